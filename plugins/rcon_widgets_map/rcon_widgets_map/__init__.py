@@ -1,0 +1,1 @@
+"""RCON Map widget: GPS fixes on offline/online tile maps."""

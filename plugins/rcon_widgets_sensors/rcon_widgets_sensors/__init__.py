@@ -1,0 +1,1 @@
+"""RCON Sensor widgets: Image, Accelerometer, Gyroscope, Magnetometer, Camera, Multi-Touch teleop."""

@@ -1,0 +1,1 @@
+"""RCON Standard widgets: Button, Label, Text Field, Switch, Slider, Stepper, Text View, Compound."""

@@ -1,0 +1,3 @@
+from rcon_core.cli.main import main
+
+raise SystemExit(main())

@@ -1,0 +1,66 @@
+"""The ``rcon`` command: the app by default, plus subcommands over the bridge, the sim and the plugins.
+
+Each subcommand lives in its own module, imported only when that subcommand runs, so ``rcon topics``
+never pays for Qt and ``rcon`` (the app) never pays for the CLI helpers.  A command module exposes
+``configure(name, parser)`` and ``run(name, args) -> int``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+#: subcommand -> (module, one-line help)
+COMMANDS: dict[str, tuple[str, str]] = {
+    "sim": ("rcon_core.cli.sim_cmd", "run the embedded simulated robot (a rosbridge v2 server)"),
+    "topics": ("rcon_core.cli.bridge_cmds", "list the robot's topics and their types"),
+    "services": ("rcon_core.cli.bridge_cmds", "list the robot's services and their types"),
+    "type": ("rcon_core.cli.bridge_cmds", "print a message or service type's definition"),
+    "echo": ("rcon_core.cli.bridge_cmds", "print messages arriving on a topic"),
+    "pub": ("rcon_core.cli.bridge_cmds", "publish a message on a topic"),
+    "call": ("rcon_core.cli.bridge_cmds", "call a service"),
+    "plugins": ("rcon_core.cli.plugin_cmds", "list installed widget packages and their widgets"),
+    "match": ("rcon_core.cli.plugin_cmds", "list the widgets that fit a type and role, ranked"),
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="rcon",
+        description="RCON: build a robot's operator interface at run time over rosbridge. "
+        "Without a subcommand, opens the app.",
+    )
+    parser.add_argument("--url", help="rosbridge WebSocket URL to connect to (default: last used)")
+    parser.add_argument("--layout", help="layout file to open instead of the saved workspace")
+    parser.add_argument("--demo", action="store_true", help="start the embedded robot and open the demo layout")
+    parser.add_argument("--screenshot", metavar="PATH", help="write a PNG of the window, then exit")
+    parser.add_argument("--quit-after", type=float, metavar="SECONDS", help="quit after this many seconds")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name, (module, help_text) in COMMANDS.items():
+        p = sub.add_parser(name, help=help_text, description=help_text)
+        try:
+            mod = importlib.import_module(module)
+        except ImportError as exc:  # a command whose module is missing must not break the others
+            p.set_defaults(_unavailable=f"{name}: unavailable ({exc})")
+            continue
+        mod.configure(name, p)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:
+        from rcon_core.app.main import run_app
+
+        return run_app(args)
+    if getattr(args, "_unavailable", None):
+        print(args._unavailable, file=sys.stderr)
+        return 2
+    module = importlib.import_module(COMMANDS[args.command][0])
+    return int(module.run(args.command, args) or 0)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
