@@ -1,0 +1,100 @@
+"""Side panel listing the robot's topics and services (name, type, live rate), with a filter."""
+
+from __future__ import annotations
+
+from qtpy import QtCore, QtWidgets
+
+NAME_ROLE = QtCore.Qt.ItemDataRole.UserRole
+TYPE_ROLE = QtCore.Qt.ItemDataRole.UserRole + 1
+
+
+class CatalogList(QtWidgets.QWidget):
+    """One filterable list (topics or services). ``picked(name, type)`` fires on tap."""
+
+    picked = QtCore.Signal(str, str)
+
+    def __init__(self, what: str, with_rate: bool, parent: QtWidgets.QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.what = what
+        self.filter = QtWidgets.QLineEdit()
+        self.filter.setObjectName(f"{what}Filter")
+        self.filter.setPlaceholderText(f"Search {what}…")
+        self.filter.setClearButtonEnabled(True)
+        self.filter.textChanged.connect(self._apply_filter)
+        self.tree = QtWidgets.QTreeWidget()
+        self.tree.setObjectName(f"{what}List")
+        self.tree.setRootIsDecorated(False)
+        self.tree.setUniformRowHeights(True)
+        self.tree.setHeaderLabels(["Name", "Type", "Rate"] if with_rate else ["Name", "Type"])
+        header = self.tree.header()
+        header.setSectionResizeMode(0, QtWidgets.QHeaderView.ResizeMode.Stretch)
+        header.setSectionResizeMode(1, QtWidgets.QHeaderView.ResizeMode.ResizeToContents)
+        header.setStretchLastSection(False)
+        self.tree.itemClicked.connect(self._clicked)
+        self.tree.itemActivated.connect(self._clicked)
+        QtWidgets.QScroller.grabGesture(
+            self.tree.viewport(), QtWidgets.QScroller.ScrollerGestureType.LeftMouseButtonGesture
+        )
+        self.empty = QtWidgets.QLabel(f"No {what} yet: connect to a robot.")
+        self.empty.setProperty("role", "hint")
+        self.empty.setWordWrap(True)
+        col = QtWidgets.QVBoxLayout(self)
+        col.setContentsMargins(0, 0, 0, 0)
+        col.addWidget(self.filter)
+        col.addWidget(self.empty)
+        col.addWidget(self.tree, 1)
+        self._items: dict[str, QtWidgets.QTreeWidgetItem] = {}
+        self._with_rate = with_rate
+
+    def set_entries(self, entries: list[tuple[str, str]]) -> None:
+        """Replace the list (keeps the selection and the filter)."""
+        names = {n for n, _ in entries}
+        if names == set(self._items) and all(self._items[n].data(0, TYPE_ROLE) == t for n, t in entries):
+            return
+        selected = self.current()
+        self.tree.clear()
+        self._items = {}
+        for name, type_name in entries:
+            item = QtWidgets.QTreeWidgetItem([name, short_type(type_name)])
+            item.setData(0, NAME_ROLE, name)
+            item.setData(0, TYPE_ROLE, type_name)
+            item.setToolTip(1, type_name)
+            self.tree.addTopLevelItem(item)
+            self._items[name] = item
+            if selected and selected[0] == name:
+                item.setSelected(True)
+        self.empty.setVisible(not entries)
+        self._apply_filter(self.filter.text())
+
+    def set_rates(self, rates: dict[str, float]) -> None:
+        if not self._with_rate:
+            return
+        for name, item in self._items.items():
+            hz = rates.get(name)
+            text = "" if hz is None else (f"{hz:.0f} Hz" if hz >= 10 else f"{hz:.1f} Hz")
+            if item.text(2) != text:
+                item.setText(2, text)
+
+    def current(self) -> tuple[str, str] | None:
+        item = self.tree.currentItem()
+        if item is None:
+            return None
+        return item.data(0, NAME_ROLE), item.data(0, TYPE_ROLE)
+
+    def item(self, name: str) -> QtWidgets.QTreeWidgetItem | None:
+        return self._items.get(name)
+
+    def _apply_filter(self, text: str) -> None:
+        words = text.lower().split()
+        for name, item in self._items.items():
+            hay = f"{name} {item.data(0, TYPE_ROLE)}".lower()
+            item.setHidden(not all(w in hay for w in words))
+
+    def _clicked(self, item: QtWidgets.QTreeWidgetItem, _col: int = 0) -> None:
+        self.picked.emit(item.data(0, NAME_ROLE), item.data(0, TYPE_ROLE))
+
+
+def short_type(type_name: str) -> str:
+    """``sensor_msgs/msg/Image`` -> ``sensor_msgs/Image`` (the column is narrow)."""
+    parts = type_name.split("/")
+    return f"{parts[0]}/{parts[-1]}" if len(parts) == 3 else type_name

@@ -1,0 +1,111 @@
+"""The bar across the top: robot URL (with history), connect/disconnect, link state and latency."""
+
+from __future__ import annotations
+
+from qtpy import QtCore, QtWidgets
+
+from rcon_core.app.config import AppConfig
+from rcon_core.app.link import BadUrl, Link
+from rcon_core.app.theme import repolish
+
+STATE_TEXT = {
+    "connecting": "CONNECTING",
+    "connected": "CONNECTED",
+    "reconnecting": "RECONNECTING",
+    "closed": "DISCONNECTED",
+}
+
+
+class ConnectionBar(QtWidgets.QFrame):
+    """Shows and drives the :class:`Link`; call :meth:`poll` once per frame."""
+
+    state_changed = QtCore.Signal(str)
+
+    def __init__(self, link: Link, config: AppConfig, parent: QtWidgets.QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.setObjectName("connectionBar")
+        self.link, self.config = link, config
+        self.state = "closed"
+        self._last_latency_text = ""
+
+        self.url = QtWidgets.QComboBox()
+        self.url.setObjectName("urlField")
+        self.url.setEditable(True)
+        self.url.setInsertPolicy(QtWidgets.QComboBox.InsertPolicy.NoInsert)
+        self.url.setMinimumWidth(320)
+        self.url.addItems(config.url_history or [config.last_url])
+        self.url.setCurrentText(config.last_url)
+        self.url.lineEdit().returnPressed.connect(self.connect_clicked)
+
+        self.connect_button = QtWidgets.QPushButton("Connect")
+        self.connect_button.setObjectName("connectButton")
+        self.connect_button.setProperty("primary", True)
+        self.connect_button.clicked.connect(self.toggle)
+
+        self.state_label = QtWidgets.QLabel()
+        self.state_label.setObjectName("linkState")
+        self.state_label.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
+        self.latency_label = QtWidgets.QLabel("—")
+        self.latency_label.setObjectName("latency")
+        self.latency_label.setToolTip("round-trip time to the robot")
+        self.message = QtWidgets.QLabel()
+        self.message.setProperty("role", "problem")
+
+        row = QtWidgets.QHBoxLayout(self)
+        row.setContentsMargins(10, 8, 10, 8)
+        row.setSpacing(10)
+        row.addWidget(QtWidgets.QLabel("Robot"))
+        row.addWidget(self.url, 1)
+        row.addWidget(self.connect_button)
+        row.addWidget(self.state_label)
+        row.addWidget(self.latency_label)
+        row.addWidget(self.message, 1)
+        self._show_state("closed")
+
+    # ---------------------------------------------------------------------------------------- actions
+    def toggle(self) -> None:
+        if self.link.client is None:
+            self.connect_clicked()
+        else:
+            self.link.disconnect()
+            self._show_state("closed")
+
+    def connect_clicked(self) -> None:
+        text = self.url.currentText()
+        try:
+            self.link.connect_to(text)
+        except BadUrl as exc:
+            self.message.setText(str(exc))
+            return
+        self.message.clear()
+        self.config.remember_url(text.strip())
+        self.url.blockSignals(True)
+        self.url.clear()
+        self.url.addItems(self.config.url_history)
+        self.url.setCurrentText(text.strip())
+        self.url.blockSignals(False)
+        self._show_state("connecting")
+
+    # ------------------------------------------------------------------------------------ per frame
+    def poll(self, _now: float = 0.0) -> None:
+        ok, state = self.link.state_box.take()
+        if ok and state != self.state:
+            self._show_state(state)
+        ok, error = self.link.error_box.take()
+        if ok and self.link.client is not None:
+            self.message.setText(str(error))
+        latency = self.link.latency if self.state == "connected" else None
+        text = "—" if latency is None else f"{latency * 1000:.0f} ms"
+        if text != self._last_latency_text:
+            self._last_latency_text = text
+            self.latency_label.setText(text)
+
+    def _show_state(self, state: str) -> None:
+        self.state = state
+        self.state_label.setText(STATE_TEXT.get(state, state.upper()))
+        self.state_label.setProperty("state", state)
+        repolish(self.state_label)
+        self.connect_button.setText("Connect" if self.link.client is None else "Disconnect")
+        if state == "connected":
+            self.message.clear()
+        self.state_changed.emit(state)

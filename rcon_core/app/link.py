@@ -1,0 +1,203 @@
+"""The app's link to the robot: one BridgeClient living on a BridgeThread, seen from the GUI thread.
+
+Every network operation runs on the bridge thread.  The GUI reads what the bridge thread left behind:
+the connection state in a :class:`LatestValue` mailbox, the latency as a float attribute, and the topic
+and service catalogue in another mailbox.  Nothing here blocks the GUI thread.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from collections.abc import Callable
+from typing import Any
+from urllib.parse import urlparse
+
+from rcon_core.bridge import BridgeClient
+from rcon_core.bridge.threaded import BridgeThread, LatestValue
+
+log = logging.getLogger(__name__)
+
+#: how often the catalogue is fetched from rosapi while connected (s)
+CATALOG_PERIOD = 5.0
+
+
+class BadUrl(ValueError):
+    """A rosbridge URL the app cannot use; the message tells why."""
+
+
+def check_url(url: str) -> str:
+    """Return ``url`` stripped, or raise :class:`BadUrl` saying what is wrong with it."""
+    url = url.strip()
+    if not url:
+        raise BadUrl("enter a rosbridge URL such as ws://192.168.1.10:9090")
+    parsed = urlparse(url)
+    if parsed.scheme not in ("ws", "wss"):
+        raise BadUrl(f"{url!r}: the URL must start with ws:// or wss://")
+    if not parsed.hostname:
+        raise BadUrl(f"{url!r}: the URL has no host name")
+    try:
+        parsed.port  # noqa: B018 - raises on a bad port
+    except ValueError:
+        raise BadUrl(f"{url!r}: the port is not a number between 0 and 65535") from None
+    return url
+
+
+def state_name(state: Any) -> str:
+    """``ConnectionState.CONNECTED`` -> ``"connected"`` (also accepts plain strings)."""
+    name = getattr(state, "name", None) or getattr(state, "value", None) or str(state)
+    return str(name).lower().rsplit(".", 1)[-1]
+
+
+class Link:
+    """Owns the bridge thread and the current client; safe to drive from the GUI thread."""
+
+    def __init__(self, bridge_thread: BridgeThread | None = None) -> None:
+        self.thread = bridge_thread or BridgeThread()
+        self._own_thread = bridge_thread is None
+        if self._own_thread:
+            self.thread.start()
+        self.client: BridgeClient | None = None
+        self.url: str | None = None
+        self.state_box = LatestValue()
+        self.catalog_box = LatestValue()
+        self.error_box = LatestValue()
+        self._catalog_task: asyncio.Task | None = None
+        self._generation = 0
+        self._listeners: list[Callable[[BridgeClient | None], None]] = []
+        self.state_box.put("closed")
+
+    # ------------------------------------------------------------------------------------- GUI side
+    def on_client_changed(self, fn: Callable[[BridgeClient | None], None]) -> None:
+        """``fn(client)`` is called (on the GUI thread, from :meth:`connect_to`) when the client changes."""
+        self._listeners.append(fn)
+
+    def connect_to(self, url: str) -> None:
+        """Close any current client and connect to ``url`` (with automatic reconnection)."""
+        url = check_url(url)
+        self.disconnect()
+        self._generation += 1
+        gen = self._generation
+        client = BridgeClient(url, reconnect=True)
+        self.client, self.url = client, url
+        self.state_box.put("connecting")
+        self.thread.call(self._wire, client, gen)
+        for fn in self._listeners:
+            fn(client)
+
+    def disconnect(self) -> None:
+        """Close the current client, if any (returns at once; the close runs on the bridge thread)."""
+        client, self.client = self.client, None
+        self._generation += 1
+        if client is None:
+            return
+        for fn in self._listeners:
+            fn(None)
+        self.thread.run(self._close(client))
+        self.state_box.put("closed")
+
+    @property
+    def latency(self) -> float | None:
+        client = self.client
+        return getattr(client, "latency", None) if client is not None else None
+
+    def shutdown(self, timeout: float = 2.0) -> None:
+        """Close the client and, if this link started it, stop the bridge thread."""
+        client, self.client = self.client, None
+        if client is not None:
+            try:
+                self.thread.run(self._close(client)).result(timeout)
+            except Exception:
+                log.debug("close on shutdown failed", exc_info=True)
+        if self._own_thread:
+            stop = getattr(self.thread, "stop", None)
+            if stop is not None:
+                stop()
+
+    # ---------------------------------------------------------------------------- bridge-thread side
+    def _wire(self, client: BridgeClient, gen: int) -> None:
+        def on_state(state: Any) -> None:
+            if gen == self._generation:
+                self.state_box.put(state_name(state))
+                if state_name(state) == "connected":
+                    self._start_catalog(client, gen)
+
+        client.add_state_listener(on_state)
+        asyncio.ensure_future(self._connect(client, gen))
+
+    async def _connect(self, client: BridgeClient, gen: int) -> None:
+        try:
+            await client.connect()
+        except Exception as exc:  # with reconnect=True the client keeps trying on its own
+            if gen == self._generation:
+                self.error_box.put(f"could not connect: {exc}")
+            return
+        if gen == self._generation:
+            self.state_box.put(state_name(client.state))
+            self._start_catalog(client, gen)
+
+    def _start_catalog(self, client: BridgeClient, gen: int) -> None:
+        if self._catalog_task is not None and not self._catalog_task.done():
+            return
+        self._catalog_task = asyncio.ensure_future(self._catalog_loop(client, gen))
+
+    async def _catalog_loop(self, client: BridgeClient, gen: int) -> None:
+        while gen == self._generation:
+            if state_name(client.state) == "connected":
+                try:
+                    self.catalog_box.put(await fetch_catalog(client))
+                except Exception as exc:
+                    log.debug("catalogue refresh failed: %s", exc)
+            await asyncio.sleep(CATALOG_PERIOD)
+
+    async def _close(self, client: BridgeClient) -> None:
+        if self._catalog_task is not None:
+            self._catalog_task.cancel()
+            self._catalog_task = None
+        try:
+            await client.close()
+        except Exception:
+            log.debug("close failed", exc_info=True)
+
+    def refresh_catalog(self) -> None:
+        """Fetch topics and services now (results arrive in ``catalog_box``)."""
+        client = self.client
+        if client is None:
+            return
+
+        async def once() -> None:
+            try:
+                self.catalog_box.put(await fetch_catalog(client))
+            except Exception as exc:
+                self.error_box.put(f"could not list topics: {exc}")
+
+        self.thread.run(once())
+
+
+async def fetch_catalog(client: BridgeClient) -> dict[str, list[tuple[str, str]]]:
+    """``{"topics": [(name, type)], "services": [(name, type)]}`` from rosapi."""
+    api = client.rosapi
+    topics = _pairs(await api.topics())
+    services = _pairs(await api.services())
+    return {"topics": sorted(topics), "services": sorted(services)}
+
+
+def _pairs(answer: Any) -> list[tuple[str, str]]:
+    """Accept the shapes a rosapi helper may return: pairs, a mapping, or the raw rosapi dict."""
+    if isinstance(answer, dict):
+        if "topics" in answer or "services" in answer:
+            names = answer.get("topics") or answer.get("services") or []
+            types = answer.get("types") or [""] * len(names)
+            return list(zip(names, types, strict=False))
+        return [(str(k), str(v)) for k, v in answer.items()]
+    out = []
+    for item in answer or []:
+        if isinstance(item, str):
+            out.append((item, ""))
+        elif isinstance(item, (tuple, list)) and len(item) >= 2:
+            out.append((str(item[0]), str(item[1])))
+        else:
+            name = getattr(item, "name", None)
+            if name is not None:
+                out.append((str(name), str(getattr(item, "type", ""))))
+    return out

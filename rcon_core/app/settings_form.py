@@ -1,0 +1,149 @@
+"""A form generated from a widget's attrs settings class.
+
+Supported field types: ``str``, ``int``, ``float``, ``bool``, ``enum.Enum`` subclasses, ``typing.Literal``
+and any field with ``metadata={"choices": [...]}``.  Optional metadata: ``label``, ``help``, ``min``,
+``max``, ``step``, ``decimals``.  Fields of other types keep their value and are not shown.
+"""
+
+from __future__ import annotations
+
+import enum
+import typing
+from typing import Any
+
+import attrs
+from qtpy import QtCore, QtWidgets
+
+INT_RANGE = 2_000_000_000
+
+
+def _resolved_fields(cls: type) -> tuple[attrs.Attribute, ...]:
+    try:
+        attrs.resolve_types(cls)
+    except Exception:  # unresolvable forward refs: fall back to whatever .type holds
+        pass
+    return attrs.fields(cls)
+
+
+def _unwrap_optional(tp: Any) -> Any:
+    if typing.get_origin(tp) in (typing.Union, getattr(__import__("types"), "UnionType", None)):
+        args = [a for a in typing.get_args(tp) if a is not type(None)]
+        if len(args) == 1:
+            return args[0]
+    return tp
+
+
+def _label(field: attrs.Attribute) -> str:
+    return str(field.metadata.get("label") or field.name.replace("_", " ").capitalize())
+
+
+class SettingsForm(QtWidgets.QWidget):
+    """Edits one attrs settings instance; emits ``changed`` after every edit."""
+
+    changed = QtCore.Signal()
+
+    def __init__(self, settings: Any, parent: QtWidgets.QWidget | None = None) -> None:
+        super().__init__(parent)
+        if not attrs.has(type(settings)):
+            raise TypeError(f"settings must be an attrs instance, not {type(settings).__name__}")
+        self._cls = type(settings)
+        self._value = settings
+        self._editors: dict[str, tuple[QtWidgets.QWidget, typing.Callable[[], Any]]] = {}
+        layout = QtWidgets.QFormLayout(self)
+        layout.setFieldGrowthPolicy(QtWidgets.QFormLayout.FieldGrowthPolicy.AllNonFixedFieldsGrow)
+        layout.setVerticalSpacing(10)
+        for field in _resolved_fields(self._cls):
+            if field.name.startswith("_"):
+                continue
+            built = self._editor_for(field, getattr(settings, field.name))
+            if built is None:
+                continue
+            editor, getter = built
+            editor.setObjectName(f"setting_{field.name}")
+            if field.metadata.get("help"):
+                editor.setToolTip(str(field.metadata["help"]))
+            self._editors[field.name] = (editor, getter)
+            layout.addRow(_label(field), editor)
+        if not self._editors:
+            note = QtWidgets.QLabel("This widget has no settings.")
+            note.setProperty("role", "hint")
+            layout.addRow(note)
+
+    # ----------------------------------------------------------------------------------------- building
+    def _editor_for(self, field: attrs.Attribute, value: Any):
+        tp = _unwrap_optional(field.type)
+        meta = field.metadata
+        choices = meta.get("choices")
+        if choices is None and typing.get_origin(tp) is typing.Literal:
+            choices = list(typing.get_args(tp))
+        if choices is None and isinstance(tp, type) and issubclass(tp, enum.Enum):
+            choices = list(tp)
+        if choices is not None:
+            box = QtWidgets.QComboBox()
+            for choice in choices:
+                text = choice.name if isinstance(choice, enum.Enum) else str(choice)
+                box.addItem(text, choice)
+            index = next((i for i, c in enumerate(choices) if c == value), -1)
+            box.setCurrentIndex(max(0, index) if choices else -1)
+            box.currentIndexChanged.connect(self._edited)
+            return box, box.currentData
+        if tp is bool:
+            check = QtWidgets.QCheckBox()
+            check.setChecked(bool(value))
+            check.toggled.connect(self._edited)
+            return check, check.isChecked
+        if tp is int:
+            spin = QtWidgets.QSpinBox()
+            spin.setRange(int(meta.get("min", -INT_RANGE)), int(meta.get("max", INT_RANGE)))
+            spin.setSingleStep(int(meta.get("step", 1)))
+            spin.setValue(int(value or 0))
+            spin.valueChanged.connect(self._edited)
+            return spin, spin.value
+        if tp is float:
+            spin = QtWidgets.QDoubleSpinBox()
+            spin.setDecimals(int(meta.get("decimals", 3)))
+            spin.setRange(float(meta.get("min", -1e12)), float(meta.get("max", 1e12)))
+            spin.setSingleStep(float(meta.get("step", 0.1)))
+            spin.setValue(float(value or 0.0))
+            spin.valueChanged.connect(self._edited)
+            return spin, spin.value
+        if tp is str:
+            line = QtWidgets.QLineEdit("" if value is None else str(value))
+            line.textChanged.connect(self._edited)
+            return line, line.text
+        return None
+
+    # ------------------------------------------------------------------------------------------- values
+    def _edited(self, *_: Any) -> None:
+        self._value = self._read()
+        self.changed.emit()
+
+    def _read(self) -> Any:
+        values = {name: getter() for name, (_, getter) in self._editors.items()}
+        try:
+            return attrs.evolve(self._value, **values)
+        except (TypeError, ValueError):
+            return self._value  # a validator refused the edit: keep the last good value
+
+    def value(self) -> Any:
+        """The settings instance as currently edited."""
+        return self._value
+
+    def editor(self, name: str) -> QtWidgets.QWidget:
+        """The editor of field ``name`` (for tests and accessibility tooling)."""
+        return self._editors[name][0]
+
+    def problems(self) -> list[str]:
+        """What is still missing or wrong (the settings' own ``problems()``), empty once valid."""
+        return settings_problems(self._value)
+
+
+def settings_problems(settings: Any) -> list[str]:
+    """``settings.problems()`` if the class has it, else no problems."""
+    fn = getattr(settings, "problems", None)
+    if fn is None:
+        return []
+    try:
+        return [str(p) for p in fn()]
+    except Exception as exc:  # a broken problems() is itself a problem to show, not a crash
+        return [f"settings check failed: {exc}"]

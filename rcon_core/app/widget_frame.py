@@ -1,0 +1,381 @@
+"""The frame around one widget on a canvas: title, the widget's view, status badges, and editing.
+
+In edit mode a transparent *shield* covers the view and takes every press: drag to move, drag a corner
+handle or pinch with two fingers to resize, long-press or right-click for the context menu.  In operator
+(locked) mode the shield is gone, the view gets the touches, and nothing can be moved or deleted.
+"""
+
+from __future__ import annotations
+
+import math
+
+from qtpy import QtCore, QtGui, QtWidgets
+
+from rcon_core.app.geometry import GRID, fit_rect, scaled_about_center, snap_rect
+from rcon_core.app.theme import current_touch_px, repolish
+
+LONG_PRESS_MS = 600
+DRAG_SLOP = 12
+
+
+class Badge(QtWidgets.QLabel):
+    """A small status pill painted over the frame's top-right corner."""
+
+    COLOURS = {"stale": "#a85400", "down": "#b00000", "problem": "#b00000", "ok": "#006b1b"}
+
+    def __init__(self, parent: QtWidgets.QWidget) -> None:
+        super().__init__(parent)
+        self.setObjectName("frameBadge")
+        self.kind = ""
+        self.setAttribute(QtCore.Qt.WidgetAttribute.WA_TransparentForMouseEvents)
+        self.hide()
+
+    def show_status(self, kind: str, text: str) -> None:
+        if kind == self.kind and text == self.text():
+            return
+        self.kind = kind
+        if not kind:
+            self.hide()
+            return
+        colour = self.COLOURS.get(kind, "#000000")
+        self.setStyleSheet(
+            f"background:{colour}; color:#ffffff; font-weight:bold; border-radius:4px; padding:2px 8px;"
+        )
+        self.setText(text)
+        self.adjustSize()
+        self.show()
+        self.raise_()
+        self.parentWidget().layout_overlays()  # type: ignore[attr-defined]
+
+
+class ProblemOverlay(QtWidgets.QLabel):
+    """Covers the view while the widget's settings are not valid and lists what is missing."""
+
+    def __init__(self, parent: QtWidgets.QWidget) -> None:
+        super().__init__(parent)
+        self.setObjectName("problemOverlay")
+        self.setWordWrap(True)
+        self.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
+        self.setAttribute(QtCore.Qt.WidgetAttribute.WA_TransparentForMouseEvents)
+        self.setStyleSheet(
+            "background: rgba(255, 236, 179, 235); color: #000000; border: 3px dashed #b00000;"
+            " font-weight: bold; padding: 6px;"
+        )
+        self.hide()
+
+    def set_problems(self, problems: list[str]) -> None:
+        if problems:
+            self.setText("⚠ Not configured\n" + "\n".join(f"• {p}" for p in problems))
+            self.show()
+            self.raise_()
+        else:
+            self.hide()
+
+
+class Shield(QtWidgets.QWidget):
+    """Transparent layer over a frame in edit mode: turns presses into move/resize/menu."""
+
+    def __init__(self, frame: WidgetFrame) -> None:
+        super().__init__(frame)
+        self.frame = frame
+        self.setAttribute(QtCore.Qt.WidgetAttribute.WA_AcceptTouchEvents)
+        self.setMouseTracking(False)
+        self._long = QtCore.QTimer(self)
+        self._long.setSingleShot(True)
+        self._long.setInterval(LONG_PRESS_MS)
+        self._long.timeout.connect(self._long_press)
+        self._mode = ""  # "", "move", "resize", "pinch"
+        self._press_global = QtCore.QPointF()
+        self._start_rect = QtCore.QRect()
+        self._corner = ""
+        self._pinch_dist = 0.0
+
+    # painting: corner handles and the grid hint
+    def paintEvent(self, _event: QtGui.QPaintEvent) -> None:
+        p = QtGui.QPainter(self)
+        p.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing)
+        size = self.frame.handle_size()
+        colour = QtGui.QColor("#0040a0") if self.frame.selected else QtGui.QColor("#000000")
+        p.setPen(QtCore.Qt.PenStyle.NoPen)
+        p.setBrush(colour)
+        for rect in self.frame.handle_rects(size).values():
+            p.drawRoundedRect(QtCore.QRectF(rect).adjusted(6, 6, -6, -6), 6, 6)
+
+    # mouse -------------------------------------------------------------------------------------------
+    def mousePressEvent(self, event: QtGui.QMouseEvent) -> None:
+        if event.button() == QtCore.Qt.MouseButton.RightButton:
+            self.frame.request_menu(event.globalPosition().toPoint())
+            return
+        if event.button() == QtCore.Qt.MouseButton.LeftButton:
+            self._begin(event.position(), event.globalPosition())
+
+    def mouseMoveEvent(self, event: QtGui.QMouseEvent) -> None:
+        if self._mode:
+            self._drag(event.globalPosition())
+
+    def mouseReleaseEvent(self, _event: QtGui.QMouseEvent) -> None:
+        self._end()
+
+    # touch -------------------------------------------------------------------------------------------
+    def event(self, event: QtCore.QEvent) -> bool:
+        t = event.type()
+        if t in (QtCore.QEvent.Type.TouchBegin, QtCore.QEvent.Type.TouchUpdate, QtCore.QEvent.Type.TouchEnd):
+            self._touch(event)  # type: ignore[arg-type]
+            event.accept()
+            return True
+        if t == QtCore.QEvent.Type.TouchCancel:
+            self._end(commit=False)
+            return True
+        return super().event(event)
+
+    def _touch(self, event: QtGui.QTouchEvent) -> None:
+        points = [p for p in event.points() if p.state() != QtGui.QEventPoint.State.Released]
+        if event.type() == QtCore.QEvent.Type.TouchEnd or not points:
+            self._end()
+            return
+        if len(points) >= 2:
+            a, b = points[0].globalPosition(), points[1].globalPosition()
+            dist = math.hypot(a.x() - b.x(), a.y() - b.y())
+            if self._mode != "pinch":
+                self._long.stop()
+                self._mode = "pinch"
+                self._pinch_dist = max(dist, 1.0)
+                self._start_rect = self.frame.geometry()
+                self.frame.set_selected(True)
+            else:
+                self.frame.apply_pinch(dist / self._pinch_dist, self._start_rect, finished=False)
+            return
+        if self._mode == "pinch":
+            return  # one finger lifted mid-pinch: wait for the end
+        point = points[0]
+        if event.type() == QtCore.QEvent.Type.TouchBegin or not self._mode:
+            self._begin(point.position(), point.globalPosition())
+        else:
+            self._drag(point.globalPosition())
+
+    # shared ------------------------------------------------------------------------------------------
+    def _begin(self, local: QtCore.QPointF, global_pos: QtCore.QPointF) -> None:
+        self.frame.set_selected(True)
+        self._press_global = QtCore.QPointF(global_pos)
+        self._start_rect = self.frame.geometry()
+        self._corner = self.frame.corner_at(local.toPoint())
+        self._mode = "resize" if self._corner else "pending"
+        self._long.start()
+
+    def _drag(self, global_pos: QtCore.QPointF) -> None:
+        delta = global_pos - self._press_global
+        if self._mode == "pending":
+            if abs(delta.x()) + abs(delta.y()) < DRAG_SLOP:
+                return
+            self._mode = "move"
+        self._long.stop()
+        if self._mode == "move":
+            self.frame.move_to(self._start_rect.topLeft() + delta.toPoint(), finished=False)
+        elif self._mode == "resize":
+            self.frame.resize_corner(self._corner, self._start_rect, delta.toPoint(), finished=False)
+
+    def _end(self, commit: bool = True) -> None:
+        self._long.stop()
+        mode, self._mode = self._mode, ""
+        if commit and mode in ("move", "resize", "pinch"):
+            self.frame.commit_geometry()
+
+    def _long_press(self) -> None:
+        if self._mode == "pending":
+            self._mode = ""
+            self.frame.request_menu(self.mapToGlobal(self.rect().center()))
+
+
+class WidgetFrame(QtWidgets.QFrame):
+    """One widget instance on a canvas surface."""
+
+    geometry_committed = QtCore.Signal(str, QtCore.QRect)  # instance id, new rect (snapped, on screen)
+    action_requested = QtCore.Signal(str, str)  # instance id, "configure" | "duplicate" | "delete"
+    selected_changed = QtCore.Signal(str, bool)
+
+    def __init__(self, instance_id: str, title: str, parent: QtWidgets.QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.setObjectName("widgetFrame")
+        self.instance_id = instance_id
+        self.selected = False
+        self.editable = True
+        self.menu: QtWidgets.QMenu | None = None
+        self.title = QtWidgets.QLabel(title)
+        self.title.setObjectName("frameTitle")
+        self.body = QtWidgets.QWidget()
+        self.body.setObjectName("frameBody")
+        self.body_layout = QtWidgets.QVBoxLayout(self.body)
+        self.body_layout.setContentsMargins(4, 4, 4, 4)
+        self.view: QtWidgets.QWidget | None = None
+        col = QtWidgets.QVBoxLayout(self)
+        col.setContentsMargins(3, 3, 3, 3)
+        col.setSpacing(0)
+        col.addWidget(self.title)
+        col.addWidget(self.body, 1)
+        self.problems = ProblemOverlay(self)
+        self.badge = Badge(self)
+        self.shield = Shield(self)
+        self.grabGesture(QtCore.Qt.GestureType.PinchGesture)
+        self._pinch_start = QtCore.QRect()
+
+    # content ----------------------------------------------------------------------------------------
+    def set_view(self, view: QtWidgets.QWidget) -> None:
+        if self.view is not None:
+            self.body_layout.removeWidget(self.view)
+            self.view.deleteLater()
+        self.view = view
+        self.body_layout.addWidget(view)
+        self.layout_overlays()
+
+    def set_placeholder(self, text: str) -> QtWidgets.QLabel:
+        label = QtWidgets.QLabel(text)
+        label.setObjectName("placeholder")
+        label.setWordWrap(True)
+        label.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
+        label.setStyleSheet("background:#f0f0f0; border:3px dashed #707070; color:#000000; font-weight:bold;")
+        self.set_view(label)
+        return label
+
+    def set_title(self, title: str) -> None:
+        self.title.setText(title)
+
+    # modes ------------------------------------------------------------------------------------------
+    def set_editable(self, editable: bool) -> None:
+        self.editable = editable
+        self.shield.setVisible(editable)
+        if not editable:
+            self.set_selected(False)
+        self.layout_overlays()
+
+    def set_selected(self, selected: bool) -> None:
+        if selected == self.selected:
+            return
+        self.selected = selected
+        self.setProperty("selected", selected)
+        repolish(self)
+        self.shield.update()
+        if selected:
+            self.raise_()
+        self.selected_changed.emit(self.instance_id, selected)
+
+    # geometry ---------------------------------------------------------------------------------------
+    def handle_size(self) -> int:
+        return current_touch_px()
+
+    def min_size(self) -> QtCore.QSize:
+        t = self.handle_size()
+        return QtCore.QSize(max(3 * t, 5 * GRID), max(2 * t + GRID, 5 * GRID))
+
+    def handle_rects(self, size: int | None = None) -> dict[str, QtCore.QRect]:
+        size = size or self.handle_size()
+        w, h = self.width(), self.height()
+        return {
+            "tl": QtCore.QRect(0, 0, size, size),
+            "tr": QtCore.QRect(w - size, 0, size, size),
+            "bl": QtCore.QRect(0, h - size, size, size),
+            "br": QtCore.QRect(w - size, h - size, size, size),
+        }
+
+    def corner_at(self, pos: QtCore.QPoint) -> str:
+        for name, rect in self.handle_rects().items():
+            if rect.contains(pos):
+                return name
+        return ""
+
+    def bounds(self) -> QtCore.QRect:
+        parent = self.parentWidget()
+        return parent.rect() if parent is not None else QtCore.QRect(0, 0, 10_000, 10_000)
+
+    def place(self, rect: QtCore.QRect) -> None:
+        """Set the frame's geometry, kept on screen (no snapping: used while dragging and on load)."""
+        self.setGeometry(fit_rect(rect, self.bounds(), self.min_size()))
+
+    def move_to(self, top_left: QtCore.QPoint, finished: bool = True) -> None:
+        self.place(QtCore.QRect(top_left, self.size()))
+        if finished:
+            self.commit_geometry()
+
+    def resize_corner(self, corner: str, start: QtCore.QRect, delta: QtCore.QPoint, finished: bool = True) -> None:
+        r = QtCore.QRect(start)
+        if "l" in corner:
+            r.setLeft(min(r.left() + delta.x(), r.right() - self.min_size().width()))
+        else:
+            r.setRight(r.right() + delta.x())
+        if "t" in corner:
+            r.setTop(min(r.top() + delta.y(), r.bottom() - self.min_size().height()))
+        else:
+            r.setBottom(r.bottom() + delta.y())
+        self.place(r)
+        if finished:
+            self.commit_geometry()
+
+    def apply_pinch(self, scale: float, start: QtCore.QRect | None = None, finished: bool = True) -> None:
+        """Resize by ``scale`` (relative to ``start``, default the current geometry) about the centre."""
+        if not self.editable:
+            return
+        scale = max(0.1, min(10.0, float(scale)))
+        self.place(scaled_about_center(start if start is not None else self.geometry(), scale))
+        if finished:
+            self.commit_geometry()
+
+    def commit_geometry(self) -> None:
+        """Snap to the grid, keep on screen and report the final geometry."""
+        rect = fit_rect(snap_rect(self.geometry()), self.bounds(), self.min_size())
+        self.setGeometry(rect)
+        self.geometry_committed.emit(self.instance_id, QtCore.QRect(rect))
+
+    # gestures (native pinch, e.g. trackpads or platforms delivering QPinchGesture) -------------------
+    def event(self, event: QtCore.QEvent) -> bool:
+        if event.type() == QtCore.QEvent.Type.Gesture:
+            pinch = event.gesture(QtCore.Qt.GestureType.PinchGesture)  # type: ignore[attr-defined]
+            if pinch is not None:
+                self.pinch_gesture(pinch)
+                event.accept()
+                return True
+        return super().event(event)
+
+    def pinch_gesture(self, pinch: QtWidgets.QPinchGesture) -> None:
+        """Handle a QPinchGesture (or any object with ``state()`` and ``totalScaleFactor()``)."""
+        if not self.editable:
+            return
+        state = pinch.state()
+        if state == QtCore.Qt.GestureState.GestureStarted:
+            self._pinch_start = self.geometry()
+            self.set_selected(True)
+        if self._pinch_start.isNull():
+            self._pinch_start = self.geometry()
+        finished = state in (QtCore.Qt.GestureState.GestureFinished, QtCore.Qt.GestureState.GestureCanceled)
+        self.apply_pinch(pinch.totalScaleFactor(), self._pinch_start, finished=finished)
+        if finished:
+            self._pinch_start = QtCore.QRect()
+
+    # context menu -----------------------------------------------------------------------------------
+    def request_menu(self, global_pos: QtCore.QPoint) -> QtWidgets.QMenu | None:
+        """Open the context menu (configure, duplicate, delete); nothing in operator mode."""
+        if not self.editable:
+            return None
+        menu = QtWidgets.QMenu(self)
+        menu.setObjectName("frameMenu")
+        for name, text in (("configure", "Configure…"), ("duplicate", "Duplicate"), ("delete", "Delete")):
+            action = menu.addAction(text)
+            action.setObjectName(name)
+            action.triggered.connect(lambda _=False, n=name: self.action_requested.emit(self.instance_id, n))
+        self.menu = menu
+        menu.popup(global_pos)
+        return menu
+
+    # overlays ---------------------------------------------------------------------------------------
+    def resizeEvent(self, event: QtGui.QResizeEvent) -> None:
+        super().resizeEvent(event)
+        self.layout_overlays()
+
+    def layout_overlays(self) -> None:
+        self.shield.setGeometry(self.rect())
+        body = self.body.geometry()
+        self.problems.setGeometry(body.adjusted(4, 4, -4, -4))
+        if self.badge.isVisible():
+            self.badge.move(self.width() - self.badge.width() - 6, self.title.height() + 6)
+        self.problems.raise_()
+        self.badge.raise_()
+        if self.editable:
+            self.shield.raise_()
