@@ -1,0 +1,53 @@
+"""The widget contract and the plugin system (no Qt).
+
+::
+
+    from rcon_core.plugins import PluginManager, WidgetSpec, Role, Accepts, hookimpl, WidgetModel, Binding
+
+See ``docs/hooks.md`` (the hooks) and ``docs/writing-a-widget-plugin.md`` (a guide).
+"""
+
+from .hookspecs import hookimpl, hookspec
+from .manager import DISABLE_ENV, ENTRY_POINT_GROUP, PluginInfo, PluginManager, UnknownWidget
+from .model import Binding, BridgePort, WidgetModel, WidgetState
+from .paths import PathError, get_path, set_path
+from .registry import DuplicateWidget, TypeContributions, TypeDefinition, WidgetRegistry
+from .spec import (
+    FIELD_PREDICATES,
+    MESSAGE_PREDICATES,
+    Accepts,
+    Role,
+    SettingsError,
+    SpecError,
+    WidgetSpec,
+    resolve,
+)
+
+__all__ = [
+    "hookimpl",
+    "hookspec",
+    "PluginManager",
+    "PluginInfo",
+    "UnknownWidget",
+    "ENTRY_POINT_GROUP",
+    "DISABLE_ENV",
+    "WidgetSpec",
+    "Role",
+    "Accepts",
+    "FIELD_PREDICATES",
+    "MESSAGE_PREDICATES",
+    "SpecError",
+    "SettingsError",
+    "resolve",
+    "WidgetModel",
+    "WidgetState",
+    "Binding",
+    "BridgePort",
+    "WidgetRegistry",
+    "TypeContributions",
+    "TypeDefinition",
+    "DuplicateWidget",
+    "PathError",
+    "get_path",
+    "set_path",
+]

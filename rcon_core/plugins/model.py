@@ -1,0 +1,431 @@
+"""The widget-model base class (pure Python, never Qt) and the bridge port it is given.
+
+A widget is a *model* (this module: talks to the robot, holds the state) plus a *view* (Qt, paints
+``model.state``). The canvas runtime builds a model per widget instance::
+
+    model = Model(settings, binding, port, types=type_registry, plugin_settings=shared, dispatch=bt.call)
+    model.start()            # on the bridge loop thread: subscribes / advertises as the role says
+    ...
+    model.stop()             # ends every subscription/advertisement it made (idempotent)
+
+Threads. ``start``, ``stop``, ``on_message`` and ``handle_request`` run on the bridge loop thread
+(the runtime arranges it). The view runs on the GUI thread and only (a) reads :attr:`WidgetModel.state`
+(a frozen snapshot, built under a lock) and (b) calls the *action* methods :meth:`publish`,
+:meth:`publish_value`, :meth:`call`, which hand their work to the loop thread through ``dispatch``.
+Compare ``state.seq`` with the last painted one to skip repaints: it increases on every change.
+
+A subclass usually overrides only :meth:`on_message` (turn a message into a value and call
+:meth:`set_value`), and, for a server, :meth:`handle_request`. Everything else has a sensible default.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import concurrent.futures
+import threading
+import time
+from collections.abc import Awaitable, Callable
+from typing import Any, Protocol
+
+import attrs
+
+from .paths import PathError, get_path, set_path, split_service_path
+from .spec import Role
+
+__all__ = [
+    "Binding",
+    "BridgePort",
+    "WidgetModel",
+    "WidgetState",
+    "Dispatch",
+]
+
+
+def _paths(value: Any) -> tuple[str, ...]:
+    if value is None:
+        return ()
+    if isinstance(value, str):
+        return (value,) if value else ()
+    return tuple(value)
+
+
+@attrs.frozen
+class Binding:
+    """What a widget instance is bound to.
+
+    ``name``: the topic or service name (``""`` = not bound yet). ``type``: its type, either spelling.
+    ``role``: how the widget uses it. ``field_paths``: the field(s) the widget shows or sets, e.g.
+    ``("percentage",)``; empty means the whole message. On a service, paths begin with ``request`` or
+    ``response`` (``"request.data"``).
+    """
+
+    name: str = ""
+    type: str = ""
+    role: Role = attrs.field(default=Role.SUBSCRIBE, converter=Role.parse)
+    field_paths: tuple[str, ...] = attrs.field(default=(), converter=_paths)
+
+    @property
+    def field_path(self) -> str:
+        """The first (main) field path, ``""`` for the whole message."""
+        return self.field_paths[0] if self.field_paths else ""
+
+    def problems(self) -> list[str]:
+        """What is missing before this binding can work; ``[]`` when complete."""
+        out = []
+        what = "service" if self.role.is_service else "topic"
+        if not self.name:
+            out.append(f"no {what} chosen")
+        elif not self.name.startswith("/") and not self.name[0].isalpha():
+            out.append(f"{what} name {self.name!r} is not a valid ROS name")
+        if not self.type:
+            out.append(f"no {what} type set")
+        return out
+
+
+class Subscription(Protocol):
+    def unsubscribe(self) -> None: ...
+
+
+class Publisher(Protocol):
+    def publish(self, msg: dict[str, Any]) -> None: ...
+    def unadvertise(self) -> None: ...
+
+
+class ServiceServer(Protocol):
+    def unadvertise(self) -> None: ...
+
+
+class BridgePort(Protocol):
+    """The slice of a bridge client node (``client.node(id)``) a model may use. Tests may pass a fake."""
+
+    def subscribe(
+        self, topic: str, callback: Callable[[dict[str, Any]], Any], **options: Any
+    ) -> Subscription: ...
+    def advertise(self, topic: str, type: str, **options: Any) -> Publisher: ...
+    def call_service(
+        self, name: str, args: Any = None, timeout: float | None = None
+    ) -> Awaitable[dict[str, Any]]: ...
+    def advertise_service(
+        self, name: str, type: str, handler: Callable[[dict[str, Any]], Any]
+    ) -> ServiceServer: ...
+    def close(self) -> None: ...
+
+
+#: runs a plain function on the bridge loop thread (e.g. ``BridgeThread.call``); default: call it now
+Dispatch = Callable[[Callable[[], Any]], Any]
+
+
+def _call_now(fn: Callable[[], Any]) -> Any:
+    return fn()
+
+
+@attrs.frozen
+class WidgetState:
+    """A snapshot of what the view paints, taken at one instant.
+
+    ``value``: the widget's value (the bound field, or whatever the model's ``set_value`` gave).
+    ``message``: the last whole message (or service response) the value came from, or None.
+    ``count``: values received so far. ``age``: seconds since the last value, None if never.
+    ``stale``: True when ``age`` exceeds the model's ``stale_after`` (or nothing came since start).
+    ``link_down``: the bridge connection is down. ``error``: last problem as a sentence, or None.
+    ``running``: the model is started. ``seq``: increases on every change (not on mere ageing).
+    """
+
+    value: Any = None
+    message: Any = None
+    count: int = 0
+    age: float | None = None
+    stale: bool = False
+    link_down: bool = False
+    error: str | None = None
+    running: bool = False
+    seq: int = 0
+
+
+class WidgetModel:
+    """Base class of every widget model. See the module docstring for the threading rules.
+
+    Constructor arguments (the runtime passes all of them):
+
+    - ``settings``: the per-instance settings object (``spec.make_settings(dict)``), or None.
+    - ``binding``: a :class:`Binding`.
+    - ``port``: a :class:`BridgePort`, normally ``client.node(instance_id)``.
+    - ``types``: an ``rcon_core.msgs.TypeRegistry`` (for default messages), or None.
+    - ``plugin_settings``: the per-kind shared settings object, or None.
+    - ``dispatch``: runs a function on the bridge loop thread; default runs it immediately.
+    - ``clock``: monotonic seconds, for ages (tests may pass a fake).
+    """
+
+    #: seconds without a value after which ``state.stale`` is True; None disables. A settings object
+    #: with a ``stale_after`` attribute overrides it per instance.
+    stale_after: float | None = 5.0
+    #: timeout (seconds) for :meth:`call`; None uses the client's default
+    call_timeout: float | None = None
+
+    def __init__(
+        self,
+        settings: Any,
+        binding: Binding,
+        port: BridgePort,
+        *,
+        types: Any = None,
+        plugin_settings: Any = None,
+        dispatch: Dispatch | None = None,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.settings = settings
+        self.binding = binding
+        self.port = port
+        self.types = types
+        self.plugin_settings = plugin_settings
+        self._dispatch: Dispatch = dispatch or _call_now
+        self._clock = clock
+        self._lock = threading.Lock()
+        self._value: Any = None
+        self._message: Any = None
+        self._count = 0
+        self._stamp: float | None = None
+        self._started_at: float | None = None
+        self._link_down = False
+        self._error: str | None = None
+        self._seq = 0
+        self._running = False
+        self._sub: Subscription | None = None
+        self._pub: Publisher | None = None
+        self._srv: ServiceServer | None = None
+        self._tasks: set[asyncio.Task[Any]] = set()
+        if settings is not None and getattr(settings, "stale_after", None) is not None:
+            self.stale_after = float(settings.stale_after)
+
+    # -- lifecycle (bridge loop thread) --------------------------------------------------------------
+    @property
+    def running(self) -> bool:
+        return self._running
+
+    def start(self) -> None:
+        """Open what the role needs: subscribe, advertise a topic, or advertise a service. Idempotent.
+
+        Does nothing but mark the model running when the binding is incomplete (``problems()``), so
+        an unconfigured widget shows its warning instead of failing.
+        """
+        if self._running:
+            return
+        b = self.binding
+        if not b.problems():
+            if b.role is Role.SUBSCRIBE:
+                self._sub = self.port.subscribe(
+                    b.name, self._receive, type=b.type, **self.subscribe_options()
+                )
+            elif b.role is Role.PUBLISH:
+                self._pub = self.port.advertise(b.name, b.type, **self.advertise_options())
+            elif b.role is Role.SERVE:
+                self._srv = self.port.advertise_service(b.name, b.type, self._serve)
+        with self._lock:
+            self._running = True
+            self._started_at = self._clock()
+            self._seq += 1
+        self.on_start()
+
+    def stop(self) -> None:
+        """End every subscription/advertisement this model made. Idempotent; never raises for those."""
+        if not self._running:
+            return
+        self.on_stop()
+        for handle, method in (
+            (self._sub, "unsubscribe"),
+            (self._pub, "unadvertise"),
+            (self._srv, "unadvertise"),
+        ):
+            if handle is not None:
+                try:
+                    getattr(handle, method)()
+                except Exception as exc:  # the link may be down; the server drops them with the socket
+                    self.set_error(f"while stopping: {exc}")
+        self._sub = self._pub = self._srv = None
+        for task in list(self._tasks):
+            task.cancel()
+        with self._lock:
+            self._running = False
+            self._seq += 1
+
+    def on_start(self) -> None:
+        """Hook for subclasses: called at the end of :meth:`start`."""
+
+    def on_stop(self) -> None:
+        """Hook for subclasses: called at the beginning of :meth:`stop`."""
+
+    def subscribe_options(self) -> dict[str, Any]:
+        """Extra keywords for ``port.subscribe`` (throttle_rate, queue_length, compression...)."""
+        return {}
+
+    def advertise_options(self) -> dict[str, Any]:
+        """Extra keywords for ``port.advertise`` (latch, queue_size)."""
+        return {}
+
+    # -- incoming (bridge loop thread) ---------------------------------------------------------------
+    def _receive(self, msg: dict[str, Any]) -> None:
+        try:
+            self.on_message(msg)
+        except Exception as exc:  # a bad message must not break the bridge's callback loop
+            self.set_error(f"{type(exc).__name__}: {exc}")
+
+    def on_message(self, msg: dict[str, Any]) -> None:
+        """A message arrived (subscribers). Default: the bound field becomes the value."""
+        path = self.binding.field_path
+        try:
+            value = get_path(msg, path) if path else msg
+        except PathError as exc:
+            self.set_error(str(exc))
+            return
+        self.set_value(value, message=msg)
+
+    def _serve(self, request: dict[str, Any]) -> Any:
+        return self.handle_request(request)
+
+    def handle_request(self, request: dict[str, Any]) -> dict[str, Any] | Awaitable[dict[str, Any]]:
+        """Answer a service request (role SERVE). Default: an all-default response, and the request
+        becomes the value (so a view can show the last request)."""
+        self.set_value(request, message=request)
+        if self.types is not None:
+            return self.types.default(self._service_part_type("response"))
+        return {}
+
+    def _service_part_type(self, part: str) -> str:
+        # registries name service parts by the service type plus the part; ask the registry if it can
+        fn = getattr(self.types, "service_part_name", None)
+        if fn is not None:
+            return fn(self.binding.type, part)
+        return f"{self.binding.type}_{part.capitalize()}"
+
+    # -- outgoing (any thread) -----------------------------------------------------------------------
+    def publish(self, msg: dict[str, Any]) -> bool:
+        """Publish a whole message on the bound topic. Returns False (and sets ``error``) if not running."""
+        if self._pub is None:
+            self.set_error("not publishing: the widget is not running or has no topic")
+            return False
+        pub = self._pub
+        self._dispatch(lambda: pub.publish(msg))
+        return True
+
+    def build_message(self, value: Any, path: str | None = None) -> dict[str, Any]:
+        """A message of the bound type with ``value`` at ``path`` (default: the bound field path).
+
+        The rest of the message is the type's default (needs ``types``), else an empty dict.
+        """
+        path = self.binding.field_path if path is None else path
+        if not path:
+            if not isinstance(value, dict):
+                raise PathError("the whole message must be a dict")
+            return value
+        base = self.types.default(self.binding.type) if self.types is not None else {}
+        return set_path(base, path, value)
+
+    def publish_value(self, value: Any) -> bool:
+        """Publish ``value`` at the bound field of an otherwise default message."""
+        return self.publish(self.build_message(value))
+
+    def call(self, args: dict[str, Any] | None = None) -> concurrent.futures.Future[dict[str, Any]]:
+        """Call the bound service from any thread. The response becomes ``state.message`` and its bound
+        ``response.*`` field (if any) the value. Returns a future with the response (or the error)."""
+        fut: concurrent.futures.Future[dict[str, Any]] = concurrent.futures.Future()
+
+        def go() -> None:
+            try:
+                loop = asyncio.get_running_loop()
+            except RuntimeError:
+                fut.set_exception(
+                    RuntimeError("call() needs the bridge loop: pass dispatch=BridgeThread.call")
+                )
+                return
+            task = loop.create_task(self._call_into(args, fut))
+            self._tasks.add(task)
+            task.add_done_callback(self._tasks.discard)
+
+        self._dispatch(go)
+        return fut
+
+    async def call_async(self, args: dict[str, Any] | None = None) -> dict[str, Any]:
+        """Same as :meth:`call`, awaited on the bridge loop."""
+        fut: concurrent.futures.Future[dict[str, Any]] = concurrent.futures.Future()
+        await self._call_into(args, fut)
+        return fut.result()
+
+    async def _call_into(self, args: dict[str, Any] | None, fut: concurrent.futures.Future[Any]) -> None:
+        try:
+            response = await self.port.call_service(self.binding.name, args, timeout=self.call_timeout)
+        except Exception as exc:
+            self.set_error(f"call {self.binding.name} failed: {exc}")
+            if not fut.done():
+                fut.set_exception(exc)
+            return
+        self.on_response(response)
+        if not fut.done():
+            fut.set_result(response)
+
+    def on_response(self, response: dict[str, Any]) -> None:
+        """A service response arrived (role CALL). Default: the first ``response.*`` path is the value."""
+        value: Any = response
+        for path in self.binding.field_paths:
+            part, rest = split_service_path(path)
+            if part == "response":
+                try:
+                    value = get_path(response, rest)
+                except PathError as exc:
+                    self.set_error(str(exc))
+                    return
+                break
+        self.set_value(value, message=response)
+
+    # -- state (thread-safe) -------------------------------------------------------------------------
+    def set_value(self, value: Any, message: Any = None) -> None:
+        """Record a new value (any thread): stamps it, clears the error, bumps ``seq``."""
+        with self._lock:
+            self._value = value
+            self._message = message
+            self._count += 1
+            self._stamp = self._clock()
+            self._error = None
+            self._seq += 1
+
+    def set_error(self, error: str | None) -> None:
+        """Record a problem to show on the widget (None clears it)."""
+        with self._lock:
+            if error != self._error:
+                self._error = error
+                self._seq += 1
+
+    def set_link(self, up: bool) -> None:
+        """The runtime tells the model the bridge connection went down or came back."""
+        with self._lock:
+            if self._link_down == up:
+                self._link_down = not up
+                self._seq += 1
+
+    @property
+    def state(self) -> WidgetState:
+        """A consistent snapshot for the view (any thread)."""
+        with self._lock:
+            now = self._clock()
+            age = None if self._stamp is None else max(0.0, now - self._stamp)
+            stale = False
+            if self.stale_after is not None and self._running and self.binding.role is Role.SUBSCRIBE:
+                since = age if age is not None else (now - (self._started_at or now))
+                stale = since > self.stale_after
+            return WidgetState(
+                value=self._value,
+                message=self._message,
+                count=self._count,
+                age=age,
+                stale=stale,
+                link_down=self._link_down,
+                error=self._error,
+                running=self._running,
+                seq=self._seq,
+            )
+
+    def problems(self) -> list[str]:
+        """Everything that keeps this widget from working, as sentences (binding + settings)."""
+        out = list(self.binding.problems())
+        if self.settings is not None and hasattr(self.settings, "problems"):
+            out += list(self.settings.problems())
+        return out

@@ -1,0 +1,390 @@
+"""The widget contract: what a widget package declares about each widget it offers.
+
+A widget package registers :class:`WidgetSpec` objects from its ``rcon_register_widgets(registry)`` hook.
+A spec is pure data plus lazy ``"module:attr"`` references: building the list of widgets never imports a
+view module (and so never imports Qt).
+
+Accepted types are declared with :class:`Accepts`:
+
+* ``types``: exact type names, either spelling (``"std_msgs/Float64"`` or ``"std_msgs/msg/Float64"``).
+* ``packages``: whole packages (``"sensor_msgs"``), any type in them.
+* ``fields``: field predicates over *leaf* fields of the type, anywhere in the message tree. Each match
+  gives a field path the widget would bind to (``"percentage"``, ``"linear.x"``). Names:
+  see :data:`FIELD_PREDICATES` (``"numeric"``, ``"float"``, ``"integer"``, ``"bool"``, ``"string"``,
+  ``"time"``, ``"bytes"``, ``"numeric_array"``) or a callable ``fn(field: FieldDef) -> bool``.
+* ``messages``: message predicates over the whole type *and* every scalar nested message field, giving
+  the path of the (sub)message (``""`` is the whole message). Names: see :data:`MESSAGE_PREDICATES`
+  (``"any"``, ``"empty"``, ``"image"``, ``"compressed_image"``, ``"vector3"``, ``"quaternion"``,
+  ``"twist"``, ``"geo"``) or a callable ``fn(type_name: str, fields: list[FieldDef]) -> bool``.
+* ``prefer``: field names (last path component) ranked first when several paths match, e.g.
+  ``("percentage", "data")`` so a Slider on ``sensor_msgs/BatteryState`` binds ``percentage``.
+* ``service_parts``: for service types, which side(s) the predicates look at. Paths on a service are
+  prefixed with the part: ``"request.data"``, ``"response.success"``; the whole request is ``"request"``.
+
+``"any"`` is a *generic fallback* (ranked last by the matcher); every other predicate is *structural*.
+"""
+
+from __future__ import annotations
+
+import enum
+import importlib
+from collections.abc import Callable, Iterable, Mapping
+from typing import Any, Protocol
+
+import attrs
+
+__all__ = [
+    "Role",
+    "Accepts",
+    "WidgetSpec",
+    "FieldLike",
+    "FIELD_PREDICATES",
+    "MESSAGE_PREDICATES",
+    "SpecError",
+    "SettingsError",
+    "resolve",
+    "NUMERIC_BASES",
+    "INTEGER_BASES",
+    "FLOAT_BASES",
+]
+
+
+class SpecError(ValueError):
+    """A widget spec is malformed (bad kind, unknown predicate name, bad reference...)."""
+
+
+class SettingsError(ValueError):
+    """Stored settings could not be turned into the widget's settings class; ``str()`` says why."""
+
+
+class Role(enum.StrEnum):
+    """How a widget is bound to the robot. A widget may support several roles."""
+
+    SUBSCRIBE = "subscribe"  #: shows messages from a topic
+    PUBLISH = "publish"  #: publishes messages on a topic
+    CALL = "call"  #: calls a service (a client)
+    SERVE = "serve"  #: answers a service (advertises it)
+
+    @property
+    def is_service(self) -> bool:
+        return self in (Role.CALL, Role.SERVE)
+
+    @classmethod
+    def parse(cls, value: str | Role) -> Role:
+        """``"subscribe"``, ``"SUBSCRIBE"``, ``Role.SUBSCRIBE`` -> ``Role.SUBSCRIBE``; clear error otherwise."""
+        if isinstance(value, Role):
+            return value
+        try:
+            return cls(str(value).strip().lower())
+        except ValueError:
+            names = ", ".join(r.value for r in cls)
+            raise ValueError(f"unknown role {value!r}: expected one of {names}") from None
+
+
+class FieldLike(Protocol):
+    """What predicates see: ``rcon_core.msgs.FieldDef`` (name, type, base, array_len, is_builtin)."""
+
+    name: str
+    type: str
+    base: str
+    array_len: int | None
+    is_builtin: bool
+
+
+INTEGER_BASES = frozenset(
+    {"int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64", "byte", "char"}
+)
+FLOAT_BASES = frozenset({"float32", "float64"})
+NUMERIC_BASES = INTEGER_BASES | FLOAT_BASES
+STRING_BASES = frozenset({"string", "wstring"})
+TIME_BASES = frozenset({"time", "duration", "builtin_interfaces/msg/Time", "builtin_interfaces/msg/Duration"})
+
+
+def _scalar(f: FieldLike) -> bool:
+    return f.array_len is None
+
+
+FieldPredicate = Callable[[FieldLike], bool]
+MessagePredicate = Callable[[str, "list[FieldLike]"], bool]
+
+#: named predicates over one leaf field
+FIELD_PREDICATES: dict[str, FieldPredicate] = {
+    "numeric": lambda f: _scalar(f) and f.base in NUMERIC_BASES,
+    "float": lambda f: _scalar(f) and f.base in FLOAT_BASES,
+    "integer": lambda f: _scalar(f) and f.base in INTEGER_BASES,
+    "bool": lambda f: _scalar(f) and f.base == "bool",
+    "string": lambda f: _scalar(f) and f.base in STRING_BASES,
+    "time": lambda f: _scalar(f) and f.base in TIME_BASES,
+    "bytes": lambda f: f.array_len is not None and f.base in ("uint8", "char", "byte"),
+    "numeric_array": lambda f: f.array_len is not None and f.base in NUMERIC_BASES,
+}
+
+
+def _names(fields: list[FieldLike]) -> dict[str, FieldLike]:
+    return {f.name: f for f in fields}
+
+
+def _has_numeric(fields: list[FieldLike], *names: str) -> bool:
+    by = _names(fields)
+    return all(n in by and FIELD_PREDICATES["numeric"](by[n]) for n in names)
+
+
+def _is_image(_t: str, fields: list[FieldLike]) -> bool:
+    by = _names(fields)
+    return (
+        _has_numeric(fields, "height", "width")
+        and "encoding" in by
+        and "data" in by
+        and FIELD_PREDICATES["bytes"](by["data"])
+    )
+
+
+def _is_compressed_image(_t: str, fields: list[FieldLike]) -> bool:
+    by = _names(fields)
+    return "format" in by and "data" in by and FIELD_PREDICATES["bytes"](by["data"]) and "width" not in by
+
+
+def _is_twist(_t: str, fields: list[FieldLike]) -> bool:
+    by = _names(fields)
+    return all(n in by and by[n].array_len is None and not by[n].is_builtin for n in ("linear", "angular"))
+
+
+#: named predicates over a whole (sub)message: fn(type_name, fields)
+MESSAGE_PREDICATES: dict[str, MessagePredicate] = {
+    "any": lambda _t, _f: True,
+    "empty": lambda _t, fields: len(fields) == 0,
+    "image": _is_image,
+    "compressed_image": _is_compressed_image,
+    "vector3": lambda _t, f: _has_numeric(f, "x", "y", "z") and "w" not in _names(f),
+    "quaternion": lambda _t, f: _has_numeric(f, "x", "y", "z", "w"),
+    "twist": _is_twist,
+    "geo": lambda _t, f: _has_numeric(f, "latitude", "longitude"),
+}
+
+
+def _tuple(value: Iterable[Any] | str | None) -> tuple[Any, ...]:
+    if value is None:
+        return ()
+    if isinstance(value, str):
+        return (value,)
+    return tuple(value)
+
+
+def _check_predicates(kind: str, table: Mapping[str, Any]) -> Callable[[Any, Any, tuple[Any, ...]], None]:
+    def check(_inst: Any, _attr: Any, value: tuple[Any, ...]) -> None:
+        for p in value:
+            if isinstance(p, str):
+                if p not in table:
+                    raise SpecError(
+                        f"unknown {kind} predicate {p!r}: known ones are {', '.join(sorted(table))}"
+                    )
+            elif not callable(p):
+                raise SpecError(f"{kind} predicate must be a name or a callable, got {p!r}")
+
+    return check
+
+
+@attrs.frozen
+class Accepts:
+    """Which types a widget fits. See the module docstring for the meaning of each field."""
+
+    types: tuple[str, ...] = attrs.field(default=(), converter=_tuple)
+    packages: tuple[str, ...] = attrs.field(default=(), converter=_tuple)
+    fields: tuple[str | FieldPredicate, ...] = attrs.field(
+        default=(), converter=_tuple, validator=_check_predicates("field", FIELD_PREDICATES)
+    )
+    messages: tuple[str | MessagePredicate, ...] = attrs.field(
+        default=(), converter=_tuple, validator=_check_predicates("message", MESSAGE_PREDICATES)
+    )
+    prefer: tuple[str, ...] = attrs.field(default=(), converter=_tuple)
+    service_parts: tuple[str, ...] = attrs.field(default=("request", "response"), converter=_tuple)
+
+    @service_parts.validator
+    def _check_parts(self, _attr: Any, value: tuple[str, ...]) -> None:
+        bad = [p for p in value if p not in ("request", "response")]
+        if bad:
+            raise SpecError(f"service_parts may hold 'request' and 'response' only, got {bad}")
+
+    @property
+    def is_generic(self) -> bool:
+        """True when the only thing accepted is "any message" (a fallback widget such as Text View)."""
+        return not self.types and not self.packages and not self.fields and self.messages == ("any",)
+
+    def describe(self) -> list[str]:
+        """Human-readable list, for ``rcon plugins``: ``["std_msgs/msg/Float64", "field:numeric", ...]``."""
+        out: list[str] = list(self.types)
+        out += [f"{p}/*" for p in self.packages]
+        out += ["field:" + _pred_name(p) for p in self.fields]
+        out += ["message:" + _pred_name(p) for p in self.messages]
+        return out
+
+
+def _pred_name(p: Any) -> str:
+    return p if isinstance(p, str) else getattr(p, "__name__", repr(p))
+
+
+def resolve(ref: str | Any) -> Any:
+    """Import a ``"package.module:attr.sub"`` reference; objects pass through unchanged.
+
+    Raises :class:`SpecError` naming the reference when the module or attribute is missing (the
+    underlying ImportError is chained).
+    """
+    if not isinstance(ref, str):
+        return ref
+    module_name, sep, attr = ref.partition(":")
+    if not sep or not module_name or not attr:
+        raise SpecError(f"reference {ref!r} must look like 'package.module:attr'")
+    try:
+        obj: Any = importlib.import_module(module_name)
+    except ImportError as exc:
+        raise SpecError(f"cannot import {module_name!r} for {ref!r}: {exc}") from exc
+    for part in attr.split("."):
+        try:
+            obj = getattr(obj, part)
+        except AttributeError:
+            raise SpecError(f"{module_name!r} has no attribute {attr!r} (from {ref!r})") from None
+    return obj
+
+
+def _check_ref(_inst: Any, attribute: Any, value: Any) -> None:
+    if value is None:
+        return
+    if isinstance(value, str) and (":" not in value or value.startswith(":") or value.endswith(":")):
+        raise SpecError(f"WidgetSpec.{attribute.name} {value!r} must look like 'package.module:attr'")
+
+
+def _roles(value: Iterable[Role | str] | Role | str) -> frozenset[Role]:
+    if isinstance(value, (Role, str)):
+        value = [value]
+    return frozenset(Role.parse(v) for v in value)
+
+
+def _check_kind(_inst: Any, _attr: Any, value: str) -> None:
+    import re
+
+    if not re.fullmatch(r"[a-z][a-z0-9_]*(\.[a-z0-9_][a-z0-9_-]*)+", value or ""):
+        raise SpecError(
+            f"widget kind {value!r} must be a dotted lowercase id with a package prefix, e.g. 'std.slider'"
+        )
+
+
+@attrs.frozen
+class WidgetSpec:
+    """One widget kind offered by a widget package.
+
+    ``kind`` is the stable id saved in layouts (``"std.slider"``): never rename it once released.
+    ``settings`` is the *per-instance* settings class (an attrs class whose instances have
+    ``problems() -> list[str]``: an empty list means "configured"; each string becomes a line of the
+    "not configured" warning). ``plugin_settings`` is the *per-kind* settings class shared by every
+    instance of that kind (e.g. a tile cache directory), same protocol. Both, and ``model``, may be a
+    ``"module:attr"`` string or the object itself; ``view`` must be a ``"module:attr"`` string (it
+    imports Qt). ``package`` is filled in by the plugin manager from the distribution name; leave it empty.
+    ``default_size`` is (w, h) in canvas units (device-independent pixels). Higher ``priority`` wins ties
+    in the matcher between widgets of the same rank.
+    """
+
+    kind: str = attrs.field(validator=_check_kind)
+    title: str
+    model: str | type = attrs.field(validator=_check_ref)
+    view: str | None = attrs.field(default=None, validator=_check_ref)
+    roles: frozenset[Role] = attrs.field(default=frozenset({Role.SUBSCRIBE}), converter=_roles)
+    accepts: Accepts = attrs.field(factory=Accepts)
+    settings: str | type | None = attrs.field(default=None, validator=_check_ref)
+    plugin_settings: str | type | None = attrs.field(default=None, validator=_check_ref)
+    icon: str = ""
+    description: str = ""
+    category: str = ""
+    default_size: tuple[float, float] = (160.0, 80.0)
+    priority: int = 0
+    package: str = ""
+
+    @view.validator
+    def _view_is_lazy(self, _attr: Any, value: Any) -> None:
+        if value is not None and not isinstance(value, str):
+            raise SpecError(f"WidgetSpec.view for {self.kind!r} must be a 'module:attr' string (lazy)")
+
+    @roles.validator
+    def _has_role(self, _attr: Any, value: frozenset[Role]) -> None:
+        if not value:
+            raise SpecError(f"widget {self.kind!r} declares no role")
+
+    # -- lazy loading ------------------------------------------------------------------------------
+    def load_model(self) -> type:
+        """The model class (imports the model module; never Qt)."""
+        return resolve(self.model)
+
+    def load_view(self) -> type:
+        """The Qt view class (imports Qt). Only the front end calls this."""
+        if self.view is None:
+            raise SpecError(f"widget {self.kind!r} has no view")
+        return resolve(self.view)
+
+    def load_settings_class(self) -> type | None:
+        return resolve(self.settings) if self.settings is not None else None
+
+    def load_plugin_settings_class(self) -> type | None:
+        return resolve(self.plugin_settings) if self.plugin_settings is not None else None
+
+    # -- settings ------------------------------------------------------------------------------------
+    def make_settings(self, data: Mapping[str, Any] | None = None) -> Any:
+        """Build the per-instance settings object from a stored dict (unknown keys are ignored).
+
+        Returns None when the widget has no settings class. Raises :class:`SettingsError` with a
+        human-readable reason when a value has the wrong type.
+        """
+        return _structure(self.load_settings_class(), data, self.kind)
+
+    def make_plugin_settings(self, data: Mapping[str, Any] | None = None) -> Any:
+        """Same as :meth:`make_settings` for the per-kind shared settings."""
+        return _structure(self.load_plugin_settings_class(), data, self.kind)
+
+    def settings_problems(self, data: Mapping[str, Any] | None = None) -> list[str]:
+        """Everything wrong with these stored settings, as sentences; ``[]`` means configured."""
+        try:
+            obj = self.make_settings(data)
+        except SettingsError as exc:
+            return [str(exc)]
+        if obj is None or not hasattr(obj, "problems"):
+            return []
+        return list(obj.problems())
+
+    def settings_to_dict(self, settings: Any) -> dict[str, Any]:
+        """The dict stored in a layout for a settings object."""
+        if settings is None:
+            return {}
+        return _converter().unstructure(settings)
+
+
+_CONVERTER: Any = None
+
+
+def _converter() -> Any:
+    global _CONVERTER
+    if _CONVERTER is None:
+        import cattrs
+
+        _CONVERTER = cattrs.Converter(forbid_extra_keys=False)
+    return _CONVERTER
+
+
+def _structure(cls: type | None, data: Mapping[str, Any] | None, kind: str) -> Any:
+    if cls is None:
+        return None
+    if data is None:
+        data = {}
+    if not attrs.has(cls):
+        try:
+            return cls(**data)
+        except TypeError as exc:
+            raise SettingsError(f"{kind}: {exc}") from exc
+    import cattrs
+
+    known = {a.name for a in attrs.fields(cls)} | {a.alias for a in attrs.fields(cls)}
+    data = {k: v for k, v in data.items() if k in known}
+    try:
+        return _converter().structure(data, cls)
+    except cattrs.ClassValidationError as exc:
+        msgs = cattrs.transform_error(exc)
+        raise SettingsError(f"{kind}: invalid settings: " + "; ".join(msgs)) from exc
+    except (TypeError, ValueError) as exc:
+        raise SettingsError(f"{kind}: invalid settings: {exc}") from exc
