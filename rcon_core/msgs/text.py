@@ -1,0 +1,258 @@
+"""Messages typed by a person (YAML or JSON) -> complete wire-shape dicts, with precise errors.
+
+``from_text`` parses, ``complete`` checks and fills a dict, ``validate`` lists every problem. Problems
+carry a ``path`` in the message (``linear.x``, ``covariance[3]``, ``header.stamp.secs``) and a
+``problem`` in words ("expected a number, got 'abc'").
+
+Accepted spellings: numbers for floats (ints too; ``null``, ``nan``, ``inf`` for NaN/inf), integral
+numbers for ints (range-checked for the type), ``true``/``false`` (or 0/1) for bool, base64 text, bytes or
+a list of 0..255 for ``uint8[]``/``char[]``, time as ``{secs, nsecs}`` or ``{sec, nanosec}`` or a number
+of seconds. A message with a single field also accepts that field's value alone (``5`` for
+``std_msgs/Float64``). Missing fields take their default; unknown fields are an error.
+"""
+
+from __future__ import annotations
+
+import base64
+import binascii
+import math
+from typing import TYPE_CHECKING, Any
+
+import attrs
+
+from .model import TIME_TYPES, FieldDef, is_binary, primitive
+
+if TYPE_CHECKING:
+    from .registry import TypeRegistry
+
+__all__ = ["MessageTextError", "Problem", "from_text", "complete", "validate"]
+
+
+@attrs.frozen
+class Problem:
+    """One problem in a message: where (``path``) and what (``problem``)."""
+
+    path: str
+    problem: str
+
+    def __str__(self) -> str:
+        return f"{self.path}: {self.problem}" if self.path else self.problem
+
+
+class MessageTextError(ValueError):
+    """A message typed by a person that cannot be used. ``.path`` and ``.problem`` say where and what;
+    ``.problems`` holds every problem found (the first one is ``.path``/``.problem``)."""
+
+    def __init__(self, path: str, problem: str, problems: list[Problem] | None = None) -> None:
+        self.path = path
+        self.problem = problem
+        self.problems = problems or [Problem(path, problem)]
+        super().__init__(str(Problem(path, problem)))
+
+
+def _show(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _join(path: str, name: str) -> str:
+    return f"{path}.{name}" if path else name
+
+
+class _Walker:
+    def __init__(self, reg: TypeRegistry) -> None:
+        self.reg = reg
+        self.problems: list[Problem] = []
+
+    def bad(self, path: str, problem: str) -> None:
+        self.problems.append(Problem(path, problem))
+
+    # -- messages
+    def message(self, name: str, value: Any, path: str) -> dict[str, Any]:
+        md = self.reg.msgdef(name)
+        if value is None:
+            value = {}
+        if not isinstance(value, dict):
+            if len(md.fields) == 1 and path == "":
+                value = {md.fields[0].name: value}
+            else:
+                self.bad(path, f"expected a mapping of the fields of {self.reg.wire_name(md.name)}, got {_show(value)}")
+                return self.reg.default(name)
+        known = {f.name: f for f in md.fields}
+        for key in value:
+            if key not in known:
+                listing = ", ".join(known) if known else "none"
+                self.bad(_join(path, str(key)), f"unknown field {str(key)!r} (known: {listing})")
+        out: dict[str, Any] = {}
+        for f in md.fields:
+            sub = _join(path, f.name)
+            out[f.name] = self.field(f, value[f.name], sub) if f.name in value else self.reg.default_value(f)
+        return out
+
+    def field(self, f: FieldDef, value: Any, path: str) -> Any:
+        if f.array_len is None:
+            return self.scalar(f.base, value, path)
+        if is_binary(f.base, f.array_len):
+            return self.binary(f, value, path)
+        if isinstance(value, tuple) or type(value).__name__ == "ndarray":
+            value = list(value)
+        if not isinstance(value, list):
+            self.bad(path, f"expected a list, got {_show(value)}")
+            return self.reg.default_value(f)
+        if f.array_len and len(value) != f.array_len:
+            self.bad(path, f"expected {f.array_len} items, got {len(value)}")
+            return self.reg.default_value(f)
+        if f.bound and len(value) > f.bound:
+            self.bad(path, f"at most {f.bound} items allowed, got {len(value)}")
+        return [self.scalar(f.base, v, f"{path}[{i}]") for i, v in enumerate(value)]
+
+    def binary(self, f: FieldDef, value: Any, path: str) -> str:
+        data: bytes | None = None
+        if isinstance(value, str):
+            try:
+                data = base64.b64decode(value, validate=True)
+            except (binascii.Error, ValueError):
+                self.bad(path, f"expected base64 text, bytes or a list of 0..255, got {_show(value)}")
+                return self.reg.default_value(f)
+        elif isinstance(value, bytes | bytearray | memoryview):
+            data = bytes(value)
+        elif isinstance(value, list | tuple):
+            ok = True
+            for i, v in enumerate(value):
+                if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v <= 255:
+                    self.bad(f"{path}[{i}]", f"expected a byte 0..255, got {_show(v)}")
+                    ok = False
+            if not ok:
+                return self.reg.default_value(f)
+            data = bytes(value)
+        else:
+            self.bad(path, f"expected base64 text, bytes or a list of 0..255, got {_show(value)}")
+            return self.reg.default_value(f)
+        if f.array_len and len(data) != f.array_len:
+            self.bad(path, f"expected {f.array_len} items, got {len(data)}")
+            return self.reg.default_value(f)
+        return base64.b64encode(data).decode("ascii")
+
+    def scalar(self, base: str, value: Any, path: str) -> Any:
+        if base in TIME_TYPES:
+            return self.time(base, value, path)
+        p = primitive(base, self.reg.ros2)
+        if p is None:
+            return self.message(base, value, path)
+        if p.kind == "float":
+            return self.float_(p, value, path)
+        if p.kind == "int":
+            return self.int_(p, value, path)
+        if p.kind == "bool":
+            if isinstance(value, bool):
+                return value
+            if isinstance(value, int) and value in (0, 1):
+                return bool(value)
+            self.bad(path, f"expected true or false, got {_show(value)}")
+            return False
+        if isinstance(value, str):
+            return value
+        self.bad(path, f"expected a string, got {_show(value)} (put quotes around it)")
+        return ""
+
+    def float_(self, p: Any, value: Any, path: str) -> float:
+        if value is None:
+            return math.nan
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            if isinstance(value, str) and value.strip().lower() in ("nan", "inf", "+inf", "-inf", "infinity", "-infinity"):
+                return float(value.strip())
+            try:
+                number = float(value) if not isinstance(value, str | bool) else None
+            except (TypeError, ValueError):
+                number = None
+            if number is None:
+                self.bad(path, f"expected a number, got {_show(value)}")
+                return 0.0
+            value = number
+        out = float(value)
+        if p.hi is not None and math.isfinite(out) and abs(out) > p.hi:
+            self.bad(path, f"value {value} out of range for {p.name}")
+            return 0.0
+        return out
+
+    def int_(self, p: Any, value: Any, path: str) -> int:
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            if hasattr(value, "__index__") and not isinstance(value, bool):
+                value = int(value)
+            else:
+                self.bad(path, f"expected an integer, got {_show(value)}")
+                return 0
+        if isinstance(value, float):
+            if not value.is_integer():
+                self.bad(path, f"expected an integer, got {value}")
+                return 0
+            value = int(value)
+        if not p.lo <= value <= p.hi:
+            self.bad(path, f"value {value} out of range for {p.name} ({p.lo}..{p.hi})")
+            return 0
+        return value
+
+    def time(self, base: str, value: Any, path: str) -> dict[str, int]:
+        a, b = self.reg.time_fields
+        if isinstance(value, int | float) and not isinstance(value, bool):
+            if not math.isfinite(value):
+                self.bad(path, f"expected a time, got {value}")
+                return {a: 0, b: 0}
+            whole = math.floor(value)
+            return {a: int(whole), b: int(round((value - whole) * 1e9)) % 1_000_000_000}
+        if not isinstance(value, dict):
+            self.bad(path, f"expected a time ({{{a}: ..., {b}: ...}} or seconds), got {_show(value)}")
+            return {a: 0, b: 0}
+        aliases = {"secs": a, "sec": a, "nsecs": b, "nanosec": b}
+        out = {a: 0, b: 0}
+        for key, v in value.items():
+            if key not in aliases:
+                self.bad(_join(path, str(key)), f"unknown field {str(key)!r} (known: {a}, {b})")
+                continue
+            target = aliases[key]
+            lo, hi = (-(1 << 31), (1 << 32) - 1)
+            if isinstance(v, bool) or not isinstance(v, int | float) or (isinstance(v, float) and not v.is_integer()):
+                self.bad(_join(path, str(key)), f"expected an integer, got {_show(v)}")
+                continue
+            if not lo <= v <= hi:
+                self.bad(_join(path, str(key)), f"value {v} out of range for {base}")
+                continue
+            out[target] = int(v)
+        return out
+
+
+def complete(reg: TypeRegistry, name: str, msg: Any) -> dict[str, Any]:
+    """Check ``msg`` against ``name`` and fill every missing field; raises :class:`MessageTextError`."""
+    w = _Walker(reg)
+    out = w.message(reg.resolve(name), msg, "")
+    if w.problems:
+        first = w.problems[0]
+        raise MessageTextError(first.path, first.problem, w.problems)
+    return out
+
+
+def validate(reg: TypeRegistry, name: str, msg: Any) -> list[Problem]:
+    """Every problem in ``msg`` as a message of type ``name``; an empty list when it is fine."""
+    w = _Walker(reg)
+    w.message(reg.resolve(name), msg, "")
+    return w.problems
+
+
+def parse_text(text: str) -> Any:
+    """YAML (a superset of JSON) -> Python value; raises :class:`MessageTextError` on a syntax error."""
+    import yaml
+
+    if not text or not text.strip():
+        return {}
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" (line {mark.line + 1}, column {mark.column + 1})" if mark is not None else ""
+        what = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise MessageTextError("", f"not valid YAML or JSON{where}: {what}") from None
+
+
+def from_text(reg: TypeRegistry, name: str, text: str) -> dict[str, Any]:
+    """Parse YAML/JSON text typed by a person into a complete message of type ``name``."""
+    return complete(reg, name, parse_text(text))
