@@ -254,22 +254,31 @@ class PluginManager:
     def apply_types(self, types: Any) -> list[str]:
         """Add contributed definitions to an ``rcon_core.msgs.TypeRegistry``.
 
-        Returns the names added. A definition that does not parse fails its plugin (recorded, reason
-        kept) without stopping the others.
+        ``.msg``/``.srv`` text goes through ``types.add_msg_text``, typedefs through
+        ``types.add_typedefs``. Returns the canonical names added. A definition that does not parse
+        fails its plugin (recorded with the reason; its widgets are withdrawn) without stopping others.
         """
-        from .typedefs import definition_to_typedefs
-
         added: list[str] = []
         for info in self.plugins:
             if info.status != "loaded":
                 continue
-            for d in info.types:
-                try:
-                    types.add_typedefs(definition_to_typedefs(d))
-                except Exception as exc:
-                    for spec in info.widgets:
-                        self._specs.pop(spec.kind, None)
-                    self._fail(info, exc)
-                    break
-                added.append(d.name)
+            mine: list[str] = []
+            try:
+                for d in info.types:
+                    if d.kind == "typedefs":
+                        mine += types.add_typedefs(list(d.typedefs))
+                    else:
+                        mine += types.add_msg_text(_interface_name(d.name, d.kind), d.text)
+            except Exception as exc:
+                for spec in info.widgets:
+                    self._specs.pop(spec.kind, None)
+                self._fail(info, exc)
+                continue
+            added += mine
         return added
+
+
+def _interface_name(name: str, kind: str) -> str:
+    """``lab_msgs/Grip`` given as a service -> ``lab_msgs/srv/Grip`` (the ROS 1 spelling is ambiguous)."""
+    parts = name.split("/")
+    return f"{parts[0]}/{kind}/{parts[1]}" if len(parts) == 2 else name
