@@ -1,0 +1,850 @@
+"""``BridgeClient``: one rosbridge v2 connection, shared by many nodes, on one asyncio loop.
+
+Behaviour decisions (see also ``topics.py`` for how nodes share subscriptions):
+
+Reconnect
+    ``async for ws in websockets.asyncio.client.connect(...)`` with our own ``reconnect_delays``: capped
+    exponential backoff (``backoff_min`` doubling up to ``backoff_max``) with full jitter.  After every
+    (re)connect the client sends, in order: ``auth`` (when configured), ``set_level`` (when set), every
+    advertisement, every advertised service, then every subscription -- rosbridge forgets all of them with
+    the connection (README point 30).  TLS certificate errors are fatal rather than retried.
+
+State
+    CONNECTING (first attempt) -> CONNECTED -> RECONNECTING (link lost, retrying) -> CONNECTED ...;
+    CLOSED after ``close()`` or a fatal error.  Listeners get ``fn(state)`` on the loop thread.
+
+Latency
+    A WebSocket ping every ``latency_interval`` (2 s) seconds; ``client.latency`` is the ping/pong
+    round trip.  It needs no rosapi and works on any server; a pong missing for ``pong_timeout`` seconds
+    drops the link (then it reconnects).
+
+Publishing while the link is down
+    Nothing is queued for later, so a robot never receives a burst of stale commands.  For a **latched**
+    topic only the latest value is kept and sent right after the advertisement is restored; every other
+    publish made while down is dropped and counted (``Publisher.dropped``, ``client.stats``).  Frames
+    still in the outgoing queue when the link drops are dropped too (counted).
+
+Service calls
+    Every call has a client-side timeout (``timeout`` or ``call_timeout``) even though rosbridge 0.11
+    ignores the ``timeout`` field; a missing or hung service raises ``ServiceTimeoutError``.  A call made
+    while reconnecting waits for the link inside the same budget.  Calls waiting when the link drops fail
+    with ``ConnectionLostError``.  ``result: false`` raises ``ServiceError`` carrying the server's string.
+
+Bad input from the server
+    Invalid JSON, unknown ops, missing or mistyped fields, broken fragments and frames above
+    ``max_message_size`` are logged (rate limited, counted in ``client.stats``) and dropped; the
+    connection, the process and other subscriptions carry on.  A callback that raises is logged and
+    does not affect other callbacks.  Frames above the hard ``max_frame_size`` make the websockets
+    library close the link, which then reconnects.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import enum
+import inspect
+import logging
+import random
+import ssl
+from collections import deque
+from collections.abc import Awaitable, Callable, Generator
+from typing import Any
+
+import orjson
+from websockets.asyncio.client import ClientConnection, connect, process_exception
+from websockets.exceptions import ConnectionClosed
+
+from .errors import (
+    ActionError,
+    BridgeError,
+    ConnectionLostError,
+    NotConnectedError,
+    ServiceError,
+    ServiceTimeoutError,
+)
+from .nodes import ActionGoal, Node, Publisher, ServiceServer, Subscription
+from .protocol import FragmentAssembler, decode_binary, decode_png, encode
+from .rawdecode import RawDecoder, _short, has_fixed_arrays
+from .topics import AdvertEntry, TopicEntry
+
+log = logging.getLogger(__name__)
+
+_loads = orjson.loads
+_dumps = orjson.dumps
+LOG_LEVELS = ("info", "warning", "error", "none")
+AUTH_FIELDS = ("mac", "client", "dest", "rand", "t", "level", "end")
+
+
+class ConnectionState(enum.Enum):
+    CONNECTING = "connecting"
+    CONNECTED = "connected"
+    RECONNECTING = "reconnecting"
+    CLOSED = "closed"
+
+
+def _check_auth(auth: dict[str, Any]) -> dict[str, Any]:
+    if not isinstance(auth, dict):
+        raise TypeError(f"auth must be a dict of rosauth fields, got {type(auth).__name__}")
+    missing = [f for f in AUTH_FIELDS if f not in auth]
+    if missing:
+        raise ValueError(f"auth is missing rosauth field(s): {', '.join(missing)}")
+    return {"op": "auth", **{f: auth[f] for f in AUTH_FIELDS}}
+
+
+class BridgeClient:
+    """A rosbridge v2 client.  Create, ``await connect()``, then hand out ``node(label)`` to consumers."""
+
+    def __init__(self, url: str, *, reconnect: bool = True, ca_file: str | None = None,
+                 auth: dict[str, Any] | Callable[[], Any] | None = None, call_timeout: float = 10.0,
+                 registry: Any = None, typed_arrays: str = "list", backoff_min: float = 0.25,
+                 backoff_max: float = 10.0, latency_interval: float = 2.0, pong_timeout: float = 10.0,
+                 open_timeout: float = 10.0, max_message_size: int = 64 << 20,
+                 max_frame_size: int = 256 << 20, fragment_timeout: float = 10.0) -> None:
+        if not isinstance(url, str) or not url.startswith(("ws://", "wss://")):
+            raise ValueError(f"url must start with ws:// or wss://, got {url!r}")
+        if typed_arrays not in ("list", "numpy"):
+            raise ValueError("typed_arrays must be 'list' or 'numpy'")
+        if isinstance(auth, dict):
+            _check_auth(auth)
+        self.url = url
+        self.reconnect = reconnect
+        self.ca_file = ca_file
+        self.auth = auth
+        self.call_timeout = call_timeout
+        self.registry = registry
+        self.typed_arrays = typed_arrays
+        self.backoff_min = backoff_min
+        self.backoff_max = backoff_max
+        self.latency_interval = latency_interval
+        self.pong_timeout = pong_timeout
+        self.open_timeout = open_timeout
+        self.max_message_size = max_message_size
+        self.max_frame_size = max_frame_size
+        self.latency: float | None = None
+        self.last_error: BaseException | None = None
+        self.stats: dict[str, int] = {"connects": 0, "bad_frames": 0, "dropped_while_down": 0,
+                                      "dropped_on_disconnect": 0, "oversize_frames": 0}
+        self._state = ConnectionState.CLOSED
+        self._state_listeners: list[Callable[[ConnectionState], None]] = []
+        self._status_listeners: list[Callable[[dict[str, Any]], None]] = []
+        self._ws: ClientConnection | None = None
+        self._task: asyncio.Task[None] | None = None
+        self._connected = asyncio.Event()
+        self._closing = False
+        self._out: deque[bytes] = deque()
+        self._out_event = asyncio.Event()
+        self._nodes: dict[str, Node] = {}
+        self._topics: dict[str, TopicEntry] = {}
+        self._adverts: dict[str, AdvertEntry] = {}
+        self._services: dict[str, ServiceServer] = {}
+        self._pending: dict[str, asyncio.Future[Any]] = {}
+        self._goals: dict[str, ActionGoal] = {}
+        self._typedefs: dict[str, list[dict[str, Any]]] = {}
+        self._raw = RawDecoder()
+        self._fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_message_size)
+        self._png_fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_message_size)
+        self._level: str | None = None
+        self._seq = 0
+        self._bad_counts: dict[str, int] = {}
+        self._tasks: set[asyncio.Task[Any]] = set()
+        self._ops: dict[str, Callable[[dict[str, Any]], None]] = {
+            "publish": self._on_publish, "fragment": self._on_fragment, "png": self._on_png,
+            "service_response": self._on_service_response, "call_service": self._on_call_service,
+            "status": self._on_status, "action_feedback": self._on_action_feedback,
+            "action_result": self._on_action_result,
+        }
+        from .rosapi import Rosapi
+
+        self.rosapi = Rosapi(self)
+
+    # ================================================================== state
+
+    @property
+    def state(self) -> ConnectionState:
+        return self._state
+
+    @property
+    def connected(self) -> bool:
+        return self._ws is not None
+
+    def add_state_listener(self, fn: Callable[[ConnectionState], None]) -> Callable[[], None]:
+        """Call ``fn(state)`` on every change; returns a function that removes the listener."""
+        self._state_listeners.append(fn)
+        return lambda: self._state_listeners.remove(fn) if fn in self._state_listeners else None
+
+    def add_status_listener(self, fn: Callable[[dict[str, Any]], None]) -> Callable[[], None]:
+        """Call ``fn(frame)`` for each ``status`` op the server sends (``level``, ``msg``, ``id``)."""
+        self._status_listeners.append(fn)
+        return lambda: self._status_listeners.remove(fn) if fn in self._status_listeners else None
+
+    def _set_state(self, state: ConnectionState) -> None:
+        if state is self._state:
+            return
+        self._state = state
+        for fn in list(self._state_listeners):
+            try:
+                fn(state)
+            except Exception:
+                log.exception("state listener raised")
+
+    def node(self, label: str) -> Node:
+        """A new node; its id is ``label``, made unique with a ``#n`` suffix when already taken."""
+        if not isinstance(label, str) or not label:
+            raise ValueError("node label must be a non-empty string")
+        node_id, n = label, 1
+        while node_id in self._nodes:
+            n += 1
+            node_id = f"{label}#{n}"
+        node = self._nodes[node_id] = Node(self, node_id)
+        return node
+
+    # ================================================================== connecting
+
+    def _ssl_context(self) -> ssl.SSLContext | None:
+        if not self.url.startswith("wss://"):
+            return None
+        ctx = ssl.create_default_context(cafile=self.ca_file) if self.ca_file else ssl.create_default_context()
+        return ctx
+
+    def _delays(self) -> Generator[float]:
+        delay = self.backoff_min
+        while True:
+            yield random.uniform(self.backoff_min / 2, delay)  # jitter
+            delay = min(delay * 2, self.backoff_max)
+
+    def _process_exception(self, exc: Exception) -> Exception | None:
+        self.last_error = exc
+        if isinstance(exc, ssl.SSLCertVerificationError):
+            return exc  # retrying cannot fix a certificate problem
+        if self._state is not ConnectionState.CLOSED:
+            log.info("connecting to %s failed: %s", self.url, exc)
+        return process_exception(exc)
+
+    def _connector(self) -> connect:
+        return connect(self.url, ssl=self._ssl_context(), compression=None, ping_interval=None,
+                       open_timeout=self.open_timeout, max_size=self.max_frame_size, max_queue=64,
+                       process_exception=self._process_exception, reconnect_delays=self._delays,
+                       close_timeout=2)
+
+    async def connect(self, timeout: float | None = None) -> None:
+        """Connect; returns once connected.  With ``reconnect=False`` the first failure is raised; with
+        reconnect it keeps trying (until ``timeout``, then ``TimeoutError``) unless the error is fatal."""
+        if self._ws is not None:
+            return
+        self._closing = False
+        if self._task is None or self._task.done():
+            self._set_state(ConnectionState.CONNECTING)
+            if not self.reconnect:
+                try:
+                    ws = await self._connector()
+                except BaseException as exc:
+                    self.last_error = exc
+                    self._set_state(ConnectionState.CLOSED)
+                    raise
+                self._task = asyncio.create_task(self._serve_once(ws))
+                return
+            self._task = asyncio.create_task(self._run())
+        waiter = asyncio.ensure_future(self._connected.wait())
+        try:
+            done, _ = await asyncio.wait({waiter, self._task}, timeout=timeout,
+                                         return_when=asyncio.FIRST_COMPLETED)
+        finally:
+            waiter.cancel()
+        if self._ws is not None:
+            return
+        if self._task.done():
+            exc = self._task.exception() if not self._task.cancelled() else None
+            raise exc or NotConnectedError(f"could not connect to {self.url}")
+        raise TimeoutError(f"not connected to {self.url} within {timeout} s (last error: {self.last_error})")
+
+    async def close(self) -> None:
+        """Close the connection and stop reconnecting.  Nodes stay usable for a later ``connect()``."""
+        self._closing = True
+        task, self._task = self._task, None
+        ws = self._ws
+        if ws is not None:
+            await ws.close()
+        if task is not None and not task.done():
+            task.cancel()
+        if task is not None:
+            try:
+                await task
+            except (asyncio.CancelledError, Exception):
+                pass
+        for t in list(self._tasks):
+            t.cancel()
+        self._set_state(ConnectionState.CLOSED)
+
+    async def __aenter__(self) -> BridgeClient:
+        await self.connect()
+        return self
+
+    async def __aexit__(self, *exc: object) -> None:
+        await self.close()
+
+    async def _run(self) -> None:
+        try:
+            async for ws in self._connector():
+                await self._serve_once(ws, final=False)
+                if self._closing:
+                    break
+                self._set_state(ConnectionState.RECONNECTING)
+                await asyncio.sleep(random.uniform(0, self.backoff_min))  # never a tight reconnect loop
+        except asyncio.CancelledError:
+            raise
+        except Exception as exc:
+            self.last_error = exc
+            log.error("giving up on %s: %s", self.url, exc)
+            raise
+        finally:
+            self._set_state(ConnectionState.CLOSED)
+
+    async def _serve_once(self, ws: ClientConnection, final: bool = True) -> None:
+        self._ws = ws
+        self.stats["connects"] += 1
+        writer = asyncio.create_task(self._writer(ws))
+        pinger = asyncio.create_task(self._pinger(ws))
+        try:
+            await self._restore()
+            self._connected.set()
+            self._set_state(ConnectionState.CONNECTED)
+            await self._read(ws)
+        except ConnectionClosed as exc:
+            self.last_error = exc
+        finally:
+            self._ws = None
+            self._connected.clear()
+            writer.cancel()
+            pinger.cancel()
+            self._on_disconnect()
+            if final:
+                self._set_state(ConnectionState.CLOSED)
+        if not self._closing:
+            log.warning("connection to %s lost (%s)", self.url, ws.close_reason or ws.close_code or "no close frame")
+
+    async def _restore(self) -> None:
+        """Send auth, level, advertisements, services and subscriptions on a fresh connection."""
+        if self.auth is not None:
+            auth = self.auth() if callable(self.auth) else self.auth
+            if inspect.isawaitable(auth):
+                auth = await auth
+            self._send(_check_auth(auth))
+        if self._level is not None:
+            self._send({"op": "set_level", "level": self._level})
+        for entry in self._adverts.values():
+            entry.active = False
+            self._send(entry.advertise_op())
+            entry.active = True
+            if entry.pending is not None:
+                self._send_publish(entry, entry.pending)
+                entry.pending = None
+        for srv in self._services.values():
+            self._send({"op": "advertise_service", "service": srv.service, "type": srv.type})
+        for entry in self._topics.values():
+            entry.sid = None
+            entry.sent_options = None
+            self._sync_topic(entry)
+
+    def _on_disconnect(self) -> None:
+        dropped = len(self._out)
+        if dropped:
+            self.stats["dropped_on_disconnect"] += dropped
+            self._out.clear()
+        for entry in self._adverts.values():
+            entry.active = False
+        for entry in self._topics.values():
+            entry.sid = None
+            entry.sent_options = None
+        for fut in list(self._pending.values()):
+            if not fut.done():
+                fut.set_exception(ConnectionLostError("connection lost before the answer arrived"))
+        self._pending.clear()
+        for gid, goal in list(self._goals.items()):
+            if not goal._future.done():
+                goal._future.set_exception(ConnectionLostError(f"connection lost while goal {gid} was active"))
+        self._goals.clear()
+
+    # ================================================================== writing
+
+    def _send(self, op: dict[str, Any]) -> bool:
+        """Queue one frame for the current connection; False when there is none."""
+        if self._ws is None:
+            return False
+        self._out.append(encode(op))
+        self._out_event.set()
+        return True
+
+    async def _writer(self, ws: ClientConnection) -> None:
+        out = self._out
+        event = self._out_event
+        try:
+            while True:
+                while out:
+                    await ws.send(out.popleft(), text=True)
+                event.clear()
+                await event.wait()
+        except ConnectionClosed:
+            pass
+
+    async def _pinger(self, ws: ClientConnection) -> None:
+        try:
+            while True:
+                waiter = await ws.ping()
+                try:
+                    self.latency = await asyncio.wait_for(waiter, self.pong_timeout)
+                except TimeoutError:
+                    log.warning("no pong from %s within %.0f s; dropping the link", self.url, self.pong_timeout)
+                    ws.transport.abort()
+                    return
+                await asyncio.sleep(self.latency_interval)
+        except ConnectionClosed:
+            pass
+
+    # ================================================================== reading (hot path)
+
+    async def _read(self, ws: ClientConnection) -> None:
+        loads = _loads
+        topics = self._topics
+        limit = self.max_message_size
+        other = self._handle_other
+        while True:
+            raw = await ws.recv()
+            if len(raw) > limit:
+                self._oversize(raw)
+                continue
+            if raw.__class__ is str:
+                try:
+                    m = loads(raw)
+                except orjson.JSONDecodeError as exc:
+                    self._bad_frame("json", f"text frame is not valid JSON ({exc}): {raw[:80]!r}")
+                    continue
+            else:
+                m = self._decode_binary(raw)
+                if m is None:
+                    continue
+            try:
+                if m["op"] == "publish":
+                    entry = topics.get(m["topic"])
+                    if entry is not None:
+                        entry.deliver(m["msg"])
+                        continue
+            except (KeyError, TypeError):
+                pass
+            other(m)
+
+    def _dispatch_text(self, text: str | bytes) -> None:
+        """Handle a frame reconstructed from fragments or a png frame."""
+        try:
+            m = _loads(text)
+        except orjson.JSONDecodeError as exc:
+            self._bad_frame("json", f"reassembled frame is not valid JSON ({exc})")
+            return
+        self._handle_other(m)
+
+    def _decode_binary(self, raw: bytes) -> Any:
+        try:
+            return decode_binary(raw, self.typed_arrays)
+        except Exception as exc:
+            self._bad_frame("binary", f"binary frame of {len(raw)} bytes dropped: {exc}")
+            return None
+
+    def _oversize(self, raw: str | bytes) -> None:
+        self.stats["oversize_frames"] += 1
+        self._bad_frame("size", f"frame of {len(raw)} bytes exceeds max_message_size={self.max_message_size}; dropped")
+
+    def _bad_frame(self, kind: str, message: str) -> None:
+        """Log a bad frame from the server (the first 20 of each kind, then every 1000th) and count it."""
+        self.stats["bad_frames"] += 1
+        n = self._bad_counts[kind] = self._bad_counts.get(kind, 0) + 1
+        if n <= 20 or n % 1000 == 0:
+            suffix = f" [{n} such frames so far]" if n > 20 else ""
+            log.warning("bad frame from %s: %s%s", self.url, message, suffix)
+
+    def _handle_other(self, m: Any) -> None:
+        if not isinstance(m, dict):
+            self._bad_frame("shape", f"frame is a JSON {type(m).__name__}, not an object; ignored")
+            return
+        op = m.get("op")
+        handler = self._ops.get(op) if isinstance(op, str) else None
+        if handler is None:
+            if "op" not in m:
+                self._bad_frame("op", f"frame without 'op' ignored: {str(m)[:80]}")
+            else:
+                self._bad_frame("op", f"unknown op {op!r} ignored")
+            return
+        try:
+            handler(m)
+        except (KeyError, TypeError, ValueError, AttributeError) as exc:
+            self._bad_frame("field", f"malformed {op!r} frame ignored ({type(exc).__name__}: {exc})")
+
+    # ------------------------------------------------------------------ op handlers (slow path)
+
+    def _on_publish(self, m: dict[str, Any]) -> None:
+        topic = m.get("topic")
+        if not isinstance(topic, str):
+            raise TypeError(f"'topic' must be a string, got {type(topic).__name__}")
+        if "msg" not in m:
+            raise KeyError("publish frame has no 'msg'")
+        entry = self._topics.get(topic)
+        if entry is not None:
+            entry.deliver(m["msg"])
+
+    def _on_fragment(self, m: dict[str, Any]) -> None:
+        from .errors import ProtocolError
+
+        try:
+            text = self._fragments.add(m)
+        except ProtocolError as exc:
+            self._bad_frame("fragment", str(exc))
+            return
+        if text is not None:
+            self._dispatch_text(text)
+
+    def _on_png(self, m: dict[str, Any]) -> None:
+        from .errors import ProtocolError
+
+        try:
+            data = m["data"]
+            if "num" in m and "total" in m:
+                data = self._png_fragments.add(m)
+                if data is None:
+                    return
+            if not isinstance(data, str):
+                raise ProtocolError(f"png frame: 'data' must be a string, got {type(data).__name__}")
+            inner = decode_png(data)
+        except ProtocolError as exc:
+            self._bad_frame("png", str(exc))
+            return
+        self._handle_other(inner)
+
+    def _on_service_response(self, m: dict[str, Any]) -> None:
+        cid = m.get("id")
+        fut = self._pending.pop(cid, None) if isinstance(cid, str) else None
+        if fut is None:
+            log.debug("service_response for unknown or finished call %r (late answer?)", cid)
+            return
+        if fut.done():
+            return
+        values = m.get("values")
+        if m.get("result", True) is False:
+            fut.set_exception(ServiceError(values if isinstance(values, str) else str(values), m.get("service")))
+        else:
+            fut.set_result({} if values is None else values)
+
+    def _on_status(self, m: dict[str, Any]) -> None:
+        level = m.get("level", "info")
+        text = m.get("msg", "")
+        sid = m.get("id")
+        pylevel = {"error": logging.ERROR, "warning": logging.WARNING}.get(level, logging.INFO)
+        log.log(pylevel, "server status (%s)%s: %s", level, f" for {sid}" if sid else "", text)
+        if level == "error" and isinstance(sid, str):
+            fut = self._pending.pop(sid, None)
+            if fut is not None and not fut.done():
+                fut.set_exception(ServiceError(str(text)))
+        for fn in list(self._status_listeners):
+            try:
+                fn(m)
+            except Exception:
+                log.exception("status listener raised")
+
+    # ================================================================== subscriptions
+
+    def _add_subscription(self, sub: Subscription) -> None:
+        entry = self._topics.get(sub.topic)
+        if entry is None:
+            entry = self._topics[sub.topic] = TopicEntry(self, sub.topic)
+            entry.decoder = self._raw
+        entry.subs.append(sub)
+        entry.rebuild()
+        self._sync_topic(entry)
+
+    def _remove_subscription(self, sub: Subscription) -> None:
+        entry = self._topics.get(sub.topic)
+        if entry is None or sub not in entry.subs:
+            return
+        entry.subs.remove(sub)
+        if not entry.subs:
+            del self._topics[sub.topic]
+            if entry.sid is not None:
+                self._send({"op": "unsubscribe", "id": entry.sid, "topic": entry.topic})
+            entry.sid = None
+            entry.raw_type = None
+            entry.rebuild()
+            return
+        entry.rebuild()
+        self._sync_topic(entry)
+
+    def _sync_topic(self, entry: TopicEntry) -> None:
+        """Make the server-side subscription match what the nodes want (resubscribe when it changed)."""
+        if self._ws is None or not entry.subs:
+            return
+        wanted = entry.wanted()
+        if wanted == entry.sent_options:
+            return
+        entry.sent_options = wanted
+        if wanted["compression"] in ("cbor", "cbor-raw"):
+            self._spawn(self._resolve_and_subscribe(entry, wanted))
+        else:
+            self._subscribe_now(entry, wanted)
+
+    async def _resolve_and_subscribe(self, entry: TopicEntry, wanted: dict[str, Any]) -> None:
+        opts = dict(wanted)
+        try:
+            type_name = opts.get("type") or await self.rosapi.topic_type(entry.topic)
+            if not type_name:
+                raise BridgeError(f"the server does not know the type of {entry.topic}")
+            opts["type"] = type_name
+            typedefs = await self.typedefs(type_name)
+            if opts["compression"] == "cbor" and has_fixed_arrays(type_name, typedefs):
+                log.info("%s [%s] has fixed-size arrays, which rosbridge's cbor encoder cannot send; "
+                         "using cbor-raw instead", entry.topic, type_name)
+                opts["compression"] = "cbor-raw"
+        except Exception as exc:
+            log.warning("%s: cannot prepare %s compression (%s); subscribing without compression",
+                        entry.topic, opts["compression"], exc)
+            opts["compression"] = "none"
+        if self._topics.get(entry.topic) is not entry or entry.sent_options is not wanted or self._ws is None:
+            return  # superseded while we were asking the server
+        self._subscribe_now(entry, opts)
+
+    def _subscribe_now(self, entry: TopicEntry, opts: dict[str, Any]) -> None:
+        self._seq += 1
+        sid = f"sub:{entry.topic}:{self._seq}"
+        op = {"op": "subscribe", "id": sid, "topic": entry.topic, **opts}
+        entry.raw_type = opts["type"] if opts["compression"] == "cbor-raw" else None
+        old, entry.sid = entry.sid, sid
+        entry.rebuild()
+        self._send(op)
+        if old is not None:
+            self._send({"op": "unsubscribe", "id": old, "topic": entry.topic})
+
+    async def typedefs(self, type_name: str) -> list[dict[str, Any]]:
+        """rosapi typedefs of a message type, from the server (cached), else from the local registry."""
+        key = _short(type_name)
+        cached = self._typedefs.get(key)
+        if cached is not None:
+            return cached
+        try:
+            typedefs = await self.rosapi.message_details(key if "/msg/" not in type_name else type_name)
+        except (ServiceError, NotConnectedError) as exc:
+            if self.registry is None or not self.registry.has(type_name):
+                raise
+            log.info("rosapi message_details failed for %s (%s); using the local registry", type_name, exc)
+            typedefs = self.registry.typedefs(type_name)
+        if not typedefs:
+            raise BridgeError(f"the server has no definition for {type_name}")
+        self._typedefs[key] = typedefs
+        self._raw.add_typedefs(typedefs)
+        if self.registry is not None and hasattr(self.registry, "add_typedefs"):
+            try:
+                self.registry.add_typedefs(typedefs)
+            except Exception as exc:
+                log.debug("registry did not take typedefs of %s: %s", type_name, exc)
+        return typedefs
+
+    # ================================================================== publishing
+
+    def _add_publisher(self, pub: Publisher) -> None:
+        entry = self._adverts.get(pub.topic)
+        if entry is None:
+            entry = self._adverts[pub.topic] = AdvertEntry(pub.topic, pub.type)
+        elif _short(entry.type) != _short(pub.type):
+            raise BridgeError(f"{pub.topic} is already advertised as {entry.type}, not {pub.type}")
+        entry.pubs.append(pub)
+        changed = entry.merge()
+        if self._ws is not None and (not entry.active or changed):
+            self._send(entry.advertise_op())
+            entry.active = True
+
+    def _remove_publisher(self, pub: Publisher) -> None:
+        entry = self._adverts.get(pub.topic)
+        if entry is None or pub not in entry.pubs:
+            return
+        entry.pubs.remove(pub)
+        if not entry.pubs:
+            del self._adverts[pub.topic]
+            if entry.active:
+                self._send({"op": "unadvertise", "id": f"adv:{entry.topic}", "topic": entry.topic})
+            return
+        entry.merge()
+
+    def _publish(self, pub: Publisher, msg: dict[str, Any]) -> bool:
+        entry = self._adverts[pub.topic]
+        if self._ws is not None and entry.active:
+            self._send_publish(entry, msg)
+            pub.sent += 1
+            return True
+        if entry.latch:
+            entry.pending = msg  # latest value wins; sent after the advertisement is restored
+            return True
+        pub.dropped += 1
+        entry.dropped += 1
+        self.stats["dropped_while_down"] += 1
+        return False
+
+    def _send_publish(self, entry: AdvertEntry, msg: dict[str, Any]) -> None:
+        # latch is repeated in every publish (README point 25: otherwise the topic is re-registered)
+        op = {"op": "publish", "topic": entry.topic, "msg": msg, "latch": True} if entry.latch else \
+            {"op": "publish", "topic": entry.topic, "msg": msg}
+        self._out.append(encode(op))
+        self._out_event.set()
+
+    # ================================================================== services
+
+    async def call_service(self, name: str, args: dict[str, Any] | list | None = None,
+                           timeout: float | None = None) -> Any:
+        """Call a service; returns its ``values``.  Raises ServiceError / ServiceTimeoutError."""
+        if not isinstance(name, str) or not name:
+            raise ValueError(f"service name must be a non-empty string, got {name!r}")
+        if args is not None and not isinstance(args, dict | list):
+            raise TypeError(f"args must be a dict or list, got {type(args).__name__}")
+        budget = self.call_timeout if timeout is None else timeout
+        self._seq += 1
+        cid = f"call:{name}:{self._seq}"
+        op: dict[str, Any] = {"op": "call_service", "id": cid, "service": name}
+        if args is not None:
+            op["args"] = args
+        if timeout is not None:
+            op["timeout"] = timeout
+        fut: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
+        try:
+            async with asyncio.timeout(budget):
+                await self._wait_connected()
+                self._pending[cid] = fut
+                self._send(op)
+                return await fut
+        except TimeoutError:
+            raise ServiceTimeoutError(f"no answer within {budget:g} s", name) from None
+        finally:
+            self._pending.pop(cid, None)
+
+    async def _wait_connected(self) -> None:
+        if self._ws is not None:
+            return
+        if self._task is None or self._task.done():
+            raise NotConnectedError(f"not connected to {self.url}")
+        await self._connected.wait()
+
+    def _add_service(self, srv: ServiceServer) -> None:
+        if srv.service in self._services:
+            other = self._services[srv.service]
+            raise BridgeError(f"service {srv.service} is already advertised by node {other.node.id}")
+        self._services[srv.service] = srv
+        self._send({"op": "advertise_service", "service": srv.service, "type": srv.type})
+
+    def _remove_service(self, srv: ServiceServer) -> None:
+        if self._services.get(srv.service) is srv:
+            del self._services[srv.service]
+            self._send({"op": "unadvertise_service", "service": srv.service})
+
+    def _on_call_service(self, m: dict[str, Any]) -> None:
+        name = m["service"]
+        if not isinstance(name, str):
+            raise TypeError(f"'service' must be a string, got {type(name).__name__}")
+        srv = self._services.get(name)
+        if srv is None:
+            log.warning("server called %s, which this client does not provide", name)
+            self._respond(m, f"service {name} is not provided by this client", False)
+            return
+        args = m.get("args")
+        if args is None:
+            args = {}
+        srv.calls += 1
+        try:
+            result = srv.handler(args)
+        except Exception as exc:
+            self._handler_failed(m, srv, exc)
+            return
+        if inspect.isawaitable(result):
+            self._spawn(self._finish_call(m, srv, result))
+        else:
+            self._answer(m, srv, result)
+
+    async def _finish_call(self, m: dict[str, Any], srv: ServiceServer, pending: Awaitable[Any]) -> None:
+        try:
+            result = await pending
+        except Exception as exc:
+            self._handler_failed(m, srv, exc)
+            return
+        self._answer(m, srv, result)
+
+    def _answer(self, m: dict[str, Any], srv: ServiceServer, result: Any) -> None:
+        if result is None:
+            result = {}
+        if not isinstance(result, dict):
+            self._handler_failed(m, srv, TypeError(f"handler returned {type(result).__name__}, expected a dict"))
+            return
+        self._respond(m, result, True)
+
+    def _handler_failed(self, m: dict[str, Any], srv: ServiceServer, exc: BaseException) -> None:
+        log.error("handler of %s (node %s) failed: %s", srv.service, srv.node.id, exc, exc_info=exc)
+        self._respond(m, f"{type(exc).__name__}: {exc}", False)
+
+    def _respond(self, m: dict[str, Any], values: Any, result: bool) -> None:
+        resp: dict[str, Any] = {"op": "service_response", "service": m.get("service"), "values": values,
+                                "result": result}
+        if "id" in m:
+            resp["id"] = m["id"]
+        self._send(resp)
+
+    # ================================================================== actions (ROS 2)
+
+    def _send_goal(self, node: Node, action: str, action_type: str, args: dict[str, Any] | None,
+                   feedback: Callable[[Any], None] | None) -> ActionGoal:
+        self._seq += 1
+        goal = ActionGoal(node, action, action_type, f"goal:{action}:{self._seq}", feedback)
+        op = {"op": "send_action_goal", "id": goal.id, "action": action, "action_type": action_type,
+              "args": args or {}, "feedback": feedback is not None}
+        if self._send(op):
+            self._goals[goal.id] = goal
+        else:
+            goal._future.set_exception(NotConnectedError(f"not connected to {self.url}"))
+            goal._future.exception()  # mark retrieved: the caller may never await it
+        return goal
+
+    def _on_action_feedback(self, m: dict[str, Any]) -> None:
+        goal = self._goals.get(m["id"])
+        if goal is None:
+            log.debug("action_feedback for unknown goal %r", m.get("id"))
+            return
+        goal.feedback_count += 1
+        if goal.feedback_callback is not None:
+            try:
+                goal.feedback_callback(m.get("values"))
+            except Exception:
+                log.exception("feedback callback of %s raised", goal.action)
+
+    def _on_action_result(self, m: dict[str, Any]) -> None:
+        goal = self._goals.pop(m["id"], None)
+        if goal is None or goal._future.done():
+            log.debug("action_result for unknown goal %r", m.get("id"))
+            return
+        values = m.get("values")
+        status = m.get("status")
+        goal.status = status if isinstance(status, int) else None
+        if m.get("result", True) is False:
+            goal._future.set_exception(ActionError(values if isinstance(values, str) else str(values),
+                                                   goal.action, goal.status))
+        else:
+            goal._future.set_result({} if values is None else values)
+
+    # ================================================================== misc ops
+
+    def set_level(self, level: str) -> None:
+        """Ask the server for ``status`` messages at ``level`` (info, warning, error, none); kept across
+        reconnects."""
+        if level not in LOG_LEVELS:
+            raise ValueError(f"level must be one of {', '.join(LOG_LEVELS)}; got {level!r}")
+        self._level = level
+        self._send({"op": "set_level", "level": level})
+
+    def _spawn(self, coro: Awaitable[Any]) -> asyncio.Task[Any]:
+        task = asyncio.ensure_future(coro)
+        self._tasks.add(task)
+        task.add_done_callback(self._task_done)
+        return task
+
+    def _task_done(self, task: asyncio.Task[Any]) -> None:
+        self._tasks.discard(task)
+        if not task.cancelled() and task.exception() is not None:
+            log.error("background task failed: %s", task.exception(), exc_info=task.exception())

@@ -1,0 +1,54 @@
+"""Exceptions raised by the rosbridge client."""
+
+from __future__ import annotations
+
+
+class BridgeError(Exception):
+    """Base class for everything the bridge raises."""
+
+
+class NotConnectedError(BridgeError):
+    """The operation needs a live connection and there is none (and it could not wait for one)."""
+
+
+class ServiceError(BridgeError):
+    """A ``call_service`` failed.
+
+    ``message`` is the server's own text when the server answered ``result: false`` (rosbridge puts the
+    error string in ``values``), or a description of the client-side failure (timeout, connection lost).
+    """
+
+    def __init__(self, message: str, service: str | None = None) -> None:
+        super().__init__(message)
+        self.message = message
+        self.service = service
+
+    def __str__(self) -> str:
+        if self.service:
+            return f"{self.service}: {self.message}"
+        return self.message
+
+
+class ServiceTimeoutError(ServiceError, TimeoutError):
+    """No answer arrived within the client-side timeout (a missing or hung service)."""
+
+
+class ConnectionLostError(ServiceError):
+    """The connection dropped while a call or action goal was waiting for its answer."""
+
+
+class ActionError(BridgeError):
+    """An action goal ended with ``result: false``; ``status`` is the GoalStatus code when given."""
+
+    def __init__(self, message: str, action: str | None = None, status: int | None = None) -> None:
+        super().__init__(message)
+        self.message = message
+        self.action = action
+        self.status = status
+
+    def __str__(self) -> str:
+        return f"{self.action}: {self.message}" if self.action else self.message
+
+
+class ProtocolError(BridgeError):
+    """A frame from the server could not be understood (logged, never raised out of the reader)."""

@@ -1,0 +1,233 @@
+"""Nodes: every consumer of the bridge (a widget, a CLI command, a panel) is a node with a unique id.
+
+A node owns what it asked for (subscriptions, publishers, advertised services, action goals) and
+``node.close()`` ends all of it.  Messages are routed only to the nodes that subscribed; nodes on the
+same topic share one rosbridge subscription (see ``topics.py``).  All methods run on the client's loop.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from collections.abc import Awaitable, Callable
+from typing import TYPE_CHECKING, Any
+
+from .errors import BridgeError
+from .protocol import COMPRESSIONS
+
+if TYPE_CHECKING:
+    from .client import BridgeClient
+
+log = logging.getLogger(__name__)
+
+MessageCallback = Callable[[dict[str, Any]], None]
+ServiceHandler = Callable[[dict[str, Any]], "dict[str, Any] | Awaitable[dict[str, Any]]"]
+
+
+class Subscription:
+    """One node's interest in a topic.  ``unsubscribe()`` is idempotent."""
+
+    __slots__ = ("node", "topic", "callback", "type", "throttle_rate", "queue_length", "compression",
+                 "fragment_size", "active")
+
+    def __init__(self, node: Node, topic: str, callback: MessageCallback, type: str | None, throttle_rate: int,
+                 queue_length: int, compression: str, fragment_size: int | None) -> None:
+        self.node = node
+        self.topic = topic
+        self.callback = callback
+        self.type = type
+        self.throttle_rate = throttle_rate
+        self.queue_length = queue_length
+        self.compression = compression
+        self.fragment_size = fragment_size
+        self.active = True
+
+    def unsubscribe(self) -> None:
+        if self.active:
+            self.active = False
+            self.node._subs.discard(self)
+            self.node.client._remove_subscription(self)
+
+    def __repr__(self) -> str:
+        return f"<Subscription {self.topic} node={self.node.id} active={self.active}>"
+
+
+class Publisher:
+    """One node's right to publish on a topic.  ``publish`` never blocks.
+
+    While the link is down a publish is not queued, except for latched topics whose latest value is kept
+    and sent once the advertisement is restored after a reconnect; ``dropped`` counts the others.
+    """
+
+    __slots__ = ("node", "topic", "type", "latch", "queue_size", "active", "sent", "dropped")
+
+    def __init__(self, node: Node, topic: str, type: str, latch: bool, queue_size: int) -> None:
+        self.node = node
+        self.topic = topic
+        self.type = type
+        self.latch = latch
+        self.queue_size = queue_size
+        self.active = True
+        self.sent = 0
+        self.dropped = 0
+
+    def publish(self, msg: dict[str, Any]) -> bool:
+        """Send ``msg``; returns False when it was dropped (link down and not latched)."""
+        if not self.active:
+            raise BridgeError(f"publish on {self.topic} after unadvertise")
+        if not isinstance(msg, dict):
+            raise TypeError(f"publish on {self.topic}: msg must be a dict, got {type(msg).__name__}")
+        return self.node.client._publish(self, msg)
+
+    def unadvertise(self) -> None:
+        if self.active:
+            self.active = False
+            self.node._pubs.discard(self)
+            self.node.client._remove_publisher(self)
+
+    def __repr__(self) -> str:
+        return f"<Publisher {self.topic} [{self.type}] node={self.node.id} active={self.active}>"
+
+
+class ServiceServer:
+    """A service this client provides.  Incoming calls are answered with the handler's dict."""
+
+    __slots__ = ("node", "service", "type", "handler", "active", "calls")
+
+    def __init__(self, node: Node, service: str, type: str, handler: ServiceHandler) -> None:
+        self.node = node
+        self.service = service
+        self.type = type
+        self.handler = handler
+        self.active = True
+        self.calls = 0
+
+    def unadvertise(self) -> None:
+        if self.active:
+            self.active = False
+            self.node._services.discard(self)
+            self.node.client._remove_service(self)
+
+
+class ActionGoal:
+    """A goal sent with ``send_action_goal``.  ``await goal.result()``; ``goal.cancel()``."""
+
+    def __init__(self, node: Node, action: str, action_type: str, goal_id: str,
+                 feedback: MessageCallback | None) -> None:
+        self.node = node
+        self.action = action
+        self.action_type = action_type
+        self.id = goal_id
+        self.feedback_callback = feedback
+        self.feedback_count = 0
+        self.status: int | None = None
+        self._future: asyncio.Future[dict[str, Any]] = asyncio.get_running_loop().create_future()
+
+    @property
+    def done(self) -> bool:
+        return self._future.done()
+
+    async def result(self, timeout: float | None = None) -> dict[str, Any]:
+        """The result ``values``; raises ActionError when the server reports ``result: false``."""
+        if timeout is None:
+            return await asyncio.shield(self._future)
+        return await asyncio.wait_for(asyncio.shield(self._future), timeout)
+
+    def cancel(self) -> None:
+        """Ask the server to cancel the goal (the result arrives as usual, typically status CANCELED)."""
+        if not self._future.done():
+            self.node.client._send({"op": "cancel_action_goal", "id": self.id, "action": self.action})
+
+
+class Node:
+    """A consumer of the bridge.  Create with ``client.node(label)``."""
+
+    def __init__(self, client: BridgeClient, node_id: str) -> None:
+        self.client = client
+        self.id = node_id
+        self._subs: set[Subscription] = set()
+        self._pubs: set[Publisher] = set()
+        self._services: set[ServiceServer] = set()
+        self._goals: set[ActionGoal] = set()
+        self.closed = False
+
+    def __repr__(self) -> str:
+        return f"<Node {self.id}>"
+
+    def _check(self) -> None:
+        if self.closed:
+            raise BridgeError(f"node {self.id} is closed")
+
+    def subscribe(self, topic: str, callback: MessageCallback, type: str | None = None, throttle_rate: int = 0,
+                  queue_length: int = 0, compression: str = "none",
+                  fragment_size: int | None = None) -> Subscription:
+        """Receive ``topic``'s messages as dicts in ``callback`` (called on the loop thread; keep it quick).
+
+        ``compression="cbor"`` on a type with fixed-size arrays is switched to ``"cbor-raw"`` because
+        rosbridge's cbor encoder sends nothing for those types (Imu, Odometry, NavSatFix, ...).
+        """
+        self._check()
+        if not isinstance(topic, str) or not topic:
+            raise ValueError(f"topic must be a non-empty string, got {topic!r}")
+        if not callable(callback):
+            raise TypeError("callback must be callable")
+        if compression not in COMPRESSIONS:
+            raise ValueError(f"compression must be one of {', '.join(COMPRESSIONS)}; got {compression!r}")
+        for name, value in (("throttle_rate", throttle_rate), ("queue_length", queue_length)):
+            if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+                raise ValueError(f"{name} must be a non-negative integer, got {value!r}")
+        if fragment_size is not None and (not isinstance(fragment_size, int) or fragment_size <= 0):
+            raise ValueError(f"fragment_size must be a positive integer, got {fragment_size!r}")
+        sub = Subscription(self, topic, callback, type, throttle_rate, queue_length, compression, fragment_size)
+        self._subs.add(sub)
+        self.client._add_subscription(sub)
+        return sub
+
+    def advertise(self, topic: str, type: str, latch: bool = False, queue_size: int = 100) -> Publisher:
+        self._check()
+        if not isinstance(topic, str) or not topic:
+            raise ValueError(f"topic must be a non-empty string, got {topic!r}")
+        if not isinstance(type, str) or "/" not in type:
+            raise ValueError(f"type must be a message type name like 'std_msgs/String', got {type!r}")
+        pub = Publisher(self, topic, type, bool(latch), int(queue_size))
+        self.client._add_publisher(pub)  # may raise on a type conflict
+        self._pubs.add(pub)
+        return pub
+
+    async def call_service(self, name: str, args: dict[str, Any] | list | None = None,
+                           timeout: float | None = None) -> dict[str, Any]:
+        self._check()
+        return await self.client.call_service(name, args, timeout=timeout)
+
+    def advertise_service(self, name: str, type: str, handler: ServiceHandler) -> ServiceServer:
+        self._check()
+        if not callable(handler):
+            raise TypeError("handler must be callable")
+        srv = ServiceServer(self, name, type, handler)
+        self.client._add_service(srv)
+        self._services.add(srv)
+        return srv
+
+    def send_action_goal(self, action: str, action_type: str, args: dict[str, Any] | None = None,
+                         feedback: MessageCallback | None = None) -> ActionGoal:
+        """Send a ROS 2 action goal; ``feedback(values)`` gets each ``action_feedback``."""
+        self._check()
+        goal = self.client._send_goal(self, action, action_type, args, feedback)
+        self._goals.add(goal)
+        goal._future.add_done_callback(lambda _f: self._goals.discard(goal))
+        return goal
+
+    def close(self) -> None:
+        """End every subscription, advertisement, service and goal of this node."""
+        if self.closed:
+            return
+        for s in list(self._subs):
+            s.unsubscribe()
+        for p in list(self._pubs):
+            p.unadvertise()
+        for srv in list(self._services):
+            srv.unadvertise()
+        for g in list(self._goals):
+            g.cancel()
+        self.closed = True
+        self.client._nodes.pop(self.id, None)

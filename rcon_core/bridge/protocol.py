@@ -1,0 +1,256 @@
+"""The rosbridge v2 wire codec: text (JSON) frames, binary (CBOR) frames, ``png`` frames and fragments.
+
+Decisions (the recordings in ``shared/rosbridge-ros1`` are the ground truth):
+
+* Text frames are parsed with one ``orjson.loads``.  rosbridge escapes ``/`` and non-ASCII characters;
+  that is plain JSON and needs nothing special.  NaN/Inf arrive as ``null`` and stay ``None``.
+* Binary frames are CBOR (``compression: "cbor"`` and ``"cbor-raw"``).  RFC 8746 typed arrays (tags
+  64-87) are decoded with numpy into **plain lists** by default, so a message looks the same whichever
+  compression carried it; uint8 arrays (tags 64 and 68) become ``bytes`` (the same value a CBOR byte
+  string gives, and what ``rcon_core.msgs.values.as_bytes`` accepts).  ``typed_arrays="numpy"`` keeps
+  numpy arrays instead, for consumers that want them.  CBOR keeps real NaN and Infinity.
+* A binary frame that is not CBOR but JSON text (rosbridge itself accepts that) is parsed as JSON.
+* ``png`` frames hold a base64 PNG whose RGB pixel bytes are the JSON text of the real frame padded with
+  ``\\n``; it is decoded with OpenCV (imported lazily) and the padding is ignored by the JSON parser.
+* ``fragment`` frames: ``total`` may be a float (rosbridge 0.11 computes it that way); the number of
+  fragments is ``floor(total)``, ``num`` runs from 0.  ``id`` is 0 for every message, so fragments are
+  reassembled by arrival order per id: a ``num == 0`` starts a new message and drops any unfinished
+  one.  Unfinished messages older than ``timeout`` are dropped, and a message may not exceed
+  ``max_bytes`` nor ``max_fragments``.
+"""
+
+from __future__ import annotations
+
+import base64
+import binascii
+import logging
+import math
+import time
+from typing import Any
+
+import cbor2
+import numpy as np
+import orjson
+
+from .errors import ProtocolError
+
+log = logging.getLogger(__name__)
+
+dumps = orjson.dumps
+loads = orjson.loads
+
+#: compression modes a subscription may ask for
+COMPRESSIONS = ("none", "png", "cbor", "cbor-raw")
+
+
+def encode(op: dict[str, Any]) -> bytes:
+    """One outgoing frame as UTF-8 JSON bytes (sent as a *text* frame)."""
+    return dumps(op, option=orjson.OPT_SERIALIZE_NUMPY)
+
+
+# --------------------------------------------------------------------------- typed arrays (RFC 8746)
+
+
+def typed_array_dtype(tag: int) -> np.dtype | None:
+    """The numpy dtype of an RFC 8746 typed-array tag (64-87), or None for tags numpy cannot hold."""
+    if not 64 <= tag <= 87:
+        return None
+    bits = tag - 64
+    is_float = bits >> 4 & 1
+    signed = bits >> 3 & 1
+    little = bits >> 2 & 1
+    ll = bits & 3
+    order = "<" if little else ">"
+    if is_float:
+        size = 2 << ll  # 2, 4, 8, 16 bytes
+        if size == 16:
+            return None  # float128 has no portable numpy type
+        return np.dtype(f"{order}f{size}")
+    size = 1 << ll
+    return np.dtype(f"{order}{'i' if signed else 'u'}{size}")
+
+
+# cbor2 5.x calls tag_hook(decoder, tag); cbor2 6.x calls tag_hook(tag, immutable): accept both.
+
+
+def _tag_hook_list(a: Any, b: Any) -> Any:
+    tag = a if a.__class__ is cbor2.CBORTag else b
+    t = tag.tag
+    if t == 64 or t == 68:
+        return bytes(tag.value)
+    dtype = typed_array_dtype(t)
+    if dtype is None or not isinstance(tag.value, bytes | bytearray):
+        return tag
+    return np.frombuffer(tag.value, dtype=dtype).tolist()
+
+
+def _tag_hook_numpy(a: Any, b: Any) -> Any:
+    tag = a if a.__class__ is cbor2.CBORTag else b
+    t = tag.tag
+    if t == 64 or t == 68:
+        return bytes(tag.value)
+    dtype = typed_array_dtype(t)
+    if dtype is None or not isinstance(tag.value, bytes | bytearray):
+        return tag
+    return np.frombuffer(tag.value, dtype=dtype)
+
+
+def decode_cbor(data: bytes, typed_arrays: str = "list") -> Any:
+    """Decode one CBOR frame; typed arrays become lists (or numpy arrays with ``typed_arrays="numpy"``)."""
+    hook = _tag_hook_numpy if typed_arrays == "numpy" else _tag_hook_list
+    return cbor2.loads(data, tag_hook=hook)
+
+
+def decode_binary(data: bytes, typed_arrays: str = "list") -> Any:
+    """Decode a binary frame: CBOR, or JSON text sent in a binary frame.  Raises ProtocolError."""
+    if not data:
+        raise ProtocolError("empty binary frame")
+    first = data[0]
+    if first in (0x7B, 0x5B):  # '{' or '[': JSON text in a binary frame (a CBOR map never starts so)
+        try:
+            return loads(data)
+        except orjson.JSONDecodeError:
+            pass
+    try:
+        return decode_cbor(data, typed_arrays)
+    except Exception as exc:  # cbor2 raises several types (CBORDecodeError, ValueError, ...)
+        raise ProtocolError(f"binary frame is neither CBOR nor JSON ({exc})") from None
+
+
+# --------------------------------------------------------------------------- png frames
+
+
+def png_to_text(data_b64: str) -> bytes:
+    """The JSON bytes hidden in a ``png`` frame's ``data`` (base64 PNG of the text's bytes as RGB pixels).
+
+    The trailing ``\\n`` padding is stripped.  Raises ProtocolError when the data is not a PNG.
+    """
+    try:
+        png = base64.b64decode(data_b64, validate=False)
+    except (binascii.Error, ValueError, TypeError) as exc:
+        raise ProtocolError(f"png frame: data is not base64 ({exc})") from None
+    import cv2  # lazily: OpenCV is only needed by png subscriptions
+
+    img = cv2.imdecode(np.frombuffer(png, np.uint8), cv2.IMREAD_UNCHANGED)
+    if img is None:
+        raise ProtocolError("png frame: data is not a PNG image")
+    if img.ndim == 3 and img.shape[2] == 3:
+        img = img[:, :, ::-1]  # OpenCV gives BGR; the payload bytes are in RGB order
+    elif img.ndim == 3 and img.shape[2] == 4:
+        img = img[:, :, [2, 1, 0, 3]]
+    return np.ascontiguousarray(img).tobytes().rstrip(b"\n\x00")
+
+
+def decode_png(data_b64: str) -> Any:
+    """Decode a (complete) ``png`` frame's payload into the frame it carries."""
+    text = png_to_text(data_b64)
+    try:
+        return loads(text)
+    except orjson.JSONDecodeError as exc:
+        raise ProtocolError(f"png frame: embedded text is not JSON ({exc})") from None
+
+
+# --------------------------------------------------------------------------- fragments
+
+
+class _Partial:
+    __slots__ = ("parts", "count", "size", "started", "updated")
+
+    def __init__(self, count: int, now: float) -> None:
+        self.parts: list[str] = []
+        self.count = count
+        self.size = 0
+        self.started = now
+        self.updated = now
+
+
+class FragmentAssembler:
+    """Joins ``fragment`` (and fragmented ``png``) frames back into the text they were cut from.
+
+    ``add(frame)`` returns the joined text when the last fragment arrives, else None.  Problems (a gap, a
+    fragment without a start, a message larger than ``max_bytes``) drop the partial message and raise
+    ProtocolError with a specific reason; the caller logs it.  Nothing here can grow without bound.
+    """
+
+    def __init__(self, timeout: float = 10.0, max_bytes: int = 64 << 20, max_fragments: int = 100_000,
+                 max_partials: int = 64) -> None:
+        self.timeout = timeout
+        self.max_bytes = max_bytes
+        self.max_fragments = max_fragments
+        self.max_partials = max_partials
+        self._partials: dict[Any, _Partial] = {}
+        self.dropped = 0
+        self.completed = 0
+
+    def __len__(self) -> int:
+        return len(self._partials)
+
+    @property
+    def buffered_bytes(self) -> int:
+        return sum(p.size for p in self._partials.values())
+
+    def expire(self, now: float | None = None) -> int:
+        """Drop unfinished messages not updated for ``timeout`` seconds; returns how many were dropped."""
+        now = time.monotonic() if now is None else now
+        stale = [k for k, p in self._partials.items() if now - p.updated > self.timeout]
+        for k in stale:
+            del self._partials[k]
+        self.dropped += len(stale)
+        if stale:
+            log.warning("dropped %d unfinished fragmented message(s) after %.0f s without a fragment",
+                        len(stale), self.timeout)
+        return len(stale)
+
+    def add(self, frame: dict[str, Any], now: float | None = None) -> str | None:
+        now = time.monotonic() if now is None else now
+        if self._partials:
+            self.expire(now)
+        fid = frame.get("id")
+        data = frame.get("data")
+        num = frame.get("num")
+        total = frame.get("total")
+        if not isinstance(data, str):
+            raise ProtocolError(f"fragment id={fid!r}: 'data' must be a string, got {type(data).__name__}")
+        if isinstance(num, bool) or not isinstance(num, int) or num < 0:
+            raise ProtocolError(f"fragment id={fid!r}: 'num' must be a non-negative integer, got {num!r}")
+        if isinstance(total, bool) or not isinstance(total, int | float) or not math.isfinite(total):
+            raise ProtocolError(f"fragment id={fid!r}: 'total' must be a number, got {total!r}")
+        count = math.floor(total)
+        if count < 1 or count > self.max_fragments:
+            raise ProtocolError(f"fragment id={fid!r}: total {total!r} is out of range "
+                                f"(1..{self.max_fragments} fragments)")
+        try:
+            hash(fid)
+        except TypeError:
+            raise ProtocolError(f"fragment: 'id' must be a string or number, got {type(fid).__name__}") from None
+        part = self._partials.get(fid)
+        if num == 0:
+            if part is not None:
+                self.dropped += 1
+                log.warning("fragment id=%r: a new message started before the previous one was complete "
+                            "(%d of %d fragments); dropped the incomplete one", fid, len(part.parts), part.count)
+            if len(self._partials) >= self.max_partials and fid not in self._partials:
+                oldest = min(self._partials, key=lambda k: self._partials[k].updated)
+                del self._partials[oldest]
+                self.dropped += 1
+                log.warning("too many unfinished fragmented messages; dropped the oldest (id=%r)", oldest)
+            part = self._partials[fid] = _Partial(count, now)
+        elif part is None:
+            raise ProtocolError(f"fragment id={fid!r} num={num}: no message was started (num 0 missing); ignored")
+        elif num != len(part.parts) or count != part.count:
+            del self._partials[fid]
+            self.dropped += 1
+            raise ProtocolError(f"fragment id={fid!r}: expected num {len(part.parts)} of {part.count}, got "
+                                f"num {num} of {count}; dropped the incomplete message")
+        part.size += len(data)
+        if part.size > self.max_bytes:
+            del self._partials[fid]
+            self.dropped += 1
+            raise ProtocolError(f"fragment id={fid!r}: message exceeds {self.max_bytes} bytes; dropped")
+        part.parts.append(data)
+        part.updated = now
+        if len(part.parts) == part.count:
+            del self._partials[fid]
+            self.completed += 1
+            return "".join(part.parts)
+        return None

@@ -1,0 +1,144 @@
+"""Shared per-topic state: one rosbridge subscription and one advertisement per topic, many nodes.
+
+Several nodes on one topic share ONE rosbridge subscription.  Its options are merged:
+
+* ``throttle_rate``: the smallest (the tightest a consumer asked for wins; rosbridge does the same across
+  ids on one topic, README point 11);
+* ``queue_length``: the largest (what rosbridge itself picks across ids);
+* ``fragment_size``: the smallest given;
+* ``compression``: the first of ``cbor``, ``cbor-raw``, ``png``, ``none`` that any consumer asked for
+  (every mode is decoded into the same dicts, so the cheapest binary form serves everybody);
+* ``type``: the first type given.
+
+When the set of consumers changes the options are recomputed and, if they changed, the client subscribes
+with a new id and then unsubscribes the old one (no gap: publish frames do not carry the id).  The last
+consumer to leave unsubscribes.  Advertisements are shared the same way (``latch`` if any asked,
+the largest ``queue_size``); the last publisher to leave unadvertises.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .nodes import Publisher, Subscription
+
+log = logging.getLogger(__name__)
+
+_COMPRESSION_RANK = {"cbor": 0, "cbor-raw": 1, "png": 2, "none": 3}
+
+
+class TopicEntry:
+    """The client's one subscription to a topic, fanned out to every node's callback."""
+
+    __slots__ = ("topic", "subs", "deliver", "sid", "sent_options", "raw_type", "decoder", "received", "_client")
+
+    def __init__(self, client: Any, topic: str) -> None:
+        self._client = client
+        self.topic = topic
+        self.subs: list[Subscription] = []
+        self.sid: str | None = None  # id of the rosbridge subscription currently active on the server
+        self.sent_options: dict[str, Any] | None = None
+        self.raw_type: str | None = None  # set when the active subscription is cbor-raw
+        self.decoder: Any = None
+        self.received = 0
+        self.deliver: Callable[[Any], None] = self._deliver_none
+
+    # --- options ---------------------------------------------------------------------------------
+
+    def wanted(self) -> dict[str, Any]:
+        """The merged options of every consumer (before the cbor -> cbor-raw decision)."""
+        subs = self.subs
+        opts: dict[str, Any] = {"throttle_rate": min(s.throttle_rate for s in subs),
+                                "queue_length": max(s.queue_length for s in subs)}
+        types = [s.type for s in subs if s.type]
+        if types:
+            opts["type"] = types[0]
+        frags = [s.fragment_size for s in subs if s.fragment_size]
+        if frags:
+            opts["fragment_size"] = min(frags)
+        opts["compression"] = min((s.compression for s in subs), key=_COMPRESSION_RANK.__getitem__)
+        return opts
+
+    # --- delivery (the hot path) -----------------------------------------------------------------
+
+    def rebuild(self) -> None:
+        """Pick the delivery function for the current set of consumers (no per-message branching)."""
+        subs = self.subs
+        if self.raw_type is not None:
+            self.deliver = self._deliver_raw
+        elif not subs:
+            self.deliver = self._deliver_none
+        elif len(subs) == 1:
+            self.deliver = self._make_one(subs[0].callback)
+        else:
+            self.deliver = self._deliver_many
+
+    def _deliver_none(self, msg: Any) -> None:
+        self.received += 1
+
+    def _make_one(self, cb: Callable[[Any], None]) -> Callable[[Any], None]:
+        topic = self.topic
+
+        def deliver_one(msg: Any) -> None:
+            try:
+                cb(msg)
+            except Exception:
+                log.exception("callback for %s raised; other subscribers are unaffected", topic)
+
+        return deliver_one
+
+    def _deliver_many(self, msg: Any) -> None:
+        for s in self.subs:
+            try:
+                s.callback(msg)
+            except Exception:
+                log.exception("callback for %s (node %s) raised; other subscribers are unaffected",
+                              self.topic, s.node.id)
+
+    def _fan_out(self, msg: Any) -> None:
+        for s in self.subs:
+            try:
+                s.callback(msg)
+            except Exception:
+                log.exception("callback for %s (node %s) raised; other subscribers are unaffected",
+                              self.topic, s.node.id)
+
+    def _deliver_raw(self, msg: Any) -> None:
+        try:
+            data = msg["bytes"]
+            decoded = self.decoder.decode(self.raw_type, data)
+        except Exception as exc:
+            self._client._bad_frame("cbor-raw", f"{self.topic}: cannot decode cbor-raw message ({exc})")
+            return
+        self._fan_out(decoded)
+
+
+class AdvertEntry:
+    """The client's one advertisement of a topic, shared by every node's Publisher."""
+
+    __slots__ = ("topic", "pubs", "type", "latch", "queue_size", "active", "pending", "dropped")
+
+    def __init__(self, topic: str, type: str) -> None:
+        self.topic = topic
+        self.type = type
+        self.pubs: list[Publisher] = []
+        self.latch = False
+        self.queue_size = 100
+        self.active = False  # advertise sent on the current connection
+        self.pending: Any = None  # latest latched value published while the link was down
+        self.dropped = 0
+
+    def merge(self) -> bool:
+        """Recompute latch/queue_size from the publishers; True when they changed."""
+        latch = any(p.latch for p in self.pubs)
+        queue_size = max((p.queue_size for p in self.pubs), default=100)
+        changed = (latch, queue_size) != (self.latch, self.queue_size)
+        self.latch, self.queue_size = latch, queue_size
+        return changed
+
+    def advertise_op(self) -> dict[str, Any]:
+        return {"op": "advertise", "id": f"adv:{self.topic}", "topic": self.topic, "type": self.type,
+                "latch": self.latch, "queue_size": self.queue_size}
