@@ -10,10 +10,10 @@ import cbor2
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from rcon_core.msgs import TypeRegistry
 from rcon_core.msgs.ros1_wire import WireError
-
 from rcon_core.msgs.strategies import message
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "rosbridge-ros1"
@@ -207,7 +207,7 @@ ROUND_TRIP_TYPES = [
 
 @pytest.mark.parametrize("type_name", ROUND_TRIP_TYPES)
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(data=__import__("hypothesis").strategies.data())
+@given(data=st.data())
 def test_round_trip_property(type_name, data):
     msg = data.draw(message(REG, REG.resolve(type_name), binary_as="bytes"))
     raw = REG.serialize_ros1(type_name, msg)
