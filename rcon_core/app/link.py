@@ -178,7 +178,8 @@ async def fetch_catalog(client: BridgeClient) -> dict[str, list[tuple[str, str]]
     """``{"topics": [(name, type)], "services": [(name, type)]}`` from rosapi."""
     api = client.rosapi
     topics = _pairs(await api.topics())
-    services = _pairs(await api.services())
+    with_types = getattr(api, "services_with_types", None)
+    services = _pairs(await (with_types() if with_types is not None else api.services()))
     return {"topics": sorted(topics), "services": sorted(services)}
 
 

@@ -1,0 +1,340 @@
+"""The main window: connection bar, side panels, canvas switcher, canvases and the add-widget panel."""
+
+from __future__ import annotations
+
+import logging
+import time
+from pathlib import Path
+from typing import Any
+
+from qtpy import QtCore, QtGui, QtWidgets
+
+from rcon_core.app.add_panel import AddPanel
+from rcon_core.app.canvas_controller import CanvasController
+from rcon_core.app.catalog_panel import CatalogList
+from rcon_core.app.config import AppConfig
+from rcon_core.app.connection_bar import ConnectionBar
+from rcon_core.app.draft import Candidate, Target
+from rcon_core.app.frame_clock import FrameClock
+from rcon_core.app.layout import LayoutError, WorkspaceDoc
+from rcon_core.app.link import Link
+from rcon_core.app.palette_panel import PalettePanel
+from rcon_core.app.settings_form import SettingsForm
+from rcon_core.app.widget_host import PreviewHost, RateMeter, WidgetHost
+from rcon_core.plugins import PluginManager, Role, WidgetSpec
+
+log = logging.getLogger(__name__)
+
+
+class MainWindow(QtWidgets.QMainWindow):
+    """RCON's window. ``plugins`` and ``config`` are injected so tests use their own."""
+
+    def __init__(
+        self,
+        config: AppConfig,
+        plugins: PluginManager,
+        *,
+        layout_path: Path | None = None,
+        types: Any = None,
+        link: Link | None = None,
+    ) -> None:
+        super().__init__()
+        self.setWindowTitle("RCON")
+        self.config = config
+        self.plugins = plugins
+        self.types = types if types is not None else _standard_types()
+        self.link = link or Link()
+        self.clock = FrameClock(self)
+        self.host = WidgetHost(plugins, self.link, self.types)
+        self.preview = PreviewHost(self.host)
+        self.rates = RateMeter()
+        self._last_rate_sample = 0.0
+        self.catalog: dict[str, list[tuple[str, str]]] = {"topics": [], "services": []}
+        self.first_paint_at: float | None = None
+
+        # ---- widgets
+        self.connection = ConnectionBar(self.link, config)
+        self.topics = CatalogList("topics", with_rate=True)
+        self.services = CatalogList("services", with_rate=False)
+        self.palette = PalettePanel()
+        self.palette.set_specs(plugins.widgets())
+        self.side = QtWidgets.QTabWidget()
+        self.side.setObjectName("sidePanel")
+        self.side.addTab(self.topics, "Topics")
+        self.side.addTab(self.services, "Services")
+        self.side.addTab(self.palette, "Widgets")
+        self.side.setMinimumWidth(300)
+
+        self.tabs = QtWidgets.QTabBar()
+        self.tabs.setObjectName("canvasTabs")
+        self.tabs.setExpanding(False)
+        self.tabs.setDrawBase(False)
+        self.tabs.currentChanged.connect(self._tab_changed)
+        self.lock_button = QtWidgets.QPushButton("Edit mode")
+        self.lock_button.setObjectName("lockButton")
+        self.lock_button.setCheckable(True)
+        self.lock_button.toggled.connect(self._lock_toggled)
+        mode_bar = QtWidgets.QFrame()
+        mode_bar.setObjectName("modeBar")
+        row = QtWidgets.QHBoxLayout(mode_bar)
+        row.setContentsMargins(8, 6, 8, 6)
+        row.addWidget(self.tabs, 1)
+        self.canvas_buttons: dict[str, QtWidgets.QPushButton] = {}
+        for name, text, slot in (
+            ("new", "+ Canvas", self.new_canvas),
+            ("rename", "Rename", self.rename_canvas_dialog),
+            ("duplicate", "Duplicate", self.duplicate_canvas),
+            ("delete", "Delete", self.delete_canvas),
+            ("undo", "Undo", self.undo),
+            ("redo", "Redo", self.redo),
+        ):
+            b = QtWidgets.QPushButton(text)
+            b.setObjectName(f"canvas_{name}")
+            b.clicked.connect(slot)
+            self.canvas_buttons[name] = b
+            row.addWidget(b)
+        row.addWidget(self.lock_button)
+
+        self.stack = QtWidgets.QStackedWidget()
+        self.add_panel = AddPanel(self.rank_widgets, self.targets_for, self.preview.build, self.preview.release)
+        self.add_panel.setMinimumWidth(360)
+        self.add_panel.hide()
+        self.add_panel.place_requested.connect(self.place_draft)
+
+        center = QtWidgets.QWidget()
+        ccol = QtWidgets.QVBoxLayout(center)
+        ccol.setContentsMargins(0, 0, 0, 0)
+        ccol.setSpacing(0)
+        ccol.addWidget(mode_bar)
+        ccol.addWidget(self.stack, 1)
+        split = QtWidgets.QSplitter()
+        split.setHandleWidth(12)
+        split.addWidget(self.side)
+        split.addWidget(center)
+        split.addWidget(self.add_panel)
+        split.setStretchFactor(1, 1)
+        split.setSizes([320, 900, 380])
+        split.setChildrenCollapsible(False)
+        root = QtWidgets.QWidget()
+        rcol = QtWidgets.QVBoxLayout(root)
+        rcol.setContentsMargins(0, 0, 0, 0)
+        rcol.setSpacing(0)
+        rcol.addWidget(self.connection)
+        rcol.addWidget(split, 1)
+        self.setCentralWidget(root)
+
+        # ---- workspace
+        self.layout_path = layout_path or config.workspace_path
+        doc = self._load_doc(self.layout_path)
+        self.controller = CanvasController(doc, self.host, self.stack, self.layout_path)
+        self.controller.on_drop = self._dropped
+        self.controller.on_configure = self.configure_widget
+        self.controller.canvases_changed.connect(self._sync_tabs)
+        self.controller.current_changed.connect(self._sync_tabs)
+        self.controller.lock_changed.connect(self._show_lock)
+        self._sync_tabs()
+        self._show_lock(self.controller.canvas.locked)
+
+        # ---- signals and the frame clock
+        self.topics.picked.connect(self.add_panel.start_from_topic)
+        self.services.picked.connect(self.add_panel.start_from_service)
+        self.palette.picked.connect(self._palette_picked)
+        self.link.on_client_changed(self._client_changed)
+        self.connection.state_changed.connect(self._link_state)
+        QtGui.QShortcut(QtGui.QKeySequence.StandardKey.Undo, self, self.undo)
+        QtGui.QShortcut(QtGui.QKeySequence.StandardKey.Redo, self, self.redo)
+        self.clock.add(self.connection.poll)
+        self.clock.add(self._poll_catalog)
+        self.clock.add(self.host.tick)
+        self.clock.start()
+        self.resize(1280, 800)
+
+    # ------------------------------------------------------------------------------------ workspace
+    def _load_doc(self, path: Path) -> WorkspaceDoc:
+        if not path.exists():
+            return WorkspaceDoc()
+        try:
+            return WorkspaceDoc.load(path)
+        except LayoutError as exc:
+            log.error("%s; starting with an empty workspace", exc)
+            self.connection.message.setText(str(exc))
+            return WorkspaceDoc()
+
+    def open_doc(self, doc: WorkspaceDoc) -> None:
+        """Replace the workspace (the demo uses this)."""
+        self.controller._snapshot()
+        self.controller._restore(doc.to_dict())
+
+    def _sync_tabs(self, *_: Any) -> None:
+        self.tabs.blockSignals(True)
+        while self.tabs.count():
+            self.tabs.removeTab(0)
+        for canvas in self.controller.doc.canvases:
+            self.tabs.addTab(canvas.name)
+        self.tabs.setCurrentIndex(self.controller.doc.current)
+        self.tabs.blockSignals(False)
+        self.canvas_buttons["delete"].setEnabled(len(self.controller.doc.canvases) > 1)
+
+    def _tab_changed(self, index: int) -> None:
+        self.controller.switch(index)
+
+    def switch_canvas(self, index: int) -> None:
+        self.tabs.setCurrentIndex(index)
+
+    def new_canvas(self) -> None:
+        self.controller.add_canvas("Canvas")
+
+    def rename_canvas_dialog(self) -> None:
+        index = self.controller.doc.current
+        name, ok = QtWidgets.QInputDialog.getText(
+            self, "Rename canvas", "Name", text=self.controller.canvas.name
+        )
+        if ok:
+            try:
+                self.controller.rename_canvas(index, name)
+            except ValueError as exc:
+                self.connection.message.setText(str(exc))
+
+    def duplicate_canvas(self) -> None:
+        self.controller.duplicate_canvas(self.controller.doc.current)
+
+    def delete_canvas(self) -> None:
+        try:
+            self.controller.delete_canvas(self.controller.doc.current)
+        except ValueError as exc:
+            self.connection.message.setText(str(exc))
+
+    def undo(self) -> None:
+        self.controller.undo()
+
+    def redo(self) -> None:
+        self.controller.redo()
+
+    def _lock_toggled(self, locked: bool) -> None:
+        self.controller.set_locked(locked)
+        self._show_lock(locked)
+
+    def _show_lock(self, locked: bool) -> None:
+        self.lock_button.blockSignals(True)
+        self.lock_button.setChecked(locked)
+        self.lock_button.blockSignals(False)
+        self.lock_button.setText("🔒 Operator mode" if locked else "✎ Edit mode")
+        for name in ("rename", "delete", "undo", "redo"):
+            self.canvas_buttons[name].setEnabled(not locked and (name != "delete" or len(self.controller.doc.canvases) > 1))
+        if locked:
+            self.add_panel.cancel()
+
+    # -------------------------------------------------------------------------------------- adding
+    def _palette_picked(self, kind: str) -> None:
+        self.add_panel.start_from_widget(self.plugins.widget(kind))
+
+    def rank_widgets(self, type_name: str, role: Role) -> list[Candidate]:
+        from rcon_core.matcher import match
+
+        out = []
+        for m in match(type_name, role, self.types, self.plugins):
+            paths = (m.field_path,) if m.field_path else ()
+            out.append(Candidate(m.spec, paths, float(int(m.rank)), m.reason))
+        return out
+
+    def targets_for(self, spec: WidgetSpec, role: Role) -> list[Target]:
+        from rcon_core.matcher import match
+
+        entries = self.catalog["services" if role.is_service else "topics"]
+        out = []
+        for name, type_name in entries:
+            for m in match(type_name, role, self.types, self.plugins):
+                if m.spec.kind == spec.kind:
+                    out.append(Target(name, type_name, (m.field_path,) if m.field_path else ()))
+                    break
+        return out
+
+    def place_draft(self) -> None:
+        draft = self.add_panel.take_draft()
+        if draft is not None:
+            try:
+                self.controller.add_draft(draft)
+            except ValueError as exc:
+                self.connection.message.setText(str(exc))
+
+    def _dropped(self, _surface: Any, point: QtCore.QPoint) -> None:
+        draft = self.add_panel.take_draft()
+        if draft is not None:
+            self.controller.add_draft(draft, point)
+
+    def configure_widget(self, instance_id: str) -> None:
+        """Edit a placed widget's title and settings in a dialog."""
+        inst = self.controller.canvas.find(instance_id)
+        if inst is None or not self.plugins.has_widget(inst.kind):
+            return
+        spec = self.plugins.widget(inst.kind)
+        settings = spec.make_settings(inst.settings)
+        dialog = QtWidgets.QDialog(self)
+        dialog.setWindowTitle(f"Configure {inst.title or spec.title}")
+        col = QtWidgets.QVBoxLayout(dialog)
+        title = QtWidgets.QLineEdit(inst.title)
+        col.addWidget(title)
+        form = SettingsForm(settings) if settings is not None else None
+        if form is not None:
+            col.addWidget(form)
+        buttons = QtWidgets.QDialogButtonBox(
+            QtWidgets.QDialogButtonBox.StandardButton.Ok | QtWidgets.QDialogButtonBox.StandardButton.Cancel
+        )
+        buttons.accepted.connect(dialog.accept)
+        buttons.rejected.connect(dialog.reject)
+        col.addWidget(buttons)
+        self.configure_dialog = dialog
+        dialog.accepted.connect(
+            lambda: self.controller.update_instance(
+                instance_id,
+                settings=spec.settings_to_dict(form.value()) if form is not None else None,
+                title=title.text(),
+            )
+        )
+        dialog.open()
+
+    # -------------------------------------------------------------------------------------- link
+    def _client_changed(self, _client: Any) -> None:
+        # widgets hold nodes of the old client: rebuild them on the new one (or offline)
+        self.host.rebuild_all()
+        self.host.start([i.id for i in self.controller.canvas.instances])
+
+    def _link_state(self, state: str) -> None:
+        self.host.set_link_up(state == "connected")
+
+    def _poll_catalog(self, now: float) -> None:
+        ok, catalog = self.link.catalog_box.take()
+        if ok:
+            self.catalog = catalog
+            self.topics.set_entries(catalog["topics"])
+            self.services.set_entries(catalog["services"])
+        if now - self._last_rate_sample >= 1.0:
+            self._last_rate_sample = now
+            self.topics.set_rates(self.rates.sample(self.host.topic_counts(), now))
+        if self.first_paint_at is None:
+            self.first_paint_at = time.perf_counter()
+
+    def connect_to(self, url: str) -> None:
+        self.connection.url.setCurrentText(url)
+        self.connection.connect_clicked()
+
+    # -------------------------------------------------------------------------------------- closing
+    def closeEvent(self, event: QtGui.QCloseEvent) -> None:
+        self.shutdown()
+        super().closeEvent(event)
+
+    def shutdown(self) -> None:
+        """Stop the clock and the widgets, save, and close the link (idempotent)."""
+        if getattr(self, "_shut", False):
+            return
+        self._shut = True
+        self.clock.stop()
+        self.add_panel.cancel()
+        self.controller.shutdown()
+        self.link.shutdown()
+
+
+def _standard_types() -> Any:
+    from rcon_core.msgs import TypeRegistry
+
+    return TypeRegistry.standard(ros2=False)
