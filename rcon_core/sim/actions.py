@@ -1,0 +1,133 @@
+"""The sim's one ROS 2 action: drive to a GPS fix (``send_action_goal`` ... ``action_result``).
+
+Feedback frames come at 5 Hz (scaled by rate_scale) while the vessel steers toward the goal; a new goal
+aborts the running one; ``cancel_action_goal`` or the client's disconnect cancels it.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import math
+import time
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .connection import Connection
+    from .robot_node import RobotNode
+    from .server import SimServer
+
+ACTION_NAME = "/navigate_to_fix"
+ACTION_TYPE = "rcon_sim/action/NavigateToFix"
+STATUS_SUCCEEDED, STATUS_CANCELED, STATUS_ABORTED = 4, 5, 6
+
+
+@dataclass
+class _Goal:
+    conn: Connection
+    goal_id: Any
+    x: float
+    y: float
+    tolerance: float
+    max_speed: float
+    feedback: bool
+    task: asyncio.Task[None] | None = None
+    status: int = 0
+
+
+class NavigateActionServer:
+    """Serves ``/navigate_to_fix`` on the sim's robot."""
+
+    name = ACTION_NAME
+
+    def __init__(self, server: SimServer, node: RobotNode) -> None:
+        self.server = server
+        self.node = node
+        self.type = ACTION_TYPE
+        self.goal: _Goal | None = None
+
+    async def stop(self) -> None:
+        if self.goal is not None and self.goal.task is not None:
+            self.goal.task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self.goal.task
+
+    def op_send_goal(self, conn: Connection, msg: dict[str, Any]) -> None:
+        from .server import _field, _OpError
+
+        action = _field(msg, "action", str)
+        if action != ACTION_NAME:
+            raise _OpError(f"Action {action} does not exist")
+        args = msg.get("args") or {}
+        if isinstance(args, list):
+            args = dict(zip(("latitude", "longitude", "tolerance", "max_speed"), args, strict=False))
+        if not isinstance(args, dict):
+            raise _OpError("send_action_goal args must be an object")
+        lat, lon = args.get("latitude"), args.get("longitude")
+        if not all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in (lat, lon)):
+            self._result(conn, msg.get("id"), STATUS_ABORTED, False,
+                         {"success": False, "distance": 0.0, "message": "latitude and longitude must be numbers"})
+            return
+        x, y = self.node.vessel.local_from_lat_lon(float(lat), float(lon))
+        tolerance = float(args.get("tolerance") or 2.0)
+        max_speed = float(args.get("max_speed") or 1.5)
+        if self.goal is not None and self.goal.task is not None and not self.goal.task.done():
+            self._finish(self.goal, STATUS_ABORTED, False, "preempted by a new goal")
+        goal = _Goal(conn, msg.get("id"), x, y, max(0.5, tolerance), max(0.1, max_speed), msg.get("feedback", True)
+                     is not False)
+        self.goal = goal
+        goal.task = asyncio.get_running_loop().create_task(self._drive(goal))
+        self.server.log("/kingfisher", "info", f"Navigating to {lat:.6f}, {lon:.6f} "
+                        f"({math.hypot(x - self.node.vessel.x, y - self.node.vessel.y):.1f} m away)",
+                        function="navigate_to_fix")
+
+    def op_cancel_goal(self, conn: Connection, msg: dict[str, Any]) -> None:
+        goal = self.goal
+        if goal is None or goal.task is None or goal.task.done():
+            return
+        if msg.get("id") not in (None, goal.goal_id):
+            return
+        self._finish(goal, STATUS_CANCELED, False, "canceled")
+
+    def _distance(self, goal: _Goal) -> float:
+        v = self.node.vessel
+        return math.hypot(goal.x - v.x, goal.y - v.y)
+
+    async def _drive(self, goal: _Goal) -> None:
+        v = self.node.vessel
+        period = 0.2 / self.server.rate_scale
+        while goal.conn in self.server.connections:
+            dist = self._distance(goal)
+            if dist <= goal.tolerance:
+                v.command(0.0, 0.0, time.monotonic())
+                self._finish(goal, STATUS_SUCCEEDED, True, f"arrived within {dist:.1f} m", cancel=False)
+                return
+            bearing = math.atan2(goal.y - v.y, goal.x - v.x)
+            error = (bearing - v.yaw + math.pi) % (2 * math.pi) - math.pi
+            speed = min(goal.max_speed, 0.4 * dist) if abs(error) < 0.7 else 0.2
+            v.command(speed, 1.5 * error, time.monotonic())
+            if goal.feedback:
+                lat, lon = v.lat_lon()
+                self.server._send_text(goal.conn, {"op": "action_feedback", "id": goal.goal_id, "action": ACTION_NAME,
+                                                   "values": {"distance_remaining": dist, "latitude": lat,
+                                                              "longitude": lon, "speed": v.surge}})
+            await asyncio.sleep(period)
+        v.command(0.0, 0.0, time.monotonic())  # the client went away: stop
+
+    def _finish(self, goal: _Goal, status: int, success: bool, message: str, *, cancel: bool = True) -> None:
+        if goal.status:
+            return
+        goal.status = status
+        if cancel and goal.task is not None:
+            goal.task.cancel()
+            self.node.vessel.command(0.0, 0.0, time.monotonic())
+        dist = self._distance(goal)
+        self._result(goal.conn, goal.goal_id, status, status == STATUS_SUCCEEDED,
+                     {"success": success, "distance": dist, "message": message})
+        level = "info" if success else "warn"
+        self.server.log("/kingfisher", level, f"navigate_to_fix {message}", function="navigate_to_fix")
+
+    def _result(self, conn: Connection, goal_id: Any, status: int, result: bool, values: dict[str, Any]) -> None:
+        self.server._send_text(conn, {"op": "action_result", "id": goal_id, "action": ACTION_NAME,
+                                      "values": values, "status": status, "result": result})

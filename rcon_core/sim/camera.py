@@ -1,0 +1,115 @@
+"""Camera images rendered with OpenCV from the vessel's pose: sky, water, the shore, buoys, a clock.
+
+A pinhole camera at ``height`` metres looks along the hull (front) or backwards (rear). The scene without
+the overlay is cached by a quantised pose, so a vessel at rest costs a copy and a line of text per frame.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import cv2
+import numpy as np
+
+from .vessel import Vessel
+from .world import BUOYS
+
+SHORE_Y = 40.0
+SHORE_HEIGHT = 9.0
+
+
+class CameraRenderer:
+    """Renders RGB frames for one camera mounted on the vessel."""
+
+    def __init__(self, name: str, width: int = 640, height: int = 480, hfov_deg: float = 90.0,
+                 yaw_offset: float = 0.0, mount_height: float = 0.6) -> None:
+        self.name = name
+        self.width = width
+        self.height = height
+        self.yaw_offset = yaw_offset
+        self.mount_height = mount_height
+        self.focal = (width / 2) / math.tan(math.radians(hfov_deg) / 2)
+        self._cols = np.arange(width, dtype=np.float64)
+        self._rows = np.arange(height, dtype=np.float64)[:, None]
+        self._col_angles = np.arctan((width / 2 - self._cols) / self.focal)  # left of centre is positive
+        self._sky = self._gradient((120, 170, 225), (200, 225, 245), height)
+        self._water = self._gradient((60, 110, 140), (20, 55, 80), height)
+        self._cache_key: tuple[int, ...] | None = None
+        self._cache: np.ndarray | None = None
+        self.renders = 0
+
+    @staticmethod
+    def _gradient(top: tuple[int, int, int], bottom: tuple[int, int, int], rows: int) -> np.ndarray:
+        t = np.linspace(0.0, 1.0, rows)[:, None]
+        return (np.array(top)[None, :] * (1 - t) + np.array(bottom)[None, :] * t).astype(np.uint8)
+
+    def frame(self, vessel: Vessel, stamp: float | None = None) -> np.ndarray:
+        """An RGB uint8 image (height x width x 3) of what the camera sees now."""
+        heading = vessel.yaw + self.yaw_offset
+        key = (round(vessel.x * 10), round(vessel.y * 10), round(heading * 200), round(vessel.roll * 300),
+               round(vessel.pitch * 300), int(vessel.lights))
+        if key != self._cache_key or self._cache is None:
+            self._cache = self._scene(vessel, heading)
+            self._cache_key = key
+            self.renders += 1
+        img = self._cache.copy()
+        stamp = time.time() if stamp is None else stamp
+        text = time.strftime("%Y-%m-%d %H:%M:%S", time.gmtime(stamp)) + f".{int(stamp * 10) % 10} UTC"
+        label = f"{self.name}  {math.degrees(heading) % 360:05.1f} deg  {vessel.surge:+.2f} m/s"
+        for y, line in ((self.height - 32, label), (self.height - 12, text)):
+            cv2.putText(img, line, (10, y), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0, 0, 0), 3, cv2.LINE_AA)
+            cv2.putText(img, line, (10, y), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (255, 255, 255), 1, cv2.LINE_AA)
+        return img
+
+    def _scene(self, vessel: Vessel, heading: float) -> np.ndarray:
+        w, h, f = self.width, self.height, self.focal
+        sign = 1.0 if self.yaw_offset == 0.0 else -1.0
+        pitch = vessel.pitch * sign
+        roll = vessel.roll * sign
+        # horizon row per column, tilted by roll and shifted by pitch
+        horizon = h / 2 + f * math.tan(pitch) + (self._cols - w / 2) * math.tan(roll)
+        rows = self._rows
+        below = rows >= horizon[None, :]
+        img = np.where(below[:, :, None], self._water[:, None, :], self._sky[:, None, :]).astype(np.uint8)
+        # the shore: a band above the horizon where a column's ray meets the line y = SHORE_Y
+        theta = heading + self._col_angles
+        s = np.sin(theta)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            dist = np.where(s > 1e-3, (SHORE_Y - vessel.y) / s, np.inf)
+        dist = np.where(dist > 0.5, dist, np.inf)
+        band = np.where(np.isfinite(dist), np.clip(f * SHORE_HEIGHT / np.maximum(dist, 1.0), 0, h), 0.0)
+        shore_top = horizon - band
+        shore = (rows >= shore_top[None, :]) & ~below & (band[None, :] > 0.5)
+        img[shore] = (70, 85, 70)
+        # buoys, far to near
+        items = []
+        for b in BUOYS:
+            dx, dy = b.x - vessel.x, b.y - vessel.y
+            dist_b = math.hypot(dx, dy)
+            rel = (math.atan2(dy, dx) - heading + math.pi) % (2 * math.pi) - math.pi
+            if dist_b < 0.5 or abs(rel) > math.radians(60):
+                continue
+            items.append((dist_b, rel, b))
+        for dist_b, rel, b in sorted(items, key=lambda i: -i[0]):
+            forward = dist_b * math.cos(rel)
+            if forward <= 0.3:
+                continue
+            u = w / 2 - f * math.tan(rel)
+            v_water = h / 2 + f * math.tan(pitch) + (u - w / 2) * math.tan(roll) + f * self.mount_height / forward
+            r = max(1, int(f * b.radius / forward))
+            cx, cy = int(u), int(v_water)
+            color = tuple(int(c) for c in b.color)
+            cv2.ellipse(img, (cx, cy), (r, max(1, r // 3)), 0, 0, 360, (30, 50, 60), -1, cv2.LINE_AA)
+            cv2.rectangle(img, (cx - r, cy - 2 * r), (cx + r, cy), color, -1, cv2.LINE_AA)
+            cv2.circle(img, (cx, cy - 2 * r), r, color, -1, cv2.LINE_AA)
+            if vessel.lights and dist_b < 25:
+                cv2.circle(img, (cx, cy - 2 * r), max(1, r // 2), (255, 255, 210), -1, cv2.LINE_AA)
+        return img
+
+
+def encode_jpeg(rgb: np.ndarray, quality: int = 80) -> bytes:
+    ok, buf = cv2.imencode(".jpg", cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR), [cv2.IMWRITE_JPEG_QUALITY, quality])
+    if not ok:
+        raise RuntimeError("JPEG encoding failed")
+    return buf.tobytes()

@@ -1,0 +1,120 @@
+"""Wire encodings of outgoing frames: JSON text, CBOR (typed arrays), PNG, fragments.
+
+Messages inside the sim are plain dicts.  ``bytes`` values stand for ``uint8[]``/``char[]`` and numpy
+arrays for other numeric arrays, so each encoding can render them the way rosbridge does: base64 text and
+plain JSON lists (float32 widened to double, NaN/inf as ``null``) in JSON; byte strings and RFC 8746
+typed arrays in CBOR.
+"""
+
+from __future__ import annotations
+
+import base64
+import math
+import struct
+import zlib
+from typing import Any
+
+import cbor2
+import numpy as np
+import orjson
+
+# RFC 8746 typed-array tags (little endian)
+_CBOR_TAGS: dict[str, int] = {
+    "uint8": 64,
+    "uint16": 69,
+    "uint32": 70,
+    "uint64": 71,
+    "int8": 72,
+    "int16": 77,
+    "int32": 78,
+    "int64": 79,
+    "float32": 85,
+    "float64": 86,
+}
+
+
+def _json_default(value: Any) -> Any:
+    if isinstance(value, bytes | bytearray | memoryview):
+        return base64.b64encode(bytes(value)).decode("ascii")
+    if isinstance(value, np.ndarray):
+        if value.dtype == np.float32:
+            return value.astype(np.float64).tolist()
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"cannot encode {type(value).__name__} as JSON")
+
+
+def dumps(obj: Any) -> str:
+    """Compact JSON text; NaN and infinities become ``null`` (as rosbridge's ujson does)."""
+    return orjson.dumps(obj, default=_json_default).decode("utf-8")
+
+
+def loads(text: str | bytes) -> Any:
+    return orjson.loads(text)
+
+
+def _cbor_default(encoder: cbor2.CBOREncoder, value: Any) -> None:
+    if isinstance(value, np.ndarray):
+        name = value.dtype.name
+        tag = _CBOR_TAGS.get(name)
+        if tag is None:
+            encoder.encode(value.tolist())
+            return
+        data = value.astype(value.dtype.newbyteorder("<"), copy=False).tobytes()
+        encoder.encode(cbor2.CBORTag(tag, data))
+        return
+    if isinstance(value, np.generic):
+        encoder.encode(value.item())
+        return
+    if isinstance(value, bytearray | memoryview):
+        encoder.encode(bytes(value))
+        return
+    raise cbor2.CBOREncodeTypeError(f"cannot encode {type(value).__name__} as CBOR")
+
+
+def cbor_dumps(obj: Any) -> bytes:
+    """CBOR bytes: ``bytes`` as byte strings, numeric numpy arrays as typed arrays, floats as doubles."""
+    return cbor2.dumps(obj, default=_cbor_default)
+
+
+def publish_frame(topic: str, msg: Any) -> dict[str, Any]:
+    return {"op": "publish", "topic": topic, "msg": msg}
+
+
+def png_frame(text: str) -> str:
+    """rosbridge's ``png`` compression: the JSON text as the pixels of an RGB PNG, padded with newlines."""
+    data = text.encode("utf-8")
+    n = len(data)
+    width = max(1, int(math.floor(math.sqrt(n / 3.0))))
+    height = max(1, -(-n // (3 * width)))
+    data += b"\n" * (width * height * 3 - n)
+    stride = width * 3
+    raw = b"".join(b"\x00" + data[row * stride : (row + 1) * stride] for row in range(height))
+
+    def chunk(kind: bytes, body: bytes) -> bytes:
+        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body) & 0xFFFFFFFF)
+
+    png = (
+        b"\x89PNG\r\n\x1a\n"
+        + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0))
+        + chunk(b"IDAT", zlib.compress(raw, 6))
+        + chunk(b"IEND", b"")
+    )
+    return dumps({"op": "png", "data": base64.b64encode(png).decode("ascii")})
+
+
+def fragments(text: str, size: int) -> list[str]:
+    """Split a JSON text into rosbridge ``fragment`` frames.
+
+    Like rosbridge 0.11, ``id`` is 0 and ``total`` is a float whose floor is the number of fragments.
+    """
+    count = max(1, -(-len(text) // size))
+    rest = len(text) % size
+    total = float(count) if rest == 0 else count + round(rest / size, 2)
+    if total >= count + 1:  # rounding up to the next whole number would mislead floor(total)
+        total = count + 0.99
+    return [
+        dumps({"op": "fragment", "id": 0, "data": text[i * size : (i + 1) * size], "num": i, "total": total})
+        for i in range(count)
+    ]

@@ -1,0 +1,407 @@
+"""The robot's ROS node inside the sim: its topics, services and /rosout lines, on a schedule.
+
+Sensor messages are built only while someone subscribes (the cameras especially), so an idle sim costs
+almost nothing. All publish rates are multiplied by the server's ``rate_scale``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import math
+import random
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from . import world
+from .camera import CameraRenderer, encode_jpeg
+from .rosapi import add_logger_services
+from .vessel import Vessel
+
+if TYPE_CHECKING:
+    from .server import SimServer
+
+log = logging.getLogger(__name__)
+
+NODE = "/kingfisher"
+PHYSICS_HZ = 50.0
+
+#: topic -> base rate in Hz (scaled by rate_scale)
+RATES: dict[str, float] = {
+    "/odom": 20.0,
+    "/gps/fix": 5.0,
+    "/imu/data": 100.0,
+    "/imu/mag": 25.0,
+    "/camera/front/image_raw": 10.0,
+    "/camera/rear/image_raw/compressed": 12.0,
+    "/scan": 10.0,
+    "/battery": 1.0,
+    "/depth": 5.0,
+}
+
+# the Earth's field in Toronto, Tesla, ENU (declination about -10.5 deg, inclination about 71 deg)
+_MAG_E, _MAG_N, _MAG_U = -3.17e-6, 17.1e-6, -51.4e-6
+
+
+def f32(value: float) -> float:
+    """A float32 value widened to double, as rosbridge sends float32 fields."""
+    return float(np.float32(value))
+
+
+def _diag(values: list[float], n: int) -> list[float]:
+    out = [0.0] * (n * n)
+    for i, v in enumerate(values):
+        out[i * n + i] = v
+    return out
+
+
+@dataclass
+class _Periodic:
+    topic: str
+    period: float
+    fn: Callable[[float], None]
+    next_due: float = 0.0
+
+
+class RobotNode:
+    """Publishes the vessel's sensors and takes its commands."""
+
+    def __init__(self, server: SimServer, vessel: Vessel | None = None) -> None:
+        self.server = server
+        self.vessel = vessel or Vessel()
+        self.fl = server.flavour
+        self.rng = random.Random(7)
+        self.lidar = world.Lidar()
+        self.front = CameraRenderer("front")
+        self.rear = CameraRenderer("rear", yaw_offset=math.pi)
+        self.published_counts: dict[str, int] = {}
+        self._task: asyncio.Task[None] | None = None
+        self._last_physics = time.monotonic()
+        self._cmd_logged_at = float("-inf")
+        self._idle = True
+        m, s = self.fl.msg, self.fl.srv
+        self.types = {
+            "/odom": m("nav_msgs", "Odometry"),
+            "/gps/fix": m("sensor_msgs", "NavSatFix"),
+            "/imu/data": m("sensor_msgs", "Imu"),
+            "/imu/mag": m("sensor_msgs", "MagneticField"),
+            "/camera/front/image_raw": m("sensor_msgs", "Image"),
+            "/camera/rear/image_raw/compressed": m("sensor_msgs", "CompressedImage"),
+            "/scan": m("sensor_msgs", "LaserScan"),
+            "/battery": m("sensor_msgs", "BatteryState"),
+            "/depth": m("sensor_msgs", "Range"),
+            "/map": m("nav_msgs", "OccupancyGrid"),
+            "/lights/state": m("std_msgs", "Bool"),
+        }
+        for topic, type_name in self.types.items():
+            server.advertise_internal(topic, type_name, NODE, latched=topic in ("/map", "/lights/state"))
+        server.subscribe_internal("/cmd_vel", m("geometry_msgs", "Twist"), NODE, self._on_cmd_vel)
+        server.subscribe_internal("/speed_limit", m("std_msgs", "Float64"), NODE, self._on_speed_limit)
+        server.add_service("/reset_pose", s("std_srvs", "Empty"), NODE, self._srv_reset_pose)
+        server.add_service("/lights/set", s("std_srvs", "SetBool"), NODE, self._srv_lights)
+        server.add_service("/dock", s("std_srvs", "Trigger"), NODE, self._srv_dock)
+        if server.rosapi is not None:
+            add_logger_services(server, server.rosapi, NODE)
+        p = self.vessel.params
+        server.params_tree.set(NODE, {
+            "max_speed": p.max_surge, "max_yaw_rate": p.max_yaw_rate, "watchdog_timeout": p.watchdog_s,
+            "battery_capacity_ah": p.capacity_ah, "frame_id": "base_link",
+            "gps": {"origin_lat": self.vessel.origin_lat, "origin_lon": self.vessel.origin_lon},
+        })
+        scale = server.rate_scale
+        self._periodic = [_Periodic(t, 1.0 / (hz * scale), getattr(self, "_pub_" + t.strip("/").replace("/", "_")))
+                          for t, hz in RATES.items()]
+
+    # -- lifecycle ----------------------------------------------------------------------------------
+
+    def start(self) -> None:
+        self._publish_map()
+        self._publish_lights()
+        self.server.log(NODE, "info", "Kingfisher simulator up: thrusters armed, waiting for /cmd_vel",
+                        function="start")
+        self._task = asyncio.get_running_loop().create_task(self._run(), name="sim-robot")
+
+    async def stop(self) -> None:
+        if self._task is not None:
+            self._task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._task
+            self._task = None
+
+    async def _run(self) -> None:
+        now = time.monotonic()
+        physics = _Periodic("", 1.0 / PHYSICS_HZ, self._physics, now)
+        entries = [physics, *self._periodic]
+        for i, e in enumerate(self._periodic):
+            e.next_due = now + (i * 0.0037) % e.period  # spread the first publications
+        while True:
+            due = min(e.next_due for e in entries)
+            delay = due - time.monotonic()
+            if delay > 0:
+                await asyncio.sleep(delay)
+            now = time.monotonic()
+            for e in entries:
+                if e.next_due <= now:
+                    e.next_due += e.period
+                    if e.next_due < now:  # fell behind: skip, never burst
+                        e.next_due = now + e.period
+                    try:
+                        e.fn(now)
+                    except Exception:  # noqa: BLE001 - a sensor bug must not stop the robot
+                        log.exception("publishing %s failed", e.topic or "physics")
+
+    def _publish(self, topic: str, msg: dict[str, Any]) -> None:
+        self.published_counts[topic] = self.published_counts.get(topic, 0) + 1
+        self.server.publish(topic, msg, NODE)
+
+    # -- physics and events -------------------------------------------------------------------------
+
+    def _physics(self, now: float) -> None:
+        dt = min(0.2, now - self._last_physics)
+        self._last_physics = now
+        v = self.vessel
+        for event in v.step(dt, now):
+            if event == "watchdog":
+                self.server.log(NODE, "warn", f"No /cmd_vel for {v.params.watchdog_s:.1f} s: watchdog stopped "
+                                "the thrusters", function="watchdog")
+                self._idle = True
+            elif event == "battery_low":
+                self.server.log(NODE, "warn", f"Battery low: {v.battery_fraction * 100:.0f}% "
+                                f"({v.voltage:.1f} V); return to dock", function="battery")
+            elif event == "docked":
+                self.server.log(NODE, "info", f"Docked; charging at {v.current:.1f} A", function="dock")
+
+    def _on_cmd_vel(self, msg: dict[str, Any]) -> None:
+        linear = msg.get("linear") or {}
+        angular = msg.get("angular") or {}
+        surge = float(linear.get("x", 0.0) or 0.0)
+        yaw_rate = float(angular.get("z", 0.0) or 0.0)
+        now = time.monotonic()
+        was_docking = self.vessel.docking
+        self.vessel.command(surge, yaw_rate, now)
+        if was_docking:
+            self.server.log(NODE, "warn", "Docking cancelled by a /cmd_vel command", function="cmd_vel")
+        if self._idle or now - self._cmd_logged_at > 10.0:
+            self._idle = False
+            self._cmd_logged_at = now
+            self.server.log(NODE, "info", f"cmd_vel received: surge {self.vessel.cmd_surge:.2f} m/s, yaw rate "
+                            f"{self.vessel.cmd_yaw_rate:.2f} rad/s", function="cmd_vel")
+
+    def _on_speed_limit(self, msg: dict[str, Any]) -> None:
+        value = msg.get("data")
+        if not isinstance(value, int | float) or not math.isfinite(value) or value < 0:
+            self.server.log(NODE, "error", f"Ignoring invalid speed limit {value!r}", function="speed_limit")
+            return
+        self.vessel.speed_limit = float(value)
+        self.server.log(NODE, "info", f"Speed limit set to {value:.2f} m/s", function="speed_limit")
+
+    # -- services -----------------------------------------------------------------------------------
+
+    def _srv_reset_pose(self, req: dict[str, Any]) -> dict[str, Any]:
+        self.vessel.reset_pose()
+        self.server.log(NODE, "info", "Pose reset to the origin", function="reset_pose")
+        return {}
+
+    def _srv_lights(self, req: dict[str, Any]) -> dict[str, Any]:
+        on = bool(req.get("data", False))
+        changed = on != self.vessel.lights
+        self.vessel.lights = on
+        if changed:
+            self._publish_lights()
+            self.server.log(NODE, "info", f"Lights {'on' if on else 'off'}", function="lights")
+        return {"success": True, "message": f"lights {'on' if on else 'off'}"}
+
+    def _srv_dock(self, req: dict[str, Any]) -> dict[str, Any]:
+        v = self.vessel
+        if v.docked:
+            return {"success": False, "message": "already docked"}
+        if v.dock_distance < 1.5:
+            v.docked = True
+            v.docking = False
+            self.server.log(NODE, "info", "Docked; charging", function="dock")
+            return {"success": True, "message": "docked"}
+        v.docking = True
+        v.watchdog_tripped = False
+        self.server.log(NODE, "info", f"Docking started: {v.dock_distance:.1f} m to the dock", function="dock")
+        return {"success": True, "message": f"docking started, {v.dock_distance:.1f} m to go"}
+
+    # -- latched topics -----------------------------------------------------------------------------
+
+    def _publish_lights(self) -> None:
+        self._publish("/lights/state", {"data": self.vessel.lights})
+
+    def _publish_map(self) -> None:
+        resolution = 0.5
+        data, width, height = world.occupancy_grid(resolution=resolution)
+        stamp = time.time()
+        info = {
+            "map_load_time": self.fl.time(stamp),
+            "resolution": f32(resolution),
+            "width": width,
+            "height": height,
+            "origin": {"position": {"x": -40.0, "y": -50.0, "z": 0.0},
+                       "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}},
+        }
+        self._publish("/map", {"header": self.fl.header("map", stamp), "info": info, "data": data})
+
+    # -- periodic publishers ------------------------------------------------------------------------
+
+    def _wanted(self, topic: str) -> bool:
+        return self.server.has_subscribers(topic)
+
+    def _pub_odom(self, now: float) -> None:
+        if not self._wanted("/odom"):
+            return
+        v = self.vessel
+        qx, qy, qz, qw = v.quaternion()
+        pose_cov = _diag([0.05, 0.05, 1e3, 1e3, 1e3, 0.02], 6)
+        twist_cov = _diag([0.01, 0.01, 1e3, 1e3, 1e3, 0.01], 6)
+        self._publish("/odom", {
+            "header": self.fl.header("odom"),
+            "child_frame_id": "base_link",
+            "pose": {"pose": {"position": {"x": v.x, "y": v.y, "z": 0.0},
+                              "orientation": {"x": qx, "y": qy, "z": qz, "w": qw}},
+                     "covariance": np.array(pose_cov)},
+            "twist": {"twist": {"linear": {"x": v.surge, "y": 0.0, "z": 0.0},
+                                "angular": {"x": 0.0, "y": 0.0, "z": v.yaw_rate}},
+                      "covariance": np.array(twist_cov)},
+        })
+
+    def _pub_gps_fix(self, now: float) -> None:
+        if not self._wanted("/gps/fix"):
+            return
+        v = self.vessel
+        sigma = 0.6
+        lat, lon = v.lat_lon()
+        lat += math.degrees(self.rng.gauss(0, sigma) / 6_378_137.0)
+        lon += math.degrees(self.rng.gauss(0, sigma) / (6_378_137.0 * math.cos(math.radians(v.origin_lat))))
+        self._publish("/gps/fix", {
+            "header": self.fl.header("gps"),
+            "status": {"status": 0, "service": 1},
+            "latitude": lat,
+            "longitude": lon,
+            "altitude": 74.6 + self.rng.gauss(0, 0.8),
+            "position_covariance": np.array(_diag([sigma**2, sigma**2, 1.5**2], 3)),
+            "position_covariance_type": 2,
+        })
+
+    def _pub_imu_data(self, now: float) -> None:
+        if not self._wanted("/imu/data"):
+            return
+        v = self.vessel
+        g = self.rng.gauss
+        qx, qy, qz, qw = v.quaternion()
+        self._publish("/imu/data", {
+            "header": self.fl.header("imu_link"),
+            "orientation": {"x": qx, "y": qy, "z": qz, "w": qw},
+            "orientation_covariance": np.array(_diag([0.0004, 0.0004, 0.0025], 3)),
+            "angular_velocity": {"x": g(0, 0.002) + 0.04 * math.cos(1.3 * v.time_s),
+                                 "y": g(0, 0.002) + 0.018 * math.cos(0.9 * v.time_s + 0.5),
+                                 "z": v.yaw_rate + g(0, 0.002)},
+            "angular_velocity_covariance": np.array(_diag([4e-6, 4e-6, 4e-6], 3)),
+            "linear_acceleration": {"x": v.surge_accel + g(0, 0.02), "y": v.surge * v.yaw_rate + g(0, 0.02),
+                                    "z": 9.80665 + 0.15 * math.sin(1.7 * v.time_s) + g(0, 0.02)},
+            "linear_acceleration_covariance": np.array(_diag([4e-4, 4e-4, 4e-4], 3)),
+        })
+
+    def _pub_imu_mag(self, now: float) -> None:
+        if not self._wanted("/imu/mag"):
+            return
+        yaw = self.vessel.yaw
+        g = self.rng.gauss
+        bx = math.cos(yaw) * _MAG_E + math.sin(yaw) * _MAG_N
+        by = -math.sin(yaw) * _MAG_E + math.cos(yaw) * _MAG_N
+        self._publish("/imu/mag", {
+            "header": self.fl.header("imu_link"),
+            "magnetic_field": {"x": bx + g(0, 2e-7), "y": by + g(0, 2e-7), "z": _MAG_U + g(0, 2e-7)},
+            "magnetic_field_covariance": np.array(_diag([4e-14, 4e-14, 4e-14], 3)),
+        })
+
+    def _pub_camera_front_image_raw(self, now: float) -> None:
+        if not self._wanted("/camera/front/image_raw"):
+            return
+        stamp = time.time()
+        img = self.front.frame(self.vessel, stamp)
+        h, w = img.shape[:2]
+        self._publish("/camera/front/image_raw", {
+            "header": self.fl.header("camera_front_optical", stamp),
+            "height": h, "width": w, "encoding": "rgb8", "is_bigendian": 0, "step": w * 3,
+            "data": img.tobytes(),
+        })
+
+    def _pub_camera_rear_image_raw_compressed(self, now: float) -> None:
+        if not self._wanted("/camera/rear/image_raw/compressed"):
+            return
+        stamp = time.time()
+        img = self.rear.frame(self.vessel, stamp)
+        self._publish("/camera/rear/image_raw/compressed", {
+            "header": self.fl.header("camera_rear_optical", stamp),
+            "format": "jpeg",
+            "data": encode_jpeg(img),
+        })
+
+    def _pub_scan(self, now: float) -> None:
+        if not self._wanted("/scan"):
+            return
+        v = self.vessel
+        ranges = self.lidar.scan(v.x, v.y, v.yaw)
+        noise = np.asarray([self.rng.gauss(0, 0.01) for _ in range(8)], dtype=np.float32)
+        ranges = ranges + np.resize(noise, ranges.shape)
+        lid = self.lidar
+        self._publish("/scan", {
+            "header": self.fl.header("laser"),
+            "angle_min": f32(lid.angle_min),
+            "angle_max": f32(lid.angle_max),
+            "angle_increment": f32(lid.angle_increment),
+            "time_increment": f32(0.1 / lid.rays),
+            "scan_time": f32(0.1),
+            "range_min": f32(lid.range_min),
+            "range_max": f32(lid.range_max),
+            "ranges": ranges.astype(np.float32),
+            "intensities": np.where(np.isfinite(ranges), 100.0, 0.0).astype(np.float32),
+        })
+
+    def _pub_battery(self, now: float) -> None:
+        if not self._wanted("/battery"):
+            return
+        v = self.vessel
+        cells = v.params.cells
+        cell = v.voltage / cells
+        status = 1 if v.docked and v.battery_fraction < 0.999 else (4 if v.docked else 2)
+        self._publish("/battery", {
+            "header": self.fl.header("battery"),
+            "voltage": f32(v.voltage),
+            "temperature": f32(24.5 + 0.3 * abs(v.current) / 10),
+            "current": f32(v.current),
+            "charge": f32(v.battery_charge),
+            "capacity": f32(v.params.capacity_ah),
+            "design_capacity": f32(v.params.capacity_ah),
+            "percentage": f32(v.battery_fraction),
+            "power_supply_status": status,
+            "power_supply_health": 1,
+            "power_supply_technology": 3,
+            "present": True,
+            "cell_voltage": np.array([cell + 0.005 * ((i * 7) % 3 - 1) for i in range(cells)], dtype=np.float32),
+            "cell_temperature": np.full(cells, 24.5, dtype=np.float32),
+            "location": "hull",
+            "serial_number": "KF-BAT-0142",
+        })
+
+    def _pub_depth(self, now: float) -> None:
+        if not self._wanted("/depth"):
+            return
+        v = self.vessel
+        depth = world.depth_at(v.x, v.y) + self.rng.gauss(0, 0.03)
+        self._publish("/depth", {
+            "header": self.fl.header("sonar"),
+            "radiation_type": 0,  # ULTRASOUND
+            "field_of_view": f32(0.26),
+            "min_range": f32(0.3),
+            "max_range": f32(50.0),
+            "range": f32(depth),
+        })

@@ -1,0 +1,745 @@
+"""SimServer: a rosbridge v2 server (``websockets``) around the simulated vessel.
+
+Every client op of rosbridge 0.11 is handled the way the real server does it (see the recordings'
+README): no acknowledgements except service responses, errors only in the log, lenient input parsing.
+Slow clients never stall the simulation: each connection has its own bounded, drop-oldest send queue.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import collections
+import contextlib
+import inspect
+import itertools
+import json
+import logging
+import threading
+import time
+from collections.abc import Callable, Iterator
+from typing import Any
+
+from websockets.asyncio.server import Server, ServerConnection, serve
+from websockets.exceptions import ConnectionClosed
+
+from . import encoding
+from .auth import check_auth
+from .connection import Connection, SubOptions, TopicSubscription
+from .convert import ConversionError
+from .flavour import Flavour
+from .graph import BRIDGE_NODE, ROSOUT_NODE, InternalCallback, Service, ServiceFailure, ServiceHandler, Topic
+from .params import ParamTree
+from .typesource import TypeSource
+
+log = logging.getLogger("rcon.sim")
+
+COMPRESSIONS = {"none", "png", "cbor", "cbor-raw"}
+PUBLISHED_KEEP = 500
+
+
+class SimServer:
+    """The embedded simulated robot, served over rosbridge v2."""
+
+    def __init__(self, host: str = "127.0.0.1", port: int = 0, ros2: bool = False, rate_scale: float = 1.0,
+                 auth_secret: str | None = None, *, robot: bool = True) -> None:
+        if rate_scale <= 0:
+            raise ValueError(f"rate_scale must be positive, got {rate_scale}")
+        self.host = host
+        self._requested_port = port
+        self.ros2 = ros2
+        self.rate_scale = rate_scale
+        self.auth_secret = auth_secret
+        self.flavour = Flavour(ros2)
+        self.types = TypeSource(ros2, lambda: self.flavour.time())
+        self.topics: dict[str, Topic] = {}
+        self.services: dict[str, Service] = {}
+        self.connections: set[Connection] = set()
+        self.params_tree = ParamTree()
+        self.rosapi: Any = None
+        self.loop: asyncio.AbstractEventLoop | None = None
+        self.started_at = time.time()
+        self._with_robot = robot
+        self.robot: Any = None
+        self._robot_node: Any = None
+        self._actions: Any = None
+        self._server: Server | None = None
+        self._port = 0
+        self._client_ids = itertools.count(0)
+        self._published: dict[str, collections.deque[dict[str, Any]]] = {}
+        self._published_lock = threading.Lock()
+        self._published_event: asyncio.Event | None = None
+        self._tasks: set[asyncio.Task[Any]] = set()
+
+    # -- lifecycle ------------------------------------------------------------------------------------
+
+    @property
+    def port(self) -> int:
+        return self._port
+
+    @property
+    def url(self) -> str:
+        host = f"[{self.host}]" if ":" in self.host else self.host
+        return f"ws://{host}:{self._port}"
+
+    async def start(self) -> None:
+        """Bind the socket, set up rosapi and the robot, and start simulating."""
+        from . import rosapi
+
+        self.loop = asyncio.get_running_loop()
+        self._published_event = asyncio.Event()
+        self.started_at = time.time()
+        self.advertise_internal("/rosout", self.flavour.msg("rosgraph_msgs", "Log") if not self.ros2
+                                else self.flavour.msg("rcl_interfaces", "Log"), ROSOUT_NODE, latched=True)
+        if not self.ros2:
+            self.advertise_internal("/rosout_agg", self.flavour.msg("rosgraph_msgs", "Log"), ROSOUT_NODE)
+        self.advertise_internal("/client_count", self.flavour.msg("std_msgs", "Int32"), BRIDGE_NODE, latched=True)
+        rosapi.install(self)
+        if self._with_robot:
+            from .robot_node import RobotNode
+
+            self._robot_node = RobotNode(self)
+            self.robot = self._robot_node.vessel
+            self._robot_node.start()
+            if self.ros2:
+                from .actions import NavigateActionServer
+
+                self._actions = NavigateActionServer(self, self._robot_node)
+        self._server = await serve(self._handle, self.host, self._requested_port, max_size=None,
+                                   compression=None, ping_interval=20, ping_timeout=20)
+        sock = next(iter(self._server.sockets))
+        self._port = sock.getsockname()[1]
+        self.publish("/client_count", {"data": 0}, BRIDGE_NODE)
+        self.log(BRIDGE_NODE, "info", f"Rosbridge WebSocket server started on port {self._port}")
+        log.info("sim listening on %s (ros2=%s, rate_scale=%s)", self.url, self.ros2, self.rate_scale)
+
+    async def stop(self) -> None:
+        """Stop simulating and close every connection."""
+        if self._robot_node is not None:
+            await self._robot_node.stop()
+        if self._actions is not None:
+            await self._actions.stop()
+        for task in list(self._tasks):
+            task.cancel()
+        for task in list(self._tasks):
+            with contextlib.suppress(asyncio.CancelledError, Exception):
+                await task
+        if self._server is not None:
+            self._server.close()
+            with contextlib.suppress(Exception):
+                await asyncio.wait_for(self._server.wait_closed(), 5)
+            self._server = None
+        for conn in list(self.connections):
+            await conn.close()
+
+    async def __aenter__(self) -> SimServer:
+        await self.start()
+        return self
+
+    async def __aexit__(self, *exc: object) -> None:
+        await self.stop()
+
+    @classmethod
+    @contextlib.contextmanager
+    def in_thread(cls, host: str = "127.0.0.1", port: int = 0, **kwargs: Any) -> Iterator[SimServer]:
+        """Run a SimServer on its own event loop in a daemon thread (for sync code)."""
+        server = cls(host=host, port=port, **kwargs)
+        loop = asyncio.new_event_loop()
+        thread = threading.Thread(target=loop.run_forever, name="rcon-sim", daemon=True)
+        thread.start()
+        try:
+            asyncio.run_coroutine_threadsafe(server.start(), loop).result(timeout=30)
+            yield server
+        finally:
+            with contextlib.suppress(Exception):
+                asyncio.run_coroutine_threadsafe(server.stop(), loop).result(timeout=10)
+            loop.call_soon_threadsafe(loop.stop)
+            thread.join(timeout=10)
+            if not thread.is_alive():
+                loop.close()
+
+    def run_sync(self, fn: Callable[[], Any], timeout: float = 10.0) -> Any:
+        """Run a plain function on the server's loop from another thread and return its result."""
+        assert self.loop is not None
+
+        async def call() -> Any:
+            return fn()
+
+        return asyncio.run_coroutine_threadsafe(call(), self.loop).result(timeout)
+
+    def _spawn(self, coro: Any) -> asyncio.Task[Any]:
+        task = asyncio.get_running_loop().create_task(coro)
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+        return task
+
+    # -- inspection (tests) ---------------------------------------------------------------------------
+
+    def topic_subscriber_count(self, topic: str) -> int:
+        """How many client connections are currently subscribed to ``topic``."""
+        t = self.topics.get(topic)
+        return len(t.client_subscribers) if t else 0
+
+    def published(self, topic: str) -> list[dict[str, Any]]:
+        """Messages clients published on ``topic`` (the most recent ones, oldest first)."""
+        with self._published_lock:
+            return list(self._published.get(topic, ()))
+
+    async def wait_for_published(self, topic: str, predicate: Callable[[dict[str, Any]], bool] | None = None,
+                                 timeout: float = 5.0) -> dict[str, Any]:
+        """The newest message a client published on ``topic`` that fits ``predicate``, waiting for one."""
+        assert self._published_event is not None, "server not started"
+        deadline = time.monotonic() + timeout
+        while True:
+            for msg in reversed(self.published(topic)):
+                if predicate is None or predicate(msg):
+                    return msg
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise TimeoutError(f"no matching message published on {topic} within {timeout} s")
+            self._published_event.clear()
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(self._published_event.wait(), left)
+
+    def wait_for_published_sync(self, topic: str, predicate: Callable[[dict[str, Any]], bool] | None = None,
+                                timeout: float = 5.0) -> dict[str, Any]:
+        """``wait_for_published`` for code outside the server's loop (``in_thread``)."""
+        assert self.loop is not None
+        fut = asyncio.run_coroutine_threadsafe(self.wait_for_published(topic, predicate, timeout), self.loop)
+        return fut.result(timeout + 5)
+
+    # -- graph API used by the robot and rosapi -------------------------------------------------------
+
+    def advertise_internal(self, name: str, type_name: str, node: str, latched: bool = False) -> Topic:
+        topic = self.topics.get(name)
+        if topic is None:
+            topic = self.topics[name] = Topic(name, type_name, latched)
+        topic.latched = topic.latched or latched
+        topic.publishers[node] += 1
+        return topic
+
+    def subscribe_internal(self, name: str, type_name: str, node: str, callback: InternalCallback) -> Topic:
+        topic = self.topics.get(name)
+        if topic is None:
+            topic = self.topics[name] = Topic(name, type_name)
+        topic.internal_subscribers.setdefault(node, []).append(callback)
+        return topic
+
+    def add_service(self, name: str, type_name: str, node: str, handler: ServiceHandler) -> Service:
+        svc = Service(name, type_name, node, handler=handler)
+        self.services[name] = svc
+        return svc
+
+    def has_subscribers(self, name: str) -> bool:
+        topic = self.topics.get(name)
+        return topic is not None and topic.has_subscribers()
+
+    def publish(self, name: str, msg: dict[str, Any], node: str) -> None:
+        """Publish ``msg`` on topic ``name`` as ``node``: latch it, call internal subscribers, fan out."""
+        topic = self.topics[name]
+        header = msg.get("header")
+        if isinstance(header, dict) and "seq" in header and not self.ros2:
+            if topic.has_subscribers():
+                topic.seq += 1
+            header["seq"] = topic.seq
+        if topic.latched:
+            topic.latched_msgs[node] = msg
+        for callbacks in list(topic.internal_subscribers.values()):
+            for cb in list(callbacks):
+                try:
+                    cb(msg)
+                except Exception:  # noqa: BLE001 - one broken callback must not stop the others
+                    log.exception("subscriber callback on %s failed", name)
+        if topic.client_subscribers:
+            self._fan_out(topic, msg)
+
+    def log(self, node: str, level: str, text: str, *, function: str = "", line: int = 0) -> None:
+        """A /rosout line from ``node`` (``level``: debug, info, warn, error, fatal)."""
+        getattr(log, {"warn": "warning", "fatal": "critical"}.get(level, level))("%s: %s", node, text)
+        if "/rosout" not in self.topics:
+            return
+        if self.ros2:
+            levels = {"debug": 10, "info": 20, "warn": 30, "error": 40, "fatal": 50}
+            msg: dict[str, Any] = {"stamp": self.flavour.time(), "level": levels[level], "name": node.lstrip("/"),
+                                   "msg": text, "file": "", "function": function, "line": line}
+        else:
+            levels = {"debug": 1, "info": 2, "warn": 4, "error": 8, "fatal": 16}
+            topics = sorted(t.name for t in self.topics.values() if t.publishers[node] > 0)
+            msg = {"header": self.flavour.header(""), "level": levels[level], "name": node, "msg": text,
+                   "file": "", "function": function, "line": line, "topics": topics}
+        self.publish("/rosout", msg, node)
+        if "/rosout_agg" in self.topics:
+            self.publish("/rosout_agg", dict(msg), ROSOUT_NODE)
+
+    # -- fan-out and encoding -------------------------------------------------------------------------
+
+    def _fan_out(self, topic: Topic, msg: dict[str, Any]) -> None:
+        cache: dict[Any, Any] = {}
+        now = time.monotonic()
+        for conn in list(topic.client_subscribers):
+            sub = conn.subscriptions.get(topic.name)
+            if sub is None:
+                continue
+            throttle = sub.throttle_s
+            if throttle > 0 and now - sub.last_sent < throttle:
+                continue  # throttling drops, it does not delay
+            payload = self._encoded(cache, topic, msg, sub.compression, conn.fragment_size)
+            if payload is None:
+                continue
+            sub.last_sent = now
+            conn.send(payload, topic=topic.name, queue_length=sub.queue_length)
+
+    def _encoded(self, cache: dict[Any, Any], topic: Topic, msg: dict[str, Any], compression: str,
+                 fragment_size: int | None) -> str | bytes | list[str] | None:
+        key = (compression, fragment_size)
+        if key in cache:
+            return cache[key]
+        try:
+            payload: str | bytes | list[str] | None
+            if compression == "cbor":
+                payload = encoding.cbor_dumps(encoding.publish_frame(topic.name, msg))
+            elif compression == "cbor-raw":
+                raw = {**self.flavour.time(), "bytes": self.types.serialize(topic.type, msg)}
+                if self.ros2:
+                    raw = {"secs": raw["sec"], "nsecs": raw["nanosec"], "bytes": raw["bytes"]}
+                payload = encoding.cbor_dumps(encoding.publish_frame(topic.name, raw))
+            else:
+                text = cache.get("text")
+                if text is None:
+                    text = cache["text"] = encoding.dumps(encoding.publish_frame(topic.name, msg))
+                if compression == "png":
+                    text = encoding.png_frame(text)
+                payload = text
+                if fragment_size and len(text) > fragment_size:
+                    payload = encoding.fragments(text, fragment_size)
+        except Exception as exc:  # noqa: BLE001 - mirror rosbridge: log once per message, send nothing
+            log.error("Exception calling subscribe callback: %s", exc)
+            payload = None
+        cache[key] = payload
+        return payload
+
+    def _send_text(self, conn: Connection, frame: dict[str, Any]) -> None:
+        """Send a non-publish frame (a reply or a request), fragmented if the connection asked for it."""
+        text = encoding.dumps(frame)
+        if conn.fragment_size and len(text) > conn.fragment_size:
+            conn.send(encoding.fragments(text, conn.fragment_size))
+        else:
+            conn.send(text)
+
+    # -- connections ----------------------------------------------------------------------------------
+
+    async def _handle(self, ws: ServerConnection) -> None:
+        conn = Connection(ws, next(self._client_ids))
+        conn.authenticated = self.auth_secret is None
+        conn.start()
+        self.connections.add(conn)
+        self.log(BRIDGE_NODE, "info", f"Client connected.  {len(self.connections)} clients total.")
+        self.publish("/client_count", {"data": len(self.connections)}, BRIDGE_NODE)
+        try:
+            async for message in ws:
+                try:
+                    await self._receive(conn, message)
+                except Exception:  # noqa: BLE001 - bad input never takes the connection down
+                    log.exception("%s failed to handle a frame", conn.label)
+                if conn.closing:
+                    break
+        except ConnectionClosed:
+            pass
+        finally:
+            self.connections.discard(conn)
+            self._cleanup(conn)
+            await conn.close()
+            with contextlib.suppress(Exception):
+                await ws.close()
+            self.log(BRIDGE_NODE, "info", f"Client disconnected. {len(self.connections)} clients total.")
+            if "/client_count" in self.topics:
+                self.publish("/client_count", {"data": len(self.connections)}, BRIDGE_NODE)
+
+    def _cleanup(self, conn: Connection) -> None:
+        for name in list(conn.subscriptions):
+            topic = self.topics.get(name)
+            if topic is not None:
+                topic.client_subscribers.discard(conn)
+        conn.subscriptions.clear()
+        for name in list(conn.advertised):
+            self._unadvertise(conn, name)
+        for svc in [s for s in self.services.values() if s.provider is conn]:
+            self._remove_client_service(svc, "the providing client disconnected")
+
+    async def _receive(self, conn: Connection, message: str | bytes) -> None:
+        for frame in _parse_frames(message, conn):
+            if not conn.authenticated:
+                self._authenticate(conn, frame)
+                if not conn.authenticated:
+                    return
+                continue
+            await self._dispatch(conn, frame)
+
+    def _authenticate(self, conn: Connection, frame: Any) -> None:
+        assert self.auth_secret is not None
+        if isinstance(frame, dict) and frame.get("op") == "auth":
+            problem = check_auth(self.auth_secret, frame)
+            if problem is None:
+                conn.authenticated = True
+                log.info("%s has authenticated.", conn.label)
+                return
+            log.warning("%s failed to authenticate: %s. Closing connection.", conn.label, problem)
+        else:
+            log.warning("%s did not authenticate. Closing connection.", conn.label)
+        conn.closing = True
+        self._spawn(conn.ws.close(4001, "authentication required"))
+
+    async def _dispatch(self, conn: Connection, msg: Any) -> None:
+        if not isinstance(msg, dict) or "op" not in msg:
+            if isinstance(msg, dict) and "receiver" in msg:
+                log.error("%s Received a rosbridge v1.0 message.  Please refer to rosbridge.org for the correct "
+                          "format of rosbridge v2.0 messages.", conn.label)
+            else:
+                log.error("%s Received a message without an op.  All messages require 'op' field with value "
+                          "one of: %s.", conn.label, sorted(self._ops()))
+            return
+        op = msg["op"]
+        handler = self._ops().get(op) if isinstance(op, str) else None
+        if handler is None:
+            log.error("%s [id: %s] Unknown operation: %s.  Allowed operations: %s", conn.label, msg.get("id"),
+                      op, sorted(self._ops()))
+            return
+        try:
+            result = handler(conn, msg)
+            if inspect.isawaitable(result):
+                await result
+        except _OpError as exc:
+            log.error("%s [id: %s] %s: %s", conn.label, msg.get("id"), op, exc)
+
+    def _ops(self) -> dict[str, Callable[[Connection, dict[str, Any]], Any]]:
+        ops: dict[str, Callable[[Connection, dict[str, Any]], Any]] = {
+            "advertise": self._op_advertise,
+            "unadvertise": self._op_unadvertise,
+            "publish": self._op_publish,
+            "subscribe": self._op_subscribe,
+            "unsubscribe": self._op_unsubscribe,
+            "call_service": self._op_call_service,
+            "advertise_service": self._op_advertise_service,
+            "unadvertise_service": self._op_unadvertise_service,
+            "service_response": self._op_service_response,
+            "fragment": self._op_fragment,
+            "set_level": lambda conn, msg: None,
+            "auth": lambda conn, msg: None,  # already authenticated (or no auth configured)
+        }
+        if self._actions is not None:
+            ops["send_action_goal"] = self._actions.op_send_goal
+            ops["cancel_action_goal"] = self._actions.op_cancel_goal
+        return ops
+
+    # -- topic ops ------------------------------------------------------------------------------------
+
+    def _op_advertise(self, conn: Connection, msg: dict[str, Any]) -> None:
+        name = _field(msg, "topic", str)
+        type_name = _field(msg, "type", str)
+        if not self.types.has(type_name):
+            raise _OpError(f"Unable to import msg class {type_name.rsplit('/', 1)[-1]} from package "
+                           f"{type_name.split('/', 1)[0]}")
+        topic = self.topics.get(name)
+        if topic is not None and topic.is_alive() and _norm(topic.type) != _norm(type_name):
+            raise _OpError(f"Tried to register topic {name} with type {type_name} but it is already "
+                           f"established with type {topic.type}")
+        latch = bool(msg.get("latch", False))
+        if name in conn.advertised:
+            if topic is not None:
+                topic.latched = topic.latched or latch
+            return
+        if topic is None or not topic.is_alive():
+            topic = self.topics[name] = Topic(name, self.flavour.wire(type_name), latch) if topic is None \
+                else _retype(topic, self.flavour.wire(type_name))
+        topic.latched = topic.latched or latch
+        topic.publishers[BRIDGE_NODE] += 1
+        conn.advertised[name] = topic.type
+        log.info("%s Advertised %s", conn.label, name)
+
+    def _op_unadvertise(self, conn: Connection, msg: dict[str, Any]) -> None:
+        name = _field(msg, "topic", str)
+        if name not in conn.advertised:
+            raise _OpError(f"Topic {name} has not been advertised by this client")
+        self._unadvertise(conn, name)
+
+    def _unadvertise(self, conn: Connection, name: str) -> None:
+        conn.advertised.pop(name, None)
+        topic = self.topics.get(name)
+        if topic is not None:
+            topic.publishers[BRIDGE_NODE] -= 1
+            if topic.publishers[BRIDGE_NODE] <= 0:
+                del topic.publishers[BRIDGE_NODE]
+                topic.latched_msgs.pop(BRIDGE_NODE, None)
+
+    def _op_publish(self, conn: Connection, msg: dict[str, Any]) -> None:
+        name = _field(msg, "topic", str)
+        topic = self.topics.get(name)
+        if topic is None or not topic.is_alive():
+            raise _OpError(f"Cannot infer topic type for topic {name} as it is not yet advertised")
+        if name not in conn.advertised:  # publish without advertise: rosbridge registers a publisher
+            conn.advertised[name] = topic.type
+            topic.publishers[BRIDGE_NODE] += 1
+        if msg.get("latch"):
+            topic.latched = True
+        body = msg.get("msg", {})
+        converter = self.types.converter(topic.type)
+        if converter is not None:
+            try:
+                body = converter.convert(body)
+            except ConversionError as exc:
+                raise _OpError(str(exc)) from exc
+        elif not isinstance(body, dict):
+            raise _OpError(f"Expected a JSON object for type {topic.type}")
+        with self._published_lock:
+            self._published.setdefault(name, collections.deque(maxlen=PUBLISHED_KEEP)).append(body)
+        assert self._published_event is not None
+        self._published_event.set()
+        self.publish(name, body, BRIDGE_NODE)
+
+    def _op_subscribe(self, conn: Connection, msg: dict[str, Any]) -> None:
+        name = _field(msg, "topic", str)
+        type_name = msg.get("type")
+        if type_name is not None and not isinstance(type_name, str):
+            raise _OpError(f"Expected field type to be one of (<class 'str'>,). Invalid value: {type_name}")
+        topic = self.topics.get(name)
+        if topic is None or not topic.is_alive():
+            if not type_name:
+                raise _OpError(f"Cannot infer topic type for topic {name} as it is not yet advertised")
+            if not self.types.has(type_name):
+                raise _OpError(f"Unable to load the type {type_name}")
+            topic = self.topics[name] = Topic(name, self.flavour.wire(type_name)) if topic is None \
+                else _retype(topic, self.flavour.wire(type_name))
+        elif type_name and _norm(type_name) != _norm(topic.type):
+            raise _OpError(f"Tried to register topic {name} with type {type_name} but it is already established "
+                           f"with type {topic.type}")
+        fragment_size = msg.get("fragment_size")
+        if isinstance(fragment_size, int) and not isinstance(fragment_size, bool) and fragment_size > 0:
+            conn.fragment_size = fragment_size
+        compression = msg.get("compression") or "none"
+        if compression not in COMPRESSIONS:
+            log.warning("%s unknown compression %r, sending plain JSON", conn.label, compression)
+            compression = "none"
+        options = SubOptions(
+            throttle_rate=_nonneg_int(msg.get("throttle_rate")),
+            queue_length=_nonneg_int(msg.get("queue_length")),
+            compression=compression,
+        )
+        sub = conn.subscriptions.get(name)
+        if sub is None:
+            sub = conn.subscriptions[name] = TopicSubscription(name, topic.type)
+        sub.ids[msg.get("id")] = options
+        sub.compression = compression
+        first = conn not in topic.client_subscribers
+        topic.client_subscribers.add(conn)
+        log.info("%s Subscribed to %s", conn.label, name)
+        if first and topic.latched_msgs:
+            now = time.monotonic()
+            for latched in list(topic.latched_msgs.values()):
+                payload = self._encoded({}, topic, latched, sub.compression, conn.fragment_size)
+                if payload is not None:
+                    conn.send(payload, topic=name)
+            sub.last_sent = now
+
+    def _op_unsubscribe(self, conn: Connection, msg: dict[str, Any]) -> None:
+        name = _field(msg, "topic", str)
+        sub = conn.subscriptions.get(name)
+        if sub is None:
+            return
+        sub_id = msg.get("id")
+        if sub_id is None:
+            sub.ids.clear()
+        else:
+            sub.ids.pop(sub_id, None)
+        if not sub.ids:
+            del conn.subscriptions[name]
+            topic = self.topics.get(name)
+            if topic is not None:
+                topic.client_subscribers.discard(conn)
+            log.info("%s Unsubscribed from %s", conn.label, name)
+
+    def _op_fragment(self, conn: Connection, msg: dict[str, Any]) -> None:
+        """Reassemble fragments a client sends (by id), then handle the joined frame."""
+        frag_id = msg.get("id")
+        data, num, total = msg.get("data"), msg.get("num"), msg.get("total")
+        if not isinstance(data, str) or not isinstance(num, int) or not isinstance(total, int | float):
+            raise _OpError("fragment needs string data, integer num and numeric total")
+        parts = conn.incoming_fragments.setdefault(frag_id, {})
+        parts[num] = data
+        count = int(total)
+        if len(parts) >= count and all(i in parts for i in range(count)):
+            del conn.incoming_fragments[frag_id]
+            text = "".join(parts[i] for i in range(count))
+            self._spawn(self._receive(conn, text))
+
+    # -- service ops ----------------------------------------------------------------------------------
+
+    def _op_call_service(self, conn: Connection, msg: dict[str, Any]) -> None:
+        service = _field(msg, "service", str)
+        self._spawn(self._call_service(conn, msg, service))
+
+    async def _call_service(self, conn: Connection, msg: dict[str, Any], service: str) -> None:
+        call_id = msg.get("id")
+        has_id = "id" in msg
+        name = service
+        if "#" in service and not has_id:
+            name, call_id = service.split("#", 1)
+            has_id = True
+        ok, values = await self.call(name, msg.get("args"))
+        frame: dict[str, Any] = {"op": "service_response", "service": service, "values": values, "result": ok}
+        if has_id:
+            frame["id"] = call_id
+        self._send_text(conn, frame)
+
+    async def call(self, name: str, args: Any = None) -> tuple[bool, Any]:
+        """Call a service of the graph: ``(True, values)`` or ``(False, error text)``."""
+        svc = self.services.get(name)
+        if svc is None:
+            return False, f"Service {name} does not exist"
+        request = self.types.converter(svc.type, "request")
+        if request is not None:
+            try:
+                args = request.from_args(args)
+            except ConversionError as exc:
+                return False, str(exc)
+        elif args is None:
+            args = {}
+        try:
+            if svc.provider is not None:
+                values = await self._call_client_service(svc, args)
+            else:
+                assert svc.handler is not None
+                values = svc.handler(args)
+                if inspect.isawaitable(values):
+                    values = await values
+        except ServiceFailure as exc:
+            return False, f"service [{name}] responded with an error: b'{exc}'"
+        except Exception as exc:  # noqa: BLE001 - a handler bug is reported like a ROS handler exception
+            log.exception("service %s failed", name)
+            return False, f"service [{name}] responded with an error: b'error processing request: {exc}'"
+        response = self.types.converter(svc.type, "response")
+        if response is not None and isinstance(values, dict):
+            try:
+                values = response.convert(values)
+            except ConversionError as exc:
+                return False, f"service [{name}] responded with an error: b'error processing request: {exc}'"
+        return True, values
+
+    async def _call_client_service(self, svc: Service, args: dict[str, Any]) -> dict[str, Any]:
+        assert svc.provider is not None and self.loop is not None
+        svc.counter += 1
+        request_id = f"service_request:{svc.name}:{svc.counter}"
+        future: asyncio.Future[dict[str, Any]] = self.loop.create_future()
+        svc.pending[request_id] = future
+        self._send_text(svc.provider, {"op": "call_service", "id": request_id, "service": svc.name, "args": args})
+        try:
+            return await future
+        finally:
+            svc.pending.pop(request_id, None)
+
+    def _op_advertise_service(self, conn: Connection, msg: dict[str, Any]) -> None:
+        name = _field(msg, "service", str)
+        type_name = _field(msg, "type", str)
+        old = self.services.get(name)
+        if old is not None:
+            if old.provider is None:
+                raise _OpError(f"Service {name} is already provided by {old.node}")
+            self._remove_client_service(old, "the service was advertised again")
+        self.services[name] = Service(name, self.flavour.wire(type_name, "srv"), BRIDGE_NODE, provider=conn)
+        log.info("%s Advertised service %s.", conn.label, name)
+
+    def _op_unadvertise_service(self, conn: Connection, msg: dict[str, Any]) -> None:
+        name = _field(msg, "service", str)
+        svc = self.services.get(name)
+        if svc is None or svc.provider is None:
+            raise _OpError(f"Service {name} has not been advertised via rosbridge, can't unadvertise.")
+        self._remove_client_service(svc, "service handler returned None")
+        log.warning("%s Service %s was unadvertised", conn.label, name)
+
+    def _remove_client_service(self, svc: Service, reason: str) -> None:
+        if self.services.get(svc.name) is svc:
+            del self.services[svc.name]
+        for future in list(svc.pending.values()):
+            if not future.done():
+                future.set_exception(ServiceFailure(f"service cannot process request: {reason}"))
+        svc.pending.clear()
+
+    def _op_service_response(self, conn: Connection, msg: dict[str, Any]) -> None:
+        name = _field(msg, "service", str)
+        svc = self.services.get(name)
+        if svc is None or svc.provider is not conn:
+            raise _OpError(f"Service {name} has not been advertised via rosbridge.")
+        values = msg.get("values", {})
+        if not isinstance(values, dict):
+            raise _OpError(f"Expected field values to be one of (<class 'dict'>,). Invalid value: {values}")
+        future = svc.pending.get(msg.get("id"))  # type: ignore[arg-type]
+        if future is None:
+            raise _OpError(f"no pending request with id {msg.get('id')!r} for {name}")
+        if not future.done():
+            future.set_result(values)
+
+
+class _OpError(Exception):
+    """A client frame the server refuses; logged, never answered (rosbridge 0.11)."""
+
+
+def _field(msg: dict[str, Any], name: str, kind: type) -> Any:
+    if name not in msg:
+        raise _OpError(f"Expected a {name} field but none was found.")
+    value = msg[name]
+    if not isinstance(value, kind) or isinstance(value, bool):
+        raise _OpError(f"Expected field {name} to be one of ({kind},). Invalid value: {value}")
+    return value
+
+
+def _nonneg_int(value: Any) -> int:
+    if isinstance(value, int | float) and not isinstance(value, bool) and value > 0:
+        return int(value)
+    return 0
+
+
+def _norm(type_name: str) -> str:
+    parts = type_name.strip("/").split("/")
+    return f"{parts[0]}/{parts[-1]}" if len(parts) >= 2 else type_name
+
+
+def _retype(topic: Topic, type_name: str) -> Topic:
+    topic.type = type_name
+    topic.latched_msgs.clear()
+    return topic
+
+
+_json_decoder = json.JSONDecoder()
+
+
+def _parse_frames(message: str | bytes, conn: Connection) -> list[Any]:
+    """The JSON values in one frame, as leniently as rosbridge 0.11 reads them.
+
+    Several objects in one frame are all returned, a ``NaN`` literal is accepted, JSON text in a binary
+    frame is read; anything else is logged and dropped.
+    """
+    if isinstance(message, bytes):
+        try:
+            message = message.decode("utf-8")
+        except UnicodeDecodeError:
+            log.warning("%s ignored a binary frame that is not JSON text", conn.label)
+            return []
+    try:
+        return [encoding.loads(message)]
+    except Exception:  # noqa: BLE001 - fall back to the lenient scanner
+        pass
+    frames: list[Any] = []
+    index = 0
+    text = message.strip()
+    while index < len(text):
+        start = text.find("{", index)
+        if start < 0:
+            break
+        try:
+            value, end = _json_decoder.raw_decode(text, start)
+        except ValueError:
+            index = start + 1
+            continue
+        frames.append(value)
+        index = end
+    if not frames and text:
+        log.warning("%s ignored a frame that is not valid JSON", conn.label)
+    return frames

@@ -1,0 +1,76 @@
+"""The sim's access to message definitions (``rcon_core.msgs.TypeRegistry``), with per-type caches."""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from typing import Any
+
+from .convert import Converter
+
+log = logging.getLogger(__name__)
+
+
+class TypeSource:
+    """Typedefs, converters and ROS 1 serialization for the sim, in the flavour's type spelling."""
+
+    def __init__(self, ros2: bool, now: Callable[[], dict[str, int]]) -> None:
+        self.ros2 = ros2
+        self._now = now
+        self._registry: Any = None
+        self._loaded = False
+        self._converters: dict[tuple[str, str], Converter | None] = {}
+
+    @property
+    def registry(self) -> Any:
+        if not self._loaded:
+            self._loaded = True
+            try:
+                from rcon_core.msgs import TypeRegistry
+
+                self._registry = TypeRegistry.standard(ros2=self.ros2)
+            except Exception as exc:  # noqa: BLE001 - the sim still runs, without type checks
+                log.warning("message definitions unavailable (%s); client messages are not checked", exc)
+        return self._registry
+
+    def has(self, name: str) -> bool:
+        reg = self.registry
+        if reg is None:
+            return True
+        try:
+            return bool(reg.has(name))
+        except Exception:  # noqa: BLE001
+            return False
+
+    def typedefs(self, name: str) -> list[dict[str, Any]] | None:
+        reg = self.registry
+        if reg is None:
+            return None
+        try:
+            return reg.typedefs(name)
+        except Exception:  # noqa: BLE001 - unknown type
+            return None
+
+    def service_typedefs(self, name: str, part: str) -> list[dict[str, Any]] | None:
+        reg = self.registry
+        if reg is None:
+            return None
+        try:
+            return reg.service_typedefs(name, part)
+        except Exception:  # noqa: BLE001 - unknown type
+            return None
+
+    def converter(self, name: str, part: str = "message") -> Converter | None:
+        """A converter for a message type, or for a service's ``request``/``response`` part."""
+        key = (name, part)
+        if key not in self._converters:
+            defs = self.typedefs(name) if part == "message" else self.service_typedefs(name, part)
+            self._converters[key] = Converter(defs, self._now) if defs else None
+        return self._converters[key]
+
+    def serialize(self, name: str, msg: dict[str, Any]) -> bytes:
+        """ROS 1 serialization (for ``cbor-raw``); raises when the registry cannot do it."""
+        reg = self.registry
+        if reg is None:
+            raise RuntimeError("message definitions unavailable")
+        return bytes(reg.serialize_ros1(name, msg))
