@@ -38,7 +38,7 @@ class CanvasSurface(QtWidgets.QWidget):
         frame.setParent(self)
         self.frames[frame.instance_id] = frame
         frame.set_editable(self.editable)
-        frame.place(rect)
+        frame.place(rect, remember=True)
         frame.show()
         self.placeholder.setVisible(False)
         return frame
@@ -89,8 +89,7 @@ class CanvasSurface(QtWidgets.QWidget):
         super().resizeEvent(event)
         self.placeholder.setGeometry(self.rect())
         for frame in self.frames.values():  # a smaller window never leaves widgets off-screen
-            if not self.rect().contains(frame.geometry()):
-                frame.place(frame.geometry())
+            frame.place(frame.desired if not frame.desired.isNull() else frame.geometry())
 
     def mousePressEvent(self, event: QtGui.QMouseEvent) -> None:
         self.background_pressed.emit()

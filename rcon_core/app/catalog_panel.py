@@ -28,8 +28,13 @@ class CatalogList(QtWidgets.QWidget):
         self.tree.setHeaderLabels(["Name", "Type", "Rate"] if with_rate else ["Name", "Type"])
         header = self.tree.header()
         header.setSectionResizeMode(0, QtWidgets.QHeaderView.ResizeMode.Stretch)
-        header.setSectionResizeMode(1, QtWidgets.QHeaderView.ResizeMode.ResizeToContents)
+        header.setSectionResizeMode(1, QtWidgets.QHeaderView.ResizeMode.Interactive)
         header.setStretchLastSection(False)
+        header.resizeSection(1, 130)
+        if with_rate:
+            header.resizeSection(2, 64)
+        self.tree.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        self.tree.setTextElideMode(QtCore.Qt.TextElideMode.ElideMiddle)
         self.tree.itemClicked.connect(self._clicked)
         self.tree.itemActivated.connect(self._clicked)
         QtWidgets.QScroller.grabGesture(

@@ -95,7 +95,7 @@ class ConnectionBar(QtWidgets.QFrame):
         if ok and self.link.client is not None:
             self.message.setText(str(error))
         latency = self.link.latency if self.state == "connected" else None
-        text = "—" if latency is None else f"{latency * 1000:.0f} ms"
+        text = "—" if latency is None else ("<1 ms" if latency < 0.0005 else f"{latency * 1000:.0f} ms")
         if text != self._last_latency_text:
             self._last_latency_text = text
             self.latency_label.setText(text)

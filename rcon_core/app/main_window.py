@@ -80,16 +80,26 @@ class MainWindow(QtWidgets.QMainWindow):
         row.setContentsMargins(8, 6, 8, 6)
         row.addWidget(self.tabs, 1)
         self.canvas_buttons: dict[str, QtWidgets.QPushButton] = {}
+        self.canvas_actions: dict[str, QtGui.QAction] = {}
+        menu_button = QtWidgets.QPushButton("Canvas ▾")
+        menu_button.setObjectName("canvasMenuButton")
+        canvas_menu = QtWidgets.QMenu(menu_button)
         for name, text, slot in (
-            ("new", "+ Canvas", self.new_canvas),
-            ("rename", "Rename", self.rename_canvas_dialog),
+            ("new", "New canvas", self.new_canvas),
+            ("rename", "Rename…", self.rename_canvas_dialog),
             ("duplicate", "Duplicate", self.duplicate_canvas),
             ("delete", "Delete", self.delete_canvas),
-            ("undo", "Undo", self.undo),
-            ("redo", "Redo", self.redo),
         ):
+            action = canvas_menu.addAction(text)
+            action.setObjectName(f"canvas_{name}")
+            action.triggered.connect(slot)
+            self.canvas_actions[name] = action
+        menu_button.setMenu(canvas_menu)
+        row.addWidget(menu_button)
+        for name, text, slot in (("undo", "↶", self.undo), ("redo", "↷", self.redo)):
             b = QtWidgets.QPushButton(text)
             b.setObjectName(f"canvas_{name}")
+            b.setToolTip(name.capitalize())
             b.clicked.connect(slot)
             self.canvas_buttons[name] = b
             row.addWidget(b)
@@ -173,7 +183,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.tabs.addTab(canvas.name)
         self.tabs.setCurrentIndex(self.controller.doc.current)
         self.tabs.blockSignals(False)
-        self.canvas_buttons["delete"].setEnabled(len(self.controller.doc.canvases) > 1)
+        self.canvas_actions["delete"].setEnabled(len(self.controller.doc.canvases) > 1)
 
     def _tab_changed(self, index: int) -> None:
         self.controller.switch(index)
@@ -219,8 +229,12 @@ class MainWindow(QtWidgets.QMainWindow):
         self.lock_button.setChecked(locked)
         self.lock_button.blockSignals(False)
         self.lock_button.setText("🔒 Operator mode" if locked else "✎ Edit mode")
-        for name in ("rename", "delete", "undo", "redo"):
-            self.canvas_buttons[name].setEnabled(not locked and (name != "delete" or len(self.controller.doc.canvases) > 1))
+        for name in ("undo", "redo"):
+            self.canvas_buttons[name].setEnabled(not locked)
+        for name in ("rename", "delete"):
+            self.canvas_actions[name].setEnabled(
+                not locked and (name != "delete" or len(self.controller.doc.canvases) > 1)
+            )
         if locked:
             self.add_panel.cancel()
 

@@ -217,6 +217,8 @@ class WidgetFrame(QtWidgets.QFrame):
         self.shield = Shield(self)
         self.grabGesture(QtCore.Qt.GestureType.PinchGesture)
         self._pinch_start = QtCore.QRect()
+        #: where the operator put the widget; re-applied when the canvas grows back after shrinking
+        self.desired = QtCore.QRect()
 
     # content ----------------------------------------------------------------------------------------
     def set_view(self, view: QtWidgets.QWidget) -> None:
@@ -286,8 +288,10 @@ class WidgetFrame(QtWidgets.QFrame):
         parent = self.parentWidget()
         return parent.rect() if parent is not None else QtCore.QRect(0, 0, 10_000, 10_000)
 
-    def place(self, rect: QtCore.QRect) -> None:
+    def place(self, rect: QtCore.QRect, remember: bool = False) -> None:
         """Set the frame's geometry, kept on screen (no snapping: used while dragging and on load)."""
+        if remember:
+            self.desired = QtCore.QRect(rect)
         self.setGeometry(fit_rect(rect, self.bounds(), self.min_size()))
 
     def move_to(self, top_left: QtCore.QPoint, finished: bool = True) -> None:
@@ -322,6 +326,7 @@ class WidgetFrame(QtWidgets.QFrame):
         """Snap to the grid, keep on screen and report the final geometry."""
         rect = fit_rect(snap_rect(self.geometry()), self.bounds(), self.min_size())
         self.setGeometry(rect)
+        self.desired = QtCore.QRect(rect)
         self.geometry_committed.emit(self.instance_id, QtCore.QRect(rect))
 
     # gestures (native pinch, e.g. trackpads or platforms delivering QPinchGesture) -------------------

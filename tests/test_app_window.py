@@ -1,0 +1,213 @@
+"""The app end to end against the embedded robot: adding widgets three ways, canvases, editing, restart.
+
+A small label-like widget plugin is defined here and registered directly with the plugin manager, so
+these tests do not depend on the widget packages.
+"""
+
+from __future__ import annotations
+
+import time
+
+import attrs
+import pytest
+from qtpy import QtCore, QtGui, QtWidgets
+from qtpy.QtTest import QTest
+
+from rcon_core.app.config import AppConfig
+from rcon_core.app.main_window import MainWindow
+from rcon_core.plugins import Accepts, PluginManager, Role, WidgetModel, WidgetSpec, hookimpl
+
+pytestmark = pytest.mark.usefixtures("qapp")
+
+
+# ------------------------------------------------------------------------------------- test widget
+@attrs.define
+class ProbeSettings:
+    """A label widget: needs a caption before it can be placed."""
+
+    caption: str = ""
+    digits: int = 2
+
+    def problems(self) -> list[str]:
+        return [] if self.caption.strip() else ["caption is empty"]
+
+
+class ProbeModel(WidgetModel):
+    stale_after = 30.0
+
+
+class ProbeView(QtWidgets.QLabel):
+    def __init__(self, model: ProbeModel) -> None:
+        super().__init__("—")
+        self.model = model
+        self.painted = 0
+
+    def refresh(self, state) -> None:
+        self.painted += 1
+        self.setText(f"{self.model.settings.caption}: {state.value!r}")
+
+
+class ProbePlugin:
+    @hookimpl
+    def rcon_register_widgets(self, registry) -> None:
+        registry.add(
+            WidgetSpec(
+                kind="apptest.probe",
+                title="Probe",
+                model=ProbeModel,
+                view=f"{__name__}:ProbeView",
+                roles={Role.SUBSCRIBE, Role.PUBLISH, Role.CALL},
+                accepts=Accepts(fields=["float", "bool"], prefer=("percentage", "data")),
+                settings=ProbeSettings,
+                default_size=(192, 112),
+            )
+        )
+
+
+def make_plugins() -> PluginManager:
+    pm = PluginManager(environ={})
+    pm.register(ProbePlugin(), name="apptest")
+    return pm
+
+
+# ------------------------------------------------------------------------------------- fixtures
+@pytest.fixture
+def robot():
+    from rcon_core.sim.server import SimServer
+
+    with SimServer.in_thread(port=0) as server:
+        yield server
+
+
+@pytest.fixture
+def make_window(qtbot, tmp_path, robot):
+    made: list[MainWindow] = []
+
+    def make(connect: bool = True) -> MainWindow:
+        window = MainWindow(AppConfig(tmp_path / "config"), make_plugins())
+        qtbot.addWidget(window)
+        window.show()
+        QTest.qWaitForWindowExposed(window)
+        if connect:
+            window.connect_to(robot.url)
+            qtbot.waitUntil(lambda: window.connection.state == "connected", timeout=10_000)
+            qtbot.waitUntil(lambda: window.topics.item("/battery") is not None, timeout=10_000)
+        made.append(window)
+        return window
+
+    yield make
+    for window in made:
+        window.shutdown()
+
+
+def tap(widget: QtWidgets.QWidget, pos: QtCore.QPoint | None = None) -> None:
+    QTest.mouseClick(widget, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier,
+                     pos if pos is not None else widget.rect().center())
+
+
+def tap_item(tree: QtWidgets.QAbstractItemView, index: QtCore.QModelIndex) -> None:
+    tree.scrollTo(index)
+    tap(tree.viewport(), tree.visualRect(index).center())
+
+
+def fill_caption(window: MainWindow, text: str) -> None:
+    editor = window.add_panel.form.editor("caption")
+    editor.setFocus()
+    QTest.keyClicks(editor, text)
+
+
+# ------------------------------------------------------------------------------------- the three ways
+def test_add_from_topic_subscribes_on_the_robot(make_window, robot, qtbot):
+    window = make_window()
+    topics = window.topics.tree
+    tap_item(topics, topics.indexFromItem(window.topics.item("/battery")))
+    panel = window.add_panel
+    assert panel.isVisible() and panel.stack.currentWidget() is panel.role_page
+    assert not panel.role_buttons[Role.CALL].isVisible()  # a topic offers subscribe/publish only
+    tap(panel.role_buttons[Role.SUBSCRIBE])
+    assert panel.stack.currentWidget() is panel.widgets_page
+    assert panel.candidates.count() >= 1
+    tap_item(panel.candidates, panel.candidates.model().index(0, 0))
+    assert panel.stack.currentWidget() is panel.settings_page
+    # not configured yet: the preview carries the warning and nothing can be placed
+    assert panel.preview_frame.problems.isVisibleTo(panel.preview_frame)
+    assert "caption is empty" in panel.preview_frame.problems.text()
+    assert not panel.place_button.isEnabled()
+    fill_caption(window, "Charge")
+    assert not panel.preview_frame.problems.isVisibleTo(panel.preview_frame)
+    assert panel.place_button.isEnabled()
+    tap(panel.place_button)
+    [inst] = window.controller.canvas.instances
+    assert inst.kind == "apptest.probe"
+    assert inst.binding.name == "/battery" and inst.binding.field_paths == ("percentage",)
+    assert inst.settings["caption"] == "Charge"
+    qtbot.waitUntil(lambda: robot.topic_subscriber_count("/battery") >= 1, timeout=10_000)
+    view = window.host.hosted[inst.id].view
+    qtbot.waitUntil(lambda: view.text().startswith("Charge: ") and view.text() != "Charge: None", timeout=10_000)
+
+
+def test_add_from_service_calls_the_robot(make_window, robot, qtbot):
+    window = make_window()
+    window.side.setCurrentWidget(window.services)
+    qtbot.waitUntil(lambda: window.services.item("/lights/set") is not None, timeout=10_000)
+    services = window.services.tree
+    tap_item(services, services.indexFromItem(window.services.item("/lights/set")))
+    panel = window.add_panel
+    assert not panel.role_buttons[Role.SUBSCRIBE].isVisible()
+    tap(panel.role_buttons[Role.CALL])
+    assert panel.candidates.count() >= 1
+    tap_item(panel.candidates, panel.candidates.model().index(0, 0))
+    fill_caption(window, "Lights")
+    tap(panel.place_button)
+    [inst] = window.controller.canvas.instances
+    assert inst.binding.role is Role.CALL and inst.binding.name == "/lights/set"
+    model = window.host.hosted[inst.id].model
+    response = model.call({"data": True}).result(timeout=10)
+    assert response["success"] is True
+    view = window.host.hosted[inst.id].view
+    qtbot.waitUntil(lambda: "Lights:" in view.text(), timeout=5_000)
+
+
+def test_add_from_palette_then_drop_on_canvas(make_window, robot, qtbot):
+    window = make_window()
+    window.side.setCurrentWidget(window.palette)
+    item = window.palette.item("apptest.probe")
+    tap_item(window.palette.tree, window.palette.tree.indexFromItem(item))
+    panel = window.add_panel
+    assert panel.stack.currentWidget() is panel.settings_page
+    assert set(panel.problems()) >= {"no topic chosen", "caption is empty"}
+    offered = [panel.target_combo.itemData(i) for i in range(1, panel.target_combo.count())]
+    names = {t.name for t in offered}
+    assert "/battery" in names and "/camera/front/image_raw" not in names  # compatible ones only
+    with pytest.raises(ValueError, match="not compatible"):
+        panel.choose_target("/camera/front/image_raw")
+    panel.choose_target("/lights/state")
+    fill_caption(window, "Lights on")
+    assert panel.drag_handle.isEnabled() and not panel.problems()
+    # the drag ends as a drop on the canvas surface
+    surface = window.controller.surface
+    mime = QtCore.QMimeData()
+    mime.setData("application/x-rcon-widget-draft", QtCore.QByteArray(b"draft"))
+    for etype in (QtCore.QEvent.Type.DragEnter, QtCore.QEvent.Type.DragMove):
+        cls = QtGui.QDragEnterEvent if etype == QtCore.QEvent.Type.DragEnter else QtGui.QDragMoveEvent
+        ev = cls(QtCore.QPoint(200, 150), QtCore.Qt.DropAction.CopyAction, mime,
+                 QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier)
+        QtWidgets.QApplication.sendEvent(surface, ev)
+    drop = QtGui.QDropEvent(QtCore.QPointF(203, 149), QtCore.Qt.DropAction.CopyAction, mime,
+                            QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier)
+    QtWidgets.QApplication.sendEvent(surface, drop)
+    [inst] = window.controller.canvas.instances
+    assert inst.binding.name == "/lights/state"
+    assert inst.rect[:2] == (208, 144)  # snapped to the 16 px grid
+    assert not panel.isVisible()
+    qtbot.waitUntil(lambda: robot.topic_subscriber_count("/lights/state") >= 1, timeout=10_000)
+
+
+def test_palette_says_so_when_no_widget_is_installed(qtbot, tmp_path):
+    window = MainWindow(AppConfig(tmp_path), PluginManager(environ={}))
+    qtbot.addWidget(window)
+    try:
+        assert window.palette.empty.isVisibleTo(window.palette)
+        assert "No widget plugins are installed" in window.palette.empty.text()
+    finally:
+        window.shutdown()
