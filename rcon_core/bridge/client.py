@@ -141,8 +141,9 @@ class BridgeClient:
         self._goals: dict[str, ActionGoal] = {}
         self._typedefs: dict[str, list[dict[str, Any]]] = {}
         self._raw = RawDecoder()
-        self._fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_message_size)
-        self._png_fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_message_size)
+        warn = self._fragment_warning
+        self._fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_message_size, warn=warn)
+        self._png_fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_message_size, warn=warn)
         self._level: str | None = None
         self._seq = 0
         self._bad_counts: dict[str, int] = {}
@@ -242,8 +243,8 @@ class BridgeClient:
                     self._set_state(ConnectionState.CLOSED)
                     raise
                 self._task = asyncio.create_task(self._serve_once(ws))
-                return
-            self._task = asyncio.create_task(self._run())
+            else:
+                self._task = asyncio.create_task(self._run())
         waiter = asyncio.ensure_future(self._connected.wait())
         try:
             done, _ = await asyncio.wait({waiter, self._task}, timeout=timeout,
@@ -452,13 +453,18 @@ class BridgeClient:
         self.stats["oversize_frames"] += 1
         self._bad_frame("size", f"frame of {len(raw)} bytes exceeds max_message_size={self.max_message_size}; dropped")
 
+    def _fragment_warning(self, message: str) -> None:
+        self._bad_frame("fragment", message)
+
     def _bad_frame(self, kind: str, message: str) -> None:
         """Log a bad frame from the server (the first 20 of each kind, then every 1000th) and count it."""
         self.stats["bad_frames"] += 1
         n = self._bad_counts[kind] = self._bad_counts.get(kind, 0) + 1
         if n <= 20 or n % 1000 == 0:
-            suffix = f" [{n} such frames so far]" if n > 20 else ""
-            log.warning("bad frame from %s: %s%s", self.url, message, suffix)
+            log.warning("bad frame from %s: %s", self.url, message)
+        elif n == 21:
+            log.warning("bad frame from %s: %s (more %s problems are counted in stats and logged every 1000th)",
+                        self.url, message, kind)
 
     def _handle_other(self, m: Any) -> None:
         if not isinstance(m, dict):

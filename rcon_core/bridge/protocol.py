@@ -26,6 +26,7 @@ import binascii
 import logging
 import math
 import time
+from collections.abc import Callable
 from typing import Any
 
 import cbor2
@@ -173,7 +174,8 @@ class FragmentAssembler:
     """
 
     def __init__(self, timeout: float = 10.0, max_bytes: int = 64 << 20, max_fragments: int = 100_000,
-                 max_partials: int = 64) -> None:
+                 max_partials: int = 64, warn: Callable[[str], None] | None = None) -> None:
+        self.warn = warn or log.warning
         self.timeout = timeout
         self.max_bytes = max_bytes
         self.max_fragments = max_fragments
@@ -197,8 +199,8 @@ class FragmentAssembler:
             del self._partials[k]
         self.dropped += len(stale)
         if stale:
-            log.warning("dropped %d unfinished fragmented message(s) after %.0f s without a fragment",
-                        len(stale), self.timeout)
+            self.warn(f"dropped {len(stale)} unfinished fragmented message(s) after {self.timeout:g} s "
+                      "without a fragment")
         return len(stale)
 
     def add(self, frame: dict[str, Any], now: float | None = None) -> str | None:
@@ -227,13 +229,13 @@ class FragmentAssembler:
         if num == 0:
             if part is not None:
                 self.dropped += 1
-                log.warning("fragment id=%r: a new message started before the previous one was complete "
-                            "(%d of %d fragments); dropped the incomplete one", fid, len(part.parts), part.count)
+                self.warn(f"fragment id={fid!r}: a new message started before the previous one was complete "
+                          f"({len(part.parts)} of {part.count} fragments); dropped the incomplete one")
             if len(self._partials) >= self.max_partials and fid not in self._partials:
                 oldest = min(self._partials, key=lambda k: self._partials[k].updated)
                 del self._partials[oldest]
                 self.dropped += 1
-                log.warning("too many unfinished fragmented messages; dropped the oldest (id=%r)", oldest)
+                self.warn(f"too many unfinished fragmented messages; dropped the oldest (id={oldest!r})")
             part = self._partials[fid] = _Partial(count, now)
         elif part is None:
             raise ProtocolError(f"fragment id={fid!r} num={num}: no message was started (num 0 missing); ignored")
