@@ -9,7 +9,7 @@ import cbor2
 import numpy as np
 import orjson
 import pytest
-from replay_server import load, received_frame
+from replay_server import load
 
 from rcon_core.bridge.errors import ProtocolError
 from rcon_core.bridge.protocol import (
