@@ -192,7 +192,7 @@ class PluginManager:
         for info in self._infos.values():
             info.widgets.clear()
             info.types.clear()
-        for impl in self.pluggy.hook.rcon_register_widgets.get_hookimpls()[::-1]:  # registration order
+        for impl in self.pluggy.hook.rcon_register_widgets.get_hookimpls():  # registration order
             info = self._infos[impl.plugin_name]
             reg = WidgetRegistry(info.package, self._specs)
             try:
@@ -203,7 +203,7 @@ class PluginManager:
             for spec in reg.specs:
                 self._specs[spec.kind] = spec
             info.widgets.extend(reg.specs)
-        for impl in self.pluggy.hook.rcon_register_types.get_hookimpls()[::-1]:
+        for impl in self.pluggy.hook.rcon_register_types.get_hookimpls():
             info = self._infos[impl.plugin_name]
             if info.status == "failed":
                 continue

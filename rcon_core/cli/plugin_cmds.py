@@ -1,0 +1,132 @@
+"""``rcon plugins`` (installed widget packages and their widgets) and ``rcon match`` (which widgets fit)."""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import json
+import sys
+from typing import Any
+
+from rcon_core.plugins.spec import Role
+
+
+def configure(name: str, parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--json", action="store_true", help="print JSON instead of text")
+    parser.add_argument(
+        "--disable", action="append", default=[], metavar="NAME", help="do not load this plugin (repeatable)"
+    )
+    if name == "match":
+        parser.add_argument("type", help="message or service type, e.g. sensor_msgs/BatteryState")
+        parser.add_argument(
+            "--role",
+            default=None,
+            choices=[r.value for r in Role],
+            help="how the widget is bound (default: subscribe for messages, call for services)",
+        )
+        parser.add_argument("--url", help="fetch the type's definition from this rosbridge server (rosapi)")
+        parser.add_argument("--ros2", action="store_true", help="use ROS 2 standard definitions")
+        parser.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for the server")
+
+
+def run(name: str, args: argparse.Namespace) -> int:
+    from rcon_core.plugins import PluginManager
+
+    pm = PluginManager(disabled=args.disable)
+    pm.load_entry_points()
+    if name == "plugins":
+        return _plugins(pm, args)
+    return _match(pm, args)
+
+
+def _plugins(pm: Any, args: argparse.Namespace) -> int:
+    infos = pm.plugins
+    if args.json:
+        print(json.dumps({"plugins": [i.to_dict() for i in infos]}, indent=2))
+        return 0
+    if not infos:
+        print("no widget plugins installed (entry-point group 'rcon.widgets')")
+        return 0
+    for info in infos:
+        head = f"{info.dist or info.name} {info.version}".strip()
+        origin = f"(entry point {info.name!r} -> {info.value})"
+        if info.status == "failed":
+            print(f"{head} {origin}: FAILED: {info.error}")
+            continue
+        if info.status == "disabled":
+            print(f"{head} {origin}: disabled")
+            continue
+        print(f"{head} {origin}: {len(info.widgets)} widget(s)")
+        for spec in info.widgets:
+            roles = ",".join(sorted(r.value for r in spec.roles))
+            accepts = " ".join(spec.accepts.describe()) or "-"
+            print(f"  {spec.kind:<24} {spec.title:<20} {roles:<28} {accepts}")
+        for d in info.types:
+            print(f"  type {d.name} ({d.kind})")
+    return 0
+
+
+def _match(pm: Any, args: argparse.Namespace) -> int:
+    from rcon_core.matcher import match
+    from rcon_core.msgs import TypeRegistry, names
+
+    try:
+        names.split(args.type)
+    except ValueError as exc:
+        print(f"rcon match: {exc}", file=sys.stderr)
+        return 2
+    types = TypeRegistry.standard(ros2=args.ros2)
+    pm.apply_types(types)
+    is_service = "/srv/" in args.type or types.has_service(args.type)
+    role = Role.parse(args.role) if args.role else (Role.CALL if is_service else Role.SUBSCRIBE)
+    if args.url:
+        try:
+            asyncio.run(_fetch(args.url, args.type, role, types, args.timeout, args.ros2))
+        except Exception as exc:
+            print(f"rcon match: could not get the definition of {args.type} from {args.url}: {exc}", file=sys.stderr)
+            return 1
+    if role.is_service and not types.has_service(args.type):
+        known = "" if args.url else " (give --url to ask the robot)"
+        print(f"rcon match: note: service type {args.type} is unknown{known}", file=sys.stderr)
+    elif not role.is_service and not types.has(args.type):
+        known = "" if args.url else " (give --url to ask the robot)"
+        print(f"rcon match: note: {args.type} is unknown{known}; only name-based matches", file=sys.stderr)
+    found = match(args.type, role, types, pm)
+    if args.json:
+        print(json.dumps({"type": args.type, "role": role.value, "matches": [m.to_dict() for m in found]}, indent=2))
+        return 0
+    if not found:
+        print(f"no installed widget fits {args.type} ({role.value})")
+        return 0
+    for m in found:
+        path = m.field_path or "(whole message)"
+        others = f"  [also: {', '.join(m.field_paths[1:4])}]" if len(m.field_paths) > 1 else ""
+        print(f"{m.rank.name.lower():<10} {m.spec.kind:<24} {m.spec.title:<20} {path}{others}")
+    return 0
+
+
+async def _fetch(url: str, type_name: str, role: Role, types: Any, timeout: float, ros2: bool) -> None:
+    from rcon_core.bridge import BridgeClient
+    from rcon_core.msgs import names
+
+    client = BridgeClient(url, reconnect=False, call_timeout=timeout)
+    await asyncio.wait_for(client.connect(), timeout)
+    spell = names.normalize if ros2 else names.to_ros1
+    try:
+        pkg, _kind, typ = names.split(type_name)
+        if role.is_service:
+            for part, fetch in (
+                ("Request", client.rosapi.service_request_details),
+                ("Response", client.rosapi.service_response_details),
+            ):
+                tds = await fetch(spell(f"{pkg}/srv/{typ}"))
+                if not tds:
+                    raise LookupError(f"the server does not know service type {type_name}")
+                types.add_typedefs(tds, root=f"{pkg}/srv/{typ}_{part}")
+        else:
+            tds = await client.rosapi.message_details(spell(f"{pkg}/msg/{typ}"))
+            if not tds:
+                raise LookupError(f"the server does not know {type_name}")
+            types.add_typedefs(tds, root=f"{pkg}/msg/{typ}")
+    finally:
+        await client.close()

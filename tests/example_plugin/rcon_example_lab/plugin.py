@@ -1,0 +1,33 @@
+"""Entry point (group ``rcon.widgets``): hooks only, no Qt."""
+
+from rcon_core.plugins import Accepts, Role, WidgetSpec, hookimpl
+
+GRIPPER_MSG = """\
+# State of the lab's two-finger gripper
+float64 opening      # metres between the fingers
+float64 force        # newtons
+bool grasping
+string tool_id
+"""
+
+
+@hookimpl
+def rcon_register_types(registry):
+    registry.add_msg("lab_msgs/Gripper", GRIPPER_MSG)
+
+
+@hookimpl
+def rcon_register_widgets(registry):
+    registry.add(
+        WidgetSpec(
+            kind="lab.gripper",
+            title="Gripper",
+            description="Shows how far the gripper is open and whether it holds something",
+            icon="gripper",
+            roles={Role.SUBSCRIBE},
+            accepts=Accepts(types=["lab_msgs/Gripper"]),
+            settings="rcon_example_lab.gripper:GripperSettings",
+            model="rcon_example_lab.gripper:GripperModel",
+            view="rcon_example_lab.gripper_view:GripperView",
+        )
+    )
