@@ -11,6 +11,7 @@ import base64
 from typing import Any
 
 from . import names
+from .actions import actionlib_wrappers
 from .model import TIME_TYPES, Constant, FieldDef, MsgDef, is_binary, primitive
 from .parse import parse_interface
 from .sources import standard_defs, standard_interfaces
@@ -74,6 +75,8 @@ class TypeRegistry:
         """
         canonical = names.normalize(name)
         defs = parse_interface(canonical, text)
+        if "/action/" in canonical and not self.ros2:
+            defs += actionlib_wrappers(canonical)
         for md in defs:
             self._defs[md.name] = md
         if "/msg/" not in canonical:

@@ -10,6 +10,7 @@ from importlib import resources
 from types import MappingProxyType
 from typing import Any
 
+from .actions import actionlib_wrappers
 from .model import Constant, FieldDef, MsgDef
 from .parse import TIME_NAMES, parse_interface
 
@@ -85,6 +86,9 @@ def standard_defs(ros2: bool) -> MappingProxyType[str, MsgDef]:
     for name, text in bundled_texts().items():
         for md in parse_interface(name, text):
             defs.setdefault(md.name, md)
+        if "/action/" in name and not ros2:
+            for md in actionlib_wrappers(name):
+                defs.setdefault(md.name, md)
     return MappingProxyType(defs)
 
 

@@ -238,6 +238,29 @@ def validate(reg: TypeRegistry, name: str, msg: Any) -> list[Problem]:
     return w.problems
 
 
+_LOADER: Any = None
+
+
+def _loader() -> Any:
+    """A safe YAML loader that also reads ``1e-5`` and ``1E9`` as floats (YAML 1.1 wants a dot)."""
+    global _LOADER
+    if _LOADER is None:
+        import re
+
+        import yaml
+
+        class Loader(yaml.SafeLoader):
+            pass
+
+        Loader.add_implicit_resolver(
+            "tag:yaml.org,2002:float",
+            re.compile(r"^[-+]?[0-9]+(?:\.[0-9]*)?[eE][-+]?[0-9]+$"),
+            list("-+0123456789"),
+        )
+        _LOADER = Loader
+    return _LOADER
+
+
 def parse_text(text: str) -> Any:
     """YAML (a superset of JSON) -> Python value; raises :class:`MessageTextError` on a syntax error."""
     import yaml
@@ -245,7 +268,7 @@ def parse_text(text: str) -> Any:
     if not text or not text.strip():
         return {}
     try:
-        return yaml.safe_load(text)
+        return yaml.load(text, Loader=_loader())  # noqa: S506 - a SafeLoader subclass
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" (line {mark.line + 1}, column {mark.column + 1})" if mark is not None else ""

@@ -3,7 +3,8 @@
 ``reg.typed("geometry_msgs/Twist")`` gives a class with one attribute per field, every one defaulted,
 constants as class attributes and ``__msgtype__`` holding the canonical name. Time fields are a small
 ``Time``/``Duration`` class with the flavour's field names (``secs, nsecs`` or ``sec, nanosec``),
-``uint8[]``/``char[]`` are ``bytes``, every other array a ``list``. ``structure`` reads wire-shape
+``uint8[]``/``char[]`` are ``bytes``,
+a field whose name is a Python keyword is the attribute ``name_``, every other array a ``list``. ``structure`` reads wire-shape
 dicts (base64 text, bytes or int lists for binary fields; ``None`` for NaN; either time shape);
 ``unstructure`` writes them back (binary as base64 text, NaN as a float NaN, which JSON encoders such
 as orjson send as ``null``).
@@ -116,9 +117,12 @@ class TypedFactory:
         self._classes[name] = None  # type: ignore[assignment]  # cycle guard
         try:
             body = {}
+            renamed = {}
             for f in md.fields:
-                alias = f.name + "_" if keyword.iskeyword(f.name) else None
-                body[f.name] = attrs.field(default=self._default(f), type=self._annotation(f), alias=alias)
+                attr = f.name + "_" if keyword.iskeyword(f.name) else f.name
+                if attr != f.name:
+                    renamed[attr] = f.name
+                body[attr] = attrs.field(default=self._default(f), type=self._annotation(f))
             short = names.short(name)
             cls = attrs.make_class(short, body, slots=True, eq=True, repr=True)
         except BaseException:
@@ -130,6 +134,13 @@ class TypedFactory:
         for c in md.constants:
             if c.name not in field_names:
                 setattr(cls, c.name, c.value)
+        if renamed:  # Python keywords as field names: attribute "from_" travels as "from"
+            from cattrs.gen import make_dict_structure_fn, make_dict_unstructure_fn, override
+
+            c = self.converter
+            over = {a: override(rename=n) for a, n in renamed.items()}
+            c.register_structure_hook(cls, make_dict_structure_fn(cls, c, **over))
+            c.register_unstructure_hook(cls, make_dict_unstructure_fn(cls, c, **over))
         self._classes[name] = cls
         return cls
 
