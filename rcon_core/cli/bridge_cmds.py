@@ -1,0 +1,336 @@
+"""``rcon topics|services|type|echo|pub|call``: the robot's graph and traffic from a terminal.
+
+Every command takes ``--url`` (default ws://localhost:9090) and ``--json``.  Failures print the server's
+own message on stderr and exit non-zero: 1 for a failed call or connection, 2 for bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import base64
+import sys
+from typing import Any
+
+import orjson
+
+DEFAULT_URL = "ws://localhost:9090"
+CONNECT_TIMEOUT = 5.0
+
+
+def configure(name: str, parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--url", dest="bridge_url", metavar="URL",
+                        help=f"rosbridge WebSocket URL (default {DEFAULT_URL})")
+    parser.add_argument("--json", action="store_true", help="machine-readable JSON output")
+    if name == "type":
+        parser.add_argument("type_name", metavar="TYPE", help="message or service type, e.g. sensor_msgs/Imu")
+    elif name == "echo":
+        parser.add_argument("topic", metavar="TOPIC")
+        parser.add_argument("-n", type=int, default=0, metavar="N", help="exit after N messages (default: run)")
+        parser.add_argument("--type", dest="msg_type", help="message type (default: ask the server)")
+        parser.add_argument("--compression", default="none", choices=["none", "png", "cbor", "cbor-raw"])
+        parser.add_argument("--throttle", type=int, default=0, metavar="MS", help="throttle_rate in ms")
+    elif name == "pub":
+        parser.add_argument("topic", metavar="TOPIC")
+        parser.add_argument("msg_type", metavar="TYPE")
+        parser.add_argument("msg", metavar="MSG", help="the message as YAML or JSON text, e.g. '{data: 1.5}'")
+        parser.add_argument("--rate", type=float, metavar="HZ", help="publish repeatedly at this rate")
+        parser.add_argument("--once", action="store_true", help="publish once and exit (the default without --rate)")
+        parser.add_argument("--count", type=int, default=0, metavar="N", help="with --rate: stop after N messages")
+        parser.add_argument("--latch", action="store_true", help="advertise the topic as latched")
+    elif name == "call":
+        parser.add_argument("service", metavar="SERVICE")
+        parser.add_argument("args", nargs="?", default=None, metavar="ARGS",
+                            help="request as YAML or JSON text, e.g. '{data: true}'")
+        parser.add_argument("--timeout", type=float, default=10.0, metavar="S", help="seconds to wait (default 10)")
+
+
+def run(name: str, args: argparse.Namespace) -> int:
+    url = getattr(args, "bridge_url", None) or getattr(args, "url", None) or DEFAULT_URL
+    handler = {"topics": _topics, "services": _services, "type": _type, "echo": _echo, "pub": _pub,
+               "call": _call}[name]
+    try:
+        return asyncio.run(handler(url, args))
+    except KeyboardInterrupt:
+        return 0
+
+
+# ---------------------------------------------------------------------------------------------- helpers
+
+
+def _err(text: str) -> None:
+    print(f"rcon: {text}", file=sys.stderr)
+
+
+def _default(value: Any) -> Any:
+    if isinstance(value, bytes | bytearray | memoryview):
+        return base64.b64encode(bytes(value)).decode()
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    raise TypeError(f"cannot print {type(value).__name__}")
+
+
+def _json(value: Any, indent: bool = False) -> str:
+    opts = orjson.OPT_SERIALIZE_NUMPY | (orjson.OPT_INDENT_2 if indent else 0)
+    return orjson.dumps(value, default=_default, option=opts).decode()
+
+
+async def _connect(url: str) -> Any:
+    from rcon_core.bridge import BridgeClient
+
+    client = BridgeClient(url, reconnect=False, call_timeout=10.0)
+    try:
+        await asyncio.wait_for(client.connect(), CONNECT_TIMEOUT)
+    except (OSError, TimeoutError, Exception) as exc:
+        _err(f"cannot connect to {url}: {exc or type(exc).__name__}")
+        return None
+    return client
+
+
+def _table(rows: dict[str, str]) -> None:
+    width = max((len(k) for k in rows), default=0)
+    for k in sorted(rows):
+        print(f"{k:<{width}}  {rows[k]}")
+
+
+def _registry() -> Any:
+    try:
+        from rcon_core.msgs import TypeRegistry
+    except ImportError:
+        return None
+    return TypeRegistry.standard()
+
+
+def _parse_text(text: str) -> Any:
+    import yaml
+
+    return yaml.safe_load(text)
+
+
+# ---------------------------------------------------------------------------------------------- commands
+
+
+async def _topics(url: str, args: argparse.Namespace) -> int:
+    from rcon_core.bridge import ServiceError
+
+    client = await _connect(url)
+    if client is None:
+        return 1
+    try:
+        topics = await client.rosapi.topics()
+    except ServiceError as exc:
+        _err(str(exc))
+        return 1
+    finally:
+        await client.close()
+    print(_json(topics, indent=True)) if args.json else _table(topics)
+    return 0
+
+
+async def _services(url: str, args: argparse.Namespace) -> int:
+    from rcon_core.bridge import ServiceError
+
+    client = await _connect(url)
+    if client is None:
+        return 1
+    try:
+        services = await client.rosapi.services_with_types()
+    except ServiceError as exc:
+        _err(str(exc))
+        return 1
+    finally:
+        await client.close()
+    print(_json(services, indent=True)) if args.json else _table(services)
+    return 0
+
+
+def typedefs_text(typedefs: list[dict[str, Any]]) -> str:
+    """rosapi typedefs as ``.msg``-style text: the type first, then each nested type (like gendeps)."""
+    blocks = []
+    typedefs = [td for td in typedefs if td.get("type") not in ("time", "duration")]  # builtin pseudo-types
+    for i, td in enumerate(typedefs):
+        lines = [] if i == 0 else ["=" * 80, f"MSG: {td.get('type')}"]
+        for cname, cvalue in zip(td.get("constnames", []), td.get("constvalues", []), strict=False):
+            lines.append(f"{cname}={cvalue}")
+        for fname, ftype, alen in zip(td.get("fieldnames", []), td.get("fieldtypes", []),
+                                      td.get("fieldarraylen", []), strict=False):
+            suffix = "" if alen is None or alen < 0 else ("[]" if alen == 0 else f"[{alen}]")
+            lines.append(f"{ftype}{suffix} {fname}")
+        blocks.append("\n".join(lines))
+    return "\n".join(blocks)
+
+
+async def _server_definition(url: str, name: str) -> tuple[Any, str] | None:
+    """(typedefs, text) from the server, or None when it is unreachable or does not know the type."""
+    from rcon_core.bridge import BridgeClient, BridgeError
+
+    client = BridgeClient(url, reconnect=False, call_timeout=5.0)
+    try:
+        await asyncio.wait_for(client.connect(), 2.0)
+    except Exception:
+        return None
+    try:
+        short = "/".join(name.split("/")[::2]) if name.count("/") == 2 else name
+        if "/srv/" in name or await _is_service_type(client, short):
+            req = await client.rosapi.service_request_details(short)
+            resp = await client.rosapi.service_response_details(short)
+            if req or resp:
+                return {"request": req, "response": resp}, typedefs_text(req) + "\n---\n" + typedefs_text(resp)
+            return None
+        tds = await client.rosapi.message_details(short)
+        return (tds, typedefs_text(tds)) if tds and tds[0].get("fieldnames") is not None else None
+    except BridgeError:
+        return None
+    finally:
+        await client.close()
+
+
+async def _is_service_type(client: Any, name: str) -> bool:
+    from rcon_core.bridge import BridgeError
+
+    try:
+        tds = await client.rosapi.message_details(name)
+    except BridgeError:
+        tds = []
+    if tds:
+        return False
+    try:
+        return bool(await client.rosapi.service_request_details(name))
+    except BridgeError:
+        return False
+
+
+async def _type(url: str, args: argparse.Namespace) -> int:
+    name = args.type_name
+    found = await _server_definition(url, name)
+    if found is not None:
+        typedefs, text = found
+        print(_json({"type": name, "source": "server", "typedefs": typedefs}, indent=True) if args.json else text)
+        return 0
+    reg = _registry()
+    if reg is not None and reg.has(name):
+        if args.json:
+            print(_json({"type": name, "source": "standard", "definition": reg.definition_text(name)}, indent=True))
+        else:
+            print(reg.definition_text(name))
+        return 0
+    _err(f"unknown type {name} (not on the server at {url} and not a standard type)")
+    return 1
+
+
+async def _echo(url: str, args: argparse.Namespace) -> int:
+    client = await _connect(url)
+    if client is None:
+        return 1
+    done = asyncio.Event()
+    count = 0
+
+    def on_msg(msg: dict[str, Any]) -> None:
+        nonlocal count
+        if done.is_set():
+            return
+        count += 1
+        if args.json:
+            print(_json(msg), flush=True)
+        else:
+            import yaml
+
+            text = yaml.safe_dump(orjson.loads(_json(msg)), sort_keys=False, allow_unicode=True)
+            print(text + "---", flush=True)
+        if args.n and count >= args.n:
+            done.set()
+
+    try:
+        client.node("rcon-echo").subscribe(args.topic, on_msg, type=args.msg_type, throttle_rate=args.throttle,
+                                           compression=args.compression)
+        closed = asyncio.ensure_future(_until_closed(client))
+        waiter = asyncio.ensure_future(done.wait())
+        await asyncio.wait({waiter, closed}, return_when=asyncio.FIRST_COMPLETED)
+        waiter.cancel()
+        closed.cancel()
+        if not done.is_set():
+            _err(f"connection to {url} lost")
+            return 1
+        return 0
+    finally:
+        await client.close()
+
+
+async def _until_closed(client: Any) -> None:
+    while client.connected:
+        await asyncio.sleep(0.2)
+
+
+async def _pub(url: str, args: argparse.Namespace) -> int:
+    reg = _registry()
+    if reg is not None and reg.has(args.msg_type):
+        from rcon_core.msgs import MessageTextError
+
+        try:
+            msg = reg.from_text(args.msg_type, args.msg)
+        except MessageTextError as exc:
+            _err(f"bad message for {args.msg_type}: {exc}")
+            return 2
+    else:
+        try:
+            msg = _parse_text(args.msg)
+        except Exception as exc:
+            _err(f"MSG is not YAML or JSON: {exc}")
+            return 2
+        if not isinstance(msg, dict):
+            _err("MSG must be a mapping like '{data: 1}'")
+            return 2
+    if args.rate is not None and args.rate <= 0:
+        _err("--rate must be positive")
+        return 2
+    client = await _connect(url)
+    if client is None:
+        return 1
+    try:
+        pub = client.node("rcon-pub").advertise(args.topic, args.msg_type, latch=args.latch)
+        if args.rate is None or args.once:
+            pub.publish(msg)
+            await asyncio.sleep(0.3)  # let the frame leave before the socket closes
+            return 0
+        period = 1.0 / args.rate
+        sent = 0
+        while client.connected and (not args.count or sent < args.count):
+            pub.publish(msg)
+            sent += 1
+            await asyncio.sleep(period)
+        await asyncio.sleep(0.1)
+        return 0 if client.connected else 1
+    finally:
+        await client.close()
+
+
+async def _call(url: str, args: argparse.Namespace) -> int:
+    from rcon_core.bridge import ServiceError
+
+    request: Any = None
+    if args.args is not None:
+        try:
+            request = _parse_text(args.args)
+        except Exception as exc:
+            _err(f"ARGS is not YAML or JSON: {exc}")
+            return 2
+        if request is not None and not isinstance(request, dict | list):
+            _err("ARGS must be a mapping like '{data: true}' or a list")
+            return 2
+    client = await _connect(url)
+    if client is None:
+        return 1
+    try:
+        values = await client.call_service(args.service, request, timeout=args.timeout)
+    except ServiceError as exc:
+        _err(str(exc))
+        return 1
+    finally:
+        await client.close()
+    if args.json:
+        print(_json(values, indent=True))
+    else:
+        import yaml
+
+        print(yaml.safe_dump(orjson.loads(_json(values)), sort_keys=False, allow_unicode=True).rstrip())
+    return 0

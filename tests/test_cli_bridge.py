@@ -1,0 +1,91 @@
+"""``rcon topics|services|type|echo|pub|call`` through ``rcon_core.cli.main.main`` against the embedded sim."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from rcon_core.cli.main import main
+
+
+def run(capsys, *argv):
+    rc = main(list(argv))
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+def test_topics_and_services(sim_url, capsys):
+    rc, out, _ = run(capsys, "topics", "--url", sim_url, "--json")
+    assert rc == 0
+    topics = json.loads(out)
+    assert topics["/cmd_vel"] == "geometry_msgs/Twist" and topics["/imu/data"] == "sensor_msgs/Imu"
+    rc, out, _ = run(capsys, "topics", "--url", sim_url)
+    assert rc == 0 and any(line.split() == ["/odom", "nav_msgs/Odometry"] for line in out.splitlines())
+    rc, out, _ = run(capsys, "services", "--url", sim_url, "--json")
+    assert rc == 0 and json.loads(out)["/lights/set"] == "std_srvs/SetBool"
+
+
+def test_type_from_server_and_from_the_standard_registry(sim_url, capsys):
+    rc, out, _ = run(capsys, "type", "sensor_msgs/Imu", "--url", sim_url)
+    assert rc == 0
+    assert "float64[9] orientation_covariance" in out and "MSG: std_msgs/Header" in out
+    rc, out, _ = run(capsys, "type", "std_srvs/SetBool", "--url", sim_url, "--json")
+    assert rc == 0 and json.loads(out)["source"] == "server"
+    # the server is unreachable: the standard definitions answer
+    rc, out, _ = run(capsys, "type", "geometry_msgs/Twist", "--url", "ws://127.0.0.1:9")
+    assert rc == 0 and "Vector3 linear" in out
+    rc, _, err = run(capsys, "type", "nope_msgs/Nope", "--url", "ws://127.0.0.1:9")
+    assert rc == 1 and "unknown type nope_msgs/Nope" in err
+
+
+def test_echo_n_messages(sim_url, capsys):
+    rc, out, _ = run(capsys, "echo", "/odom", "-n", "2", "--url", sim_url, "--json")
+    assert rc == 0
+    msgs = [json.loads(line) for line in out.splitlines()]
+    assert len(msgs) == 2 and len(msgs[0]["pose"]["covariance"]) == 36
+    rc, out, _ = run(capsys, "echo", "/imu/data", "-n", "1", "--url", sim_url, "--compression", "cbor")
+    assert rc == 0 and "orientation_covariance" in out and out.rstrip().endswith("---")
+
+
+def test_pub_reaches_the_robot(sim_url, sim_thread, capsys):
+    rc, _, err = run(capsys, "pub", "/cmd_vel", "geometry_msgs/Twist", "{linear: {x: 0.5}}", "--url", sim_url)
+    assert rc == 0, err
+    assert any(m["linear"]["x"] == 0.5 for m in sim_thread.published("/cmd_vel"))
+    rc, _, err = run(capsys, "pub", "/speed_limit", "std_msgs/Float64", "{data: 2.5}", "--rate", "50", "--count", "3",
+                     "--url", sim_url)
+    assert rc == 0 and len([m for m in sim_thread.published("/speed_limit") if m["data"] == 2.5]) >= 3
+
+
+def test_pub_bad_message_is_a_clear_error(sim_url, capsys):
+    rc, _, err = run(capsys, "pub", "/cmd_vel", "geometry_msgs/Twist", "{linear: {x: fast}}", "--url", sim_url)
+    assert rc == 2 and "linear.x" in err
+
+
+def test_call_success_and_failure(sim_url, capsys):
+    rc, out, _ = run(capsys, "call", "/lights/set", "{data: true}", "--url", sim_url, "--json")
+    assert rc == 0 and json.loads(out)["success"] is True
+    rc, out, _ = run(capsys, "call", "/rosapi/get_time", "--url", sim_url)
+    assert rc == 0 and "secs:" in out
+    rc, _, err = run(capsys, "call", "/no/such/service", "--url", sim_url, "--timeout", "3")
+    assert rc == 1 and "/no/such/service" in err and "does not exist" in err
+    rc, _, err = run(capsys, "call", "/lights/set", "{data: [", "--url", sim_url)
+    assert rc == 2 and "not YAML or JSON" in err
+
+
+def test_unreachable_server(capsys):
+    rc, _, err = run(capsys, "topics", "--url", "ws://127.0.0.1:9")
+    assert rc == 1 and "cannot connect to ws://127.0.0.1:9" in err
+
+
+@pytest.mark.shared
+def test_call_against_the_recorded_server(capsys):
+    """The exact failure text a real rosbridge sends reaches stderr (scripted server replaying services.jsonl)."""
+    from replay_server import ThreadedServer, require_shared
+
+    require_shared()
+    with ThreadedServer() as server:
+        rc, _, err = run(capsys, "call", "/rec/fails", "{}", "--url", server.url)
+        assert rc == 1 and "error processing request: simulated failure" in err
+        rc, out, _ = run(capsys, "call", "/rec/set_bool", '{"data": true}', "--url", server.url, "--json")
+        assert rc == 0 and json.loads(out) == {"success": True, "message": "motors enabled"}
