@@ -23,10 +23,10 @@ def new_id(prefix: str) -> str:
 
 @attrs.define
 class Geometry:
-    x: float = 0.0
-    y: float = 0.0
-    w: float = 160.0
-    h: float = 80.0
+    x: float = attrs.field(default=0.0, converter=float)
+    y: float = attrs.field(default=0.0, converter=float)
+    w: float = attrs.field(default=160.0, converter=float)
+    h: float = attrs.field(default=80.0, converter=float)
 
 
 @attrs.define

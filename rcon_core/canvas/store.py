@@ -30,6 +30,7 @@ from typing import Any
 import attrs
 import cattrs
 import cattrs.gen
+import cattrs.v
 
 from rcon_core.plugins.model import Binding
 
@@ -159,9 +160,15 @@ def _make_converter() -> cattrs.Converter:
 _CONV = _make_converter()
 
 
-def _describe(exc: Exception) -> str:
-    if isinstance(exc, (cattrs.BaseValidationError,)):
-        return "; ".join(cattrs.transform_error(exc))
+def _format_exc(exc: BaseException, type_: Any) -> str:
+    if isinstance(exc, ValueError) and str(exc):
+        return str(exc)
+    return cattrs.v.format_exception(exc, type_)
+
+
+def _describe(exc: Exception, root: str = "$") -> str:
+    if isinstance(exc, cattrs.BaseValidationError):
+        return "; ".join(cattrs.transform_error(exc, path=root, format_exception=_format_exc))
     return str(exc)
 
 
@@ -206,7 +213,7 @@ def workspace_from_dict(data: Any, path: Path | None = None) -> Workspace:
         ):
             raise ValueError("plugin_settings must map widget kinds to objects")
     except Exception as exc:
-        raise WorkspaceFileError(path, f"invalid workspace: {_describe(exc)}") from exc
+        raise WorkspaceFileError(path, f"invalid workspace: {_describe(exc, 'canvases')}") from exc
     ids = [c.id for c in canvases] + [w.id for c in canvases for w in c.widgets]
     dup = sorted({i for i in ids if ids.count(i) > 1})
     if dup:
@@ -328,4 +335,4 @@ def import_canvas(path: str | os.PathLike[str]) -> Canvas:
     try:
         return _CONV.structure(data.get("canvas"), Canvas)
     except Exception as exc:
-        raise WorkspaceFileError(p, f"invalid canvas: {_describe(exc)}") from exc
+        raise WorkspaceFileError(p, f"invalid canvas: {_describe(exc, 'canvas')}") from exc

@@ -1,0 +1,199 @@
+"""Persistence: versioned JSON, atomic writes (crash-safe), backups, unknown data kept, import/export."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+from rcon_core.canvas import (
+    AutoSaver,
+    Binding,
+    Document,
+    Geometry,
+    NewerVersionError,
+    Workspace,
+    WorkspaceFileError,
+    WorkspaceStore,
+    default_path,
+    dumps_workspace,
+    export_canvas,
+    import_canvas,
+    loads_workspace,
+)
+from rcon_core.canvas import store as store_mod
+
+
+def sample() -> Workspace:
+    doc = Document(Workspace.new("Main"))
+    c = doc.current
+    doc.add_widget(c.id, "std.slider", Binding("/speed", "std_msgs/Float64", "publish", "data"),
+                   Geometry(10, 20, 200, 60), {"minimum": -1.5, "maximum": 2, "label": "Speed ⚓"})
+    deck = doc.create_canvas("Deck")
+    doc.add_widget(deck.id, "std.switch", Binding("/lights", "std_srvs/SetBool", "call", ["request.data"]))
+    doc.set_locked(deck.id, True)
+    return doc.workspace
+
+
+def test_round_trip_is_exact(tmp_path):
+    ws = sample()
+    text = dumps_workspace(ws)
+    data = json.loads(text)
+    assert data["format"] == "rcon-workspace" and data["version"] == 1
+    assert data["canvases"][1]["locked"] is True
+    assert data["canvases"][1]["widgets"][0]["binding"] == {
+        "name": "/lights", "type": "std_srvs/SetBool", "role": "call", "field_paths": ["request.data"]}
+    again = loads_workspace(text)
+    assert again == ws
+    assert dumps_workspace(again) == text
+    store = WorkspaceStore(tmp_path / "sub" / "ws.json")
+    assert store.load().canvases[0].name == "Main"  # no file yet: a new workspace
+    store.save(ws)
+    assert store.load() == ws
+
+
+def test_missing_plugin_widget_and_unknown_keys_saved_back_byte_for_byte(tmp_path):
+    path = tmp_path / "ws.json"
+    store = WorkspaceStore(path)
+    ws = sample()
+    store.save(ws)
+    data = json.loads(path.read_text())
+    odd = {"nested": {"list": [1, 2.5, None, True, "ü"], "big": 12345678901234567890}, "tiny": 1e-300}
+    data["canvases"][0]["widgets"].append({
+        "id": "w-gone", "kind": "retired.widget", "title": "Old", "binding": {"name": "/x", "type": "a/B",
+        "role": "subscribe", "field_paths": []}, "geometry": {"x": 1.0, "y": 2.0, "w": 3.0, "h": 4.0},
+        "settings": odd, "future_widget_key": {"keep": "me"}})
+    data["canvases"][0]["future_canvas_key"] = [1, 2]
+    data["future_top_key"] = "yes"
+    path.write_text(json.dumps(data, indent=2, ensure_ascii=False) + "\n")
+    before = path.read_bytes()
+    loaded = store.load()
+    gone = loaded.canvases[0].widget("w-gone")
+    assert gone.settings == odd and gone.extra == {"future_widget_key": {"keep": "me"}}
+    store.save(loaded)
+    assert path.read_bytes() == before
+
+
+@pytest.mark.parametrize("content, reason", [
+    (b"{not json", "not valid JSON"),
+    (b'{"format": "something-else", "version": 1}', "not an RCON workspace file"),
+    (b'{"format": "rcon-workspace", "version": "one"}', "bad format version"),
+    (b'{"format": "rcon-workspace", "version": 1, "canvases": [{"id": "c", "name": "A", "widgets": '
+     b'[{"id": "w", "kind": "k", "geometry": {"x": "left"}}]}]}', "geometry.x must be a number"),
+    (b'{"format": "rcon-workspace", "version": 1, "canvases": [{"id": "c", "name": "A"}, '
+     b'{"id": "c", "name": "B"}]}', "duplicate ids"),
+])
+def test_corrupt_file_clear_error_backup_and_never_overwritten(tmp_path, content, reason):
+    path = tmp_path / "ws.json"
+    path.write_bytes(content)
+    store = WorkspaceStore(path)
+    with pytest.raises(WorkspaceFileError, match=reason) as info:
+        store.load()
+    assert str(path) in str(info.value)
+    assert info.value.backup is not None and info.value.backup.read_bytes() == content
+    assert store.read_only
+    with pytest.raises(WorkspaceFileError, match="not saving over a file that could not be read"):
+        store.save(Workspace.new())
+    assert path.read_bytes() == content
+    store.save(Workspace.new(), force=True)  # after the user said so
+    assert store.load().canvases[0].name == "Main"
+
+
+def test_newer_version_is_refused(tmp_path):
+    path = tmp_path / "ws.json"
+    content = json.dumps({"format": "rcon-workspace", "version": 7, "canvases": []}).encode()
+    path.write_bytes(content)
+    store = WorkspaceStore(path)
+    with pytest.raises(NewerVersionError, match="newer RCON.*version 7.*reads up to 1"):
+        store.load()
+    doc = Document()
+    saver = AutoSaver(doc, store, on_error=lambda exc: errors.append(exc))
+    errors = []
+    doc.create_canvas("X")
+    assert path.read_bytes() == content and len(errors) == 1 and saver.saves == 0
+
+
+def test_crash_in_replace_leaves_old_file_and_no_temp(tmp_path, monkeypatch):
+    path = tmp_path / "ws.json"
+    store = WorkspaceStore(path)
+    store.save(sample())
+    before = path.read_bytes()
+
+    def boom(src, dst):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(store_mod.os, "replace", boom)
+    with pytest.raises(OSError, match="No space left"):
+        store.save(Workspace.new("Other"))
+    assert path.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ws.json"]
+
+
+def test_process_killed_mid_save_leaves_old_file_intact(tmp_path):
+    path = tmp_path / "ws.json"
+    WorkspaceStore(path).save(sample())
+    before = path.read_bytes()
+    script = textwrap.dedent(f"""
+        import os, signal
+        from rcon_core.canvas import store as s
+        from rcon_core.canvas import Workspace, WorkspaceStore
+        def die(*a):  # killed after the data hit the temp file, before the rename
+            os.kill(os.getpid(), signal.SIGKILL)
+        s.os.replace = die
+        ws = Workspace.new("Half written")
+        WorkspaceStore({str(path)!r}).save(ws)
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, timeout=60)
+    assert proc.returncode == -signal.SIGKILL, proc.stderr.decode()
+    assert path.read_bytes() == before
+    leftovers = [p for p in tmp_path.iterdir() if p.name != "ws.json"]
+    assert leftovers and all(p.name.startswith(".ws.json.") for p in leftovers)  # the dead temp file
+    assert WorkspaceStore(path).load() == loads_workspace(before)
+
+
+def test_autosave_after_each_change_and_debounced(tmp_path):
+    store = WorkspaceStore(tmp_path / "ws.json")
+    doc = Document(Workspace.new())
+    saver = AutoSaver(doc, store)
+    w = doc.add_widget(doc.current.id, "std.label")
+    doc.move_widget(w.id, 7, 8)
+    assert saver.saves == 2
+    assert store.load().current_canvas.widget(w.id).geometry.x == 7
+    saver.close()
+    slow = AutoSaver(doc, store, debounce=30.0)
+    for x in range(10):
+        doc.move_widget(w.id, x + 100, 0)
+    assert slow.saves == 0  # still waiting for the burst to end
+    assert slow.flush() and slow.saves == 1
+    assert store.load().current_canvas.widget(w.id).geometry.x == 109
+    slow.close()
+
+
+def test_export_and_import_one_canvas(tmp_path):
+    ws = sample()
+    deck = ws.canvas_named("Deck")
+    export_canvas(deck, tmp_path / "deck.json")
+    data = json.loads((tmp_path / "deck.json").read_text())
+    assert data["format"] == "rcon-canvas" and data["version"] == 1
+    back = import_canvas(tmp_path / "deck.json")
+    assert back == deck
+    doc = Document(ws)
+    added = doc.add_canvas(back)
+    assert added.name == "Deck (2)" and added.id != deck.id
+    (tmp_path / "ws.json").write_text(dumps_workspace(ws))
+    with pytest.raises(WorkspaceFileError, match="not an RCON canvas file"):
+        import_canvas(tmp_path / "ws.json")
+    with pytest.raises(WorkspaceFileError, match="no such file"):
+        import_canvas(tmp_path / "nope.json")
+
+
+def test_default_path_uses_config_dir(monkeypatch, tmp_path):
+    monkeypatch.setenv("RCON_CONFIG_DIR", str(tmp_path))
+    assert default_path() == tmp_path / "workspace.json"
+    monkeypatch.delenv("RCON_CONFIG_DIR")
+    p = default_path()
+    assert p.name == "workspace.json" and "rcon" in p.parts
+    assert os.path.isabs(p)
