@@ -6,8 +6,6 @@ these tests do not depend on the widget packages.
 
 from __future__ import annotations
 
-import time
-
 import attrs
 import pytest
 from qtpy import QtCore, QtGui, QtWidgets

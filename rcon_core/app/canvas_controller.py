@@ -183,7 +183,7 @@ class CanvasController(QtCore.QObject):
             self.host.discard(iid)
         self.stack.removeWidget(surface)
         surface.deleteLater()
-        if self.doc.current > index or (was_current and self.doc.current >= len(self.doc.canvases)):
+        if self.doc.current > index or was_current:  # a deleted current canvas: show the one before it
             self.doc.current = max(0, self.doc.current - 1)
         self.stack.setCurrentWidget(self.surfaces[self.doc.current])
         if was_current:

@@ -9,6 +9,7 @@ from typing import Any
 
 from qtpy import QtCore, QtGui, QtWidgets
 
+from rcon_core.app import theme
 from rcon_core.app.add_panel import AddPanel
 from rcon_core.app.canvas_controller import CanvasController
 from rcon_core.app.catalog_panel import CatalogList
@@ -39,6 +40,10 @@ class MainWindow(QtWidgets.QMainWindow):
         link: Link | None = None,
     ) -> None:
         super().__init__()
+        app = QtWidgets.QApplication.instance()
+        if app is not None and not app.property("rcon_touch_px"):
+            theme.apply(app)  # the touch-sized high-contrast theme, also for embedders and tests
+        self.setAttribute(QtCore.Qt.WidgetAttribute.WA_AcceptTouchEvents)
         self.setWindowTitle("RCON")
         self.config = config
         self.plugins = plugins
