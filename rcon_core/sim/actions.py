@@ -61,17 +61,19 @@ class NavigateActionServer:
             raise _OpError(f"Action {action} does not exist")
         args = msg.get("args") or {}
         if isinstance(args, list):
-            args = dict(zip(("latitude", "longitude", "tolerance", "max_speed"), args, strict=False))
-        if not isinstance(args, dict):
-            raise _OpError("send_action_goal args must be an object")
-        lat, lon = args.get("latitude"), args.get("longitude")
+            args = dict(zip(("target",), args, strict=False))
+        target = args.get("target") if isinstance(args, dict) else None
+        if not isinstance(target, dict):
+            raise _OpError("send_action_goal args must be an object with a sensor_msgs/NavSatFix 'target'")
+        lat, lon = target.get("latitude"), target.get("longitude")
         if not all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in (lat, lon)):
             self._result(conn, msg.get("id"), STATUS_ABORTED, False,
-                         {"success": False, "distance": 0.0, "message": "latitude and longitude must be numbers"})
+                         {"success": False, "message": "target latitude and longitude must be numbers",
+                          "distance": 0.0})
             return
         x, y = self.node.vessel.local_from_lat_lon(float(lat), float(lon))
-        tolerance = float(args.get("tolerance") or 2.0)
-        max_speed = float(args.get("max_speed") or 1.5)
+        tolerance = 2.0
+        max_speed = 1.5
         if self.goal is not None and self.goal.task is not None and not self.goal.task.done():
             self._finish(self.goal, STATUS_ABORTED, False, "preempted by a new goal")
         goal = _Goal(conn, msg.get("id"), x, y, max(0.5, tolerance), max(0.1, max_speed), msg.get("feedback", True)
@@ -108,10 +110,9 @@ class NavigateActionServer:
             speed = min(goal.max_speed, 0.4 * dist) if abs(error) < 0.7 else 0.2
             v.command(speed, 1.5 * error, time.monotonic())
             if goal.feedback:
-                lat, lon = v.lat_lon()
                 self.server._send_text(goal.conn, {"op": "action_feedback", "id": goal.goal_id, "action": ACTION_NAME,
-                                                   "values": {"distance_remaining": dist, "latitude": lat,
-                                                              "longitude": lon, "speed": v.surge}})
+                                                   "values": {"distance_remaining": dist,
+                                                              "current": self.node.fix_message()}})
             await asyncio.sleep(period)
         v.command(0.0, 0.0, time.monotonic())  # the client went away: stop
 
@@ -124,7 +125,7 @@ class NavigateActionServer:
             self.node.vessel.command(0.0, 0.0, time.monotonic())
         dist = self._distance(goal)
         self._result(goal.conn, goal.goal_id, status, status == STATUS_SUCCEEDED,
-                     {"success": success, "distance": dist, "message": message})
+                     {"success": success, "message": message, "distance": dist})
         level = "info" if success else "warn"
         self.server.log("/kingfisher", level, f"navigate_to_fix {message}", function="navigate_to_fix")
 

@@ -16,14 +16,15 @@ from typing import Any
 
 import numpy as np
 
-INT_TYPES = {"int8", "int16", "int32", "int64", "uint8", "uint16", "uint32", "uint64", "byte", "char"}
-FLOAT_TYPES = {"float32", "float64"}
+INT_TYPES = {"int8", "int16", "int32", "int64", "uint8", "uint16", "uint32", "uint64", "byte", "char", "octet"}
+FLOAT_TYPES = {"float32", "float64", "float", "double"}
+BOOL_TYPES = {"bool", "boolean"}
 _DTYPES: dict[str, Any] = {
     "int8": np.int8, "byte": np.int8, "int16": np.int16, "int32": np.int32, "int64": np.int64,
     "uint16": np.uint16, "uint32": np.uint32, "uint64": np.uint64,
-    "float32": np.float32, "float64": np.float64,
+    "float32": np.float32, "float64": np.float64, "float": np.float32, "double": np.float64,
 }
-BYTES_TYPES = {"uint8", "char"}
+BYTES_TYPES = {"uint8", "char", "octet"}
 
 
 class ConversionError(ValueError):
@@ -52,7 +53,7 @@ class Converter:
         }
 
     def _default_scalar(self, ftype: str) -> Any:
-        if ftype == "bool":
+        if ftype in BOOL_TYPES:
             return False
         if ftype in INT_TYPES:
             return 0
@@ -124,7 +125,7 @@ class Converter:
         raise ConversionError(f"{owner} message requires a str for field {name}, but got a {_pytype(value)}")
 
     def _scalar(self, value: Any, ftype: str, owner: str, name: str) -> Any:
-        if ftype == "bool":
+        if ftype in BOOL_TYPES:
             if isinstance(value, bool):
                 return value
             raise ConversionError(f"{owner} message requires a bool for field {name}, but got a {_pytype(value)}")

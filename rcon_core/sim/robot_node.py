@@ -273,14 +273,17 @@ class RobotNode:
         })
 
     def _pub_gps_fix(self, now: float) -> None:
-        if not self._wanted("/gps/fix"):
-            return
+        if self._wanted("/gps/fix"):
+            self._publish("/gps/fix", self.fix_message())
+
+    def fix_message(self) -> dict[str, Any]:
+        """A sensor_msgs/NavSatFix of the vessel's position now, with GPS noise."""
         v = self.vessel
         sigma = 0.6
         lat, lon = v.lat_lon()
         lat += math.degrees(self.rng.gauss(0, sigma) / 6_378_137.0)
         lon += math.degrees(self.rng.gauss(0, sigma) / (6_378_137.0 * math.cos(math.radians(v.origin_lat))))
-        self._publish("/gps/fix", {
+        return {
             "header": self.fl.header("gps"),
             "status": {"status": 0, "service": 1},
             "latitude": lat,
@@ -288,7 +291,7 @@ class RobotNode:
             "altitude": 74.6 + self.rng.gauss(0, 0.8),
             "position_covariance": np.array(_diag([sigma**2, sigma**2, 1.5**2], 3)),
             "position_covariance_type": 2,
-        })
+        }
 
     def _pub_imu_data(self, now: float) -> None:
         if not self._wanted("/imu/data"):
