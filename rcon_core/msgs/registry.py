@@ -278,6 +278,12 @@ class TypeRegistry:
 
         return from_text(self, name, text)
 
+    def to_text(self, msg: dict[str, Any]) -> str:
+        """A message as YAML for a person to edit; :meth:`from_text` reads it back unchanged."""
+        from .text import to_text
+
+        return to_text(msg)
+
     def complete(self, name: str, msg: Any) -> dict[str, Any]:
         """Check and fill a (partial) message dict; raises MessageTextError at the first problem."""
         from .text import complete

@@ -25,7 +25,7 @@ from .model import TIME_TYPES, FieldDef, is_binary, primitive
 if TYPE_CHECKING:
     from .registry import TypeRegistry
 
-__all__ = ["MessageTextError", "Problem", "from_text", "complete", "validate"]
+__all__ = ["MessageTextError", "Problem", "from_text", "to_text", "complete", "validate"]
 
 
 @attrs.frozen
@@ -238,13 +238,14 @@ def validate(reg: TypeRegistry, name: str, msg: Any) -> list[Problem]:
     return w.problems
 
 
-_LOADER: Any = None
+_YAML: dict[str, Any] = {}
+_EXP_FLOAT = r"^[-+]?[0-9]+(?:\.[0-9]*)?[eE][-+]?[0-9]+$"
 
 
-def _loader() -> Any:
-    """A safe YAML loader that also reads ``1e-5`` and ``1E9`` as floats (YAML 1.1 wants a dot)."""
-    global _LOADER
-    if _LOADER is None:
+def _yaml_classes() -> tuple[Any, Any]:
+    """Safe YAML loader/dumper that also read ``1e-5`` and ``1E9`` as floats (YAML 1.1 wants a dot);
+    the dumper quotes strings that look like that, so dumped text reads back the same."""
+    if not _YAML:
         import re
 
         import yaml
@@ -252,13 +253,24 @@ def _loader() -> Any:
         class Loader(yaml.SafeLoader):
             pass
 
-        Loader.add_implicit_resolver(
-            "tag:yaml.org,2002:float",
-            re.compile(r"^[-+]?[0-9]+(?:\.[0-9]*)?[eE][-+]?[0-9]+$"),
-            list("-+0123456789"),
-        )
-        _LOADER = Loader
-    return _LOADER
+        class Dumper(yaml.SafeDumper):
+            pass
+
+        for cls in (Loader, Dumper):
+            cls.add_implicit_resolver("tag:yaml.org,2002:float", re.compile(_EXP_FLOAT), list("-+0123456789"))
+        _YAML.update(loader=Loader, dumper=Dumper)
+    return _YAML["loader"], _YAML["dumper"]
+
+
+def _loader() -> Any:
+    return _yaml_classes()[0]
+
+
+def to_text(msg: Any) -> str:
+    """A message as YAML that :func:`from_text` reads back unchanged (block style, keys in field order)."""
+    import yaml
+
+    return yaml.dump(msg, Dumper=_yaml_classes()[1], sort_keys=False, allow_unicode=True)
 
 
 def parse_text(text: str) -> Any:
@@ -267,6 +279,13 @@ def parse_text(text: str) -> Any:
 
     if not text or not text.strip():
         return {}
+    if text.lstrip()[:1] in ("{", "[", '"'):
+        import json
+
+        try:  # real JSON first: YAML does not join \ud83d\ude00 surrogate pairs
+            return json.loads(text)
+        except ValueError:
+            pass
     try:
         return yaml.load(text, Loader=_loader())  # noqa: S506 - a SafeLoader subclass
     except yaml.YAMLError as exc:
