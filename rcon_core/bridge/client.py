@@ -223,7 +223,7 @@ class BridgeClient:
 
     def _connector(self) -> connect:
         return connect(self.url, ssl=self._ssl_context(), compression=None, ping_interval=None,
-                       open_timeout=self.open_timeout, max_size=self.max_frame_size, max_queue=64,
+                       open_timeout=self.open_timeout, max_size=self.max_frame_size,
                        process_exception=self._process_exception, reconnect_delays=self._delays,
                        close_timeout=2)
 
