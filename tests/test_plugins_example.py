@@ -1,0 +1,134 @@
+"""The example external plugin (tests/example_plugin), pip-installed into a temp dir and found only
+through entry-point discovery: by the manager, `rcon plugins`, `rcon match` and on a canvas."""
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+EXAMPLE = Path(__file__).parent / "example_plugin"
+
+
+@pytest.fixture(scope="module")
+def lab_path(tmp_path_factory):
+    target = tmp_path_factory.mktemp("site")
+    proc = subprocess.run(
+        [sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--no-input", "--target", str(target),
+         str(EXAMPLE)],
+        capture_output=True, text=True, timeout=300,
+    )
+    assert proc.returncode == 0, f"pip install of the example plugin failed:\n{proc.stderr}"
+    assert list(target.glob("rcon_example_lab-0.3.1.dist-info/entry_points.txt"))
+    return target
+
+
+def run(lab_path, *args, code=None, env_extra=None, timeout=120):
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(lab_path), os.environ.get("PYTHONPATH", "")]))
+    env.update(env_extra or {})
+    cmd = [sys.executable, "-c", textwrap.dedent(code)] if code else [sys.executable, "-m", "rcon_core", *args]
+    proc = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=timeout)
+    assert proc.returncode == 0, proc.stderr
+    return proc.stdout
+
+
+def test_discovered_with_dist_name_and_version(lab_path):
+    out = run(lab_path, code="""
+        import json
+        from rcon_core.plugins import PluginManager
+        pm = PluginManager(); pm.load_entry_points()
+        info = next(i for i in pm.plugins if i.name == "lab")
+        spec = pm.widget("lab.gripper")
+        print(json.dumps([info.status, info.dist, info.version, spec.package, spec.title,
+                          [d.name for d in info.types]]))
+    """)
+    assert json.loads(out) == ["loaded", "rcon-example-lab", "0.3.1", "rcon-example-lab", "Gripper",
+                               ["lab_msgs/Gripper"]]
+
+
+def test_rcon_plugins_lists_it(lab_path):
+    data = json.loads(run(lab_path, "plugins", "--json"))
+    lab = next(p for p in data["plugins"] if p["name"] == "lab")
+    assert lab["dist"] == "rcon-example-lab" and lab["version"] == "0.3.1" and lab["status"] == "loaded"
+    assert lab["widgets"] == [{"kind": "lab.gripper", "title": "Gripper", "roles": ["subscribe"],
+                               "accepts": ["lab_msgs/Gripper"]}]
+    text = run(lab_path, "plugins")
+    assert "rcon-example-lab 0.3.1" in text and "lab.gripper" in text and "type lab_msgs/Gripper" in text
+    off = run(lab_path, "plugins", env_extra={"RCON_DISABLE_PLUGINS": "lab"})
+    assert "rcon-example-lab 0.3.1 (entry point 'lab' -> rcon_example_lab.plugin): disabled" in off
+
+
+def test_rcon_match_knows_the_contributed_type(lab_path):
+    data = json.loads(run(lab_path, "match", "lab_msgs/msg/Gripper", "--json"))
+    assert data["role"] == "subscribe"
+    first = data["matches"][0]
+    assert (first["kind"], first["rank"], first["package"]) == ("lab.gripper", "exact", "rcon-example-lab")
+    text = run(lab_path, "match", "lab_msgs/Gripper", "--role", "subscribe")
+    assert text.splitlines()[0].split()[:2] == ["exact", "lab.gripper"]
+
+
+def test_on_a_canvas_against_the_sim(lab_path, sim_url):
+    out = run(lab_path, code=f"""
+        import asyncio, json, time
+        from rcon_core.bridge import BridgeClient
+        from rcon_core.canvas import Binding, Document, WorkspaceStore, Workspace
+        from rcon_core.canvas.runtime import CanvasRuntime
+        from rcon_core.msgs import TypeRegistry
+        from rcon_core.plugins import PluginManager
+
+        async def main():
+            pm = PluginManager(); pm.load_entry_points()
+            types = TypeRegistry.standard(); pm.apply_types(types)
+            doc = Document(Workspace.new("Lab"))
+            w = doc.add_widget(doc.current.id, "lab.gripper",
+                               Binding("/gripper", "lab_msgs/Gripper", "subscribe"), settings={{"max_opening": 0.1}})
+            client = BridgeClient({sim_url!r}, reconnect=False)
+            await client.connect()
+            rt = CanvasRuntime(pm, client, types=types)
+            rt.start(doc.current)
+            model = rt.models[w.id]
+            # the sim only knows standard types, so the robot side of lab_msgs/Gripper is played here
+            # through the same callback the bridge subscription calls
+            model._receive({{"opening": 0.05, "force": 2.0, "grasping": True, "tool_id": "t1"}})
+            st = model.state
+            rt.stop(); await client.close()
+            print(json.dumps([type(model).__name__, st.value, model.problems(),
+                              types.default("lab_msgs/Gripper")]))
+        asyncio.run(main())
+    """)
+    name, value, problems, default = json.loads(out.strip().splitlines()[-1])
+    assert name == "GripperModel" and value == [0.5, True] and problems == []
+    assert default == {"opening": 0.0, "force": 0.0, "grasping": False, "tool_id": ""}
+
+
+def test_layout_survives_the_plugin_being_uninstalled(lab_path, tmp_path):
+    path = tmp_path / "ws.json"
+    run(lab_path, code=f"""
+        from rcon_core.canvas import Binding, Document, Workspace, WorkspaceStore
+        doc = Document(Workspace.new("Lab"))
+        doc.add_widget(doc.current.id, "lab.gripper", Binding("/gripper", "lab_msgs/Gripper", "subscribe"),
+                       settings={{"max_opening": 0.12, "note": "left arm"}})
+        WorkspaceStore({str(path)!r}).save(doc.workspace)
+    """)
+    before = path.read_bytes()
+    # without the plugin on the path: the widget becomes a placeholder and is saved back unchanged
+    from rcon_core.canvas import Document, WorkspaceStore
+    from rcon_core.canvas.runtime import CanvasRuntime, MissingWidgetModel
+    from rcon_core.plugins import PluginManager
+
+    store = WorkspaceStore(path)
+    doc = Document(store.load())
+    pm = PluginManager(environ={})
+    pm.load_entry_points()
+    assert not pm.has_widget("lab.gripper")
+    rt = CanvasRuntime(pm, client=None)
+    (inst,) = doc.current.widgets
+    model = rt.build_model(inst, port=None)
+    assert isinstance(model, MissingWidgetModel) and "lab.gripper" in model.state.error
+    doc.create_canvas("Other")
+    doc.undo()
+    store.save(doc.workspace)
+    assert path.read_bytes() == before
