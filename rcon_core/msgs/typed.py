@@ -131,16 +131,16 @@ class TypedFactory:
         cls.__qualname__ = short
         cls.__msgtype__ = name  # type: ignore[attr-defined]
         field_names = {f.name for f in md.fields}
-        for c in md.constants:
-            if c.name not in field_names:
-                setattr(cls, c.name, c.value)
+        for const in md.constants:
+            if const.name not in field_names:
+                setattr(cls, const.name, const.value)
         if renamed:  # Python keywords as field names: attribute "from_" travels as "from"
             from cattrs.gen import make_dict_structure_fn, make_dict_unstructure_fn, override
 
-            c = self.converter
-            over = {a: override(rename=n) for a, n in renamed.items()}
-            c.register_structure_hook(cls, make_dict_structure_fn(cls, c, **over))
-            c.register_unstructure_hook(cls, make_dict_unstructure_fn(cls, c, **over))
+            conv = self.converter
+            over: dict[str, Any] = {a: override(rename=n) for a, n in renamed.items()}
+            conv.register_structure_hook(cls, make_dict_structure_fn(cls, conv, **over))
+            conv.register_unstructure_hook(cls, make_dict_unstructure_fn(cls, conv, **over))
         self._classes[name] = cls
         return cls
 
