@@ -1,0 +1,116 @@
+"""WidgetModel base: state snapshots, staleness and age, link flag, thread-safe hand-off, calls via the sim."""
+
+import asyncio
+import threading
+
+import pytest
+
+from rcon_core.bridge import BridgeClient
+from rcon_core.msgs import TypeRegistry
+from rcon_core.plugins import Binding, Role, WidgetModel
+
+
+class Clock:
+    def __init__(self):
+        self.now = 100.0
+
+    def __call__(self):
+        return self.now
+
+
+def test_binding_problems_and_roles():
+    assert Binding().problems() == ["no topic chosen", "no topic type set"]
+    assert Binding("/lights/set", "", Role.CALL).problems() == ["no service type set"]
+    assert Binding("/x", "std_msgs/Bool", "publish", "data").field_paths == ("data",)
+    assert Binding("/x", "a/B", "subscribe", ["a", "b"]).field_path == "a"
+    with pytest.raises(ValueError, match="unknown role"):
+        Binding("/x", "a/B", "watch")
+
+
+def test_value_age_stale_and_errors():
+    clock = Clock()
+    m = WidgetModel(None, Binding("", "sensor_msgs/BatteryState", "subscribe", "percentage"), None, clock=clock)
+    m.start()  # incomplete binding: no port use, but running (and will show its problems)
+    assert m.running and m.problems() == ["no topic chosen"]
+    s0 = m.state
+    assert s0.value is None and s0.age is None and not s0.stale
+    clock.now += 6
+    assert m.state.stale  # nothing for longer than stale_after since start
+    m.on_message({"percentage": 0.8, "voltage": 12.1})
+    s1 = m.state
+    assert s1.value == 0.8 and s1.count == 1 and s1.age == 0 and not s1.stale and s1.seq > s0.seq
+    clock.now += 2.5
+    assert m.state.age == 2.5 and m.state.seq == s1.seq  # ageing is not a change
+    clock.now += 3
+    assert m.state.stale
+    m.on_message({"voltage": 1.0})
+    assert "percentage" in m.state.error and m.state.value == 0.8
+    m.set_link(False)
+    assert m.state.link_down
+    m.stop()
+    assert not m.state.running and not m.state.stale
+
+
+def test_settings_stale_after_and_problems():
+    class S:
+        stale_after = 1.0
+
+        def problems(self):
+            return ["pick a colour"]
+
+    clock = Clock()
+    m = WidgetModel(S(), Binding("/a", "std_msgs/Float64", "subscribe", "data"), None, clock=clock)
+    assert m.stale_after == 1.0 and m.problems() == ["pick a colour"]
+
+
+def test_publish_without_running_reports_instead_of_raising():
+    m = WidgetModel(None, Binding("/a", "std_msgs/Float64", "publish", "data"), None,
+                    types=TypeRegistry.standard())
+    assert m.publish_value(1.0) is False and "not running" in m.state.error
+    assert m.build_message(2.0) == {"data": 2.0}
+
+
+def test_thread_safe_hand_off_latest_value_wins():
+    m = WidgetModel(None, Binding("/a", "std_msgs/Int32", "subscribe", "data"), None)
+    seen = []
+    stop = threading.Event()
+
+    def reader():
+        while not stop.is_set():
+            st = m.state
+            seen.append((st.count, st.value))
+
+    t = threading.Thread(target=reader)
+    t.start()
+    for i in range(20000):
+        m.on_message({"data": i})
+    stop.set()
+    t.join()
+    assert m.state.value == 19999 and m.state.count == 20000
+    assert all(v == c - 1 for c, v in seen if c)  # every snapshot is consistent
+
+
+async def test_call_through_the_sim_and_dispatch(sim):
+    client = BridgeClient(sim.url, reconnect=False)
+    await client.connect()
+    try:
+        dispatched = []
+
+        def dispatch(fn):
+            dispatched.append(fn)
+            fn()
+
+        m = WidgetModel(None, Binding("/lights/set", "std_srvs/SetBool", "call", ["request.data", "response.message"]),
+                        client.node("switch"), types=TypeRegistry.standard(), dispatch=dispatch)
+        m.start()
+        fut = m.call({"data": True})
+        response = await asyncio.wait_for(asyncio.wrap_future(fut), 10)
+        assert response["success"] is True and dispatched
+        assert m.state.value == response["message"] and m.state.message == response
+        bad = WidgetModel(None, Binding("/no/such/service", "std_srvs/Trigger", "call"), client.node("b"))
+        with pytest.raises(Exception):  # noqa: B017 - the bridge's error type is its own business
+            await bad.call_async()
+        assert "/no/such/service" in bad.state.error
+        m.stop()
+    finally:
+        await client.close()
