@@ -190,7 +190,8 @@ def test_service_text_needs_two_parts():
 
 
 def test_definition_text(reg):
-    text = reg.definition_text("geometry_msgs/TwistStamped")
+    assert reg.definition_text("geometry_msgs/TwistStamped") == "std_msgs/Header header\ngeometry_msgs/Twist twist\n"
+    text = reg.definition_text("geometry_msgs/TwistStamped", dependencies=True)
     assert text.startswith("std_msgs/Header header\ngeometry_msgs/Twist twist\n")
     assert "\nMSG: std_msgs/Header\nuint32 seq\ntime stamp\nstring frame_id\n" in text
     assert text.count("MSG: geometry_msgs/Vector3") == 1
@@ -200,7 +201,7 @@ def test_definition_text(reg):
     assert ros2.startswith("builtin_interfaces/Time stamp\nstring frame_id\n")
     # the text parses back to the same fields
     again = TypeRegistry.standard()
-    again.add_msg_text("check_pkg/Log", reg.definition_text("rosgraph_msgs/Log").split("\n====")[0])
+    again.add_msg_text("check_pkg/Log", reg.definition_text("rosgraph_msgs/Log"))
     assert again.fields("check_pkg/Log") == reg.fields("rosgraph_msgs/Log")
     assert again.constants("check_pkg/Log") == reg.constants("rosgraph_msgs/Log")
 

@@ -39,7 +39,7 @@ def msgdef_text(reg: TypeRegistry, md: MsgDef) -> str:
     return "\n".join(lines) + ("\n" if lines else "")
 
 
-def definition_text(reg: TypeRegistry, name: str) -> str:
+def definition_text(reg: TypeRegistry, name: str, dependencies: bool = False) -> str:
     """Text of ``name`` (a message, or a whole service/action with ``---`` between parts) and its types."""
     try:
         roots = [reg.resolve(name)]
@@ -51,6 +51,8 @@ def definition_text(reg: TypeRegistry, name: str) -> str:
         roots = [names.part_name(parent, p) for p in parts]
         parts_text = [msgdef_text(reg, reg.msgdef(r)) for r in roots]
     out = "---\n".join(parts_text)
+    if not dependencies:
+        return out
     seen: list[str] = []
     for r in roots:
         for dep in reg.dependencies(r):

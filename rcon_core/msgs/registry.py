@@ -246,11 +246,15 @@ class TypeRegistry:
         return {f.name: self.default_value(f) for f in md.fields}
 
     # ------------------------------------------------------------------ definition text
-    def definition_text(self, name: str) -> str:
-        """``.msg``-style text of the type and (like ``gendeps --cat``) each type it uses."""
+    def definition_text(self, name: str, dependencies: bool = False) -> str:
+        """``.msg``-style text of a message, or of a service/action (parts separated by ``---``).
+
+        With ``dependencies=True`` every type it uses follows, each once, after a ``====`` line and
+        ``MSG: pkg/Type`` (like ``gendeps --cat`` and rosapi's ``typedefs_full_text``).
+        """
         from .deftext import definition_text
 
-        return definition_text(self, name)
+        return definition_text(self, name, dependencies)
 
     # ------------------------------------------------------------------ typed objects, text, wire
     def _typed_factory(self) -> Any:
