@@ -190,7 +190,7 @@ async def test_service_argument_errors_match_rosbridge(sim: SimServer) -> None:
     assert bad_type["values"] == ("std_srvs/SetBoolRequest message requires a bool for field data, "
                                   "but got a <class 'str'>")
     assert bad_field["values"] == "Message type std_srvs/SetBoolRequest does not have a field force"
-    assert rosapi_type["values"] == ("rosapi/TopicTypeRequest message requires a str for field topic, "
+    assert rosapi_type["values"] == ("rosapi/TopicTypeRequest message requires a string for field topic, "
                                      "but got a <class 'int'>")
 
 

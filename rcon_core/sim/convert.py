@@ -128,23 +128,23 @@ class Converter:
         if ftype in BOOL_TYPES:
             if isinstance(value, bool):
                 return value
-            raise ConversionError(f"{owner} message requires a bool for field {name}, but got a {_pytype(value)}")
+            raise ConversionError(f"{owner} message requires a {ftype} for field {name}, but got a {_pytype(value)}")
         if ftype in INT_TYPES:
             if isinstance(value, int) and not isinstance(value, bool):
                 return value
-            raise ConversionError(f"{owner} message requires a int for field {name}, but got a {_pytype(value)}")
+            raise ConversionError(f"{owner} message requires a {ftype} for field {name}, but got a {_pytype(value)}")
         if ftype in FLOAT_TYPES:
             if value is None:
                 return math.nan
             if isinstance(value, int | float) and not isinstance(value, bool):
                 return float(value)
             raise ConversionError(
-                f"{owner} message requires a float for field {name}, but got a {_pytype(value)}"
+                f"{owner} message requires a {ftype} for field {name}, but got a {_pytype(value)}"
             )
         if ftype in ("string", "wstring"):
             if isinstance(value, str):
                 return value
-            raise ConversionError(f"{owner} message requires a str for field {name}, but got a {_pytype(value)}")
+            raise ConversionError(f"{owner} message requires a {ftype} for field {name}, but got a {_pytype(value)}")
         if ftype in self.defs:
             if not isinstance(value, dict):
                 raise ConversionError(
