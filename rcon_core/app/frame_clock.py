@@ -13,6 +13,8 @@ from collections.abc import Callable
 
 from qtpy import QtCore
 
+from rcon_core.app import pyside_guard
+
 FRAME_HZ = 60
 
 
@@ -53,6 +55,7 @@ class FrameClock(QtCore.QObject):
         return self._timer.isActive()
 
     def _tick(self) -> None:
+        pyside_guard.top_up()
         now = time.monotonic()
         self.gaps.append(now - self.last_tick)
         self.last_tick = now

@@ -1,0 +1,234 @@
+"""Benchmark of the app on the embedded robot: 50 live widgets at 20 Hz each.
+
+Figures: GUI frame time (frame-clock work plus the views' paint events) p50/p95, publish-to-painted
+latency p50/p99, CPU share and peak memory, start-up time to the first painted canvas, idle memory.
+Usage: ``QT_QPA_PLATFORM=offscreen python benchmarks/bench_app.py [--widgets 50] [--hz 20] [--seconds 8]
+[--out FILE.json]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+TARGETS = {"frame_p95_ms": 16.0, "latency_p99_ms": 20.0, "startup_s": 1.5, "idle_rss_mb": 150.0}
+
+
+def rss_mb() -> float:
+    with open("/proc/self/statm") as f:
+        pages = int(f.read().split()[1])
+    return pages * os.sysconf("SC_PAGE_SIZE") / 2**20
+
+
+def pct(values: list[float], q: float) -> float:
+    if not values:
+        return float("nan")
+    values = sorted(values)
+    return values[min(len(values) - 1, int(q / 100 * len(values)))]
+
+
+BUSY = [0.0]  # seconds spent painting views since the last frame tick
+
+
+def spin(app, seconds: float, until=None) -> bool:
+    """Run the Qt event loop for up to ``seconds`` (or until ``until()``), the way the app runs it.
+
+    (``QApplication.processEvents()`` is avoided: in PySide6 6.12 each call drops a reference to None.)
+    """
+    from qtpy import QtCore
+
+    loop = QtCore.QEventLoop()
+    end = time.monotonic() + seconds
+    check = QtCore.QTimer()
+    check.setInterval(5)
+
+    def poll() -> None:
+        from rcon_core.app import pyside_guard
+
+        pyside_guard.top_up()
+        if time.monotonic() >= end or (until is not None and until()):
+            loop.quit()
+
+    check.timeout.connect(poll)
+    check.start()
+    loop.exec()
+    check.stop()
+    return until() if until is not None else True
+
+
+def make_plugins():
+    import attrs
+    from qtpy import QtWidgets
+
+    from rcon_core.plugins import Accepts, PluginManager, Role, WidgetModel, WidgetSpec, hookimpl
+
+    @attrs.define
+    class BenchSettings:
+        def problems(self) -> list[str]:
+            return []
+
+    class BenchView(QtWidgets.QLabel):
+        def __init__(self, model) -> None:
+            super().__init__("—")
+
+        def paintEvent(self, event) -> None:  # noqa: N802 - Qt's name
+            t = time.perf_counter()
+            super().paintEvent(event)
+            BUSY[0] += time.perf_counter() - t
+
+        def refresh(self, state) -> None:
+            self.setText(f"{state.value:.4f}" if isinstance(state.value, float) else "—")
+
+    mod = sys.modules[__name__]
+    mod.BenchView = BenchView  # the spec names it lazily as module:attr
+
+    class Plugin:
+        @hookimpl
+        def rcon_register_widgets(self, registry) -> None:
+            registry.add(WidgetSpec(kind="bench.value", title="Value", model=WidgetModel,
+                                    view=f"{__name__}:BenchView", roles={Role.SUBSCRIBE},
+                                    accepts=Accepts(fields=["float"]), settings=BenchSettings,
+                                    default_size=(160, 80)))
+
+    pm = PluginManager(environ={})
+    pm.register(Plugin(), name="bench")
+    return pm
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--widgets", type=int, default=50)
+    parser.add_argument("--hz", type=float, default=20.0)
+    parser.add_argument("--seconds", type=float, default=8.0)
+    parser.add_argument("--out", type=Path)
+    args = parser.parse_args(argv)
+    os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+
+    t0 = time.perf_counter()
+    from qtpy import QtWidgets
+
+    from rcon_core.app.config import AppConfig
+    from rcon_core.app.layout import CanvasDoc, Instance, WorkspaceDoc
+    from rcon_core.app.main_window import MainWindow
+    from rcon_core.bridge import BridgeClient
+    from rcon_core.plugins import Binding, Role
+
+    try:
+        from rcon_core.sim import SimServer
+    except ImportError:
+        from rcon_core.sim.server import SimServer
+
+    app = QtWidgets.QApplication.instance() or QtWidgets.QApplication([])
+    figures: dict = {"widgets": args.widgets, "hz": args.hz}
+    with tempfile.TemporaryDirectory() as tmp, SimServer.in_thread(port=0) as server:
+        # ---- start-up to the first painted (empty) canvas, and idle memory
+        t_start = time.perf_counter()
+        window = MainWindow(AppConfig(Path(tmp) / "cfg"), make_plugins())
+        window.show()
+        spin(app, 10, lambda: window.first_paint_at is not None)
+        figures["startup_s"] = round(window.first_paint_at - t_start, 3)
+        figures["startup_with_imports_s"] = round(window.first_paint_at - t0, 3)
+        window.connect_to(server.url)
+        spin(app, 10, lambda: window.connection.state == "connected")
+        spin(app, 1.0)
+        figures["idle_rss_mb"] = round(rss_mb(), 1)
+
+        # ---- 50 widgets, each on its own topic published at 20 Hz by a separate client
+        topics = [f"/bench/v{i}" for i in range(args.widgets)]
+        canvas = CanvasDoc("Bench")
+        cols = 8
+        for i, topic in enumerate(topics):
+            x, y = 16 + (i % cols) * 176, 16 + (i // cols) * 96
+            canvas.instances.append(Instance(kind="bench.value", binding=Binding(
+                topic, "std_msgs/Float64", Role.SUBSCRIBE, ("data",)), rect=(x, y, 160, 80), title=topic))
+        window.resize(1600, 1000)
+        window.open_doc(WorkspaceDoc(canvases=[canvas]))
+
+        latencies: list[float] = []
+
+        def on_paint(hosted, state) -> None:
+            if isinstance(state.value, float) and state.value > 0:
+                latencies.append(time.perf_counter() - state.value)
+
+        window.host.paint_hooks.append(on_paint)
+
+        bt = window.link.thread
+        pub_client = BridgeClient(server.url, reconnect=False)
+
+        async def publisher() -> None:
+            import asyncio
+
+            await pub_client.connect()
+            node = pub_client.node("bench-publisher")
+            pubs = [node.advertise(t, "std_msgs/Float64") for t in topics]
+            await asyncio.sleep(0.5)
+            period = 1.0 / args.hz
+            nxt = time.perf_counter()
+            while True:
+                for p in pubs:
+                    p.publish({"data": time.perf_counter()})
+                nxt += period
+                await asyncio.sleep(max(0.0, nxt - time.perf_counter()))
+
+        task = bt.run(publisher())
+        # warm up until every widget painted once
+        spin(app, 10, lambda: sum(1 for h in window.host.hosted.values() if h.painted_seq > 2) >= args.widgets)
+        latencies.clear()
+        window.clock.work_times.clear()
+        window.clock.gaps.clear()
+
+        # frame time: the clock's work plus the paint events that follow it, per frame
+        frame_busy: list[float] = []
+        works = window.clock.work_times
+
+        def measure_tick(_now: float) -> None:
+            # called first in a tick: the previous tick's work plus the paints that followed it
+            if works:
+                frame_busy.append(works[-1] + BUSY[0])
+            BUSY[0] = 0.0
+
+        window.clock._consumers.insert(0, measure_tick)
+        cpu0, wall0 = time.process_time(), time.perf_counter()
+        spin(app, args.seconds)
+        cpu = (time.process_time() - cpu0) / (time.perf_counter() - wall0)
+        task.cancel()
+        works_ms = [w * 1000 for w in window.clock.work_times]
+        frames = [b * 1000 for b in frame_busy[1:]]
+        figures.update({
+            "frame_work_p50_ms": round(pct(works_ms, 50), 2),
+            "frame_work_p95_ms": round(pct(works_ms, 95), 2),
+            "frame_p50_ms": round(pct(frames, 50), 2),
+            "frame_p95_ms": round(pct(frames, 95), 2),
+            "frame_interval_p50_ms": round(pct([g * 1000 for g in window.clock.gaps], 50), 2),
+            "latency_p50_ms": round(pct([v * 1000 for v in latencies], 50), 2),
+            "latency_p99_ms": round(pct([v * 1000 for v in latencies], 99), 2),
+            "paints": len(latencies),
+            "messages_expected": int(args.widgets * args.hz * args.seconds),
+            "cpu_share": round(cpu, 3),
+            "peak_rss_mb": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1),
+        })
+        try:
+            bt.run(pub_client.close()).result(5)
+        except Exception:
+            pass
+        window.shutdown()
+    figures["median_frame_budget_ok"] = statistics.median(frames or [0]) < 16
+    for key, target in TARGETS.items():
+        figures[f"{key}_target"] = target
+        figures[f"{key}_ok"] = bool(figures.get(key, float("inf")) < target)
+    for key, value in figures.items():
+        print(f"{key:28s} {value}")
+    if args.out:
+        args.out.write_text(json.dumps(figures, indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
