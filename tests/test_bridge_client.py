@@ -500,3 +500,22 @@ async def test_messages_dict_frames_are_plain_json(server, client):
     await until(lambda: len(got) == 2)
     expected = orjson.loads(recorded().frames[("/rec/image", "none")][0])["msg"]
     assert got[0] == expected and isinstance(got[0]["data"], str)  # base64 left lazy
+
+
+async def test_cbor_raw_uses_the_registry_when_given(server):
+    """With a TypeRegistry the registry's deserialize_ros1 decodes cbor-raw; it agrees with the built-in decoder."""
+    msgs = pytest.importorskip("rcon_core.msgs")
+    reg = msgs.TypeRegistry.standard()
+    c = BridgeClient(server.url, registry=reg)
+    plain = BridgeClient(server.url)
+    await c.connect(timeout=5)
+    await plain.connect(timeout=5)
+    a, b = [], []
+    c.node("n").subscribe("/rec/imu", a.append, type="sensor_msgs/Imu", compression="cbor")
+    plain.node("n").subscribe("/rec/imu", b.append, type="sensor_msgs/Imu", compression="cbor")
+    await until(lambda: len(a) == 2 and len(b) == 2)
+    assert type(c._topics["/rec/imu"].decoder).__name__ == "_RegistryDecoder"
+    assert type(plain._topics["/rec/imu"].decoder).__name__ == "RawDecoder"
+    assert a == b
+    await c.close()
+    await plain.close()

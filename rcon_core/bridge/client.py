@@ -91,6 +91,16 @@ def _check_auth(auth: dict[str, Any]) -> dict[str, Any]:
     return {"op": "auth", **{f: auth[f] for f in AUTH_FIELDS}}
 
 
+class _RegistryDecoder:
+    __slots__ = ("registry",)
+
+    def __init__(self, registry: Any) -> None:
+        self.registry = registry
+
+    def decode(self, type_name: str, data: bytes) -> dict[str, Any]:
+        return self.registry.deserialize_ros1(type_name, data)
+
+
 class BridgeClient:
     """A rosbridge v2 client.  Create, ``await connect()``, then hand out ``node(label)`` to consumers."""
 
@@ -618,11 +628,26 @@ class BridgeClient:
         sid = f"sub:{entry.topic}:{self._seq}"
         op = {"op": "subscribe", "id": sid, "topic": entry.topic, **opts}
         entry.raw_type = opts["type"] if opts["compression"] == "cbor-raw" else None
+        if entry.raw_type is not None:
+            entry.decoder = self._raw_decoder(entry.raw_type)
         old, entry.sid = entry.sid, sid
         entry.rebuild()
         self._send(op)
         if old is not None:
             self._send({"op": "unsubscribe", "id": old, "topic": entry.topic})
+
+    def _raw_decoder(self, type_name: str) -> Any:
+        """cbor-raw decoding: the registry's ``deserialize_ros1`` when a registry is given and knows the
+        type (it learns the server's typedefs in ``typedefs()``), else the built-in typedef-driven decoder."""
+        reg = self.registry
+        if reg is not None and hasattr(reg, "deserialize_ros1"):
+            try:
+                known = reg.has(type_name)
+            except Exception:
+                known = False
+            if known:
+                return _RegistryDecoder(reg)
+        return self._raw
 
     async def typedefs(self, type_name: str) -> list[dict[str, Any]]:
         """rosapi typedefs of a message type, from the server (cached), else from the local registry."""
