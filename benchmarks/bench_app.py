@@ -50,9 +50,6 @@ def spin(app, seconds: float, until=None) -> bool:
     check.setInterval(5)
 
     def poll() -> None:
-        from rcon_core.app import pyside_guard
-
-        pyside_guard.top_up()
         if time.monotonic() >= end or (until is not None and until()):
             loop.quit()
 

@@ -13,8 +13,6 @@ from collections.abc import Callable
 
 from qtpy import QtCore
 
-from rcon_core.app import pyside_guard
-
 FRAME_HZ = 60
 
 
@@ -55,7 +53,6 @@ class FrameClock(QtCore.QObject):
         return self._timer.isActive()
 
     def _tick(self) -> None:
-        pyside_guard.top_up()
         now = time.monotonic()
         self.gaps.append(now - self.last_tick)
         self.last_tick = now
