@@ -219,3 +219,12 @@ def test_registries_are_independent_and_cheap():
 def test_wire_name():
     assert TypeRegistry.standard().wire_name("geometry_msgs/msg/Twist") == "geometry_msgs/Twist"
     assert TypeRegistry.standard(ros2=True).wire_name("geometry_msgs/Twist") == "geometry_msgs/msg/Twist"
+
+
+@pytest.mark.parametrize("ros2", [False, True])
+def test_empty_message_has_no_placeholder_field(ros2):
+    # rosbags gives empty messages an IDL stand-in member; no rosbridge wire carries it
+    reg = TypeRegistry.standard(ros2=ros2)
+    assert reg.fields("std_msgs/Empty") == []
+    assert reg.default("std_msgs/Empty") == {}
+    assert reg.typedefs("std_msgs/Empty")[0]["fieldnames"] == []

@@ -38,9 +38,15 @@ def _node_to_field(fname: str, node: Any) -> FieldDef:
     return FieldDef.make(fname, base, array_len, bound)
 
 
+#: the member rosbags (like the ROS 2 IDL) gives an empty message such as std_msgs/Empty
+_IDL_PLACEHOLDER = "structure_needs_at_least_one_member"
+
+
 def from_rosbags_fielddefs(name: str, entry: Any) -> MsgDef:
     """Convert one rosbags ``fielddefs`` entry ``(consts, fields)`` into a :class:`MsgDef`."""
     consts, fields = entry
+    if [f[0] for f in fields] == [_IDL_PLACEHOLDER]:
+        fields = []  # rosbags' stand-in for an empty message; no ROS wire carries it
     return MsgDef(
         name,
         tuple(_node_to_field(fname, node) for fname, node in fields),
