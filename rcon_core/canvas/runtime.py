@@ -8,7 +8,12 @@
     rt.switch(other_canvas)     # stops every widget of the old canvas (their subscriptions and
                                 #   advertisements end on the server), starts the new one's
     rt.restart_widget(inst)     # after a reconfigure
-    rt.stop()
+    rt.focus_lost()             # the operator looked away: models' optional on_focus_lost() (teleop stops)
+    rt.stop()                   # focus_lost() first, then every model stops
+
+``on_activity(widget_id)`` (optional) is called on the loop thread right after a widget's model handled
+an incoming message, service request or service response, so a front end can repaint at once instead of
+polling on its next frame.
 
 Call these on the bridge loop thread (from the GUI: ``bridge_thread.call(rt.switch, canvas)``); pass
 ``dispatch=bridge_thread.call`` so the models' GUI-side actions reach the loop thread too.
@@ -20,6 +25,8 @@ other widgets run either way. The instance data is never touched, so it saves ba
 
 from __future__ import annotations
 
+import asyncio
+import inspect
 import logging
 from collections.abc import Callable
 from typing import Any
@@ -70,6 +77,55 @@ class BrokenWidgetModel(MissingWidgetModel):
     """Stands in for a widget whose model could not be built; ``reason`` says why."""
 
 
+class _WatchedPort:
+    """A widget's node that reports activity after each incoming message, request or response."""
+
+    def __init__(self, node: Any, notify: Callable[[], None]) -> None:
+        self._node = node
+        self._notify = notify
+
+    def _ping(self) -> None:
+        try:
+            self._notify()
+        except Exception:
+            log.exception("activity listener failed")
+
+    def subscribe(self, topic: str, callback: Callable[[Any], Any], **options: Any) -> Any:
+        def watched(msg: Any) -> Any:
+            try:
+                return callback(msg)
+            finally:
+                self._ping()
+
+        return self._node.subscribe(topic, watched, **options)
+
+    def advertise_service(self, name: str, type: str, handler: Callable[[Any], Any]) -> Any:
+        def watched(request: Any) -> Any:
+            result = handler(request)
+            if inspect.isawaitable(result):
+                async def finish() -> Any:
+                    try:
+                        return await result
+                    finally:
+                        self._ping()
+
+                return finish()
+            self._ping()
+            return result
+
+        return self._node.advertise_service(name, type, watched)
+
+    async def call_service(self, name: str, args: Any = None, timeout: float | None = None) -> Any:
+        try:
+            return await self._node.call_service(name, args, timeout=timeout)
+        finally:
+            # after the caller's on_response, which runs in the same task step as this return
+            asyncio.get_running_loop().call_soon(self._ping)
+
+    def __getattr__(self, name: str) -> Any:  # advertise, close, ...
+        return getattr(self._node, name)
+
+
 class CanvasRuntime:
     """Creates, starts and stops the models of one canvas at a time."""
 
@@ -81,8 +137,10 @@ class CanvasRuntime:
         types: Any = None,
         plugin_settings: dict[str, dict[str, Any]] | None = None,
         dispatch: Callable[[Callable[[], Any]], Any] | None = None,
+        on_activity: Callable[[str], Any] | None = None,
     ) -> None:
         self.pm = plugin_manager
+        self.on_activity = on_activity
         self.client = client
         self.types = types
         self.plugin_settings = plugin_settings if plugin_settings is not None else {}
@@ -106,7 +164,8 @@ class CanvasRuntime:
             self._start_widget(inst)
 
     def stop(self) -> None:
-        """Stop every model and close its node (which ends anything the model forgot)."""
+        """Tell the models focus is lost, stop every one and close its node (ending what it forgot)."""
+        self.focus_lost()
         for widget_id in list(self.models):
             self._stop_widget(widget_id)
         self.canvas = None
@@ -128,6 +187,17 @@ class CanvasRuntime:
 
     def remove_widget(self, widget_id: str) -> None:
         self._stop_widget(widget_id)
+
+    def focus_lost(self) -> None:
+        """Call the optional ``on_focus_lost()`` of every model (the window lost focus, the canvas is
+        being left): a teleop widget stops driving. A model that raises is logged, the others still run."""
+        for widget_id, model in list(self.models.items()):
+            hook = getattr(model, "on_focus_lost", None)
+            if callable(hook):
+                try:
+                    hook()
+                except Exception as exc:
+                    log.warning("widget %s failed on focus loss: %s", widget_id, exc)
 
     # -- one widget ----------------------------------------------------------------------------------
     def build_model(self, inst: WidgetInstance, port: Any) -> WidgetModel:
@@ -156,7 +226,11 @@ class CanvasRuntime:
 
     def _start_widget(self, inst: WidgetInstance) -> WidgetModel:
         node = self.client.node(inst.id)
-        model = self.build_model(inst, node)
+        port = node
+        if self.on_activity is not None:
+            notify, widget_id = self.on_activity, inst.id
+            port = _WatchedPort(node, lambda: notify(widget_id))
+        model = self.build_model(inst, port)
         self._nodes[inst.id] = node
         self.models[inst.id] = model
         model.set_link(self._link_up)
