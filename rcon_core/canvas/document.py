@@ -264,11 +264,18 @@ class Document:
             self._notify([Change("canvas-switched", canvas.id)])
         return canvas
 
-    def set_locked(self, canvas_id: str, locked: bool) -> None:
+    def set_locked(self, canvas_id: str, locked: bool, *, undoable: bool = True) -> None:
+        """Lock or unlock a canvas. ``undoable=False`` treats it as a mode switch (an operator toggling
+        operator mode): it notifies and is saved like any change, but is not put on the undo stack, so
+        undo keeps meaning "undo my last layout edit"."""
         canvas = self._canvas(canvas_id)
         if canvas.locked == locked:
             return
         old = canvas.locked
+        if not undoable:
+            canvas.locked = locked
+            self._notify([Change("canvas-locked", canvas.id)])
+            return
 
         def set_to(value: bool) -> Callable[[], list[Change]]:
             def fn() -> list[Change]:
