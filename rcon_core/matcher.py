@@ -29,7 +29,15 @@ from typing import Any
 import attrs
 
 from rcon_core.msgs import names
-from rcon_core.plugins.spec import FIELD_PREDICATES, MESSAGE_PREDICATES, Role, WidgetSpec
+from rcon_core.plugins.spec import (
+    FIELD_PREDICATES,
+    MESSAGE_PREDICATES,
+    FieldLike,
+    FieldPredicate,
+    MessagePredicate,
+    Role,
+    WidgetSpec,
+)
 
 __all__ = ["match", "Match", "Rank", "candidate_paths"]
 
@@ -113,14 +121,20 @@ def _roots(types: Any, type_name: str, role: Role, parts: tuple[str, ...]) -> li
     return [(p, types.service_part_name(type_name, p)) for p in order if p in parts]
 
 
-def _pred_ok(pred: Any, *args: Any) -> bool:
-    fn = FIELD_PREDICATES.get(pred) if isinstance(pred, str) and len(args) == 1 else None
-    if isinstance(pred, str) and len(args) == 2:
-        fn = MESSAGE_PREDICATES.get(pred)
-    if fn is None:
-        fn = pred
+def _field_fits(pred: str | FieldPredicate, field: FieldLike) -> bool:
+    """Whether a field predicate (a name from FIELD_PREDICATES, checked by Accepts, or a callable) fits."""
+    fn = FIELD_PREDICATES[pred] if isinstance(pred, str) else pred
     try:
-        return bool(fn(*args))
+        return bool(fn(field))
+    except Exception:  # a custom predicate that raises does not fit (and does not break matching)
+        return False
+
+
+def _message_fits(pred: str | MessagePredicate, type_name: str, fields: list[FieldLike]) -> bool:
+    """Whether a message predicate (a name from MESSAGE_PREDICATES, checked by Accepts, or a callable) fits."""
+    fn = MESSAGE_PREDICATES[pred] if isinstance(pred, str) else pred
+    try:
+        return bool(fn(type_name, fields))
     except Exception:  # a custom predicate that raises does not fit (and does not break matching)
         return False
 
@@ -139,9 +153,9 @@ def candidate_paths(spec: WidgetSpec, role: Role | str, type_name: str, types: A
         return found
     for prefix, root in _roots(types, type_name, role, acc.service_parts):
         for kind, node in _walk(types, root, prefix):
-            if kind == "leaf" and any(_pred_ok(p, node.field) for p in field_preds):
+            if kind == "leaf" and any(_field_fits(p, node.field) for p in field_preds):
                 found.append(node.path)
-            elif kind == "message" and any(_pred_ok(p, node.type, list(node.fields)) for p in msg_preds):
+            elif kind == "message" and any(_message_fits(p, node.type, list(node.fields)) for p in msg_preds):
                 found.append(node.path)
     prefer = acc.prefer or DEFAULT_PREFER
     return sorted(found, key=lambda p: _path_key(p, prefer, found))

@@ -264,8 +264,8 @@ class BridgeClient:
         if self._ws is not None:
             return
         if self._task.done():
-            exc = self._task.exception() if not self._task.cancelled() else None
-            raise exc or NotConnectedError(f"could not connect to {self.url}")
+            error = self._task.exception() if not self._task.cancelled() else None
+            raise error or NotConnectedError(f"could not connect to {self.url}")
         raise TimeoutError(f"not connected to {self.url} within {timeout} s (last error: {self.last_error})")
 
     async def close(self) -> None:
@@ -342,30 +342,30 @@ class BridgeClient:
             self._send(_check_auth(auth))
         if self._level is not None:
             self._send({"op": "set_level", "level": self._level})
-        for entry in self._adverts.values():
-            entry.active = False
-            self._send(entry.advertise_op())
-            entry.active = True
-            if entry.pending is not None:
-                self._send_publish(entry, entry.pending)
-                entry.pending = None
+        for advert in self._adverts.values():
+            advert.active = False
+            self._send(advert.advertise_op())
+            advert.active = True
+            if advert.pending is not None:
+                self._send_publish(advert, advert.pending)
+                advert.pending = None
         for srv in self._services.values():
             self._send({"op": "advertise_service", "service": srv.service, "type": srv.type})
-        for entry in self._topics.values():
-            entry.sid = None
-            entry.sent_options = None
-            self._sync_topic(entry)
+        for topic in self._topics.values():
+            topic.sid = None
+            topic.sent_options = None
+            self._sync_topic(topic)
 
     def _on_disconnect(self) -> None:
         dropped = len(self._out)
         if dropped:
             self.stats["dropped_on_disconnect"] += dropped
             self._out.clear()
-        for entry in self._adverts.values():
-            entry.active = False
-        for entry in self._topics.values():
-            entry.sid = None
-            entry.sent_options = None
+        for advert in self._adverts.values():
+            advert.active = False
+        for topic in self._topics.values():
+            topic.sid = None
+            topic.sent_options = None
         for fut in list(self._pending.values()):
             if not fut.done():
                 fut.set_exception(ConnectionLostError("connection lost before the answer arrived"))
@@ -423,7 +423,7 @@ class BridgeClient:
             if len(raw) > limit:
                 self._oversize(raw)
                 continue
-            if raw.__class__ is str:
+            if isinstance(raw, str):
                 try:
                     m = loads(raw)
                 except orjson.JSONDecodeError as exc:
@@ -840,8 +840,9 @@ class BridgeClient:
             return
         goal.feedback_count += 1
         if goal.feedback_callback is not None:
+            values = m.get("values")
             try:
-                goal.feedback_callback(m.get("values"))
+                goal.feedback_callback({} if values is None else values)
             except Exception:
                 log.exception("feedback callback of %s raised", goal.action)
 

@@ -135,7 +135,7 @@ def _make_converter() -> cattrs.Converter:
     conv.register_structure_hook_func(lambda t: t == dict[str, Any], structure_settings)
 
     def with_extra(cls: type, order: tuple[str, ...]) -> None:
-        base_struct = cattrs.gen.make_dict_structure_fn(cls, conv)
+        base_struct: cattrs.SimpleStructureHook[Any, Any] = cattrs.gen.make_dict_structure_fn(cls, conv)
 
         def structure(data: Any, _t: Any) -> Any:
             known, extra = _split_extra(cls, data, cls.__name__)

@@ -49,6 +49,11 @@ def _paths(value: Any) -> tuple[str, ...]:
     return tuple(value)
 
 
+def _role(value: str | Role) -> Role:
+    # a plain function: mypy's attrs plugin cannot follow a classmethod (Role.parse) as a converter
+    return Role.parse(value)
+
+
 @attrs.frozen
 class Binding:
     """What a widget instance is bound to.
@@ -61,7 +66,7 @@ class Binding:
 
     name: str = ""
     type: str = ""
-    role: Role = attrs.field(default=Role.SUBSCRIBE, converter=Role.parse)
+    role: Role = attrs.field(default=Role.SUBSCRIBE, converter=_role)
     field_paths: tuple[str, ...] = attrs.field(default=(), converter=_paths)
 
     @property

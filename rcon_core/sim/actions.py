@@ -36,6 +36,13 @@ class _Goal:
     status: int = 0
 
 
+def _finite_number(value: Any) -> float | None:
+    """``value`` as a float when it is a finite JSON number (not a bool), else None."""
+    if isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value):
+        return float(value)
+    return None
+
+
 class NavigateActionServer:
     """Serves ``/navigate_to_fix`` on the sim's robot."""
 
@@ -65,13 +72,13 @@ class NavigateActionServer:
         target = args.get("target") if isinstance(args, dict) else None
         if not isinstance(target, dict):
             raise _OpError("send_action_goal args must be an object with a sensor_msgs/NavSatFix 'target'")
-        lat, lon = target.get("latitude"), target.get("longitude")
-        if not all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in (lat, lon)):
+        lat, lon = _finite_number(target.get("latitude")), _finite_number(target.get("longitude"))
+        if lat is None or lon is None:
             self._result(conn, msg.get("id"), STATUS_ABORTED, False,
                          {"success": False, "message": "target latitude and longitude must be numbers",
                           "distance": 0.0})
             return
-        x, y = self.node.vessel.local_from_lat_lon(float(lat), float(lon))
+        x, y = self.node.vessel.local_from_lat_lon(lat, lon)
         tolerance = 2.0
         max_speed = 1.5
         if self.goal is not None and self.goal.task is not None and not self.goal.task.done():

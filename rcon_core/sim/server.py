@@ -607,9 +607,8 @@ class SimServer:
                 values = await self._call_client_service(svc, args)
             else:
                 assert svc.handler is not None
-                values = svc.handler(args)
-                if inspect.isawaitable(values):
-                    values = await values
+                result = svc.handler(args)
+                values = await result if inspect.isawaitable(result) else result
         except ServiceFailure as exc:
             return False, f"service [{name}] responded with an error: b'{exc}'"
         except Exception as exc:  # noqa: BLE001 - a handler bug is reported like a ROS handler exception
