@@ -1,4 +1,67 @@
-"""Entry point of this widget package (group `rcon.widgets`): the module the plugin manager registers.
+"""Entry point of this widget package (group ``rcon.widgets``): the module the plugin manager registers.
 
-It must import without Qt: views are referenced lazily as `module:attr` strings.
+It must import without Qt: views are referenced lazily as ``module:attr`` strings. Each widget is
+registered exactly as a lab's package would register its own.
 """
+
+from __future__ import annotations
+
+from rcon_core.plugins import Accepts, Role, WidgetSpec, hookimpl
+
+from .common import NUMERIC_TYPES
+
+PKG = "rcon_widgets_std"
+
+LOG_TYPES = ("rosgraph_msgs/Log", "rcl_interfaces/msg/Log")
+
+
+def _refs(module: str, name: str) -> dict[str, str]:
+    return {
+        "settings": f"{PKG}.{module}:{name}Settings",
+        "model": f"{PKG}.{module}:{name}Model",
+        "view": f"{PKG}.{module}_view:{name}View",
+    }
+
+
+def specs() -> list[WidgetSpec]:
+    """Every standard widget (also used by Compound to build std children without the manager)."""
+    return [
+        WidgetSpec(
+            kind="std.label", title="Label", icon="label", category="Displays",
+            description="A field or the whole message of any topic, with decimals, units and its age",
+            roles={Role.SUBSCRIBE},
+            accepts=Accepts(types=[*NUMERIC_TYPES, "std_msgs/String"],
+                            fields=["numeric", "bool", "string", "time"], messages=["any"],
+                            prefer=["data", "percentage", "value", "range", "temperature"]),
+            default_size=(160, 70), priority=20, **_refs("label", "Label"),
+        ),
+        WidgetSpec(
+            kind="std.slider", title="Slider", icon="slider", category="Controls",
+            description="Sets (or shows) a number: std_msgs numbers or any numeric field",
+            roles={Role.PUBLISH, Role.SUBSCRIBE},
+            accepts=Accepts(types=NUMERIC_TYPES, fields=["numeric"], prefer=["data", "percentage", "value"]),
+            default_size=(220, 80), priority=10, **_refs("slider", "Slider"),
+        ),
+        WidgetSpec(
+            kind="std.switch", title="Switch", icon="switch", category="Controls",
+            description="A bool: publishes it, shows it, or calls a SetBool-like service",
+            roles={Role.PUBLISH, Role.SUBSCRIBE, Role.CALL},
+            accepts=Accepts(types=["std_msgs/Bool", "std_srvs/SetBool"], fields=["bool"],
+                            prefer=["data", "enable", "enabled", "on"], service_parts=["request"]),
+            default_size=(150, 70), priority=10, **_refs("switch", "Switch"),
+        ),
+        WidgetSpec(
+            kind="std.button", title="Button", icon="button", category="Controls",
+            description="Calls a service when pressed (and another when released), or publishes a fixed message",
+            roles={Role.CALL, Role.PUBLISH},
+            accepts=Accepts(types=["std_srvs/Trigger", "std_srvs/Empty", "std_msgs/Empty"],
+                            messages=["empty", "any"], service_parts=["request"]),
+            default_size=(160, 80), priority=5, **_refs("button", "Button"),
+        ),
+    ]
+
+
+@hookimpl
+def rcon_register_widgets(registry):  # type: ignore[no-untyped-def]
+    for spec in specs():
+        registry.add(spec)

@@ -1,0 +1,75 @@
+"""Label: shows one field (or the whole message) of any subscribed topic, with decimals, units and the
+age of the data. Settings and model; the Qt view is in ``label_view``."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import attrs
+
+from rcon_core.plugins.paths import PathError, get_path
+
+from .base import StdModel
+from .common import format_value
+
+__all__ = ["LabelSettings", "LabelModel", "LabelValue"]
+
+
+@attrs.define
+class LabelSettings:
+    decimals: int = attrs.field(
+        default=2, metadata={"label": "Decimals", "min": -1, "max": 12,
+                             "help": "digits after the point; -1 shows numbers as they arrive"}
+    )
+    units: str = attrs.field(default="", metadata={"label": "Units", "help": "e.g. m/s, %, V"})
+    scale: float = attrs.field(
+        default=1.0, metadata={"label": "Scale", "help": "numbers are multiplied by this (100 for a 0..1 fraction in %)"}
+    )
+    stale_after: float = attrs.field(
+        default=5.0, metadata={"label": "Stale after (s)", "min": 0.1, "max": 3600.0,
+                               "help": "mark the value stale when nothing new arrived for this long"}
+    )
+
+    def problems(self) -> list[str]:
+        out = []
+        if not -1 <= self.decimals <= 12:
+            out.append(f"decimals must be between -1 and 12, not {self.decimals}")
+        if not self.stale_after > 0:
+            out.append(f"'stale after' must be more than 0 s, not {self.stale_after}")
+        if self.scale == 0:
+            out.append("scale must not be 0")
+        return out
+
+
+@attrs.frozen
+class LabelValue:
+    """What the view paints: the text, ready (formatted on the bridge thread), and the raw value."""
+
+    text: str
+    raw: Any
+    numeric: bool
+
+
+class LabelModel(StdModel):
+    """Subscriber: the bound field becomes a :class:`LabelValue`."""
+
+    needs_types = False
+
+    def __init__(self, settings: LabelSettings | None, *args: Any, **kwargs: Any) -> None:
+        super().__init__(settings if settings is not None else LabelSettings(), *args, **kwargs)
+
+    def on_message(self, msg: dict[str, Any]) -> None:
+        path = self.binding.field_path
+        try:
+            value = get_path(msg, path) if path else msg
+        except PathError as exc:
+            self.set_error(str(exc))
+            return
+        self.set_value(self.make_value(value), message=msg)
+
+    def make_value(self, value: Any) -> LabelValue:
+        s = self.settings
+        numeric = isinstance(value, (int, float)) and not isinstance(value, bool)
+        if numeric and s.scale != 1.0:
+            value = value * s.scale
+        return LabelValue(format_value(value, s.decimals, s.units), value, numeric)

@@ -1,0 +1,181 @@
+"""Slider: sets (publish) or shows (subscribe) one numeric field: std_msgs Float32/64, Int8..64,
+UInt8..64 or any numeric field of a larger message. Settings and model; the view is ``slider_view``."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import attrs
+
+from rcon_core.plugins import Role
+from rcon_core.plugins.paths import PathError
+
+from .base import StdModel
+from .common import INT_LIMITS, RateLimiter, field_at, type_limits
+
+__all__ = ["SliderSettings", "SliderModel", "NumberRange", "PUBLISH_ON_RELEASE", "PUBLISH_CONTINUOUS"]
+
+PUBLISH_ON_RELEASE = "release"
+PUBLISH_CONTINUOUS = "continuous"
+
+
+@attrs.define
+class SliderSettings:
+    minimum: float = attrs.field(default=0.0, metadata={"label": "Minimum"})
+    maximum: float = attrs.field(default=1.0, metadata={"label": "Maximum"})
+    step: float = attrs.field(default=0.01, metadata={"label": "Step", "help": "values snap to minimum + n*step"})
+    rate_hz: float = attrs.field(
+        default=10.0, metadata={"label": "Update rate (Hz)", "min": 0.1, "max": 100.0,
+                                "help": "at most this many messages per second while dragging"}
+    )
+    publish_mode: str = attrs.field(
+        default=PUBLISH_ON_RELEASE,
+        metadata={"label": "Publish", "choices": [PUBLISH_ON_RELEASE, PUBLISH_CONTINUOUS],
+                  "help": "release: once when the handle is let go; continuous: while dragging too"},
+    )
+    decimals: int = attrs.field(default=2, metadata={"label": "Decimals", "min": 0, "max": 9})
+    units: str = attrs.field(default="", metadata={"label": "Units"})
+    stale_after: float = attrs.field(default=5.0, metadata={"label": "Stale after (s)", "min": 0.1})
+
+    def problems(self) -> list[str]:
+        return range_problems(self.minimum, self.maximum, self.step, self.rate_hz) + (
+            [] if self.publish_mode in (PUBLISH_ON_RELEASE, PUBLISH_CONTINUOUS)
+            else [f"publish must be {PUBLISH_ON_RELEASE!r} or {PUBLISH_CONTINUOUS!r}, not {self.publish_mode!r}"]
+        )
+
+
+def range_problems(minimum: float, maximum: float, step: float, rate_hz: float) -> list[str]:
+    out = []
+    for name, v in (("minimum", minimum), ("maximum", maximum), ("step", step), ("update rate", rate_hz)):
+        if not isinstance(v, (int, float)) or not math.isfinite(v):
+            out.append(f"{name} must be a finite number, not {v!r}")
+    if out:
+        return out
+    if minimum >= maximum:
+        out.append(f"minimum ({minimum:g}) must be less than maximum ({maximum:g})")
+    if step <= 0:
+        out.append(f"step must be more than 0, not {step:g}")
+    elif step > maximum - minimum > 0:
+        out.append(f"step ({step:g}) is larger than the range ({maximum - minimum:g})")
+    if rate_hz <= 0:
+        out.append(f"update rate must be more than 0 Hz, not {rate_hz:g}")
+    return out
+
+
+@attrs.frozen
+class NumberRange:
+    """The usable range of a numeric field: settings clamped to what the field's type holds."""
+
+    minimum: float
+    maximum: float
+    step: float
+    integer: bool
+    base: str = "float64"
+    clamped: bool = False  #: the settings asked for more than the type holds
+
+    def coerce(self, value: float) -> float | int:
+        """Clamp into the range and snap to the step grid (ints for integer fields)."""
+        v = min(self.maximum, max(self.minimum, float(value)))
+        n = round((v - self.minimum) / self.step)
+        v = min(self.maximum, self.minimum + n * self.step)
+        if self.integer:
+            return int(min(self.maximum, max(self.minimum, round(v))))
+        return round(v, 12)
+
+    @property
+    def steps(self) -> int:
+        return max(1, round((self.maximum - self.minimum) / self.step))
+
+
+def number_range(minimum: float, maximum: float, step: float, base: str) -> NumberRange:
+    lo, hi = type_limits(base) or (-math.inf, math.inf)
+    integer = base in INT_LIMITS
+    cmin, cmax = max(minimum, lo), min(maximum, hi)
+    if integer:
+        cmin, cmax, step = math.ceil(cmin), math.floor(cmax), max(1, round(step))
+    clamped = (cmin, cmax) != (minimum, maximum)
+    return NumberRange(cmin, cmax, step, integer, base, clamped)
+
+
+class NumericModel(StdModel):
+    """Shared by Slider and Stepper: the bound field's type, the range, rate-limited publishing."""
+
+    def __init__(self, settings: Any, *args: Any, **kwargs: Any) -> None:
+        super().__init__(settings, *args, **kwargs)
+        self._limiter = RateLimiter(self._send, settings.rate_hz if settings is not None else 10.0,
+                                    clock=self._clock)
+
+    @property
+    def field_base(self) -> str:
+        """The numeric type of the bound field (``float64`` until the type is known)."""
+        if not self.types_ready:
+            return "float64"
+        try:
+            f = field_at(self.types, self.binding.type, self.binding.field_path, self.binding.role.is_service)
+        except (PathError, KeyError, ValueError):
+            return "float64"
+        return f.base if f is not None else "float64"
+
+    @property
+    def range(self) -> NumberRange:
+        s = self.settings
+        return number_range(s.minimum, s.maximum, s.step, self.field_base)
+
+    def problems(self) -> list[str]:
+        out = super().problems()
+        b = self.binding
+        if b.problems() or not self.types_ready:
+            return out
+        try:
+            f = field_at(self.types, b.type, b.field_path, b.role.is_service)
+        except (PathError, KeyError, ValueError) as exc:
+            return [*out, f"field: {exc}"]
+        if f is None or not f.is_builtin or f.array_len is not None or type_limits(f.base) is None:
+            what = "the whole message" if f is None else f"{f.name} ({f.type})"
+            return [*out, f"the bound field must be a number, but it is {what}"]
+        if not out and self.range.minimum >= self.range.maximum:
+            out.append(f"the range {self.settings.minimum:g}..{self.settings.maximum:g} holds no {f.base} value")
+        return out
+
+    # -- publishing (any thread) ---------------------------------------------------------------------
+    def _send(self, value: float | int) -> None:
+        if self.publish_value(value):
+            self.set_value(value)
+
+    def offer(self, value: float) -> float | int:
+        """Rate-limited publish of the coerced value (latest wins). Returns the coerced value."""
+        v = self.range.coerce(value)
+        self._dispatch(lambda: self._limiter.offer(v))
+        return v
+
+    def send_now(self, value: float) -> float | int:
+        """Publish the coerced value at once (a release, a click), dropping any kept one."""
+        v = self.range.coerce(value)
+        self._dispatch(lambda: self._limiter.now(v))
+        return v
+
+    def on_stop(self) -> None:
+        self._limiter.cancel()
+
+
+class SliderModel(NumericModel):
+    """PUBLISH: the view calls :meth:`drag` while moving and :meth:`release` when let go.
+    SUBSCRIBE: the bound field becomes the value (a float or int)."""
+
+    def __init__(self, settings: SliderSettings | None, *args: Any, **kwargs: Any) -> None:
+        super().__init__(settings if settings is not None else SliderSettings(), *args, **kwargs)
+
+    def drag(self, value: float) -> float | int:
+        """The handle moved: publishes (rate-limited) only in continuous mode."""
+        if self.settings.publish_mode == PUBLISH_CONTINUOUS:
+            return self.offer(value)
+        return self.range.coerce(value)
+
+    def release(self, value: float) -> float | int:
+        """The handle was let go: the final value is always published, at once."""
+        return self.send_now(value)
+
+    def on_message(self, msg: dict[str, Any]) -> None:
+        if self.binding.role is Role.SUBSCRIBE:
+            super().on_message(msg)

@@ -1,0 +1,94 @@
+"""Label: formatting (decimals, units, scale), whole messages, age and staleness; /battery end to end."""
+
+import math
+
+from rcon_widgets_std.common import format_value
+from rcon_widgets_std.label import LabelModel, LabelSettings
+from std_testkit import Clock, bridge, build, until
+
+from rcon_core.msgs import TypeRegistry
+
+
+def test_number_formatting_with_decimals_units_and_scale():
+    m = build(LabelModel, LabelSettings(decimals=1, units="%", scale=100), "/battery",
+              "sensor_msgs/BatteryState", "subscribe", "percentage")
+    m.on_message({"percentage": 0.8766, "voltage": 12.0})
+    assert m.state.value.text == "87.7 %" and m.state.value.numeric
+    m.settings.decimals = -1
+    m.on_message({"percentage": 0.5})
+    assert m.state.value.text == "50 %"
+    assert format_value(3, 2, "m") == "3.00 m"
+    assert format_value(None) == "NaN"  # NaN arrives as null on the JSON wire
+    assert format_value(math.inf, 2) == "inf"
+    assert format_value(True) == "true"
+    assert format_value({"secs": 3, "nsecs": 500_000_000}) == "3.500 s"
+
+
+def test_whole_message_and_long_arrays_are_summarised():
+    m = build(LabelModel, LabelSettings(), "/scan", "sensor_msgs/LaserScan", "subscribe")
+    m.on_message({"angle_min": -1.5, "ranges": [1.0] * 500, "header": {"frame_id": "laser"}})
+    text = m.state.value.text
+    assert "angle_min: -1.5" in text and "frame_id: laser" in text
+    assert "492 more" in text and text.count("1.0") < 20
+    m.on_message({"data": "YWJj" * 1000})
+    assert len(m.state.value.text) < 100
+
+
+def test_missing_field_is_an_error_not_a_crash():
+    m = build(LabelModel, LabelSettings(), "/battery", "sensor_msgs/BatteryState", "subscribe", "percentage")
+    m.on_message({"voltage": 12.0})
+    assert "percentage" in m.state.error and m.state.value is None
+
+
+class FakePort:
+    def __init__(self):
+        self.subscribed = []
+
+    def subscribe(self, topic, callback, **options):
+        self.subscribed.append(topic)
+        return self
+
+    def unsubscribe(self):
+        self.subscribed.pop()
+
+
+def test_age_and_stale_after_setting():
+    clock = Clock()
+    m = build(LabelModel, LabelSettings(stale_after=2.0), "/x", "std_msgs/Float64", "subscribe", "data",
+              clock=clock)
+    m.port = FakePort()
+    m.start()
+    assert m.port.subscribed == ["/x"]
+    m.on_message({"data": 1.0})
+    clock.now += 1.5
+    st = m.state
+    assert st.age == 1.5 and not st.stale
+    clock.now += 1.0
+    assert m.state.stale
+    m.on_message({"data": 2.0})
+    assert not m.state.stale and m.state.value.text == "2.00"
+    m.stop()
+    assert m.port.subscribed == []
+
+
+def test_settings_problems():
+    assert LabelSettings().problems() == []
+    p = LabelSettings(decimals=20, stale_after=0, scale=0).problems()
+    assert any("decimals" in x for x in p) and any("stale" in x for x in p) and any("scale" in x for x in p)
+
+
+async def test_battery_percentage_from_the_robot(sim):
+    async with bridge(sim) as client:
+        # a registry that knows nothing: a Label needs no definition to show what arrives
+        m = build(LabelModel, LabelSettings(decimals=1, units="%", scale=100), "/battery",
+                  "sensor_msgs/BatteryState", "subscribe", "percentage", client=client,
+                  types=TypeRegistry.empty())
+        m.start()
+        await until(lambda: m.state.value is not None, what="a battery message")
+        expected = sim.robot.battery_fraction * 100
+        got = float(m.state.value.text.split()[0])
+        assert abs(got - expected) < 2.0 and m.state.value.text.endswith("%")
+        assert m.state.age is not None and not m.state.stale
+        assert sim.topic_subscriber_count("/battery") >= 1
+        m.stop()
+        await until(lambda: sim.topic_subscriber_count("/battery") == 0, what="unsubscribe")

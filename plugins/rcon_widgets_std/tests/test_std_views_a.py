@@ -1,0 +1,124 @@
+"""Views of Label, Slider, Switch and Button offscreen: what they show for realistic states, user input
+reaching the robot through the model, and a screenshot of each."""
+
+import pytest
+from rcon_widgets_std.button import ButtonModel, ButtonSettings, CallStatus
+from rcon_widgets_std.button_view import ButtonView
+from rcon_widgets_std.label import LabelModel, LabelSettings
+from rcon_widgets_std.label_view import LabelView
+from rcon_widgets_std.slider import SliderModel, SliderSettings
+from rcon_widgets_std.slider_view import SliderView
+from rcon_widgets_std.switch import SwitchModel, SwitchSettings, SwitchValue
+from rcon_widgets_std.switch_view import SwitchView
+from std_qtkit import LiveBridge, shoot, wait_until
+from std_testkit import Clock, build
+
+from rcon_core.msgs import TypeRegistry
+
+
+@pytest.fixture
+def live(sim_url):
+    bridge = LiveBridge(sim_url)
+    yield bridge
+    bridge.close()
+
+
+def test_label_view_value_age_and_stale(qtbot, tmp_path):
+    clock = Clock()
+    m = build(LabelModel, LabelSettings(decimals=1, units="%", scale=100, stale_after=3), "/battery",
+              "sensor_msgs/BatteryState", "subscribe", "percentage", clock=clock)
+    view = LabelView(m)
+    m.on_message({"percentage": 0.873})
+    clock.now += 1.2
+    view.refresh(m.state)
+    assert view.value.text() == "87.3 %" and view.age.text() == "1.2 s ago"
+    shoot(qtbot, view, "Battery", (200, 130), "label", tmp_path)
+    m._running = True  # as if started: staleness only counts while running
+    clock.now += 5
+    view.refresh(m.state)
+    assert view.age.text().startswith("STALE")
+
+
+def test_slider_view_drag_and_release_publish_through_the_bridge(qtbot, live, sim_thread, tmp_path):
+    m = SliderModel(SliderSettings(minimum=0, maximum=2, step=0.1, units="m/s"),
+                    build(SliderModel, None, "/speed_limit", "std_msgs/Float64", "publish", "data").binding,
+                    live.node("slider"), types=TypeRegistry.standard(), dispatch=live.thread.call)
+    live.thread.call(m.start).result(5)
+    view = SliderView(m)
+    assert view.slider.maximum() == 20 and view.low.text() == "0.00 m/s"
+    view.slider.setSliderDown(True)
+    view.slider.setValue(12)  # a drag: on-release mode publishes nothing yet
+    assert view.value.text() == "1.20 m/s"
+    view.slider.setSliderDown(False)  # the release
+    wait_until(qtbot, lambda: any(msg["data"] == 1.2 for msg in sim_thread.published("/speed_limit")),
+               what="1.2 on /speed_limit")
+    wait_until(qtbot, lambda: sim_thread.robot.speed_limit == 1.2, what="the robot's limit")
+    view.refresh(m.state)
+    shoot(qtbot, view, "Speed limit", (260, 150), "slider", tmp_path)
+    live.thread.call(m.stop).result(5)
+
+
+def test_slider_view_subscribe_follows_and_cannot_be_moved(qtbot):
+    m = build(SliderModel, SliderSettings(minimum=0, maximum=1), "/battery", "sensor_msgs/BatteryState",
+              "subscribe", "percentage")
+    view = SliderView(m)
+    qtbot.addWidget(view)
+    m.on_message({"percentage": 0.25})
+    view.refresh(m.state)
+    assert not view.slider.isEnabled() and view.slider.value() == 25 and view.value.text() == "0.25"
+
+
+def test_switch_view_call_lights_and_show_state(qtbot, live, sim_thread, tmp_path):
+    m = SwitchModel(SwitchSettings(state_topic="/lights/state", on_text="Lights on", off_text="Lights off"),
+                    build(SwitchModel, None, "/lights/set", "std_srvs/SetBool", "call", "request.data").binding,
+                    live.node("switch"), types=TypeRegistry.standard(), dispatch=live.thread.call)
+    live.thread.call(m.start).result(5)
+    view = SwitchView(m)
+    qtbot.addWidget(view)
+    wait_until(qtbot, lambda: getattr(m.state.value, "on", None) is False, what="the latched state")
+    view.refresh(m.state)
+    assert view.button.text() == "Lights off" and not view.button.isChecked()
+    view.button.click()
+    wait_until(qtbot, lambda: getattr(m.state.value, "on", None) is True, what="lights on")
+    view.refresh(m.state)
+    assert view.button.isChecked() and view.button.text() == "Lights on" and view.reply.text() == "lights on"
+    assert sim_thread.robot.lights is True
+    shoot(qtbot, view, "Lights", (180, 130), "switch", tmp_path)
+    live.thread.call(m.stop).result(5)
+
+
+def test_switch_view_busy_and_refused(qtbot):
+    m = build(SwitchModel, SwitchSettings(), "/arm", "std_srvs/SetBool", "call", "request.data")
+    view = SwitchView(m)
+    qtbot.addWidget(view)
+    m.set_value(SwitchValue(False, True, True))
+    view.refresh(m.state)
+    assert view.button.text() == "On…" and "asking" in view.reply.text()
+    m.set_value(SwitchValue(False, False, None, "interlock open"))
+    m.set_error("/arm refused: interlock open")
+    view.refresh(m.state)
+    assert view.button.text() == "Off" and "interlock open" in view.reply.text()
+
+
+def test_button_view_progress_result_and_error(qtbot, live, sim_thread, tmp_path):
+    m = ButtonModel(ButtonSettings(text="Dock"),
+                    build(ButtonModel, None, "/dock", "std_srvs/Trigger", "call").binding,
+                    live.node("button"), types=TypeRegistry.standard(), dispatch=live.thread.call)
+    live.thread.call(m.start).result(5)
+    view = ButtonView(m)
+    qtbot.addWidget(view)
+    assert view.button.text() == "Dock"
+    view.button.pressed.emit()
+    view.refresh(m.state)
+    wait_until(qtbot, lambda: m.state.value is not None and not m.state.value.busy, what="the answer")
+    view.refresh(m.state)
+    assert view.result.text().startswith("✓ dock")
+    assert sim_thread.robot.docking or sim_thread.robot.docked
+    shoot(qtbot, view, "Dock", (200, 130), "button", tmp_path)
+    m.set_value(CallStatus("busy", "/dock"))
+    view.refresh(m.state)
+    assert view.result.text() == "calling /dock…"
+    m.set_value(CallStatus("failed", "/dock", "already docked"))
+    view.refresh(m.state)
+    assert view.result.text() == "✗ already docked"
+    live.thread.call(m.stop).result(5)
