@@ -29,7 +29,7 @@ from .settings import MapSettings, parse_extra_topics
 
 NAVSATFIX = "sensor_msgs/NavSatFix"
 #: marker colours: the main track first, then one per extra topic
-PALETTE = ("#2f81f7", "#f0883e", "#3fb950", "#db61a2", "#a371f7", "#e3b341", "#56d4dd", "#f85149")
+PALETTE = ("#0050d0", "#d05a00", "#008a2e", "#c0007a", "#6a2fd0", "#8a6d00", "#007a8a", "#b00020")
 #: a course heading needs the robot to have moved this far over the last COURSE_WINDOW points
 COURSE_MIN_M = 2.0
 COURSE_WINDOW = 60
