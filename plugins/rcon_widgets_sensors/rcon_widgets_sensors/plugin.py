@@ -2,3 +2,44 @@
 
 It must import without Qt: views are referenced lazily as `module:attr` strings.
 """
+
+from __future__ import annotations
+
+from rcon_core.plugins import Accepts, Role, WidgetSpec, hookimpl
+
+from .teleop import TELEOP_TYPES
+
+P = "rcon_widgets_sensors"
+
+IMAGE_TYPES = ["sensor_msgs/Image", "sensor_msgs/CompressedImage", "sensor_msgs/LaserScan",
+               "nav_msgs/OccupancyGrid"]
+
+
+def specs() -> list[WidgetSpec]:
+    """Every widget of this package."""
+    return [
+        WidgetSpec(
+            kind="sensors.image", title="Image", icon="image", category="Sensors",
+            description="Camera images (raw, compressed, depth), laser scans and occupancy grids; "
+                        "pinch to zoom, double-tap to fit",
+            roles={Role.SUBSCRIBE},
+            accepts=Accepts(types=IMAGE_TYPES, messages=["image", "compressed_image"]),
+            settings=f"{P}.image:ImageSettings", model=f"{P}.image:ImageModel",
+            view=f"{P}.image_view:ImageView", default_size=(480, 320), priority=10,
+        ),
+        WidgetSpec(
+            kind="sensors.teleop", title="Multi-Touch", icon="gamepad", category="Controls",
+            description="A touch pad that drives the robot: Twist and other planar motion commands at a "
+                        "steady rate, zero as soon as you let go",
+            roles={Role.PUBLISH},
+            accepts=Accepts(types=list(TELEOP_TYPES)),
+            settings=f"{P}.teleop:TeleopSettings", model=f"{P}.teleop:TeleopModel",
+            view=f"{P}.teleop_view:TeleopView", default_size=(320, 320), priority=10,
+        ),
+    ]
+
+
+@hookimpl
+def rcon_register_widgets(registry):  # noqa: ANN001 - pluggy hook
+    for spec in specs():
+        registry.add(spec)

@@ -1,0 +1,225 @@
+"""The Image widget's settings and model (no Qt).
+
+The model never decodes on the bridge loop: ``on_message`` hands the message to a decode worker thread
+through a latest-wins slot (a burst of big frames costs the loop nothing and older frames are dropped,
+never queued), and the worker publishes a ready :class:`Frame` with ``set_value``. The server is asked
+to send no more than the view can show: ``throttle_rate`` from ``max_fps``, ``queue_length`` 1, CBOR
+(binary data, no base64) when ``compression`` is ``"auto"``.
+"""
+
+from __future__ import annotations
+
+import collections
+import threading
+import time
+from typing import Any
+
+import attrs
+import numpy as np
+
+from rcon_core.msgs import time as rtime
+from rcon_core.plugins import WidgetModel
+from rcon_core.plugins.paths import PathError, get_path
+
+from .decode import DecodeError, decode_compressed, decode_image, message_kind
+from .scan_render import ScanCounts, render_grid, render_scan
+from .slots import SlotWorker
+
+__all__ = ["ImageSettings", "ImageModel", "Frame"]
+
+COMPRESSIONS = ("auto", "none", "cbor", "png")
+
+
+@attrs.define
+class ImageSettings:
+    """``max_fps``: frames per second asked of the server (0 = every frame). ``compression``: ``auto``
+    (CBOR: binary, no base64), ``none``, ``cbor``, ``png``. ``depth_min``/``depth_max``: the depth range
+    (in the image's unit) mapped onto the colour map; both 0 = automatic. ``scan_range``: metres shown
+    around a laser scan (0 = the scan's range_max). ``show_overlay``: frame rate and age in the corner.
+    ``smooth``: smooth scaling (off: sharp pixels, cheaper)."""
+
+    max_fps: float = 30.0
+    compression: str = "auto"
+    depth_min: float = 0.0
+    depth_max: float = 0.0
+    scan_range: float = 0.0
+    show_overlay: bool = True
+    smooth: bool = True
+    stale_after: float = 3.0
+
+    def problems(self) -> list[str]:
+        out = []
+        if not 0 <= self.max_fps <= 120:
+            out.append(f"the maximum frame rate must be between 0 (no limit) and 120, not {self.max_fps:g}")
+        if self.compression not in COMPRESSIONS:
+            out.append(f"compression must be one of {', '.join(COMPRESSIONS)}, not {self.compression!r}")
+        if self.depth_min < 0 or self.depth_max < 0:
+            out.append("the depth range cannot be negative")
+        elif (self.depth_min or self.depth_max) and self.depth_max <= self.depth_min:
+            out.append(f"the depth range needs min < max (got {self.depth_min:g} .. {self.depth_max:g}); "
+                       "set both to 0 for automatic")
+        if self.scan_range < 0:
+            out.append("the scan range cannot be negative (0 = the scan's own maximum)")
+        if not self.stale_after > 0:
+            out.append("'stale after' must be more than 0 s")
+        return out
+
+
+@attrs.frozen(eq=False)
+class Frame:
+    """A decoded frame, ready to paint: ``rgb`` is H x W x 3 uint8, C-contiguous, never modified.
+
+    ``stamp``: the message header's time (epoch seconds) or None; ``received``/``decoded``: wall clock
+    when it arrived / was ready. ``fps``: frames decoded per second lately. ``dropped``: frames skipped so
+    far because a newer one came first. ``kind``: image, compressed, scan or grid; ``info``: for people.
+    """
+
+    rgb: np.ndarray
+    kind: str
+    info: str
+    stamp: float | None
+    received: float
+    decoded: float
+    index: int
+    fps: float = 0.0
+    dropped: int = 0
+    smooth: bool = True
+    counts: ScanCounts | None = None
+
+    @property
+    def width(self) -> int:
+        return int(self.rgb.shape[1])
+
+    @property
+    def height(self) -> int:
+        return int(self.rgb.shape[0])
+
+
+def _stamp(msg: dict[str, Any]) -> float | None:
+    header = msg.get("header")
+    if not isinstance(header, dict):
+        return None
+    stamp = header.get("stamp")
+    if not rtime.is_time(stamp):
+        return None
+    try:
+        value = rtime.to_float(stamp)
+    except (TypeError, ValueError):
+        return None
+    return value if value > 0 else None
+
+
+def _meta(msg: dict[str, Any]) -> dict[str, Any]:
+    """The message without its bulk (kept as ``state.message``)."""
+    return {k: v for k, v in msg.items() if k not in ("data", "ranges", "intensities")}
+
+
+class ImageModel(WidgetModel):
+    """Decodes images, compressed images, laser scans and occupancy grids into :class:`Frame` values."""
+
+    stale_after = 3.0
+
+    def __init__(self, settings: Any, binding: Any, port: Any, **kwargs: Any) -> None:
+        super().__init__(settings if settings is not None else ImageSettings(), binding, port, **kwargs)
+        self._worker: SlotWorker | None = None
+        self._worker_lock = threading.Lock()
+        self._frames = 0
+        self._times: collections.deque[float] = collections.deque(maxlen=90)
+        self._frame_cond = threading.Condition()
+
+    # -- server options ---------------------------------------------------------------------------------
+    def subscribe_options(self) -> dict[str, Any]:
+        s = self.settings
+        opts: dict[str, Any] = {"queue_length": 1}
+        if s.max_fps > 0:
+            opts["throttle_rate"] = int(1000 / s.max_fps)
+        comp = s.compression
+        opts["compression"] = "cbor" if comp == "auto" else comp
+        return opts
+
+    # -- lifecycle ------------------------------------------------------------------------------------
+    def on_start(self) -> None:
+        self._ensure_worker()
+
+    def on_stop(self) -> None:
+        with self._worker_lock:
+            worker, self._worker = self._worker, None
+        if worker is not None:
+            worker.close(timeout=0.5)
+
+    def _ensure_worker(self) -> SlotWorker:
+        with self._worker_lock:
+            if self._worker is None:
+                self._worker = SlotWorker("rcon-image-decode", self._decode, self._decode_failed)
+            return self._worker
+
+    # -- incoming (bridge loop: cheap) ----------------------------------------------------------------
+    def on_message(self, msg: dict[str, Any]) -> None:
+        self._ensure_worker().submit((msg, time.time()))
+
+    @property
+    def dropped(self) -> int:
+        w = self._worker
+        return w.slot.dropped if w is not None else 0
+
+    # -- decoding (worker thread) ---------------------------------------------------------------------
+    def _decode_failed(self, exc: BaseException) -> None:
+        self.set_error(str(exc) if isinstance(exc, DecodeError | PathError) else f"{type(exc).__name__}: {exc}")
+
+    def decode(self, msg: dict[str, Any], received: float | None = None) -> Frame:
+        """Turn one message into a :class:`Frame` (any thread; the worker calls it)."""
+        received = time.time() if received is None else received
+        path = self.binding.field_path
+        body = get_path(msg, path) if path else msg
+        s = self.settings
+        kind = message_kind(body)
+        depth = (s.depth_min, s.depth_max) if s.depth_max > s.depth_min else None
+        counts = None
+        smooth = s.smooth
+        if kind == "image":
+            rgb = decode_image(body, depth)
+            info = f"{rgb.shape[1]}×{rgb.shape[0]} {body.get('encoding')}"
+        elif kind == "compressed":
+            rgb = decode_compressed(body, depth)
+            info = f"{rgb.shape[1]}×{rgb.shape[0]} {body.get('format') or 'compressed'}"
+        elif kind == "scan":
+            rgb, counts = render_scan(body, max_range=s.scan_range or None)
+            info = f"{counts.valid} hits, {counts.out_of_range} out of range, {counts.invalid} no return"
+        elif kind == "grid":
+            rgb = render_grid(body)
+            res = (body.get("info") or {}).get("resolution")
+            info = f"{rgb.shape[1]}×{rgb.shape[0]} cells" + (f" at {float(res):g} m" if res else "")
+            smooth = False
+        else:
+            raise DecodeError("this message is not an image, compressed image, laser scan or occupancy grid")
+        now = time.time()
+        with self._frame_cond:
+            self._frames += 1
+            self._times.append(now)
+            index = self._frames
+            fps = 0.0
+            if len(self._times) > 1 and self._times[-1] > self._times[0]:
+                fps = (len(self._times) - 1) / (self._times[-1] - self._times[0])
+        return Frame(rgb=rgb, kind=kind, info=info, stamp=_stamp(body), received=received, decoded=now,
+                     index=index, fps=fps, dropped=self.dropped, smooth=smooth, counts=counts)
+
+    def _decode(self, item: tuple[dict[str, Any], float]) -> None:
+        msg, received = item
+        frame = self.decode(msg, received)
+        self.set_value(frame, message=_meta(msg))
+        with self._frame_cond:
+            self._frame_cond.notify_all()
+
+    def wait_frame(self, after: int = 0, timeout: float = 5.0) -> Frame:
+        """Block until a frame with ``index > after`` is ready (tests, benchmarks); TimeoutError if not."""
+        deadline = time.monotonic() + timeout
+        with self._frame_cond:
+            while True:
+                value = self.state.value
+                if isinstance(value, Frame) and value.index > after:
+                    return value
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    err = self.state.error
+                    raise TimeoutError(f"no frame within {timeout} s" + (f" (error: {err})" if err else ""))
+                self._frame_cond.wait(min(left, 0.1))

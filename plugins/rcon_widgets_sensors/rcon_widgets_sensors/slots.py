@@ -1,0 +1,149 @@
+"""Thread helpers shared by the sensor widgets (no Qt).
+
+* :class:`LatestSlot`: a one-item mailbox where the newest item replaces an unread one (latest wins).
+* :class:`SlotWorker`: a daemon thread that takes items from a :class:`LatestSlot` and handles them, so
+  heavy work (image decoding, JPEG encoding) never runs on the bridge loop or the GUI thread.
+* :class:`LoopTicker`: a steady periodic call on the running asyncio loop (the bridge loop), used for
+  publish rates; it never bursts to catch up.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import threading
+from collections.abc import Callable
+from typing import Any
+
+log = logging.getLogger(__name__)
+
+__all__ = ["LatestSlot", "SlotWorker", "LoopTicker"]
+
+_EMPTY = object()
+
+
+class LatestSlot:
+    """Holds at most one item; ``put`` replaces an item nobody took yet (counted in ``dropped``)."""
+
+    def __init__(self) -> None:
+        self._cond = threading.Condition()
+        self._item: Any = _EMPTY
+        self._closed = False
+        self.dropped = 0
+
+    def put(self, item: Any) -> None:
+        with self._cond:
+            if self._item is not _EMPTY:
+                self.dropped += 1
+            self._item = item
+            self._cond.notify()
+
+    def take(self, timeout: float | None = None) -> tuple[bool, Any]:
+        """``(True, item)``, or ``(False, None)`` after ``timeout`` or once closed and empty."""
+        with self._cond:
+            if self._item is _EMPTY and not self._closed:
+                self._cond.wait(timeout)
+            if self._item is _EMPTY:
+                return False, None
+            item, self._item = self._item, _EMPTY
+            return True, item
+
+    def close(self) -> None:
+        with self._cond:
+            self._closed = True
+            self._cond.notify_all()
+
+    @property
+    def closed(self) -> bool:
+        return self._closed
+
+
+class SlotWorker:
+    """A daemon thread feeding each newest item of its slot to ``handle(item)``.
+
+    Exceptions from ``handle`` go to ``on_error(exc)`` (the thread keeps running).
+    """
+
+    def __init__(self, name: str, handle: Callable[[Any], None],
+                 on_error: Callable[[BaseException], None] | None = None) -> None:
+        self.slot = LatestSlot()
+        self._handle = handle
+        self._on_error = on_error
+        self._thread = threading.Thread(target=self._run, name=name, daemon=True)
+        self._thread.start()
+
+    def submit(self, item: Any) -> None:
+        self.slot.put(item)
+
+    def _run(self) -> None:
+        while True:
+            ok, item = self.slot.take()
+            if not ok:
+                if self.slot.closed:
+                    return
+                continue
+            try:
+                self._handle(item)
+            except Exception as exc:  # noqa: BLE001 - report, keep going with the next item
+                if self._on_error is not None:
+                    self._on_error(exc)
+                else:
+                    log.exception("worker %s failed", self._thread.name)
+
+    def close(self, timeout: float = 1.0) -> None:
+        """Stop after the item being handled; waits up to ``timeout`` (never from the thread itself)."""
+        self.slot.close()
+        if threading.current_thread() is not self._thread:
+            self._thread.join(timeout)
+
+    @property
+    def alive(self) -> bool:
+        return self._thread.is_alive()
+
+
+class LoopTicker:
+    """Calls ``fn()`` every ``period`` seconds on the running asyncio loop, steadily (no catch-up bursts).
+
+    ``start`` and ``stop`` must be called on the loop thread.
+    """
+
+    def __init__(self, period: float, fn: Callable[[], None]) -> None:
+        if not period > 0:
+            raise ValueError(f"period must be positive, got {period}")
+        self.period = period
+        self._fn = fn
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._handle: asyncio.TimerHandle | None = None
+        self._due = 0.0
+
+    @property
+    def running(self) -> bool:
+        return self._handle is not None
+
+    def start(self, first_delay: float | None = None) -> None:
+        if self._handle is not None:
+            return
+        try:
+            self._loop = asyncio.get_running_loop()
+        except RuntimeError:
+            raise RuntimeError("a periodic publisher needs the bridge loop: call it there "
+                               "(pass dispatch=BridgeThread.call to the model)") from None
+        self._due = self._loop.time() + (self.period if first_delay is None else first_delay)
+        self._handle = self._loop.call_at(self._due, self._tick)
+
+    def stop(self) -> None:
+        if self._handle is not None:
+            self._handle.cancel()
+            self._handle = None
+
+    def _tick(self) -> None:
+        assert self._loop is not None
+        now = self._loop.time()
+        self._due += self.period
+        if self._due < now:  # fell behind (a busy loop): skip, never burst
+            self._due = now + self.period
+        self._handle = self._loop.call_at(self._due, self._tick)
+        try:
+            self._fn()
+        except Exception:  # noqa: BLE001 - one failed tick must not end the rate
+            log.exception("periodic call failed")

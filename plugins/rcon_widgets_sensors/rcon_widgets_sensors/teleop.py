@@ -1,0 +1,387 @@
+"""The Multi-Touch teleop pad's settings and model (no Qt).
+
+The view reports where the finger is on the pad as ``set_axes(x, y)`` (each -1..1, y up) and
+``release()`` when it lifts. While a finger is down the model publishes the command at a steady rate from
+a timer on the bridge loop; when it lifts it publishes one zero command at once and then nothing at all
+(an idle pad never floods zeros that would fight another controller).
+
+Safety: the zero is also sent, immediately, when the model is stopped (the canvas is left), when the link
+goes down (sent again once it is back, then silence), and by the view on touch cancel and focus loss.
+After a forced stop the pad ignores the finger until it is lifted and put down again.
+
+Several pads bound to the same topic on the same connection (two thumbs: linear on one, angular on the
+other) form a group: their axes are merged into one message, published by one of them at its rate, so
+they never fight; each pad's release zeroes only its own axes.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import re
+import threading
+import time
+from typing import Any
+
+import attrs
+
+from rcon_core.msgs import names
+from rcon_core.plugins import WidgetModel
+from rcon_core.plugins.paths import PathError, get_path, set_path
+
+from .slots import LoopTicker
+
+__all__ = ["TeleopSettings", "TeleopModel", "TeleopValue", "TELEOP_TYPES", "shape_axes"]
+
+#: canonical type -> path of the part the axes are relative to
+TELEOP_TYPES: dict[str, str] = {
+    "geometry_msgs/msg/Twist": "",
+    "geometry_msgs/msg/TwistStamped": "twist",
+    "geometry_msgs/msg/Accel": "",
+    "geometry_msgs/msg/AccelStamped": "accel",
+    "geometry_msgs/msg/Vector3": "",
+    "geometry_msgs/msg/Vector3Stamped": "vector",
+    "geometry_msgs/msg/Point": "",
+    "geometry_msgs/msg/PointStamped": "point",
+    "geometry_msgs/msg/Point32": "",
+    "geometry_msgs/msg/Pose2D": "",
+}
+_XYZ = {"x": 0.0, "y": 0.0, "z": 0.0}
+_STAMP_HEADER = {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""}
+_FALLBACK: dict[str, dict[str, Any]] = {
+    "geometry_msgs/msg/Twist": {"linear": dict(_XYZ), "angular": dict(_XYZ)},
+    "geometry_msgs/msg/Accel": {"linear": dict(_XYZ), "angular": dict(_XYZ)},
+    "geometry_msgs/msg/Vector3": dict(_XYZ),
+    "geometry_msgs/msg/Point": dict(_XYZ),
+    "geometry_msgs/msg/Point32": dict(_XYZ),
+    "geometry_msgs/msg/Pose2D": {"x": 0.0, "y": 0.0, "theta": 0.0},
+}
+for _stamped, _inner, _key in (("TwistStamped", "Twist", "twist"), ("AccelStamped", "Accel", "accel"),
+                               ("Vector3Stamped", "Vector3", "vector"), ("PointStamped", "Point", "point")):
+    _FALLBACK[f"geometry_msgs/msg/{_stamped}"] = {"header": _STAMP_HEADER,
+                                                  _key: _FALLBACK[f"geometry_msgs/msg/{_inner}"]}
+
+_AXIS_RE = re.compile(r"^(auto|-?[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*)?$")
+
+
+@attrs.define
+class TeleopSettings:
+    """``horizontal``/``vertical``: the field (relative to the motion part of the message) a finger
+    moving right/up drives; a leading ``-`` inverts it, ``""`` leaves the axis unused, ``"auto"``: for
+    Twist/Accel up = ``linear.x`` and right = ``-angular.z`` (turn right); for points and vectors up = ``x``,
+    right = ``-y``. ``max_linear`` (m/s) and ``max_angular`` (rad/s) are the commands at the pad's edge
+    (``angular.*`` and ``theta`` use ``max_angular``). ``dead_zone``: fraction of the pad radius around the
+    centre that means zero. ``rate_hz``: publish rate while a finger is down. ``frame_id``: for stamped
+    types."""
+
+    horizontal: str = "auto"
+    vertical: str = "auto"
+    max_linear: float = 1.0
+    max_angular: float = 1.0
+    dead_zone: float = 0.1
+    rate_hz: float = 10.0
+    frame_id: str = ""
+
+    def problems(self) -> list[str]:
+        out = []
+        for name in ("horizontal", "vertical"):
+            value = getattr(self, name)
+            if not _AXIS_RE.match(value or ""):
+                out.append(f"the {name} axis {value!r} is not a field path such as 'linear.x' or '-angular.z'")
+        if not self.horizontal and not self.vertical:
+            out.append("both axes are unused: set the horizontal or the vertical axis")
+        if not 0 < self.max_linear <= 100:
+            out.append(f"the maximum linear speed must be more than 0 and at most 100, not {self.max_linear:g}")
+        if not 0 < self.max_angular <= 50:
+            out.append(f"the maximum angular speed must be more than 0 and at most 50, not {self.max_angular:g}")
+        if not 0 <= self.dead_zone < 0.9:
+            out.append(f"the dead zone must be between 0 and 0.9 of the pad, not {self.dead_zone:g}")
+        if not 1 <= self.rate_hz <= 50:
+            out.append(f"the publish rate must be between 1 and 50 Hz, not {self.rate_hz:g}")
+        return out
+
+
+@attrs.frozen
+class TeleopValue:
+    """What the pad shows: the finger (x, y after the dead zone, -1..1), the command by field path,
+    ``active`` (a finger is down and commands go out), ``locked`` (stopped by safety until the finger
+    lifts), ``sent`` (messages published so far)."""
+
+    active: bool = False
+    x: float = 0.0
+    y: float = 0.0
+    command: tuple[tuple[str, float], ...] = ()
+    locked: bool = False
+    sent: int = 0
+    reason: str = ""
+
+
+def shape_axes(x: float, y: float, dead_zone: float) -> tuple[float, float]:
+    """Clamp (x, y) to the unit disc and apply a radial dead zone (rescaled so the edge stays 1)."""
+    r = math.hypot(x, y)
+    if r > 1:
+        x, y, r = x / r, y / r, 1.0
+    if r <= dead_zone or r == 0:
+        return 0.0, 0.0
+    k = (r - dead_zone) / (1 - dead_zone) / r
+    return x * k, y * k
+
+
+class _Group:
+    """Pads publishing to one topic on one connection: merged contributions, one publisher at a time."""
+
+    def __init__(self) -> None:
+        self.members: list[TeleopModel] = []  # active ones, in activation order; the first publishes
+        self.contrib: dict[int, dict[str, float]] = {}
+
+
+_groups: dict[tuple[int, str], _Group] = {}
+_groups_lock = threading.Lock()
+_ids = itertools.count(1)
+
+
+class TeleopModel(WidgetModel):
+    """Turns pad positions into motion commands at a steady rate; zero on every kind of letting go."""
+
+    stale_after = None
+
+    def __init__(self, settings: Any, binding: Any, port: Any, **kwargs: Any) -> None:
+        super().__init__(settings if settings is not None else TeleopSettings(), binding, port, **kwargs)
+        self._id = next(_ids)
+        self._ticker: LoopTicker | None = None
+        self._active = False
+        self._locked = False
+        self._zero_pending = False
+        self._x = self._y = 0.0
+        self._sent = 0
+        self._reason = ""
+        self._group_key = (id(getattr(port, "client", port)), binding.name)
+        self.send_times: list[float] = []  # monotonic time of each publish (tests, diagnostics)
+        self._publish_value()
+
+    # -- what the message looks like --------------------------------------------------------------------
+    @property
+    def canonical_type(self) -> str:
+        try:
+            return names.normalize(self.binding.type) if self.binding.type else ""
+        except ValueError:
+            return self.binding.type
+
+    @property
+    def body_path(self) -> str:
+        """Where the motion part sits in the message (the bound field, else by type)."""
+        return self.binding.field_path or TELEOP_TYPES.get(self.canonical_type, "")
+
+    def template(self) -> dict[str, Any]:
+        """An all-zero message of the bound type."""
+        if self.types is not None:
+            try:
+                return self.types.default(self.binding.type)
+            except Exception:  # noqa: BLE001 - unknown to the registry: the table below may know it
+                pass
+        base = _FALLBACK.get(self.canonical_type)
+        if base is None:
+            raise ValueError(f"cannot build a {self.binding.type} message (unknown type)")
+        return _deep_copy(base)
+
+    def axes(self) -> tuple[str, str]:
+        """(horizontal, vertical) field paths relative to :attr:`body_path`, ``-`` prefix = inverted."""
+        s = self.settings
+        body = self._body_fields()
+        if "linear" in body or "angular" in body:
+            auto = ("-angular.z", "linear.x")
+        else:
+            auto = ("-y", "x")
+        h = auto[0] if s.horizontal == "auto" else s.horizontal
+        v = auto[1] if s.vertical == "auto" else s.vertical
+        return h, v
+
+    def _body_fields(self) -> dict[str, Any]:
+        try:
+            body = self.template()
+            if self.body_path:
+                body = get_path(body, self.body_path)
+        except (ValueError, PathError):
+            return {}
+        return body if isinstance(body, dict) else {}
+
+    def problems(self) -> list[str]:
+        out = super().problems()
+        if out or not self.binding.type:
+            return out
+        try:
+            msg = self.template()
+        except ValueError as exc:
+            return [str(exc)]
+        for axis in self.axes():
+            if not axis:
+                continue
+            path = self._abs(axis.lstrip("-"))
+            try:
+                value = get_path(msg, path)
+            except PathError:
+                out.append(f"{self.binding.type} has no field {path!r} for the pad's axis")
+                continue
+            if not isinstance(value, int | float) or isinstance(value, bool):
+                out.append(f"{path!r} in {self.binding.type} is not a number")
+        return out
+
+    def _abs(self, rel: str) -> str:
+        return f"{self.body_path}.{rel}" if self.body_path else rel
+
+    def command_for(self, x: float, y: float) -> dict[str, float]:
+        """Field path -> value for a finger at (x, y) (raw pad coordinates, -1..1, y up)."""
+        s = self.settings
+        sx, sy = shape_axes(x, y, s.dead_zone)
+        out: dict[str, float] = {}
+        for axis, v in zip(self.axes(), (sx, sy), strict=True):
+            if not axis:
+                continue
+            sign = -1.0 if axis.startswith("-") else 1.0
+            rel = axis.lstrip("-")
+            leaf = rel.rsplit(".", 1)[-1]
+            limit = s.max_angular if rel.startswith("angular") or leaf == "theta" else s.max_linear
+            out[self._abs(rel)] = out.get(self._abs(rel), 0.0) + sign * v * limit + 0.0
+        return out
+
+    # -- view -> model (any thread) ---------------------------------------------------------------------
+    def set_axes(self, x: float, y: float) -> None:
+        """The finger is at (x, y) on the pad (each -1..1, y up)."""
+        self._dispatch(lambda: self._on_axes(float(x), float(y)))
+
+    def release(self, reason: str = "released") -> None:
+        """The finger lifted (or the touch was cancelled, or focus was lost): zero now, then silence."""
+        self._dispatch(lambda: self._on_release(reason, unlock=True))
+
+    # -- loop thread ----------------------------------------------------------------------------------
+    def _group(self) -> _Group:
+        with _groups_lock:
+            g = _groups.get(self._group_key)
+            if g is None:
+                g = _groups[self._group_key] = _Group()
+            return g
+
+    def _merged(self) -> dict[str, Any]:
+        msg = self.template()
+        g = self._group()
+        for contrib in [g.contrib.get(m._id, {}) for m in g.members]:
+            for path, value in contrib.items():
+                msg = set_path(msg, path, value)
+        header = msg.get("header")
+        if isinstance(header, dict) and isinstance(header.get("stamp"), dict):
+            stamp = header["stamp"]
+            ns = time.time_ns()
+            a, b = ("sec", "nanosec") if "sec" in stamp else ("secs", "nsecs")
+            header["stamp"] = {a: ns // 1_000_000_000, b: ns % 1_000_000_000}
+            header["frame_id"] = self.settings.frame_id
+        return msg
+
+    def _send(self) -> None:
+        pub = self._pub
+        if pub is None:
+            return
+        try:
+            pub.publish(self._merged())
+        except Exception as exc:  # noqa: BLE001 - report on the widget, never raise into the loop
+            self.set_error(f"publishing failed: {exc}")
+            return
+        self._sent += 1
+        self.send_times.append(time.monotonic())
+        del self.send_times[:-2000]
+
+    def _on_axes(self, x: float, y: float) -> None:
+        if not self.running or self._pub is None or self._locked or self.state.link_down:
+            self._x, self._y = x, y
+            self._publish_value()
+            return
+        self._x, self._y = x, y
+        g = self._group()
+        g.contrib[self._id] = self.command_for(x, y)
+        if not self._active:
+            self._active = True
+            self._reason = ""
+            g.members.append(self)
+            self._ticker = LoopTicker(1.0 / self.settings.rate_hz, self._tick)
+            self._send()  # the first command goes out at once
+            self._ticker.start()
+        self._publish_value()
+
+    def _tick(self) -> None:
+        g = self._group()
+        if self._active and g.members and g.members[0] is self:
+            self._send()
+            self._publish_value()
+
+    def _on_release(self, reason: str, unlock: bool) -> bool:
+        """End this pad's command: drop its axes, send the (merged) zero once. True if it was active."""
+        was = self._active
+        if unlock:
+            self._locked = False
+        self._x = self._y = 0.0
+        if self._ticker is not None:
+            self._ticker.stop()
+            self._ticker = None
+        if was:
+            self._active = False
+            self._reason = reason
+            g = self._group()
+            g.contrib.pop(self._id, None)
+            self._send()  # own axes now zero (others' still held if any)
+            if self in g.members:
+                g.members.remove(self)
+        self._publish_value()
+        return was
+
+    def _force_release(self, reason: str) -> bool:
+        was = self._on_release(reason, unlock=False)
+        if was:
+            self._locked = True  # until the finger lifts
+            self._publish_value()
+        return was
+
+    # -- lifecycle ------------------------------------------------------------------------------------
+    def on_stop(self) -> None:
+        self._force_release("stopped")
+        self._zero_pending = False
+        with _groups_lock:
+            g = _groups.get(self._group_key)
+            if g is not None and not g.members:
+                _groups.pop(self._group_key, None)
+
+    def set_link(self, up: bool) -> None:
+        was_down = self.state.link_down
+        super().set_link(up)
+        if not up and not was_down:
+            self._dispatch(self._link_lost)
+        elif up and was_down:
+            self._dispatch(self._link_back)
+
+    def _link_lost(self) -> None:
+        if self._force_release("link down"):
+            self._zero_pending = True  # the zero may not have gone out: send it again once back
+
+    def _link_back(self) -> None:
+        if self._zero_pending and self.running:
+            self._zero_pending = False
+            g = self._group()
+            if not g.members:
+                self._send()
+
+    def _publish_value(self) -> None:
+        active = self._active
+        cmd = self.command_for(self._x, self._y) if active else {}
+        sx, sy = shape_axes(self._x, self._y, self.settings.dead_zone) if active else (0.0, 0.0)
+        self.set_value(TeleopValue(active=active, x=sx, y=sy, command=tuple(sorted(cmd.items())),
+                                   locked=self._locked, sent=self._sent, reason=self._reason))
+
+    @property
+    def active(self) -> bool:
+        return self._active
+
+
+def _deep_copy(v: Any) -> Any:
+    if isinstance(v, dict):
+        return {k: _deep_copy(x) for k, x in v.items()}
+    if isinstance(v, list):
+        return [_deep_copy(x) for x in v]
+    return v

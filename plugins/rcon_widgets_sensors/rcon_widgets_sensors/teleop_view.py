@@ -1,0 +1,228 @@
+"""The Multi-Touch teleop pad's Qt view: a round pad; the finger's offset from the centre drives.
+
+Each pad takes its own touch points (touch events are delivered per widget), so two pads on one canvas
+work at once with two thumbs. The first finger on a pad drives it; lifting it, a cancelled touch, the
+window losing focus or the pad being hidden all call ``model.release()`` (the model sends the zero).
+Mouse dragging works the same on a desktop.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+from qtpy import QtCore, QtGui, QtWidgets
+
+from .teleop import TeleopValue
+
+TRAIL_S = 0.6
+
+
+class TeleopView(QtWidgets.QWidget):
+    def __init__(self, model: Any, parent: QtWidgets.QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.model = model
+        self._touch_id: int | None = None
+        self._dead_touch = False  # focus was lost mid-touch: ignore this touch until it ends
+        self._mouse_down = False
+        self._finger: QtCore.QPointF | None = None
+        self._trail: list[tuple[float, QtCore.QPointF]] = []
+        self._value = TeleopValue()
+        self._state: Any = None
+        self.setAttribute(QtCore.Qt.WidgetAttribute.WA_AcceptTouchEvents, True)
+        self.setFocusPolicy(QtCore.Qt.FocusPolicy.StrongFocus)
+        self.setMinimumSize(120, 120)
+        self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Expanding, QtWidgets.QSizePolicy.Policy.Expanding)
+
+    # -- geometry -----------------------------------------------------------------------------------------
+    def pad(self) -> tuple[QtCore.QPointF, float]:
+        """Centre and radius of the pad (leaving room for the labels)."""
+        top, bottom = 18, 22  # room for the axis labels and the status line
+        r = max(10.0, min(self.width() - 8, self.height() - top - bottom) / 2 - 4)
+        return QtCore.QPointF(self.width() / 2, top + (self.height() - top - bottom) / 2), r
+
+    def to_axes(self, pos: QtCore.QPointF) -> tuple[float, float]:
+        c, r = self.pad()
+        return (pos.x() - c.x()) / r, -(pos.y() - c.y()) / r
+
+    # -- state ---------------------------------------------------------------------------------------------
+    def refresh(self, state: Any) -> None:
+        self._state = state
+        if isinstance(state.value, TeleopValue):
+            self._value = state.value
+        self.update()
+
+    # -- input -------------------------------------------------------------------------------------------
+    def _press(self, pos: QtCore.QPointF) -> None:
+        self._finger = pos
+        self._trail = [(time.monotonic(), pos)]
+        self.model.set_axes(*self.to_axes(pos))
+        self.update()
+
+    def _move(self, pos: QtCore.QPointF) -> None:
+        self._finger = pos
+        now = time.monotonic()
+        self._trail.append((now, pos))
+        self._trail = [(t, p) for t, p in self._trail if now - t < TRAIL_S][-40:]
+        self.model.set_axes(*self.to_axes(pos))
+        self.update()
+
+    def _lift(self, reason: str = "released") -> None:
+        self._finger = None
+        self._trail = []
+        self.model.release(reason)
+        self.update()
+
+    def event(self, e: QtCore.QEvent) -> bool:
+        t = e.type()
+        T = QtCore.QEvent.Type
+        if t in (T.TouchBegin, T.TouchUpdate, T.TouchEnd, T.TouchCancel):
+            self._touch(e)
+            e.accept()
+            return True
+        return super().event(e)
+
+    def _touch(self, e: Any) -> None:
+        T = QtCore.QEvent.Type
+        S = QtGui.QEventPoint.State
+        if e.type() == T.TouchCancel:
+            if self._touch_id is not None and not self._dead_touch:
+                self._lift("touch cancelled")
+            self._touch_id = None
+            self._dead_touch = False
+            return
+        for p in e.points():
+            if self._touch_id is None and p.state() == S.Pressed:
+                self._touch_id = p.id()
+                self._dead_touch = False
+                self._press(p.position())
+            elif p.id() == self._touch_id:
+                if p.state() == S.Released:
+                    self._touch_id = None
+                    if self._dead_touch:
+                        self._dead_touch = False
+                        self.model.release("released")  # unlock for the next touch
+                    else:
+                        self._lift()
+                elif not self._dead_touch and p.state() == S.Updated:
+                    self._move(p.position())
+        if e.type() == T.TouchEnd and self._touch_id is not None:
+            self._touch_id = None
+            if not self._dead_touch:
+                self._lift()
+            self._dead_touch = False
+
+    def mousePressEvent(self, e: QtGui.QMouseEvent) -> None:  # noqa: N802
+        if e.button() == QtCore.Qt.MouseButton.LeftButton and self._touch_id is None:
+            self._mouse_down = True
+            self._press(e.position())
+
+    def mouseMoveEvent(self, e: QtGui.QMouseEvent) -> None:  # noqa: N802
+        if self._mouse_down:
+            self._move(e.position())
+
+    def mouseReleaseEvent(self, e: QtGui.QMouseEvent) -> None:  # noqa: N802
+        if self._mouse_down and e.button() == QtCore.Qt.MouseButton.LeftButton:
+            self._mouse_down = False
+            self._lift()
+
+    def _lose(self, reason: str) -> None:
+        if self._finger is not None or self._mouse_down:
+            self._mouse_down = False
+            if self._touch_id is not None:
+                self._dead_touch = True
+            self._finger = None
+            self._trail = []
+            self.model.release(reason)
+            self.update()
+
+    def focusOutEvent(self, e: QtGui.QFocusEvent) -> None:  # noqa: N802
+        if e.reason() == QtCore.Qt.FocusReason.ActiveWindowFocusReason or not self.window().isActiveWindow():
+            self._lose("focus lost")
+        super().focusOutEvent(e)
+
+    def changeEvent(self, e: QtCore.QEvent) -> None:  # noqa: N802
+        if e.type() == QtCore.QEvent.Type.ActivationChange and not self.isActiveWindow():
+            self._lose("focus lost")
+        super().changeEvent(e)
+
+    def hideEvent(self, e: QtGui.QHideEvent) -> None:  # noqa: N802
+        self._lose("hidden")
+        super().hideEvent(e)
+
+    # -- painting --------------------------------------------------------------------------------------
+    def paintEvent(self, _e: QtGui.QPaintEvent) -> None:  # noqa: N802
+        p = QtGui.QPainter(self)
+        p.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing, True)
+        pal = self.palette()
+        p.fillRect(self.rect(), pal.color(QtGui.QPalette.ColorRole.Window))
+        c, r = self.pad()
+        v = self._value
+        active = v.active
+        ring = QtGui.QColor(70, 160, 255) if active else QtGui.QColor(120, 128, 140)
+        p.setPen(QtGui.QPen(ring, 2))
+        p.setBrush(QtGui.QColor(ring.red(), ring.green(), ring.blue(), 28))
+        p.drawEllipse(c, r, r)
+        dz = float(getattr(self.model.settings, "dead_zone", 0.0))
+        if dz > 0:
+            p.setPen(QtGui.QPen(QtGui.QColor(120, 128, 140, 160), 1, QtCore.Qt.PenStyle.DashLine))
+            p.setBrush(QtCore.Qt.BrushStyle.NoBrush)
+            p.drawEllipse(c, r * dz, r * dz)
+        p.setPen(QtGui.QPen(QtGui.QColor(120, 128, 140, 120), 1))
+        p.drawLine(QtCore.QPointF(c.x() - r, c.y()), QtCore.QPointF(c.x() + r, c.y()))
+        p.drawLine(QtCore.QPointF(c.x(), c.y() - r), QtCore.QPointF(c.x(), c.y() + r))
+        # trail and knob
+        now = time.monotonic()
+        for i in range(1, len(self._trail)):
+            t0, a = self._trail[i - 1]
+            _t1, b = self._trail[i]
+            alpha = max(0, int(200 * (1 - (now - t0) / TRAIL_S)))
+            p.setPen(QtGui.QPen(QtGui.QColor(70, 160, 255, alpha), 4, QtCore.Qt.PenStyle.SolidLine,
+                                QtCore.Qt.PenCapStyle.RoundCap))
+            p.drawLine(a, b)
+        knob = c
+        if self._finger is not None:
+            fx, fy = self.to_axes(self._finger)
+            d = math.hypot(fx, fy)
+            if d > 1:
+                fx, fy = fx / d, fy / d
+            knob = QtCore.QPointF(c.x() + fx * r, c.y() - fy * r)
+            p.setPen(QtGui.QPen(QtGui.QColor(70, 160, 255, 140), 2))
+            p.drawLine(c, knob)
+        kr = max(10.0, r * 0.18)
+        p.setPen(QtGui.QPen(QtGui.QColor(30, 60, 110), 2))
+        p.setBrush(QtGui.QColor(70, 160, 255) if self._finger is not None else QtGui.QColor(150, 158, 170))
+        p.drawEllipse(knob, kr, kr)
+        # axis labels (drawn last: never under the knob)
+        h, vert = self.model.axes() if hasattr(self.model, "axes") else ("", "")
+        p.setPen(pal.color(QtGui.QPalette.ColorRole.WindowText))
+        font = p.font()
+        font.setPointSizeF(max(7.0, font.pointSizeF() * 0.8))
+        p.setFont(font)
+        top = QtCore.QRectF(4, 1, self.width() - 8, 16)
+        if vert:
+            p.drawText(top, QtCore.Qt.AlignmentFlag.AlignLeft | QtCore.Qt.AlignmentFlag.AlignVCenter, "↑ " + vert)
+        if h:
+            p.drawText(top, QtCore.Qt.AlignmentFlag.AlignRight | QtCore.Qt.AlignmentFlag.AlignVCenter, h + " →")
+        # status line
+        p.setPen(pal.color(QtGui.QPalette.ColorRole.WindowText))
+        status = self._status_text(v)
+        p.drawText(QtCore.QRectF(4, self.height() - 20, self.width() - 8, 18),
+                   QtCore.Qt.AlignmentFlag.AlignCenter, status)
+        p.end()
+
+    def _status_text(self, v: TeleopValue) -> str:
+        st = self._state
+        if st is not None and st.link_down:
+            return "link down: stopped"
+        if st is not None and st.error:
+            return st.error
+        if v.locked:
+            return f"stopped ({v.reason}): lift your finger"
+        if v.active:
+            parts = [f"{path.rsplit('.', 2)[-2] + '.' if '.' in path else ''}{path.rsplit('.', 1)[-1]} "
+                     f"{val:+.2f}" for path, val in v.command]
+            return "  ".join(parts) or "driving"
+        rate = getattr(self.model.settings, "rate_hz", 0)
+        return f"idle · touch to drive ({rate:g} Hz)"

@@ -1,0 +1,155 @@
+"""Image view offscreen: paints the newest frame letterboxed, overlay, pinch/pan/double-tap, screenshots."""
+
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from qtpy import QtCore, QtGui
+from qtpy.QtTest import QTest
+from rcon_widgets_sensors.image import Frame, ImageModel, ImageSettings
+from rcon_widgets_sensors.image_view import ImageView
+from rcon_widgets_sensors.viewport import Viewport
+
+from rcon_core.plugins import Binding
+from rcon_core.sim.camera import CameraRenderer, encode_jpeg
+from rcon_core.sim.vessel import Vessel
+
+SHOTS = Path(__file__).resolve().parents[3] / "docs" / "screenshots" / "sensors"
+
+
+def feed(model, msg):
+    before = model.state.value.index if isinstance(model.state.value, Frame) else 0
+    model.on_message(msg)
+    return model.wait_frame(before, 5.0)
+
+
+def camera_msg():
+    stamp = time.time()
+    img = CameraRenderer("front").frame(Vessel(), stamp)
+    return {"header": {"stamp": {"secs": int(stamp), "nsecs": int(stamp % 1 * 1e9)}, "frame_id": "cam"},
+            "format": "jpeg", "data": encode_jpeg(img)}
+
+
+@pytest.fixture
+def view(qtbot):
+    model = ImageModel(ImageSettings(), Binding("/camera/rear/image_raw/compressed", "sensor_msgs/CompressedImage",
+                                                "subscribe"), None)
+    v = ImageView(model)
+    qtbot.addWidget(v)
+    v.resize(480, 320)
+    v.show()
+    yield v
+    model.on_stop()
+
+
+def grab(view):
+    return view.grab().toImage()
+
+
+def test_paints_the_frame_letterboxed_with_overlay(view, qtbot):
+    frame = feed(view.model, camera_msg())
+    painted = []
+    view.on_painted = lambda f, t: painted.append((f.index, t))
+    view.refresh(view.model.state)
+    qtbot.waitUntil(lambda: bool(painted), timeout=3000)
+    assert painted[0][0] == frame.index
+    img = grab(view)
+    # 640x480 into 480x320: 426.7 px wide, centred -> dark bars left and right, picture in the middle
+    left, mid = img.pixelColor(5, 300), img.pixelColor(240, 100)
+    assert (left.red(), left.green(), left.blue()) == (14, 17, 22)
+    assert mid.blue() > 100  # the sky
+    # the overlay box is in the top left corner over the picture
+    assert view.painted_fps >= 0 and "640×480 jpeg" in frame.info
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    view.grab().save(str(SHOTS / "image-camera.png"))
+
+
+def test_waiting_and_error_texts(view, qtbot):
+    view.refresh(view.model.state)
+    view.model.set_error("could not decode the JPEG image (12 bytes; format 'jpeg')")
+    view.refresh(view.model.state)
+    assert view.frame is None
+    grab(view)  # paints without a frame (no exception)
+
+
+def test_viewport_arithmetic():
+    vp = Viewport(480, 320, 640, 480)
+    x, y, w, h = vp.rect()
+    assert math.isclose(w, 426.666, rel_tol=1e-3) and h == 320 and math.isclose(x, 26.666, rel_tol=1e-3)
+    ix, iy = vp.to_image(240, 160)
+    assert math.isclose(ix, 320) and math.isclose(iy, 240)
+    vp.zoom_at(2.0, 100, 100)  # the image point under (100, 100) stays there
+    before = Viewport(480, 320, 640, 480).to_image(100, 100)
+    after = vp.to_image(100, 100)
+    assert math.isclose(before[0], after[0], abs_tol=1e-6) and math.isclose(before[1], after[1], abs_tol=1e-6)
+    vp.pan_by(10_000, 0)  # cannot throw the image away
+    assert vp.rect()[0] < 480
+    vp.zoom_at(100, 0, 0)
+    assert vp.zoom == 16.0
+    vp.fit()
+    assert vp.fitted
+
+
+def touch_device():
+    return QTest.createTouchDevice()
+
+
+def test_pinch_zooms_pan_moves_double_tap_fits(view, qtbot):
+    feed(view.model, camera_msg())
+    view.refresh(view.model.state)
+    dev = touch_device()
+    c = QtCore.QPoint(240, 160)
+    QTest.touchEvent(view, dev).press(0, c - QtCore.QPoint(40, 0), view).press(1, c + QtCore.QPoint(40, 0), view)
+    for step in range(1, 6):
+        d = 40 + step * 16
+        QTest.touchEvent(view, dev).move(0, c - QtCore.QPoint(d, 0), view).move(1, c + QtCore.QPoint(d, 0), view)
+    QTest.touchEvent(view, dev).release(0, c - QtCore.QPoint(120, 0), view).release(1, c + QtCore.QPoint(120, 0),
+                                                                                    view)
+    assert view.viewport.zoom == pytest.approx(3.0, rel=0.05)  # fingers 80 px -> 240 px apart
+    z_rect = view.viewport.rect()
+    # one finger drags the picture
+    QTest.touchEvent(view, dev).press(0, c, view)
+    QTest.touchEvent(view, dev).move(0, c + QtCore.QPoint(30, 20), view)
+    QTest.touchEvent(view, dev).release(0, c + QtCore.QPoint(30, 20), view)
+    moved = view.viewport.rect()
+    assert moved[0] == pytest.approx(z_rect[0] + 30) and moved[1] == pytest.approx(z_rect[1] + 20)
+    view.grab().save(str(SHOTS / "image-zoomed.png"))
+    # double tap fits again
+    for _ in range(2):
+        QTest.touchEvent(view, dev).press(0, c, view)
+        QTest.touchEvent(view, dev).release(0, c, view)
+    assert view.viewport.fitted
+
+
+def test_mouse_wheel_and_double_click(view, qtbot):
+    feed(view.model, camera_msg())
+    view.refresh(view.model.state)
+    pos = QtCore.QPointF(240, 160)
+    ev = QtGui.QWheelEvent(pos, view.mapToGlobal(pos), QtCore.QPoint(), QtCore.QPoint(0, 240),
+                           QtCore.Qt.MouseButton.NoButton, QtCore.Qt.KeyboardModifier.NoModifier,
+                           QtCore.Qt.ScrollPhase.NoScrollPhase, False)
+    view.wheelEvent(ev)
+    assert view.viewport.zoom == pytest.approx(1.5625)
+    QTest.mouseDClick(view, QtCore.Qt.MouseButton.LeftButton, pos=QtCore.QPoint(240, 160))
+    assert view.viewport.fitted
+
+
+def test_scan_and_grid_screenshots(qtbot):
+    model = ImageModel(None, Binding("/scan", "sensor_msgs/LaserScan", "subscribe"), None)
+    view = ImageView(model)
+    qtbot.addWidget(view)
+    view.resize(360, 360)
+    view.show()
+    from rcon_core.sim import world
+    lidar = world.Lidar()
+    ranges = lidar.scan(0.0, 0.0, math.radians(30)).astype(np.float64)
+    msg = {"header": {"stamp": {"secs": int(time.time()), "nsecs": 0}}, "angle_min": lidar.angle_min,
+           "angle_max": lidar.angle_max, "angle_increment": lidar.angle_increment, "range_min": lidar.range_min,
+           "range_max": lidar.range_max, "ranges": [None if not np.isfinite(r) else float(r) for r in ranges]}
+    frame = feed(model, msg)
+    view.refresh(model.state)
+    assert frame.kind == "scan" and frame.counts.valid > 0
+    view.grab().save(str(SHOTS / "image-scan.png"))
+    model.on_stop()

@@ -1,0 +1,284 @@
+"""Teleop model against the embedded sim: steady rate while held, one zero on every way of letting go
+(release, stop, link drop), then silence; two pads merge; the vessel moves."""
+
+import asyncio
+import time
+
+import pytest
+from rcon_widgets_sensors.teleop import TeleopModel, TeleopSettings, TeleopValue, shape_axes
+from sensors_helpers import until
+
+from rcon_core.bridge import BridgeClient, ConnectionState
+from rcon_core.msgs import TypeRegistry
+from rcon_core.plugins import Binding
+
+TWIST = "geometry_msgs/Twist"
+
+
+class Receiver:
+    """The robot's side: every /cmd_vel message with its monotonic receipt time."""
+
+    def __init__(self, sim, topic="/cmd_vel", type_name="geometry_msgs/Twist"):
+        self.got = []
+        sim.subscribe_internal(topic, type_name, "/rcon_test_receiver", self._on)
+
+    def _on(self, msg):
+        self.got.append((time.monotonic(), msg))
+
+    def since(self, t):
+        return [m for when, m in self.got if when >= t]
+
+    def times_since(self, t):
+        return [when for when, _m in self.got if when >= t]
+
+    def first_zero_since(self, t):
+        """(receipt time, messages received after it) of the first zero command at or after ``t``."""
+        for i, (when, m) in enumerate(self.got):
+            if when >= t and is_zero(m):
+                return when, [x for _w, x in self.got[i + 1:]]
+        return None, []
+
+
+def is_zero(msg):
+    return all(v == 0 for part in ("linear", "angular") for v in msg[part].values())
+
+
+@pytest.fixture
+async def client(sim):
+    c = BridgeClient(sim.url, reconnect=True, backoff_min=0.05, backoff_max=0.2)
+    await c.connect()
+    yield c
+    await c.close()
+
+
+def pad(client, settings=None, name="/cmd_vel", type_name=TWIST, node="pad"):
+    return TeleopModel(settings or TeleopSettings(), Binding(name, type_name, "publish"), client.node(node),
+                       types=TypeRegistry.standard())
+
+
+async def test_rate_while_held_zero_on_release_then_silence(sim, client):
+    rx = Receiver(sim)
+    model = pad(client, TeleopSettings(rate_hz=20, max_linear=2.0))
+    model.start()
+    try:
+        await asyncio.sleep(0.3)
+        assert rx.got == []  # idle: nothing at all, not even zeros
+        t0 = time.monotonic()
+        model.set_axes(0.0, 0.5)  # half way up: linear.x = 2.0 * (0.5 - 0.1) / 0.9
+        await asyncio.sleep(1.0)
+        held = rx.since(t0)
+        # 20 Hz for 1 s: about 21 (the first goes out at once); generous bounds
+        assert 14 <= len(held) <= 26, len(held)
+        assert held[0]["linear"]["x"] == pytest.approx(2.0 * 0.4 / 0.9)
+        assert held[0]["angular"]["z"] == 0.0
+        gaps = [b - a for a, b in zip(rx.times_since(t0), rx.times_since(t0)[1:], strict=False)]
+        assert max(gaps) < 0.2  # steady: no long holes
+        assert model.state.value.active
+        t_rel = time.monotonic()
+        model.release()
+        await until(lambda: rx.first_zero_since(t_rel)[0], 2.0, "the zero")
+        assert rx.first_zero_since(t_rel)[0] - t_rel < 0.1  # zero within 100 ms of the lift
+        await asyncio.sleep(0.5)
+        assert rx.first_zero_since(t_rel)[1] == []  # one zero, then silence
+        model.release()  # releasing an idle pad sends nothing
+        await asyncio.sleep(0.2)
+        assert rx.first_zero_since(t_rel)[1] == []
+    finally:
+        model.stop()
+
+
+async def test_stop_sends_zero_and_locks_until_lift(sim, client):
+    rx = Receiver(sim)
+    model = pad(client)
+    model.start()
+    model.set_axes(0.3, 0.9)
+    await until(lambda: rx.got, 2.0, "driving")
+    t = time.monotonic()
+    model.stop()  # the canvas is switched away
+    await until(lambda: rx.first_zero_since(t)[0], 2.0, "the zero on stop")
+    assert rx.first_zero_since(t)[0] - t < 0.1
+    await asyncio.sleep(0.4)
+    assert rx.first_zero_since(t)[1] == []
+    # back on the canvas: a fresh view sends a fresh touch; the lock ended with the stop
+    model.release()
+    model.start()
+    model.set_axes(0.3, 0.9)
+    await until(lambda: len(rx.first_zero_since(t)[1]) > 0, 2.0, "driving after a restart")
+    model.release()
+    model.stop()
+
+
+async def test_link_drop_zero_after_reconnect_then_silence(sim, client):
+    rx = Receiver(sim)
+    model = pad(client, TeleopSettings(rate_hz=10))
+    states = []
+
+    def on_state(st):
+        states.append(st)
+        model.set_link(st is ConnectionState.CONNECTED)
+
+    client.add_state_listener(on_state)
+    model.start()
+    try:
+        model.set_axes(0.0, 1.0)
+        await until(lambda: len(rx.got) >= 2, 3.0, "driving")
+        assert rx.got[-1][1]["linear"]["x"] == pytest.approx(1.0)
+        t = time.monotonic()
+        for conn in list(sim.connections):  # the network drops: the socket dies without a close frame
+            conn.ws.transport.abort()
+        await until(lambda: ConnectionState.RECONNECTING in states, 3.0, "link down seen")
+        await until(lambda: states[-1] is ConnectionState.CONNECTED, 5.0, "reconnected")
+        value = model.state.value
+        assert value.locked and not value.active and value.reason == "link down"
+        await until(lambda: any(is_zero(m) for m in rx.since(t)), 3.0, "a zero after the drop")
+        _when, after = rx.first_zero_since(t)
+        assert after == [] or all(is_zero(m) for m in after)  # never the old command again
+        n = len(rx.since(t))
+        model.set_axes(0.0, 1.0)  # the finger is still down: locked until it lifts
+        await asyncio.sleep(0.5)
+        assert len(rx.since(t)) == n
+        model.release()  # lift: unlocks, sends nothing (already idle)
+        await asyncio.sleep(0.2)
+        assert len(rx.since(t)) == n
+        model.set_axes(0.0, 1.0)  # a new touch drives again
+        await until(lambda: len(rx.since(t)) > n and not is_zero(rx.since(t)[-1]), 2.0, "driving again")
+        model.release()
+    finally:
+        model.stop()
+
+
+async def test_two_pads_merge_into_one_stream(sim, client):
+    rx = Receiver(sim)
+    linear = pad(client, TeleopSettings(horizontal="", vertical="linear.x", rate_hz=10), node="left")
+    angular = pad(client, TeleopSettings(horizontal="-angular.z", vertical="", rate_hz=10, dead_zone=0),
+                  node="right")
+    linear.start()
+    angular.start()
+    try:
+        t = time.monotonic()
+        linear.set_axes(0.0, 1.0)
+        angular.set_axes(0.5, 0.0)  # right: turn right (negative yaw rate)
+        await asyncio.sleep(1.0)
+        msgs = rx.since(t)
+        assert 7 <= len(msgs) <= 15, len(msgs)  # one stream at 10 Hz, not two
+        last = msgs[-1]
+        assert last["linear"]["x"] == pytest.approx(1.0) and last["angular"]["z"] == pytest.approx(-0.5)
+        t2 = time.monotonic()
+        linear.release()  # only its own axis drops to zero; the other pad keeps driving
+        await asyncio.sleep(0.5)
+        later = [m for m in rx.since(t2) if m["linear"]["x"] == 0]
+        assert len(later) >= 3 and all(m["angular"]["z"] == pytest.approx(-0.5) for m in later)
+        assert rx.since(t2)[-1]["linear"]["x"] == 0
+        t3 = time.monotonic()
+        angular.release()
+        await asyncio.sleep(0.4)
+        when, after = rx.first_zero_since(t3)
+        assert when is not None and after == []
+    finally:
+        linear.stop()
+        angular.stop()
+
+
+async def test_vessel_moves_when_driven(sim, client):
+    model = pad(client, TeleopSettings(max_linear=1.0, rate_hz=10))
+    model.start()
+    x0, y0 = sim.robot.x, sim.robot.y
+    try:
+        model.set_axes(0.0, 1.0)
+        await until(lambda: abs(sim.robot.x - x0) + abs(sim.robot.y - y0) > 0.2, 10.0, "the vessel moving")
+        assert sim.robot.cmd_surge == pytest.approx(1.0)
+        model.release()
+        await until(lambda: sim.robot.cmd_surge == 0.0, 2.0, "the thrusters stopped")
+    finally:
+        model.stop()
+
+
+@pytest.mark.parametrize("type_name,field,axes,expect", [
+    ("geometry_msgs/TwistStamped", "twist", (0.0, 1.0), {"twist.linear.x": 1.0}),
+    ("geometry_msgs/Vector3", "", (1.0, 0.0), {"y": -1.0}),
+    ("geometry_msgs/PointStamped", "point", (0.0, -1.0), {"point.x": -1.0}),
+    ("geometry_msgs/Pose2D", "", (0.0, 1.0), {"x": 1.0}),
+    ("geometry_msgs/Accel", "", (-1.0, 0.0), {"angular.z": 2.0}),
+])
+async def test_other_planar_types(sim, client, type_name, field, axes, expect):
+    topic = "/rcon_test/motion"
+    got = []
+    sim.subscribe_internal(topic, type_name, "/rcon_test_receiver", got.append)
+    model = pad(client, TeleopSettings(dead_zone=0, max_angular=2.0), name=topic, type_name=type_name)
+    assert model.problems() == [] and model.body_path == field
+    model.start()
+    try:
+        model.set_axes(*axes)
+        await until(lambda: got, 3.0, "a message")
+        from rcon_core.plugins.paths import get_path
+        for path, value in expect.items():
+            assert get_path(got[-1], path) == pytest.approx(value)
+        if "header" in got[-1]:
+            assert got[-1]["header"]["stamp"]["secs"] > 0
+    finally:
+        model.release()
+        model.stop()
+
+
+def test_settings_and_axis_problems():
+    assert TeleopSettings().problems() == []
+    bad = TeleopSettings(horizontal="linear x", vertical="", max_linear=0, max_angular=99, dead_zone=0.95, rate_hz=0)
+    text = " | ".join(bad.problems())
+    for part in ("'linear x' is not a field path", "maximum linear speed", "maximum angular speed", "dead zone",
+                 "publish rate"):
+        assert part in text
+    assert "both axes are unused" in " ".join(TeleopSettings(horizontal="", vertical="").problems())
+    m = TeleopModel(TeleopSettings(vertical="linear.q"), Binding("/c", TWIST, "publish"), None,
+                    types=TypeRegistry.standard())
+    assert m.problems() == ["geometry_msgs/Twist has no field 'linear.q' for the pad's axis"]
+    m2 = TeleopModel(None, Binding("/c", "geometry_msgs/Twist", "publish"), None)  # no registry: built-in table
+    assert m2.problems() == [] and m2.template()["linear"] == {"x": 0.0, "y": 0.0, "z": 0.0}
+    assert isinstance(m2.state.value, TeleopValue) and not m2.state.value.active
+
+
+def test_dead_zone_and_clamp():
+    assert shape_axes(0.05, 0.05, 0.1) == (0.0, 0.0)
+    x, y = shape_axes(3.0, 4.0, 0.0)
+    assert (x, y) == pytest.approx((0.6, 0.8))
+    assert shape_axes(0.0, 0.55, 0.1)[1] == pytest.approx(0.5)
+    m = TeleopModel(TeleopSettings(dead_zone=0.2, max_linear=0.5, max_angular=1.5), Binding("/c", TWIST, "publish"),
+                    None)
+    assert m.command_for(0.1, 0.1) == {"angular.z": 0.0, "linear.x": 0.0}
+    cmd = m.command_for(1.0, 0.0)
+    assert cmd["angular.z"] == pytest.approx(-1.5) and cmd["linear.x"] == 0.0
+
+
+def test_set_axes_before_start_publishes_nothing():
+    sent = []
+
+    class Port:
+        def advertise(self, *a, **k):
+            raise AssertionError("not started")
+
+    m = TeleopModel(None, Binding("/c", TWIST, "publish"), Port())
+    m.set_axes(0, 1)  # not running: no publish, no error
+    assert sent == [] and not m.active and m.state.error is None
+
+
+async def test_client_closed_then_reopened_sends_one_zero(sim):
+    rx = Receiver(sim)
+    client = BridgeClient(sim.url, reconnect=False)
+    await client.connect()
+    model = pad(client)
+    client.add_state_listener(lambda st: model.set_link(st is ConnectionState.CONNECTED))
+    model.start()
+    try:
+        model.set_axes(0.0, 1.0)
+        await until(lambda: len(rx.got) >= 2, 3.0, "driving")
+        await client.close()  # the operator's side goes away
+        t = time.monotonic()
+        await asyncio.sleep(0.5)
+        assert rx.since(t) == []  # nothing can (and nothing tries to) go out while down
+        assert model.state.link_down and model.state.value.locked
+        await client.connect()  # back: exactly one zero, then silence
+        await until(lambda: rx.first_zero_since(t)[0], 3.0, "the zero after reconnecting")
+        await asyncio.sleep(0.4)
+        assert rx.first_zero_since(t)[1] == [] and len(rx.since(t)) == 1
+    finally:
+        model.stop()
+        await client.close()

@@ -1,0 +1,147 @@
+"""Teleop pads offscreen with a real bridge thread and the sim: two fingers on two pads at once, zero on
+lift, on focus loss and when hidden; screenshot."""
+
+import time
+from pathlib import Path
+
+import pytest
+from qtpy import QtCore, QtGui, QtWidgets
+from qtpy.QtTest import QTest
+from rcon_widgets_sensors.teleop import TeleopModel, TeleopSettings
+from rcon_widgets_sensors.teleop_view import TeleopView
+
+from rcon_core.bridge import BridgeClient
+from rcon_core.bridge.threaded import BridgeThread
+from rcon_core.msgs import TypeRegistry
+from rcon_core.plugins import Binding
+
+SHOTS = Path(__file__).resolve().parents[3] / "docs" / "screenshots" / "sensors"
+
+
+class Robot:
+    """/cmd_vel as the sim receives it, with receipt times."""
+
+    def __init__(self, sim):
+        self.got = []
+        sim.run_sync(lambda: sim.subscribe_internal("/cmd_vel", "geometry_msgs/Twist", "/rcon_test_rx",
+                                                    lambda m: self.got.append((time.monotonic(), m))))
+
+    def since(self, t):
+        return [m for when, m in list(self.got) if when >= t]
+
+
+def zero(m):
+    return not any(m["linear"].values()) and not any(m["angular"].values())
+
+
+@pytest.fixture
+def bridge(sim_thread):
+    bt = BridgeThread().start()
+    client = BridgeClient(sim_thread.url, reconnect=False)
+    bt.run(client.connect()).result(10)
+    yield bt, client
+    bt.run(client.close()).result(10)
+    bt.stop()
+
+
+def make_pad(bridge, settings, node):
+    bt, client = bridge
+    model = TeleopModel(settings, Binding("/cmd_vel", "geometry_msgs/Twist", "publish"), client.node(node),
+                        types=TypeRegistry.standard(), dispatch=bt.call)
+    bt.call(model.start).result(5)
+    view = TeleopView(model)
+    return model, view
+
+
+def wait(qtbot, pred, timeout=3000):
+    qtbot.waitUntil(lambda: bool(pred()), timeout=timeout)
+
+
+@pytest.fixture
+def two_pads(qtbot, bridge):
+    left_m, left = make_pad(bridge, TeleopSettings(horizontal="", vertical="linear.x", dead_zone=0), "left")
+    right_m, right = make_pad(bridge, TeleopSettings(horizontal="-angular.z", vertical="", dead_zone=0), "right")
+    win = QtWidgets.QWidget()
+    lay = QtWidgets.QHBoxLayout(win)
+    lay.addWidget(left)
+    lay.addWidget(right)
+    qtbot.addWidget(win)
+    win.resize(640, 300)
+    win.show()
+    qtbot.waitExposed(win)
+    yield win, left, right
+    bt = bridge[0]
+    for m in (left_m, right_m):
+        bt.call(m.stop).result(5)
+
+
+def centre(view):
+    c, r = view.pad()
+    return c.toPoint(), r
+
+
+def test_two_fingers_drive_two_pads_at_once(qtbot, sim_thread, two_pads):
+    robot = Robot(sim_thread)
+    win, left, right = two_pads
+    dev = QTest.createTouchDevice()
+    lc, lr = centre(left)
+    rc, rr = centre(right)
+    up = lc - QtCore.QPoint(0, int(lr * 0.8))  # left thumb up: forward
+    side = rc + QtCore.QPoint(int(rr * 0.5), 0)  # right thumb right: turn right
+    QTest.touchEvent(win, dev).press(0, left.mapTo(win, lc), win).press(1, right.mapTo(win, rc), win).commit()
+    QTest.touchEvent(win, dev).move(0, left.mapTo(win, up), win).move(1, right.mapTo(win, side), win).commit()
+    wait(qtbot, lambda: any(m["linear"]["x"] > 0.7 and m["angular"]["z"] < -0.4 for m in robot.since(0)))
+    assert left.model.active and right.model.active
+    left.refresh(left.model.state)
+    right.refresh(right.model.state)
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    win.grab().save(str(SHOTS / "teleop-two-pads.png"))
+    t = time.monotonic()
+    QTest.touchEvent(win, dev).release(0, left.mapTo(win, up), win).stationary(1).commit()
+    wait(qtbot, lambda: any(m["linear"]["x"] == 0 and m["angular"]["z"] < -0.4 for m in robot.since(t)))
+    assert not left.model.active and right.model.active  # the right thumb still turns
+    t2 = time.monotonic()
+    QTest.touchEvent(win, dev).release(1, right.mapTo(win, side), win).commit()
+    wait(qtbot, lambda: any(zero(m) for m in robot.since(t2)))
+    qtbot.wait(400)
+    after = robot.since(t2)
+    assert zero(after[-1]) and sum(zero(m) for m in after) == 1
+
+
+def test_focus_loss_and_hiding_send_the_zero(qtbot, sim_thread, two_pads):
+    robot = Robot(sim_thread)
+    win, left, _right = two_pads
+    lc, lr = centre(left)
+    QTest.mousePress(left, QtCore.Qt.MouseButton.LeftButton, pos=lc)
+    QTest.mouseMove(left, lc - QtCore.QPoint(0, int(lr * 0.9)))
+    wait(qtbot, lambda: any(m["linear"]["x"] > 0.8 for m in robot.since(0)))
+    t = time.monotonic()
+    QtWidgets.QApplication.sendEvent(
+        left, QtGui.QFocusEvent(QtCore.QEvent.Type.FocusOut, QtCore.Qt.FocusReason.ActiveWindowFocusReason))
+    wait(qtbot, lambda: any(zero(m) for m in robot.since(t)))
+    qtbot.wait(300)
+    assert not left.model.active
+    QTest.mouseMove(left, lc - QtCore.QPoint(0, int(lr * 0.5)))  # still dragging: ignored (no longer held)
+    qtbot.wait(300)
+    assert not any(m["linear"]["x"] > 0 for m in robot.since(t))
+    QTest.mouseRelease(left, QtCore.Qt.MouseButton.LeftButton, pos=lc)
+    # again, and this time the pad is hidden (its canvas goes to the background)
+    QTest.mousePress(left, QtCore.Qt.MouseButton.LeftButton, pos=lc)
+    QTest.mouseMove(left, lc - QtCore.QPoint(0, int(lr * 0.9)))
+    t2 = time.monotonic()
+    wait(qtbot, lambda: any(m["linear"]["x"] > 0.8 for m in robot.since(t2)))
+    t3 = time.monotonic()
+    win.hide()
+    wait(qtbot, lambda: any(zero(m) for m in robot.since(t3)))
+    qtbot.wait(300)
+    assert zero(robot.since(t3)[-1]) and not left.model.active
+
+
+def test_idle_pad_screenshot(qtbot, bridge):
+    model, view = make_pad(bridge, TeleopSettings(), "idle")
+    qtbot.addWidget(view)
+    view.resize(300, 300)
+    view.show()
+    view.refresh(model.state)
+    view.grab().save(str(SHOTS / "teleop-idle.png"))
+    bridge[0].call(model.stop).result(5)
