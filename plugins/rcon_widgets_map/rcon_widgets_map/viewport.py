@@ -52,10 +52,13 @@ class Viewport:
         return m.latlon_to_world(self.lat, self.lon, self.zoom)
 
     def to_screen(self, lat: float, lon: float) -> tuple[float, float]:
-        """Screen pixel of a point (may lie outside the view)."""
+        """Screen pixel of a point (may lie outside the view); across the antimeridian, the copy of the
+        point nearest the centre."""
         cx, cy = self._centre_world()
         x, y = m.latlon_to_world(lat, lon, self.zoom)
-        return x - cx + self.width / 2.0, y - cy + self.height / 2.0
+        size = m.world_size(self.zoom)
+        dx = (x - cx + size / 2.0) % size - size / 2.0
+        return dx + self.width / 2.0, y - cy + self.height / 2.0
 
     def to_latlon(self, sx: float, sy: float) -> tuple[float, float]:
         """Lat/lon under a screen pixel; longitude wrapped to [-180, 180)."""
