@@ -43,7 +43,7 @@ async def test_raw_camera_frames_arrive_decoded_with_stamp(sim, client):
         # the sky is at the top of the sim's camera, water at the bottom: blue-ish both, sky brighter
         assert frame.rgb[5].mean() > frame.rgb[-60].mean()
         opts = sim_options(sim, "/camera/front/image_raw")
-        assert (opts.throttle_rate, opts.queue_length, opts.compression) == (50, 1, "cbor")
+        assert (opts.throttle_rate, opts.queue_length, opts.compression) == (45, 1, "cbor")
         st = model.state
         assert st.error is None and "data" not in st.message and st.message["encoding"] == "rgb8"
         second = await in_thread(model.wait_frame, frame.index, 10.0)
