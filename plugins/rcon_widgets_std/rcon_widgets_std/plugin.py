@@ -58,6 +58,36 @@ def specs() -> list[WidgetSpec]:
                             messages=["empty", "any"], service_parts=["request"]),
             default_size=(160, 80), priority=5, **_refs("button", "Button"),
         ),
+        WidgetSpec(
+            kind="std.textfield", title="Text Field", icon="textfield", category="Controls",
+            description="Shows raw data of any type, or publishes what the operator types (YAML or JSON)",
+            roles={Role.SUBSCRIBE, Role.PUBLISH},
+            accepts=Accepts(types=["std_msgs/String"], fields=["numeric", "string", "bool", "time"],
+                            messages=["any"], prefer=["data", "value", "text", "name"]),
+            default_size=(240, 90), priority=16, **_refs("textfield", "TextField"),
+        ),
+        WidgetSpec(
+            kind="std.stepper", title="Stepper", icon="stepper", category="Controls",
+            description="Publishes a number with - and + buttons (no feedback)",
+            roles={Role.PUBLISH},
+            accepts=Accepts(types=NUMERIC_TYPES, fields=["numeric"], prefer=["data", "value"]),
+            default_size=(200, 80), priority=5, **_refs("stepper", "Stepper"),
+        ),
+        WidgetSpec(
+            kind="std.textview", title="Text View", icon="textview", category="Displays",
+            description="Scrolling history of strings and log lines, coloured by level, with filters; "
+                        "as a publisher also an input line (a chat room)",
+            roles={Role.SUBSCRIBE, Role.PUBLISH},
+            accepts=Accepts(types=["std_msgs/String", *LOG_TYPES]),
+            default_size=(420, 260), priority=15, **_refs("textview", "TextView"),
+        ),
+        WidgetSpec(
+            kind="std.compound", title="Compound", icon="compound", category="Controls",
+            description="Child widgets composing one message, service request or service response",
+            roles={Role.PUBLISH, Role.CALL, Role.SERVE},
+            accepts=Accepts(messages=["any"]),
+            default_size=(300, 260), priority=0, **_refs("compound", "Compound"),
+        ),
     ]
 
 

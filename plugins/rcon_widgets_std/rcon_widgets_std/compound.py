@@ -1,0 +1,384 @@
+"""Compound: child widgets, each bound to one field of a single message, service request or service
+response, of any type (also types learned from the robot's typedefs).
+
+Roles and what the children do:
+
+* PUBLISH: every child is an input; their values are set into one message (the type's default to
+  start with) and :meth:`CompoundModel.send` publishes it (or every change, with ``auto_send``).
+  E.g. sliders on ``linear_acceleration.x``/``angular_velocity.z`` and a text field on ``orientation``
+  composing one ``sensor_msgs/Imu``.
+* CALL: children on ``request.*`` are inputs composing the request; children on ``response.*`` show
+  the answer. :meth:`send` calls the service.
+* SERVE: the compound answers the service. Children on ``response.*`` compose the response; children
+  on ``request.*`` show the last request.
+
+Child composition lives in the model: ``settings.children`` is a list of (kind, field_path, settings).
+
+Children from other packages. A child is an ordinary widget model, built exactly as the app builds one
+(``Model(settings, binding, port, types=..., dispatch=...)``) but given a *child port*: an input child is
+bound with role PUBLISH to the compound's (part) type and its field path, and what it publishes through
+the port is captured, not sent: the compound takes the value at the child's path out of it. A display
+child is bound with role SUBSCRIBE and receives the response (CALL) or request (SERVE) through the
+callback it subscribed with. So any widget whose model publishes through its port (``publish`` /
+``publish_value``) provides a value and can be a child, whichever package it comes from; its kind is
+found through the ``rcon.widgets`` entry points like any widget.
+"""
+
+from __future__ import annotations
+
+import copy
+import threading
+import time
+from typing import Any
+
+import attrs
+
+from rcon_core.msgs import MessageTextError
+from rcon_core.plugins import Binding, Role, WidgetModel, WidgetSpec
+from rcon_core.plugins.paths import PathError, get_path, parse_path, set_path, split_service_path
+
+from .base import StdModel
+from .button import CallStatus, describe_response
+from .common import RateLimiter, field_at
+
+__all__ = ["ChildSpec", "CompoundSettings", "CompoundModel", "Child", "CompoundValue", "find_spec"]
+
+
+@attrs.define
+class ChildSpec:
+    """One child: its widget kind, the field it is bound to, its own settings (a stored dict)."""
+
+    kind: str
+    field_path: str = ""
+    settings: dict[str, Any] = attrs.field(factory=dict)
+    title: str = ""
+
+
+@attrs.define
+class CompoundSettings:
+    children: list[ChildSpec] = attrs.field(factory=list, metadata={"label": "Children"})
+    send_text: str = attrs.field(default="", metadata={"label": "Button text", "help": "default: Publish / Call"})
+    auto_send: bool = attrs.field(default=False, metadata={
+        "label": "Send on every change", "help": "publish (or call) whenever a child changes, rate-limited"})
+    rate_hz: float = attrs.field(default=5.0, metadata={"label": "Update rate (Hz)", "min": 0.1, "max": 50.0})
+    columns: int = attrs.field(default=1, metadata={"label": "Columns", "min": 1, "max": 6})
+
+    def problems(self) -> list[str]:
+        out = []
+        if not self.children:
+            out.append("add at least one child widget")
+        for i, c in enumerate(self.children, 1):
+            if not c.kind:
+                out.append(f"child {i}: no widget kind")
+            if c.kind == "std.compound":
+                out.append(f"child {i}: a compound cannot contain a compound")
+            try:
+                parse_path(c.field_path)
+            except PathError as exc:
+                out.append(f"child {i}: {exc}")
+        if not self.rate_hz > 0:
+            out.append("update rate must be more than 0 Hz")
+        if not 1 <= self.columns <= 6:
+            out.append("columns must be between 1 and 6")
+        return out
+
+
+_MANAGER: Any = None
+_MANAGER_LOCK = threading.Lock()
+
+
+def find_spec(kind: str) -> WidgetSpec:
+    """The spec of a child kind: this package's own directly, others through the ``rcon.widgets`` entry
+    points (honouring ``RCON_DISABLE_PLUGINS``). Raises KeyError (UnknownWidget) when nobody offers it."""
+    from .plugin import specs
+
+    for spec in specs():
+        if spec.kind == kind:
+            return spec
+    global _MANAGER
+    with _MANAGER_LOCK:
+        if _MANAGER is None:
+            from rcon_core.plugins import PluginManager
+
+            pm = PluginManager()
+            pm.load_entry_points()
+            _MANAGER = pm
+    return _MANAGER.widget(kind)
+
+
+@attrs.frozen
+class CompoundValue:
+    message: dict[str, Any]  #: the composed message; for services ``{"request": ..., "response": ...}``
+    status: CallStatus | None = None  #: the last call (CALL) or the last request answered (SERVE)
+    served: int = 0
+
+
+class Child:
+    """A built child: its spec, model and where it sits."""
+
+    def __init__(self, index: int, spec: WidgetSpec, model: WidgetModel, cfg: ChildSpec, is_input: bool,
+                 part: str) -> None:
+        self.index = index
+        self.spec = spec
+        self.model = model
+        self.cfg = cfg
+        self.is_input = is_input
+        self.part = part  #: "" for topics, "request"/"response" for services
+        self.feed: Any = None  #: the display child's subscription callback
+
+    @property
+    def title(self) -> str:
+        return self.cfg.title or self.cfg.field_path or "(whole message)"
+
+
+class _Captured:
+    """The publisher a child gets: what it publishes goes to the compound."""
+
+    def __init__(self, compound: CompoundModel, index: int) -> None:
+        self.compound, self.index = compound, index
+
+    def publish(self, msg: dict[str, Any]) -> bool:
+        self.compound._child_published(self.index, msg)
+        return True
+
+    def unadvertise(self) -> None:
+        pass
+
+
+class _Feed:
+    def __init__(self, child: Child) -> None:
+        self.child = child
+
+    def unsubscribe(self) -> None:
+        self.child.feed = None
+
+
+class ChildPort:
+    """The port a child model gets (see the module docstring). Service calls go to the real robot."""
+
+    def __init__(self, compound: CompoundModel, child: Child | None = None) -> None:
+        self.compound = compound
+        self.child = child
+
+    def advertise(self, topic: str, type: str, **options: Any) -> _Captured:
+        assert self.child is not None
+        return _Captured(self.compound, self.child.index)
+
+    def subscribe(self, topic: str, callback: Any, **options: Any) -> _Feed:
+        assert self.child is not None
+        self.child.feed = callback
+        return _Feed(self.child)
+
+    def call_service(self, name: str, args: Any = None, timeout: float | None = None) -> Any:
+        return self.compound.port.call_service(name, args, timeout=timeout)
+
+    def advertise_service(self, name: str, type: str, handler: Any) -> Any:
+        raise RuntimeError("a child widget cannot serve a service; bind the compound with role serve")
+
+    def close(self) -> None:
+        pass
+
+
+class CompoundModel(StdModel):
+    stale_after = None
+
+    def __init__(self, settings: CompoundSettings | None, *args: Any, **kwargs: Any) -> None:
+        super().__init__(settings if settings is not None else CompoundSettings(), *args, **kwargs)
+        self.children: list[Child] = []
+        #: bumps when children are (re)built, so the view rebuilds its child views
+        self.children_version = 0
+        self._composed: dict[str, Any] = {}
+        self._build_problems: list[str] = []
+        self._served = 0
+        self._status: CallStatus | None = None
+        self._limiter = RateLimiter(lambda _v: self._send_now(), self.settings.rate_hz, clock=self._clock)
+
+    # -- building ------------------------------------------------------------------------------------
+    @property
+    def is_service(self) -> bool:
+        return self.binding.role.is_service
+
+    def _part_type(self, part: str) -> str:
+        return self.types.service_part_name(self.binding.type, part) if part else self.types.resolve(self.binding.type)
+
+    def default_message(self) -> dict[str, Any]:
+        if self.is_service:
+            return {p: self.types.default(self._part_type(p)) for p in ("request", "response")}
+        return self.types.default(self.binding.type)
+
+    def _split(self, path: str) -> tuple[str, str]:
+        if self.is_service:
+            return split_service_path(path)
+        return "", path
+
+    def _child_role(self, part: str) -> Role:
+        role = self.binding.role
+        if role is Role.PUBLISH or (role is Role.CALL and part == "request") or (
+                role is Role.SERVE and part == "response"):
+            return Role.PUBLISH
+        return Role.SUBSCRIBE
+
+    def on_types_ready(self) -> None:
+        self.build_children()
+        for child in self.children:
+            try:
+                child.model.start()
+            except Exception as exc:
+                self._build_problems.append(f"child {child.index + 1} ({child.cfg.kind}): {exc}")
+        self._publish_state()
+
+    def build_children(self) -> None:
+        """Build every child's model (loop thread, once the type is known)."""
+        self._stop_children()
+        self._composed = self.default_message()
+        built: list[Child] = []
+        problems: list[str] = []
+        for i, cfg in enumerate(self.settings.children):
+            try:
+                built.append(self._build_child(i, cfg))
+            except Exception as exc:
+                problems.append(f"child {i + 1} ({cfg.kind or '?'}): {exc}")
+        self.children = built
+        self._build_problems = problems
+        self.children_version += 1
+
+    def _build_child(self, index: int, cfg: ChildSpec) -> Child:
+        spec = find_spec(cfg.kind)
+        part, rest = self._split(cfg.field_path)
+        role = self._child_role(part)
+        if role not in spec.roles:
+            raise ValueError(f"{spec.title} cannot {role.value} (it offers {', '.join(sorted(spec.roles))})")
+        field_at(self.types, self._part_type(part), rest)  # PathError naming the missing part
+        binding = Binding(f"{self.binding.name}#{index + 1}", self._part_type(part), role, (rest,) if rest else ())
+        settings = spec.make_settings(cfg.settings)
+        port = ChildPort(self)
+        model = spec.load_model()(settings, binding, port, types=self.types, dispatch=self._dispatch,
+                                  clock=self._clock)
+        child = Child(index, spec, model, cfg, role is Role.PUBLISH, part)
+        port.child = child
+        return child
+
+    def _stop_children(self) -> None:
+        for child in self.children:
+            try:
+                child.model.stop()
+            except Exception as exc:  # a child that fails to stop must not keep the others running
+                self.set_error(f"child {child.index + 1}: {exc}")
+
+    def on_stop(self) -> None:
+        self._limiter.cancel()
+        self._stop_children()
+
+    def problems(self) -> list[str]:
+        out = super().problems()
+        if self.binding.problems() or out:
+            return out
+        if not self.children and self.types_ready:
+            try:  # not started yet: check what building would say, without starting anything
+                for i, cfg in enumerate(self.settings.children):
+                    try:
+                        spec = find_spec(cfg.kind)
+                        part, rest = self._split(cfg.field_path)
+                        field_at(self.types, self._part_type(part), rest)
+                        if self._child_role(part) not in spec.roles:
+                            out.append(f"child {i + 1} ({cfg.kind}): {spec.title} cannot "
+                                       f"{self._child_role(part).value}")
+                        out += [f"child {i + 1} ({cfg.kind}): {p}" for p in spec.settings_problems(cfg.settings)]
+                    except Exception as exc:
+                        out.append(f"child {i + 1} ({cfg.kind or '?'}): {exc}")
+            except Exception as exc:
+                out.append(str(exc))
+            return out
+        out += self._build_problems
+        for child in self.children:
+            out += [f"child {child.index + 1} ({child.cfg.kind}): {p}" for p in child.model.problems()]
+        return out
+
+    # -- composing -----------------------------------------------------------------------------------
+    def _child_published(self, index: int, msg: dict[str, Any]) -> None:
+        child = self.children[index]
+        path = child.cfg.field_path
+        _part, rest = self._split(path)
+        try:
+            value = get_path(msg, rest) if rest else msg
+            with self._lock:
+                if path:
+                    set_path(self._composed, path, copy.deepcopy(value))
+                else:
+                    self._composed = copy.deepcopy(value)
+        except PathError as exc:
+            self.set_error(f"child {index + 1}: {exc}")
+            return
+        self._publish_state()
+        if self.settings.auto_send and self.binding.role is not Role.SERVE:
+            self._limiter.offer(None)
+
+    def composed(self) -> dict[str, Any]:
+        """A copy of the composed message (services: ``{"request", "response"}``)."""
+        with self._lock:
+            return copy.deepcopy(self._composed)
+
+    def _publish_state(self) -> None:
+        self.set_value(CompoundValue(self.composed(), self._status, self._served), message=self.composed())
+
+    # -- sending -------------------------------------------------------------------------------------
+    def send(self) -> None:
+        """Publish the composed message, or call the service with the composed request (any thread)."""
+        self._dispatch(self._send_now)
+
+    def _send_now(self) -> None:
+        role = self.binding.role
+        if not self.types_ready:
+            self.set_error(f"the type {self.binding.type} is not known yet")
+            return
+        if role is Role.PUBLISH:
+            if self.publish(self.composed()):
+                self._status = CallStatus("ok", self.binding.name, "published", time.time(), 0.0)
+                self._publish_state()
+        elif role is Role.CALL:
+            self._status = CallStatus("busy", self.binding.name, "", time.time())
+            self._publish_state()
+            self.spawn(self._call(self.composed()["request"]))
+        else:
+            self.set_error("a serving compound answers requests; it does not send")
+
+    async def _call(self, request: dict[str, Any]) -> None:
+        t0 = self._clock()
+        started = self._status.started if self._status else time.time()
+        try:
+            response = await self.port.call_service(self.binding.name, request, timeout=self.call_timeout)
+        except Exception as exc:
+            self._status = CallStatus("failed", self.binding.name, str(exc), started, self._clock() - t0)
+            self._publish_state()
+            self.set_error(f"{self.binding.name}: {exc}")
+            return
+        ok = not (isinstance(response, dict) and response.get("success") is False)
+        text = describe_response(response) if ok else str(response.get("message") or "success: false")
+        self._status = CallStatus("ok" if ok else "failed", self.binding.name, text, started, self._clock() - t0)
+        with self._lock:
+            self._composed["response"] = copy.deepcopy(response)
+        self._feed_display("response", response)
+        self._publish_state()
+        if not ok:
+            self.set_error(f"{self.binding.name}: {text}")
+
+    def _feed_display(self, part: str, msg: dict[str, Any]) -> None:
+        for child in self.children:
+            if not child.is_input and child.part == part and child.feed is not None:
+                child.feed(copy.deepcopy(msg))
+
+    # -- serving -------------------------------------------------------------------------------------
+    def handle_request(self, request: dict[str, Any]) -> dict[str, Any]:
+        """Answer with the response the children composed; display children show the request."""
+        self._feed_display("request", request)
+        with self._lock:
+            self._composed["request"] = copy.deepcopy(request)
+            response = copy.deepcopy(self._composed.get("response", {}))
+            self._served += 1
+        try:
+            response = self.types.complete(self._part_type("response"), response)
+        except MessageTextError as exc:
+            self.set_error(f"response: {exc}")
+        self._status = CallStatus("ok", self.binding.name, f"answered request {self._served}", time.time(), 0.0)
+        self._publish_state()
+        return response

@@ -1,0 +1,90 @@
+"""Compound's Qt view: each child's own view under a small title (its field), in a grid; a Publish or
+Call button and the result underneath. Child views are built from their specs, like the app builds any
+widget view, and refreshed when their model's ``seq`` moves."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from qtpy import QtCore, QtWidgets
+
+from rcon_core.plugins import Role
+
+from .view_common import BAD, MUTED, OK, Caption, vbox
+
+
+class CompoundView(QtWidgets.QWidget):
+    def __init__(self, model: Any, parent: QtWidgets.QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.model = model
+        layout = vbox(self)
+        self.grid = QtWidgets.QGridLayout()
+        self.grid.setSpacing(6)
+        layout.addLayout(self.grid, 1)
+        role = model.binding.role
+        self.button = None
+        if role is not Role.SERVE:
+            default = "Publish" if role is Role.PUBLISH else "Call"
+            self.button = QtWidgets.QPushButton(model.settings.send_text or default)
+            self.button.setProperty("primary", True)
+            self.button.clicked.connect(model.send)
+            layout.addWidget(self.button)
+        self.status = Caption("")
+        self.status.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
+        layout.addWidget(self.status)
+        self.child_views: list[tuple[Any, QtWidgets.QWidget]] = []
+        self._version = -1
+        self._painted: dict[int, int] = {}
+        self._timer = QtCore.QTimer(self)  # children's own changes (a display child ageing, ...)
+        self._timer.setInterval(100)
+        self._timer.timeout.connect(self._refresh_children)
+        self._timer.start()
+        self._build()
+
+    def _build(self) -> None:
+        if self._version == self.model.children_version:
+            return
+        self._version = self.model.children_version
+        for _child, box in self.child_views:
+            self.grid.removeWidget(box)
+            box.deleteLater()
+        self.child_views = []
+        self._painted = {}
+        cols = max(1, int(self.model.settings.columns))
+        for i, child in enumerate(self.model.children):
+            box = QtWidgets.QGroupBox(child.title)
+            inner = vbox(box, margins=2, spacing=0)
+            try:
+                view = child.spec.load_view()(child.model)
+            except Exception as exc:  # a child package's broken view must not break the compound
+                view = QtWidgets.QLabel(f"{child.cfg.kind}: {exc}")
+            inner.addWidget(view)
+            self.grid.addWidget(box, i // cols, i % cols)
+            self.child_views.append((child, view))
+
+    def _refresh_children(self) -> None:
+        for child, view in self.child_views:
+            st = child.model.state
+            if self._painted.get(child.index) == st.seq:
+                continue
+            self._painted[child.index] = st.seq
+            refresh = getattr(view, "refresh", None)
+            if refresh is not None:
+                refresh(st)
+
+    def refresh(self, state: Any) -> None:
+        self._build()
+        self._refresh_children()
+        v = state.value
+        st = getattr(v, "status", None)
+        if state.error:
+            self.status.show_text(state.error, BAD)
+        elif st is None:
+            problems = self.model.problems()
+            self.status.show_text("; ".join(problems) if problems else "", BAD if problems else MUTED)
+        elif st.busy:
+            self.status.show_text(f"calling {st.target}…", MUTED)
+        elif st.phase == "failed":
+            self.status.show_text(f"✗ {st.text}", BAD)
+        else:
+            self.status.show_text(f"✓ {st.text}", OK)

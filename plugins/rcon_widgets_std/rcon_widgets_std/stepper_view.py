@@ -1,0 +1,54 @@
+"""Stepper's Qt view: − value + ; holding a button repeats (the model limits the publish rate)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from qtpy import QtCore, QtWidgets
+
+from .common import format_number
+from .view_common import BAD, Caption, style_text, vbox
+
+
+class StepperView(QtWidgets.QWidget):
+    def __init__(self, model: Any, parent: QtWidgets.QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.model = model
+        layout = vbox(self)
+        row = QtWidgets.QHBoxLayout()
+        self.minus = QtWidgets.QPushButton("−")
+        self.plus = QtWidgets.QPushButton("+")
+        for b in (self.minus, self.plus):
+            b.setAutoRepeat(True)
+            b.setAutoRepeatDelay(400)
+            b.setAutoRepeatInterval(120)
+            style_text(b, 24)
+        self.value = QtWidgets.QLabel()
+        self.value.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
+        style_text(self.value, 22)
+        row.addWidget(self.minus)
+        row.addWidget(self.value, 1)
+        row.addWidget(self.plus)
+        layout.addLayout(row, 1)
+        self.note = Caption("")
+        self.note.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
+        layout.addWidget(self.note)
+        self.minus.clicked.connect(lambda: self._show(model.down()))
+        self.plus.clicked.connect(lambda: self._show(model.up()))
+        self._show(model.current)
+
+    def _show(self, v: float) -> None:
+        s = self.model.settings
+        r = self.model.range
+        text = format_number(v, -1 if r.integer else s.decimals)
+        self.value.setText(f"{text} {s.units}".strip())
+        self.minus.setEnabled(v > r.minimum)
+        self.plus.setEnabled(v < r.maximum)
+
+    def refresh(self, state: Any) -> None:
+        if isinstance(state.value, (int, float)):
+            self._show(state.value)
+        r = self.model.range
+        self.note.show_text(state.error or f"{format_number(r.minimum)} … {format_number(r.maximum)}, "
+                                            f"step {format_number(r.step)}",
+                            BAD if state.error else "#5a5a5a")

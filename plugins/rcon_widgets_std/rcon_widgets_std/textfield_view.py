@@ -1,0 +1,58 @@
+"""Text Field's Qt view. Subscribe: the data as text (read-only, selectable). Publish: a line to type
+YAML/JSON (or a plain string) and a Send button; Enter sends too. Errors name the field."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from qtpy import QtWidgets
+
+from rcon_core.plugins import Role
+
+from .view_common import BAD, MUTED, OK, Caption, vbox
+
+
+class TextFieldView(QtWidgets.QWidget):
+    def __init__(self, model: Any, parent: QtWidgets.QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.model = model
+        self.publishing = model.binding.role is Role.PUBLISH
+        layout = vbox(self)
+        if self.publishing:
+            row = QtWidgets.QHBoxLayout()
+            self.edit = QtWidgets.QLineEdit()
+            self.edit.setPlaceholderText(model.settings.placeholder or "YAML or JSON, e.g. {x: 1.0}")
+            self.edit.returnPressed.connect(self.send)
+            row.addWidget(self.edit, 1)
+            self.button = QtWidgets.QPushButton("Send")
+            self.button.clicked.connect(self.send)
+            row.addWidget(self.button)
+            layout.addLayout(row)
+            self.text = None
+        else:
+            self.text = QtWidgets.QPlainTextEdit()
+            self.text.setReadOnly(True)
+            self.text.setLineWrapMode(QtWidgets.QPlainTextEdit.LineWrapMode.NoWrap)
+            layout.addWidget(self.text, 1)
+        self.status = Caption("")
+        layout.addWidget(self.status)
+
+    def send(self) -> None:
+        self.model.submit(self.edit.text())
+        self.status.show_text("sending…", MUTED)
+
+    def refresh(self, state: Any) -> None:
+        v = state.value
+        if self.text is not None:
+            if v is not None and v.text != self.text.toPlainText():
+                self.text.setPlainText(v.text)
+            self.status.show_text(state.error or "", BAD if state.error else MUTED)
+            return
+        if state.error:
+            self.status.show_text(state.error, BAD)
+        elif v is not None and v.sent:
+            self.status.show_text(f"sent: {v.text}", OK)
+            if self.model.settings.clear_after_send and self.edit.text() == v.text:
+                self.edit.clear()
+        else:
+            self.status.show_text("", MUTED)
