@@ -41,6 +41,13 @@ def open_window(qtbot, config_dir, url: str | None) -> MainWindow:
     return window
 
 
+def rect_of(window: MainWindow, widget_id: str) -> tuple[int, int, int, int]:
+    """Where the document has the widget (what is saved)."""
+    _canvas, widget = window.controller.workspace.find_widget(widget_id)
+    g = widget.geometry
+    return (int(g.x), int(g.y), int(g.w), int(g.h))
+
+
 def add_probe(window: MainWindow, topic: str, type_name: str, path: str, at=None):
     spec = window.plugins.widget("apptest.probe")
     settings = spec.make_settings({"caption": topic})
@@ -62,13 +69,13 @@ def test_switching_canvas_stops_and_starts_subscriptions(qtbot, tmp_path, robot)
         qtbot.waitUntil(lambda: robot.topic_subscriber_count("/lights/state") == 0, timeout=10_000)
         # duplicate, rename and delete canvases
         index = window.controller.duplicate_canvas(0)
-        assert window.controller.doc.canvases[index].name == "Main copy"
+        assert window.controller.workspace.canvases[index].name == "Main copy"
         window.controller.rename_canvas(index, "Spare")
-        with pytest.raises(ValueError, match="already a canvas named"):
+        with pytest.raises(ValueError, match="canvas named 'Lights' already exists"):
             window.controller.rename_canvas(index, "Lights")
         assert window.tabs.tabText(index) == "Spare"
         window.controller.delete_canvas(index)
-        assert [c.name for c in window.controller.doc.canvases] == ["Main", "Lights"]
+        assert [c.name for c in window.controller.workspace.canvases] == ["Main", "Lights"]
         qtbot.waitUntil(lambda: robot.topic_subscriber_count("/battery") == 1, timeout=10_000)
     finally:
         window.shutdown()
@@ -89,7 +96,7 @@ def test_move_pinch_and_lock(qtbot, tmp_path, robot):  # noqa: F811
             QTest.mouseMove(shield, press + QtCore.QPoint(step * 20, step * 10))
         QTest.mouseRelease(shield, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier,
                            press + QtCore.QPoint(100, 50))
-        moved = window.controller.canvas.find(inst.id).rect
+        moved = rect_of(window, inst.id)
         assert (moved[0], moved[1]) != (start.x(), start.y())
         assert moved[0] % 16 == 0 and moved[1] % 16 == 0
         # pinch: the gesture handler fed a QPinchGesture-equivalent (started, updated, finished)
@@ -98,7 +105,7 @@ def test_move_pinch_and_lock(qtbot, tmp_path, robot):  # noqa: F811
                              (QtCore.Qt.GestureState.GestureUpdated, 1.5),
                              (QtCore.Qt.GestureState.GestureFinished, 2.0)):
             frame.pinch_gesture(FakePinch(state, scale))
-        after = window.controller.canvas.find(inst.id).rect
+        after = rect_of(window, inst.id)
         assert after[2] > before.width() * 1.5 and after[3] > before.height() * 1.5
         # pinching far out never leaves the widget off-screen
         frame.apply_pinch(20.0)
@@ -118,7 +125,7 @@ def test_move_pinch_and_lock(qtbot, tmp_path, robot):  # noqa: F811
         [dup] = [a for a in menu.actions() if a.objectName() == "duplicate"]
         dup.trigger()
         menu.close()
-        assert len(window.controller.canvas.instances) == 2
+        assert len(window.controller.canvas.widgets) == 2
         # lock: nothing moves, no menu, no deletes; the lock is saved
         tap = window.lock_button
         QTest.mouseClick(tap, QtCore.Qt.MouseButton.LeftButton)
@@ -131,14 +138,14 @@ def test_move_pinch_and_lock(qtbot, tmp_path, robot):  # noqa: F811
         QTest.mouseMove(frame, QtCore.QPoint(200, 200))
         QTest.mouseRelease(frame, QtCore.Qt.MouseButton.LeftButton)
         assert frame.pos() == pos
-        window.controller.delete_instance(inst.id)
-        assert window.controller.canvas.find(inst.id) is not None
+        assert not window.controller.delete_instance(inst.id)
+        assert inst.id in [w.id for w in window.controller.canvas.widgets]
         # undo/redo work in edit mode
         QTest.mouseClick(tap, QtCore.Qt.MouseButton.LeftButton)
         window.undo()
-        assert len(window.controller.canvas.instances) == 1
+        assert len(window.controller.canvas.widgets) == 1
         window.redo()
-        assert len(window.controller.canvas.instances) == 2
+        assert len(window.controller.canvas.widgets) == 2
     finally:
         window.shutdown()
 
@@ -153,11 +160,11 @@ def test_layout_survives_restart(qtbot, tmp_path, robot):  # noqa: F811
 
     again = open_window(qtbot, tmp_path, None)
     try:
-        doc = again.controller.doc
-        assert [c.name for c in doc.canvases] == ["Main", "Ops"]
-        assert doc.current == 1 and doc.canvas.locked and again.lock_button.isChecked()
-        saved = doc.canvases[0].find(inst.id)
-        assert saved is not None and saved.rect[:2] == (160, 96)
+        ws = again.controller.workspace
+        assert [c.name for c in ws.canvases] == ["Main", "Ops"]
+        assert again.controller.index == 1 and again.controller.canvas.locked and again.lock_button.isChecked()
+        saved = ws.canvases[0].widget(inst.id)
+        assert (saved.geometry.x, saved.geometry.y) == (160, 96)
         assert saved.settings["caption"] == "/battery" and saved.binding.field_paths == ("percentage",)
         assert again.connection.url.currentText() == robot.url  # URL history persisted
     finally:

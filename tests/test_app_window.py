@@ -108,6 +108,13 @@ def tap_item(tree: QtWidgets.QAbstractItemView, index: QtCore.QModelIndex) -> No
     tap(tree.viewport(), tree.visualRect(index).center())
 
 
+def running(window: MainWindow, qtbot, widget_id: str):
+    """The widget's hosted entry once the canvas runtime (bridge thread) built its model and view."""
+    hosted = window.host.hosted[widget_id]
+    qtbot.waitUntil(lambda: hosted.model is not None and hosted.view is not None, timeout=10_000)
+    return hosted
+
+
 def fill_caption(window: MainWindow, text: str) -> None:
     editor = window.add_panel.form.editor("caption")
     editor.setFocus()
@@ -135,12 +142,12 @@ def test_add_from_topic_subscribes_on_the_robot(make_window, robot, qtbot):
     assert not panel.preview_frame.problems.isVisibleTo(panel.preview_frame)
     assert panel.place_button.isEnabled()
     tap(panel.place_button)
-    [inst] = window.controller.canvas.instances
+    [inst] = window.controller.canvas.widgets
     assert inst.kind == "apptest.probe"
     assert inst.binding.name == "/battery" and inst.binding.field_paths == ("percentage",)
     assert inst.settings["caption"] == "Charge"
     qtbot.waitUntil(lambda: robot.topic_subscriber_count("/battery") >= 1, timeout=10_000)
-    view = window.host.hosted[inst.id].view
+    view = running(window, qtbot, inst.id).view
     qtbot.waitUntil(lambda: view.text().startswith("Charge: ") and view.text() != "Charge: None", timeout=10_000)
 
 
@@ -157,12 +164,12 @@ def test_add_from_service_calls_the_robot(make_window, robot, qtbot):
     tap_item(panel.candidates, panel.candidates.model().index(0, 0))
     fill_caption(window, "Lights")
     tap(panel.place_button)
-    [inst] = window.controller.canvas.instances
+    [inst] = window.controller.canvas.widgets
     assert inst.binding.role is Role.CALL and inst.binding.name == "/lights/set"
-    model = window.host.hosted[inst.id].model
-    response = model.call({"data": True}).result(timeout=10)
+    hosted = running(window, qtbot, inst.id)
+    response = hosted.model.call({"data": True}).result(timeout=10)
     assert response["success"] is True
-    view = window.host.hosted[inst.id].view
+    view = hosted.view
     qtbot.waitUntil(lambda: "Lights:" in view.text(), timeout=5_000)
 
 
@@ -194,9 +201,9 @@ def test_add_from_palette_then_drop_on_canvas(make_window, robot, qtbot):
     drop = QtGui.QDropEvent(QtCore.QPointF(203, 149), QtCore.Qt.DropAction.CopyAction, mime,
                             QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier)
     QtWidgets.QApplication.sendEvent(surface, drop)
-    [inst] = window.controller.canvas.instances
+    [inst] = window.controller.canvas.widgets
     assert inst.binding.name == "/lights/state"
-    assert inst.rect[:2] == (208, 144)  # snapped to the 16 px grid
+    assert (inst.geometry.x, inst.geometry.y) == (208, 144)  # snapped to the 16 px grid
     assert not panel.isVisible()
     qtbot.waitUntil(lambda: robot.topic_subscriber_count("/lights/state") >= 1, timeout=10_000)
 

@@ -84,7 +84,7 @@ class AddPanel(QtWidgets.QWidget):
         self,
         rank_widgets: RankWidgets,
         targets_for: TargetsFor,
-        build_preview: Callable[[Draft], QtWidgets.QWidget],
+        build_preview: Callable[[Draft, WidgetFrame], None],
         release_preview: Callable[[], None],
         parent: QtWidgets.QWidget | None = None,
     ) -> None:
@@ -360,7 +360,7 @@ class AddPanel(QtWidgets.QWidget):
         frame = WidgetFrame("preview", self.draft.title)
         frame.setObjectName("widgetFrame")
         frame.set_editable(False)
-        frame.set_view(self._build_preview(self.draft))
+        self._build_preview(self.draft, frame)
         w, h = self.draft.spec.default_size
         frame.setMinimumSize(int(min(w, 360)), int(max(h, 120)))
         self.preview_frame = frame

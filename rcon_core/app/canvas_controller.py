@@ -1,303 +1,312 @@
-"""Keeps the workspace document, the canvas surfaces and the running widgets in step.
+"""Keeps the canvas document, the canvas surfaces and the running widgets in step.
 
-Every edit goes through here: it changes the document, records an undo snapshot, saves the workspace,
-and updates the surfaces.  Switching canvas stops the old canvas's widgets and starts the new one's.
+The workspace is a :class:`rcon_core.canvas.Document`: every edit goes through it (so it can be undone)
+and is saved by an :class:`rcon_core.canvas.AutoSaver` through the :class:`WorkspaceStore`. The
+controller listens to the document's changes and updates the surfaces (one per canvas) and the
+:class:`LiveCanvas` that runs the current canvas's widget models on the bridge thread. Undo, redo and
+edits made elsewhere therefore reach the screen and the robot the same way.
 """
 
 from __future__ import annotations
 
-import copy
 import logging
-from pathlib import Path
+from collections.abc import Callable
+from typing import Any
 
 from qtpy import QtCore, QtWidgets
 
 from rcon_core.app.canvas_surface import CanvasSurface
 from rcon_core.app.draft import Draft
-from rcon_core.app.layout import CanvasDoc, Instance, WorkspaceDoc
+from rcon_core.app.geometry import fit_rect, snap_rect
+from rcon_core.app.link import OFFLINE
+from rcon_core.app.live import LiveCanvas
+from rcon_core.app.widget_frame import frame_min_size
 from rcon_core.app.widget_host import WidgetHost
+from rcon_core.canvas import (
+    AutoSaver,
+    Canvas,
+    CanvasLocked,
+    Change,
+    Document,
+    EditError,
+    Geometry,
+    WidgetInstance,
+    Workspace,
+    WorkspaceStore,
+)
 
 log = logging.getLogger(__name__)
 
-UNDO_LIMIT = 100
+
+def _runs_differently(a: WidgetInstance, b: WidgetInstance) -> bool:
+    """Whether the model must be rebuilt (title and geometry are the frame's business)."""
+    return (a.kind, a.binding, a.settings) != (b.kind, b.binding, b.settings)
 
 
 class CanvasController(QtCore.QObject):
-    """Owns the :class:`WorkspaceDoc` and one :class:`CanvasSurface` per canvas."""
+    """Owns the document's surfaces; edits by index (the tab bar) or by widget id."""
 
     canvases_changed = QtCore.Signal()  # names/order changed
     current_changed = QtCore.Signal(int)
     lock_changed = QtCore.Signal(bool)
+    save_failed = QtCore.Signal(str)
 
-    def __init__(self, doc: WorkspaceDoc, host: WidgetHost, stack: QtWidgets.QStackedWidget,
-                 save_path: Path | None) -> None:
+    def __init__(self, doc: Document, store: WorkspaceStore, host: WidgetHost, live: LiveCanvas,
+                 stack: QtWidgets.QStackedWidget) -> None:
         super().__init__(stack)
         self.doc = doc
+        self.store = store
         self.host = host
+        self.live = live
         self.stack = stack
-        self.save_path = save_path
-        self.surfaces: list[CanvasSurface] = []
-        self._undo: list[dict] = []
-        self._redo: list[dict] = []
-        self.on_drop = None  # set by the window: fn(surface, point)
+        self.surfaces: dict[str, CanvasSurface] = {}
+        self._known: dict[str, WidgetInstance] = {}  # what the runtime was last given, per widget
+        self.on_drop: Callable[[CanvasSurface, QtCore.QPoint], Any] | None = None  # set by the window
+        self.on_configure: Callable[[str], Any] | None = None
+        #: the bridge client the widgets run on (the window sets it; offline until connected)
+        self.client: Any = OFFLINE
+        self.saver = AutoSaver(doc, store, on_error=lambda exc: self.save_failed.emit(str(exc)))
+        self._remove_listener = doc.add_listener(self._changed)
         self._rebuild_surfaces()
+
+    # ------------------------------------------------------------------------------------- reading
+    @property
+    def workspace(self) -> Workspace:
+        return self.doc.workspace
+
+    @property
+    def canvas(self) -> Canvas:
+        return self.doc.current
+
+    @property
+    def index(self) -> int:
+        return self.workspace.canvases.index(self.canvas)
+
+    @property
+    def surface(self) -> CanvasSurface:
+        return self.surfaces[self.canvas.id]
+
+    def _canvas_at(self, index: int) -> Canvas:
+        canvases = self.workspace.canvases
+        if not 0 <= index < len(canvases):
+            raise EditError(f"there is no canvas number {index + 1}")
+        return canvases[index]
 
     # ------------------------------------------------------------------------------------ surfaces
     def _rebuild_surfaces(self) -> None:
-        for surface in self.surfaces:
-            for iid in list(surface.frames):
-                self.host.discard(iid)
-            surface.clear_frames()
-            self.stack.removeWidget(surface)
-            surface.deleteLater()
-        self.surfaces = []
-        for canvas in self.doc.canvases:
-            self.surfaces.append(self._make_surface(canvas))
-        self.stack.setCurrentWidget(self.surfaces[self.doc.current])
-        self._apply_lock()
-        self.host.start(self._ids(self.doc.canvas))
+        for canvas_id in list(self.surfaces):
+            self._drop_surface(canvas_id)
+        for canvas in self.workspace.canvases:
+            self._make_surface(canvas)
+        self._show_current()
         self.canvases_changed.emit()
-        self.current_changed.emit(self.doc.current)
 
-    def _make_surface(self, canvas: CanvasDoc) -> CanvasSurface:
+    def _make_surface(self, canvas: Canvas) -> CanvasSurface:
         surface = CanvasSurface(canvas.name)
-        self.stack.addWidget(surface)
+        self.stack.insertWidget(self.workspace.canvases.index(canvas), surface)
         surface.resize(self.stack.size())
-        for inst in canvas.instances:
-            self._add_frame(surface, inst)
+        self.surfaces[canvas.id] = surface
+        for widget in canvas.widgets:
+            self._add_frame(surface, widget)
+        surface.set_editable(not canvas.locked)
         surface.dropped.connect(lambda pt, s=surface: self.on_drop and self.on_drop(s, pt))
         surface.background_pressed.connect(lambda s=surface: self._deselect(s))
         return surface
 
-    def _add_frame(self, surface: CanvasSurface, inst: Instance) -> None:
-        frame = self.host.build(inst)
-        frame.geometry_committed.connect(self._geometry_committed)
-        frame.action_requested.connect(self._frame_action)
-        surface.add_frame(frame, QtCore.QRect(*inst.rect))
-
-    @staticmethod
-    def _ids(canvas: CanvasDoc) -> list[str]:
-        return [i.id for i in canvas.instances]
-
-    @property
-    def surface(self) -> CanvasSurface:
-        return self.surfaces[self.doc.current]
-
-    @property
-    def canvas(self) -> CanvasDoc:
-        return self.doc.canvas
-
-    # -------------------------------------------------------------------------------------- history
-    def _snapshot(self) -> None:
-        self._undo.append(copy.deepcopy(self.doc.to_dict()))
-        del self._undo[:-UNDO_LIMIT]
-        self._redo.clear()
-
-    def _restore(self, data: dict) -> None:
-        self.doc = WorkspaceDoc.from_dict(data)
-        self._rebuild_surfaces()
-        self.save()
-
-    def undo(self) -> bool:
-        if not self._undo:
-            return False
-        self._redo.append(self.doc.to_dict())
-        self._restore(self._undo.pop())
-        return True
-
-    def redo(self) -> bool:
-        if not self._redo:
-            return False
-        self._undo.append(self.doc.to_dict())
-        self._restore(self._redo.pop())
-        return True
-
-    def save(self) -> None:
-        if self.save_path is not None:
-            try:
-                self.doc.save(self.save_path)
-            except OSError as exc:
-                log.error("could not save the workspace to %s: %s", self.save_path, exc)
-
-    # -------------------------------------------------------------------------------------- canvases
-    def switch(self, index: int) -> None:
-        """Show canvas ``index``: stop the old canvas's widgets, start the new one's."""
-        if not 0 <= index < len(self.doc.canvases) or index == self.doc.current:
-            return
-        self.host.stop(self._ids(self.doc.canvas))
-        self.doc.current = index
-        self.stack.setCurrentWidget(self.surfaces[index])
-        self.host.start(self._ids(self.doc.canvas))
-        self._apply_lock()
-        self.save()
-        self.current_changed.emit(index)
-
-    def add_canvas(self, name: str = "Canvas") -> int:
-        self._snapshot()
-        canvas = CanvasDoc(self.doc.unique_name(name.strip() or "Canvas"))
-        self.doc.canvases.append(canvas)
-        self.surfaces.append(self._make_surface(canvas))
-        self.canvases_changed.emit()
-        self.switch(len(self.doc.canvases) - 1)
-        self.save()
-        return self.doc.current
-
-    def rename_canvas(self, index: int, name: str) -> None:
-        name = name.strip()
-        if not name:
-            raise ValueError("a canvas needs a name")
-        if any(c.name == name for i, c in enumerate(self.doc.canvases) if i != index):
-            raise ValueError(f"there is already a canvas named {name!r}")
-        self._snapshot()
-        self.doc.canvases[index].name = name
-        self.surfaces[index].name = name
-        self.save()
-        self.canvases_changed.emit()
-
-    def duplicate_canvas(self, index: int) -> int:
-        self._snapshot()
-        src = self.doc.canvases[index]
-        data = src.to_dict()
-        for w in data["widgets"]:
-            w["id"] = ""
-        copy_doc = CanvasDoc.from_dict(data)
-        copy_doc.name = self.doc.unique_name(f"{src.name} copy")
-        self.doc.canvases.insert(index + 1, copy_doc)
-        surface = self._make_surface(copy_doc)
-        self.surfaces.insert(index + 1, surface)
-        if self.doc.current > index:
-            self.doc.current += 1
-        self.canvases_changed.emit()
-        self.switch(index + 1)
-        self.save()
-        return index + 1
-
-    def delete_canvas(self, index: int) -> None:
-        if len(self.doc.canvases) <= 1:
-            raise ValueError("the last canvas cannot be deleted")
-        self._snapshot()
-        was_current = index == self.doc.current
-        canvas = self.doc.canvases.pop(index)
-        surface = self.surfaces.pop(index)
-        for iid in self._ids(canvas):
-            self.host.discard(iid)
+    def _drop_surface(self, canvas_id: str) -> None:
+        surface = self.surfaces.pop(canvas_id)
+        for widget_id in list(surface.frames):
+            self.host.discard(widget_id)
+            self._known.pop(widget_id, None)
+        surface.clear_frames()
         self.stack.removeWidget(surface)
         surface.deleteLater()
-        if self.doc.current > index or was_current:  # a deleted current canvas: show the one before it
-            self.doc.current = max(0, self.doc.current - 1)
-        self.stack.setCurrentWidget(self.surfaces[self.doc.current])
-        if was_current:
-            self.host.start(self._ids(self.doc.canvas))
-        self._apply_lock()
-        self.save()
-        self.canvases_changed.emit()
-        self.current_changed.emit(self.doc.current)
 
-    # -------------------------------------------------------------------------------------- lock
-    def set_locked(self, locked: bool) -> None:
-        if self.canvas.locked == locked:
-            return
-        self.canvas.locked = locked
+    def _add_frame(self, surface: CanvasSurface, widget: WidgetInstance) -> None:
+        frame = self.host.build_frame(widget)
+        frame.geometry_committed.connect(self._geometry_committed)
+        frame.action_requested.connect(self._frame_action)
+        g = widget.geometry
+        surface.add_frame(frame, QtCore.QRect(round(g.x), round(g.y), round(g.w), round(g.h)))
+        self._known[widget.id] = _copy(widget)
+
+    def _show_current(self) -> None:
+        canvas = self.canvas
+        self.stack.setCurrentWidget(self.surfaces[canvas.id])
         self._apply_lock()
-        self.save()
+        self.current_changed.emit(self.index)
 
     def _apply_lock(self) -> None:
         locked = self.canvas.locked
         self.surface.set_editable(not locked)
         self.lock_changed.emit(locked)
 
-    # -------------------------------------------------------------------------------------- widgets
-    def add_draft(self, draft: Draft, at: QtCore.QPoint | None = None) -> Instance:
-        """Put a valid draft on the current canvas at ``at`` (default: a free spot)."""
+    # ------------------------------------------------------------------------- document listener
+    def _changed(self, change: Change) -> None:
+        what, cid, wid = change.what, change.canvas_id, change.widget_id
+        current = self.canvas.id
+        if what == "workspace-replaced":
+            self._rebuild_surfaces()
+            self.run_current()
+        elif what == "canvas-added" and cid not in self.surfaces:
+            self._make_surface(self.workspace.canvas(cid))
+            self.canvases_changed.emit()
+        elif what == "canvas-removed" and cid in self.surfaces:
+            self._drop_surface(cid)
+            self.canvases_changed.emit()
+        elif what == "canvas-renamed" and cid in self.surfaces:
+            self.surfaces[cid].name = self.workspace.canvas(cid).name
+            self.canvases_changed.emit()
+        elif what == "canvas-switched":
+            self._show_current()
+            self.live.switch(self.canvas)
+        elif what == "canvas-locked" and cid in self.surfaces:
+            self.surfaces[cid].set_editable(not self.workspace.canvas(cid).locked)
+            if cid == current:
+                self._apply_lock()
+        elif what == "widget-added" and cid in self.surfaces:
+            widget = self.workspace.canvas(cid).widget(wid)
+            self._add_frame(self.surfaces[cid], widget)
+            if cid == current:
+                self.live.add(widget)
+        elif what == "widget-removed" and cid in self.surfaces:
+            self.surfaces[cid].remove_frame(wid)
+            self.host.discard(wid)
+            self._known.pop(wid, None)
+            if cid == current:
+                self.live.remove(wid)
+        elif what == "widget-changed" and cid in self.surfaces:
+            self._widget_changed(cid, self.workspace.canvas(cid).widget(wid))
+        elif what == "plugin-settings-changed":
+            self.run_current()
+
+    def _widget_changed(self, canvas_id: str, widget: WidgetInstance) -> None:
+        frame = self.surfaces[canvas_id].frames.get(widget.id)
+        if frame is not None:
+            g = widget.geometry
+            frame.place(QtCore.QRect(round(g.x), round(g.y), round(g.w), round(g.h)), remember=True)
+        self.host.update_widget(widget)
+        before = self._known.get(widget.id)
+        self._known[widget.id] = _copy(widget)
+        if canvas_id == self.canvas.id and (before is None or _runs_differently(before, widget)):
+            self.live.restart(widget)
+
+    def run_current(self) -> None:
+        """(Re)start the current canvas's widgets on :attr:`client` (set by the window)."""
+        self.live.start(self.client, self.canvas, self.workspace.plugin_settings)
+
+    # -------------------------------------------------------------------------------- navigation
+    def switch(self, index: int) -> None:
+        """Show canvas ``index``: the old canvas's widgets stop, the new one's start."""
+        if 0 <= index < len(self.workspace.canvases):
+            self.doc.switch_canvas(self.workspace.canvases[index].id)
+
+    # ------------------------------------------------------------------------------- canvas edits
+    def add_canvas(self, name: str = "Canvas") -> int:
+        canvas = self.doc.create_canvas(name.strip() or "Canvas")
+        self.doc.switch_canvas(canvas.id)
+        return self.index
+
+    def rename_canvas(self, index: int, name: str) -> None:
+        self.doc.rename_canvas(self._canvas_at(index).id, name)
+
+    def duplicate_canvas(self, index: int) -> int:
+        dup = self.doc.duplicate_canvas(self._canvas_at(index).id)
+        self.doc.switch_canvas(dup.id)
+        return self.index
+
+    def delete_canvas(self, index: int) -> None:
+        """Delete canvas ``index`` (not the last); when it is shown, the one before it is shown instead."""
+        canvas = self._canvas_at(index)
+        if len(self.workspace.canvases) > 1 and canvas is self.canvas:
+            self.switch(max(0, index - 1) if index > 0 else 1)
+        self.doc.delete_canvas(canvas.id)
+
+    def set_locked(self, locked: bool) -> None:
+        """Operator mode on the current canvas (saved with it; a mode switch, not an undo step)."""
+        self.doc.set_locked(self.canvas.id, locked, undoable=False)
+
+    def undo(self) -> bool:
+        """Undo the last layout edit; refused in operator mode (nothing moves on a locked canvas)."""
+        return False if self.canvas.locked else self.doc.undo()
+
+    def redo(self) -> bool:
+        return False if self.canvas.locked else self.doc.redo()
+
+    # ------------------------------------------------------------------------------- widget edits
+    def add_draft(self, draft: Draft, at: QtCore.QPoint | None = None) -> WidgetInstance:
+        """Put a valid draft on the current canvas at ``at`` (default: a free spot), snapped, on screen."""
         problems = draft.problems()
         if problems:
             raise ValueError("the widget is not configured: " + "; ".join(problems))
-        if self.canvas.locked:
-            raise ValueError(f"canvas {self.canvas.name!r} is locked (operator mode)")
-        self._snapshot()
         w, h = (int(v) for v in draft.spec.default_size)
         surface = self.surface
         pos = at if at is not None else surface.free_spot(QtCore.QSize(w, h))
-        inst = Instance(
-            kind=draft.spec.kind, binding=draft.binding, settings=draft.settings_dict(),
-            rect=(pos.x(), pos.y(), w, h), title=draft.title or draft.spec.title,
+        rect = fit_rect(snap_rect(QtCore.QRect(pos, QtCore.QSize(w, h))), surface.rect(), frame_min_size())
+        return self.doc.add_widget(
+            self.canvas.id, draft.spec.kind, draft.binding,
+            Geometry(rect.x(), rect.y(), rect.width(), rect.height()), draft.settings_dict(),
+            draft.title or draft.spec.title,
         )
-        self.canvas.instances.append(inst)
-        self._add_frame(surface, inst)
-        frame = surface.frames[inst.id]
-        frame.commit_geometry()  # snaps and keeps it on screen, records the final rect
-        self.host.start([inst.id])
-        self.save()
-        return inst
 
-    def _geometry_committed(self, instance_id: str, rect: QtCore.QRect) -> None:
-        inst = self.canvas.find(instance_id)
-        if inst is None:
-            return
-        new = (rect.x(), rect.y(), rect.width(), rect.height())
-        if new != inst.rect:
-            self._snapshot()
-            inst.rect = new
-            self.save()
+    def _geometry_committed(self, widget_id: str, rect: QtCore.QRect) -> None:
+        geometry = Geometry(rect.x(), rect.y(), rect.width(), rect.height())
+        try:
+            self.doc.set_geometry(widget_id, geometry)
+        except EditError as exc:  # e.g. locked meanwhile: the frame goes back where the document has it
+            log.info("geometry not kept: %s", exc)
+            canvas, widget = self.workspace.find_widget(widget_id)
+            self._widget_changed(canvas.id, widget)
 
-    def _frame_action(self, instance_id: str, action: str) -> None:
+    def _frame_action(self, widget_id: str, action: str) -> None:
         if action == "delete":
-            self.delete_instance(instance_id)
+            self.delete_instance(widget_id)
         elif action == "duplicate":
-            self.duplicate_instance(instance_id)
+            self.duplicate_instance(widget_id)
         elif action == "configure" and self.on_configure is not None:
-            self.on_configure(instance_id)
+            self.on_configure(widget_id)
 
-    on_configure = None  # set by the window: fn(instance_id)
+    def delete_instance(self, widget_id: str) -> bool:
+        """Remove a widget; False (and nothing happens) on a locked canvas."""
+        try:
+            self.doc.remove_widget(widget_id)
+        except CanvasLocked:
+            return False
+        return True
 
-    def delete_instance(self, instance_id: str) -> None:
-        if self.canvas.locked:
-            return
-        inst = self.canvas.find(instance_id)
-        if inst is None:
-            return
-        self._snapshot()
-        self.canvas.instances.remove(inst)
-        self.host.discard(instance_id)
-        self.surface.remove_frame(instance_id)
-        self.save()
-
-    def duplicate_instance(self, instance_id: str) -> Instance | None:
-        if self.canvas.locked:
+    def duplicate_instance(self, widget_id: str) -> WidgetInstance | None:
+        try:
+            _canvas, src = self.workspace.find_widget(widget_id)
+        except KeyError:
             return None
-        src = self.canvas.find(instance_id)
-        if src is None:
+        g = src.geometry
+        surface = self.surface
+        rect = fit_rect(snap_rect(QtCore.QRect(round(g.x) + 32, round(g.y) + 32, round(g.w), round(g.h))),
+                        surface.rect(), frame_min_size())
+        try:
+            return self.doc.add_widget(self.canvas.id, src.kind, src.binding,
+                                       Geometry(rect.x(), rect.y(), rect.width(), rect.height()),
+                                       _copy(src).settings, src.title)
+        except CanvasLocked:
             return None
-        self._snapshot()
-        data = src.to_dict()
-        data["id"] = ""
-        x, y, w, h = src.rect
-        data["rect"] = [x + 32, y + 32, w, h]
-        inst = Instance.from_dict(data)
-        self.canvas.instances.append(inst)
-        self._add_frame(self.surface, inst)
-        self.surface.frames[inst.id].commit_geometry()
-        self.host.start([inst.id])
-        self.save()
-        return inst
 
-    def update_instance(self, instance_id: str, *, settings: dict | None = None, title: str | None = None) -> None:
-        inst = self.canvas.find(instance_id)
-        if inst is None:
-            return
-        self._snapshot()
-        if settings is not None:
-            inst.settings = settings
-        if title is not None:
-            inst.title = title
-            self.surface.frames[instance_id].set_title(title)
-        self.host.rebuild(instance_id)
-        self.save()
+    def update_instance(self, widget_id: str, *, settings: dict | None = None, title: str | None = None) -> None:
+        self.doc.reconfigure_widget(widget_id, settings=settings, title=title)
 
     def _deselect(self, surface: CanvasSurface) -> None:
         for frame in surface.frames.values():
             frame.set_selected(False)
 
+    # ------------------------------------------------------------------------------------ closing
     def shutdown(self) -> None:
-        self.host.stop(list(self.host.hosted))
-        self.save()
+        """Stop the widgets and save (the store refuses to overwrite a file it could not read)."""
+        self.live.stop()
+        self.saver.flush()
+        self.saver.close()
+        self._remove_listener()
+
+
+def _copy(widget: WidgetInstance) -> WidgetInstance:
+    import copy
+
+    return copy.deepcopy(widget)

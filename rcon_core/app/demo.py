@@ -7,7 +7,7 @@ shows its "not installed" placeholder (and the layout still works once the packa
 
 from __future__ import annotations
 
-from rcon_core.app.layout import CanvasDoc, Instance, WorkspaceDoc
+from rcon_core.canvas import Canvas, Geometry, WidgetInstance, Workspace, new_id
 from rcon_core.plugins import Binding, PluginManager, Role
 
 #: (title, wanted kinds best first, topic, type, role, field paths, rect)
@@ -36,8 +36,8 @@ def pick_kind(plugins: PluginManager, wanted: list[str]) -> str:
     return next((k for k in wanted if plugins.has_widget(k)), wanted[0])
 
 
-def _canvas(name: str, slots: list, plugins: PluginManager) -> CanvasDoc:
-    canvas = CanvasDoc(name)
+def _canvas(name: str, slots: list, plugins: PluginManager) -> Canvas:
+    canvas = Canvas(new_id("c"), name)
     for title, kinds, topic, type_name, role, paths, rect in slots:
         kind = pick_kind(plugins, kinds)
         spec = plugins.widget(kind) if plugins.has_widget(kind) else None
@@ -49,12 +49,13 @@ def _canvas(name: str, slots: list, plugins: PluginManager) -> CanvasDoc:
                 settings = spec.settings_to_dict(spec.make_settings({}))
             except Exception:
                 settings = {}
-        canvas.instances.append(
-            Instance(kind=kind, binding=Binding(topic, type_name, role, paths), settings=settings, rect=rect,
-                     title=title)
+        canvas.widgets.append(
+            WidgetInstance(new_id("w"), kind, Binding(topic, type_name, role, paths), Geometry(*rect), settings,
+                           title)
         )
     return canvas
 
 
-def demo_workspace(plugins: PluginManager) -> WorkspaceDoc:
-    return WorkspaceDoc(canvases=[_canvas("Drive", DRIVE, plugins), _canvas("Sensors", SENSORS, plugins)])
+def demo_workspace(plugins: PluginManager) -> Workspace:
+    canvases = [_canvas("Drive", DRIVE, plugins), _canvas("Sensors", SENSORS, plugins)]
+    return Workspace(canvases, canvases[0].id)

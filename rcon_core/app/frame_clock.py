@@ -65,3 +65,72 @@ class FrameClock(QtCore.QObject):
 
                 logging.getLogger(__name__).exception("frame consumer %r failed", consumer)
         self.work_times.append(time.monotonic() - now)
+
+
+#: the event type a :class:`Waker` posts to itself
+WAKE_EVENT = QtCore.QEvent.Type(QtCore.QEvent.registerEventType())
+
+
+class Waker(QtCore.QObject):
+    """Wakes the GUI thread from any thread as soon as something arrived, without flooding it.
+
+    ``poke(key)`` (thread-safe) collects ``key`` (a widget id, or None for "something") and posts one event
+    to the GUI thread unless one is already pending; the handler then gets every key collected so far.
+    Two handler runs are at least ``min_gap`` seconds apart, so a burst of messages costs one GUI pass,
+    and a value waits at most ``min_gap`` instead of a whole frame for the next clock tick.
+    """
+
+    def __init__(self, handler: Callable[[set[str]], None], parent: QtCore.QObject | None = None,
+                 min_gap: float = 0.004) -> None:
+        super().__init__(parent)
+        import threading
+
+        self.handler = handler
+        self.min_gap = min_gap
+        self._lock = threading.Lock()
+        self._keys: set[str] = set()
+        self._pending = False
+        self._last = 0.0
+        self._later = QtCore.QTimer(self)
+        self._later.setSingleShot(True)
+        self._later.setTimerType(QtCore.Qt.TimerType.PreciseTimer)
+        self._later.timeout.connect(self._fire)
+        self.wakes = 0
+        self.enabled = True
+
+    def poke(self, key: str | None = None) -> None:
+        with self._lock:
+            if key is not None:
+                self._keys.add(key)
+            if self._pending or not self.enabled:
+                return
+            self._pending = True
+        QtCore.QCoreApplication.postEvent(self, QtCore.QEvent(WAKE_EVENT))
+
+    def event(self, event: QtCore.QEvent) -> bool:
+        if event.type() == WAKE_EVENT:
+            wait = self._last + self.min_gap - time.monotonic()
+            if wait > 0:
+                self._later.start(max(1, round(wait * 1000)))
+            else:
+                self._fire()
+            return True
+        return super().event(event)
+
+    def _fire(self) -> None:
+        with self._lock:
+            keys, self._keys = self._keys, set()
+            self._pending = False
+        self._last = time.monotonic()
+        self.wakes += 1
+        try:
+            self.handler(keys)
+        except Exception:
+            import logging
+
+            logging.getLogger(__name__).exception("wake handler failed")
+
+    def stop(self) -> None:
+        with self._lock:
+            self.enabled = False
+        self._later.stop()

@@ -13,7 +13,7 @@ from collections.abc import Callable
 from typing import Any
 from urllib.parse import urlparse
 
-from rcon_core.bridge import BridgeClient
+from rcon_core.bridge import BridgeClient, ConnectionState
 from rcon_core.bridge.threaded import BridgeThread, LatestValue
 
 log = logging.getLogger(__name__)
@@ -202,3 +202,48 @@ def _pairs(answer: Any) -> list[tuple[str, str]]:
             if name is not None:
                 out.append((str(name), str(getattr(item, "type", ""))))
     return out
+
+
+class _Dropped:
+    """The handle an offline port hands out: publishing drops the message, ending does nothing."""
+
+    def publish(self, _msg: Any) -> None:
+        pass
+
+    def unsubscribe(self) -> None:
+        pass
+
+    def unadvertise(self) -> None:
+        pass
+
+
+class OfflinePort:
+    """A widget's port while the app is not connected: nothing reaches a robot, calls fail clearly."""
+
+    def subscribe(self, *_a: Any, **_k: Any) -> _Dropped:
+        return _Dropped()
+
+    def advertise(self, *_a: Any, **_k: Any) -> _Dropped:
+        return _Dropped()
+
+    def advertise_service(self, *_a: Any, **_k: Any) -> _Dropped:
+        return _Dropped()
+
+    async def call_service(self, *_a: Any, **_k: Any) -> Any:
+        raise RuntimeError("not connected to a robot")
+
+    def close(self) -> None:
+        pass
+
+
+class OfflineClient:
+    """Stands in for a BridgeClient while there is none: the canvas runtime still builds and runs the
+    widgets (so they show, with LINK DOWN), and they talk to nobody."""
+
+    state = ConnectionState.CLOSED
+
+    def node(self, _node_id: str) -> OfflinePort:
+        return OfflinePort()
+
+
+OFFLINE = OfflineClient()

@@ -24,7 +24,6 @@ def run_app(args: Any) -> int:
 
     from rcon_core.app import theme
     from rcon_core.app.config import AppConfig
-    from rcon_core.app.layout import LayoutError, WorkspaceDoc
     from rcon_core.app.link import BadUrl, check_url
     from rcon_core.app.main_window import MainWindow
 
@@ -35,13 +34,8 @@ def run_app(args: Any) -> int:
         except BadUrl as exc:
             print(f"rcon: {exc}", file=sys.stderr)
             return 2
+    # a layout file that cannot be read is reported in the window (and never overwritten)
     layout = Path(args.layout) if getattr(args, "layout", None) else None
-    if layout is not None and layout.exists():
-        try:
-            WorkspaceDoc.load(layout)
-        except LayoutError as exc:
-            print(f"rcon: {exc}", file=sys.stderr)
-            return 2
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(sys.argv[:1])
     app.setApplicationName("RCON")
     theme.apply(app)
@@ -62,7 +56,7 @@ def run_app(args: Any) -> int:
         if getattr(args, "demo", False):
             from rcon_core.app.demo import demo_workspace
 
-            window.open_doc(demo_workspace(plugins))
+            window.open_workspace(demo_workspace(plugins))
         window.show()
         window.connect_to(url or config.last_url)
         if getattr(args, "screenshot", None):

@@ -16,12 +16,14 @@ from rcon_core.app.catalog_panel import CatalogList
 from rcon_core.app.config import AppConfig
 from rcon_core.app.connection_bar import ConnectionBar
 from rcon_core.app.draft import Candidate, Target
-from rcon_core.app.frame_clock import FrameClock
-from rcon_core.app.layout import LayoutError, WorkspaceDoc
-from rcon_core.app.link import Link
+from rcon_core.app.frame_clock import FrameClock, Waker
+from rcon_core.app.link import OFFLINE, Link
+from rcon_core.app.live import LiveCanvas
 from rcon_core.app.palette_panel import PalettePanel
+from rcon_core.app.preview import PreviewHost
 from rcon_core.app.settings_form import SettingsForm
-from rcon_core.app.widget_host import PreviewHost, RateMeter, WidgetHost
+from rcon_core.app.widget_host import RateMeter, WidgetHost
+from rcon_core.canvas import Document, Workspace, WorkspaceFileError, WorkspaceStore
 from rcon_core.plugins import PluginManager, Role, WidgetSpec
 
 log = logging.getLogger(__name__)
@@ -50,8 +52,17 @@ class MainWindow(QtWidgets.QMainWindow):
         self.types = types if types is not None else _standard_types()
         self.link = link or Link()
         self.clock = FrameClock(self)
-        self.host = WidgetHost(plugins, self.link, self.types)
-        self.preview = PreviewHost(self.host)
+        #: wakes the GUI as soon as the bridge thread has something (a value, new models)
+        self.waker = Waker(self._pump, self)
+        self._due_timer = QtCore.QTimer(self)
+        self._due_timer.setSingleShot(True)
+        self._due_timer.setTimerType(QtCore.Qt.TimerType.PreciseTimer)
+        self._due_timer.timeout.connect(lambda: self._pump(set()))
+        self.host = WidgetHost(plugins)
+        self.live = LiveCanvas(plugins, self.link.thread, types=self.types, notify=self.waker.poke)
+        self.preview_live = LiveCanvas(plugins, self.link.thread, types=self.types, notify=self.waker.poke)
+        self.preview = PreviewHost(self.host, self.preview_live, lambda: self.link.client or OFFLINE)
+        self.focus_losses = 0
         self.rates = RateMeter()
         self._last_rate_sample = 0.0
         self.catalog: dict[str, list[tuple[str, str]]] = {"topics": [], "services": []}
@@ -135,13 +146,21 @@ class MainWindow(QtWidgets.QMainWindow):
         rcol.setContentsMargins(0, 0, 0, 0)
         rcol.setSpacing(0)
         rcol.addWidget(self.connection)
+        #: a layout file that could not be read: says so, and that it will not be overwritten
+        self.banner = QtWidgets.QLabel()
+        self.banner.setObjectName("fileBanner")
+        self.banner.setWordWrap(True)
+        self.banner.hide()
+        rcol.addWidget(self.banner)
         rcol.addWidget(split, 1)
         self.setCentralWidget(root)
 
         # ---- workspace
-        self.layout_path = layout_path or config.workspace_path
-        doc = self._load_doc(self.layout_path)
-        self.controller = CanvasController(doc, self.host, self.stack, self.layout_path)
+        self.layout_path = Path(layout_path) if layout_path is not None else config.workspace_path
+        self.store = WorkspaceStore(self.layout_path)
+        self.doc = Document(self._load_workspace())
+        self.controller = CanvasController(self.doc, self.store, self.host, self.live, self.stack)
+        self.controller.save_failed.connect(self._save_failed)
         self.controller.on_drop = self._dropped
         self.controller.on_configure = self.configure_widget
         self.controller.canvases_changed.connect(self._sync_tabs)
@@ -149,6 +168,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.controller.lock_changed.connect(self._show_lock)
         self._sync_tabs()
         self._show_lock(self.controller.canvas.locked)
+        self.controller.run_current()  # offline (LINK DOWN) until a robot is connected
 
         # ---- signals and the frame clock
         self.topics.picked.connect(self.add_panel.start_from_topic)
@@ -160,35 +180,50 @@ class MainWindow(QtWidgets.QMainWindow):
         QtGui.QShortcut(QtGui.QKeySequence.StandardKey.Redo, self, self.redo)
         self.clock.add(self.connection.poll)
         self.clock.add(self._poll_catalog)
-        self.clock.add(self.host.tick)
+        self.clock.add(lambda _now: self._pump(None))
         self.clock.start()
+        app = QtWidgets.QApplication.instance()
+        if app is not None:
+            app.applicationStateChanged.connect(self._app_state_changed)
         self.resize(1280, 800)
 
     # ------------------------------------------------------------------------------------ workspace
-    def _load_doc(self, path: Path) -> WorkspaceDoc:
-        if not path.exists():
-            return WorkspaceDoc()
+    def _load_workspace(self) -> Workspace:
+        """The saved workspace; a file that cannot be read is reported on the banner and left alone."""
         try:
-            return WorkspaceDoc.load(path)
-        except LayoutError as exc:
+            return self.store.load()
+        except WorkspaceFileError as exc:
             log.error("%s; starting with an empty workspace", exc)
-            self.connection.message.setText(str(exc))
-            return WorkspaceDoc()
+            self.show_file_problem(str(exc))
+            return Workspace.new()
 
-    def open_doc(self, doc: WorkspaceDoc) -> None:
-        """Replace the workspace (the demo uses this)."""
-        self.controller._snapshot()
-        self.controller._restore(doc.to_dict())
+    def show_file_problem(self, text: str) -> None:
+        self.banner.setText(
+            f"⚠ The layout could not be opened: {text}.\nThe file is left as it is and will not be "
+            "overwritten: changes made now are not saved."
+        )
+        self.banner.show()
+
+    def _save_failed(self, text: str) -> None:
+        if self.store.read_only:
+            return  # the banner already says why nothing is saved
+        self.banner.setText(f"⚠ The layout could not be saved: {text}")
+        self.banner.show()
+
+    def open_workspace(self, workspace: Workspace) -> None:
+        """Replace the workspace (the demo uses this); saved like any change."""
+        self.doc.replace_workspace(workspace)
 
     def _sync_tabs(self, *_: Any) -> None:
+        canvases = self.controller.workspace.canvases
         self.tabs.blockSignals(True)
         while self.tabs.count():
             self.tabs.removeTab(0)
-        for canvas in self.controller.doc.canvases:
+        for canvas in canvases:
             self.tabs.addTab(canvas.name)
-        self.tabs.setCurrentIndex(self.controller.doc.current)
+        self.tabs.setCurrentIndex(self.controller.index)
         self.tabs.blockSignals(False)
-        self.canvas_actions["delete"].setEnabled(len(self.controller.doc.canvases) > 1)
+        self.canvas_actions["delete"].setEnabled(len(canvases) > 1 and not self.controller.canvas.locked)
 
     def _tab_changed(self, index: int) -> None:
         self.controller.switch(index)
@@ -200,7 +235,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.controller.add_canvas("Canvas")
 
     def rename_canvas_dialog(self) -> None:
-        index = self.controller.doc.current
+        index = self.controller.index
         name, ok = QtWidgets.QInputDialog.getText(
             self, "Rename canvas", "Name", text=self.controller.canvas.name
         )
@@ -211,11 +246,11 @@ class MainWindow(QtWidgets.QMainWindow):
                 self.connection.message.setText(str(exc))
 
     def duplicate_canvas(self) -> None:
-        self.controller.duplicate_canvas(self.controller.doc.current)
+        self.controller.duplicate_canvas(self.controller.index)
 
     def delete_canvas(self) -> None:
         try:
-            self.controller.delete_canvas(self.controller.doc.current)
+            self.controller.delete_canvas(self.controller.index)
         except ValueError as exc:
             self.connection.message.setText(str(exc))
 
@@ -238,7 +273,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.canvas_buttons[name].setEnabled(not locked)
         for name in ("rename", "delete"):
             self.canvas_actions[name].setEnabled(
-                not locked and (name != "delete" or len(self.controller.doc.canvases) > 1)
+                not locked and (name != "delete" or len(self.controller.workspace.canvases) > 1)
             )
         if locked:
             self.add_panel.cancel()
@@ -283,8 +318,11 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def configure_widget(self, instance_id: str) -> None:
         """Edit a placed widget's title and settings in a dialog."""
-        inst = self.controller.canvas.find(instance_id)
-        if inst is None or not self.plugins.has_widget(inst.kind):
+        try:
+            _canvas, inst = self.controller.workspace.find_widget(instance_id)
+        except KeyError:
+            return
+        if not self.plugins.has_widget(inst.kind):
             return
         spec = self.plugins.widget(inst.kind)
         settings = spec.make_settings(inst.settings)
@@ -313,10 +351,39 @@ class MainWindow(QtWidgets.QMainWindow):
         dialog.open()
 
     # -------------------------------------------------------------------------------------- link
-    def _client_changed(self, _client: Any) -> None:
-        # widgets hold nodes of the old client: rebuild them on the new one (or offline)
-        self.host.rebuild_all()
-        self.host.start([i.id for i in self.controller.canvas.instances])
+    def _client_changed(self, client: Any) -> None:
+        # widgets hold nodes of the old client: the runtime rebuilds them on the new one (or offline)
+        self.controller.client = client or OFFLINE
+        self.controller.run_current()
+        self.preview.restart()
+
+    # -------------------------------------------------------------------------------- painting
+    def _pump(self, ids: set[str] | None = None) -> None:
+        """Take the runtime's new models and refresh the views that changed (all when ``ids`` is None,
+        else those widgets and the ones waiting for their frame interval)."""
+        self.host.apply(self.live.take_updates())
+        self.host.apply(self.preview_live.take_updates())
+        due = self.host.refresh(ids)
+        if due is not None and not self._due_timer.isActive():
+            self._due_timer.start(max(1, int(due * 1000 + 0.999)))
+
+    # -------------------------------------------------------------------------------- focus
+    def focus_lost(self) -> None:
+        """The operator's attention left the window: running widgets are told (teleop stops driving)."""
+        if getattr(self, "_shut", False):
+            return
+        self.focus_losses += 1
+        self.live.focus_lost()
+        self.preview_live.focus_lost()
+
+    def _app_state_changed(self, state: Any) -> None:
+        if state != QtCore.Qt.ApplicationState.ApplicationActive:
+            self.focus_lost()
+
+    def changeEvent(self, event: QtCore.QEvent) -> None:
+        super().changeEvent(event)
+        if event.type() == QtCore.QEvent.Type.ActivationChange and not self.isActiveWindow():
+            self.focus_lost()
 
     def _link_state(self, state: str) -> None:
         self.host.set_link_up(state == "connected")
@@ -348,8 +415,17 @@ class MainWindow(QtWidgets.QMainWindow):
             return
         self._shut = True
         self.clock.stop()
+        self.waker.stop()
+        self._due_timer.stop()
+        app = QtWidgets.QApplication.instance()
+        if app is not None:
+            try:
+                app.applicationStateChanged.disconnect(self._app_state_changed)
+            except (RuntimeError, TypeError):
+                pass
         self.add_panel.cancel()
         self.controller.shutdown()
+        self.preview_live.stop()
         self.link.shutdown()
 
 

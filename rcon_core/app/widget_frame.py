@@ -18,6 +18,12 @@ LONG_PRESS_MS = 600
 DRAG_SLOP = 12
 
 
+def frame_min_size() -> QtCore.QSize:
+    """The smallest a widget frame may be: room for its corner handles and a little content."""
+    t = current_touch_px()
+    return QtCore.QSize(max(3 * t, 5 * GRID), max(2 * t + GRID, 5 * GRID))
+
+
 class Badge(QtWidgets.QLabel):
     """A small status pill painted over the frame's top-right corner."""
 
@@ -265,8 +271,7 @@ class WidgetFrame(QtWidgets.QFrame):
         return current_touch_px()
 
     def min_size(self) -> QtCore.QSize:
-        t = self.handle_size()
-        return QtCore.QSize(max(3 * t, 5 * GRID), max(2 * t + GRID, 5 * GRID))
+        return frame_min_size()
 
     def handle_rects(self, size: int | None = None) -> dict[str, QtCore.QRect]:
         size = size or self.handle_size()

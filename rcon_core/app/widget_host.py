@@ -1,197 +1,152 @@
-"""Builds widget instances (model + view inside a frame) and paints them once per frame.
+"""The Qt side of the widgets: a frame per instance, a view per running model, painting.
 
-Models live on the bridge thread: they are started, stopped and fed there.  The GUI thread only reads
-``model.state`` (a snapshot) and repaints a view when ``state.seq`` moved.  Each frame gets a time budget;
-views are visited round-robin so a slow view delays the others by at most one frame, never more.
+Models are built, started and stopped by the canvas runtime on the bridge thread (see
+:mod:`rcon_core.app.live`); they arrive here through :meth:`WidgetHost.attach`, and the host builds their
+views (``View(model)``). Per pass it reads ``model.state`` (a snapshot) and calls ``view.refresh(state)``
+only when ``state.seq`` moved, and for each widget at most once per frame interval (latest value wins:
+a widget that changed too soon is refreshed when its interval is over). All decoding happens in the
+models, on the bridge thread; the host never does more than ``view.refresh(state)``.
 """
 
 from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Iterable
 from typing import Any
 
-from qtpy import QtWidgets
-
-from rcon_core.app.layout import Instance
-from rcon_core.app.link import Link
 from rcon_core.app.widget_frame import WidgetFrame
-from rcon_core.plugins import Binding, PluginManager, SettingsError, SpecError, UnknownWidget
+from rcon_core.canvas import WidgetInstance
+from rcon_core.canvas.runtime import BrokenWidgetModel, MissingWidgetModel
+from rcon_core.plugins import PluginManager, UnknownWidget
 
 log = logging.getLogger(__name__)
 
-#: seconds of GUI work per frame spent refreshing views before the rest waits for the next frame
+#: seconds of GUI work per pass spent refreshing views before the rest waits for the next pass
 FRAME_BUDGET = 0.010
+#: a view is refreshed at most once per this many seconds (one display frame)
+FRAME_INTERVAL = 1 / 60
 
 
 class Hosted:
-    """One live widget: its frame, model and view."""
+    """One widget instance on a canvas: its frame, and its model and view while its canvas runs."""
 
-    __slots__ = ("instance", "frame", "model", "view", "painted_seq", "problems", "running")
+    __slots__ = ("widget", "frame", "model", "view", "painted_seq", "painted_at")
 
-    def __init__(self, instance: Instance, frame: WidgetFrame) -> None:
-        self.instance = instance
+    def __init__(self, widget: WidgetInstance, frame: WidgetFrame) -> None:
+        self.widget = widget
         self.frame = frame
         self.model: Any = None
         self.view: Any = None
         self.painted_seq = -1
-        self.problems: list[str] = []
-        self.running = False
-
-
-def make_view(view_cls: type, model: Any) -> QtWidgets.QWidget:
-    """Views are built as ``View(model)``; a view may also accept ``View(model, parent)``."""
-    return view_cls(model)
+        self.painted_at = 0.0
 
 
 class WidgetHost:
-    """Owns the models and views of the instances shown on canvases."""
+    """Owns the frames of every instance and the views of the running ones."""
 
-    def __init__(self, plugins: PluginManager, link: Link, types: Any = None) -> None:
+    def __init__(self, plugins: PluginManager) -> None:
         self.plugins = plugins
-        self.link = link
-        self.types = types
         self.hosted: dict[str, Hosted] = {}
-        self._order: list[str] = []
         self._cursor = 0
         self._link_up = False
+        self._due: set[str] = set()  # changed, but refreshed less than a frame ago
         self.paint_hooks: list[Any] = []  # benchmark: fn(hosted, state) after each refresh
 
-    # -------------------------------------------------------------------------------------- building
-    def build(self, instance: Instance) -> WidgetFrame:
-        """A frame for ``instance`` with its view, or a placeholder saying why there is none."""
-        title = instance.title or instance.kind
-        frame = WidgetFrame(instance.id, title)
-        hosted = Hosted(instance, frame)
-        self.hosted[instance.id] = hosted
-        self._order.append(instance.id)
-        self._populate(hosted)
+    # -------------------------------------------------------------------------------------- frames
+    def build_frame(self, widget: WidgetInstance, frame: WidgetFrame | None = None) -> WidgetFrame:
+        """The frame for ``widget`` (empty until its model arrives); an existing frame may be given."""
+        frame = frame or WidgetFrame(widget.id, widget.title or widget.kind)
+        self.hosted[widget.id] = Hosted(widget, frame)
+        if not self.plugins.has_widget(widget.kind):
+            frame.set_placeholder(_not_installed(widget.kind))
         return frame
 
-    def _populate(self, hosted: Hosted) -> None:
-        instance, frame = hosted.instance, hosted.frame
-        try:
-            spec = self.plugins.widget(instance.kind)
-        except UnknownWidget:
-            frame.set_placeholder(f"Widget “{instance.kind}” is not installed.\nIts settings are kept.")
-            hosted.problems = []
+    def update_widget(self, widget: WidgetInstance) -> None:
+        """The instance changed (title, geometry, settings): keep the host's copy in step."""
+        hosted = self.hosted.get(widget.id)
+        if hosted is not None:
+            hosted.widget = widget
+            hosted.frame.set_title(widget.title or widget.kind)
+
+    def discard(self, widget_id: str) -> None:
+        """Forget a widget (its frame is removed by its surface)."""
+        self.hosted.pop(widget_id, None)
+        self._due.discard(widget_id)
+
+    # -------------------------------------------------------------------------------------- models
+    def apply(self, updates: Iterable[tuple[str, Any]]) -> None:
+        """Take the runtime's updates (see :class:`rcon_core.app.live.LiveCanvas`), in order."""
+        for kind, payload in updates:
+            if kind == "reset":
+                for widget_id, model in payload.items():
+                    self.attach(widget_id, model)
+            else:
+                self.attach(*payload)
+
+    def attach(self, widget_id: str, model: Any) -> None:
+        """Show ``model`` in its widget's frame (None: the widget stopped)."""
+        hosted = self.hosted.get(widget_id)
+        if hosted is None or model is hosted.model:
+            return
+        hosted.model, hosted.view, hosted.painted_seq = model, None, -1
+        frame = hosted.frame
+        if model is None:
+            frame.set_placeholder("")
+            frame.problems.set_problems([])
+            return
+        if isinstance(model, MissingWidgetModel):
+            if isinstance(model, BrokenWidgetModel):
+                frame.set_placeholder(f"{hosted.widget.title or hosted.widget.kind} could not be shown:\n"
+                                      f"{model.reason}")
+            else:
+                frame.set_placeholder(_not_installed(hosted.widget.kind))
+            frame.problems.set_problems([])
             return
         try:
-            settings = spec.make_settings(instance.settings)
-            model_cls = spec.load_model()
-            hosted.model = self._new_model(model_cls, settings, instance.binding, instance.id, spec)
-            view_cls = spec.load_view()
-            hosted.view = make_view(view_cls, hosted.model)
-            frame.set_view(hosted.view)
-        except (SettingsError, SpecError, Exception) as exc:  # a broken plugin must not break the app
-            log.warning("widget %s (%s) failed to build: %s", instance.id, instance.kind, exc)
-            hosted.model = None if hosted.view is None else hosted.model
-            frame.set_placeholder(f"{spec.title} could not be shown:\n{exc}")
+            view_cls = self.plugins.widget(hosted.widget.kind).load_view()
+            hosted.view = view_cls(model)
+        except (UnknownWidget, Exception) as exc:  # a broken view must not break the app
+            log.warning("view of %s (%s) failed: %s", widget_id, hosted.widget.kind, exc)
+            frame.set_placeholder(f"{hosted.widget.title or hosted.widget.kind} could not be shown:\n{exc}")
             return
-        hosted.problems = list(hosted.model.problems()) if hasattr(hosted.model, "problems") else []
-        frame.problems.set_problems(hosted.problems)
-
-    def _new_model(self, model_cls: type, settings: Any, binding: Binding, node_id: str, spec: Any) -> Any:
-        client = self.link.client
-        port = client.node(node_id) if client is not None else _OfflinePort()
-        plugin_settings = None
-        try:
-            plugin_settings = spec.make_plugin_settings({})
-        except Exception:
-            plugin_settings = None
-        return model_cls(
-            settings, binding, port, types=self.types, plugin_settings=plugin_settings,
-            dispatch=self.link.thread.call,
-        )
-
-    def rebuild(self, instance_id: str) -> None:
-        """Re-create model and view of one instance (after its settings changed or the client did)."""
-        hosted = self.hosted.get(instance_id)
-        if hosted is None:
-            return
-        was_running = hosted.running
-        self.stop([instance_id])
-        self._close_port(hosted)
-        hosted.model = hosted.view = None
-        hosted.painted_seq = -1
-        self._populate(hosted)
-        if was_running:
-            self.start([instance_id])
-
-    def rebuild_all(self) -> None:
-        for iid in list(self.hosted):
-            self.rebuild(iid)
-
-    def discard(self, instance_id: str) -> None:
-        hosted = self.hosted.pop(instance_id, None)
-        if hosted is None:
-            return
-        self._order.remove(instance_id)
-        self._stop_hosted(hosted)
-        self._close_port(hosted)
-
-    # ------------------------------------------------------------------------------------ lifecycle
-    def start(self, ids: list[str]) -> None:
-        """Start these instances' models on the bridge thread (only when connected to a client)."""
-        for iid in ids:
-            hosted = self.hosted.get(iid)
-            if hosted is None or hosted.model is None or hosted.running:
-                continue
-            if self.link.client is None:
-                continue
-            hosted.running = True
-            model = hosted.model
-            self.link.thread.call(_safe, model.start)
-            self.link.thread.call(_safe, model.set_link, self._link_up)
-
-    def stop(self, ids: list[str]) -> None:
-        for iid in ids:
-            hosted = self.hosted.get(iid)
-            if hosted is not None:
-                self._stop_hosted(hosted)
-
-    def _stop_hosted(self, hosted: Hosted) -> None:
-        if hosted.running and hosted.model is not None:
-            self.link.thread.call(_safe, hosted.model.stop)
-        hosted.running = False
-
-    def _close_port(self, hosted: Hosted) -> None:
-        port = getattr(hosted.model, "port", None)
-        if port is not None and not isinstance(port, _OfflinePort):
-            self.link.thread.call(_safe, port.close)
-
-    def running_ids(self) -> list[str]:
-        return [iid for iid, h in self.hosted.items() if h.running]
+        frame.set_view(hosted.view)
+        frame.problems.set_problems(list(model.problems()))
 
     def set_link_up(self, up: bool) -> None:
         self._link_up = up
-        for hosted in self.hosted.values():
-            if hosted.model is not None and hasattr(hosted.model, "set_link"):
-                hosted.model.set_link(up)
 
-    # ------------------------------------------------------------------------------------ per frame
-    def tick(self, _now: float = 0.0) -> None:
-        """Refresh the views whose model changed, within the frame budget, fairly."""
-        order = [iid for iid in self._order if self.hosted[iid].running or self.hosted[iid].model is not None]
-        n = len(order)
-        if not n:
-            return
+    # ------------------------------------------------------------------------------------ painting
+    def refresh(self, ids: Iterable[str] | None = None, now: float | None = None) -> float | None:
+        """Refresh the views whose model changed (all, or only ``ids`` and those waiting for their
+        interval), within the frame budget, fairly. Returns seconds until a waiting widget is due."""
+        now = time.monotonic() if now is None else now
+        if ids is None:
+            order = [w for w, h in self.hosted.items() if h.model is not None]
+            start = self._cursor % len(order) if order else 0
+            order = order[start:] + order[:start]
+        else:
+            order = [w for w in {*ids, *self._due} if w in self.hosted]
         deadline = time.perf_counter() + FRAME_BUDGET
-        start = self._cursor % n
-        for k in range(n):
-            hosted = self.hosted[order[(start + k) % n]]
-            shown = hosted.view if hosted.view is not None else hosted.frame
-            if not shown.isVisible():
-                continue
-            self._refresh(hosted)
+        for k, widget_id in enumerate(order):
+            self._refresh(self.hosted[widget_id], now)
             if time.perf_counter() > deadline:
-                self._cursor = (start + k + 1) % n
-                return
-        self._cursor = 0
+                self._due.update(order[k + 1:])
+                if ids is None:
+                    self._cursor = (self._cursor + k + 1) % max(1, len(self.hosted))
+                break
+        else:
+            if ids is None:
+                self._cursor = 0
+        if not self._due:
+            return None
+        soonest = min((self.hosted[w].painted_at for w in self._due if w in self.hosted), default=now)
+        return max(0.0, soonest + FRAME_INTERVAL - now)
 
-    def _refresh(self, hosted: Hosted) -> None:
+    def _refresh(self, hosted: Hosted, now: float) -> None:
         model = hosted.model
-        if model is None:
+        if model is None or not hosted.frame.isVisible():
+            self._due.discard(hosted.widget.id)
             return
         state = model.state
         badge = hosted.frame.badge
@@ -205,8 +160,13 @@ class WidgetHost:
         else:
             badge.show_status("", "")
         if state.seq == hosted.painted_seq:
+            self._due.discard(hosted.widget.id)
             return
-        hosted.painted_seq = state.seq
+        if now - hosted.painted_at < FRAME_INTERVAL:
+            self._due.add(hosted.widget.id)  # at most one repaint per frame; the latest value wins later
+            return
+        self._due.discard(hosted.widget.id)
+        hosted.painted_seq, hosted.painted_at = state.seq, now
         view = hosted.view
         refresh = getattr(view, "refresh", None)
         if refresh is not None:
@@ -217,35 +177,17 @@ class WidgetHost:
             hook(hosted, state)
 
     def topic_counts(self) -> dict[str, int]:
-        """Values received per subscribed topic (summed over widgets), for the topic list's rates."""
+        """Values received per subscribed topic (the largest over its widgets), for the topic rates."""
         out: dict[str, int] = {}
         for hosted in self.hosted.values():
-            if hosted.running and hosted.model is not None and hosted.instance.binding.role.value == "subscribe":
-                name = hosted.instance.binding.name
-                out[name] = max(out.get(name, 0), hosted.model.state.count)
+            binding = hosted.widget.binding
+            if hosted.model is not None and binding.role.value == "subscribe" and binding.name:
+                out[binding.name] = max(out.get(binding.name, 0), hosted.model.state.count)
         return out
 
 
-def _safe(fn: Any, *args: Any) -> None:
-    try:
-        fn(*args)
-    except Exception:
-        log.exception("widget lifecycle call failed")
-
-
-class _OfflinePort:
-    """The port a model gets while there is no client: every request says so."""
-
-    def subscribe(self, *_a: Any, **_k: Any) -> Any:
-        raise RuntimeError("not connected to a robot")
-
-    advertise = advertise_service = subscribe
-
-    async def call_service(self, *_a: Any, **_k: Any) -> Any:
-        raise RuntimeError("not connected to a robot")
-
-    def close(self) -> None:
-        pass
+def _not_installed(kind: str) -> str:
+    return f"Widget “{kind}” is not installed.\nIts settings are kept."
 
 
 class RateMeter:
@@ -268,39 +210,3 @@ class RateMeter:
                 del self._last[topic]
         self.rates = rates
         return rates
-
-
-
-class PreviewHost:
-    """The live preview of a draft in the add panel: one model + view, started when it can be."""
-
-    def __init__(self, host: WidgetHost) -> None:
-        self.host = host
-        self.hosted: Hosted | None = None
-
-    def build(self, draft: Any) -> QtWidgets.QWidget:
-        self.release()
-        instance = Instance(
-            kind=draft.spec.kind, binding=draft.binding, settings=draft.settings_dict(), title=draft.title,
-            id=f"preview-{draft.spec.kind}",
-        )
-        frame_holder = WidgetFrame(instance.id, instance.title)  # only used for its badge/overlay logic
-        hosted = Hosted(instance, frame_holder)
-        self.hosted = hosted
-        self.host.hosted[instance.id] = hosted
-        self.host._order.append(instance.id)
-        self.host._populate(hosted)
-        view = frame_holder.view
-        if view is not None:
-            frame_holder.body_layout.removeWidget(view)
-            view.setParent(None)
-        if not draft.problems():
-            self.host.start([instance.id])
-        return view if view is not None else QtWidgets.QLabel("no preview")
-
-    def release(self) -> None:
-        if self.hosted is not None:
-            iid = self.hosted.instance.id
-            self.hosted.frame.deleteLater()
-            self.host.discard(iid)
-            self.hosted = None

@@ -1,0 +1,49 @@
+"""The live preview on the add panel's settings page: the draft run as a one-widget canvas.
+
+The preview's model is built and started by its own canvas runtime (a :class:`LiveCanvas`) on the
+bridge thread, like any placed widget, and shown by the same :class:`WidgetHost`; releasing the preview
+stops it there.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from rcon_core.app.live import LiveCanvas
+from rcon_core.app.widget_frame import WidgetFrame
+from rcon_core.app.widget_host import WidgetHost
+from rcon_core.canvas import Canvas, Geometry, WidgetInstance, new_id
+
+
+class PreviewHost:
+    """Runs the draft being configured; ``client()`` gives the current bridge client (or the offline one)."""
+
+    def __init__(self, host: WidgetHost, live: LiveCanvas, client: Any) -> None:
+        self.host = host
+        self.live = live
+        self.client = client
+        self.widget: WidgetInstance | None = None
+
+    def build(self, draft: Any, frame: WidgetFrame) -> None:
+        """Show ``draft`` in ``frame``: its view appears when the runtime has built the model."""
+        self.release()
+        w, h = draft.spec.default_size
+        widget = WidgetInstance(
+            new_id("preview"), draft.spec.kind, draft.binding, Geometry(0, 0, w, h), draft.settings_dict(),
+            draft.title,
+        )
+        self.widget = widget
+        frame.instance_id = widget.id
+        self.host.build_frame(widget, frame)
+        self.live.start(self.client(), Canvas("preview", "Preview", [widget]))
+
+    def release(self) -> None:
+        if self.widget is not None:
+            self.host.discard(self.widget.id)
+            self.live.stop()
+            self.widget = None
+
+    def restart(self) -> None:
+        """Run the preview again on the current client (after the link changed)."""
+        if self.widget is not None:
+            self.live.start(self.client(), Canvas("preview", "Preview", [self.widget]))
