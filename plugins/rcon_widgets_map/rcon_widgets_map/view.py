@@ -113,7 +113,7 @@ class MapView(QtWidgets.QWidget):
         self.bubble.send.clicked.connect(self.confirm_goal)
         self.bubble.cancel.clicked.connect(self.cancel_goal)
 
-        self.tilesArrived.connect(self.update, Qt.ConnectionType.QueuedConnection)
+        self.tilesArrived.connect(self._tiles_arrived, Qt.ConnectionType.QueuedConnection)
         self._ager = QtCore.QTimer(self)  # ages "stale 12 s" labels between messages
         self._ager.setInterval(1000)
         self._ager.timeout.connect(self._age)
@@ -140,6 +140,14 @@ class MapView(QtWidgets.QWidget):
         )
         self.destroyed.connect(loader.close)
         return loader
+
+    def _tiles_arrived(self) -> None:
+        if not self._centred_once and self.loader is not None and self.loader.center is not None:
+            lat, lon, _zoom = self.loader.center  # no fix yet: show the offline map's own centre
+            self.viewport.centre_on(lat, lon)
+            self._centred_once = True
+            self._place_bubble()
+        self.update()
 
     def close_loader(self) -> None:
         """Stop the tile workers (also done when the view is destroyed)."""
