@@ -51,6 +51,8 @@ class CompoundView(QtWidgets.QWidget):
         self.child_views = []
         self._painted = {}
         cols = max(1, int(self.model.settings.columns))
+        for c in range(cols):
+            self.grid.setColumnStretch(c, 1)
         for i, child in enumerate(self.model.children):
             box = QtWidgets.QGroupBox(child.title)
             inner = vbox(box, margins=2, spacing=0)

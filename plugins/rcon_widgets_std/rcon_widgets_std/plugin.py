@@ -32,7 +32,7 @@ def specs() -> list[WidgetSpec]:
             roles={Role.SUBSCRIBE},
             accepts=Accepts(types=[*NUMERIC_TYPES, "std_msgs/String"],
                             fields=["numeric", "bool", "string", "time"], messages=["any"],
-                            prefer=["data", "percentage", "value", "range", "temperature"]),
+                            prefer=["data", "percentage", "value", "msg", "range", "temperature"]),
             default_size=(160, 70), priority=20, **_refs("label", "Label"),
         ),
         WidgetSpec(
@@ -63,7 +63,7 @@ def specs() -> list[WidgetSpec]:
             description="Shows raw data of any type, or publishes what the operator types (YAML or JSON)",
             roles={Role.SUBSCRIBE, Role.PUBLISH},
             accepts=Accepts(types=["std_msgs/String"], fields=["numeric", "string", "bool", "time"],
-                            messages=["any"], prefer=["data", "value", "text", "name"]),
+                            messages=["any"], prefer=["data", "percentage", "value", "msg", "text", "name"]),
             default_size=(240, 90), priority=16, **_refs("textfield", "TextField"),
         ),
         WidgetSpec(

@@ -38,6 +38,9 @@ class SliderView(QtWidgets.QWidget):
         layout.addLayout(ends)
         self._range = None
         self._apply_range()
+        self.slider.blockSignals(True)  # nothing sent or received yet: rest at 0 (or the nearest end)
+        self.slider.setValue(self._position(self._range.coerce(0)))
+        self.slider.blockSignals(False)
         self.slider.valueChanged.connect(self._moved)
         self.slider.sliderReleased.connect(self._released)
 

@@ -25,9 +25,26 @@ TABLE = [
     ("geometry_msgs/Twist", "publish", {"std.slider": "linear.x", "std.button": ""}, {"std.switch", "std.label"}),
     ("sensor_msgs/Image", "subscribe", {"std.label": "height"}, {"std.switch", "std.button"}),
     ("std_msgs/String", "subscribe", {"std.label": "data"}, {"std.slider", "std.switch"}),
-    ("std_msgs/String", "publish", {}, {"std.slider", "std.switch", "std.label"}),
+    ("std_msgs/String", "publish", {"std.textview": ""}, {"std.slider", "std.switch", "std.label"}),
     ("nav_msgs/OccupancyGrid", "subscribe", {"std.label": "info.map_load_time"}, {"std.switch"}),
     ("sensor_msgs/Imu", "subscribe", {"std.label": "orientation.x"}, {"std.switch"}),
+    # Text Field, Stepper, Text View, Compound
+    ("std_msgs/String", "publish", {"std.textfield": "data", "std.textview": ""}, {"std.stepper"}),
+    ("std_msgs/Float64", "publish", {"std.stepper": "data", "std.textfield": "data", "std.compound": ""},
+     {"std.textview"}),
+    ("std_msgs/Int8", "publish", {"std.stepper": "data"}, {"std.textview"}),
+    ("std_msgs/Float64", "subscribe", {"std.textfield": "data"}, {"std.stepper", "std.compound"}),
+    ("rosgraph_msgs/Log", "subscribe", {"std.textview": "", "std.label": "msg"}, {"std.stepper"}),
+    ("rcl_interfaces/msg/Log", "subscribe", {"std.textview": ""}, {"std.stepper"}),
+    ("std_msgs/String", "subscribe", {"std.textview": "", "std.textfield": "data"}, {"std.compound"}),
+    ("sensor_msgs/Imu", "publish", {"std.compound": "", "std.textfield": "orientation.x",
+                                    "std.stepper": "orientation.x"}, {"std.textview"}),
+    ("sensor_msgs/BatteryState", "subscribe", {"std.textfield": "percentage"},
+     {"std.textview", "std.stepper", "std.compound"}),
+    ("std_srvs/SetBool", "serve", {"std.compound": ""}, {"std.textview", "std.textfield"}),
+    ("std_srvs/Trigger", "call", {"std.compound": ""}, {"std.stepper", "std.textview", "std.textfield"}),
+    ("sensor_msgs/Image", "subscribe", {"std.textfield": "height"}, {"std.textview", "std.compound"}),
+    ("geometry_msgs/Twist", "subscribe", {"std.textfield": "linear.x"}, {"std.textview", "std.compound"}),
 ]
 
 
@@ -77,6 +94,12 @@ def test_a_type_learned_from_typedefs_matches_structurally(pm):
 def test_every_std_widget_is_registered_with_its_package(pm):
     std = [s for s in pm.widgets() if s.kind.startswith("std.")]
     assert {s.package for s in std} == {"rcon-widgets-std"}
+    assert {s.kind for s in std} == {"std.label", "std.slider", "std.switch", "std.button", "std.textfield",
+                                     "std.stepper", "std.textview", "std.compound"}
     for s in std:
         assert s.load_model() and s.load_settings_class()
-        assert s.settings_problems({}) == [], s.kind
+        expected = ["add at least one child widget"] if s.kind == "std.compound" else []
+        assert s.settings_problems({}) == expected, s.kind
+    slider = pm.widget("std.slider")
+    (problem,) = slider.settings_problems({"minimum": "low"})
+    assert "invalid settings" in problem and "minimum" in problem
