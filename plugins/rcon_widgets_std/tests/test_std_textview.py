@@ -103,3 +103,25 @@ async def test_operator_note_into_rosout(sim):
                                            timeout=10)
         assert got["level"] == 2 and got["name"] == "rcon_operator"
         m.stop()
+
+
+async def test_ros2_rosout_from_a_ros2_robot():
+    from rcon_core.msgs import TypeRegistry
+    from rcon_core.sim import SimServer
+
+    server = SimServer(host="127.0.0.1", port=0, ros2=True, rate_scale=2.0)
+    await server.start()
+    try:
+        async with bridge(server) as client:
+            m = build(TextViewModel, TextViewSettings(), "/rosout", "rcl_interfaces/msg/Log", "subscribe",
+                      client=client, types=TypeRegistry.standard(ros2=True))
+            m.start()
+            await until(lambda: server.topic_subscriber_count("/rosout") >= 1, what="the subscription")
+            server.log("/rcon_sim", "error", "ROS 2 fault line")
+            await until(lambda: m.state.value is not None and any("ROS 2 fault" in x.text
+                                                                  for x in m.state.value.lines), what="the line")
+            line = next(x for x in m.state.value.lines if "ROS 2 fault" in x.text)
+            assert line.level == "error" and line.node == "rcon_sim" and line.stamp
+            m.stop()
+    finally:
+        await server.stop()
