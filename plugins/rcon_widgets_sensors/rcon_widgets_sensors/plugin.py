@@ -36,6 +36,23 @@ def specs() -> list[WidgetSpec]:
             settings=f"{P}.teleop:TeleopSettings", model=f"{P}.teleop:TeleopModel",
             view=f"{P}.teleop_view:TeleopView", default_size=(320, 320), priority=10,
         ),
+    ] + [
+        WidgetSpec(
+            kind=f"sensors.{name}", title=title, icon=name, category="Sensors",
+            description=f"{what}; publishes it (or shows the robot's) — test signal and manual sources "
+                        "for devices without one",
+            roles={Role.PUBLISH, Role.SUBSCRIBE},
+            accepts=Accepts(types=[main, "geometry_msgs/Vector3Stamped", "geometry_msgs/Vector3"]),
+            settings=f"{P}.motion_sensors:MotionSettings", model=f"{P}.motion_sensors:{model}",
+            view=f"{P}.motion_view:MotionSensorView", default_size=(260, 150),
+        )
+        for name, title, what, main, model in (
+            ("accelerometer", "Accelerometer", "This device's acceleration (m/s²)", "sensor_msgs/Imu",
+             "AccelerometerModel"),
+            ("gyroscope", "Gyroscope", "This device's rotation rate (rad/s)", "sensor_msgs/Imu", "GyroscopeModel"),
+            ("magnetometer", "Magnetometer", "The magnetic field at this device (tesla)",
+             "sensor_msgs/MagneticField", "MagnetometerModel"),
+        )
     ]
 
 

@@ -36,16 +36,21 @@ TABLE = [
     ("geometry_msgs/Twist", "publish", {"sensors.teleop": ""}),
     ("geometry_msgs/TwistStamped", "publish", {"sensors.teleop": ""}),
     ("geometry_msgs/Pose2D", "publish", {"sensors.teleop": ""}),
-    ("geometry_msgs/Vector3", "publish", {"sensors.teleop": ""}),
     ("geometry_msgs/Point", "publish", {"sensors.teleop": ""}),
     ("geometry_msgs/Twist", "subscribe", {}),
     ("nav_msgs/Odometry", "publish", {}),  # carries a twist, but is not a command
-    ("sensor_msgs/Imu", "publish", {"sensors.accelerometer": "linear_acceleration",
-                                    "sensors.gyroscope": "angular_velocity"}),
-    ("sensor_msgs/Imu", "subscribe", {"sensors.accelerometer": "linear_acceleration",
-                                      "sensors.gyroscope": "angular_velocity"}),
-    ("sensor_msgs/MagneticField", "publish", {"sensors.magnetometer": "magnetic_field"}),
-    ("sensor_msgs/MagneticField", "subscribe", {"sensors.magnetometer": "magnetic_field"}),
+    # the motion sensors bind the whole message; the model puts the vector in the type's usual field
+    ("sensor_msgs/Imu", "publish", {"sensors.accelerometer": "", "sensors.gyroscope": ""}),
+    ("sensor_msgs/Imu", "subscribe", {"sensors.accelerometer": "", "sensors.gyroscope": ""}),
+    ("sensor_msgs/MagneticField", "publish", {"sensors.magnetometer": ""}),
+    ("sensor_msgs/MagneticField", "subscribe", {"sensors.magnetometer": ""}),
+    ("geometry_msgs/Vector3Stamped", "publish", {"sensors.accelerometer": "", "sensors.gyroscope": "",
+                                                 "sensors.magnetometer": "", "sensors.teleop": ""}),
+    ("geometry_msgs/Vector3", "publish", {"sensors.accelerometer": "", "sensors.gyroscope": "",
+                                          "sensors.magnetometer": "", "sensors.teleop": ""}),
+    ("geometry_msgs/Vector3", "subscribe", {"sensors.accelerometer": "", "sensors.gyroscope": "",
+                                            "sensors.magnetometer": ""}),
+    ("geometry_msgs/Accel", "subscribe", {}),
     ("sensor_msgs/BatteryState", "subscribe", {}),
     ("std_msgs/Float64", "publish", {}),
     ("std_srvs/SetBool", "call", {}),
@@ -71,4 +76,5 @@ def test_image_and_teleop_rank_first_for_the_demo_topics(pm, types):
 
 def test_all_kinds_registered(pm):
     kinds = {s.kind for s in pm.widgets() if s.package == "rcon-widgets-sensors" or s.kind.startswith("sensors.")}
-    assert {"sensors.image", "sensors.teleop"} <= kinds
+    assert {"sensors.image", "sensors.teleop", "sensors.accelerometer", "sensors.gyroscope",
+            "sensors.magnetometer"} <= kinds
