@@ -36,6 +36,15 @@ def specs() -> list[WidgetSpec]:
             settings=f"{P}.teleop:TeleopSettings", model=f"{P}.teleop:TeleopModel",
             view=f"{P}.teleop_view:TeleopView", default_size=(320, 320), priority=10,
         ),
+        WidgetSpec(
+            kind="sensors.camera", title="Camera", icon="camera", category="Sensors",
+            description="This device's camera (or a test pattern) shown live and published as JPEG "
+                        "(CompressedImage) or rgb8 (Image) at a chosen rate and quality",
+            roles={Role.PUBLISH},
+            accepts=Accepts(types=["sensor_msgs/CompressedImage", "sensor_msgs/Image"]),
+            settings=f"{P}.camera:CameraSettings", model=f"{P}.camera:CameraModel",
+            view=f"{P}.camera_view:CameraView", default_size=(360, 280),
+        ),
     ] + [
         WidgetSpec(
             kind=f"sensors.{name}", title=title, icon=name, category="Sensors",
