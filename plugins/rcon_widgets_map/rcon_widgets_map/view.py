@@ -256,15 +256,22 @@ class MapView(QtWidgets.QWidget):
         self.update()
 
     def _place_bubble(self) -> None:
+        """Beside the proposed goal (right of it, or left when there is no room), below the map's buttons."""
         if self.pending is None or not self.bubble.isVisible():
             return
         sx, sy = self.viewport.to_screen(*self.pending)
         w, h = self.bubble.width(), self.bubble.height()
-        x = int(min(max(4, sx - w / 2), self.width() - w - 4))
-        y = int(sy - h - 22)
-        if y < 4:
-            y = int(sy + 22)
-        self.bubble.move(x, int(min(max(4, y), self.height() - h - 4)))
+        top = self.follow_button.geometry().bottom() + 6
+        if sx + 24 + w <= self.width() - 4:
+            x, y = sx + 24, sy - h / 2
+        elif sx - 24 - w >= 4:
+            x, y = sx - 24 - w, sy - h / 2
+        else:  # too narrow beside it: above the point, or below
+            x = sx - w / 2
+            y = sy - 24 - h if sy - 24 - h >= top else sy + 24
+        x = min(max(4, x), self.width() - w - 4)
+        y = min(max(top, y), self.height() - h - 4)
+        self.bubble.move(int(x), int(max(4, y)))
 
     # -- input ----------------------------------------------------------------------------------------
     def mousePressEvent(self, event: QtGui.QMouseEvent) -> None:  # noqa: N802
