@@ -12,14 +12,16 @@ from rcon_widgets_map.model import MapModel
 from rcon_widgets_map.settings import MapPluginSettings, MapSettings
 from rcon_widgets_map.view import MapView
 
-from conftest import MAX_TEST_ZOOM, SIM_LAT, SIM_LON
 from rcon_core.bridge import BridgeClient
 from rcon_core.bridge.threaded import BridgeThread
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding
+from rcon_core.sim import Vessel
 
 TYPES = TypeRegistry.standard()
 Qt = QtCore.Qt
+SIM_LAT, SIM_LON = Vessel().origin_lat, Vessel().origin_lon
+MAX_TEST_ZOOM = 4  # the deepest zoom of the conftest's MBTiles file
 
 
 def fix(lat, lon, status=0):
