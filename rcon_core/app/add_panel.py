@@ -173,17 +173,25 @@ class AddPanel(QtWidgets.QWidget):
         outer.addWidget(self.settings_title)
         scroll = QtWidgets.QScrollArea()
         scroll.setWidgetResizable(True)
+        scroll.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
         QtWidgets.QScroller.grabGesture(
             scroll.viewport(), QtWidgets.QScroller.ScrollerGestureType.TouchGesture
         )
         inner = QtWidgets.QWidget()
+        # as wide as the panel, never wider (fields shrink instead of hiding under the scroll bar)
+        inner.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored, QtWidgets.QSizePolicy.Policy.Preferred)
         self.settings_col = QtWidgets.QVBoxLayout(inner)
         binding_box = QtWidgets.QFormLayout()
         self.role_combo = QtWidgets.QComboBox()
         self.role_combo.setObjectName("roleCombo")
+        self.role_combo.setSizeAdjustPolicy(QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
         self.role_combo.currentIndexChanged.connect(self._role_combo_changed)
         self.target_combo = QtWidgets.QComboBox()
         self.target_combo.setObjectName("targetCombo")
+        self.target_combo.setSizeAdjustPolicy(
+            QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon
+        )
+        self.target_combo.setMinimumContentsLength(12)
         self.target_combo.currentIndexChanged.connect(self._target_changed)
         self.target_label = QtWidgets.QLabel("Topic")
         binding_box.addRow("Role", self.role_combo)
@@ -362,7 +370,7 @@ class AddPanel(QtWidgets.QWidget):
         frame.set_editable(False)
         self._build_preview(self.draft, frame)
         w, h = self.draft.spec.default_size
-        frame.setMinimumSize(int(min(w, 360)), int(max(h, 120)))
+        frame.setMinimumSize(int(min(w, 280)), int(max(min(h, 320), 120)))
         self.preview_frame = frame
         self.preview_slot.addWidget(frame)
         self._refresh_validity()
@@ -381,7 +389,8 @@ class AddPanel(QtWidgets.QWidget):
         ok = not problems
         self.place_button.setEnabled(ok)
         self.drag_handle.setEnabled(ok)
-        self.drag_handle.setText("✥ Drag onto the canvas" if ok else "Fix the settings above to place it")
+        self.drag_handle.setText("✥ Drag onto the canvas" if ok else f"Not ready: {problems[0]}")
+        self.drag_handle.setToolTip("" if ok else "\n".join(problems))
 
     def problems(self) -> list[str]:
         return self.draft.problems() if self.draft is not None else ["nothing chosen"]

@@ -25,14 +25,15 @@ class CatalogList(QtWidgets.QWidget):
         self.tree.setObjectName(f"{what}List")
         self.tree.setRootIsDecorated(False)
         self.tree.setUniformRowHeights(True)
-        self.tree.setHeaderLabels(["Name", "Type", "Rate"] if with_rate else ["Name", "Type"])
+        # the name with its type on a second line: the panel is narrow, names are long
+        label = "Topic" if what == "topics" else "Service"
+        self.tree.setHeaderLabels([f"{label} / type", "Rate"] if with_rate else [f"{label} / type"])
         header = self.tree.header()
         header.setSectionResizeMode(0, QtWidgets.QHeaderView.ResizeMode.Stretch)
-        header.setSectionResizeMode(1, QtWidgets.QHeaderView.ResizeMode.Interactive)
         header.setStretchLastSection(False)
-        header.resizeSection(1, 130)
         if with_rate:
-            header.resizeSection(2, 64)
+            header.setSectionResizeMode(1, QtWidgets.QHeaderView.ResizeMode.Fixed)
+            header.resizeSection(1, 76)
         self.tree.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
         self.tree.setTextElideMode(QtCore.Qt.TextElideMode.ElideMiddle)
         self.tree.itemClicked.connect(self._clicked)
@@ -60,10 +61,10 @@ class CatalogList(QtWidgets.QWidget):
         self.tree.clear()
         self._items = {}
         for name, type_name in entries:
-            item = QtWidgets.QTreeWidgetItem([name, short_type(type_name)])
+            item = QtWidgets.QTreeWidgetItem([f"{name}\n{short_type(type_name)}"])
             item.setData(0, NAME_ROLE, name)
             item.setData(0, TYPE_ROLE, type_name)
-            item.setToolTip(1, type_name)
+            item.setToolTip(0, f"{name}\n{type_name}")
             self.tree.addTopLevelItem(item)
             self._items[name] = item
             if selected and selected[0] == name:
@@ -77,8 +78,8 @@ class CatalogList(QtWidgets.QWidget):
         for name, item in self._items.items():
             hz = rates.get(name)
             text = "" if hz is None else (f"{hz:.0f} Hz" if hz >= 10 else f"{hz:.1f} Hz")
-            if item.text(2) != text:
-                item.setText(2, text)
+            if item.text(1) != text:
+                item.setText(1, text)
 
     def current(self) -> tuple[str, str] | None:
         item = self.tree.currentItem()

@@ -1,33 +1,49 @@
-"""The demo layout: canvas "Drive" (two cameras and a teleop pad) and "Sensors" (GPS map, IMU, battery, log).
+"""The demo layout on the embedded robot: canvas "Drive" (cameras, teleop pad, controls) and "Sensors"
+(GPS map, battery, IMU, depth, log).
 
 Widget kinds come from whatever plugins are installed: each slot names the kinds it would like, best
-first; the first installed one is used.  When none is installed the first kind is kept, so the canvas
-shows its "not installed" placeholder (and the layout still works once the package is installed).
+first; the first installed one is used, with the settings written for it (each slot's settings are
+valid, so no demo widget shows the "not configured" warning). When none is installed the first kind is
+kept, so the canvas shows its "not installed" placeholder (and the layout works once it is installed).
 """
 
 from __future__ import annotations
 
+from typing import Any
+
 from rcon_core.canvas import Canvas, Geometry, WidgetInstance, Workspace, new_id
 from rcon_core.plugins import Binding, PluginManager, Role
 
-#: (title, wanted kinds best first, topic, type, role, field paths, rect)
-DRIVE = [
-    ("Front camera", ["sensors.image", "sensors.camera"], "/camera/front/image_raw",
-     "sensor_msgs/Image", Role.SUBSCRIBE, (), (16, 16, 480, 320)),
-    ("Rear camera", ["sensors.image", "sensors.compressed_image", "sensors.camera"],
-     "/camera/rear/image_raw/compressed", "sensor_msgs/CompressedImage", Role.SUBSCRIBE, (), (512, 16, 480, 320)),
-    ("Drive", ["sensors.teleop", "std.teleop"], "/cmd_vel", "geometry_msgs/Twist", Role.PUBLISH, (),
-     (16, 352, 400, 288)),
+#: one slot: title, {kind: settings} best first, topic or service, type, role, field paths, (x, y, w, h)
+Slot = tuple[str, dict[str, dict[str, Any]], str, str, Role, tuple[str, ...], tuple[int, int, int, int]]
+
+DRIVE: list[Slot] = [
+    ("Front camera", {"sensors.image": {"max_fps": 15.0}}, "/camera/front/image_raw",
+     "sensor_msgs/Image", Role.SUBSCRIBE, (), (16, 16, 448, 304)),
+    ("Rear camera", {"sensors.image": {"max_fps": 15.0}}, "/camera/rear/image_raw/compressed",
+     "sensor_msgs/CompressedImage", Role.SUBSCRIBE, (), (480, 16, 448, 304)),
+    ("Drive", {"sensors.teleop": {"max_linear": 2.0, "max_angular": 1.0}}, "/cmd_vel",
+     "geometry_msgs/Twist", Role.PUBLISH, (), (16, 336, 320, 304)),
+    ("Speed limit", {"std.slider": {"minimum": 0.0, "maximum": 3.0, "step": 0.1, "decimals": 1,
+                                    "units": "m/s"}},
+     "/speed_limit", "std_msgs/Float64", Role.PUBLISH, ("data",), (352, 336, 288, 96)),
+    ("Lights", {"std.switch": {"state_topic": "/lights/state", "state_field": "data"}}, "/lights/set",
+     "std_srvs/SetBool", Role.CALL, ("request.data",), (656, 336, 272, 96)),
+    ("Battery", {"std.label": {"decimals": 0, "units": "%", "scale": 100.0}}, "/battery",
+     "sensor_msgs/BatteryState", Role.SUBSCRIBE, ("percentage",), (352, 448, 288, 96)),
+    ("Dock", {"std.button": {"text": "Dock"}}, "/dock", "std_srvs/Trigger", Role.CALL, (),
+     (656, 448, 272, 96)),
 ]
-SENSORS = [
-    ("GPS", ["map.gps", "map.map", "std.textview"], "/gps/fix", "sensor_msgs/NavSatFix", Role.SUBSCRIBE, (),
-     (16, 16, 480, 400)),
-    ("IMU", ["sensors.imu", "std.textview"], "/imu/data", "sensor_msgs/Imu", Role.SUBSCRIBE, (),
-     (512, 16, 320, 240)),
-    ("Battery", ["sensors.battery", "std.label", "std.textview"], "/battery", "sensor_msgs/BatteryState",
-     Role.SUBSCRIBE, ("percentage",), (512, 272, 320, 144)),
-    ("Log", ["sensors.log", "std.textview"], "/rosout", "rosgraph_msgs/Log", Role.SUBSCRIBE, (),
-     (16, 432, 816, 208)),
+SENSORS: list[Slot] = [
+    ("GPS", {"map.gps": {}}, "/gps/fix", "sensor_msgs/NavSatFix", Role.SUBSCRIBE, (), (16, 16, 512, 416)),
+    ("Battery", {"std.label": {"decimals": 0, "units": "%", "scale": 100.0}}, "/battery",
+     "sensor_msgs/BatteryState", Role.SUBSCRIBE, ("percentage",), (544, 16, 384, 96)),
+    ("Yaw rate", {"std.label": {"decimals": 2, "units": "rad/s"}}, "/imu/data", "sensor_msgs/Imu",
+     Role.SUBSCRIBE, ("angular_velocity.z",), (544, 128, 384, 96)),
+    ("Depth", {"std.label": {"decimals": 1, "units": "m"}}, "/depth", "sensor_msgs/Range", Role.SUBSCRIBE,
+     ("range",), (544, 240, 384, 96)),
+    ("Log", {"std.textview": {"min_level": "info"}}, "/rosout", "rosgraph_msgs/Log", Role.SUBSCRIBE, (),
+     (16, 448, 912, 192)),
 ]
 
 
@@ -36,22 +52,22 @@ def pick_kind(plugins: PluginManager, wanted: list[str]) -> str:
     return next((k for k in wanted if plugins.has_widget(k)), wanted[0])
 
 
-def _canvas(name: str, slots: list, plugins: PluginManager) -> Canvas:
-    canvas = Canvas(new_id("c"), name)
-    for title, kinds, topic, type_name, role, paths, rect in slots:
-        kind = pick_kind(plugins, kinds)
-        spec = plugins.widget(kind) if plugins.has_widget(kind) else None
-        if spec is not None and role not in spec.roles:
-            role = sorted(spec.roles, key=lambda r: list(Role).index(r))[0]
-        settings: dict = {}
-        if spec is not None:
-            try:
-                settings = spec.settings_to_dict(spec.make_settings({}))
+def _canvas(name: str, slots: list[Slot], plugins: PluginManager) -> Canvas:
+    # opened in operator mode: the widgets take touches at once (drive, switch the lights); the mode
+    # button unlocks a canvas for editing
+    canvas = Canvas(new_id("c"), name, locked=True)
+    for title, kinds, target, type_name, role, paths, rect in slots:
+        kind = pick_kind(plugins, list(kinds))
+        settings = dict(kinds[kind])
+        if plugins.has_widget(kind):
+            spec = plugins.widget(kind)
+            try:  # the stored form of the settings object: every field, defaults filled in
+                settings = spec.settings_to_dict(spec.make_settings(settings))
             except Exception:
-                settings = {}
+                pass  # kept as written; the widget shows what is wrong with it
         canvas.widgets.append(
-            WidgetInstance(new_id("w"), kind, Binding(topic, type_name, role, paths), Geometry(*rect), settings,
-                           title)
+            WidgetInstance(new_id("w"), kind, Binding(target, type_name, role, paths), Geometry(*rect),
+                           settings, title)
         )
     return canvas
 

@@ -79,7 +79,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.side.addTab(self.topics, "Topics")
         self.side.addTab(self.services, "Services")
         self.side.addTab(self.palette, "Widgets")
-        self.side.setMinimumWidth(300)
+        self.side.setMinimumWidth(330)
 
         self.tabs = QtWidgets.QTabBar()
         self.tabs.setObjectName("canvasTabs")
@@ -99,6 +99,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.canvas_actions: dict[str, QtGui.QAction] = {}
         menu_button = QtWidgets.QPushButton("Canvas ▾")
         menu_button.setObjectName("canvasMenuButton")
+        menu_button.setToolTip("New, rename, duplicate or delete canvases")
+        self.menu_button = menu_button
+        self._compact = False
         canvas_menu = QtWidgets.QMenu(menu_button)
         for name, text, slot in (
             ("new", "New canvas", self.new_canvas),
@@ -123,7 +126,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
         self.stack = QtWidgets.QStackedWidget()
         self.add_panel = AddPanel(self.rank_widgets, self.targets_for, self.preview.build, self.preview.release)
-        self.add_panel.setMinimumWidth(360)
+        self.add_panel.setMinimumWidth(330)
         self.add_panel.hide()
         self.add_panel.place_requested.connect(self.place_draft)
 
@@ -141,6 +144,10 @@ class MainWindow(QtWidgets.QMainWindow):
         split.setStretchFactor(1, 1)
         split.setSizes([320, 900, 380])
         split.setChildrenCollapsible(False)
+        self.split = split
+        self.center = center
+        center.installEventFilter(self)  # the canvas bar gets compact when the centre is narrow
+        self.add_panel.installEventFilter(self)  # the add panel gets room when it opens
         root = QtWidgets.QWidget()
         rcol = QtWidgets.QVBoxLayout(root)
         rcol.setContentsMargins(0, 0, 0, 0)
@@ -264,11 +271,47 @@ class MainWindow(QtWidgets.QMainWindow):
         self.controller.set_locked(locked)
         self._show_lock(locked)
 
+    # -------------------------------------------------------------------------------- layout
+    def eventFilter(self, obj: QtCore.QObject, event: QtCore.QEvent) -> bool:
+        if obj is self.center and event.type() == QtCore.QEvent.Type.Resize:
+            self._fit_mode_bar()
+        elif obj is self.add_panel and event.type() == QtCore.QEvent.Type.Show:
+            self._fit_mode_bar()
+            QtCore.QTimer.singleShot(0, self._make_room_for_add_panel)
+        elif obj is self.add_panel and event.type() == QtCore.QEvent.Type.Hide:
+            self._fit_mode_bar()
+        return super().eventFilter(obj, event)
+
+    def _make_room_for_add_panel(self) -> None:
+        if self.add_panel.isVisible():
+            sizes = self.split.sizes()
+            total = sum(sizes)
+            side = max(sizes[0], self.side.minimumSizeHint().width(), 330)
+            panel = min(460, max(400, total // 3))
+            self.split.setSizes([side, max(300, total - side - panel), panel])
+
+    def _fit_mode_bar(self) -> None:
+        """Short labels on the canvas bar when the centre is narrow (e.g. the add panel is open), so the
+        tabs keep their room and no button text is cut."""
+        room = self.width() - self.side.width() - (self.add_panel.width() if self.add_panel.isVisible() else 0)
+        compact = self.add_panel.isVisible() or room < 820
+        if compact != self._compact:
+            self._compact = compact
+            self.menu_button.setText("☰" if compact else "Canvas ▾")
+            self._show_lock(self.controller.canvas.locked)
+
     def _show_lock(self, locked: bool) -> None:
         self.lock_button.blockSignals(True)
         self.lock_button.setChecked(locked)
         self.lock_button.blockSignals(False)
-        self.lock_button.setText("🔒 Operator mode" if locked else "✎ Edit mode")
+        if self._compact:
+            self.lock_button.setText("Operator" if locked else "✎ Edit")
+        else:
+            self.lock_button.setText("Operator mode" if locked else "✎ Edit mode")
+        fm = self.lock_button.fontMetrics()
+        self.lock_button.setMinimumWidth(fm.horizontalAdvance(self.lock_button.text()) + 44)
+        self.lock_button.setToolTip("Operator mode: the canvas is locked; tap to edit" if locked
+                                    else "Edit mode: move and resize widgets; tap to lock the canvas")
         for name in ("undo", "redo"):
             self.canvas_buttons[name].setEnabled(not locked)
         for name in ("rename", "delete"):

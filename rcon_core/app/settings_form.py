@@ -80,6 +80,7 @@ class SettingsForm(QtWidgets.QWidget):
             choices = list(tp)
         if choices is not None:
             box = QtWidgets.QComboBox()
+            box.setSizeAdjustPolicy(QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
             for choice in choices:
                 text = choice.name if isinstance(choice, enum.Enum) else str(choice)
                 box.addItem(text, choice)

@@ -96,16 +96,24 @@ class Shield(QtWidgets.QWidget):
         self._corner = ""
         self._pinch_dist = 0.0
 
-    # painting: corner handles and the grid hint
+    # painting: an L at each corner (thick and blue on the selected frame) says "drag here to resize"
+    # without covering the title or the content; the touch area of each handle is still a full
+    # touch-sized square (handle_rects)
     def paintEvent(self, _event: QtGui.QPaintEvent) -> None:
         p = QtGui.QPainter(self)
         p.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing)
         size = self.frame.handle_size()
-        colour = QtGui.QColor("#0040a0") if self.frame.selected else QtGui.QColor("#000000")
-        p.setPen(QtCore.Qt.PenStyle.NoPen)
-        p.setBrush(colour)
-        for rect in self.frame.handle_rects(size).values():
-            p.drawRoundedRect(QtCore.QRectF(rect).adjusted(6, 6, -6, -6), 6, 6)
+        selected = self.frame.selected
+        pen = QtGui.QPen(QtGui.QColor("#0040a0"), 8 if selected else 5)
+        pen.setCapStyle(QtCore.Qt.PenCapStyle.FlatCap)
+        p.setPen(pen)
+        arm = round(size * 0.6) if selected else max(14, size // 3)
+        inset = 4
+        w, h = self.width(), self.height()
+        for x, y, dx, dy in ((inset, inset, 1, 1), (w - inset, inset, -1, 1), (inset, h - inset, 1, -1),
+                             (w - inset, h - inset, -1, -1)):
+            p.drawLine(x, y, x + dx * arm, y)
+            p.drawLine(x, y, x, y + dy * arm)
 
     # mouse -------------------------------------------------------------------------------------------
     def mousePressEvent(self, event: QtGui.QMouseEvent) -> None:
@@ -251,6 +259,9 @@ class WidgetFrame(QtWidgets.QFrame):
     def set_editable(self, editable: bool) -> None:
         self.editable = editable
         self.shield.setVisible(editable)
+        # in edit mode the title keeps clear of the corner handles
+        margin = max(14, self.handle_size() // 3) + 4 if editable else 0
+        self.title.setContentsMargins(margin, 0, margin, 0)
         if not editable:
             self.set_selected(False)
         self.layout_overlays()
