@@ -89,3 +89,24 @@ def test_call_against_the_recorded_server(capsys):
         assert rc == 1 and "error processing request: simulated failure" in err
         rc, out, _ = run(capsys, "call", "/rec/set_bool", '{"data": true}', "--url", server.url, "--json")
         assert rc == 0 and json.loads(out) == {"success": True, "message": "motors enabled"}
+
+
+def test_echo_stops_quietly_when_the_reader_goes_away(sim_url):
+    # `rcon echo /battery | head -3`: the pipe closes mid-message; echo must exit 0 with no traceback
+    import subprocess
+    import sys
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "rcon_core", "echo", "/battery", "--url", sim_url],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+    )
+    assert proc.stdout is not None
+    first = proc.stdout.readline()
+    proc.stdout.close()
+    try:
+        _, err = proc.communicate(timeout=20)
+    finally:
+        proc.kill()
+    assert first.startswith(b"header:")
+    assert proc.returncode == 0, err.decode()
+    assert b"Traceback" not in err and b"BrokenPipe" not in err, err.decode()

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import base64
+import os
 import sys
 from typing import Any
 
@@ -231,12 +232,17 @@ async def _echo(url: str, args: argparse.Namespace) -> int:
             return
         count += 1
         if args.json:
-            print(_json(msg), flush=True)
+            text = _json(msg)
         else:
             import yaml
 
-            text = yaml.safe_dump(orjson.loads(_json(msg)), sort_keys=False, allow_unicode=True)
-            print(text + "---", flush=True)
+            text = yaml.safe_dump(orjson.loads(_json(msg)), sort_keys=False, allow_unicode=True) + "---"
+        try:
+            print(text, flush=True)
+        except BrokenPipeError:  # the reader went away (`rcon echo ... | head`): stop quietly
+            _silence_stdout()
+            done.set()
+            return
         if args.n and count >= args.n:
             done.set()
 
@@ -254,6 +260,13 @@ async def _echo(url: str, args: argparse.Namespace) -> int:
         return 0
     finally:
         await client.close()
+
+
+def _silence_stdout() -> None:
+    """Point stdout at the null device so the interpreter's final flush does not fail again."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    os.close(devnull)
 
 
 async def _until_closed(client: Any) -> None:
