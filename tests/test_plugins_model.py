@@ -51,6 +51,18 @@ def test_value_age_stale_and_errors():
     assert not m.state.running and not m.state.stale
 
 
+def test_replace_value_repaints_without_counting_as_robot_data():
+    clock = Clock()
+    m = WidgetModel(None, Binding("/log", "std_msgs/String", "subscribe", "data"), None, clock=clock)
+    m.on_message({"data": "hello"})
+    before = m.state
+    clock.now += 3
+    m.replace_value("HELLO (filtered)")
+    after = m.state
+    assert after.value == "HELLO (filtered)" and after.seq > before.seq
+    assert after.count == before.count == 1 and after.age == 3  # still the age of the robot's value
+
+
 def test_settings_stale_after_and_problems():
     class S:
         stale_after = 1.0

@@ -392,6 +392,16 @@ class WidgetModel:
             self._error = None
             self._seq += 1
 
+    def replace_value(self, value: Any) -> None:
+        """Change what the view shows without counting a new value from the robot (any thread).
+
+        For changes the operator makes (a filter) or data from a widget's extra subscriptions: ``count``,
+        the age and the error stay as they are; ``seq`` moves so the view repaints.
+        """
+        with self._lock:
+            self._value = value
+            self._seq += 1
+
     def set_error(self, error: str | None) -> None:
         """Record a problem to show on the widget (None clears it)."""
         with self._lock:

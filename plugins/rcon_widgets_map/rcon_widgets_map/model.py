@@ -203,10 +203,7 @@ class MapModel(WidgetModel):
 
     def _replace_value(self) -> None:
         """A new snapshot without counting it as a value of the bound topic (its age stays the main one's)."""
-        value = self._snapshot()
-        with self._lock:  # the base class's state lock: keep value and seq consistent for readers
-            self._value = value
-            self._seq += 1
+        self.replace_value(self._snapshot())
 
     # -- snapshots -----------------------------------------------------------------------------------
     def _course(self, t: _TrackState) -> float | None:

@@ -135,7 +135,7 @@ class TextViewModel(StdModel):
             self._visible.clear()
             self._visible.extend(x for x in self._all if x.matches(self._min_level, self._filter_text))
             history = self._snapshot()
-        self._replace_value(history)
+        self.replace_value(history)
 
     def clear(self) -> None:
         with self._hist_lock:
@@ -143,13 +143,7 @@ class TextViewModel(StdModel):
             self._visible.clear()
             self._filter_version += 1
             history = self._snapshot()
-        self._replace_value(history)
-
-    def _replace_value(self, history: History) -> None:
-        """Not new data (keeps count and age), but a change the view must paint (bumps ``seq``)."""
-        with self._lock:
-            self._value = history
-            self._seq += 1
+        self.replace_value(history)
 
     # -- chat: publish role --------------------------------------------------------------------------
     def on_start(self) -> None:
