@@ -51,6 +51,7 @@ class SettingsForm(QtWidgets.QWidget):
         self._editors: dict[str, tuple[QtWidgets.QWidget, typing.Callable[[], Any]]] = {}
         layout = QtWidgets.QFormLayout(self)
         layout.setFieldGrowthPolicy(QtWidgets.QFormLayout.FieldGrowthPolicy.AllNonFixedFieldsGrow)
+        layout.setRowWrapPolicy(QtWidgets.QFormLayout.RowWrapPolicy.WrapLongRows)  # narrow panel: label above
         layout.setVerticalSpacing(10)
         for field in _resolved_fields(self._cls):
             if field.name.startswith("_"):
