@@ -42,6 +42,8 @@ class AppConfig:
 
     @property
     def workspace_path(self) -> Path:
+        """Where the canvas store keeps the workspace (``rcon_core.canvas.default_path`` when the config
+        dir is the default one)."""
         return self.dir / "workspace.json"
 
     @property
@@ -61,13 +63,6 @@ class AppConfig:
             return
         history = [u for u in self.url_history if u != url]
         self._data["url_history"] = [url, *history][:HISTORY_LIMIT]
-        self.save()
-
-    def get(self, key: str, default=None):
-        return self._data.get(key, default)
-
-    def set(self, key: str, value) -> None:
-        self._data[key] = value
         self.save()
 
     def save(self) -> None:
