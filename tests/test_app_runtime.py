@@ -15,7 +15,7 @@ from rcon_core.app.draft import Draft, Target
 from rcon_core.app.main_window import MainWindow
 from rcon_core.app.widget_host import FRAME_INTERVAL, WidgetHost
 from rcon_core.canvas import Binding, Canvas, Geometry, WidgetInstance, Workspace, dumps_workspace
-from rcon_core.plugins import PluginManager, Role, WidgetModel, WidgetSpec, WidgetState, hookimpl
+from rcon_core.plugins import Accepts, PluginManager, Role, WidgetModel, WidgetSpec, WidgetState, hookimpl
 
 pytestmark = pytest.mark.usefixtures("qapp")
 
@@ -29,11 +29,20 @@ class PadModel(WidgetModel):
         PadModel.focus_losses += 1
 
 
+class PadView(QtWidgets.QLabel):
+    def __init__(self, model: PadModel) -> None:
+        super().__init__("pad")
+
+    def refresh(self, state) -> None:
+        self.setText(f"pad: {state.count}")
+
+
 class PadPlugin:
     @hookimpl
     def rcon_register_widgets(self, registry) -> None:
         registry.add(WidgetSpec(kind="apptest.pad", title="Pad", model=PadModel,
-                                view="test_app_window:ProbeView", roles={Role.PUBLISH}, default_size=(192, 112)))
+                                view=f"{__name__}:PadView", roles={Role.PUBLISH}, default_size=(192, 112),
+                                accepts=Accepts(messages=["twist"])))
 
 
 def plugins() -> PluginManager:
@@ -210,5 +219,37 @@ def test_undo_is_refused_in_operator_mode_and_the_lock_is_not_an_undo_step(qtbot
         window.controller.redo()
         hosted = running(window, qtbot, inst.id)
         qtbot.waitUntil(lambda: hosted.frame.badge.text() == "LINK DOWN", timeout=5_000)
+    finally:
+        window.shutdown()
+
+
+def test_previews_of_controls_never_reach_the_robot(qtbot, tmp_path, robot):  # noqa: F811
+    window = open_window(qtbot, tmp_path, robot.url)
+    panel = window.add_panel
+    try:
+        qtbot.waitUntil(lambda: window.topics.item("/cmd_vel") is not None, timeout=10_000)
+        # a widget that shows: its preview is live on the robot
+        panel.start_from_topic("/depth", "sensor_msgs/Range")
+        panel.choose_role(Role.SUBSCRIBE)
+        panel.choose_candidate(0)
+        qtbot.waitUntil(lambda: robot.topic_subscriber_count("/depth") == 1, timeout=10_000)
+        # a control: previewed offline, nothing advertised, and the frame says so
+        panel.cancel()
+        qtbot.waitUntil(lambda: robot.topic_subscriber_count("/depth") == 0, timeout=10_000)
+        panel.start_from_widget(window.plugins.widget("apptest.pad"))
+        panel.choose_target("/cmd_vel")
+        assert not panel.problems()
+        preview_id = window.preview.widget.id
+        hosted = running(window, qtbot, preview_id)
+        qtbot.waitUntil(lambda: hosted.frame.badge.text() == "PREVIEW ONLY", timeout=5_000)
+        assert hosted.model.publish({"linear": {"x": 1.0}})  # what a touch on the pad would do
+        qtbot.wait(300)
+        assert robot.published("/cmd_vel") == []
+        # placed, the same widget is live
+        window.place_draft()
+        [placed] = window.controller.canvas.widgets
+        live = running(window, qtbot, placed.id)
+        qtbot.waitUntil(lambda: bool(live.model.publish({"linear": {"x": 0.5}}) and robot.published("/cmd_vel")),
+                        timeout=10_000)
     finally:
         window.shutdown()

@@ -2,17 +2,21 @@
 
 The preview's model is built and started by its own canvas runtime (a :class:`LiveCanvas`) on the
 bridge thread, like any placed widget, and shown by the same :class:`WidgetHost`; releasing the preview
-stops it there.
+stops it there. Only a widget that *shows* (subscribe) runs on the robot: a preview that would publish,
+call or serve runs offline, so touching a teleop pad or a button in the add panel never moves the robot
+(its frame says PREVIEW ONLY).
 """
 
 from __future__ import annotations
 
 from typing import Any
 
+from rcon_core.app.link import OFFLINE
 from rcon_core.app.live import LiveCanvas
 from rcon_core.app.widget_frame import WidgetFrame
 from rcon_core.app.widget_host import WidgetHost
 from rcon_core.canvas import Canvas, Geometry, WidgetInstance, new_id
+from rcon_core.plugins import Role
 
 
 class PreviewHost:
@@ -35,15 +39,24 @@ class PreviewHost:
         self.widget = widget
         frame.instance_id = widget.id
         self.host.build_frame(widget, frame)
-        self.live.start(self.client(), Canvas("preview", "Preview", [widget]))
+        if not self.live_on_robot:
+            self.host.dry_run.add(widget.id)
+        self.restart()
+
+    @property
+    def live_on_robot(self) -> bool:
+        """Whether the preview talks to the robot: only widgets that just show what arrives."""
+        return self.widget is not None and self.widget.binding.role is Role.SUBSCRIBE
 
     def release(self) -> None:
         if self.widget is not None:
             self.host.discard(self.widget.id)
+            self.host.dry_run.discard(self.widget.id)
             self.live.stop()
             self.widget = None
 
     def restart(self) -> None:
         """Run the preview again on the current client (after the link changed)."""
         if self.widget is not None:
-            self.live.start(self.client(), Canvas("preview", "Preview", [self.widget]))
+            client = self.client() if self.live_on_robot else OFFLINE
+            self.live.start(client, Canvas("preview", "Preview", [self.widget]))

@@ -52,6 +52,8 @@ class WidgetHost:
         self._link_up = False
         self._due: set[str] = set()  # changed, but refreshed less than a frame ago
         self.paint_hooks: list[Any] = []  # benchmark: fn(hosted, state) after each refresh
+        #: widgets run offline on purpose (previews of controls): no LINK DOWN, a PREVIEW ONLY badge
+        self.dry_run: set[str] = set()
 
     # -------------------------------------------------------------------------------------- frames
     def build_frame(self, widget: WidgetInstance, frame: WidgetFrame | None = None) -> WidgetFrame:
@@ -150,7 +152,10 @@ class WidgetHost:
             return
         state = model.state
         badge = hosted.frame.badge
-        if state.link_down or not self._link_up:
+        if hosted.widget.id in self.dry_run:
+            badge.show_status("ok", "PREVIEW ONLY")
+            badge.setToolTip("not sent to the robot until the widget is placed")
+        elif state.link_down or not self._link_up:
             badge.show_status("down", "LINK DOWN")
         elif state.error:
             badge.show_status("problem", "ERROR")
