@@ -85,11 +85,46 @@ async def test_navigate_to_fix_action(sim2: SimServer) -> None:
 async def test_cancel_action_goal(sim2: SimServer) -> None:
     async with websockets.connect(sim2.url, max_size=None, max_queue=None) as ws:
         await ws.send(json.dumps({"op": "send_action_goal", "id": "far", "action": "/navigate_to_fix",
-                                  "action_type": "rcon_sim/action/NavigateToFix",
+                                  "action_type": "rcon_sim/action/NavigateToFix", "feedback": True,
                                   "args": {"target": {"latitude": 43.70, "longitude": -79.30}}}))
         await recv_until(ws, lambda m: m.get("op") == "action_feedback")
         await ws.send(json.dumps({"op": "cancel_action_goal", "id": "far", "action": "/navigate_to_fix"}))
         result = await recv_until(ws, lambda m: m.get("op") == "action_result")
-    assert result["status"] == 5 and result["result"] is False
-    assert result["values"]["success"] is False
+    # rosbridge's ROS 2 capability: a goal that ended (cancelled too) is result true with its GoalStatus
+    assert result["status"] == 5 and result["result"] is True
+    assert result["values"]["success"] is False and result["values"]["message"] == "canceled"
+    assert sim2.robot.cmd_surge == 0.0
+
+
+async def test_feedback_only_when_asked(sim2: SimServer) -> None:
+    """ROSBRIDGE_PROTOCOL.md: ``feedback`` defaults to false, so a goal without it gets no feedback frames."""
+    async with websockets.connect(sim2.url, max_size=None, max_queue=None) as ws:
+        await ws.send(json.dumps({"op": "send_action_goal", "id": "quiet", "action": "/navigate_to_fix",
+                                  "action_type": "rcon_sim/action/NavigateToFix",
+                                  "args": {"target": {"latitude": 43.70, "longitude": -79.30}}}))
+        await asyncio.sleep(0.6)  # three feedback periods at rate_scale 4
+        await ws.send(json.dumps({"op": "cancel_action_goal", "id": "quiet", "action": "/navigate_to_fix"}))
+        seen: list[dict[str, Any]] = []
+        result = await recv_until(ws, lambda m: seen.append(m) or m.get("op") == "action_result")
+    assert result["status"] == 5
+    assert [m for m in seen if m.get("op") == "action_feedback"] == []
+
+
+async def test_goals_that_cannot_be_sent_fail_like_rosbridge(sim2: SimServer) -> None:
+    """Unknown action, unknown type, unusable args: ``result: false``, status 0, the error as a string."""
+    goals = [
+        ({"action": "/no_such_action", "action_type": "rcon_sim/action/NavigateToFix"}, "No action server available"),
+        ({"action": "/navigate_to_fix", "action_type": "rcon_sim/action/Nope"}, "Unable to load the action type"),
+        ({"action": "/navigate_to_fix", "action_type": "rcon_sim/NavigateToFix", "args": {"target": 5}},
+         "sensor_msgs/NavSatFix 'target'"),
+        ({"action": "/navigate_to_fix", "action_type": "rcon_sim/action/NavigateToFix",
+          "args": {"target": {"latitude": "north", "longitude": 1}}}, "must be numbers"),
+    ]
+    async with websockets.connect(sim2.url, max_size=None, max_queue=None) as ws:
+        for n, (frame, text) in enumerate(goals):
+            await ws.send(json.dumps({"op": "send_action_goal", "id": f"g{n}", **frame}))
+            result = await recv_until(ws, lambda m, n=n: m.get("op") == "action_result" and m.get("id") == f"g{n}")
+            assert result["result"] is False and result["status"] == 0
+            assert isinstance(result["values"], str) and text in result["values"]
+            assert result["action"] == frame["action"]
     assert sim2.robot.cmd_surge == 0.0

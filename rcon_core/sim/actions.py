@@ -1,13 +1,23 @@
 """The sim's one ROS 2 action: drive to a GPS fix (``send_action_goal`` ... ``action_result``).
 
-Feedback frames come at 5 Hz (scaled by rate_scale) while the vessel steers toward the goal; a new goal
-aborts the running one; ``cancel_action_goal`` or the client's disconnect cancels it.
+Frames follow ROSBRIDGE_PROTOCOL.md and rosbridge_suite's ROS 2 ``send_action_goal`` capability:
+
+* ``action_feedback`` (``id``, ``action``, ``values``) only when the goal asked ``feedback: true`` (the
+  spec's default is false); 5 Hz scaled by rate_scale while the vessel steers toward the goal.
+* A goal that ran to an end -- succeeded, cancelled or aborted -- gets ``action_result`` with
+  ``result: true``, the GoalStatus code in ``status`` (4, 5, 6) and the result message in ``values``.
+* A goal that could not be sent at all (unknown action or action type, unusable args) gets
+  ``action_result`` with ``result: false``, ``status`` 0 (STATUS_UNKNOWN) and the error *string* in
+  ``values``: the real server's failure shape ("No action server available" for an unknown action).
+
+A new goal aborts the running one; ``cancel_action_goal`` or the client's disconnect cancels it.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import logging
 import math
 import time
 from dataclasses import dataclass
@@ -20,7 +30,8 @@ if TYPE_CHECKING:
 
 ACTION_NAME = "/navigate_to_fix"
 ACTION_TYPE = "rcon_sim/action/NavigateToFix"
-STATUS_SUCCEEDED, STATUS_CANCELED, STATUS_ABORTED = 4, 5, 6
+log = logging.getLogger("rcon.sim")
+STATUS_UNKNOWN, STATUS_SUCCEEDED, STATUS_CANCELED, STATUS_ABORTED = 0, 4, 5, 6
 
 
 @dataclass
@@ -34,6 +45,12 @@ class _Goal:
     feedback: bool
     task: asyncio.Task[None] | None = None
     status: int = 0
+
+
+def _short(type_name: str) -> str:
+    """``pkg/action/Type`` -> ``pkg/Type`` so either spelling of the action type matches."""
+    parts = type_name.split("/")
+    return f"{parts[0]}/{parts[-1]}" if len(parts) == 3 else type_name
 
 
 def _finite_number(value: Any) -> float | None:
@@ -61,35 +78,49 @@ class NavigateActionServer:
                 await self.goal.task
 
     def op_send_goal(self, conn: Connection, msg: dict[str, Any]) -> None:
-        from .server import _field, _OpError
+        from .server import _field
 
         action = _field(msg, "action", str)
+        action_type = _field(msg, "action_type", str)
+        goal_id = msg.get("id")
+        if _short(action_type) != _short(ACTION_TYPE):
+            self._fail(conn, goal_id, action, f"Unable to load the action type {action_type}")
+            return
         if action != ACTION_NAME:
-            raise _OpError(f"Action {action} does not exist")
+            self._fail(conn, goal_id, action, "No action server available")
+            return
         args = msg.get("args") or {}
         if isinstance(args, list):
             args = dict(zip(("target",), args, strict=False))
         target = args.get("target") if isinstance(args, dict) else None
         if not isinstance(target, dict):
-            raise _OpError("send_action_goal args must be an object with a sensor_msgs/NavSatFix 'target'")
+            self._fail(conn, goal_id, action, "send_action_goal args must be an object with a "
+                       "sensor_msgs/NavSatFix 'target'")
+            return
         lat, lon = _finite_number(target.get("latitude")), _finite_number(target.get("longitude"))
         if lat is None or lon is None:
-            self._result(conn, msg.get("id"), STATUS_ABORTED, False,
-                         {"success": False, "message": "target latitude and longitude must be numbers",
-                          "distance": 0.0})
+            self._fail(conn, goal_id, action, "target latitude and longitude must be numbers")
             return
         x, y = self.node.vessel.local_from_lat_lon(lat, lon)
         tolerance = 2.0
         max_speed = 1.5
         if self.goal is not None and self.goal.task is not None and not self.goal.task.done():
             self._finish(self.goal, STATUS_ABORTED, False, "preempted by a new goal")
-        goal = _Goal(conn, msg.get("id"), x, y, max(0.5, tolerance), max(0.1, max_speed), msg.get("feedback", True)
-                     is not False)
+        goal = _Goal(conn, goal_id, x, y, max(0.5, tolerance), max(0.1, max_speed), bool(msg.get("feedback", False)))
         self.goal = goal
         goal.task = asyncio.get_running_loop().create_task(self._drive(goal))
         self.server.log("/kingfisher", "info", f"Navigating to {lat:.6f}, {lon:.6f} "
                         f"({math.hypot(x - self.node.vessel.x, y - self.node.vessel.y):.1f} m away)",
                         function="navigate_to_fix")
+
+    def _fail(self, conn: Connection, goal_id: Any, action: str, text: str) -> None:
+        """The real server's answer to a goal it could not send: ``result: false``, status 0, a string."""
+        log.error("%s send_action_goal %s: %s", conn.label, goal_id, text)
+        frame: dict[str, Any] = {"op": "action_result", "action": action, "values": text,
+                                 "status": STATUS_UNKNOWN, "result": False}
+        if goal_id is not None:
+            frame["id"] = goal_id
+        self.server._send_text(conn, frame)
 
     def op_cancel_goal(self, conn: Connection, msg: dict[str, Any]) -> None:
         goal = self.goal
@@ -131,11 +162,14 @@ class NavigateActionServer:
             goal.task.cancel()
             self.node.vessel.command(0.0, 0.0, time.monotonic())
         dist = self._distance(goal)
-        self._result(goal.conn, goal.goal_id, status, status == STATUS_SUCCEEDED,
-                     {"success": success, "message": message, "distance": dist})
+        self._result(goal.conn, goal.goal_id, status, {"success": success, "message": message, "distance": dist})
         level = "info" if success else "warn"
         self.server.log("/kingfisher", level, f"navigate_to_fix {message}", function="navigate_to_fix")
 
-    def _result(self, conn: Connection, goal_id: Any, status: int, result: bool, values: dict[str, Any]) -> None:
-        self.server._send_text(conn, {"op": "action_result", "id": goal_id, "action": ACTION_NAME,
-                                      "values": values, "status": status, "result": result})
+    def _result(self, conn: Connection, goal_id: Any, status: int, values: dict[str, Any]) -> None:
+        """A goal that ended (any terminal status): ``result: true``, as rosbridge's ``_success`` sends."""
+        frame: dict[str, Any] = {"op": "action_result", "id": goal_id, "action": ACTION_NAME, "values": values,
+                                 "status": status, "result": True}
+        if goal_id is None:
+            del frame["id"]
+        self.server._send_text(conn, frame)
