@@ -2,6 +2,8 @@
 JPEGs), rgb8 raw, no camera -> a clear error, capture off the GUI thread, settings; preview screenshot."""
 
 import asyncio
+import os
+import tempfile
 import threading
 import time
 from pathlib import Path
@@ -18,7 +20,9 @@ from rcon_core.msgs import TypeRegistry
 from rcon_core.msgs.values import as_bytes
 from rcon_core.plugins import Binding
 
-SHOTS = Path(__file__).resolve().parents[3] / "docs" / "screenshots" / "sensors"
+#: set RCON_SCREENSHOTS=1 to refresh the PNGs in docs/screenshots/sensors (otherwise they go to a temp dir)
+SHOTS = (Path(__file__).resolve().parents[3] / "docs" / "screenshots" / "sensors" if os.environ.get("RCON_SCREENSHOTS")
+         else Path(tempfile.mkdtemp(prefix="rcon-shots-")))
 
 
 def loop_dispatch():

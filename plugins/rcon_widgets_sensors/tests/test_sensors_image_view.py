@@ -1,6 +1,8 @@
 """Image view offscreen: paints the newest frame letterboxed, overlay, pinch/pan/double-tap, screenshots."""
 
 import math
+import os
+import tempfile
 import time
 from pathlib import Path
 
@@ -16,7 +18,9 @@ from rcon_core.plugins import Binding
 from rcon_core.sim.camera import CameraRenderer, encode_jpeg
 from rcon_core.sim.vessel import Vessel
 
-SHOTS = Path(__file__).resolve().parents[3] / "docs" / "screenshots" / "sensors"
+#: set RCON_SCREENSHOTS=1 to refresh the PNGs in docs/screenshots/sensors (otherwise they go to a temp dir)
+SHOTS = (Path(__file__).resolve().parents[3] / "docs" / "screenshots" / "sensors" if os.environ.get("RCON_SCREENSHOTS")
+         else Path(tempfile.mkdtemp(prefix="rcon-shots-")))
 
 
 def feed(model, msg):

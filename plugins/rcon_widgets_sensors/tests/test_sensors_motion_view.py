@@ -1,7 +1,9 @@
 """Motion sensor views offscreen: the real Qt Sensors backend on a machine without sensors says so;
 values drawn from the test signal; screenshots."""
 
+import os
 import sys
+import tempfile
 from pathlib import Path
 
 from rcon_widgets_sensors.motion_sensors import (
@@ -15,7 +17,9 @@ from rcon_widgets_sensors.motion_view import MotionSensorView
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding
 
-SHOTS = Path(__file__).resolve().parents[3] / "docs" / "screenshots" / "sensors"
+#: set RCON_SCREENSHOTS=1 to refresh the PNGs in docs/screenshots/sensors (otherwise they go to a temp dir)
+SHOTS = (Path(__file__).resolve().parents[3] / "docs" / "screenshots" / "sensors" if os.environ.get("RCON_SCREENSHOTS")
+         else Path(tempfile.mkdtemp(prefix="rcon-shots-")))
 
 
 def view_for(qtbot, cls, source, type_name="sensor_msgs/Imu", **kw):

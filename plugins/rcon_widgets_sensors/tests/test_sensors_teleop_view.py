@@ -1,6 +1,8 @@
 """Teleop pads offscreen with a real bridge thread and the sim: two fingers on two pads at once, zero on
 lift, on focus loss and when hidden; screenshot."""
 
+import os
+import tempfile
 import time
 from pathlib import Path
 
@@ -15,7 +17,9 @@ from rcon_core.bridge.threaded import BridgeThread
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding
 
-SHOTS = Path(__file__).resolve().parents[3] / "docs" / "screenshots" / "sensors"
+#: set RCON_SCREENSHOTS=1 to refresh the PNGs in docs/screenshots/sensors (otherwise they go to a temp dir)
+SHOTS = (Path(__file__).resolve().parents[3] / "docs" / "screenshots" / "sensors" if os.environ.get("RCON_SCREENSHOTS")
+         else Path(tempfile.mkdtemp(prefix="rcon-shots-")))
 
 
 class Robot:
