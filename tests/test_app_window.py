@@ -175,9 +175,9 @@ def test_add_from_service_calls_the_robot(make_window, robot, qtbot):
 
 def test_add_from_palette_then_drop_on_canvas(make_window, robot, qtbot):
     window = make_window()
-    window.side.setCurrentWidget(window.palette)
-    item = window.palette.item("apptest.probe")
-    tap_item(window.palette.tree, window.palette.tree.indexFromItem(item))
+    window.side.setCurrentWidget(window.palette_panel)
+    item = window.palette_panel.item("apptest.probe")
+    tap_item(window.palette_panel.tree, window.palette_panel.tree.indexFromItem(item))
     panel = window.add_panel
     assert panel.stack.currentWidget() is panel.settings_page
     assert set(panel.problems()) >= {"no topic chosen", "caption is empty"}
@@ -212,7 +212,7 @@ def test_palette_says_so_when_no_widget_is_installed(qtbot, tmp_path):
     window = MainWindow(AppConfig(tmp_path), PluginManager(environ={}))
     qtbot.addWidget(window)
     try:
-        assert window.palette.empty.isVisibleTo(window.palette)
-        assert "No widget plugins are installed" in window.palette.empty.text()
+        assert window.palette_panel.empty.isVisibleTo(window.palette_panel)
+        assert "No widget plugins are installed" in window.palette_panel.empty.text()
     finally:
         window.shutdown()

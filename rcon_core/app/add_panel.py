@@ -11,7 +11,6 @@ a warning overlay listing them; once valid it can be dragged onto the canvas or 
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
 
 from qtpy import QtCore, QtGui, QtWidgets
 
@@ -98,6 +97,7 @@ class AddPanel(QtWidgets.QWidget):
         self.form: SettingsForm | None = None
         self.preview_frame: WidgetFrame | None = None
         self._picked: Target | None = None
+        self._role: Role | None = None
         self._is_service = False
         self._targets: list[Target] = []
 
@@ -273,6 +273,7 @@ class AddPanel(QtWidgets.QWidget):
         cand: Candidate = item.data(QtCore.Qt.ItemDataRole.UserRole)
         assert self._picked is not None
         target = Target(self._picked.name, self._picked.type, cand.field_paths)
+        assert self._role is not None
         self._open_settings(cand.spec, self._role, target, pick_target=False)
 
     # ------------------------------------------------------------------------------------- settings
@@ -323,8 +324,8 @@ class AddPanel(QtWidgets.QWidget):
             self.target_combo.setCurrentIndex(index)
             self.draft.target = self.target_combo.currentData()
         else:
-            t = self.draft.target
-            self.target_combo.addItem(f"{t.name}  ({short_type(t.type)})" if t else "—", t)
+            fixed = self.draft.target
+            self.target_combo.addItem(f"{fixed.name}  ({short_type(fixed.type)})" if fixed else "—", fixed)
             self.target_combo.setEnabled(False)
         self.target_combo.blockSignals(False)
 
@@ -429,4 +430,4 @@ class AddPanel(QtWidgets.QWidget):
             self.form = None
         self.draft = None
         self._picked = None
-        self._role: Any = None
+        self._role = None

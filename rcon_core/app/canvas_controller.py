@@ -143,7 +143,7 @@ class CanvasController(QtCore.QObject):
 
     # ------------------------------------------------------------------------- document listener
     def _changed(self, change: Change) -> None:
-        what, cid, wid = change.what, change.canvas_id, change.widget_id
+        what, cid, wid = change.what, change.canvas_id or "", change.widget_id or ""
         current = self.canvas.id
         if what == "workspace-replaced":
             self._rebuild_surfaces()

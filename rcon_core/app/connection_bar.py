@@ -35,7 +35,9 @@ class ConnectionBar(QtWidgets.QFrame):
         self.url.setMinimumWidth(320)
         self.url.addItems(config.url_history or [config.last_url])
         self.url.setCurrentText(config.last_url)
-        self.url.lineEdit().returnPressed.connect(self.connect_clicked)
+        line = self.url.lineEdit()
+        assert line is not None  # the combo is editable
+        line.returnPressed.connect(self.connect_clicked)
 
         self.connect_button = QtWidgets.QPushButton("Connect")
         self.connect_button.setObjectName("connectButton")

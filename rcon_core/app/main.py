@@ -36,7 +36,8 @@ def run_app(args: Any) -> int:
             return 2
     # a layout file that cannot be read is reported in the window (and never overwritten)
     layout = Path(args.layout) if getattr(args, "layout", None) else None
-    app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(sys.argv[:1])
+    existing = QtWidgets.QApplication.instance()
+    app = existing if isinstance(existing, QtWidgets.QApplication) else QtWidgets.QApplication(sys.argv[:1])
     app.setApplicationName("RCON")
     theme.apply(app)
     plugins = load_plugins()

@@ -43,7 +43,7 @@ class MainWindow(QtWidgets.QMainWindow):
     ) -> None:
         super().__init__()
         app = QtWidgets.QApplication.instance()
-        if app is not None and not app.property("rcon_touch_px"):
+        if isinstance(app, QtWidgets.QApplication) and not app.property("rcon_touch_px"):
             theme.apply(app)  # the touch-sized high-contrast theme, also for embedders and tests
         self.setAttribute(QtCore.Qt.WidgetAttribute.WA_AcceptTouchEvents)
         self.setWindowTitle("RCON")
@@ -72,13 +72,13 @@ class MainWindow(QtWidgets.QMainWindow):
         self.connection = ConnectionBar(self.link, config)
         self.topics = CatalogList("topics", with_rate=True)
         self.services = CatalogList("services", with_rate=False)
-        self.palette = PalettePanel()
-        self.palette.set_specs(plugins.widgets())
+        self.palette_panel = PalettePanel()
+        self.palette_panel.set_specs(plugins.widgets())
         self.side = QtWidgets.QTabWidget()
         self.side.setObjectName("sidePanel")
         self.side.addTab(self.topics, "Topics")
         self.side.addTab(self.services, "Services")
-        self.side.addTab(self.palette, "Widgets")
+        self.side.addTab(self.palette_panel, "Widgets")
         self.side.setMinimumWidth(330)
 
         self.tabs = QtWidgets.QTabBar()
@@ -180,7 +180,7 @@ class MainWindow(QtWidgets.QMainWindow):
         # ---- signals and the frame clock
         self.topics.picked.connect(self.add_panel.start_from_topic)
         self.services.picked.connect(self.add_panel.start_from_service)
-        self.palette.picked.connect(self._palette_picked)
+        self.palette_panel.picked.connect(self._palette_picked)
         self.link.on_client_changed(self._client_changed)
         self.connection.state_changed.connect(self._link_state)
         QtGui.QShortcut(QtGui.QKeySequence.StandardKey.Undo, self, self.undo)
@@ -190,7 +190,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.clock.add(lambda _now: self._pump(None))
         self.clock.start()
         app = QtWidgets.QApplication.instance()
-        if app is not None:
+        if isinstance(app, QtGui.QGuiApplication):
             app.applicationStateChanged.connect(self._app_state_changed)
         self.resize(1280, 800)
 
@@ -461,7 +461,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.waker.stop()
         self._due_timer.stop()
         app = QtWidgets.QApplication.instance()
-        if app is not None:
+        if isinstance(app, QtGui.QGuiApplication):
             try:
                 app.applicationStateChanged.disconnect(self._app_state_changed)
             except (RuntimeError, TypeError):

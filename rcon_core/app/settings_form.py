@@ -102,13 +102,13 @@ class SettingsForm(QtWidgets.QWidget):
             spin.valueChanged.connect(self._edited)
             return spin, spin.value
         if tp is float:
-            spin = QtWidgets.QDoubleSpinBox()
-            spin.setDecimals(int(meta.get("decimals", 3)))
-            spin.setRange(float(meta.get("min", -1e12)), float(meta.get("max", 1e12)))
-            spin.setSingleStep(float(meta.get("step", 0.1)))
-            spin.setValue(float(value or 0.0))
-            spin.valueChanged.connect(self._edited)
-            return spin, spin.value
+            dspin = QtWidgets.QDoubleSpinBox()
+            dspin.setDecimals(int(meta.get("decimals", 3)))
+            dspin.setRange(float(meta.get("min", -1e12)), float(meta.get("max", 1e12)))
+            dspin.setSingleStep(float(meta.get("step", 0.1)))
+            dspin.setValue(float(value or 0.0))
+            dspin.valueChanged.connect(self._edited)
+            return dspin, dspin.value
         if tp is str:
             line = QtWidgets.QLineEdit("" if value is None else str(value))
             line.textChanged.connect(self._edited)

@@ -15,7 +15,7 @@ def touch_px(screen: QtGui.QScreen | None = None) -> int:
     """The minimum touch-target size in pixels for ``screen``: 9 mm at its physical DPI, at least 48 px."""
     if screen is None:
         app = QtWidgets.QApplication.instance()
-        screen = app.primaryScreen() if app is not None else None
+        screen = app.primaryScreen() if isinstance(app, QtGui.QGuiApplication) else None
     dpi = screen.physicalDotsPerInch() if screen is not None else 96.0
     if not dpi or dpi != dpi or dpi <= 0:  # some platforms report 0 or NaN
         dpi = 96.0

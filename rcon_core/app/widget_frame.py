@@ -51,7 +51,9 @@ class Badge(QtWidgets.QLabel):
         self.adjustSize()
         self.show()
         self.raise_()
-        self.parentWidget().layout_overlays()  # type: ignore[attr-defined]
+        frame = self.parentWidget()
+        if isinstance(frame, WidgetFrame):
+            frame.layout_overlays()
 
 
 class ProblemOverlay(QtWidgets.QLabel):
