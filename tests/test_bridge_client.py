@@ -12,10 +12,12 @@ from replay_server import ScriptedServer, load, recorded, require_shared
 
 from rcon_core.bridge import (
     ActionError,
+    ActionTimeoutError,
     BridgeClient,
     BridgeError,
     ConnectionLostError,
     ConnectionState,
+    GoalStatus,
     NotConnectedError,
     ServiceError,
     ServiceTimeoutError,
@@ -311,26 +313,74 @@ async def test_set_level_status_and_auth():
 
 
 async def test_action_goal_feedback_result_and_cancel(server, client):
+    server.services["/rosapi/action_servers"] = lambda f: {
+        "op": "service_response", "id": f["id"], "service": f["service"], "result": True,
+        "values": {"action_servers": ["/fibonacci"]}}
     node = client.node("nav")
     feedback = []
     goal = node.send_action_goal("/fibonacci", "example_interfaces/action/Fibonacci", {"order": 3}, feedback.append)
     (sent,) = await server.wait_for("send_action_goal")
-    assert sent["action"] == "/fibonacci" and sent["action_type"] == "example_interfaces/action/Fibonacci"
-    assert sent["args"] == {"order": 3} and sent["feedback"] is True and sent["id"] == goal.id
+    assert sent == {"op": "send_action_goal", "id": goal.id, "action": "/fibonacci",
+                    "action_type": "example_interfaces/action/Fibonacci", "args": {"order": 3}, "feedback": True}
     await server.send({"op": "action_feedback", "id": goal.id, "action": "/fibonacci", "values": {"sequence": [0, 1]}})
     await server.send({"op": "action_result", "id": goal.id, "action": "/fibonacci",
                        "values": {"sequence": [0, 1, 1, 2]}, "status": 4, "result": True})
     assert await goal.result(timeout=5) == {"sequence": [0, 1, 1, 2]}
-    assert feedback == [{"sequence": [0, 1]}] and goal.status == 4
-    g2 = node.send_action_goal("/fibonacci", "example_interfaces/action/Fibonacci", {"order": 50})
+    assert feedback == [{"sequence": [0, 1]}] and goal.status == GoalStatus.SUCCEEDED and goal.succeeded
+    # no callback: the goal asks for no feedback (the protocol's default)
+    g2 = node.send_action_goal("/fibonacci", "example_interfaces/action/Fibonacci", [50])
+    (sent2,) = await server.wait_for("send_action_goal", id=g2.id)
+    assert sent2["feedback"] is False and sent2["args"] == [50]
     g2.cancel()
     (cancel,) = await server.wait_for("cancel_action_goal")
     assert cancel == {"op": "cancel_action_goal", "id": g2.id, "action": "/fibonacci"}
-    await server.send({"op": "action_result", "id": g2.id, "action": "/fibonacci", "values": "canceled",
-                       "status": 5, "result": False})
-    with pytest.raises(ActionError, match="canceled") as info:
+    # rosbridge's ROS 2 capability answers a cancelled goal with result true and status CANCELED
+    await server.send({"op": "action_result", "id": g2.id, "action": "/fibonacci",
+                       "values": {"sequence": [0, 1]}, "status": 5, "result": True})
+    assert await g2.result(timeout=5) == {"sequence": [0, 1]}
+    assert g2.status == GoalStatus.CANCELED and not g2.succeeded and g2.cancel_requested
+    # a goal the server could not run: result false, status 0, the error as a string (its _failure shape)
+    g3 = node.send_action_goal("/fibonacci", "example_interfaces/action/Fibonacci", {"order": 1})
+    await server.send({"op": "action_result", "id": g3.id, "action": "/fibonacci",
+                       "values": "No action server available", "status": 0, "result": False})
+    with pytest.raises(ActionError, match="^/fibonacci: No action server available$") as info:
+        await g3.result(timeout=5)
+    assert info.value.status == GoalStatus.UNKNOWN
+
+
+async def test_action_goal_errors_reach_the_caller_promptly(server, client):
+    node = client.node("nav")
+    # ROS 1 rosapi lists its actionlib servers (none in the recording): the goal fails at once, clearly
+    goal = node.send_action_goal("/no_such_action", "pkg/action/Nope", {})
+    with pytest.raises(ActionError, match=r"^/no_such_action: action does not exist \(action servers: none\)"):
+        await goal.result(timeout=5)
+    (cancel,) = await server.wait_for("cancel_action_goal", id=goal.id)
+    # an error status naming the goal ends it (the op failed on the server, no result will come)
+    g2 = node.send_action_goal("/x", "pkg/action/X", check=False)
+    await server.send({"op": "status", "level": "error", "id": g2.id, "msg": "send_action_goal: bad args"})
+    with pytest.raises(ActionError, match="bad args"):
         await g2.result(timeout=5)
-    assert info.value.status == 5
+    # nothing ever comes back: the client-side timeout cancels the goal and says so
+    g3 = node.send_action_goal("/silent", "pkg/action/X", check=False, timeout=0.2)
+    with pytest.raises(ActionTimeoutError, match="no result within 0.2 s") as info:
+        await g3.result(timeout=5)
+    assert isinstance(info.value, TimeoutError)
+    await server.wait_for("cancel_action_goal", id=g3.id)
+    # a late result for a finished goal is ignored
+    await server.send({"op": "action_result", "id": g3.id, "action": "/silent", "values": {}, "status": 5,
+                       "result": True})
+    for bad, exc in ((dict(action="", action_type="a/b"), ValueError), (dict(action="/a", action_type="ab"), ValueError),
+                     (dict(action="/a", action_type="a/b", args="x"), TypeError),
+                     (dict(action="/a", action_type="a/b", timeout=0), ValueError),
+                     (dict(action="/a", action_type="a/b", feedback=3), TypeError)):
+        with pytest.raises(exc):
+            node.send_action_goal(**bad)
+    # the link drops while a goal runs: ConnectionLostError
+    g4 = node.send_action_goal("/x", "pkg/action/X", check=False)
+    await server.wait_for("send_action_goal", id=g4.id)
+    await server.drop()
+    with pytest.raises(ConnectionLostError):
+        await g4.result(timeout=5)
 
 
 # ------------------------------------------------------------------------------------------ bad input

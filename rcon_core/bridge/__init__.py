@@ -3,6 +3,7 @@
 from .client import BridgeClient, ConnectionState
 from .errors import (
     ActionError,
+    ActionTimeoutError,
     BridgeError,
     ConnectionLostError,
     NotConnectedError,
@@ -10,10 +11,10 @@ from .errors import (
     ServiceError,
     ServiceTimeoutError,
 )
-from .nodes import ActionGoal, Node, Publisher, ServiceServer, Subscription
+from .nodes import ActionGoal, GoalStatus, Node, Publisher, ServiceServer, Subscription
 
 __all__ = [
-    "ActionError", "ActionGoal", "BridgeClient", "BridgeError", "ConnectionLostError", "ConnectionState",
-    "Node", "NotConnectedError", "ProtocolError", "Publisher", "ServiceError", "ServiceServer",
-    "ServiceTimeoutError", "Subscription",
+    "ActionError", "ActionGoal", "ActionTimeoutError", "BridgeClient", "BridgeError", "ConnectionLostError",
+    "ConnectionState", "GoalStatus", "Node", "NotConnectedError", "ProtocolError", "Publisher", "ServiceError",
+    "ServiceServer", "ServiceTimeoutError", "Subscription",
 ]

@@ -30,6 +30,16 @@ Service calls
     while reconnecting waits for the link inside the same budget.  Calls waiting when the link drops fail
     with ``ConnectionLostError``.  ``result: false`` raises ``ServiceError`` carrying the server's string.
 
+ROS 2 actions
+    ``node.send_action_goal`` sends the spec's ``send_action_goal`` (``feedback: true`` only when a
+    feedback callback is given).  rosbridge answers a goal that *ran* -- succeeded, cancelled or aborted --
+    with ``result: true`` and the GoalStatus in ``status``: ``goal.result()`` returns the result message and
+    ``goal.status`` tells how it ended.  ``result: false`` (the goal could not be sent: no action server,
+    bad args; ``values`` is then the error string), an error ``status`` naming the goal, or the optional
+    client-side ``timeout`` raise ``ActionError``.  By default the client also asks
+    ``/rosapi/action_servers`` and fails a goal to an unlisted action within ``call_timeout``, because a
+    ROS 1 rosbridge drops ``send_action_goal`` without any answer.
+
 Bad input from the server
     Invalid JSON, unknown ops, missing or mistyped fields, broken fragments and frames above
     ``max_message_size`` are logged (rate limited, counted in ``client.stats``) and dropped; the
@@ -56,6 +66,7 @@ from websockets.exceptions import ConnectionClosed
 
 from .errors import (
     ActionError,
+    ActionTimeoutError,
     BridgeError,
     ConnectionLostError,
     NotConnectedError,
@@ -371,8 +382,7 @@ class BridgeClient:
                 fut.set_exception(ConnectionLostError("connection lost before the answer arrived"))
         self._pending.clear()
         for gid, goal in list(self._goals.items()):
-            if not goal._future.done():
-                goal._future.set_exception(ConnectionLostError(f"connection lost while goal {gid} was active"))
+            goal._settle(error=ConnectionLostError(f"connection lost while goal {gid} was active"))
         self._goals.clear()
 
     # ================================================================== writing
@@ -557,6 +567,9 @@ class BridgeClient:
             fut = self._pending.pop(sid, None)
             if fut is not None and not fut.done():
                 fut.set_exception(ServiceError(str(text)))
+            goal = self._goals.get(sid)
+            if goal is not None:
+                self._fail_goal(goal, ActionError(str(text), goal.action), cancel=False)
         for fn in list(self._status_listeners):
             try:
                 fn(m)
@@ -820,18 +833,53 @@ class BridgeClient:
 
     # ================================================================== actions (ROS 2)
 
-    def _send_goal(self, node: Node, action: str, action_type: str, args: dict[str, Any] | None,
-                   feedback: Callable[[Any], None] | None) -> ActionGoal:
+    def _send_goal(self, node: Node, action: str, action_type: str, args: dict[str, Any] | list | None,
+                   feedback: Callable[[Any], None] | None, timeout: float | None, check: bool) -> ActionGoal:
         self._seq += 1
         goal = ActionGoal(node, action, action_type, f"goal:{action}:{self._seq}", feedback)
         op = {"op": "send_action_goal", "id": goal.id, "action": action, "action_type": action_type,
-              "args": args or {}, "feedback": feedback is not None}
-        if self._send(op):
-            self._goals[goal.id] = goal
-        else:
-            goal._future.set_exception(NotConnectedError(f"not connected to {self.url}"))
-            goal._future.exception()  # mark retrieved: the caller may never await it
+              "args": {} if args is None else args, "feedback": feedback is not None}
+        if not self._send(op):
+            goal._settle(error=NotConnectedError(f"not connected to {self.url}"))
+            return goal
+        self._goals[goal.id] = goal
+        if timeout is not None:
+            goal._timer = asyncio.get_running_loop().call_later(timeout, self._goal_timed_out, goal, timeout)
+        if check:
+            self._spawn(self._check_action_exists(goal))
         return goal
+
+    def _fail_goal(self, goal: ActionGoal, error: ActionError, cancel: bool) -> None:
+        if self._goals.get(goal.id) is goal:
+            del self._goals[goal.id]
+        if cancel and not goal.done:
+            self._send({"op": "cancel_action_goal", "id": goal.id, "action": goal.action})
+        if goal._settle(error=error):
+            log.warning("%s", error)
+
+    def _goal_timed_out(self, goal: ActionGoal, timeout: float) -> None:
+        goal._timer = None
+        self._fail_goal(goal, ActionTimeoutError(f"no result within {timeout:g} s; goal cancelled", goal.action),
+                        cancel=True)
+
+    async def _check_action_exists(self, goal: ActionGoal) -> None:
+        """Fail the goal with a clear error when rosapi says the action does not exist (or cannot)."""
+        try:
+            servers = await self.rosapi.action_servers()
+        except (ServiceTimeoutError, ConnectionLostError, NotConnectedError) as exc:
+            log.debug("could not check that %s exists: %s", goal.action, exc)
+            return
+        except ServiceError as exc:
+            if not goal.done:
+                self._fail_goal(goal, ActionError(
+                    f"cannot check that the action exists ({exc}); a rosbridge without /rosapi/action_servers "
+                    "(ROS 1) has no ROS 2 actions (pass check=False to send anyway)", goal.action), cancel=True)
+            return
+        if goal.done or goal.action in servers or goal.action.lstrip("/") in (s.lstrip("/") for s in servers):
+            return
+        listed = ", ".join(servers) if servers else "none"
+        self._fail_goal(goal, ActionError(f"action does not exist (action servers: {listed})", goal.action),
+                        cancel=True)
 
     def _on_action_feedback(self, m: dict[str, Any]) -> None:
         goal = self._goals.get(m["id"])
@@ -848,17 +896,17 @@ class BridgeClient:
 
     def _on_action_result(self, m: dict[str, Any]) -> None:
         goal = self._goals.pop(m["id"], None)
-        if goal is None or goal._future.done():
-            log.debug("action_result for unknown goal %r", m.get("id"))
+        if goal is None or goal.done:
+            log.debug("action_result for unknown or finished goal %r", m.get("id"))
             return
         values = m.get("values")
         status = m.get("status")
-        goal.status = status if isinstance(status, int) else None
+        goal.status = status if isinstance(status, int) and not isinstance(status, bool) else None
         if m.get("result", True) is False:
-            goal._future.set_exception(ActionError(values if isinstance(values, str) else str(values),
-                                                   goal.action, goal.status))
+            text = values if isinstance(values, str) else str(values)
+            goal._settle(error=ActionError(text or "the server could not run the goal", goal.action, goal.status))
         else:
-            goal._future.set_result({} if values is None else values)
+            goal._settle({} if values is None else values)
 
     # ================================================================== misc ops
 

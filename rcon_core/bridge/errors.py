@@ -38,7 +38,12 @@ class ConnectionLostError(ServiceError):
 
 
 class ActionError(BridgeError):
-    """An action goal ended with ``result: false``; ``status`` is the GoalStatus code when given."""
+    """An action goal could not be run: the server answered ``result: false`` (its error string is the
+    message), an error ``status`` named the goal, the action does not exist, or the client-side timeout
+    ran out.  ``status`` is the GoalStatus code when the server gave one (0, STATUS_UNKNOWN, on failures).
+
+    A goal that *ran* and ended cancelled or aborted is not an error: its result arrives normally with
+    ``ActionGoal.status`` 5 or 6 (rosbridge sends those with ``result: true``)."""
 
     def __init__(self, message: str, action: str | None = None, status: int | None = None) -> None:
         super().__init__(message)
@@ -48,6 +53,10 @@ class ActionError(BridgeError):
 
     def __str__(self) -> str:
         return f"{self.action}: {self.message}" if self.action else self.message
+
+
+class ActionTimeoutError(ActionError, TimeoutError):
+    """No result arrived within the goal's client-side timeout (the client then cancels the goal)."""
 
 
 class ProtocolError(BridgeError):

@@ -8,6 +8,7 @@ same topic share one rosbridge subscription (see ``topics.py``).  All methods ru
 from __future__ import annotations
 
 import asyncio
+import enum
 import logging
 from collections.abc import Awaitable, Callable
 from typing import TYPE_CHECKING, Any
@@ -109,8 +110,26 @@ class ServiceServer:
             self.node.client._remove_service(self)
 
 
+class GoalStatus(enum.IntEnum):
+    """``action_msgs/msg/GoalStatus`` codes, as ``action_result.status`` carries them."""
+
+    UNKNOWN = 0
+    ACCEPTED = 1
+    EXECUTING = 2
+    CANCELING = 3
+    SUCCEEDED = 4
+    CANCELED = 5
+    ABORTED = 6
+
+
 class ActionGoal:
-    """A goal sent with ``send_action_goal``.  ``await goal.result()``; ``goal.cancel()``."""
+    """A goal sent with ``send_action_goal``.  ``await goal.result()``; ``goal.cancel()``.
+
+    ``result()`` returns the result message (``values``) of a goal that ended -- check ``status``
+    (``GoalStatus.SUCCEEDED``, ``CANCELED``, ``ABORTED``) or ``succeeded``.  It raises ``ActionError``
+    when the goal could not be run (``ActionTimeoutError`` after the client-side timeout) and
+    ``ConnectionLostError`` when the link dropped while the goal was active.
+    """
 
     def __init__(self, node: Node, action: str, action_type: str, goal_id: str,
                  feedback: MessageCallback | None) -> None:
@@ -121,22 +140,47 @@ class ActionGoal:
         self.feedback_callback = feedback
         self.feedback_count = 0
         self.status: int | None = None
+        self.cancel_requested = False
+        self._timer: asyncio.TimerHandle | None = None
         self._future: asyncio.Future[dict[str, Any]] = asyncio.get_running_loop().create_future()
 
     @property
     def done(self) -> bool:
         return self._future.done()
 
+    @property
+    def succeeded(self) -> bool:
+        """True once the goal ended with ``GoalStatus.SUCCEEDED``."""
+        return self._future.done() and self.status == GoalStatus.SUCCEEDED
+
     async def result(self, timeout: float | None = None) -> dict[str, Any]:
-        """The result ``values``; raises ActionError when the server reports ``result: false``."""
+        """The result ``values`` once the goal ended (see the class docstring for what raises)."""
         if timeout is None:
             return await asyncio.shield(self._future)
         return await asyncio.wait_for(asyncio.shield(self._future), timeout)
 
     def cancel(self) -> None:
-        """Ask the server to cancel the goal (the result arrives as usual, typically status CANCELED)."""
+        """Ask the server to cancel the goal (the result arrives as usual, with status CANCELED)."""
         if not self._future.done():
+            self.cancel_requested = True
             self.node.client._send({"op": "cancel_action_goal", "id": self.id, "action": self.action})
+
+    def _settle(self, result: dict[str, Any] | None = None, error: BaseException | None = None) -> bool:
+        """Finish the goal once; False when it was already finished."""
+        if self._future.done():
+            return False
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+        if error is not None:
+            self._future.set_exception(error)
+            self._future.exception()  # retrieved: a caller that never awaits gets no "never retrieved" noise
+        else:
+            self._future.set_result({} if result is None else result)
+        return True
+
+    def __repr__(self) -> str:
+        return f"<ActionGoal {self.id} status={self.status} done={self.done}>"
 
 
 class Node:
@@ -208,11 +252,31 @@ class Node:
         self._services.add(srv)
         return srv
 
-    def send_action_goal(self, action: str, action_type: str, args: dict[str, Any] | None = None,
-                         feedback: MessageCallback | None = None) -> ActionGoal:
-        """Send a ROS 2 action goal; ``feedback(values)`` gets each ``action_feedback``."""
+    def send_action_goal(self, action: str, action_type: str, args: dict[str, Any] | list | None = None,
+                         feedback: MessageCallback | None = None, *, timeout: float | None = None,
+                         check: bool = True) -> ActionGoal:
+        """Send a ROS 2 action goal; ``feedback(values)`` gets each ``action_feedback``.
+
+        Feedback is asked for only when a callback is given (the protocol's default is none).
+        ``timeout``: client-side budget for the result in seconds (None: no limit); when it runs out the
+        goal is cancelled on the server and fails with ``ActionTimeoutError``.  ``check``: also ask
+        ``/rosapi/action_servers`` (within ``call_timeout``) and fail the goal at once with a clear
+        ``ActionError`` when the action is not listed or the server has no ROS 2 actions at all (a
+        ROS 1 rosbridge ignores ``send_action_goal`` without a word).
+        """
         self._check()
-        goal = self.client._send_goal(self, action, action_type, args, feedback)
+        if not isinstance(action, str) or not action:
+            raise ValueError(f"action must be a non-empty string, got {action!r}")
+        if not isinstance(action_type, str) or "/" not in action_type:
+            raise ValueError(f"action_type must be a type name like 'pkg/action/Type', got {action_type!r}")
+        if args is not None and not isinstance(args, dict | list):
+            raise TypeError(f"args must be a dict or list, got {type(args).__name__}")
+        if feedback is not None and not callable(feedback):
+            raise TypeError("feedback must be callable")
+        if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, int | float)
+                                    or not timeout > 0):
+            raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
+        goal = self.client._send_goal(self, action, action_type, args, feedback, timeout, check)
         self._goals.add(goal)
         goal._future.add_done_callback(lambda _f: self._goals.discard(goal))
         return goal

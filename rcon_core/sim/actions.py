@@ -8,7 +8,8 @@ Frames follow ROSBRIDGE_PROTOCOL.md and rosbridge_suite's ROS 2 ``send_action_go
   ``result: true``, the GoalStatus code in ``status`` (4, 5, 6) and the result message in ``values``.
 * A goal that could not be sent at all (unknown action or action type, unusable args) gets
   ``action_result`` with ``result: false``, ``status`` 0 (STATUS_UNKNOWN) and the error *string* in
-  ``values``: the real server's failure shape ("No action server available" for an unknown action).
+  ``values``: the real server's failure shape ("No action server available", after the real server's
+  1 s wait for the action server, for an unknown action).
 
 A new goal aborts the running one; ``cancel_action_goal`` or the client's disconnect cancels it.
 """
@@ -32,6 +33,7 @@ ACTION_NAME = "/navigate_to_fix"
 ACTION_TYPE = "rcon_sim/action/NavigateToFix"
 log = logging.getLogger("rcon.sim")
 STATUS_UNKNOWN, STATUS_SUCCEEDED, STATUS_CANCELED, STATUS_ABORTED = 0, 4, 5, 6
+SERVER_WAIT_S = 1.0  # rosbridge's SendGoal.server_timeout_time
 
 
 @dataclass
@@ -86,8 +88,9 @@ class NavigateActionServer:
         if _short(action_type) != _short(ACTION_TYPE):
             self._fail(conn, goal_id, action, f"Unable to load the action type {action_type}")
             return
-        if action != ACTION_NAME:
-            self._fail(conn, goal_id, action, "No action server available")
+        if action != ACTION_NAME:  # rosbridge waits 1 s for the server (wait_for_server) before it gives up
+            asyncio.get_running_loop().call_later(SERVER_WAIT_S, self._fail, conn, goal_id, action,
+                                                  "No action server available")
             return
         args = msg.get("args") or {}
         if isinstance(args, list):
