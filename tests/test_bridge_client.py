@@ -270,19 +270,63 @@ async def test_advertised_service_answers_the_servers_calls(server, client):
     await server.send({"op": "call_service", "id": "r2", "service": "/client/async", "args": {"data": False}})
     (resp,) = await server.wait_for("service_response", id="r2")
     assert resp["values"] == {"success": True, "message": "async"} and resp["result"] is True
+    # a failing handler: always an object (rosbridge 0.11 rejects anything else and the caller hangs), the
+    # response type's default (learned from the recorded /rosapi/service_response_details) with the error
+    # in its `message` field
     await server.send({"op": "call_service", "id": "r3", "service": "/client/broken", "args": {}})
     (resp,) = await server.wait_for("service_response", id="r3")
-    assert resp["result"] is False and resp["values"] == "ValueError: cannot do that"
+    assert resp["result"] is False and resp["values"] == {"success": False, "message": "ValueError: cannot do that"}
+    (details,) = server.ops("call_service", service="/rosapi/service_response_details")
+    assert details["args"] == {"type": "std_srvs/SetBool"}
     await server.send({"op": "call_service", "id": "r4", "service": "/client/wrong"})
     (resp,) = await server.wait_for("service_response", id="r4")
-    assert resp["result"] is False and "expected a dict" in resp["values"]
+    assert resp["result"] is False and resp["values"] == {
+        "success": False, "message": "TypeError: handler returned str, expected a dict"}
+    assert len(server.ops("call_service", service="/rosapi/service_response_details")) == 1  # cached
     await server.send({"op": "call_service", "id": "r5", "service": "/client/unknown"})
     (resp,) = await server.wait_for("service_response", id="r5")
-    assert resp["result"] is False
+    assert resp["result"] is False and resp["values"] == {}
     srv.unadvertise()
     await server.wait_for("unadvertise_service", service="/client/set_bool")
     node.close()
     await server.wait_for("unadvertise_service", count=4)
+
+
+async def test_failed_handler_answers_with_the_response_types_default(server, caplog):
+    """Empty has no fields; a type rosapi cannot describe gets {}; with a registry no rosapi call is made."""
+    from rcon_core.msgs import TypeRegistry
+
+    server.services["/rosapi/service_response_details"] = lambda f: (
+        None if f["args"]["type"] != "lab_srvs/Mystery" else
+        {"op": "service_response", "id": f["id"], "service": f["service"], "result": False,
+         "values": "rosapi: unknown type lab_srvs/Mystery"})
+    server.replay = True
+    async with BridgeClient(server.url, call_timeout=5) as client:
+        def broken(req):
+            raise RuntimeError("sensor offline")
+
+        node = client.node("provider")
+        node.advertise_service("/client/empty", "std_srvs/Empty", broken)
+        srv = node.advertise_service("/client/mystery", "lab_srvs/Mystery", broken)
+        await server.wait_for("advertise_service", count=2)
+        await server.send({"op": "call_service", "id": "e1", "service": "/client/mystery"})
+        (resp,) = await server.wait_for("service_response", id="e1")
+        assert resp["values"] == {} and resp["result"] is False and srv.failures == 1
+        assert "sensor offline" in caplog.text and "cannot learn the response type of lab_srvs/Mystery" in caplog.text
+    server.services.clear()  # the recorded answer for std_srvs/Empty would come from the replay
+    del server.received[:]
+    async with BridgeClient(server.url, call_timeout=5, registry=TypeRegistry.standard()) as client:
+        node = client.node("provider")
+        node.advertise_service("/client/trigger", "std_srvs/Trigger", lambda req: 1 / 0)
+        node.advertise_service("/client/time", "rosapi/GetTime", lambda req: 1 / 0)
+        await server.wait_for("advertise_service", count=2)
+        await server.send({"op": "call_service", "id": "t1", "service": "/client/trigger"})
+        await server.send({"op": "call_service", "id": "m1", "service": "/client/time"})
+        (t1,) = await server.wait_for("service_response", id="t1")
+        (m1,) = await server.wait_for("service_response", id="m1")
+    assert t1["values"] == {"success": False, "message": "ZeroDivisionError: division by zero"}
+    assert m1["values"] == {"time": {"secs": 0, "nsecs": 0}}  # no message field: the default alone
+    assert server.ops("call_service") == []  # the registry knew both types
 
 
 # ------------------------------------------------------------------------------------------ other ops

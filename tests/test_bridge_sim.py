@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import threading
+import time
 
 import pytest
 
@@ -118,3 +119,30 @@ def test_same_messages_as_roslibpy(sim_thread):
     for m in (mine, got_rl[0]):
         m["header"].pop("seq", None)
     assert mine == got_rl[0]
+
+
+@pytest.mark.parametrize("srv_type", ["std_srvs/Trigger", "std_srvs/SetBool"])
+async def test_a_failing_handler_answers_the_caller_promptly(sim, client, srv_type, caplog):
+    """Through the sim (which, like rosbridge 0.11, rejects a non-object answer), a second client calling a
+    service whose handler raises gets the response type's default with the error text, not a hang."""
+
+    async def broken(req):
+        await asyncio.sleep(0)
+        raise RuntimeError("gripper jammed")
+
+    srv = client.node("provider").advertise_service("/rcon/broken", srv_type, broken)
+    await until(lambda: "/rcon/broken" in sim.services)
+    other = BridgeClient(sim.url, call_timeout=5)
+    await other.connect(timeout=5)
+    try:
+        started = time.monotonic()
+        args = {"data": True} if srv_type.endswith("SetBool") else {}
+        answer = await other.node("caller").call_service("/rcon/broken", args, timeout=5)
+        elapsed = time.monotonic() - started
+        again = await other.node("caller").call_service("/rcon/broken", args, timeout=5)
+    finally:
+        await other.close()
+    assert answer == {"success": False, "message": "RuntimeError: gripper jammed"} == again
+    assert elapsed < 3  # prompt: one rosapi round trip, far from the caller's timeout
+    assert srv.failures == 2 and srv.calls == 2
+    assert "handler of /rcon/broken (node provider) failed: RuntimeError: gripper jammed" in caplog.text

@@ -30,6 +30,13 @@ Service calls
     while reconnecting waits for the link inside the same budget.  Calls waiting when the link drops fail
     with ``ConnectionLostError``.  ``result: false`` raises ``ServiceError`` carrying the server's string.
 
+Services this client provides
+    A handler that raises or returns a non-dict is logged and answered with ``result: false`` and an
+    *object*: the response type's default message (from the registry, else the server's
+    ``/rosapi/service_response_details``, cached; ``{}`` when neither knows it), the error text in its
+    ``message`` string field when it has one.  rosbridge 0.11 ignores ``result`` and rejects a
+    non-object ``values``, which would leave the ROS caller waiting forever (README point 21).
+
 ROS 2 actions
     ``node.send_action_goal`` sends the spec's ``send_action_goal`` (``feedback: true`` only when a
     feedback callback is given).  rosbridge answers a goal that *ran* -- succeeded, cancelled or aborted --
@@ -51,6 +58,7 @@ Bad input from the server
 from __future__ import annotations
 
 import asyncio
+import copy
 import enum
 import inspect
 import logging
@@ -64,6 +72,7 @@ import orjson
 from websockets.asyncio.client import ClientConnection, connect, process_exception
 from websockets.exceptions import ConnectionClosed
 
+from .defaults import default_from_typedefs
 from .errors import (
     ActionError,
     ActionTimeoutError,
@@ -91,6 +100,14 @@ class ConnectionState(enum.Enum):
     CONNECTED = "connected"
     RECONNECTING = "reconnecting"
     CLOSED = "closed"
+
+
+def _error_values(default: tuple[dict[str, Any], set[str]], text: str) -> dict[str, Any]:
+    """A copy of a default response with ``text`` in its ``message`` string field when it has one."""
+    values = copy.deepcopy(default[0])
+    if "message" in default[1]:
+        values["message"] = text
+    return values
 
 
 def _check_auth(auth: dict[str, Any]) -> dict[str, Any]:
@@ -161,6 +178,7 @@ class BridgeClient:
         self._pending: dict[str, asyncio.Future[Any]] = {}
         self._goals: dict[str, ActionGoal] = {}
         self._typedefs: dict[str, list[dict[str, Any]]] = {}
+        self._response_defaults: dict[str, tuple[dict[str, Any], set[str]]] = {}
         self._raw = RawDecoder()
         warn = self._fragment_warning
         self._fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_message_size, warn=warn)
@@ -787,8 +805,9 @@ class BridgeClient:
             raise TypeError(f"'service' must be a string, got {type(name).__name__}")
         srv = self._services.get(name)
         if srv is None:
-            log.warning("server called %s, which this client does not provide", name)
-            self._respond(m, f"service {name} is not provided by this client", False)
+            log.warning("server called %s, which this client does not provide; answered with an empty message",
+                        name)
+            self._respond(m, {}, False)  # an object, so the ROS caller is answered rather than left waiting
             return
         args = m.get("args")
         if args is None:
@@ -821,8 +840,49 @@ class BridgeClient:
         self._respond(m, result, True)
 
     def _handler_failed(self, m: dict[str, Any], srv: ServiceServer, exc: BaseException) -> None:
-        log.error("handler of %s (node %s) failed: %s", srv.service, srv.node.id, exc, exc_info=exc)
-        self._respond(m, f"{type(exc).__name__}: {exc}", False)
+        """Answer a failed handler with ``result: false`` and an *object*: the response type's default
+        message, with the error text in its ``message`` string field when it has one (Trigger, SetBool...).
+        rosbridge 0.11 ignores ``result`` and rejects a non-object ``values``, leaving the ROS caller
+        waiting forever (README point 21), so the error string alone would never reach anybody."""
+        srv.failures += 1
+        text = f"{type(exc).__name__}: {exc}"
+        log.error("handler of %s (node %s) failed: %s", srv.service, srv.node.id, text, exc_info=exc)
+        cached = self._response_defaults.get(_short(srv.type))
+        if cached is not None:
+            self._respond(m, _error_values(cached, text), False)
+        else:
+            self._spawn(self._answer_failure(m, srv, text))
+
+    async def _answer_failure(self, m: dict[str, Any], srv: ServiceServer, text: str) -> None:
+        self._respond(m, _error_values(await self._response_default(srv.type), text), False)
+
+    async def _response_default(self, srv_type: str) -> tuple[dict[str, Any], set[str]]:
+        """The default response of a service type and its string field names: from the registry when it
+        knows the type, else from ``/rosapi/service_response_details`` (cached), else ``({}, set())``."""
+        key = _short(srv_type)
+        cached = self._response_defaults.get(key)
+        if cached is not None:
+            return cached
+        found: tuple[dict[str, Any], set[str]] | None = None
+        reg = self.registry
+        if reg is not None and hasattr(reg, "has_service"):
+            try:
+                if reg.has_service(srv_type):
+                    part = reg.service_part_name(srv_type, "response")
+                    found = (reg.default(part), {f.name for f in reg.fields(part)
+                                                 if f.base in ("string", "wstring") and f.array_len is None})
+            except Exception as exc:
+                log.debug("registry has no default response for %s: %s", srv_type, exc)
+        if found is None:
+            try:
+                typedefs = await self.rosapi.service_response_details(srv_type, timeout=min(self.call_timeout, 2.0))
+            except BridgeError as exc:
+                log.warning("cannot learn the response type of %s (%s); answering the failed call with {}",
+                            srv_type, exc)
+                return {}, set()
+            found = default_from_typedefs(typedefs)
+        self._response_defaults[key] = found
+        return found
 
     def _respond(self, m: dict[str, Any], values: Any, result: bool) -> None:
         resp: dict[str, Any] = {"op": "service_response", "service": m.get("service"), "values": values,

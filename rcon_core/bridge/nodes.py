@@ -91,9 +91,14 @@ class Publisher:
 
 
 class ServiceServer:
-    """A service this client provides.  Incoming calls are answered with the handler's dict."""
+    """A service this client provides.  Incoming calls are answered with the handler's dict.
 
-    __slots__ = ("node", "service", "type", "handler", "active", "calls")
+    A handler that raises (or returns something other than a dict) is logged and answered with the
+    response type's default message, the error text in its ``message`` field when it has a string one;
+    ``failures`` counts those answers.
+    """
+
+    __slots__ = ("node", "service", "type", "handler", "active", "calls", "failures")
 
     def __init__(self, node: Node, service: str, type: str, handler: ServiceHandler) -> None:
         self.node = node
@@ -102,6 +107,7 @@ class ServiceServer:
         self.handler = handler
         self.active = True
         self.calls = 0
+        self.failures = 0
 
     def unadvertise(self) -> None:
         if self.active:

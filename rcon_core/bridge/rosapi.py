@@ -57,8 +57,9 @@ class Rosapi:
     async def service_request_details(self, type_name: str) -> list[dict[str, Any]]:
         return list((await self._call("service_request_details", {"type": type_name})).get("typedefs", []))
 
-    async def service_response_details(self, type_name: str) -> list[dict[str, Any]]:
-        return list((await self._call("service_response_details", {"type": type_name})).get("typedefs", []))
+    async def service_response_details(self, type_name: str, timeout: float | None = None) -> list[dict[str, Any]]:
+        v = await self._call("service_response_details", {"type": type_name}, timeout=timeout)
+        return list(v.get("typedefs", []))
 
     async def nodes(self) -> list[str]:
         return list((await self._call("nodes")).get("nodes", []))
