@@ -253,6 +253,13 @@ class TeleopModel(WidgetModel):
         """The finger lifted (or the touch was cancelled, or focus was lost): zero now, then silence."""
         self._dispatch(lambda: self._on_release(reason, unlock=True))
 
+    def on_focus_lost(self) -> None:
+        """The app says the operator's attention left (window inactive, canvas switched): stop now.
+
+        Called by the canvas runtime even when no view of this pad had keyboard focus.
+        """
+        self.release("focus lost")
+
     # -- loop thread ----------------------------------------------------------------------------------
     def _group(self) -> _Group:
         with _groups_lock:

@@ -87,6 +87,24 @@ async def test_rate_while_held_zero_on_release_then_silence(sim, client):
         model.stop()
 
 
+async def test_runtime_focus_lost_sends_one_zero_then_silence(sim, client):
+    # the app calls on_focus_lost() when its window goes inactive, whether or not the pad had focus
+    rx = Receiver(sim)
+    model = pad(client)
+    model.start()
+    try:
+        model.set_axes(0.0, 0.8)
+        await until(lambda: rx.got, 2.0, "driving")
+        t = time.monotonic()
+        model.on_focus_lost()
+        await until(lambda: rx.first_zero_since(t)[0], 2.0, "the zero on focus loss")
+        assert rx.first_zero_since(t)[0] - t < 0.1
+        await asyncio.sleep(0.4)
+        assert rx.first_zero_since(t)[1] == []
+    finally:
+        model.stop()
+
+
 async def test_stop_sends_zero_and_locks_until_lift(sim, client):
     rx = Receiver(sim)
     model = pad(client)
