@@ -22,6 +22,8 @@ from rcon_core.bridge import (
     ServiceError,
     ServiceTimeoutError,
 )
+from rcon_core.bridge.protocol import png_to_text
+from rcon_core.msgs.values import as_bytes
 
 pytestmark = pytest.mark.shared
 
@@ -71,6 +73,42 @@ async def test_each_compression_gives_the_same_dicts(server, client, compression
     assert all("café °C" in m["data"] for m in got)
     (sub,) = server.ops("subscribe")
     assert sub["compression"] == compression
+
+
+def _recorded_png(topic: str) -> tuple[str, dict]:
+    """A real server's png frame for ``topic`` and the publish frame hidden in it."""
+    frame = recorded().frames[(topic, "png")][0]
+    return frame, orjson.loads(png_to_text(orjson.loads(frame)["data"]))
+
+
+@pytest.mark.parametrize("style", ["fragment", "png-pieces"])
+async def test_fragmented_png_frames_are_reassembled_and_decoded(server, client, style):
+    """``fragment``: a fragment_size server cuts the png frame's JSON text into fragment frames (rosbridge
+    0.11, float total); ``png-pieces``: the spec's own form, png frames carrying slices of the base64 PNG
+    with id/num/total.  Either way the recorded image comes out, twice in a row."""
+    frame, inner = _recorded_png("/rec/image")
+    assert inner["op"] == "publish" and inner["topic"] == "/rec/image"
+    if style == "fragment":
+        size = len(frame) // 7 + 1
+        pieces = [frame[i:i + size] for i in range(0, len(frame), size)]
+        total = len(pieces) + 0.42  # rosbridge's float total: floor() is the count
+        frames = [orjson.dumps({"op": "fragment", "id": 0, "data": d, "num": n, "total": total}).decode()
+                  for n, d in enumerate(pieces)]
+    else:
+        data = orjson.loads(frame)["data"]
+        size = len(data) // 5 + 1
+        pieces = [data[i:i + size] for i in range(0, len(data), size)]
+        frames = [orjson.dumps({"op": "png", "id": "img", "data": d, "num": n, "total": len(pieces)}).decode()
+                  for n, d in enumerate(pieces)]
+    assert len(frames) > 3
+    server.on_subscribe = lambda sub: frames + frames
+    got = []
+    client.node("cam").subscribe("/rec/image", got.append, type="sensor_msgs/Image", compression="png",
+                                 fragment_size=size)
+    await until(lambda: len(got) == 2)
+    assert got[0] == got[1] == inner["msg"]
+    assert got[0]["encoding"] and len(as_bytes(got[0]["data"])) == got[0]["step"] * got[0]["height"]
+    assert client.stats["bad_frames"] == 0
 
 
 async def test_cbor_on_fixed_array_types_switches_to_cbor_raw(server, client):
