@@ -651,3 +651,14 @@ async def test_cbor_raw_uses_the_registry_when_given(server):
     assert a == b
     await c.close()
     await plain.close()
+
+
+async def test_result_false_with_an_object_answer_names_its_message(server, client):
+    server.services["/other_rcon"] = lambda f: {"op": "service_response", "id": f["id"], "service": f["service"],
+                                                "result": False, "values": {"success": False, "message": "jammed"}}
+    server.services["/plain"] = lambda f: {"op": "service_response", "id": f["id"], "service": f["service"],
+                                           "result": False, "values": {"code": 3}}
+    with pytest.raises(ServiceError, match="^/other_rcon: jammed$"):
+        await client.call_service("/other_rcon", timeout=3)
+    with pytest.raises(ServiceError, match="'code': 3"):
+        await client.call_service("/plain", timeout=3)

@@ -108,3 +108,21 @@ async def test_bad_goal_args_fail_with_the_servers_reason(sim2: SimServer, clien
     with pytest.raises(ActionError, match="latitude and longitude must be numbers"):
         await goal.result(timeout=10)
     assert sim2.robot.cmd_surge == 0.0
+
+
+async def test_failing_handler_on_ros2_answers_with_the_response_default(sim2: SimServer,
+                                                                          client: BridgeClient) -> None:
+    """ROS 2 spelling and IDL typedefs: the Trigger response default with the error in ``message``."""
+    srv = client.node("provider").advertise_service("/rcon/dock", "std_srvs/srv/Trigger", lambda req: {}["nope"])
+    other = BridgeClient(sim2.url, call_timeout=5)
+    await other.connect(timeout=5)
+    try:
+        async def advertised() -> None:
+            while "/rcon/dock" not in sim2.services:
+                await asyncio.sleep(0.01)
+
+        await asyncio.wait_for(advertised(), 5)
+        answer = await other.call_service("/rcon/dock", {}, timeout=5)
+    finally:
+        await other.close()
+    assert answer == {"success": False, "message": "KeyError: 'nope'"} and srv.failures == 1

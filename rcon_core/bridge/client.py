@@ -110,6 +110,16 @@ def _error_values(default: tuple[dict[str, Any], set[str]], text: str) -> dict[s
     return values
 
 
+def _failure_text(values: Any) -> str:
+    """The text of a ``result: false`` answer: rosbridge's string, or the ``message`` of an object answer
+    (what a failed RCON handler sends), else the whole value."""
+    if isinstance(values, str):
+        return values
+    if isinstance(values, dict) and isinstance(values.get("message"), str) and values["message"]:
+        return values["message"]
+    return str(values)
+
+
 def _check_auth(auth: dict[str, Any]) -> dict[str, Any]:
     if not isinstance(auth, dict):
         raise TypeError(f"auth must be a dict of rosauth fields, got {type(auth).__name__}")
@@ -571,7 +581,7 @@ class BridgeClient:
             return
         values = m.get("values")
         if m.get("result", True) is False:
-            fut.set_exception(ServiceError(values if isinstance(values, str) else str(values), m.get("service")))
+            fut.set_exception(ServiceError(_failure_text(values), m.get("service")))
         else:
             fut.set_result({} if values is None else values)
 
