@@ -1,27 +1,19 @@
 """Run every benchmark in this folder, one after the other, and print their figures.
 
-Usage: ``python benchmarks/run_all.py [--out DIR] [--only NAME ...]``.  Each ``bench_*.py`` module exposes
-``main(argv) -> int`` and accepts ``--out PATH`` (a JSON file with the same figures it prints).
+Usage: ``python benchmarks/run_all.py [--out DIR] [--only NAME ...]``.  Each ``bench_*.py`` runs as a
+script in its own process (so one benchmark's imports, threads and children never count in another's
+memory or CPU figures) and accepts ``--out PATH`` (a JSON file with the same figures it prints).
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib.util
+import subprocess
 import sys
 import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-
-
-def load(path: Path):
-    spec = importlib.util.spec_from_file_location(path.stem, path)
-    assert spec and spec.loader
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[path.stem] = module
-    spec.loader.exec_module(module)
-    return module
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -37,7 +29,7 @@ def main(argv: list[str] | None = None) -> int:
             continue
         print(f"\n=== {name} ({path.name}) ===", flush=True)
         started = time.perf_counter()
-        rc = load(path).main(["--out", str(args.out / f"bench-{name}.json")])
+        rc = subprocess.call([sys.executable, str(path), "--out", str(args.out / f"bench-{name}.json")])
         print(f"=== {name}: exit {rc}, {time.perf_counter() - started:.1f} s", flush=True)
         if rc:
             failed.append(name)
