@@ -2,7 +2,10 @@
 
 Supported field types: ``str``, ``int``, ``float``, ``bool``, ``enum.Enum`` subclasses, ``typing.Literal``
 and any field with ``metadata={"choices": [...]}``.  Optional metadata: ``label``, ``help``, ``min``,
-``max``, ``step``, ``decimals``.  Fields of other types keep their value and are not shown.
+``max``, ``step``, ``decimals``.  A *children field* (a ``list`` of an attrs class with ``kind``,
+``field_path`` and ``settings``, see :mod:`rcon_core.app.children_editor`) gets the children editor;
+its metadata may add ``exclude_kinds`` (kinds that cannot be children).  Fields of other types keep
+their value and are not shown.
 """
 
 from __future__ import annotations
@@ -13,6 +16,11 @@ from typing import Any
 
 import attrs
 from qtpy import QtCore, QtWidgets
+
+from rcon_core.app.children_editor import ChildContext, ChildrenEditor, children_item_class, discover_context
+
+#: a context, or a function giving the current one
+ContextArg = ChildContext | typing.Callable[[], ChildContext | None] | None
 
 INT_RANGE = 2_000_000_000
 
@@ -38,17 +46,26 @@ def _label(field: attrs.Attribute) -> str:
 
 
 class SettingsForm(QtWidgets.QWidget):
-    """Edits one attrs settings instance; emits ``changed`` after every edit."""
+    """Edits one attrs settings instance; emits ``changed`` after every edit.
+
+    ``context`` (a :class:`ChildContext` or a function returning one) is what a children field needs:
+    the type registry, the plugins and the widget's binding. Without it the form looks for the app
+    window it sits in when the children editor first needs it (:func:`discover_context`).
+    """
 
     changed = QtCore.Signal()
 
-    def __init__(self, settings: Any, parent: QtWidgets.QWidget | None = None) -> None:
+    def __init__(self, settings: Any, parent: QtWidgets.QWidget | None = None, *,
+                 context: ContextArg = None) -> None:
         super().__init__(parent)
         if not attrs.has(type(settings)):
             raise TypeError(f"settings must be an attrs instance, not {type(settings).__name__}")
         self._cls = type(settings)
         self._value = settings
+        self._initial = settings
+        self._context = context
         self._editors: dict[str, tuple[QtWidgets.QWidget, typing.Callable[[], Any]]] = {}
+        self.children_editors: dict[str, ChildrenEditor] = {}
         layout = QtWidgets.QFormLayout(self)
         layout.setFieldGrowthPolicy(QtWidgets.QFormLayout.FieldGrowthPolicy.AllNonFixedFieldsGrow)
         layout.setRowWrapPolicy(QtWidgets.QFormLayout.RowWrapPolicy.WrapLongRows)  # narrow panel: label above
@@ -64,7 +81,13 @@ class SettingsForm(QtWidgets.QWidget):
             if field.metadata.get("help"):
                 editor.setToolTip(str(field.metadata["help"]))
             self._editors[field.name] = (editor, getter)
-            layout.addRow(_label(field), editor)
+            if isinstance(editor, ChildrenEditor):  # full width under its heading
+                heading = QtWidgets.QLabel(_label(field))
+                heading.setProperty("role", "heading")
+                layout.addRow(heading)
+                layout.addRow(editor)
+            else:
+                layout.addRow(_label(field), editor)
         if not self._editors:
             note = QtWidgets.QLabel("This widget has no settings.")
             note.setProperty("role", "hint")
@@ -74,6 +97,13 @@ class SettingsForm(QtWidgets.QWidget):
     def _editor_for(self, field: attrs.Attribute, value: Any):
         tp = _unwrap_optional(field.type)
         meta = field.metadata
+        item_cls = children_item_class(tp)
+        if item_cls is not None:
+            children = ChildrenEditor(item_cls, list(value or []), self.child_context,
+                                      exclude=tuple(meta.get("exclude_kinds", ())))
+            self.children_editors[field.name] = children
+            children.changed.connect(self._edited)
+            return children, children.value
         choices = meta.get("choices")
         if choices is None and typing.get_origin(tp) is typing.Literal:
             choices = list(typing.get_args(tp))
@@ -135,9 +165,22 @@ class SettingsForm(QtWidgets.QWidget):
         """The editor of field ``name`` (for tests and accessibility tooling)."""
         return self._editors[name][0]
 
+    def child_context(self) -> ChildContext | None:
+        """The context children fields use: the one given, else found from the window."""
+        ctx = self._context
+        if callable(ctx) and not isinstance(ctx, ChildContext):
+            return ctx()
+        if ctx is None:
+            return discover_context(self, self._initial)
+        return ctx
+
     def problems(self) -> list[str]:
-        """What is still missing or wrong (the settings' own ``problems()``), empty once valid."""
-        return settings_problems(self._value)
+        """What is still missing or wrong, empty once valid: the settings' own ``problems()``, then what
+        children editors find against the binding (a child on a field the type lacks...)."""
+        out = settings_problems(self._value)
+        for children in self.children_editors.values():
+            out += [p for p in children.problems() if p not in out]
+        return out
 
 
 def settings_problems(settings: Any) -> list[str]:

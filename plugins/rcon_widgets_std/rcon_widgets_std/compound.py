@@ -56,7 +56,10 @@ class ChildSpec:
 
 @attrs.define
 class CompoundSettings:
-    children: list[ChildSpec] = attrs.field(factory=list, metadata={"label": "Children"})
+    #: a children field: the app's settings form edits it with its children editor (field, fitting
+    #: widget, the child's own settings); stored as a list of {kind, field_path, settings, title}
+    children: list[ChildSpec] = attrs.field(factory=list, metadata={
+        "label": "Children", "exclude_kinds": ["std.compound"]})
     send_text: str = attrs.field(default="", metadata={"label": "Button text", "help": "default: Publish / Call"})
     auto_send: bool = attrs.field(default=False, metadata={
         "label": "Send on every change", "help": "publish (or call) whenever a child changes, rate-limited"})
@@ -76,11 +79,24 @@ class CompoundSettings:
                 parse_path(c.field_path)
             except PathError as exc:
                 out.append(f"child {i}: {exc}")
+            if c.kind and c.kind != "std.compound":
+                out += _child_settings_problems(i, c)
         if not self.rate_hz > 0:
             out.append("update rate must be more than 0 Hz")
         if not 1 <= self.columns <= 6:
             out.append("columns must be between 1 and 6")
         return out
+
+
+def _child_settings_problems(number: int, child: ChildSpec) -> list[str]:
+    """The child's own settings problems, the child named (``child 2 (Slider) on linear.x: …``)."""
+    where = child.field_path or "the whole message"
+    try:
+        spec = find_spec(child.kind)
+    except KeyError:
+        return [f"child {number} ({child.kind}) on {where}: no installed widget package offers {child.kind!r}"]
+    name = f"child {number} ({child.title or spec.title}) on {where}"
+    return [f"{name}: {p}" for p in spec.settings_problems(child.settings)]
 
 
 _MANAGER: Any = None

@@ -1,0 +1,735 @@
+"""Editing a widget's child widgets (a Compound's children) in the generated settings form.
+
+A settings field is a *children field* when it is a ``list`` of an attrs class with the fields
+``kind: str``, ``field_path: str`` and ``settings: dict`` (and optionally ``title: str``); see
+``docs/writing-a-widget-plugin.md``. :class:`~rcon_core.app.settings_form.SettingsForm` shows such a field
+with a :class:`ChildrenEditor`:
+
+* the list of children (kind, field, problems), each with ▲ ▼ Edit Remove;
+* *Add child*: the fields of the bound type (from the type registry, learned from the robot's rosapi
+  typedefs when the registry does not know the type), then only the widget kinds that fit that field
+  (:func:`rcon_core.matcher.match` on the field's message type and the child's role), then the child's
+  own settings in the same generated form.
+
+A child's role follows from where it sits: children fill what the parent sends and show what it
+receives (:func:`child_role`). The editor needs a :class:`ChildContext` (the type registry, the plugin
+manager, the parent's current binding); the form takes one as ``context=``, else
+:func:`discover_context` finds it from the window the form sits in.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import attrs
+from qtpy import QtCore, QtWidgets
+
+from rcon_core.matcher import Match, Rank, match
+from rcon_core.msgs import names
+from rcon_core.plugins import Binding, Role, SettingsError, WidgetSpec
+from rcon_core.plugins.paths import PathError, split_service_path
+
+__all__ = [
+    "ChildContext", "ChildCatalog", "ChildrenEditor", "FieldChoice", "KindChoice", "child_role",
+    "children_item_class", "discover_context",
+]
+
+#: the fields an attrs class needs to describe one child
+CHILD_FIELDS = ("kind", "field_path", "settings")
+#: how deep the field list descends into nested messages
+MAX_DEPTH = 6
+_PLACEHOLDER = "structure_needs_at_least_one_member"
+
+#: learn(type_name, is_service) -> future of [(root type name, rosapi typedefs), ...]
+Learn = Callable[[str, bool], "concurrent.futures.Future[list[tuple[str, list[dict[str, Any]]]]]"]
+
+
+# ------------------------------------------------------------------------------------------ declaring
+def children_item_class(tp: Any) -> type | None:
+    """The child class if ``tp`` (a settings field's type) declares children: ``list[C]``, C an attrs
+    class with ``kind``, ``field_path`` and ``settings``. Else None."""
+    import typing
+
+    if typing.get_origin(tp) not in (list, typing.List):  # noqa: UP006 - both spellings
+        return None
+    args = typing.get_args(tp)
+    if len(args) != 1 or not attrs.has(args[0]):
+        return None
+    cls = args[0]
+    if isinstance(cls, type) and all(name in attrs.fields_dict(cls) for name in CHILD_FIELDS):
+        return cls
+    return None
+
+
+def child_role(parent: Role, part: str = "") -> Role:
+    """The role a child gets: it fills what the parent sends (publish, a call's request, a served
+    response) and shows what the parent receives (subscribe, a call's response, a served request)."""
+    if parent is Role.PUBLISH or (parent is Role.CALL and part == "request") or (
+            parent is Role.SERVE and part == "response"):
+        return Role.PUBLISH
+    return Role.SUBSCRIBE
+
+
+@attrs.define
+class ChildContext:
+    """What the children editor needs from its surroundings."""
+
+    types: Any  #: the TypeRegistry
+    plugins: Any  #: anything with ``widgets()``, ``widget(kind)``, ``has_widget(kind)``
+    binding: Callable[[], Binding | None]  #: the parent widget's binding, as currently chosen
+    learn: Learn | None = None  #: fetches typedefs from the robot (None: offline)
+
+
+# ------------------------------------------------------------------------------------------ catalog
+@attrs.frozen
+class FieldChoice:
+    """A place a child can be bound to."""
+
+    path: str  #: the child's ``field_path`` (services: starts with request/response)
+    type: str  #: the field's type: a canonical message name or a builtin (``float64``, ``string[]``)
+    is_message: bool
+    part: str  #: "" for topics, "request" / "response" for services
+    part_type: str  #: the message type the child is bound to
+    rest: str  #: the path inside ``part_type`` ("" = all of it)
+    role: Role  #: the child's role
+
+    @property
+    def label(self) -> str:
+        return self.path or "(the whole message)"
+
+    @property
+    def type_label(self) -> str:
+        return short_type(self.type)
+
+
+@attrs.frozen
+class KindChoice:
+    spec: WidgetSpec
+    rank: Rank
+    reason: str = ""
+
+
+def short_type(name: str) -> str:
+    """``geometry_msgs/msg/Vector3`` -> ``Vector3``; builtins as they are."""
+    return name.rsplit("/", 1)[-1] if "/" in name else name
+
+
+def _join(prefix: str, name: str) -> str:
+    return f"{prefix}.{name}" if prefix else name
+
+
+class ChildCatalog:
+    """Fields of the parent's bound type, the kinds that fit each, and each child's problems (no Qt)."""
+
+    def __init__(self, types: Any, plugins: Any, binding: Binding | None, exclude: tuple[str, ...] = ()) -> None:
+        self.types, self.plugins, self.binding = types, plugins, binding
+        self.exclude = set(exclude)
+        self._matches: dict[tuple[str, Role], list[Match]] = {}
+        self._fields: list[FieldChoice] | None = None
+
+    # -- the type ----------------------------------------------------------------------------------
+    @property
+    def type_name(self) -> str:
+        return self.binding.type if self.binding is not None else ""
+
+    @property
+    def is_service(self) -> bool:
+        return self.binding is not None and self.binding.role.is_service
+
+    def known(self) -> bool:
+        """Whether the registry knows the bound type (else it must be learned from the robot)."""
+        if not self.type_name:
+            return False
+        try:
+            return bool(self.types.has_service(self.type_name) if self.is_service else self.types.has(self.type_name))
+        except ValueError:
+            return False
+
+    def parts(self) -> list[tuple[str, str, Role]]:
+        """(part, message type, child role) for each side the children can sit on."""
+        assert self.binding is not None
+        role = self.binding.role
+        if role.is_service:
+            return [(p, self.types.service_part_name(self.type_name, p), child_role(role, p))
+                    for p in ("request", "response")]
+        return [("", self.types.resolve(self.type_name), child_role(role))]
+
+    # -- fields ------------------------------------------------------------------------------------
+    def all_fields(self) -> list[FieldChoice]:
+        """Every place a child can sit: each part as a whole, each nested message and each leaf."""
+        if self._fields is None:
+            out: list[FieldChoice] = []
+            for part, part_type, role in self.parts():
+                out.append(FieldChoice(part, part_type, True, part, part_type, "", role))
+                for path, tp, is_msg in self._walk(part_type, "", 0):
+                    out.append(FieldChoice(_join(part, path), tp, is_msg, part, part_type, path, role))
+            self._fields = out
+        return self._fields
+
+    def _walk(self, msg_type: str, prefix: str, depth: int) -> Iterator[tuple[str, str, bool]]:
+        for f in self.types.fields(msg_type):
+            if f.name == _PLACEHOLDER:
+                continue
+            path = _join(prefix, f.name)
+            if f.is_builtin:
+                yield path, f.type, False
+            elif f.array_len is None and depth < MAX_DEPTH:  # arrays of messages: no single child fits
+                yield path, f.base, True
+                yield from self._walk(f.base, path, depth + 1)
+
+    def fields(self) -> list[FieldChoice]:
+        """The places at least one installed widget fits, in definition order."""
+        return [c for c in self.all_fields() if self.kinds_for(c)]
+
+    def choice(self, path: str) -> FieldChoice | None:
+        return next((c for c in self.all_fields() if c.path == path), None)
+
+    # -- kinds -------------------------------------------------------------------------------------
+    def _match(self, type_name: str, role: Role) -> list[Match]:
+        key = (type_name, role)
+        if key not in self._matches:
+            self._matches[key] = match(type_name, role, self.types, self.plugins)
+        return self._matches[key]
+
+    def kinds_for(self, choice: FieldChoice) -> list[KindChoice]:
+        """The widgets that fit ``choice`` in the child's role, best first.
+
+        A leaf fits the widgets whose structural predicates pick that path of the part type; a message
+        (or a whole part) fits the widgets taking that message type whole: listed exactly or by
+        package, a message predicate on it, or a generic (``any``) widget.
+        """
+        best: dict[str, KindChoice] = {}
+
+        def offer(m: Match) -> None:
+            if m.spec.kind in self.exclude:
+                return
+            old = best.get(m.spec.kind)
+            if old is None or m.rank < old.rank:
+                best[m.spec.kind] = KindChoice(m.spec, m.rank, m.reason)
+
+        if choice.rest:
+            for m in self._match(choice.part_type, choice.role):
+                if choice.rest in m.field_paths:
+                    offer(m)
+        if choice.is_message:
+            for m in self._match(choice.type, choice.role):
+                whole = ("" in m.field_paths or (m.rank in (Rank.EXACT, Rank.PACKAGE) and not m.field_path)
+                         or "any" in m.spec.accepts.messages)
+                if whole:
+                    offer(m)
+        return sorted(best.values(), key=lambda k: (k.rank, -k.spec.priority, k.spec.title.lower(), k.spec.kind))
+
+    # -- checking ----------------------------------------------------------------------------------
+    def spec_of(self, kind: str) -> WidgetSpec | None:
+        return self.plugins.widget(kind) if kind and self.plugins.has_widget(kind) else None
+
+    def child_name(self, index: int, item: Any) -> str:
+        """``child 2 (Slider) on linear.x``: how problems name a child."""
+        spec = self.spec_of(item.kind)
+        what = getattr(item, "title", "") or (spec.title if spec is not None else item.kind or "?")
+        return f"child {index + 1} ({what}) on {item.field_path or 'the whole message'}"
+
+    def placement_problems(self, item: Any) -> list[str]:
+        """What is wrong with where the child sits: no such widget, no such field, a kind that does
+        not fit the field. Empty while the bound type is unknown (nothing to check against yet)."""
+        if not item.kind:
+            return ["no widget chosen"]
+        spec = self.spec_of(item.kind)
+        if spec is None:
+            return [f"no installed widget package offers {item.kind!r}"]
+        if item.kind in self.exclude:
+            return [f"{spec.title} cannot be a child here"]
+        if self.binding is None or not self.known():
+            return []
+        if self.is_service:
+            try:
+                split_service_path(item.field_path)
+            except PathError as exc:
+                return [str(exc)]
+        choice = self.choice(item.field_path)
+        if choice is None:
+            return [f"{self.type_name} has no field {item.field_path!r}"]
+        if not any(k.spec.kind == item.kind for k in self.kinds_for(choice)):
+            return [f"{spec.title} cannot {choice.role.value} {choice.label} ({choice.type_label})"]
+        return []
+
+    def settings_problems(self, item: Any) -> list[str]:
+        spec = self.spec_of(item.kind)
+        return spec.settings_problems(item.settings) if spec is not None else []
+
+    def child_binding(self, index: int, item: Any) -> Binding | None:
+        """The binding the child's model gets (part type, child role, path inside the part)."""
+        if self.binding is None or not self.known():
+            return None
+        choice = self.choice(item.field_path)
+        if choice is None:
+            return None
+        return Binding(f"{self.binding.name}#{index + 1}", choice.part_type, choice.role,
+                       (choice.rest,) if choice.rest else ())
+
+
+# ------------------------------------------------------------------------------------------ context
+def discover_context(widget: QtWidgets.QWidget, settings: Any = None) -> ChildContext | None:
+    """The context of a form placed by the app without one: the window (``types``, ``plugins``,
+    ``link``) it sits in; the binding of the add panel's draft, or of the placed widget a configure
+    dialog edits (the selected widget of the current canvas whose settings are ``settings``)."""
+    window = panel = dialog = None
+    w: QtWidgets.QWidget | None = widget
+    while w is not None:
+        if panel is None and hasattr(w, "draft") and hasattr(w, "settings_page"):
+            panel = w
+        if dialog is None and isinstance(w, QtWidgets.QDialog):
+            dialog = w
+        if hasattr(w, "types") and hasattr(w, "plugins"):
+            window = w
+            break
+        w = w.parentWidget()
+    if window is None:
+        return None
+    binding: Callable[[], Binding | None]
+    if panel is not None:
+        binding = lambda: panel.draft.binding if panel.draft is not None else None  # noqa: E731
+    else:
+        found = _configured_binding(window, settings)
+        binding = lambda: found  # noqa: E731
+    return ChildContext(window.types, window.plugins, binding, _link_learner(window))
+
+
+def _configured_binding(window: Any, settings: Any) -> Binding | None:
+    controller = getattr(window, "controller", None)
+    if controller is None or settings is None:
+        return None
+    candidates = []
+    for inst in controller.canvas.widgets:
+        try:
+            same = window.plugins.has_widget(inst.kind) and \
+                window.plugins.widget(inst.kind).make_settings(inst.settings) == settings
+        except Exception:
+            same = False
+        if same:
+            frame = controller.surface.frames.get(inst.id)
+            candidates.append((not bool(getattr(frame, "selected", False)), inst))
+    candidates.sort(key=lambda c: c[0])
+    return candidates[0][1].binding if candidates else None
+
+
+def _link_learner(window: Any) -> Learn | None:
+    link = getattr(window, "link", None)
+    if link is None:
+        return None
+
+    def learn(type_name: str, service: bool) -> concurrent.futures.Future[Any]:
+        client = link.client
+        if client is None:
+            fut: concurrent.futures.Future[Any] = concurrent.futures.Future()
+            fut.set_exception(RuntimeError("not connected to a robot"))
+            return fut
+        return link.thread.run(fetch_typedefs(client.rosapi, type_name, service))
+
+    return learn
+
+
+async def fetch_typedefs(rosapi: Any, type_name: str, service: bool) -> list[tuple[str, list[dict[str, Any]]]]:
+    """The robot's rosapi typedefs of a message or service type, as (root name, typedefs) pairs."""
+    if service:
+        out = []
+        for part in ("request", "response"):
+            fn = getattr(rosapi, f"service_{part}_details")
+            out.append((names.part_name(type_name, part), await fn(type_name)))
+        return out
+    return [(names.normalize(type_name), await rosapi.message_details(type_name))]
+
+
+# ------------------------------------------------------------------------------------------ the editor
+def _button(text: str, name: str, slot: Callable[[], None], primary: bool = False) -> QtWidgets.QPushButton:
+    b = QtWidgets.QPushButton(text)
+    b.setObjectName(name)
+    if primary:
+        b.setProperty("primary", True)
+    b.clicked.connect(lambda _=False: slot())
+    return b
+
+
+def _label(text: str, role: str = "", wrap: bool = True) -> QtWidgets.QLabel:
+    label = QtWidgets.QLabel(text)
+    label.setWordWrap(wrap)
+    if role:
+        label.setProperty("role", role)
+    return label
+
+
+def _clear(layout: QtWidgets.QLayout) -> None:
+    page = layout.parentWidget()
+    if page is not None:  # shown again by ChildrenEditor._show, with its new content
+        page.hide()
+    while layout.count():
+        item = layout.takeAt(0)
+        if item.widget() is not None:
+            item.widget().hide()
+            item.widget().deleteLater()
+        elif item.layout() is not None:
+            _clear(item.layout())
+
+
+class ChildrenEditor(QtWidgets.QWidget):
+    """Edits a list of children in place: one page at a time (list, field, widget, child settings),
+    sized to its content so the surrounding form scrolls as one."""
+
+    changed = QtCore.Signal()
+
+    def __init__(self, item_cls: type, children: list[Any], context: Callable[[], ChildContext | None],
+                 exclude: tuple[str, ...] = (), parent: QtWidgets.QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.setObjectName("childrenEditor")
+        self.item_cls = item_cls
+        self.children_list: list[Any] = [attrs.evolve(c) for c in children]
+        self._context = context
+        self.exclude = tuple(exclude)
+        self.editing: int | None = None  #: the child whose settings page is open
+        self.child_form: Any = None
+        self._learning: concurrent.futures.Future[Any] | None = None
+        self._after_learning: Callable[[], None] | None = None
+        self._last_binding: Any = None
+        col = QtWidgets.QVBoxLayout(self)
+        col.setContentsMargins(0, 0, 0, 0)
+        self.pages: dict[str, QtWidgets.QWidget] = {}
+        self.page_layouts: dict[str, QtWidgets.QVBoxLayout] = {}
+        for name in ("list", "fields", "kinds", "child"):
+            page = QtWidgets.QFrame()
+            page.setObjectName(f"children_{name}_page")
+            lay = QtWidgets.QVBoxLayout(page)
+            lay.setContentsMargins(0, 0, 0, 0)
+            lay.setSpacing(8)
+            self.pages[name], self.page_layouts[name] = page, lay
+            col.addWidget(page)
+        self.status = _label("", "hint")
+        self.status.setObjectName("childrenStatus")
+        self.status.hide()
+        col.addWidget(self.status)
+        self._poll = QtCore.QTimer(self)  # the robot's typedefs arriving; the binding changing
+        self._poll.setInterval(100)
+        self._poll.timeout.connect(self._tick)
+        self._poll.start()
+        self.show_list()
+
+    # -- context -----------------------------------------------------------------------------------
+    def catalog(self) -> ChildCatalog | None:
+        ctx = self._context()
+        if ctx is None:
+            return None
+        return ChildCatalog(ctx.types, ctx.plugins, ctx.binding(), self.exclude)
+
+    def value(self) -> list[Any]:
+        return [attrs.evolve(c) for c in self.children_list]
+
+    def problems(self) -> list[str]:
+        """Each child's problems that depend on the binding (the settings' own ``problems()`` cannot
+        see the type), named: ``child 2 (Slider) on linear.q: … has no field 'linear.q'``."""
+        cat = self.catalog()
+        if cat is None:
+            return []
+        return [f"{cat.child_name(i, c)}: {p}" for i, c in enumerate(self.children_list)
+                for p in cat.placement_problems(c)]
+
+    def child_problems(self, index: int) -> list[str]:
+        """Everything wrong with one child (placement and its own settings)."""
+        cat = self.catalog()
+        if cat is None:
+            return []
+        item = self.children_list[index]
+        return cat.placement_problems(item) + cat.settings_problems(item)
+
+    def _show(self, name: str) -> None:
+        for key, page in self.pages.items():
+            page.setVisible(key == name)
+        self.current_page = name
+
+    # -- page: the list ----------------------------------------------------------------------------
+    def show_list(self) -> None:
+        self.editing = None
+        self.child_form = None
+        lay = self.page_layouts["list"]
+        _clear(lay)
+        cat = self.catalog()
+        self.rows: list[QtWidgets.QFrame] = []
+        if not self.children_list:
+            lay.addWidget(_label("No children yet. Add one for each field this widget should set or show.",
+                                 "hint"))
+        n = len(self.children_list)
+        for i, item in enumerate(self.children_list):
+            row = QtWidgets.QFrame()
+            row.setObjectName(f"child_{i}")
+            row.setFrameShape(QtWidgets.QFrame.Shape.Box)
+            row.setStyleSheet(f"QFrame#child_{i} {{ border: 2px solid #404040; border-radius: 6px; }}")
+            rc = QtWidgets.QVBoxLayout(row)
+            rc.setContentsMargins(8, 6, 8, 6)
+            head = _label(f"{i + 1}. {self._describe(cat, item)}")
+            head.setStyleSheet("font-weight: bold;")
+            head.setObjectName("childTitle")
+            rc.addWidget(head)
+            problems = self.child_problems(i)
+            if problems:
+                warn = _label("\n".join(f"⚠ {p}" for p in problems), "problem")
+                warn.setObjectName("childProblems")
+                rc.addWidget(warn)
+            buttons = QtWidgets.QHBoxLayout()
+            up = _button("▲", f"childUp_{i}", lambda i=i: self.move_child(i, -1))
+            down = _button("▼", f"childDown_{i}", lambda i=i: self.move_child(i, +1))
+            up.setToolTip("Move up")
+            down.setToolTip("Move down")
+            up.setEnabled(i > 0)
+            down.setEnabled(i < n - 1)
+            edit = _button("Edit", f"childEdit_{i}", lambda i=i: self.edit_child(i))
+            remove = _button("Remove", f"childRemove_{i}", lambda i=i: self.remove_child(i))
+            for b in (up, down, edit, remove):
+                buttons.addWidget(b)
+            buttons.insertStretch(2, 1)
+            rc.addLayout(buttons)
+            lay.addWidget(row)
+            self.rows.append(row)
+        self.add_button = _button("＋ Add child", "addChildButton", self.start_add)
+        lay.addWidget(self.add_button)
+        self._show("list")
+
+    @staticmethod
+    def _describe(cat: ChildCatalog | None, item: Any) -> str:
+        spec = cat.spec_of(item.kind) if cat is not None else None
+        what = spec.title if spec is not None else (item.kind or "?")
+        title = getattr(item, "title", "")
+        where = item.field_path or "the whole message"
+        return f"{title}: {what} on {where}" if title else f"{what} on {where}"
+
+    def move_child(self, index: int, step: int) -> None:
+        other = index + step
+        if not (0 <= index < len(self.children_list) and 0 <= other < len(self.children_list)):
+            return
+        items = self.children_list
+        items[index], items[other] = items[other], items[index]
+        self._changed()
+        self.show_list()
+
+    def remove_child(self, index: int) -> None:
+        if 0 <= index < len(self.children_list):
+            del self.children_list[index]
+            self._changed()
+        self.show_list()
+
+    # -- page: which field -------------------------------------------------------------------------
+    def start_add(self) -> None:
+        """Add a child: first the field (learning the bound type from the robot if needed)."""
+        cat = self.catalog()
+        if cat is None:
+            self._say("The children editor needs the app's type registry and widgets.")
+            return
+        if cat.binding is None or not cat.type_name:
+            what = "service" if cat.binding is not None and cat.binding.role.is_service else "topic"
+            self._say(f"Choose the {what} first: the children are fields of its type.")
+            return
+        if not cat.known():
+            self._learn(cat, self.start_add)
+            return
+        self.show_fields(cat)
+
+    def show_fields(self, cat: ChildCatalog) -> None:
+        lay = self.page_layouts["fields"]
+        _clear(lay)
+        lay.addWidget(_label("Which field should the child set or show?", "heading"))
+        lay.addWidget(_label(f"Fields of {cat.type_name}", "hint"))
+        self.field_buttons: dict[str, QtWidgets.QPushButton] = {}
+        part_now = None
+        for choice in cat.fields():
+            if cat.is_service and choice.part != part_now:
+                part_now = choice.part
+                side = "filled by the children" if choice.role is Role.PUBLISH else "shown by the children"
+                lay.addWidget(_label(f"{choice.part.capitalize()} ({side})", "hint"))
+            b = _button(f"{choice.label}   ·   {choice.type_label}", f"field_{choice.path or 'whole'}",
+                        lambda c=choice: self.show_kinds(c))
+            b.setStyleSheet("text-align: left; padding-left: 12px;")
+            b.setToolTip(f"{choice.path or '(whole message)'}: {choice.type}")
+            lay.addWidget(b)
+            self.field_buttons[choice.path] = b
+        if not self.field_buttons:
+            lay.addWidget(_label(f"No installed widget fits a field of {cat.type_name}.", "problem"))
+        lay.addWidget(_button("‹ Back", "childrenBack", self.show_list))
+        self._show("fields")
+
+    def choose_field(self, path: str) -> None:
+        """Tap the field ``path`` (ValueError if it is not offered)."""
+        if path not in getattr(self, "field_buttons", {}):
+            raise ValueError(f"field {path!r} is not offered (offered: {sorted(getattr(self, 'field_buttons', {}))})")
+        self.field_buttons[path].click()
+
+    # -- page: which widget ------------------------------------------------------------------------
+    def show_kinds(self, choice: FieldChoice) -> None:
+        cat = self.catalog()
+        assert cat is not None
+        lay = self.page_layouts["kinds"]
+        _clear(lay)
+        self.picked_field = choice
+        lay.addWidget(_label(f"Which widget for {choice.label}?", "heading"))
+        lay.addWidget(_label(f"{choice.type_label}; the child will {choice.role.value}", "hint"))
+        self.kind_buttons: dict[str, QtWidgets.QPushButton] = {}
+        for k in cat.kinds_for(choice):
+            text = f"{k.spec.title}\n{k.spec.description or k.reason}".strip()
+            b = _button(text, f"kind_{k.spec.kind}", lambda k=k: self.add_child(choice, k.spec))
+            b.setStyleSheet("text-align: left; padding: 6px 12px;")
+            b.setToolTip(k.reason)
+            lay.addWidget(b)
+            self.kind_buttons[k.spec.kind] = b
+        lay.addWidget(_button("‹ Back", "childrenBack", lambda: self.show_fields(cat)))
+        self._show("kinds")
+
+    def choose_kind(self, kind: str) -> None:
+        """Tap the widget ``kind`` (ValueError if it does not fit the field)."""
+        if kind not in getattr(self, "kind_buttons", {}):
+            raise ValueError(f"{kind!r} does not fit this field (offered: {sorted(getattr(self, 'kind_buttons', {}))})")
+        self.kind_buttons[kind].click()
+
+    def add_child(self, choice: FieldChoice, spec: WidgetSpec) -> None:
+        try:
+            settings = spec.settings_to_dict(spec.make_settings({}))
+        except SettingsError:
+            settings = {}
+        self.children_list.append(self.item_cls(kind=spec.kind, field_path=choice.path, settings=settings))
+        self._changed()
+        self.edit_child(len(self.children_list) - 1)
+
+    # -- page: one child's settings ----------------------------------------------------------------
+    def edit_child(self, index: int) -> None:
+        from rcon_core.app.settings_form import SettingsForm  # the same generated form, recursively
+
+        cat = self.catalog()
+        item = self.children_list[index]
+        spec = cat.spec_of(item.kind) if cat is not None else None
+        lay = self.page_layouts["child"]
+        _clear(lay)
+        self.editing = index
+        self.child_form = None
+        title = spec.title if spec is not None else item.kind
+        lay.addWidget(_label(f"Child {index + 1}: {title} on {item.field_path or 'the whole message'}", "heading"))
+        if "title" in attrs.fields_dict(self.item_cls):
+            form_row = QtWidgets.QFormLayout()
+            form_row.setRowWrapPolicy(QtWidgets.QFormLayout.RowWrapPolicy.WrapLongRows)
+            self.child_title = QtWidgets.QLineEdit(item.title)
+            self.child_title.setObjectName("childTitleEdit")
+            self.child_title.setPlaceholderText(item.field_path or "(whole message)")
+            self.child_title.textChanged.connect(self._title_edited)
+            form_row.addRow("Child title", self.child_title)
+            lay.addLayout(form_row)
+        if spec is None:
+            lay.addWidget(_label(f"No installed widget package offers {item.kind!r}; its settings are kept.",
+                                 "problem"))
+        else:
+            note = ""
+            try:
+                settings = spec.make_settings(item.settings)
+            except SettingsError as exc:
+                note = f"{exc}; the form starts from the defaults"
+                settings = spec.make_settings({})
+            if note:
+                lay.addWidget(_label(note, "problem"))
+            if settings is not None:
+                outer = self
+
+                def child_context() -> ChildContext | None:
+                    ctx = outer._context()
+                    if ctx is None:
+                        return None
+                    i = outer.editing if outer.editing is not None else index
+                    return ChildContext(ctx.types, ctx.plugins,
+                                        lambda: outer.catalog().child_binding(i, outer.children_list[i]),  # type: ignore[union-attr]
+                                        ctx.learn)
+
+                form = SettingsForm(settings, context=child_context)
+                form.setObjectName("childSettingsForm")
+                form.changed.connect(self._child_form_edited)
+                lay.addWidget(form)
+                self.child_form = form
+            else:
+                lay.addWidget(_label("This widget has no settings.", "hint"))
+        self.child_problems_label = _label("", "problem")
+        self.child_problems_label.setObjectName("childProblemsLabel")
+        lay.addWidget(self.child_problems_label)
+        row = QtWidgets.QHBoxLayout()
+        row.addWidget(_button("Remove child", "childRemove", lambda: self.remove_child(index)))
+        row.addStretch(1)
+        row.addWidget(_button("Done", "childDone", self.show_list, primary=True))
+        lay.addLayout(row)
+        self._show_child_problems()
+        self._show("child")
+
+    def _title_edited(self, text: str) -> None:
+        if self.editing is not None:
+            self.children_list[self.editing] = attrs.evolve(self.children_list[self.editing], title=text)
+            self._changed()
+
+    def _child_form_edited(self) -> None:
+        if self.editing is None or self.child_form is None:
+            return
+        cat = self.catalog()
+        item = self.children_list[self.editing]
+        spec = cat.spec_of(item.kind) if cat is not None else None
+        if spec is not None:
+            data = spec.settings_to_dict(self.child_form.value())
+            self.children_list[self.editing] = attrs.evolve(item, settings=data)
+            self._changed()
+        self._show_child_problems()
+
+    def _show_child_problems(self) -> None:
+        if self.editing is None:
+            return
+        problems = self.child_problems(self.editing)
+        self.child_problems_label.setText("\n".join(f"⚠ {p}" for p in problems))
+        self.child_problems_label.setVisible(bool(problems))
+
+    # -- learning the type -------------------------------------------------------------------------
+    def _learn(self, cat: ChildCatalog, then: Callable[[], None]) -> None:
+        ctx = self._context()
+        if ctx is None or ctx.learn is None:
+            self._say(f"{cat.type_name} is not known here and there is no robot to ask.")
+            return
+        if self._learning is None:
+            self._learning = ctx.learn(cat.type_name, cat.is_service)
+        self._after_learning = then
+        self._say(f"Asking the robot for the definition of {cat.type_name}…")
+
+    def _tick(self) -> None:
+        fut = self._learning
+        if fut is not None and fut.done():
+            self._learning = None
+            try:
+                learned = fut.result()
+                ctx = self._context()
+                if ctx is not None:
+                    for root, typedefs in learned:
+                        if typedefs:
+                            ctx.types.add_typedefs(typedefs, root=root)
+            except Exception as exc:  # the robot does not know it, or the link is down
+                self._say(f"Could not learn the type from the robot: {exc}")
+                self._after_learning = None
+                return
+            then, self._after_learning = self._after_learning, None
+            cat = self.catalog()
+            if cat is not None and not cat.known():
+                self._say(f"The robot does not know {cat.type_name}.")
+            elif then is not None:
+                self._say("")
+                then()
+        if self.current_page == "list" and self.isVisible():
+            ctx = self._context()
+            b = ctx.binding() if ctx is not None else None
+            key = (b.name, b.type, b.role) if b is not None else None
+            if key != self._last_binding:  # the topic/service changed under the children: recheck them
+                self._last_binding = key
+                status = self.status.text()
+                self.show_list()
+                self.status.setText(status)
+
+    def _say(self, text: str) -> None:
+        self.status.setText(text)
+        self.status.setVisible(bool(text))
+
+    def _changed(self) -> None:
+        self.changed.emit()
