@@ -352,6 +352,61 @@ def _button(text: str, name: str, slot: Callable[[], None], primary: bool = Fals
     return b
 
 
+def _icon_button(glyph: str, name: str, tip: str, slot: Callable[[], None]) -> QtWidgets.QPushButton:
+    """A square touch-sized button with one symbol (its meaning in the tooltip and accessible name)."""
+    from rcon_core.app.theme import current_touch_px
+
+    b = _button(glyph, name, slot)
+    b.setToolTip(tip)
+    b.setAccessibleName(tip)
+    b.setStyleSheet("padding: 0px;")
+    side = current_touch_px()
+    b.setFixedSize(side, side)
+    return b
+
+
+class ChoiceRow(QtWidgets.QFrame):
+    """A tappable row with a bold first line and wrapped text under it (a button that wraps)."""
+
+    clicked = QtCore.Signal()
+
+    def __init__(self, title: str, text: str = "", problem: bool = False,
+                 parent: QtWidgets.QWidget | None = None) -> None:
+        super().__init__(parent)
+        from rcon_core.app.theme import current_touch_px
+
+        self.setProperty("role", "choice")
+        self.setCursor(QtCore.Qt.CursorShape.PointingHandCursor)
+        self.setFocusPolicy(QtCore.Qt.FocusPolicy.StrongFocus)
+        self.setMinimumHeight(current_touch_px())
+        self.setStyleSheet("ChoiceRow { border: 3px solid #000000; border-radius: 6px; background: #ffffff; }"
+                           "ChoiceRow:focus { border-color: #0040a0; }")
+        col = QtWidgets.QVBoxLayout(self)
+        col.setContentsMargins(12, 6, 12, 6)
+        col.setSpacing(2)
+        self.title = _label(title)
+        self.title.setStyleSheet("font-weight: bold;")
+        col.addWidget(self.title)
+        self.text = _label(text, "problem" if problem else "hint")
+        self.text.setVisible(bool(text))
+        col.addWidget(self.text)
+        for label in (self.title, self.text):
+            label.setAttribute(QtCore.Qt.WidgetAttribute.WA_TransparentForMouseEvents)
+
+    def click(self) -> None:
+        self.clicked.emit()
+
+    def mouseReleaseEvent(self, event: Any) -> None:
+        if self.rect().contains(event.position().toPoint()):
+            self.clicked.emit()
+
+    def keyPressEvent(self, event: Any) -> None:
+        if event.key() in (QtCore.Qt.Key.Key_Return, QtCore.Qt.Key.Key_Enter, QtCore.Qt.Key.Key_Space):
+            self.clicked.emit()
+        else:
+            super().keyPressEvent(event)
+
+
 def _label(text: str, role: str = "", wrap: bool = True) -> QtWidgets.QLabel:
     label = QtWidgets.QLabel(text)
     label.setWordWrap(wrap)
@@ -445,6 +500,21 @@ class ChildrenEditor(QtWidgets.QWidget):
         for key, page in self.pages.items():
             page.setVisible(key == name)
         self.current_page = name
+        QtCore.QTimer.singleShot(0, self, lambda: self._scroll_to(self.pages[name]))
+
+    def _scroll_to(self, page: QtWidgets.QWidget) -> None:
+        """Bring the top of the page just opened into sight in the form's scroll area."""
+        w = self.parentWidget()
+        while w is not None and not isinstance(w, QtWidgets.QScrollArea):
+            w = w.parentWidget()
+        if w is None or not page.isVisible() or w.widget() is None:
+            return
+        top = page.mapTo(w.widget(), QtCore.QPoint(0, 0)).y()
+        bar = w.verticalScrollBar()
+        if self.current_page == "list":  # back on the list: keep what was in sight if the list is
+            w.ensureWidgetVisible(page, 0, 0)
+            return
+        bar.setValue(max(0, top - 8))
 
     # -- page: the list ----------------------------------------------------------------------------
     def show_list(self) -> None:
@@ -452,6 +522,7 @@ class ChildrenEditor(QtWidgets.QWidget):
         self.child_form = None
         lay = self.page_layouts["list"]
         _clear(lay)
+        lay.setSpacing(16)  # children apart: each row's buttons belong to the title above them
         cat = self.catalog()
         self.rows: list[QtWidgets.QFrame] = []
         if not self.children_list:
@@ -461,31 +532,31 @@ class ChildrenEditor(QtWidgets.QWidget):
         for i, item in enumerate(self.children_list):
             row = QtWidgets.QFrame()
             row.setObjectName(f"child_{i}")
-            row.setFrameShape(QtWidgets.QFrame.Shape.Box)
-            row.setStyleSheet(f"QFrame#child_{i} {{ border: 2px solid #404040; border-radius: 6px; }}")
             rc = QtWidgets.QVBoxLayout(row)
-            rc.setContentsMargins(8, 6, 8, 6)
-            head = _label(f"{i + 1}. {self._describe(cat, item)}")
-            head.setStyleSheet("font-weight: bold;")
-            head.setObjectName("childTitle")
-            rc.addWidget(head)
+            rc.setContentsMargins(0, 0, 0, 0)
+            rc.setSpacing(4)
             problems = self.child_problems(i)
-            if problems:
-                warn = _label("\n".join(f"⚠ {p}" for p in problems), "problem")
-                warn.setObjectName("childProblems")
-                rc.addWidget(warn)
+            head = ChoiceRow(f"{i + 1}. {self._describe(cat, item)}",
+                             "\n".join(f"⚠ {p}" for p in problems), problem=bool(problems))
+            head.setObjectName(f"childTitle_{i}")
+            head.setToolTip("Tap to edit this child")
+            head.clicked.connect(lambda i=i: self.edit_child(i))
+            rc.addWidget(head)
             buttons = QtWidgets.QHBoxLayout()
-            up = _button("▲", f"childUp_{i}", lambda i=i: self.move_child(i, -1))
-            down = _button("▼", f"childDown_{i}", lambda i=i: self.move_child(i, +1))
-            up.setToolTip("Move up")
-            down.setToolTip("Move down")
-            up.setEnabled(i > 0)
-            down.setEnabled(i < n - 1)
-            edit = _button("Edit", f"childEdit_{i}", lambda i=i: self.edit_child(i))
-            remove = _button("Remove", f"childRemove_{i}", lambda i=i: self.remove_child(i))
-            for b in (up, down, edit, remove):
+            buttons.setSpacing(6)
+            for glyph, name, tip, slot, enabled in (
+                ("▲", "childUp", "Move up", lambda i=i: self.move_child(i, -1), i > 0),
+                ("▼", "childDown", "Move down", lambda i=i: self.move_child(i, +1), i < n - 1),
+                ("", "", "", None, False),
+                ("✎", "childEdit", "Edit this child", lambda i=i: self.edit_child(i), True),
+                ("✕", "childRemove", "Remove this child", lambda i=i: self.remove_child(i), True),
+            ):
+                if slot is None:
+                    buttons.addStretch(1)
+                    continue
+                b = _icon_button(glyph, f"{name}_{i}", tip, slot)
+                b.setEnabled(enabled)
                 buttons.addWidget(b)
-            buttons.insertStretch(2, 1)
             rc.addLayout(buttons)
             lay.addWidget(row)
             self.rows.append(row)
@@ -535,7 +606,8 @@ class ChildrenEditor(QtWidgets.QWidget):
     def show_fields(self, cat: ChildCatalog) -> None:
         lay = self.page_layouts["fields"]
         _clear(lay)
-        lay.addWidget(_label("Which field should the child set or show?", "heading"))
+        verb = {Role.PUBLISH: "set"}.get(cat.parts()[0][2], "show") if not cat.is_service else "set or show"
+        lay.addWidget(_label(f"Which field should the new child {verb}?", "heading"))
         lay.addWidget(_label(f"Fields of {cat.type_name}", "hint"))
         self.field_buttons: dict[str, QtWidgets.QPushButton] = {}
         part_now = None
@@ -570,12 +642,12 @@ class ChildrenEditor(QtWidgets.QWidget):
         self.picked_field = choice
         lay.addWidget(_label(f"Which widget for {choice.label}?", "heading"))
         lay.addWidget(_label(f"{choice.type_label}; the child will {choice.role.value}", "hint"))
-        self.kind_buttons: dict[str, QtWidgets.QPushButton] = {}
+        self.kind_buttons: dict[str, ChoiceRow] = {}
         for k in cat.kinds_for(choice):
-            text = f"{k.spec.title}\n{k.spec.description or k.reason}".strip()
-            b = _button(text, f"kind_{k.spec.kind}", lambda k=k: self.add_child(choice, k.spec))
-            b.setStyleSheet("text-align: left; padding: 6px 12px;")
-            b.setToolTip(k.reason)
+            b = ChoiceRow(k.spec.title, k.spec.description or k.reason)
+            b.setObjectName(f"kind_{k.spec.kind}")
+            b.setToolTip(f"{k.spec.kind}: {k.reason}")
+            b.clicked.connect(lambda k=k: self.add_child(choice, k.spec))
             lay.addWidget(b)
             self.kind_buttons[k.spec.kind] = b
         lay.addWidget(_button("‹ Back", "childrenBack", lambda: self.show_fields(cat)))
