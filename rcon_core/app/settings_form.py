@@ -171,7 +171,10 @@ class SettingsForm(QtWidgets.QWidget):
         if callable(ctx) and not isinstance(ctx, ChildContext):
             return ctx()
         if ctx is None:
-            return discover_context(self, self._initial)
+            found = discover_context(self, self._initial)
+            if found is not None:  # found once the form sits in the window; kept (its binding stays live)
+                self._context = found
+            return found
         return ctx
 
     def problems(self) -> list[str]:
