@@ -255,3 +255,27 @@ def test_a_service_request_filled_and_its_response_shown(types, plugins):
     assert cat.choice("response.message").role is Role.SUBSCRIBE
     assert cat.placement_problems(ChildSpec("std.switch", "data")) == [
         "service field path 'data' must start with 'request' or 'response'"]
+
+
+def test_a_form_given_its_context_composes_a_service_request(qtbot, types, plugins):
+    from rcon_core.app.children_editor import ChildContext
+
+    bound = {"binding": Binding("/lights/set", "std_srvs/SetBool", Role.CALL)}
+    form = SettingsForm(CompoundSettings(), context=ChildContext(types, plugins, lambda: bound["binding"]))
+    qtbot.addWidget(form)
+    form.show()
+    editor = form.children_editors["children"]
+    tap(editor.add_button)
+    assert {"request.data", "response.message"} <= set(editor.field_buttons)
+    tap(editor.field_buttons["request.data"])
+    assert "std.label" not in editor.kind_buttons  # the request is filled, not shown
+    tap(editor.kind_buttons["std.switch"])
+    tap(button(editor, "childDone"))
+    assert [(c.kind, c.field_path) for c in form.value().children] == [("std.switch", "request.data")]
+    assert form.problems() == []
+    bound["binding"] = Binding("/cmd_vel", "geometry_msgs/Twist", Role.PUBLISH)  # the binding changed under it
+    assert form.problems() == [
+        "child 1 (Switch) on request.data: geometry_msgs/Twist has no field 'request.data'"]
+    qtbot.waitUntil(lambda: any("has no field 'request.data'" in lbl.text()
+                                for lbl in editor.findChildren(QtWidgets.QLabel) if lbl.isVisible()),
+                    timeout=5_000)  # the child's row says so too (the editor notices the new binding)

@@ -20,6 +20,7 @@ manager, the parent's current binding); the form takes one as ``context=``, else
 from __future__ import annotations
 
 import concurrent.futures
+import functools
 from collections.abc import Callable, Iterator
 from typing import Any
 
@@ -421,11 +422,14 @@ def _clear(layout: QtWidgets.QLayout) -> None:
         page.hide()
     while layout.count():
         item = layout.takeAt(0)
-        if item.widget() is not None:
-            item.widget().hide()
-            item.widget().deleteLater()
-        elif item.layout() is not None:
-            _clear(item.layout())
+        if item is None:
+            break
+        widget, inner = item.widget(), item.layout()
+        if widget is not None:
+            widget.hide()
+            widget.deleteLater()
+        elif inner is not None:
+            _clear(inner)
 
 
 class ChildrenEditor(QtWidgets.QWidget):
@@ -507,14 +511,14 @@ class ChildrenEditor(QtWidgets.QWidget):
         w = self.parentWidget()
         while w is not None and not isinstance(w, QtWidgets.QScrollArea):
             w = w.parentWidget()
-        if w is None or not page.isVisible() or w.widget() is None:
+        content = w.widget() if w is not None else None
+        if w is None or content is None or not page.isVisible():
             return
-        top = page.mapTo(w.widget(), QtCore.QPoint(0, 0)).y()
-        bar = w.verticalScrollBar()
-        if self.current_page == "list":  # back on the list: keep what was in sight if the list is
+        if self.current_page == "list":  # back on the list: the least scrolling that shows it
             w.ensureWidgetVisible(page, 0, 0)
             return
-        bar.setValue(max(0, top - 8))
+        top = page.mapTo(content, QtCore.QPoint(0, 0)).y()
+        w.verticalScrollBar().setValue(max(0, top - 8))
 
     # -- page: the list ----------------------------------------------------------------------------
     def show_list(self) -> None:
@@ -617,7 +621,7 @@ class ChildrenEditor(QtWidgets.QWidget):
                 side = "filled by the children" if choice.role is Role.PUBLISH else "shown by the children"
                 lay.addWidget(_label(f"{choice.part.capitalize()} ({side})", "hint"))
             b = _button(f"{choice.label}   ·   {choice.type_label}", f"field_{choice.path or 'whole'}",
-                        lambda c=choice: self.show_kinds(c))
+                        functools.partial(self.show_kinds, choice))
             b.setStyleSheet("text-align: left; padding-left: 12px;")
             b.setToolTip(f"{choice.path or '(whole message)'}: {choice.type}")
             lay.addWidget(b)
