@@ -34,7 +34,16 @@ def plugins() -> PluginManager:
 
 @pytest.fixture
 def window(qtbot, tmp_path, sim_thread, plugins):
-    win = MainWindow(AppConfig(tmp_path / "config"), plugins, types=TypeRegistry.empty())
+    yield from _window(qtbot, tmp_path, sim_thread, plugins, TypeRegistry.empty())
+
+
+@pytest.fixture
+def window_standard_types(qtbot, tmp_path, sim_thread, plugins):
+    yield from _window(qtbot, tmp_path, sim_thread, plugins, TypeRegistry.standard())
+
+
+def _window(qtbot, tmp_path, sim_thread, plugins, types):
+    win = MainWindow(AppConfig(tmp_path / "config"), plugins, types=types)
     qtbot.addWidget(win)
     win.show()
     QTest.qWaitForWindowExposed(win)
@@ -279,3 +288,22 @@ def test_a_form_given_its_context_composes_a_service_request(qtbot, types, plugi
     qtbot.waitUntil(lambda: any("has no field 'request.data'" in lbl.text()
                                 for lbl in editor.findChildren(QtWidgets.QLabel) if lbl.isVisible()),
                     timeout=5_000)  # the child's row says so too (the editor notices the new binding)
+
+
+def test_a_child_on_a_field_the_new_topic_lacks_blocks_placing(window_standard_types, qtbot):
+    window = window_standard_types
+    # pathway 3: the widget first, then its topic
+    window.side.setCurrentWidget(window.palette_panel)
+    item = window.palette_panel.item("std.compound")
+    tap_item(window.palette_panel.tree, window.palette_panel.tree.indexFromItem(item))
+    panel = window.add_panel
+    panel.choose_target("/cmd_vel")
+    editor = panel.form.children_editors["children"]
+    add_child(qtbot, editor, "linear.x", "std.slider")
+    tap(button(editor, "childDone"))
+    assert panel.problems() == [] and panel.place_button.isEnabled()
+    # the operator then binds the Compound to a Float64 topic: the child's field is gone
+    panel.choose_target("/speed_limit")
+    assert any("has no field 'linear.x'" in p for p in panel.problems()), panel.problems()
+    assert not panel.place_button.isEnabled()
+    assert panel.take_draft() is None

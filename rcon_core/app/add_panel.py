@@ -16,10 +16,11 @@ from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app.canvas_surface import DRAFT_MIME
 from rcon_core.app.catalog_panel import short_type
+from rcon_core.app.children_editor import ChildContext
 from rcon_core.app.draft import Candidate, Draft, Target
 from rcon_core.app.settings_form import SettingsForm
 from rcon_core.app.widget_frame import WidgetFrame
-from rcon_core.plugins import Role, SettingsError, WidgetSpec
+from rcon_core.plugins import Binding, Role, SettingsError, WidgetSpec
 
 ROLE_TEXT = {
     Role.SUBSCRIBE: ("Show it", "subscribe: a widget displays the messages"),
@@ -86,6 +87,8 @@ class AddPanel(QtWidgets.QWidget):
         build_preview: Callable[[Draft, WidgetFrame], None],
         release_preview: Callable[[], None],
         parent: QtWidgets.QWidget | None = None,
+        *,
+        child_context: Callable[[Callable[[], Binding | None]], ChildContext] | None = None,
     ) -> None:
         super().__init__(parent)
         self.setObjectName("addPanel")
@@ -93,6 +96,7 @@ class AddPanel(QtWidgets.QWidget):
         self._targets_for = targets_for
         self._build_preview = build_preview
         self._release_preview = release_preview
+        self._child_context = child_context
         self.draft: Draft | None = None
         self.form: SettingsForm | None = None
         self.preview_frame: WidgetFrame | None = None
@@ -301,7 +305,10 @@ class AddPanel(QtWidgets.QWidget):
             self.form.deleteLater()
             self.form = None
         if settings is not None:
-            self.form = SettingsForm(settings)
+            context = None
+            if self._child_context is not None:
+                context = self._child_context(lambda: self.draft.binding if self.draft is not None else None)
+            self.form = SettingsForm(settings, context=context)
             self.form.setObjectName("settingsForm")
             self.form.changed.connect(self._settings_changed)
             self.form_slot.addWidget(self.form)
@@ -386,7 +393,7 @@ class AddPanel(QtWidgets.QWidget):
             self.preview_frame = None
 
     def _refresh_validity(self) -> None:
-        problems = self.draft.problems() if self.draft is not None else ["nothing chosen"]
+        problems = self.problems()
         if self.preview_frame is not None:
             self.preview_frame.problems.set_problems(problems)
         ok = not problems
@@ -396,17 +403,24 @@ class AddPanel(QtWidgets.QWidget):
         self.drag_handle.setToolTip("" if ok else "\n".join(problems))
 
     def problems(self) -> list[str]:
-        return self.draft.problems() if self.draft is not None else ["nothing chosen"]
+        """The draft's problems, plus what only the form can see against the binding (a Compound child
+        on a field the chosen type lacks)."""
+        if self.draft is None:
+            return ["nothing chosen"]
+        out = self.draft.problems()
+        if self.form is not None:
+            out += [p for p in self.form.problems() if p not in out]
+        return out
 
     # ---------------------------------------------------------------------------------------- finish
     def _place_clicked(self) -> None:
-        if self.draft is not None and not self.draft.problems():
+        if not self.problems():
             self.place_requested.emit()
 
     def take_draft(self) -> Draft | None:
         """The draft to place (None unless valid); the panel closes."""
         draft = self.draft
-        if draft is None or draft.problems():
+        if draft is None or self.problems():
             return None
         self.cancel()
         return draft

@@ -13,8 +13,8 @@ with a :class:`ChildrenEditor`:
 
 A child's role follows from where it sits: children fill what the parent sends and show what it
 receives (:func:`child_role`). The editor needs a :class:`ChildContext` (the type registry, the plugin
-manager, the parent's current binding); the form takes one as ``context=``, else
-:func:`discover_context` finds it from the window the form sits in.
+manager, the parent's current binding); the form takes one as ``context=`` (the main window makes it,
+:meth:`MainWindow.child_context`). Without one, a children field shows its children but cannot add any.
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ from rcon_core.plugins.paths import PathError, split_service_path
 
 __all__ = [
     "ChildContext", "ChildCatalog", "ChildrenEditor", "FieldChoice", "KindChoice", "child_role",
-    "children_item_class", "discover_context",
+    "children_item_class", "link_learner",
 ]
 
 #: the fields an attrs class needs to describe one child
@@ -272,52 +272,8 @@ class ChildCatalog:
 
 
 # ------------------------------------------------------------------------------------------ context
-def discover_context(widget: QtWidgets.QWidget, settings: Any = None) -> ChildContext | None:
-    """The context of a form placed by the app without one: the window (``types``, ``plugins``,
-    ``link``) it sits in; the binding of the add panel's draft, or of the placed widget a configure
-    dialog edits (the selected widget of the current canvas whose settings are ``settings``)."""
-    window = panel = dialog = None
-    w: QtWidgets.QWidget | None = widget
-    while w is not None:
-        if panel is None and hasattr(w, "draft") and hasattr(w, "settings_page"):
-            panel = w
-        if dialog is None and isinstance(w, QtWidgets.QDialog):
-            dialog = w
-        if hasattr(w, "types") and hasattr(w, "plugins"):
-            window = w
-            break
-        w = w.parentWidget()
-    if window is None:
-        return None
-    binding: Callable[[], Binding | None]
-    if panel is not None:
-        binding = lambda: panel.draft.binding if panel.draft is not None else None  # noqa: E731
-    else:
-        found = _configured_binding(window, settings)
-        binding = lambda: found  # noqa: E731
-    return ChildContext(window.types, window.plugins, binding, _link_learner(window))
-
-
-def _configured_binding(window: Any, settings: Any) -> Binding | None:
-    controller = getattr(window, "controller", None)
-    if controller is None or settings is None:
-        return None
-    candidates = []
-    for inst in controller.canvas.widgets:
-        try:
-            same = window.plugins.has_widget(inst.kind) and \
-                window.plugins.widget(inst.kind).make_settings(inst.settings) == settings
-        except Exception:
-            same = False
-        if same:
-            frame = controller.surface.frames.get(inst.id)
-            candidates.append((not bool(getattr(frame, "selected", False)), inst))
-    candidates.sort(key=lambda c: c[0])
-    return candidates[0][1].binding if candidates else None
-
-
-def _link_learner(window: Any) -> Learn | None:
-    link = getattr(window, "link", None)
+def link_learner(link: Any) -> Learn | None:
+    """Fetches a type's typedefs from the robot the app's link is connected to (None: no link)."""
     if link is None:
         return None
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -13,6 +14,7 @@ from rcon_core.app import theme
 from rcon_core.app.add_panel import AddPanel
 from rcon_core.app.canvas_controller import CanvasController
 from rcon_core.app.catalog_panel import CatalogList
+from rcon_core.app.children_editor import ChildContext, link_learner
 from rcon_core.app.config import AppConfig
 from rcon_core.app.connection_bar import ConnectionBar
 from rcon_core.app.draft import Candidate, Target
@@ -24,7 +26,7 @@ from rcon_core.app.preview import PreviewHost
 from rcon_core.app.settings_form import SettingsForm
 from rcon_core.app.widget_host import RateMeter, WidgetHost
 from rcon_core.canvas import Document, Workspace, WorkspaceFileError, WorkspaceStore
-from rcon_core.plugins import PluginManager, Role, WidgetSpec
+from rcon_core.plugins import Binding, PluginManager, Role, WidgetSpec
 
 log = logging.getLogger(__name__)
 
@@ -125,7 +127,8 @@ class MainWindow(QtWidgets.QMainWindow):
         row.addWidget(self.lock_button)
 
         self.stack = QtWidgets.QStackedWidget()
-        self.add_panel = AddPanel(self.rank_widgets, self.targets_for, self.preview.build, self.preview.release)
+        self.add_panel = AddPanel(self.rank_widgets, self.targets_for, self.preview.build, self.preview.release,
+                                  child_context=self.child_context)
         self.add_panel.setMinimumWidth(330)
         self.add_panel.hide()
         self.add_panel.place_requested.connect(self.place_draft)
@@ -359,6 +362,11 @@ class MainWindow(QtWidgets.QMainWindow):
         if draft is not None:
             self.controller.add_draft(draft, point)
 
+    def child_context(self, binding: Callable[[], Binding | None]) -> ChildContext:
+        """What a settings form's children editor needs: types, widgets, the parent's binding, and a way to
+        learn a type from the robot."""
+        return ChildContext(self.types, self.plugins, binding, link_learner(self.link))
+
     def configure_widget(self, instance_id: str) -> None:
         """Edit a placed widget's title and settings in a dialog."""
         try:
@@ -374,7 +382,8 @@ class MainWindow(QtWidgets.QMainWindow):
         col = QtWidgets.QVBoxLayout(dialog)
         title = QtWidgets.QLineEdit(inst.title)
         col.addWidget(title)
-        form = SettingsForm(settings) if settings is not None else None
+        binding = inst.binding
+        form = SettingsForm(settings, context=self.child_context(lambda: binding)) if settings is not None else None
         if form is not None:
             col.addWidget(form)
         buttons = QtWidgets.QDialogButtonBox(

@@ -17,7 +17,7 @@ from typing import Any
 import attrs
 from qtpy import QtCore, QtWidgets
 
-from rcon_core.app.children_editor import ChildContext, ChildrenEditor, children_item_class, discover_context
+from rcon_core.app.children_editor import ChildContext, ChildrenEditor, children_item_class
 
 #: a context, or a function giving the current one
 ContextArg = ChildContext | typing.Callable[[], ChildContext | None] | None
@@ -49,8 +49,8 @@ class SettingsForm(QtWidgets.QWidget):
     """Edits one attrs settings instance; emits ``changed`` after every edit.
 
     ``context`` (a :class:`ChildContext` or a function returning one) is what a children field needs:
-    the type registry, the plugins and the widget's binding. Without it the form looks for the app
-    window it sits in when the children editor first needs it (:func:`discover_context`).
+    the type registry, the plugins and the widget's binding. The main window passes one
+    (:meth:`MainWindow.child_context`).
     """
 
     changed = QtCore.Signal()
@@ -170,11 +170,6 @@ class SettingsForm(QtWidgets.QWidget):
         ctx = self._context
         if callable(ctx) and not isinstance(ctx, ChildContext):
             return ctx()
-        if ctx is None:
-            found = discover_context(self, self._initial)
-            if found is not None:  # found once the form sits in the window; kept (its binding stays live)
-                self._context = found
-            return found
         return ctx
 
     def problems(self) -> list[str]:
