@@ -242,13 +242,15 @@ def main(argv: list[str] | None = None) -> int:
         # ---- 50 widgets, each on its own topic published at 20 Hz by a separate client
         topics = [f"/bench/v{i}" for i in range(args.widgets)]
         canvas = Canvas("c-bench", "Bench")
+        # a grid of frames that do not overlap (overlapping frames repaint each other), all on screen:
+        # 160 x 112 is about the smallest frame at 48 px touch targets
         cols = 8
         for i, topic in enumerate(topics):
-            x, y = 16 + (i % cols) * 176, 16 + (i // cols) * 96
+            x, y = 16 + (i % cols) * 168, 16 + (i // cols) * 128
             canvas.widgets.append(WidgetInstance(
                 f"w-{i}", "bench.value", Binding(topic, "std_msgs/Float64", Role.SUBSCRIBE, ("data",)),
-                Geometry(x, y, 160, 80), {}, topic))
-        window.resize(1600, 1000)
+                Geometry(x, y, 160, 112), {}, topic))
+        window.resize(1700, 1100)
         window.open_workspace(Workspace([canvas], canvas.id))
         if args.operator:
             window.lock_button.setChecked(True)
@@ -284,6 +286,11 @@ def main(argv: list[str] | None = None) -> int:
         task = bt.run(publisher())
         # warm up until every widget painted once
         spin(app, 10, lambda: sum(1 for h in window.host.hosted.values() if h.painted_seq > 2) >= args.widgets)
+        frames_geo = [h.frame.geometry() for h in window.host.hosted.values()]
+        figures["overlapping_frames"] = sum(1 for i, a in enumerate(frames_geo) for b in frames_geo[i + 1:]
+                                            if a.intersects(b))
+        surface = next(iter(window.host.hosted.values())).frame.parentWidget()
+        figures["frames_off_screen"] = sum(1 for g in frames_geo if not surface.rect().contains(g))
         latencies.clear()
         PAINTED.clear()
         VIEW_PAINTED.clear()
