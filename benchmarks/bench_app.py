@@ -53,6 +53,7 @@ PAINTED: list[float] = []  # publish to the end of the paint pass that painted t
 VIEW_PAINTED: list[float] = []  # publish to the end of the view's own paintEvent (s), --view label
 PENDING: dict[int, float] = {}  # view id -> publish stamp of the oldest value refreshed but not yet painted
 PASSES = [0]
+PASS_TIMES: list[float] = []  # duration of each paint pass (s)
 
 
 def value_stamp(state) -> float | None:
@@ -78,6 +79,7 @@ def make_paint_probe(window):
                 end = time.perf_counter()
                 BUSY[0] += end - t
                 PASSES[0] += 1
+                PASS_TIMES.append(end - t)
                 PAINTED.extend(end - stamp for stamp in PENDING.values())
                 PENDING.clear()
                 return True
@@ -294,6 +296,7 @@ def main(argv: list[str] | None = None) -> int:
         latencies.clear()
         PAINTED.clear()
         VIEW_PAINTED.clear()
+        PASS_TIMES.clear()
         passes0 = PASSES[0]
         window.clock.work_times.clear()
         window.clock.gaps.clear()
@@ -346,6 +349,8 @@ def main(argv: list[str] | None = None) -> int:
             "refreshes": len(latencies),
             "paints": len(PAINTED),
             "paint_passes_per_s": round((PASSES[0] - passes0) / args.seconds, 1),
+            "paint_pass_p50_ms": round(pct([v * 1000 for v in PASS_TIMES], 50), 2),
+            "paint_pass_p95_ms": round(pct([v * 1000 for v in PASS_TIMES], 95), 2),
             "wakes_per_s": round((window.waker.wakes - wakes0) / args.seconds, 1),
             "messages_expected": int(args.widgets * args.hz * args.seconds),
             "cpu_share": round(cpu, 3),

@@ -3,6 +3,11 @@
 In edit mode a transparent *shield* covers the view and takes every press: drag to move, drag a corner
 handle or pinch with two fingers to resize, long-press or right-click for the context menu.  In operator
 (locked) mode the shield is gone, the view gets the touches, and nothing can be moved or deleted.
+
+Painting is kept cheap because every live value repaints its view up to 60 times a second: the body
+around the view is opaque (a value change repaints the body and the view only, never the frame, the
+canvas grid or the window behind them), the shield never paints (the corner marks are small pixmap
+labels drawn by Qt), and the frame handles no per-event Python code (pinch gestures go to the shield).
 """
 
 from __future__ import annotations
@@ -88,6 +93,10 @@ class Shield(QtWidgets.QWidget):
         self.frame = frame
         self.setAttribute(QtCore.Qt.WidgetAttribute.WA_AcceptTouchEvents)
         self.setMouseTracking(False)
+        # input only: it never paints (the corner marks are CornerMark labels above it), so a repaint of
+        # the view underneath costs no Python call here
+        self.setUpdatesEnabled(False)
+        self.grabGesture(QtCore.Qt.GestureType.PinchGesture)
         self._long = QtCore.QTimer(self)
         self._long.setSingleShot(True)
         self._long.setInterval(LONG_PRESS_MS)
@@ -97,25 +106,6 @@ class Shield(QtWidgets.QWidget):
         self._start_rect = QtCore.QRect()
         self._corner = ""
         self._pinch_dist = 0.0
-
-    # painting: an L at each corner (thick and blue on the selected frame) says "drag here to resize"
-    # without covering the title or the content; the touch area of each handle is still a full
-    # touch-sized square (handle_rects)
-    def paintEvent(self, _event: QtGui.QPaintEvent) -> None:
-        p = QtGui.QPainter(self)
-        p.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing)
-        size = self.frame.handle_size()
-        selected = self.frame.selected
-        pen = QtGui.QPen(QtGui.QColor("#0040a0"), 8 if selected else 5)
-        pen.setCapStyle(QtCore.Qt.PenCapStyle.FlatCap)
-        p.setPen(pen)
-        arm = round(size * 0.6) if selected else max(14, size // 3)
-        inset = 4
-        w, h = self.width(), self.height()
-        for x, y, dx, dy in ((inset, inset, 1, 1), (w - inset, inset, -1, 1), (inset, h - inset, 1, -1),
-                             (w - inset, h - inset, -1, -1)):
-            p.drawLine(x, y, x + dx * arm, y)
-            p.drawLine(x, y, x, y + dy * arm)
 
     # mouse -------------------------------------------------------------------------------------------
     def mousePressEvent(self, event: QtGui.QMouseEvent) -> None:
@@ -135,6 +125,12 @@ class Shield(QtWidgets.QWidget):
     # touch -------------------------------------------------------------------------------------------
     def event(self, event: QtCore.QEvent) -> bool:
         t = event.type()
+        if t == QtCore.QEvent.Type.Gesture:  # native pinch (trackpads, platforms sending QPinchGesture)
+            pinch = event.gesture(QtCore.Qt.GestureType.PinchGesture)  # type: ignore[attr-defined]
+            if pinch is not None:
+                self.frame.pinch_gesture(pinch)
+                event.accept()
+                return True
         if t in (QtCore.QEvent.Type.TouchBegin, QtCore.QEvent.Type.TouchUpdate, QtCore.QEvent.Type.TouchEnd):
             self._touch(event)  # type: ignore[arg-type]
             event.accept()
@@ -202,6 +198,87 @@ class Shield(QtWidgets.QWidget):
             self.frame.request_menu(self.mapToGlobal(self.rect().center()))
 
 
+CORNERS = ("tl", "tr", "bl", "br")
+MARK_INSET = 4
+_MARK_CACHE: dict[tuple[str, bool, int, float], QtGui.QPixmap] = {}
+
+
+def mark_geometry(selected: bool, handle: int) -> tuple[int, int]:
+    """(pen width, arm length) of the L drawn at each corner of a frame in edit mode."""
+    return (8, round(handle * 0.6)) if selected else (5, max(14, handle // 3))
+
+
+def mark_pixmap(corner: str, selected: bool, handle: int, dpr: float = 1.0) -> QtGui.QPixmap:
+    """The L at ``corner`` ("tl", "tr", "bl", "br") in a transparent square pixmap whose outer corner is
+    the frame's corner: thick and blue on the selected frame, "drag here to resize"."""
+    key = (corner, selected, handle, dpr)
+    pix = _MARK_CACHE.get(key)
+    if pix is not None:
+        return pix
+    width, arm = mark_geometry(selected, handle)
+    side = MARK_INSET + arm + width
+    pix = QtGui.QPixmap(round(side * dpr), round(side * dpr))
+    pix.setDevicePixelRatio(dpr)
+    pix.fill(QtCore.Qt.GlobalColor.transparent)
+    p = QtGui.QPainter(pix)
+    p.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing)
+    pen = QtGui.QPen(QtGui.QColor("#0040a0"), width)
+    pen.setCapStyle(QtCore.Qt.PenCapStyle.FlatCap)
+    p.setPen(pen)
+    x, dx = (MARK_INSET, 1) if corner[1] == "l" else (side - MARK_INSET, -1)
+    y, dy = (MARK_INSET, 1) if corner[0] == "t" else (side - MARK_INSET, -1)
+    p.drawLine(x, y, x + dx * arm, y)
+    p.drawLine(x, y, x, y + dy * arm)
+    p.end()
+    _MARK_CACHE[key] = pix
+    return pix
+
+
+class CornerMark(QtWidgets.QLabel):
+    """One corner's L in edit mode: a pixmap Qt draws itself; presses go through to the shield."""
+
+    def __init__(self, corner: str, parent: QtWidgets.QWidget) -> None:
+        super().__init__(parent)
+        self.setObjectName("frameCorner")
+        self.corner = corner
+        self.setAttribute(QtCore.Qt.WidgetAttribute.WA_TransparentForMouseEvents)
+
+    def show_mark(self, selected: bool, handle: int) -> None:
+        screen = self.screen()
+        pix = mark_pixmap(self.corner, selected, handle, screen.devicePixelRatio() if screen else 1.0)
+        self.setPixmap(pix)
+        side = round(pix.width() / pix.devicePixelRatio())
+        frame = self.parentWidget()
+        w, h = (frame.width(), frame.height()) if frame is not None else (side, side)
+        self.setGeometry(0 if self.corner[1] == "l" else w - side, 0 if self.corner[0] == "t" else h - side,
+                         side, side)
+
+
+class FrameBody(QtWidgets.QWidget):
+    """The white area around the view, opaque to Qt's painting: a repaint of the view stops here.
+
+    The theme's style sheet clears ``autoFillBackground`` whenever it polishes a widget it gives a
+    background; the body sets it again after each style change (the brush is the theme's background).
+    """
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.setObjectName("frameBody")
+        self.setAutoFillBackground(True)
+
+    def changeEvent(self, event: QtCore.QEvent) -> None:  # noqa: N802 - Qt's name
+        super().changeEvent(event)
+        if event.type() in (QtCore.QEvent.Type.StyleChange, QtCore.QEvent.Type.PaletteChange) \
+                and not self.autoFillBackground():
+            self.setAutoFillBackground(True)
+
+    def ensure_opaque(self) -> None:
+        """Polish now and make sure the background is filled (so Qt treats the body as opaque)."""
+        self.ensurePolished()
+        if not self.autoFillBackground():
+            self.setAutoFillBackground(True)
+
+
 class WidgetFrame(QtWidgets.QFrame):
     """One widget instance on a canvas surface."""
 
@@ -218,8 +295,7 @@ class WidgetFrame(QtWidgets.QFrame):
         self.menu: QtWidgets.QMenu | None = None
         self.title = QtWidgets.QLabel(title)
         self.title.setObjectName("frameTitle")
-        self.body = QtWidgets.QWidget()
-        self.body.setObjectName("frameBody")
+        self.body = FrameBody()
         self.body_layout = QtWidgets.QVBoxLayout(self.body)
         self.body_layout.setContentsMargins(4, 4, 4, 4)
         self.view: QtWidgets.QWidget | None = None
@@ -231,7 +307,7 @@ class WidgetFrame(QtWidgets.QFrame):
         self.problems = ProblemOverlay(self)
         self.badge = Badge(self)
         self.shield = Shield(self)
-        self.grabGesture(QtCore.Qt.GestureType.PinchGesture)
+        self.marks = [CornerMark(corner, self) for corner in CORNERS]
         self._pinch_start = QtCore.QRect()
         #: where the operator put the widget; re-applied when the canvas grows back after shrinking
         self.desired = QtCore.QRect()
@@ -261,6 +337,8 @@ class WidgetFrame(QtWidgets.QFrame):
     def set_editable(self, editable: bool) -> None:
         self.editable = editable
         self.shield.setVisible(editable)
+        for mark in self.marks:
+            mark.setVisible(editable)
         # in edit mode the title keeps clear of the corner handles
         margin = max(14, self.handle_size() // 3) + 4 if editable else 0
         self.title.setContentsMargins(margin, 0, margin, 0)
@@ -274,7 +352,7 @@ class WidgetFrame(QtWidgets.QFrame):
         self.selected = selected
         self.setProperty("selected", selected)
         repolish(self)
-        self.shield.update()
+        self.layout_overlays()
         if selected:
             self.raise_()
         self.selected_changed.emit(self.instance_id, selected)
@@ -347,16 +425,7 @@ class WidgetFrame(QtWidgets.QFrame):
         self.desired = QtCore.QRect(rect)
         self.geometry_committed.emit(self.instance_id, QtCore.QRect(rect))
 
-    # gestures (native pinch, e.g. trackpads or platforms delivering QPinchGesture) -------------------
-    def event(self, event: QtCore.QEvent) -> bool:
-        if event.type() == QtCore.QEvent.Type.Gesture:
-            pinch = event.gesture(QtCore.Qt.GestureType.PinchGesture)  # type: ignore[attr-defined]
-            if pinch is not None:
-                self.pinch_gesture(pinch)
-                event.accept()
-                return True
-        return super().event(event)
-
+    # gestures (native pinch, e.g. trackpads; the shield receives them) ----------------------------
     def pinch_gesture(self, pinch: QtWidgets.QPinchGesture) -> None:
         """Handle a QPinchGesture (or any object with ``state()`` and ``totalScaleFactor()``)."""
         if not self.editable:
@@ -392,6 +461,10 @@ class WidgetFrame(QtWidgets.QFrame):
         super().resizeEvent(event)
         self.layout_overlays()
 
+    def showEvent(self, event: QtGui.QShowEvent) -> None:
+        super().showEvent(event)
+        self.body.ensure_opaque()
+
     def layout_overlays(self) -> None:
         self.shield.setGeometry(self.rect())
         body = self.body.geometry()
@@ -402,3 +475,7 @@ class WidgetFrame(QtWidgets.QFrame):
         self.badge.raise_()
         if self.editable:
             self.shield.raise_()
+            handle = self.handle_size()
+            for mark in self.marks:
+                mark.show_mark(self.selected, handle)
+                mark.raise_()
