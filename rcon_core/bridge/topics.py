@@ -22,6 +22,8 @@ import logging
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
+import orjson
+
 if TYPE_CHECKING:
     from .nodes import Publisher, Subscription
 
@@ -33,7 +35,8 @@ _COMPRESSION_RANK = {"cbor": 0, "cbor-raw": 1, "png": 2, "none": 3}
 class TopicEntry:
     """The client's one subscription to a topic, fanned out to every node's callback."""
 
-    __slots__ = ("topic", "subs", "deliver", "sid", "sent_options", "raw_type", "decoder", "received", "_client")
+    __slots__ = ("topic", "subs", "deliver", "fast", "sid", "sent_options", "raw_type", "decoder", "received",
+                 "_client")
 
     def __init__(self, client: Any, topic: str) -> None:
         self._client = client
@@ -44,7 +47,11 @@ class TopicEntry:
         self.raw_type: str | None = None  # set when the active subscription is cbor-raw
         self.decoder: Any = None
         self.received = 0
+        #: ``deliver(msg)`` never raises: callback errors are logged.  ``fast(msg)`` is what the client's
+        #: read loop calls, inside its own ``try``: the one consumer's callback itself when there is one
+        #: consumer (no wrapper frame per message), else the same as ``deliver``.
         self.deliver: Callable[[Any], None] = self._deliver_none
+        self.fast: Callable[[Any], None] = self._deliver_none
 
     # --- options ---------------------------------------------------------------------------------
 
@@ -65,16 +72,21 @@ class TopicEntry:
     # --- delivery (the hot path) -----------------------------------------------------------------
 
     def rebuild(self) -> None:
-        """Pick the delivery function for the current set of consumers (no per-message branching)."""
+        """Pick the delivery functions for the current set of consumers (no per-message branching)."""
         subs = self.subs
         if self.raw_type is not None:
-            self.deliver = self._deliver_raw
+            self.deliver = self.fast = self._deliver_raw
         elif not subs:
-            self.deliver = self._deliver_none
+            self.deliver = self.fast = self._deliver_none
         elif len(subs) == 1:
-            self.deliver = self._make_one(subs[0].callback)
+            self.fast = subs[0].callback
+            self.deliver = self._make_one(self.fast)
         else:
-            self.deliver = self._deliver_many
+            self.deliver = self.fast = self._deliver_many
+
+    def callback_failed(self) -> None:
+        """Log the exception a ``fast`` callback raised (called from the read loop's ``except``)."""
+        log.exception("callback for %s raised; other subscribers are unaffected", self.topic)
 
     def _deliver_none(self, msg: Any) -> None:
         self.received += 1
@@ -119,10 +131,12 @@ class TopicEntry:
 class AdvertEntry:
     """The client's one advertisement of a topic, shared by every node's Publisher."""
 
-    __slots__ = ("topic", "pubs", "type", "latch", "queue_size", "active", "pending", "dropped")
+    __slots__ = ("topic", "pubs", "type", "latch", "queue_size", "active", "pending", "dropped", "head")
 
     def __init__(self, topic: str, type: str) -> None:
         self.topic = topic
+        #: the start of every publish frame of this topic, up to the message (encoded once)
+        self.head = b'{"op":"publish","topic":' + orjson.dumps(topic) + b',"msg":'
         self.type = type
         self.pubs: list[Publisher] = []
         self.latch = False
