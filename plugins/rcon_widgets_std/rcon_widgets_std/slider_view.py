@@ -25,6 +25,7 @@ class SliderView(QtWidgets.QWidget):
         self.value = QtWidgets.QLabel("–")
         self.value.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
         style_text(self.value, 22)
+        self._stale = False  # what the value's style shows
         layout.addWidget(self.value)
         self.slider = QtWidgets.QSlider(QtCore.Qt.Orientation.Horizontal)
         self.slider.setEnabled(self.publishing)
@@ -86,7 +87,9 @@ class SliderView(QtWidgets.QWidget):
 
     def _show(self, v: float) -> None:
         units = getattr(self.model.settings, "units", "")
-        self.value.setText(f"{self._fmt(v)} {units}".strip())
+        text = f"{self._fmt(v)} {units}".strip()
+        if text != self.value.text():
+            self.value.setText(text)
 
     # -- state ----------------------------------------------------------------------------------------
     def refresh(self, state: Any) -> None:
@@ -99,5 +102,7 @@ class SliderView(QtWidgets.QWidget):
                 self.slider.blockSignals(False)
             self._show(v)
         stale = state.stale and not self.publishing
-        style_text(self.value, 22, STALE if stale else "")
-        self.value.setToolTip("stale: no new value" if stale else "")
+        if stale != self._stale:  # a style sheet re-polishes the label: only when staleness flips
+            self._stale = stale
+            style_text(self.value, 22, STALE if stale else "")
+            self.value.setToolTip("stale: no new value" if stale else "")

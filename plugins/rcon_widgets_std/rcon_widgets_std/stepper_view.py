@@ -31,6 +31,7 @@ class StepperView(QtWidgets.QWidget):
         row.addWidget(self.plus)
         layout.addLayout(row, 1)
         self.note = Caption("")
+        self._note: tuple[str, str] | None = None  # (text, colour) shown in the note
         self.note.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
         layout.addWidget(self.note)
         self.minus.clicked.connect(lambda: self._show(model.down()))
@@ -49,6 +50,8 @@ class StepperView(QtWidgets.QWidget):
         if isinstance(state.value, (int, float)):
             self._show(state.value)
         r = self.model.range
-        self.note.show_text(state.error or f"{format_number(r.minimum)} … {format_number(r.maximum)}, "
-                                            f"step {format_number(r.step)}",
-                            BAD if state.error else "#5a5a5a")
+        note = (state.error or f"{format_number(r.minimum)} … {format_number(r.maximum)}, "
+                               f"step {format_number(r.step)}", BAD if state.error else "#5a5a5a")
+        if note != self._note:  # show_text sets a style sheet (a re-polish): only when it changes
+            self._note = note
+            self.note.show_text(*note)

@@ -23,6 +23,7 @@ class SwitchView(QtWidgets.QWidget):
         self.button.clicked.connect(self._clicked)
         layout.addWidget(self.button, 1)
         self.reply = Caption("")
+        self._reply: tuple[str, str] | None = None  # (text, colour) shown in the reply line
         self.reply.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
         layout.addWidget(self.reply)
         self._paint(None, "", None)
@@ -50,10 +51,13 @@ class SwitchView(QtWidgets.QWidget):
         else:
             self.button.setText(s.on_text if on else s.off_text)
         if error:
-            self.reply.show_text(error, BAD)
+            shown = (error, BAD)
         elif busy:
-            self.reply.show_text("asking the robot…", MUTED)
+            shown = ("asking the robot…", MUTED)
         elif reply:
-            self.reply.show_text(reply, OK)
+            shown = (reply, OK)
         else:
-            self.reply.show_text("", MUTED)
+            shown = ("", MUTED)
+        if shown != self._reply:  # show_text sets a style sheet (a re-polish): only when it changes
+            self._reply = shown
+            self.reply.show_text(*shown)
