@@ -24,6 +24,14 @@ Publishing while the link is down
     publish made while down is dropped and counted (``Publisher.dropped``, ``client.stats``).  Frames
     still in the outgoing queue when the link drops are dropped too (counted).
 
+Writing and reading (the hot paths)
+    There is no batching and no timer: a frame (a publish, a subscribe...) is written to the transport
+    before the call that made it returns, unless frames are already queued or the transport's buffer is
+    above its high-water mark; then it waits in a queue that a writer task drains with ``ws.send`` (which
+    waits for the transport), so frames always leave in order.  asyncio turns Nagle off on TCP sockets.
+    The read loop does one ``recv``, one ``orjson.loads`` and calls a one-consumer topic's callback
+    directly; anything else takes the slow path (``_handle_other``).
+
 Service calls
     Every call has a client-side timeout (``timeout`` or ``call_timeout``) even though rosbridge 0.11
     ignores the ``timeout`` field; a missing or hung service raises ``ServiceTimeoutError``.  A call made
