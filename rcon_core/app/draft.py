@@ -18,6 +18,8 @@ class Candidate:
     field_paths: tuple[str, ...] = ()
     score: float = 0.0
     reason: str = ""
+    #: every field path the widget could bind on this type, best first (the operator may pick another)
+    choices: tuple[str, ...] = ()
 
 
 @attrs.define
@@ -27,6 +29,8 @@ class Target:
     name: str
     type: str
     field_paths: tuple[str, ...] = ()
+    #: every field path the widget could bind on this target's type, best first
+    choices: tuple[str, ...] = ()
 
 
 @attrs.define

@@ -334,7 +334,7 @@ class MainWindow(QtWidgets.QMainWindow):
         out = []
         for m in match(type_name, role, self.types, self.plugins):
             paths = (m.field_path,) if m.field_path else ()
-            out.append(Candidate(m.spec, paths, float(int(m.rank)), m.reason))
+            out.append(Candidate(m.spec, paths, float(int(m.rank)), m.reason, tuple(m.field_paths)))
         return out
 
     def targets_for(self, spec: WidgetSpec, role: Role) -> list[Target]:
@@ -345,7 +345,8 @@ class MainWindow(QtWidgets.QMainWindow):
         for name, type_name in entries:
             for m in match(type_name, role, self.types, self.plugins):
                 if m.spec.kind == spec.kind:
-                    out.append(Target(name, type_name, (m.field_path,) if m.field_path else ()))
+                    out.append(Target(name, type_name, (m.field_path,) if m.field_path else (),
+                                      tuple(m.field_paths)))
                     break
         return out
 
