@@ -516,7 +516,7 @@ class BridgeClient:
             if len(raw) > limit:
                 self._oversize(raw)
                 continue
-            if raw.__class__ is str:
+            if isinstance(raw, str):
                 try:
                     m = loads(raw)
                 except orjson.JSONDecodeError as exc:
