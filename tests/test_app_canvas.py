@@ -5,12 +5,13 @@ from __future__ import annotations
 import time
 
 import pytest
-from qtpy import QtCore
+from qtpy import QtCore, QtGui, QtWidgets
 from qtpy.QtTest import QTest
 from test_app_window import make_plugins, robot  # noqa: F401 - fixture re-used
 
 from rcon_core.app.config import AppConfig
 from rcon_core.app.draft import Draft, Target
+from rcon_core.app.geometry import snap
 from rcon_core.app.main_window import MainWindow
 from rcon_core.plugins import Role
 
@@ -205,3 +206,155 @@ def test_ui_stays_responsive_while_the_link_drops_and_returns(qtbot, tmp_path):
         window.shutdown()
     assert len(gaps) > 50
     assert max(gaps) < 0.5, f"the GUI loop stalled for {max(gaps):.3f} s"
+
+
+# ------------------------------------------------------------------ a canvas larger than the window scrolls
+def frames_in_stacking_order(surface) -> list[str]:
+    from rcon_core.app.widget_frame import WidgetFrame
+
+    return [c.instance_id for c in surface.children() if isinstance(c, WidgetFrame)]
+
+
+def drag(widget, start: QtCore.QPoint, delta: QtCore.QPoint, steps: int = 6) -> None:
+    QTest.mousePress(widget, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier, start)
+    for i in range(1, steps + 1):
+        QTest.mouseMove(widget, start + QtCore.QPoint(delta.x() * i // steps, delta.y() * i // steps))
+    QTest.mouseRelease(widget, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier,
+                       start + delta)
+
+
+def send_drop(surface, at: QtCore.QPoint, mime: QtCore.QMimeData) -> None:
+    """What Qt delivers to the canvas when a drag ends over it: enter, move, drop (surface coordinates)."""
+    for cls in (QtGui.QDragEnterEvent, QtGui.QDragMoveEvent):
+        QtWidgets.QApplication.sendEvent(surface, cls(at, QtCore.Qt.DropAction.CopyAction, mime,
+                                                      QtCore.Qt.MouseButton.LeftButton,
+                                                      QtCore.Qt.KeyboardModifier.NoModifier))
+    QtWidgets.QApplication.sendEvent(surface, QtGui.QDropEvent(
+        QtCore.QPointF(at), QtCore.Qt.DropAction.CopyAction, mime, QtCore.Qt.MouseButton.LeftButton,
+        QtCore.Qt.KeyboardModifier.NoModifier))
+
+
+def overlapping(rects) -> list[tuple[int, int]]:
+    return [(i, j) for i, a in enumerate(rects) for j, b in enumerate(rects) if i < j and a.intersects(b)]
+
+
+def test_a_small_window_or_the_add_panel_scrolls_the_canvas_and_never_moves_a_widget(qtbot, tmp_path):
+    window = open_window(qtbot, tmp_path, None)
+    try:
+        window.resize(1280, 800)
+        a = add_probe(window, "/battery", "sensor_msgs/BatteryState", "percentage", QtCore.QPoint(16, 16))
+        b = add_probe(window, "/battery", "sensor_msgs/BatteryState", "percentage", QtCore.QPoint(640, 448))
+        surface = window.controller.surface
+        saved = {i: rect_of(window, i) for i in (a.id, b.id)}
+        shown = {i: surface.frames[i].geometry() for i in (a.id, b.id)}
+        window.resize(1024, 600)
+        qtbot.wait(50)
+        # the add panel takes room from the canvas too
+        window.add_panel.start_from_widget(window.plugins.widget("apptest.probe"))
+        scroll = surface.scroll_area
+        qtbot.waitUntil(lambda: window.add_panel.isVisible() and scroll.viewport().width() < 640 + 192)
+        qtbot.wait(50)  # the far widget is out of view...
+        assert {i: surface.frames[i].geometry() for i in (a.id, b.id)} == shown  # ...and was not moved
+        assert {i: rect_of(window, i) for i in (a.id, b.id)} == saved
+        assert not overlapping(list(shown.values()))
+        assert scroll.horizontalScrollBar().maximum() > 0 and scroll.verticalScrollBar().maximum() > 0
+        for frame in surface.frames.values():  # every widget is reachable by scrolling
+            assert surface.rect().contains(frame.geometry())
+    finally:
+        window.shutdown()
+
+
+def test_a_drop_lands_where_it_was_aimed_in_a_scrolled_canvas(qtbot, tmp_path):
+    window = open_window(qtbot, tmp_path, None)
+    try:
+        window.resize(1024, 600)
+        add_probe(window, "/battery", "sensor_msgs/BatteryState", "percentage", QtCore.QPoint(1200, 800))
+        surface = window.controller.surface
+        scroll = surface.scroll_area
+        qtbot.wait(50)
+        scroll.horizontalScrollBar().setValue(400)
+        scroll.verticalScrollBar().setValue(200)
+        aimed = QtCore.QPoint(100, 100)  # in the viewport
+        spec = window.plugins.widget("apptest.probe")
+        draft = Draft(spec, Role.SUBSCRIBE, Target("/battery", "sensor_msgs/BatteryState", ("percentage",)),
+                      spec.make_settings({"caption": "x"}), "Probe")
+        mime = QtCore.QMimeData()
+        mime.setData("application/x-rcon-widget-draft", QtCore.QByteArray(b"draft"))
+        window.controller.on_drop = lambda s, pt: window.controller.add_draft(draft, pt)
+        send_drop(surface, surface.mapFrom(scroll.viewport(), aimed), mime)
+        new = window.controller.canvas.widgets[-1]
+        frame = surface.frames[new.id]
+        where = frame.mapTo(scroll.viewport(), QtCore.QPoint(0, 0))
+        assert abs(where.x() - aimed.x()) <= 8 and abs(where.y() - aimed.y()) <= 8
+        assert (new.geometry.x, new.geometry.y) == (snap(400 + 100), snap(200 + 100))
+    finally:
+        window.shutdown()
+
+
+def test_stacking_follows_the_canvas_order_and_survives_undo(qtbot, tmp_path):
+    window = open_window(qtbot, tmp_path, None)
+    try:
+        ids = [add_probe(window, "/battery", "sensor_msgs/BatteryState", "percentage",
+                         QtCore.QPoint(32 + 48 * i, 32 + 32 * i)).id for i in range(3)]
+        surface = window.controller.surface
+        assert frames_in_stacking_order(surface) == ids
+        # tap the bottom one: raised while selected; tapping the canvas puts it back
+        bottom = surface.frames[ids[0]]
+        QTest.mouseClick(bottom.shield, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier,
+                         QtCore.QPoint(12, bottom.height() // 2))
+        assert frames_in_stacking_order(surface)[-1] == ids[0]
+        QTest.mouseClick(surface, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier,
+                         QtCore.QPoint(surface.width() - 20, surface.height() - 20))
+        assert frames_in_stacking_order(surface) == ids
+        # delete the middle one and undo it: it comes back in the middle, not on top
+        window.controller.delete_instance(ids[1])
+        QTest.keyClick(window, QtCore.Qt.Key.Key_Z, QtCore.Qt.KeyboardModifier.ControlModifier)
+        assert [w.id for w in window.controller.canvas.widgets] == ids
+        assert frames_in_stacking_order(window.controller.surface) == ids
+    finally:
+        window.shutdown()
+
+
+def test_saved_geometry_is_on_the_grid_after_dragging_past_the_edge(qtbot, tmp_path):
+    window = open_window(qtbot, tmp_path, None)
+    try:
+        window.resize(1024, 600)
+        inst = add_probe(window, "/battery", "sensor_msgs/BatteryState", "percentage", QtCore.QPoint(96, 96))
+        frame = window.controller.surface.frames[inst.id]
+        drag(frame.shield, QtCore.QPoint(frame.width() // 2, frame.height() // 2), QtCore.QPoint(1203, 717))
+        x, y, w, h = rect_of(window, inst.id)
+        assert all(v % 16 == 0 for v in (x, y, w, h)), (x, y, w, h)
+        assert x > 1024 and y > 600  # nothing clamped it into the window
+        assert window.controller.surface.rect().contains(frame.geometry())  # and it can be scrolled to
+        # dragged up-left past the origin: stops at the canvas edge, never at negative coordinates
+        drag(frame.shield, QtCore.QPoint(frame.width() // 2, frame.height() // 2), QtCore.QPoint(-5000, -5000))
+        assert rect_of(window, inst.id)[:2] == (0, 0)
+    finally:
+        window.shutdown()
+
+
+def test_a_touch_scrolls_from_the_background_but_never_from_a_widget(qtbot, tmp_path):
+    """QScroller asks the viewport (ScrollPrepare) before it takes a touch: refused over a widget, so a
+    widget dragged in edit mode (or a teleop pad in operator mode) keeps its finger."""
+    window = open_window(qtbot, tmp_path, None)
+    try:
+        window.resize(1024, 600)
+        inst = add_probe(window, "/battery", "sensor_msgs/BatteryState", "percentage", QtCore.QPoint(96, 96))
+        add_probe(window, "/battery", "sensor_msgs/BatteryState", "percentage", QtCore.QPoint(1400, 900))
+        surface = window.controller.surface
+        view = surface.scroll_area.viewport()
+        assert QtWidgets.QScroller.hasScroller(view)
+        frame = surface.frames[inst.id]
+
+        def prepare(at: QtCore.QPoint) -> bool:
+            event = QtGui.QScrollPrepareEvent(QtCore.QPointF(at))
+            event.setAccepted(False)
+            QtWidgets.QApplication.sendEvent(view, event)
+            return event.isAccepted()
+
+        for locked in (False, True):
+            window.controller.set_locked(locked)
+            assert not prepare(frame.mapTo(view, frame.rect().center()))
+            assert prepare(QtCore.QPoint(view.width() - 10, view.height() - 10))
+    finally:
+        window.shutdown()

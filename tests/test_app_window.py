@@ -216,3 +216,41 @@ def test_palette_says_so_when_no_widget_is_installed(qtbot, tmp_path):
         assert "No widget plugins are installed" in window.palette_panel.empty.text()
     finally:
         window.shutdown()
+
+
+def place_from_palette(window: MainWindow, caption: str) -> None:
+    """What a person does: tap the widget in the palette, pick a topic, fill the caption, tap Place."""
+    window.side.setCurrentWidget(window.palette_panel)
+    item = window.palette_panel.item("apptest.probe")
+    tap_item(window.palette_panel.tree, window.palette_panel.tree.indexFromItem(item))
+    window.add_panel.choose_target("/battery")
+    fill_caption(window, caption)
+    tap(window.add_panel.place_button)
+
+
+def test_place_finds_a_free_spot_in_view_then_below_and_focuses_the_new_widget(make_window, qtbot):
+    window = make_window()
+    window.activateWindow()
+    QTest.qWaitForWindowActive(window)
+    surface = window.controller.surface
+    placed: list[str] = []
+    for n in range(24):
+        place_from_palette(window, f"w{n}")
+        inst = window.controller.canvas.widgets[-1]
+        placed.append(inst.id)
+        frame = surface.frames[inst.id]
+        # keyboard focus is on the new widget, not on the robot URL field (one key would replace the URL)
+        focus = QtWidgets.QApplication.focusWidget()
+        assert focus is frame or frame.isAncestorOf(focus), focus
+        assert not window.connection.url.lineEdit().hasFocus()
+    rects = [surface.frames[i].geometry() for i in placed]
+    assert not [(a, b) for k, a in enumerate(rects) for b in rects[k + 1:] if a.intersects(b)]
+    assert all(r.x() >= 16 and r.y() >= 16 and r.x() % 16 == 0 and r.y() % 16 == 0 for r in rects)
+    # the first ones went into the visible part (the add panel was open then), in reading order
+    assert (rects[0].x(), rects[0].y()) == (16, 16) and rects[1].y() == 16 and rects[1].x() > rects[0].right()
+    # once the view is full, new ones go below the others (and the canvas scrolls to them)
+    view = surface.scroll_area.viewport()
+    assert max(r.bottom() for r in rects) > view.height()
+    assert surface.scroll_area.verticalScrollBar().value() > 0
+    last = surface.frames[placed[-1]]
+    assert view.rect().intersects(QtCore.QRect(last.mapTo(view, QtCore.QPoint(0, 0)), last.size()))

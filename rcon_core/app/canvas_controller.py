@@ -15,9 +15,9 @@ from typing import Any
 
 from qtpy import QtCore, QtWidgets
 
-from rcon_core.app.canvas_surface import CanvasSurface
+from rcon_core.app.canvas_surface import CanvasScroll, CanvasSurface
 from rcon_core.app.draft import Draft
-from rcon_core.app.geometry import fit_rect, snap_rect
+from rcon_core.app.geometry import on_grid
 from rcon_core.app.link import OFFLINE
 from rcon_core.app.live import LiveCanvas
 from rcon_core.app.widget_frame import frame_min_size
@@ -103,8 +103,10 @@ class CanvasController(QtCore.QObject):
 
     def _make_surface(self, canvas: Canvas) -> CanvasSurface:
         surface = CanvasSurface(canvas.name)
-        self.stack.insertWidget(self.workspace.canvases.index(canvas), surface)
-        surface.resize(self.stack.size())
+        scroll = CanvasScroll(surface)
+        self.stack.insertWidget(self.workspace.canvases.index(canvas), scroll)
+        scroll.resize(self.stack.size())
+        surface.refit()
         self.surfaces[canvas.id] = surface
         for widget in canvas.widgets:
             self._add_frame(surface, widget)
@@ -119,8 +121,9 @@ class CanvasController(QtCore.QObject):
             self.host.discard(widget_id)
             self._known.pop(widget_id, None)
         surface.clear_frames()
-        self.stack.removeWidget(surface)
-        surface.deleteLater()
+        scroll = surface.scroll_area or surface
+        self.stack.removeWidget(scroll)
+        scroll.deleteLater()
 
     def _add_frame(self, surface: CanvasSurface, widget: WidgetInstance) -> None:
         frame = self.host.build_frame(widget)
@@ -132,7 +135,8 @@ class CanvasController(QtCore.QObject):
 
     def _show_current(self) -> None:
         canvas = self.canvas
-        self.stack.setCurrentWidget(self.surfaces[canvas.id])
+        surface = self.surfaces[canvas.id]
+        self.stack.setCurrentWidget(surface.scroll_area or surface)
         self._apply_lock()
         self.current_changed.emit(self.index)
 
@@ -167,6 +171,7 @@ class CanvasController(QtCore.QObject):
         elif what == "widget-added" and cid in self.surfaces:
             widget = self.workspace.canvas(cid).widget(wid)
             self._add_frame(self.surfaces[cid], widget)
+            self.surfaces[cid].set_order(w.id for w in self.workspace.canvas(cid).widgets)
             if cid == current:
                 self.live.add(widget)
         elif what == "widget-removed" and cid in self.surfaces:
@@ -185,6 +190,7 @@ class CanvasController(QtCore.QObject):
         if frame is not None:
             g = widget.geometry
             frame.place(QtCore.QRect(round(g.x), round(g.y), round(g.w), round(g.h)), remember=True)
+            self.surfaces[canvas_id].refit()
         self.host.update_widget(widget)
         before = self._known.get(widget.id)
         self._known[widget.id] = _copy(widget)
@@ -235,21 +241,33 @@ class CanvasController(QtCore.QObject):
 
     # ------------------------------------------------------------------------------- widget edits
     def add_draft(self, draft: Draft, at: QtCore.QPoint | None = None) -> WidgetInstance:
-        """Put a valid draft on the current canvas at ``at`` (default: a free spot), snapped, on screen."""
+        """Put a valid draft on the current canvas at ``at`` (surface coordinates; default: a free spot in
+        view, else below the other widgets), on the grid; the canvas scrolls to show it."""
         problems = draft.problems()
         if problems:
             raise ValueError("the widget is not configured: " + "; ".join(problems))
         w, h = (int(v) for v in draft.spec.default_size)
         surface = self.surface
-        pos = at if at is not None else surface.free_spot(QtCore.QSize(w, h))
-        rect = fit_rect(snap_rect(QtCore.QRect(pos, QtCore.QSize(w, h))), surface.rect(), frame_min_size())
-        return self.doc.add_widget(
+        size = on_grid(QtCore.QRect(0, 0, w, h), frame_min_size()).size()
+        pos = at if at is not None else surface.free_spot(size)
+        rect = on_grid(QtCore.QRect(pos, size), frame_min_size())
+        widget = self.doc.add_widget(
             self.canvas.id, draft.spec.kind, draft.binding,
             Geometry(rect.x(), rect.y(), rect.width(), rect.height()), draft.settings_dict(),
             draft.title or draft.spec.title,
         )
+        self._show_placed(widget.id)
+        return widget
+
+    def _show_placed(self, widget_id: str) -> None:
+        """Scroll a new widget into view and give it the keyboard focus (not whatever field Qt picks)."""
+        frame = self.surface.frames.get(widget_id)
+        if frame is not None:
+            self.surface.reveal(frame.geometry())
+            frame.setFocus(QtCore.Qt.FocusReason.OtherFocusReason)
 
     def _geometry_committed(self, widget_id: str, rect: QtCore.QRect) -> None:
+        rect = on_grid(rect, frame_min_size())  # what is saved is always on the grid
         geometry = Geometry(rect.x(), rect.y(), rect.width(), rect.height())
         try:
             self.doc.set_geometry(widget_id, geometry)
@@ -280,15 +298,16 @@ class CanvasController(QtCore.QObject):
         except KeyError:
             return None
         g = src.geometry
-        surface = self.surface
-        rect = fit_rect(snap_rect(QtCore.QRect(round(g.x) + 32, round(g.y) + 32, round(g.w), round(g.h))),
-                        surface.rect(), frame_min_size())
+        size = on_grid(QtCore.QRect(0, 0, round(g.w), round(g.h)), frame_min_size()).size()
+        rect = QtCore.QRect(self.surface.free_spot(size), size)  # a free spot, never over the original
         try:
-            return self.doc.add_widget(self.canvas.id, src.kind, src.binding,
+            copy = self.doc.add_widget(self.canvas.id, src.kind, src.binding,
                                        Geometry(rect.x(), rect.y(), rect.width(), rect.height()),
                                        _copy(src).settings, src.title)
         except CanvasLocked:
             return None
+        self._show_placed(copy.id)
+        return copy
 
     def update_instance(self, widget_id: str, *, settings: dict | None = None, title: str | None = None) -> None:
         self.doc.reconfigure_widget(widget_id, settings=settings, title=title)

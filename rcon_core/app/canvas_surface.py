@@ -1,10 +1,17 @@
-"""The area one canvas's widgets live on: hosts frames, draws the grid in edit mode, accepts drops."""
+"""The area one canvas's widgets live on: hosts frames, draws the grid in edit mode, accepts drops.
+
+A :class:`CanvasSurface` is as large as its widgets need (plus a margin), never smaller than the view;
+it sits in a :class:`CanvasScroll`, so a small window or an open side panel shows scrollbars instead of
+squeezing the widgets. A widget's geometry is the layout's, never the window's.
+"""
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 from qtpy import QtCore, QtGui, QtWidgets
 
-from rcon_core.app.geometry import GRID, snap
+from rcon_core.app.geometry import GRID, MARGIN, snap, snap_up
 from rcon_core.app.widget_frame import WidgetFrame
 
 #: mime type of a widget draft dragged from the settings preview onto a canvas
@@ -25,6 +32,10 @@ class CanvasSurface(QtWidgets.QWidget):
         self.name = name
         self.editable = True
         self.frames: dict[str, WidgetFrame] = {}
+        #: stacking order (bottom first): the canvas's widget order; the selected frame is raised on top
+        self.order: list[str] = []
+        #: the scroll area showing this surface (set by CanvasScroll)
+        self.scroll_area: CanvasScroll | None = None
         self.placeholder = QtWidgets.QLabel(
             "This canvas is empty.\nPick a topic, a service or a widget on the left to add one.", self
         )
@@ -37,23 +48,54 @@ class CanvasSurface(QtWidgets.QWidget):
     def add_frame(self, frame: WidgetFrame, rect: QtCore.QRect) -> WidgetFrame:
         frame.setParent(self)
         self.frames[frame.instance_id] = frame
+        if frame.instance_id not in self.order:
+            self.order.append(frame.instance_id)
+        frame.setFocusPolicy(QtCore.Qt.FocusPolicy.ClickFocus)  # focus lands on a placed widget
         frame.set_editable(self.editable)
+        self._grow_to(rect)  # before placing: the frame is never clamped to a surface too small for it
         frame.place(rect, remember=True)
+        frame.installEventFilter(self)
+        frame.selected_changed.connect(self._selection_changed)
         frame.show()
         self.placeholder.setVisible(False)
+        self.restack()
+        self.refit()
         return frame
 
     def remove_frame(self, instance_id: str) -> None:
         frame = self.frames.pop(instance_id, None)
+        if instance_id in self.order:
+            self.order.remove(instance_id)
         if frame is not None:
+            frame.removeEventFilter(self)
             frame.hide()
             frame.setParent(None)
             frame.deleteLater()
         self.placeholder.setVisible(not self.frames)
+        self.refit()
 
     def clear_frames(self) -> None:
         for iid in list(self.frames):
             self.remove_frame(iid)
+
+    def set_order(self, ids: Iterable[str]) -> None:
+        """Stack the frames in ``ids`` order (the canvas's widget order), the selected one on top."""
+        self.order = [i for i in ids if i in self.frames] + [i for i in self.order if i not in set(ids)]
+        self.restack()
+
+    def restack(self) -> None:
+        selected = None
+        for iid in self.order:
+            frame = self.frames.get(iid)
+            if frame is not None:
+                frame.raise_()
+                if frame.selected:
+                    selected = frame
+        if selected is not None:
+            selected.raise_()
+
+    def _selection_changed(self, _iid: str, _selected: bool) -> None:
+        self.restack()
 
     def set_editable(self, editable: bool) -> None:
         self.editable = editable
@@ -61,15 +103,73 @@ class CanvasSurface(QtWidgets.QWidget):
             frame.set_editable(editable)
         self.update()
 
-    def free_spot(self, size: QtCore.QSize) -> QtCore.QPoint:
-        """A grid point where a widget of ``size`` overlaps nothing (top-left first), else the origin."""
-        step = GRID * 2
-        for y in range(GRID, max(GRID + 1, self.height() - size.height()), step):
-            for x in range(GRID, max(GRID + 1, self.width() - size.width()), step):
+    # logical size -----------------------------------------------------------------------------------
+    def content_rect(self) -> QtCore.QRect:
+        """The union of every frame's geometry (empty when there are none)."""
+        out = QtCore.QRect()
+        for frame in self.frames.values():
+            out = out.united(frame.geometry())
+        return out
+
+    def view_size(self) -> QtCore.QSize:
+        return self.scroll_area.viewport().size() if self.scroll_area is not None else self.size()
+
+    def visible_rect(self) -> QtCore.QRect:
+        """The part of the surface the operator sees now (surface coordinates)."""
+        if self.scroll_area is None:
+            return self.rect()
+        return QtCore.QRect(-self.pos(), self.scroll_area.viewport().size()).intersected(self.rect())
+
+    def wanted_size(self) -> QtCore.QSize:
+        content = self.content_rect()
+        view = self.view_size()
+        right = content.x() + content.width() + MARGIN if not content.isNull() else 0
+        bottom = content.y() + content.height() + MARGIN if not content.isNull() else 0
+        return QtCore.QSize(max(view.width(), right), max(view.height(), bottom))
+
+    def refit(self) -> None:
+        """Size the surface to cover every widget plus a margin, and at least the view."""
+        wanted = self.wanted_size()
+        if wanted != self.size():
+            self.resize(wanted)
+
+    def _grow_to(self, rect: QtCore.QRect) -> None:
+        w = max(self.width(), rect.x() + rect.width() + MARGIN)
+        h = max(self.height(), rect.y() + rect.height() + MARGIN)
+        if (w, h) != (self.width(), self.height()):
+            self.resize(w, h)
+
+    def eventFilter(self, obj: QtCore.QObject, event: QtCore.QEvent) -> bool:
+        # a frame dragged or resized past the edge grows the surface at once (it shrinks back on commit)
+        if event.type() in (QtCore.QEvent.Type.Move, QtCore.QEvent.Type.Resize) and isinstance(obj, WidgetFrame):
+            self._grow_to(obj.geometry())
+        return super().eventFilter(obj, event)
+
+    # placing ----------------------------------------------------------------------------------------
+    def free_spot(self, size: QtCore.QSize, avoid_gap: int = GRID) -> QtCore.QPoint:
+        """Where a new widget of ``size`` goes: the first grid point (top-left first) in the visible part of
+        the canvas where it overlaps no widget (keeping ``avoid_gap`` clear around them), else on the
+        grid below every widget (at the left of the visible part)."""
+        taken = [f.geometry().adjusted(-avoid_gap + 1, -avoid_gap + 1, avoid_gap - 1, avoid_gap - 1)
+                 for f in self.frames.values()]
+        vis = self.visible_rect()
+        left, top = max(GRID, snap_up(vis.left())), max(GRID, snap_up(vis.top()))
+        right, bottom = vis.left() + vis.width(), vis.top() + vis.height()
+        for y in range(top, bottom - size.height() + 1, GRID):
+            for x in range(left, right - size.width() + 1, GRID):
                 rect = QtCore.QRect(QtCore.QPoint(x, y), size)
-                if not any(f.geometry().intersects(rect) for f in self.frames.values()):
+                if not any(t.intersects(rect) for t in taken):
                     return QtCore.QPoint(x, y)
-        return QtCore.QPoint(GRID, GRID)
+        content = self.content_rect()
+        below = snap_up(content.y() + content.height()) + GRID if not content.isNull() else GRID
+        return QtCore.QPoint(left, max(GRID, below))
+
+    def reveal(self, rect: QtCore.QRect) -> None:
+        """Scroll so ``rect`` (surface coordinates) is in view."""
+        if self.scroll_area is not None:
+            self._grow_to(rect)
+            centre = rect.center()
+            self.scroll_area.ensureVisible(centre.x(), centre.y(), rect.width() // 2 + GRID, rect.height() // 2 + GRID)
 
     # painting ---------------------------------------------------------------------------------------
     def paintEvent(self, event: QtGui.QPaintEvent) -> None:
@@ -86,10 +186,9 @@ class CanvasSurface(QtWidgets.QWidget):
                 p.drawPoint(x, y)
 
     def resizeEvent(self, event: QtGui.QResizeEvent) -> None:
+        # the widgets stay where the layout has them: only the empty-canvas hint follows the view
         super().resizeEvent(event)
-        self.placeholder.setGeometry(self.rect())
-        for frame in self.frames.values():  # a smaller window never leaves widgets off-screen
-            frame.place(frame.desired if not frame.desired.isNull() else frame.geometry())
+        self.placeholder.setGeometry(QtCore.QRect(QtCore.QPoint(0, 0), self.view_size()))
 
     def mousePressEvent(self, event: QtGui.QMouseEvent) -> None:
         self.background_pressed.emit()
@@ -108,5 +207,46 @@ class CanvasSurface(QtWidgets.QWidget):
         if not (self.editable and event.mimeData().hasFormat(DRAFT_MIME)):
             return
         event.acceptProposedAction()
-        pos = event.position().toPoint()
-        self.dropped.emit(QtCore.QPoint(snap(pos.x()), snap(pos.y())))
+        pos = event.position().toPoint()  # surface coordinates: the scroll offset is already in them
+        self.dropped.emit(QtCore.QPoint(max(0, snap(pos.x())), max(0, snap(pos.y()))))
+
+
+class CanvasScroll(QtWidgets.QScrollArea):
+    """Shows a :class:`CanvasSurface` with scrollbars when it is larger than the view.
+
+    Touch: a finger on the canvas background scrolls it kinetically (QScroller); a finger on a widget
+    never starts a scroll, so dragging a widget in edit mode moves it and a teleop pad or slider in
+    operator mode keeps its touches.
+    """
+
+    def __init__(self, surface: CanvasSurface, parent: QtWidgets.QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.setObjectName("canvasScroll")
+        self.setFrameShape(QtWidgets.QFrame.Shape.NoFrame)
+        self.setWidgetResizable(False)
+        self.setAlignment(QtCore.Qt.AlignmentFlag.AlignLeft | QtCore.Qt.AlignmentFlag.AlignTop)
+        self.surface = surface
+        surface.scroll_area = self
+        self.setWidget(surface)
+        viewport = self.viewport()
+        viewport.setAttribute(QtCore.Qt.WidgetAttribute.WA_AcceptTouchEvents)
+        QtWidgets.QScroller.grabGesture(viewport, QtWidgets.QScroller.ScrollerGestureType.TouchGesture)
+
+    def resizeEvent(self, event: QtGui.QResizeEvent) -> None:
+        super().resizeEvent(event)
+        self.surface.refit()
+
+    def frame_at(self, viewport_pos: QtCore.QPoint) -> WidgetFrame | None:
+        """The widget frame under a point of the viewport, if any."""
+        child = self.surface.childAt(self.surface.mapFrom(self.viewport(), viewport_pos))
+        while child is not None and not isinstance(child, WidgetFrame):
+            child = child.parentWidget()
+        return child
+
+    def viewportEvent(self, event: QtCore.QEvent) -> bool:
+        if event.type() == QtCore.QEvent.Type.ScrollPrepare:
+            start = event.startPos().toPoint()  # type: ignore[attr-defined]
+            if self.frame_at(start) is not None:
+                event.ignore()  # a touch on a widget belongs to the widget, not to the scroller
+                return True
+        return super().viewportEvent(event)
