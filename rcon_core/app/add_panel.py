@@ -6,19 +6,32 @@
 
 The settings page shows a live preview of the widget.  While the draft has problems the preview carries
 a warning overlay listing them; once valid it can be dragged onto the canvas or placed with "Place".
+
+Which role a widget picked from the palette starts with (:func:`role_preference`): widgets of the
+category "Controls" or "Input" prefer to send (publish, then call, serve, subscribe), every other widget
+prefers to show (subscribe, then publish, call, serve); of the roles the widget has, the first one for
+which the robot offers a compatible topic or service is chosen (the first one if none has any). The
+Topic/Service chooser lists the targets compatible with the current role first, then those only
+compatible with another of the widget's roles (marked ``· to <role>``); choosing one of those switches the
+role to it.
+
+When a widget can bind several fields of the chosen type, the *Field* chooser lists them (best first,
+with each field's type); it is hidden when there is only one, or when the widget takes the whole message.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
+import attrs
 from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app.canvas_surface import DRAFT_MIME
 from rcon_core.app.catalog_panel import short_type
 from rcon_core.app.children_editor import ChildContext
-from rcon_core.app.draft import Candidate, Draft, Target
-from rcon_core.app.settings_form import SettingsForm
+from rcon_core.app.draft import Candidate, Draft, Target, field_type
+from rcon_core.app.settings_form import SettingsForm, guard_wheel
 from rcon_core.app.widget_frame import WidgetFrame
 from rcon_core.plugins import Binding, Role, SettingsError, WidgetSpec
 
@@ -28,6 +41,20 @@ ROLE_TEXT = {
     Role.CALL: ("Call it", "call: a widget sends requests and shows the answer"),
     Role.SERVE: ("Answer it", "serve: a widget answers requests from the robot"),
 }
+
+#: categories whose widgets are for sending: they prefer publish/call over subscribe
+SENDING_CATEGORIES = frozenset({"controls", "input"})
+SENDING_FIRST = (Role.PUBLISH, Role.CALL, Role.SERVE, Role.SUBSCRIBE)
+SHOWING_FIRST = (Role.SUBSCRIBE, Role.PUBLISH, Role.CALL, Role.SERVE)
+#: item data role of the target chooser holding the role a target is compatible with
+TARGET_ROLE = QtCore.Qt.ItemDataRole.UserRole + 1
+
+
+def role_preference(spec: WidgetSpec) -> list[Role]:
+    """The widget's roles, the one an operator most likely wants first (see the module docstring)."""
+    order = SENDING_FIRST if spec.category.strip().lower() in SENDING_CATEGORIES else SHOWING_FIRST
+    return [r for r in order if r in spec.roles]
+
 
 #: rank_widgets(type_name, role) -> candidates, best first
 RankWidgets = Callable[[str, Role], list[Candidate]]
@@ -40,6 +67,85 @@ def _heading(text: str) -> QtWidgets.QLabel:
     label.setProperty("role", "heading")
     label.setWordWrap(True)
     return label
+
+
+class NameLabel(QtWidgets.QLabel):
+    """A heading showing one name (a topic, a service, a widget) on one line, never broken at a slash:
+    elided in the middle when the panel is too narrow, the full name in its tooltip."""
+
+    def __init__(self, name: str = "") -> None:
+        super().__init__()
+        self.setProperty("role", "heading")
+        self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored, QtWidgets.QSizePolicy.Policy.Preferred)
+        self.full_name = ""
+        self.set_name(name)
+
+    def set_name(self, name: str) -> None:
+        self.full_name = name
+        self.setToolTip(name)
+        self.setAccessibleName(name)
+        self._elide()
+
+    def minimumSizeHint(self) -> QtCore.QSize:
+        return QtCore.QSize(0, super().minimumSizeHint().height())
+
+    def resizeEvent(self, event: QtGui.QResizeEvent) -> None:
+        super().resizeEvent(event)
+        self._elide()
+
+    def changeEvent(self, event: QtCore.QEvent) -> None:
+        super().changeEvent(event)
+        if event.type() in (QtCore.QEvent.Type.FontChange, QtCore.QEvent.Type.StyleChange):
+            self._elide()
+
+    def _elide(self) -> None:
+        width = self.contentsRect().width()
+        text = self.full_name
+        if self.isVisible() and width > 0:
+            text = self.fontMetrics().elidedText(text, QtCore.Qt.TextElideMode.ElideMiddle, width)
+        if text != self.text():
+            self.setText(text)
+
+
+class PreviewSlot(QtWidgets.QWidget):
+    """Holds the preview frame: as wide as the panel allows, never wider, its height following the
+    widget's default aspect (clamped), so a big widget shows scaled down instead of cut."""
+
+    MIN_H, MAX_H = 120, 320
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.setObjectName("previewSlot")
+        self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored, QtWidgets.QSizePolicy.Policy.Fixed)
+        self.col = QtWidgets.QVBoxLayout(self)
+        self.col.setContentsMargins(0, 0, 0, 0)
+        self.aspect = 0.5  # height / width
+        self.frame: QtWidgets.QWidget | None = None
+        self.setFixedHeight(0)
+
+    def set_frame(self, frame: QtWidgets.QWidget | None, size: tuple[float, float] = (160.0, 80.0)) -> None:
+        if self.frame is not None:
+            self.col.removeWidget(self.frame)
+        self.frame = frame
+        if frame is not None:
+            w, h = size
+            self.aspect = (h / w) if w > 0 and h > 0 else 0.5
+            frame.setMinimumSize(60, self.MIN_H)  # explicit: the view's own minimum never widens the panel
+            frame.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored, QtWidgets.QSizePolicy.Policy.Ignored)
+            self.col.addWidget(frame)
+        self._fit()
+
+    def resizeEvent(self, event: QtGui.QResizeEvent) -> None:
+        super().resizeEvent(event)
+        self._fit()
+
+    def _fit(self) -> None:
+        if self.frame is None:
+            self.setFixedHeight(0)
+            return
+        height = int(max(self.MIN_H, min(self.MAX_H, self.width() * self.aspect)))
+        if height != self.height() or self.minimumHeight() != height:
+            self.setFixedHeight(height)
 
 
 class DragHandle(QtWidgets.QLabel):
@@ -103,7 +209,9 @@ class AddPanel(QtWidgets.QWidget):
         self._picked: Target | None = None
         self._role: Role | None = None
         self._is_service = False
+        self._pick_target = False
         self._targets: list[Target] = []
+        self._roles: list[Role] = []  #: the role chooser's roles, in its order
 
         self.stack = QtWidgets.QStackedWidget()
         self.role_page = self._build_role_page()
@@ -133,7 +241,8 @@ class AddPanel(QtWidgets.QWidget):
     def _build_role_page(self) -> QtWidgets.QWidget:
         page = QtWidgets.QWidget()
         col = QtWidgets.QVBoxLayout(page)
-        self.role_title = _heading("")
+        self.role_title = NameLabel()
+        self.role_title.setObjectName("roleTitle")
         self.role_type = QtWidgets.QLabel()
         self.role_type.setProperty("role", "hint")
         col.addWidget(self.role_title)
@@ -156,7 +265,11 @@ class AddPanel(QtWidgets.QWidget):
         page = QtWidgets.QWidget()
         col = QtWidgets.QVBoxLayout(page)
         self.widgets_title = _heading("")
+        self.widgets_title.setObjectName("widgetsTitle")
+        self.widgets_name = NameLabel()
+        self.widgets_name.setObjectName("widgetsName")
         col.addWidget(self.widgets_title)
+        col.addWidget(self.widgets_name)
         self.candidates = QtWidgets.QListWidget()
         self.candidates.setObjectName("candidateList")
         self.candidates.itemClicked.connect(self._candidate_clicked)
@@ -173,9 +286,16 @@ class AddPanel(QtWidgets.QWidget):
     def _build_settings_page(self) -> QtWidgets.QWidget:
         page = QtWidgets.QWidget()
         outer = QtWidgets.QVBoxLayout(page)
-        self.settings_title = _heading("")
+        self.settings_title = NameLabel()
+        self.settings_title.setObjectName("settingsTitle")
         outer.addWidget(self.settings_title)
-        scroll = QtWidgets.QScrollArea()
+        self.settings_error = QtWidgets.QLabel()
+        self.settings_error.setProperty("role", "problem")
+        self.settings_error.setWordWrap(True)
+        self.settings_error.hide()
+        outer.addWidget(self.settings_error)
+        self.settings_scroll = scroll = QtWidgets.QScrollArea()
+        scroll.setObjectName("settingsScroll")
         scroll.setWidgetResizable(True)
         scroll.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
         QtWidgets.QScroller.grabGesture(
@@ -191,6 +311,7 @@ class AddPanel(QtWidgets.QWidget):
         self.role_combo.setObjectName("roleCombo")
         self.role_combo.setSizeAdjustPolicy(QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
         self.role_combo.currentIndexChanged.connect(self._role_combo_changed)
+        guard_wheel(self.role_combo)
         self.target_combo = QtWidgets.QComboBox()
         self.target_combo.setObjectName("targetCombo")
         self.target_combo.setSizeAdjustPolicy(
@@ -198,9 +319,22 @@ class AddPanel(QtWidgets.QWidget):
         )
         self.target_combo.setMinimumContentsLength(12)
         self.target_combo.currentIndexChanged.connect(self._target_changed)
+        guard_wheel(self.target_combo)
         self.target_label = QtWidgets.QLabel("Topic")
+        self.field_combo = QtWidgets.QComboBox()
+        self.field_combo.setObjectName("fieldCombo")
+        self.field_combo.setSizeAdjustPolicy(
+            QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon
+        )
+        self.field_combo.setMinimumContentsLength(10)
+        self.field_combo.setToolTip("Which field of the message the widget shows or sets")
+        self.field_combo.currentIndexChanged.connect(self._field_changed)
+        guard_wheel(self.field_combo)
+        self.field_label = QtWidgets.QLabel("Field")
         binding_box.addRow("Role", self.role_combo)
         binding_box.addRow(self.target_label, self.target_combo)
+        binding_box.addRow(self.field_label, self.field_combo)
+        self.binding_box = binding_box
         self.title_edit = QtWidgets.QLineEdit()
         self.title_edit.setObjectName("titleEdit")
         self.title_edit.textChanged.connect(self._title_changed)
@@ -208,8 +342,8 @@ class AddPanel(QtWidgets.QWidget):
         self.settings_col.addLayout(binding_box)
         # the live preview first, so it is in sight while the settings below are changed
         self.settings_col.addWidget(QtWidgets.QLabel("Preview"))
-        self.preview_slot = QtWidgets.QVBoxLayout()
-        self.settings_col.addLayout(self.preview_slot)
+        self.preview_slot = PreviewSlot()
+        self.settings_col.addWidget(self.preview_slot)
         self.form_slot = QtWidgets.QVBoxLayout()
         self.settings_col.addLayout(self.form_slot)
         self.settings_col.addStretch(1)
@@ -237,7 +371,7 @@ class AddPanel(QtWidgets.QWidget):
     def _start_target(self, target: Target, service: bool) -> None:
         self._reset()
         self._picked, self._is_service = target, service
-        self.role_title.setText(target.name)
+        self.role_title.set_name(target.name)
         self.role_type.setText(target.type or "type unknown")
         for role, button in self.role_buttons.items():
             button.setVisible(role.is_service == service)
@@ -247,14 +381,16 @@ class AddPanel(QtWidgets.QWidget):
     def start_from_widget(self, spec: WidgetSpec) -> None:
         """Pathway 3: a widget was picked in the palette."""
         self._reset()
-        roles = sorted(spec.roles, key=lambda r: list(Role).index(r))
-        self._open_settings(spec, roles[0], None, pick_target=True)
+        roles = role_preference(spec)
+        role = next((r for r in roles if self._targets_for(spec, r)), roles[0])
+        self._open_settings(spec, role, None, pick_target=True)
         self.show()
 
     def choose_role(self, role: Role) -> None:
         assert self._picked is not None
         self._role = role
-        self.widgets_title.setText(f"Widgets that can {role.value} {self._picked.name}")
+        self.widgets_title.setText(f"Widgets that can {role.value}")
+        self.widgets_name.set_name(self._picked.name)
         self.candidates.clear()
         found = self._rank(self._picked.type, role)
         for cand in found:
@@ -276,34 +412,31 @@ class AddPanel(QtWidgets.QWidget):
     def _candidate_clicked(self, item: QtWidgets.QListWidgetItem) -> None:
         cand: Candidate = item.data(QtCore.Qt.ItemDataRole.UserRole)
         assert self._picked is not None
-        target = Target(self._picked.name, self._picked.type, cand.field_paths)
+        target = Target(self._picked.name, self._picked.type, cand.field_paths, cand.choices)
         assert self._role is not None
         self._open_settings(cand.spec, self._role, target, pick_target=False)
 
     # ------------------------------------------------------------------------------------- settings
     def _open_settings(self, spec: WidgetSpec, role: Role, target: Target | None, pick_target: bool) -> None:
+        self._clear_settings()
+        error = ""
         try:
             settings = spec.make_settings({})
         except SettingsError as exc:
             settings = None
-            self.settings_title.setText(f"{spec.title}: {exc}")
+            error = f"{spec.title}: {exc}"
+        self.settings_error.setText(error)
+        self.settings_error.setVisible(bool(error))
         self.draft = Draft(spec=spec, role=role, target=target, settings=settings, title=spec.title)
-        self.settings_title.setText(f"{spec.title}")
-        self.role_combo.blockSignals(True)
-        self.role_combo.clear()
-        for r in sorted(spec.roles, key=lambda r: list(Role).index(r)):
-            self.role_combo.addItem(r.value, r)
-        self.role_combo.setCurrentIndex(max(0, self.role_combo.findData(role)))
-        self.role_combo.setEnabled(pick_target and self.role_combo.count() > 1)
-        self.role_combo.blockSignals(False)
+        self.settings_title.set_name(spec.title)
+        self._pick_target = pick_target
+        self._roles = role_preference(spec) if pick_target else [role]
+        self._fill_roles()
         self.title_edit.blockSignals(True)
         self.title_edit.setText(spec.title)
         self.title_edit.blockSignals(False)
-        self._pick_target = pick_target
         self._fill_targets()
-        if self.form is not None:
-            self.form.deleteLater()
-            self.form = None
+        self._fill_fields()
         if settings is not None:
             context = None
             if self._child_context is not None:
@@ -314,49 +447,152 @@ class AddPanel(QtWidgets.QWidget):
             self.form_slot.addWidget(self.form)
         self.stack.setCurrentWidget(self.settings_page)
         self._rebuild_preview()
+        self._scroll_to_top()
+        # once more after the layout settled (a form's own first layout pass may move the bar)
+        QtCore.QTimer.singleShot(0, self, self._scroll_to_top)
+
+    def _scroll_to_top(self) -> None:
+        """A new draft's settings page starts at its top: role, topic and field in sight."""
+        self.settings_scroll.verticalScrollBar().setValue(0)
+
+    def _fill_roles(self) -> None:
+        assert self.draft is not None
+        self.role_combo.blockSignals(True)
+        self.role_combo.clear()
+        for r in self._roles:
+            self.role_combo.addItem(r.value)
+            self.role_combo.setItemData(self.role_combo.count() - 1, ROLE_TEXT[r][1],
+                                        QtCore.Qt.ItemDataRole.ToolTipRole)
+        self.role_combo.setCurrentIndex(self._roles.index(self.draft.role) if self.draft.role in self._roles else -1)
+        self.role_combo.setEnabled(self._pick_target and len(self._roles) > 1)
+        self.role_combo.blockSignals(False)
 
     def _fill_targets(self) -> None:
+        """The targets compatible with the draft's role, then those only compatible with its other roles
+        (choosing one of those switches the role). Keeps the chosen target when it is still offered."""
         assert self.draft is not None
-        self.target_label.setText("Service" if self.draft.role.is_service else "Topic")
-        self.target_combo.blockSignals(True)
-        self.target_combo.clear()
+        draft = self.draft
+        self.target_label.setText("Service" if draft.role.is_service else "Topic")
+        combo = self.target_combo
+        combo.blockSignals(True)
+        combo.clear()
         if self._pick_target:
-            self._targets = self._targets_for(self.draft.spec, self.draft.role)
-            self.target_combo.addItem("— choose —", None)
+            self._targets = self._targets_for(draft.spec, draft.role)
+            combo.addItem("— choose —", None)
             for t in self._targets:
-                self.target_combo.addItem(f"{t.name}  ({short_type(t.type)})", t)
-            self.target_combo.setEnabled(True)
-            keep = self.draft.target
-            index = next((i + 1 for i, t in enumerate(self._targets) if keep and t.name == keep.name), 0)
-            self.target_combo.setCurrentIndex(index)
-            self.draft.target = self.target_combo.currentData()
+                combo.addItem(f"{t.name}  ({short_type(t.type)})", t)
+                combo.setItemData(combo.count() - 1, draft.role.value, TARGET_ROLE)
+            offered = {t.name for t in self._targets}
+            for role in self._roles:
+                if role is draft.role:
+                    continue
+                for t in self._targets_for(draft.spec, role):
+                    if t.name in offered:
+                        continue
+                    offered.add(t.name)
+                    combo.addItem(f"{t.name}  ({short_type(t.type)})  · to {role.value}", t)
+                    i = combo.count() - 1
+                    combo.setItemData(i, role.value, TARGET_ROLE)
+                    combo.setItemData(i, f"Choosing this makes the widget {role.value} instead of {draft.role.value}",
+                                      QtCore.Qt.ItemDataRole.ToolTipRole)
+            combo.setEnabled(True)
+            keep = draft.target
+            index = 0
+            if keep is not None:
+                index = next((i for i in range(1, combo.count())
+                              if combo.itemData(i).name == keep.name and combo.itemData(i, TARGET_ROLE) == draft.role.value),
+                             0)
+            combo.setCurrentIndex(index)
+            chosen = combo.currentData()
+            if chosen is not None and keep is not None and keep.name == chosen.name and keep.field_paths:
+                if keep.field_paths[0] in (chosen.choices or chosen.field_paths):  # keep the field picked
+                    chosen = attrs.evolve(chosen, field_paths=keep.field_paths)
+            draft.target = chosen
         else:
-            fixed = self.draft.target
-            self.target_combo.addItem(f"{fixed.name}  ({short_type(fixed.type)})" if fixed else "—", fixed)
-            self.target_combo.setEnabled(False)
-        self.target_combo.blockSignals(False)
+            fixed = draft.target
+            combo.addItem(f"{fixed.name}  ({short_type(fixed.type)})" if fixed else "—", fixed)
+            combo.setEnabled(False)
+        combo.blockSignals(False)
+
+    def _fill_fields(self) -> None:
+        """The field chooser: every field the widget can use on the target, with its type, best first.
+        Hidden when there is no choice to make (one field, or the widget takes the whole message)."""
+        assert self.draft is not None
+        target = self.draft.target
+        combo = self.field_combo
+        combo.blockSignals(True)
+        combo.clear()
+        paths: list[str] = []
+        if target is not None and target.field_paths:
+            paths = list(target.choices or target.field_paths)
+            if target.field_paths[0] not in paths:
+                paths.insert(0, target.field_paths[0])
+        types = self._types()
+        for path in paths:
+            tp = field_type(types, target.type, path, self.draft.role.is_service) if target and types else ""
+            combo.addItem(f"{path}  ·  {short_type(tp)}" if tp else path, path)
+            combo.setItemData(combo.count() - 1, f"{path}: {tp or 'type unknown'}", QtCore.Qt.ItemDataRole.ToolTipRole)
+        if paths and target is not None:
+            combo.setCurrentIndex(paths.index(target.field_paths[0]))
+        combo.blockSignals(False)
+        shown = len(paths) > 1
+        self.binding_box.setRowVisible(self.field_combo, shown)
+
+    def _types(self) -> Any:
+        """The app's type registry (through the children context), or None."""
+        if self._child_context is None:
+            return None
+        return getattr(self._child_context(lambda: None), "types", None)
 
     def choose_target(self, name: str) -> None:
         """Select the compatible topic/service ``name`` (pathway 3); ValueError if it is not offered."""
-        for i in range(self.target_combo.count()):
+        for i in range(1, self.target_combo.count()):
             t = self.target_combo.itemData(i)
             if t is not None and t.name == name:
                 self.target_combo.setCurrentIndex(i)
                 return
-        offered = [t.name for t in self._targets]
+        offered = [self.target_combo.itemData(i).name for i in range(1, self.target_combo.count())]
         raise ValueError(f"{name!r} is not compatible with this widget (offered: {offered})")
 
-    def _role_combo_changed(self, _index: int) -> None:
-        if self.draft is None:
+    def choose_field(self, path: str) -> None:
+        """Select the field ``path`` of the chosen target; ValueError if the widget cannot use it."""
+        index = self.field_combo.findData(path)
+        if index < 0:
+            offered = [self.field_combo.itemData(i) for i in range(self.field_combo.count())]
+            raise ValueError(f"{path!r} is not a field this widget can use here (offered: {offered})")
+        self.field_combo.setCurrentIndex(index)
+
+    def _role_combo_changed(self, index: int) -> None:
+        if self.draft is None or not 0 <= index < len(self._roles):
             return
-        self.draft.role = self.role_combo.currentData()
+        self._set_role(self._roles[index])
+
+    def _set_role(self, role: Role) -> None:
+        assert self.draft is not None
+        self.draft.role = role
+        self._fill_roles()
         self._fill_targets()
+        self._fill_fields()
         self._rebuild_preview()
 
-    def _target_changed(self, _index: int) -> None:
+    def _target_changed(self, index: int) -> None:
         if self.draft is None:
             return
-        self.draft.target = self.target_combo.currentData()
+        target = self.target_combo.itemData(index)
+        tagged = self.target_combo.itemData(index, TARGET_ROLE)  # a plain str: Qt drops the enum
+        self.draft.target = target
+        role = Role.parse(tagged) if tagged else self.draft.role
+        if target is not None and role is not self.draft.role:
+            self._set_role(role)  # only compatible with another role: the widget takes that one
+            return
+        self._fill_fields()
+        self._rebuild_preview()
+
+    def _field_changed(self, index: int) -> None:
+        path = self.field_combo.itemData(index)
+        if self.draft is None or self.draft.target is None or path is None:
+            return
+        self.draft.set_field_path(path)
         self._rebuild_preview()
 
     def _title_changed(self, text: str) -> None:
@@ -379,16 +615,15 @@ class AddPanel(QtWidgets.QWidget):
         frame.setObjectName("widgetFrame")
         frame.set_editable(False)
         self._build_preview(self.draft, frame)
-        w, h = self.draft.spec.default_size
-        frame.setMinimumSize(int(min(w, 280)), int(max(min(h, 320), 120)))
         self.preview_frame = frame
-        self.preview_slot.addWidget(frame)
+        self.preview_slot.set_frame(frame, self.draft.spec.default_size)
         self._refresh_validity()
 
     def _drop_preview(self) -> None:
         if self.preview_frame is not None:
             self._release_preview()
-            self.preview_slot.removeWidget(self.preview_frame)
+            self.preview_slot.set_frame(None)
+            self.preview_frame.hide()
             self.preview_frame.deleteLater()
             self.preview_frame = None
 
@@ -437,11 +672,34 @@ class AddPanel(QtWidgets.QWidget):
         self.hide()
         self.closed.emit()
 
-    def _reset(self) -> None:
+    def _clear_settings(self) -> None:
+        """Drop the settings page's draft-specific content: preview, form, choosers."""
         self._drop_preview()
         if self.form is not None:
+            self.form_slot.removeWidget(self.form)
+            self.form.hide()
             self.form.deleteLater()
             self.form = None
         self.draft = None
+        self._targets = []
+        self._roles = []
+        for combo in (self.role_combo, self.target_combo, self.field_combo):
+            combo.blockSignals(True)
+            combo.clear()
+            combo.blockSignals(False)
+        self.binding_box.setRowVisible(self.field_combo, False)
+        self.title_edit.blockSignals(True)
+        self.title_edit.clear()
+        self.title_edit.blockSignals(False)
+        self.settings_title.set_name("")
+        self.settings_error.hide()
+        self._scroll_to_top()
+        self._refresh_validity()
+
+    def _reset(self) -> None:
+        """Back to nothing chosen: no draft, form or preview left over for the next add."""
+        self._clear_settings()
         self._picked = None
         self._role = None
+        self._pick_target = False
+        self.candidates.clear()

@@ -427,7 +427,9 @@ class ChildrenEditor(QtWidgets.QWidget):
         self._poll.setInterval(100)
         self._poll.timeout.connect(self._tick)
         self._poll.start()
+        self._follow = False  # the form just opened: its scroll position is the panel's to set
         self.show_list()
+        self._follow = True
 
     # -- context -----------------------------------------------------------------------------------
     def catalog(self) -> ChildCatalog | None:
@@ -460,7 +462,8 @@ class ChildrenEditor(QtWidgets.QWidget):
         for key, page in self.pages.items():
             page.setVisible(key == name)
         self.current_page = name
-        QtCore.QTimer.singleShot(0, self, lambda: self._scroll_to(self.pages[name]))
+        if self._follow:  # a page the operator opened: bring it into sight
+            QtCore.QTimer.singleShot(0, self, lambda: self._scroll_to(self.pages[name]))
 
     def _scroll_to(self, page: QtWidgets.QWidget) -> None:
         """Bring the top of the page just opened into sight in the form's scroll area."""
@@ -756,7 +759,11 @@ class ChildrenEditor(QtWidgets.QWidget):
             if key != self._last_binding:  # the topic/service changed under the children: recheck them
                 self._last_binding = key
                 status = self.status.text()
-                self.show_list()
+                self._follow = False  # a refresh, not the operator's move: leave the scrolling alone
+                try:
+                    self.show_list()
+                finally:
+                    self._follow = True
                 self.status.setText(status)
 
     def _say(self, text: str) -> None:

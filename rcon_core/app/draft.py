@@ -8,6 +8,7 @@ import attrs
 
 from rcon_core.app.settings_form import settings_problems
 from rcon_core.plugins import Binding, Role, WidgetSpec
+from rcon_core.plugins.paths import parse_path
 
 
 @attrs.define
@@ -44,6 +45,21 @@ class Draft:
     title: str = ""
 
     @property
+    def field_path(self) -> str:
+        """The field the widget shows or sets ("" = the whole message)."""
+        return self.target.field_paths[0] if self.target is not None and self.target.field_paths else ""
+
+    def set_field_path(self, path: str) -> None:
+        """Bind another of the target's fitting fields; ValueError if ``path`` is not one of them."""
+        if self.target is None:
+            raise ValueError("choose a topic or service before its field")
+        offered = self.target.choices or self.target.field_paths
+        if path not in offered:
+            raise ValueError(f"{path!r} is not a field this widget can use on {self.target.name} "
+                             f"(offered: {list(offered)})")
+        self.target = attrs.evolve(self.target, field_paths=(path,))
+
+    @property
     def binding(self) -> Binding:
         if self.target is None:
             return Binding(role=self.role)
@@ -55,3 +71,30 @@ class Draft:
 
     def settings_dict(self) -> dict[str, Any]:
         return self.spec.settings_to_dict(self.settings) if self.settings is not None else {}
+
+
+def field_type(types: Any, type_name: str, path: str, service: bool = False) -> str:
+    """The type of the field at ``path`` in ``type_name`` as the registry spells it (``float32``,
+    ``uint8[]``, ``geometry_msgs/msg/Vector3``); on a service the path starts with its side
+    (``request.data``). ``""`` when the registry does not know it."""
+    try:
+        parts = parse_path(path)
+        if service:
+            if not parts:
+                return ""
+            side, *parts = parts
+            current = types.service_part_name(type_name, str(side))
+        else:
+            current = types.resolve(type_name)
+        found, base = current, current
+        for part in parts:
+            if isinstance(part, int):  # one element of the array just named
+                found = base
+                continue
+            field = next((f for f in types.fields(current) if f.name == part), None)
+            if field is None:
+                return ""
+            found, base, current = field.type, field.base, field.base
+        return str(found)
+    except Exception:  # unknown type or malformed path: no type to show, nothing to fail over
+        return ""

@@ -6,6 +6,10 @@ and any field with ``metadata={"choices": [...]}``.  Optional metadata: ``label`
 ``field_path`` and ``settings``, see :mod:`rcon_core.app.children_editor`) gets the children editor;
 its metadata may add ``exclude_kinds`` (kinds that cannot be children).  Fields of other types keep
 their value and are not shown.
+
+Spin boxes, combo boxes and sliders of a form ignore the mouse wheel unless they have the keyboard focus
+(tap them first): a wheel over them scrolls the form instead of changing the value under the pointer
+(:func:`guard_wheel`, also used by the add panel's own choosers).
 """
 
 from __future__ import annotations
@@ -15,7 +19,7 @@ import typing
 from typing import Any
 
 import attrs
-from qtpy import QtCore, QtWidgets
+from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app.children_editor import ChildContext, ChildrenEditor, children_item_class
 
@@ -23,6 +27,45 @@ from rcon_core.app.children_editor import ChildContext, ChildrenEditor, children
 ContextArg = ChildContext | typing.Callable[[], ChildContext | None] | None
 
 INT_RANGE = 2_000_000_000
+
+
+class _WheelGuard(QtCore.QObject):
+    """Event filter: a wheel over an unfocused value editor scrolls the enclosing scroll area instead."""
+
+    def eventFilter(self, obj: QtCore.QObject, event: QtCore.QEvent) -> bool:
+        if event.type() != QtCore.QEvent.Type.Wheel or not isinstance(obj, QtWidgets.QWidget) or obj.hasFocus():
+            return False
+        wheel = typing.cast(QtGui.QWheelEvent, event)
+        scroll = obj.parentWidget()
+        while scroll is not None and not isinstance(scroll, QtWidgets.QAbstractScrollArea):
+            scroll = scroll.parentWidget()
+        if scroll is None:  # nothing to scroll: let the event travel on to the parents, unused here
+            event.ignore()
+            return True
+        viewport = scroll.viewport()
+        pos = viewport.mapFromGlobal(wheel.globalPosition())
+        forwarded = QtGui.QWheelEvent(
+            pos, wheel.globalPosition(), wheel.pixelDelta(), wheel.angleDelta(), wheel.buttons(),
+            wheel.modifiers(), wheel.phase(), wheel.inverted(), wheel.source(),
+        )
+        QtWidgets.QApplication.sendEvent(viewport, forwarded)
+        event.accept()
+        return True
+
+
+def guard_wheel(widget: QtWidgets.QWidget) -> QtWidgets.QWidget:
+    """Make ``widget`` (a spin box, combo box, slider...) take the wheel only once it has the focus;
+    it no longer takes the focus from a wheel either. Returns ``widget``."""
+    widget.setFocusPolicy(QtCore.Qt.FocusPolicy.StrongFocus)
+    if widget.findChild(_WheelGuard, "wheelGuard", QtCore.Qt.FindChildOption.FindDirectChildrenOnly) is None:
+        guard = _WheelGuard(widget)  # lives and dies with the editor
+        guard.setObjectName("wheelGuard")
+        widget.installEventFilter(guard)
+    return widget
+
+
+#: editors whose value a wheel changes
+WHEEL_EDITORS = (QtWidgets.QAbstractSpinBox, QtWidgets.QComboBox, QtWidgets.QAbstractSlider)
 
 
 def _resolved_fields(cls: type) -> tuple[attrs.Attribute, ...]:
@@ -78,6 +121,8 @@ class SettingsForm(QtWidgets.QWidget):
                 continue
             editor, getter = built
             editor.setObjectName(f"setting_{field.name}")
+            if isinstance(editor, WHEEL_EDITORS):
+                guard_wheel(editor)
             if field.metadata.get("help"):
                 editor.setToolTip(str(field.metadata["help"]))
             self._editors[field.name] = (editor, getter)
