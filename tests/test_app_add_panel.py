@@ -213,7 +213,7 @@ def test_field_chooser_binds_another_field_from_a_topic(window, qtbot, sim_threa
     snap(panel, "label-1-settings")
     assert panel.field_combo.isVisible()
     entries = field_entries(panel)
-    assert entries[0] == "percentage  ·  float32" and "voltage  ·  float32" in entries
+    assert entries[0] == "percentage · float32" and "voltage · float32" in entries
     assert panel.field_combo.height() >= panel.target_combo.height()  # as touch-sized as its neighbours
     pick(qtbot, panel.field_combo, "voltage")
     snap(panel, "label-2-voltage")

@@ -107,11 +107,40 @@ class NameLabel(QtWidgets.QLabel):
             self.setText(text)
 
 
+def type_tail(type_name: str) -> str:
+    """``sensor_msgs/msg/BatteryState`` -> ``BatteryState``: what fits in a chooser; builtins as they are."""
+    return type_name.rsplit("/", 1)[-1]
+
+
+class ElidingCombo(QtWidgets.QComboBox):
+    """A combo box that shows its current text cut with "…" when the panel is too narrow (instead of
+    clipping it mid-letter), the whole text in its tooltip. Touch-sized like every combo (theme)."""
+
+    def __init__(self, name: str) -> None:
+        super().__init__()
+        self.setObjectName(name)
+        self.setSizeAdjustPolicy(QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+        self.setMinimumContentsLength(8)
+        self.currentTextChanged.connect(self.setToolTip)
+        guard_wheel(self)
+
+    def paintEvent(self, event: QtGui.QPaintEvent) -> None:
+        painter = QtWidgets.QStylePainter(self)
+        opt = QtWidgets.QStyleOptionComboBox()
+        self.initStyleOption(opt)
+        painter.drawComplexControl(QtWidgets.QStyle.ComplexControl.CC_ComboBox, opt)
+        field = self.style().subControlRect(QtWidgets.QStyle.ComplexControl.CC_ComboBox, opt,
+                                            QtWidgets.QStyle.SubControl.SC_ComboBoxEditField, self)
+        opt.currentText = self.fontMetrics().elidedText(opt.currentText, QtCore.Qt.TextElideMode.ElideRight,
+                                                        max(0, field.width() - 4))
+        painter.drawControl(QtWidgets.QStyle.ControlElement.CE_ComboBoxLabel, opt)
+
+
 class PreviewSlot(QtWidgets.QWidget):
     """Holds the preview frame: as wide as the panel allows, never wider, its height following the
     widget's default aspect (clamped), so a big widget shows scaled down instead of cut."""
 
-    MIN_H, MAX_H = 120, 320
+    MIN_H, MAX_H = 150, 320  # room for the "not configured" warning listing a few problems
 
     def __init__(self) -> None:
         super().__init__()
@@ -307,29 +336,14 @@ class AddPanel(QtWidgets.QWidget):
         self.settings_col = QtWidgets.QVBoxLayout(inner)
         binding_box = QtWidgets.QFormLayout()
         binding_box.setRowWrapPolicy(QtWidgets.QFormLayout.RowWrapPolicy.WrapLongRows)
-        self.role_combo = QtWidgets.QComboBox()
-        self.role_combo.setObjectName("roleCombo")
-        self.role_combo.setSizeAdjustPolicy(QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+        self.role_combo = ElidingCombo("roleCombo")
         self.role_combo.currentIndexChanged.connect(self._role_combo_changed)
-        guard_wheel(self.role_combo)
-        self.target_combo = QtWidgets.QComboBox()
-        self.target_combo.setObjectName("targetCombo")
-        self.target_combo.setSizeAdjustPolicy(
-            QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon
-        )
-        self.target_combo.setMinimumContentsLength(12)
+        self.target_combo = ElidingCombo("targetCombo")
         self.target_combo.currentIndexChanged.connect(self._target_changed)
-        guard_wheel(self.target_combo)
         self.target_label = QtWidgets.QLabel("Topic")
-        self.field_combo = QtWidgets.QComboBox()
-        self.field_combo.setObjectName("fieldCombo")
-        self.field_combo.setSizeAdjustPolicy(
-            QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon
-        )
-        self.field_combo.setMinimumContentsLength(10)
-        self.field_combo.setToolTip("Which field of the message the widget shows or sets")
+        self.field_combo = ElidingCombo("fieldCombo")
+        self.field_combo.setAccessibleDescription("Which field of the message the widget shows or sets")
         self.field_combo.currentIndexChanged.connect(self._field_changed)
-        guard_wheel(self.field_combo)
         self.field_label = QtWidgets.QLabel("Field")
         binding_box.addRow("Role", self.role_combo)
         binding_box.addRow(self.target_label, self.target_combo)
@@ -480,7 +494,7 @@ class AddPanel(QtWidgets.QWidget):
             self._targets = self._targets_for(draft.spec, draft.role)
             combo.addItem("— choose —", None)
             for t in self._targets:
-                combo.addItem(f"{t.name}  ({short_type(t.type)})", t)
+                combo.addItem(f"{t.name}  ({type_tail(t.type)})", t)
                 combo.setItemData(combo.count() - 1, draft.role.value, TARGET_ROLE)
             offered = {t.name for t in self._targets}
             for role in self._roles:
@@ -490,7 +504,7 @@ class AddPanel(QtWidgets.QWidget):
                     if t.name in offered:
                         continue
                     offered.add(t.name)
-                    combo.addItem(f"{t.name}  ({short_type(t.type)})  · to {role.value}", t)
+                    combo.addItem(f"{t.name}  ({type_tail(t.type)})  · to {role.value}", t)
                     i = combo.count() - 1
                     combo.setItemData(i, role.value, TARGET_ROLE)
                     combo.setItemData(i, f"Choosing this makes the widget {role.value} instead of {draft.role.value}",
@@ -510,7 +524,7 @@ class AddPanel(QtWidgets.QWidget):
             draft.target = chosen
         else:
             fixed = draft.target
-            combo.addItem(f"{fixed.name}  ({short_type(fixed.type)})" if fixed else "—", fixed)
+            combo.addItem(f"{fixed.name}  ({type_tail(fixed.type)})" if fixed else "—", fixed)
             combo.setEnabled(False)
         combo.blockSignals(False)
 
@@ -530,7 +544,7 @@ class AddPanel(QtWidgets.QWidget):
         types = self._types()
         for path in paths:
             tp = field_type(types, target.type, path, self.draft.role.is_service) if target and types else ""
-            combo.addItem(f"{path}  ·  {short_type(tp)}" if tp else path, path)
+            combo.addItem(f"{path} · {type_tail(tp)}" if tp else path, path)
             combo.setItemData(combo.count() - 1, f"{path}: {tp or 'type unknown'}", QtCore.Qt.ItemDataRole.ToolTipRole)
         if paths and target is not None:
             combo.setCurrentIndex(paths.index(target.field_paths[0]))
