@@ -18,6 +18,7 @@ from rcon_core.app import add_panel
 from rcon_core.app.add_panel import AddPanel
 from rcon_core.app.config import AppConfig
 from rcon_core.app.main_window import MainWindow
+from rcon_core.app.theme import touch_px
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import PluginManager, Role
 
@@ -215,6 +216,13 @@ def test_field_chooser_binds_another_field_from_a_topic(window, qtbot, sim_threa
     entries = field_entries(panel)
     assert entries[0] == "percentage · float32" and "voltage · float32" in entries
     assert panel.field_combo.height() >= panel.target_combo.height()  # as touch-sized as its neighbours
+    tap(panel.field_combo)
+    popup = panel.field_combo.view()
+    qtbot.waitUntil(popup.isVisible, timeout=5_000)
+    assert popup.visualRect(panel.field_combo.model().index(1, 0)).height() >= touch_px()  # entries too
+    QTest.keyClick(popup, QtCore.Qt.Key.Key_Escape)
+    qtbot.waitUntil(lambda: not popup.isVisible(), timeout=5_000)
+    assert panel.draft.binding.field_paths == ("percentage",)
     pick(qtbot, panel.field_combo, "voltage")
     snap(panel, "label-2-voltage")
     assert panel.draft.binding.field_paths == ("voltage",)

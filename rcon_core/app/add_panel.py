@@ -123,6 +123,11 @@ class ElidingCombo(QtWidgets.QComboBox):
         self.setMinimumContentsLength(8)
         self.currentTextChanged.connect(self.setToolTip)
         guard_wheel(self)
+        # the popup's entries touch-sized too (style sheet item rules need a styled delegate)
+        from rcon_core.app.theme import current_touch_px
+
+        self.setItemDelegate(QtWidgets.QStyledItemDelegate(self))
+        self.view().setStyleSheet(f"QAbstractItemView::item {{ min-height: {current_touch_px()}px; }}")
 
     def paintEvent(self, event: QtGui.QPaintEvent) -> None:
         painter = QtWidgets.QStylePainter(self)
