@@ -108,7 +108,7 @@ def test_move_pinch_and_lock(qtbot, tmp_path, robot):  # noqa: F811
             frame.pinch_gesture(FakePinch(state, scale))
         after = rect_of(window, inst.id)
         assert after[2] > before.width() * 1.5 and after[3] > before.height() * 1.5
-        # pinching far out never leaves the widget off-screen
+        # pinching far out never puts the widget where it cannot be reached
         frame.apply_pinch(20.0)
         assert window.controller.surface.rect().contains(frame.geometry())
         # corner handle resize (mouse): shrink from bottom-right
@@ -141,8 +141,12 @@ def test_move_pinch_and_lock(qtbot, tmp_path, robot):  # noqa: F811
         assert frame.pos() == pos
         assert not window.controller.delete_instance(inst.id)
         assert inst.id in [w.id for w in window.controller.canvas.widgets]
-        # undo/redo work in edit mode
+        # tapping the active segment keeps the mode; the Edit segment unlocks
         QTest.mouseClick(tap, QtCore.Qt.MouseButton.LeftButton)
+        assert window.controller.canvas.locked and tap.isChecked() and not window.edit_button.isChecked()
+        QTest.mouseClick(window.edit_button, QtCore.Qt.MouseButton.LeftButton)
+        assert not window.controller.canvas.locked and window.edit_button.isChecked() and not tap.isChecked()
+        # undo/redo work in edit mode
         window.undo()
         assert len(window.controller.canvas.widgets) == 1
         window.redo()

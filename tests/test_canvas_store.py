@@ -197,3 +197,76 @@ def test_default_path_uses_config_dir(monkeypatch, tmp_path):
     p = default_path()
     assert p.name == "workspace.json" and "rcon" in p.parts
     assert os.path.isabs(p)
+
+
+# a workspace file exactly as this build writes format version 1 (kept verbatim: it must keep loading)
+VERSION_1_FILE = """{
+  "format": "rcon-workspace",
+  "version": 1,
+  "current": "c-0f1e2d3c",
+  "canvases": [
+    {
+      "id": "c-0f1e2d3c",
+      "name": "Drive",
+      "locked": true,
+      "widgets": [
+        {
+          "id": "w-1a2b3c4d",
+          "kind": "std.slider",
+          "title": "Speed limit",
+          "binding": {"name": "/speed_limit", "type": "std_msgs/Float64", "role": "publish",
+                      "field_paths": ["data"]},
+          "geometry": {"x": 352.0, "y": 336.0, "w": 288.0, "h": 96.0},
+          "settings": {"minimum": 0.0, "maximum": 3.0, "units": "m/s"}
+        }
+      ]
+    }
+  ],
+  "plugin_settings": {"std.slider": {"haptics": false}}
+}
+"""
+
+
+def test_version_1_files_of_this_build_load_and_the_current_format_round_trips(tmp_path):
+    ws = loads_workspace(VERSION_1_FILE)
+    [canvas] = ws.canvases
+    assert (ws.current, canvas.name, canvas.locked) == ("c-0f1e2d3c", "Drive", True)
+    [w] = canvas.widgets
+    assert (w.id, w.kind, w.title) == ("w-1a2b3c4d", "std.slider", "Speed limit")
+    assert w.binding == Binding("/speed_limit", "std_msgs/Float64", "publish", ("data",))
+    assert (w.geometry.x, w.geometry.y, w.geometry.w, w.geometry.h) == (352, 336, 288, 96)
+    assert w.settings == {"minimum": 0.0, "maximum": 3.0, "units": "m/s"}
+    assert ws.plugin_settings == {"std.slider": {"haptics": False}}
+    # what this build writes is still version 1 and reads back to the same workspace
+    assert json.loads(dumps_workspace(ws)) == json.loads(VERSION_1_FILE)
+    assert store_mod.VERSION == 1, "the saved shape changed: bump VERSION with a migration (see store.py)"
+    text = dumps_workspace(sample())
+    assert dumps_workspace(loads_workspace(text)) == text
+
+
+# an early development build: no canvas ids, "rect" instead of geometry, the same version number
+EARLY_BUILD_FILE = json.dumps({"format": "rcon-workspace", "version": 1, "canvases": [
+    {"name": "Main", "widgets": [{"kind": "std.label", "rect": [16, 16, 160, 80]}]}]}).encode()
+
+
+def test_an_unreadable_file_is_copied_once_per_content_and_can_be_moved_aside(tmp_path):
+    path = tmp_path / "ws.json"
+    path.write_bytes(EARLY_BUILD_FILE)
+    for _start in range(3):  # three starts on the same bad file keep one copy
+        with pytest.raises(WorkspaceFileError, match="invalid workspace") as info:
+            WorkspaceStore(path).load()
+    copies = list(tmp_path.glob("ws.json.unreadable-*"))
+    assert copies == [info.value.backup] and copies[0].read_bytes() == EARLY_BUILD_FILE
+    path.write_bytes(EARLY_BUILD_FILE + b" ")  # other content: another copy
+    with pytest.raises(WorkspaceFileError):
+        WorkspaceStore(path).load()
+    assert len(list(tmp_path.glob("ws.json.unreadable-*"))) == 2
+    # the operator starts a new layout: the bad file goes aside (its content kept), saving works again
+    store = WorkspaceStore(path)
+    with pytest.raises(WorkspaceFileError):
+        store.load()
+    kept = store.move_aside()
+    assert kept is not None and kept.read_bytes() == EARLY_BUILD_FILE + b" " and not path.exists()
+    assert len(list(tmp_path.glob("ws.json.unreadable-*"))) == 2
+    store.save(Workspace.new("Fresh"))
+    assert WorkspaceStore(path).load().canvases[0].name == "Fresh"

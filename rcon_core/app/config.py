@@ -9,9 +9,28 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
+from urllib.parse import urlparse
 
 DEFAULT_URL = "ws://127.0.0.1:9090"
 HISTORY_LIMIT = 12
+#: ports the OS hands out for port 0 (Linux starts at 32768, Windows and macOS at 49152)
+EPHEMERAL_PORTS = range(32768, 65536)
+
+
+#: app.json's layout version: 2 = the URL history holds only URLs the operator chose (no embedded robot's)
+CONFIG_VERSION = 2
+
+
+def looks_embedded(url: str) -> bool:
+    """A loopback URL on an OS-assigned port: what ``rcon --demo`` runs of earlier builds left in the
+    URL history (their embedded robot's port is gone once they exit). Used once, to clean such a history;
+    the demo no longer records its URL at all."""
+    try:
+        parsed = urlparse(url)
+        port = parsed.port
+    except ValueError:
+        return False
+    return parsed.hostname in ("127.0.0.1", "localhost", "::1") and port in EPHEMERAL_PORTS
 
 
 def default_config_dir() -> Path:
@@ -39,6 +58,19 @@ class AppConfig:
                     self._data = loaded
             except (OSError, ValueError):
                 self._data = {}  # a damaged file must not keep the app from starting
+        version = self._data.get("version", 1)
+        if self._data and (not isinstance(version, int) or version < CONFIG_VERSION):
+            # earlier builds put each demo run's embedded robot first: plain `rcon` then connected to a
+            # dead port. Drop those entries once.
+            history = self._data.get("url_history", [])
+            if isinstance(history, list):
+                self._data["url_history"] = [u for u in history if isinstance(u, str) and not looks_embedded(u)]
+            self._data["version"] = CONFIG_VERSION
+            try:
+                self.save()
+            except OSError:
+                pass
+        self._data.setdefault("version", CONFIG_VERSION)
 
     @property
     def workspace_path(self) -> Path:
@@ -48,11 +80,14 @@ class AppConfig:
 
     @property
     def url_history(self) -> list[str]:
+        """URLs the operator connected to, newest first."""
         history = self._data.get("url_history", [])
         return [u for u in history if isinstance(u, str)]
 
     @property
     def last_url(self) -> str:
+        """What plain ``rcon`` connects to: the newest URL the operator chose (``--demo`` never records its
+        embedded robot's URL)."""
         history = self.url_history
         return history[0] if history else DEFAULT_URL
 

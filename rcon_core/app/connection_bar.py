@@ -8,6 +8,17 @@ from rcon_core.app.config import AppConfig
 from rcon_core.app.link import BadUrl, Link
 from rcon_core.app.theme import repolish
 
+
+def normalize_url(text: str) -> str:
+    """What the operator typed, as a rosbridge URL: ``localhost:9300`` -> ``ws://localhost:9300`` (no
+    scheme means ``ws://``; ``ws://`` and ``wss://`` are kept). Other schemes are left for
+    :func:`rcon_core.app.link.check_url` to reject with its message."""
+    text = text.strip()
+    if text and "://" not in text:
+        return f"ws://{text}"
+    return text
+
+
 STATE_TEXT = {
     "connecting": "CONNECTING",
     "connected": "CONNECTED",
@@ -37,12 +48,15 @@ class ConnectionBar(QtWidgets.QFrame):
         self.url.setCurrentText(config.last_url)
         line = self.url.lineEdit()
         assert line is not None  # the combo is editable
-        line.returnPressed.connect(self.connect_clicked)
+        line.returnPressed.connect(self._return_pressed)
+        self._return_seen = False
 
         self.connect_button = QtWidgets.QPushButton("Connect")
         self.connect_button.setObjectName("connectButton")
         self.connect_button.setProperty("primary", True)
         self.connect_button.clicked.connect(self.toggle)
+        fm = self.connect_button.fontMetrics()  # room for the longer label: "Disconnect" is never cut
+        self.connect_button.setMinimumWidth(max(fm.horizontalAdvance(t) for t in ("Connect", "Disconnect")) + 48)
 
         self.state_label = QtWidgets.QLabel()
         self.state_label.setObjectName("linkState")
@@ -72,21 +86,41 @@ class ConnectionBar(QtWidgets.QFrame):
             self.link.disconnect()
             self._show_state("closed")
 
-    def connect_clicked(self) -> None:
-        text = self.url.currentText()
+    def _return_pressed(self) -> None:
+        # an editable combo hands the ignored Return back to its line edit, which emits returnPressed a
+        # second time: one key press connects once
+        if self._return_seen:
+            return
+        self._return_seen = True
+        QtCore.QTimer.singleShot(0, lambda: setattr(self, "_return_seen", False))
+        self.connect_clicked()
+
+    def connect_clicked(self, remember: bool = True) -> None:
+        """Connect to the URL in the field (``remember=False``: not put in the URL history, e.g. the
+        demo's embedded robot, whose port is gone after the run)."""
+        text = normalize_url(self.url.currentText())
         try:
             self.link.connect_to(text)
         except BadUrl as exc:
-            self.message.setText(str(exc))
+            active = self.link.url if self.link.client is not None else None
+            if active:  # the field shows the URL actually in use, never the rejected text
+                self._set_field(active)
+                self.message.setText(f"{exc}; still connected to {active}")
+            else:
+                self.message.setText(str(exc))
             return
         self.message.clear()
-        self.config.remember_url(text.strip())
+        if remember:
+            self.config.remember_url(text)
+        self._set_field(text)
+        self._show_state("connecting")
+
+    def _set_field(self, text: str) -> None:
         self.url.blockSignals(True)
         self.url.clear()
         self.url.addItems(self.config.url_history)
-        self.url.setCurrentText(text.strip())
+        self.url.setCurrentText(text)
         self.url.blockSignals(False)
-        self._show_state("connecting")
 
     # ------------------------------------------------------------------------------------ per frame
     def poll(self, _now: float = 0.0) -> None:

@@ -1,4 +1,4 @@
-"""The demo layout on the embedded robot: canvas "Drive" (cameras, teleop pad, controls) and "Sensors"
+"""The demo layout on the embedded robot (fits the canvas of a 1280 x 800 window without scrolling): canvas "Drive" (cameras, teleop pad, controls) and "Sensors"
 (GPS map, battery, IMU, depth, log).
 
 Widget kinds come from whatever plugins are installed: each slot names the kinds it would like, best
@@ -19,31 +19,31 @@ Slot = tuple[str, dict[str, dict[str, Any]], str, str, Role, tuple[str, ...], tu
 
 DRIVE: list[Slot] = [
     ("Front camera", {"sensors.image": {"max_fps": 15.0}}, "/camera/front/image_raw",
-     "sensor_msgs/Image", Role.SUBSCRIBE, (), (16, 16, 448, 304)),
+     "sensor_msgs/Image", Role.SUBSCRIBE, (), (16, 16, 416, 304)),
     ("Rear camera", {"sensors.image": {"max_fps": 15.0}}, "/camera/rear/image_raw/compressed",
-     "sensor_msgs/CompressedImage", Role.SUBSCRIBE, (), (480, 16, 448, 304)),
+     "sensor_msgs/CompressedImage", Role.SUBSCRIBE, (), (448, 16, 416, 304)),
     ("Drive", {"sensors.teleop": {"max_linear": 2.0, "max_angular": 1.0}}, "/cmd_vel",
      "geometry_msgs/Twist", Role.PUBLISH, (), (16, 336, 320, 304)),
     ("Speed limit", {"std.slider": {"minimum": 0.0, "maximum": 3.0, "step": 0.1, "decimals": 1,
                                     "units": "m/s"}},
-     "/speed_limit", "std_msgs/Float64", Role.PUBLISH, ("data",), (352, 336, 288, 96)),
+     "/speed_limit", "std_msgs/Float64", Role.PUBLISH, ("data",), (352, 336, 256, 96)),
     ("Lights", {"std.switch": {"state_topic": "/lights/state", "state_field": "data"}}, "/lights/set",
-     "std_srvs/SetBool", Role.CALL, ("request.data",), (656, 336, 272, 96)),
+     "std_srvs/SetBool", Role.CALL, ("request.data",), (624, 336, 240, 96)),
     ("Battery", {"std.label": {"decimals": 0, "units": "%", "scale": 100.0}}, "/battery",
-     "sensor_msgs/BatteryState", Role.SUBSCRIBE, ("percentage",), (352, 448, 288, 96)),
+     "sensor_msgs/BatteryState", Role.SUBSCRIBE, ("percentage",), (352, 448, 256, 96)),
     ("Dock", {"std.button": {"text": "Dock"}}, "/dock", "std_srvs/Trigger", Role.CALL, (),
-     (656, 448, 272, 96)),
+     (624, 448, 240, 96)),
 ]
 SENSORS: list[Slot] = [
     ("GPS", {"map.gps": {}}, "/gps/fix", "sensor_msgs/NavSatFix", Role.SUBSCRIBE, (), (16, 16, 512, 416)),
     ("Battery", {"std.label": {"decimals": 0, "units": "%", "scale": 100.0}}, "/battery",
-     "sensor_msgs/BatteryState", Role.SUBSCRIBE, ("percentage",), (544, 16, 384, 96)),
+     "sensor_msgs/BatteryState", Role.SUBSCRIBE, ("percentage",), (544, 16, 320, 96)),
     ("Yaw rate", {"std.label": {"decimals": 2, "units": "rad/s"}}, "/imu/data", "sensor_msgs/Imu",
-     Role.SUBSCRIBE, ("angular_velocity.z",), (544, 128, 384, 96)),
+     Role.SUBSCRIBE, ("angular_velocity.z",), (544, 128, 320, 96)),
     ("Depth", {"std.label": {"decimals": 1, "units": "m"}}, "/depth", "sensor_msgs/Range", Role.SUBSCRIBE,
-     ("range",), (544, 240, 384, 96)),
+     ("range",), (544, 240, 320, 96)),
     ("Log", {"std.textview": {"min_level": "info"}}, "/rosout", "rosgraph_msgs/Log", Role.SUBSCRIBE, (),
-     (16, 448, 912, 192)),
+     (16, 448, 848, 192)),
 ]
 
 

@@ -13,8 +13,8 @@ from qtpy import QtCore
 
 #: grid step in canvas units (device-independent pixels)
 GRID = 16
-#: free room the canvas keeps right of and below its widgets (where a widget can be dragged to grow it)
-MARGIN = 10 * GRID
+#: free room the canvas keeps right of and below its widgets (dragging a widget into it grows the canvas)
+MARGIN = GRID
 
 
 def snap(value: float, grid: int = GRID) -> int:

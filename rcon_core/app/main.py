@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import signal
 import sys
 from pathlib import Path
 from typing import Any
@@ -18,22 +19,59 @@ def load_plugins() -> Any:
     return pm
 
 
+@contextlib.contextmanager
+def closing_on_signals(windows: list[Any]) -> Any:
+    """SIGINT (Ctrl+C in the terminal) and SIGTERM close the window the normal way (widgets stopped,
+    layout saved, link closed). ``windows`` is filled once the window exists: a signal that comes
+    earlier closes it as soon as the event loop runs. Python runs its signal handlers only when it has
+    control, so a timer hands it control a few times a second while Qt's event loop runs."""
+    from qtpy import QtCore
+
+    def close_all() -> None:
+        for window in windows:
+            window.close()
+
+    def handler(_signum: int, _frame: Any) -> None:
+        QtCore.QTimer.singleShot(0, close_all)
+
+    previous = {}
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        try:
+            previous[sig] = signal.signal(sig, handler)
+        except (ValueError, OSError):  # not the main thread, or the platform lacks the signal
+            pass
+    tick = QtCore.QTimer()
+    tick.timeout.connect(lambda: None)
+    tick.start(200)
+    try:
+        yield
+    finally:
+        tick.stop()
+        for sig, old in previous.items():
+            signal.signal(sig, old)
+
+
 def run_app(args: Any) -> int:
     """Open the window; returns the process exit code."""
     from qtpy import QtCore, QtWidgets
 
     from rcon_core.app import theme
     from rcon_core.app.config import AppConfig
+    from rcon_core.app.connection_bar import normalize_url
     from rcon_core.app.link import BadUrl, check_url
     from rcon_core.app.main_window import MainWindow
 
     url = getattr(args, "url", None)
     if url:
         try:
-            check_url(url)
+            url = check_url(normalize_url(url))
         except BadUrl as exc:
             print(f"rcon: {exc}", file=sys.stderr)
             return 2
+    demo = bool(getattr(args, "demo", False))
+    if getattr(args, "reset_layout", False) and not demo:
+        print("rcon: --reset-layout resets the demo layout; use it with --demo", file=sys.stderr)
+        return 2
     # a layout file that cannot be read is reported in the window (and never overwritten)
     layout = Path(args.layout) if getattr(args, "layout", None) else None
     existing = QtWidgets.QApplication.instance()
@@ -42,24 +80,30 @@ def run_app(args: Any) -> int:
     theme.apply(app)
     plugins = load_plugins()
     config = AppConfig()
+    windows: list[Any] = []
     with contextlib.ExitStack() as stack:
-        if getattr(args, "demo", False):
-            try:
-                from rcon_core.sim import SimServer
-            except ImportError:  # older trees: the server module directly
-                from rcon_core.sim.server import SimServer
+        stack.enter_context(closing_on_signals(windows))
+        demo_factory = None
+        if demo:
+            from rcon_core.app.demo import demo_workspace
+            from rcon_core.sim import SimServer
 
             server = stack.enter_context(SimServer.in_thread(port=0))
             url = server.url
             if layout is None:
                 layout = config.dir / "demo-workspace.json"
-        window = MainWindow(config, plugins, layout_path=layout)
-        if getattr(args, "demo", False):
-            from rcon_core.app.demo import demo_workspace
 
-            window.open_workspace(demo_workspace(plugins))
+            def demo_factory() -> Any:
+                return demo_workspace(plugins)
+
+        # the demo layout is built on its first start only (or when it cannot be read); edits persist
+        window = MainWindow(config, plugins, layout_path=layout, demo=demo_factory)
+        windows.append(window)
+        if demo and getattr(args, "reset_layout", False):
+            window.reset_demo_layout()
         window.show()
-        window.connect_to(url or config.last_url)
+        # the embedded robot's URL is not put in the history: its port is gone after this run
+        window.connect_to(url or config.last_url, remember=not demo)
         if getattr(args, "screenshot", None):
             path = Path(args.screenshot)
 

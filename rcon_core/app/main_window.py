@@ -21,6 +21,7 @@ from rcon_core.app.draft import Candidate, Target
 from rcon_core.app.frame_clock import FrameClock, Waker
 from rcon_core.app.link import OFFLINE, Link
 from rcon_core.app.live import LiveCanvas
+from rcon_core.app.notice_bar import NoticeBar
 from rcon_core.app.palette_panel import PalettePanel
 from rcon_core.app.preview import PreviewHost
 from rcon_core.app.settings_form import SettingsForm
@@ -42,6 +43,7 @@ class MainWindow(QtWidgets.QMainWindow):
         layout_path: Path | None = None,
         types: Any = None,
         link: Link | None = None,
+        demo: Callable[[], Workspace] | None = None,
     ) -> None:
         super().__init__()
         app = QtWidgets.QApplication.instance()
@@ -51,6 +53,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.setWindowTitle("RCON")
         self.config = config
         self.plugins = plugins
+        #: builds the demo layout (``rcon --demo``): used when there is none yet, or it cannot be read
+        self.demo = demo
         self.types = types if types is not None else _standard_types()
         self.link = link or Link()
         self.clock = FrameClock(self)
@@ -88,10 +92,24 @@ class MainWindow(QtWidgets.QMainWindow):
         self.tabs.setExpanding(False)
         self.tabs.setDrawBase(False)
         self.tabs.currentChanged.connect(self._tab_changed)
-        self.lock_button = QtWidgets.QPushButton("Edit mode")
+        # the mode: a two-segment control, the active segment filled ("Edit | Operate"); lock_button is the
+        # Operate segment (checked = the canvas is locked)
+        self.edit_button = QtWidgets.QPushButton("✎ Edit")
+        self.edit_button.setObjectName("editButton")
+        self.lock_button = QtWidgets.QPushButton("Operate")
         self.lock_button.setObjectName("lockButton")
-        self.lock_button.setCheckable(True)
-        self.lock_button.toggled.connect(self._lock_toggled)
+        for button, locked in ((self.edit_button, False), (self.lock_button, True)):
+            button.setCheckable(True)
+            button.toggled.connect(lambda checked, locked=locked: self._mode_toggled(locked, checked))
+        mode_switch = QtWidgets.QFrame()
+        mode_switch.setObjectName("modeSwitch")
+        mode_switch.setToolTip("Edit: move, resize, add and delete widgets. Operate: the canvas is locked and "
+                               "the widgets take your touches.")
+        seg = QtWidgets.QHBoxLayout(mode_switch)
+        seg.setContentsMargins(0, 0, 0, 0)
+        seg.setSpacing(0)
+        seg.addWidget(self.edit_button)
+        seg.addWidget(self.lock_button)
         mode_bar = QtWidgets.QFrame()
         mode_bar.setObjectName("modeBar")
         row = QtWidgets.QHBoxLayout(mode_bar)
@@ -109,7 +127,8 @@ class MainWindow(QtWidgets.QMainWindow):
             ("new", "New canvas", self.new_canvas),
             ("rename", "Rename…", self.rename_canvas_dialog),
             ("duplicate", "Duplicate", self.duplicate_canvas),
-            ("delete", "Delete", self.delete_canvas),
+            ("delete", "Delete…", self.delete_canvas),
+            *((("reset_demo", "Reset demo layout…", self.reset_demo_dialog),) if demo is not None else ()),
         ):
             action = canvas_menu.addAction(text)
             action.setObjectName(f"canvas_{name}")
@@ -124,7 +143,7 @@ class MainWindow(QtWidgets.QMainWindow):
             b.clicked.connect(slot)
             self.canvas_buttons[name] = b
             row.addWidget(b)
-        row.addWidget(self.lock_button)
+        row.addWidget(mode_switch)
 
         self.stack = QtWidgets.QStackedWidget()
         self.add_panel = AddPanel(self.rank_widgets, self.targets_for, self.preview.build, self.preview.release,
@@ -156,19 +175,18 @@ class MainWindow(QtWidgets.QMainWindow):
         rcol.setContentsMargins(0, 0, 0, 0)
         rcol.setSpacing(0)
         rcol.addWidget(self.connection)
-        #: a layout file that could not be read: says so, and that it will not be overwritten
-        self.banner = QtWidgets.QLabel()
-        self.banner.setObjectName("fileBanner")
-        self.banner.setWordWrap(True)
-        self.banner.hide()
-        rcol.addWidget(self.banner)
+        #: a layout file that could not be read: says so, that it will not be overwritten, and the way out
+        self.notice = NoticeBar("fileBanner")
+        self.banner = self.notice.label
+        rcol.addWidget(self.notice)
         rcol.addWidget(split, 1)
         self.setCentralWidget(root)
 
         # ---- workspace
         self.layout_path = Path(layout_path) if layout_path is not None else config.workspace_path
         self.store = WorkspaceStore(self.layout_path)
-        self.doc = Document(self._load_workspace())
+        fresh = self.demo is not None and not self.layout_path.exists()  # the demo's first start
+        self.doc = Document(self.demo() if fresh and self.demo is not None else self._load_workspace())
         self.controller = CanvasController(self.doc, self.store, self.host, self.live, self.stack)
         self.controller.save_failed.connect(self._save_failed)
         self.controller.on_drop = self._dropped
@@ -179,15 +197,25 @@ class MainWindow(QtWidgets.QMainWindow):
         self._sync_tabs()
         self._show_lock(self.controller.canvas.locked)
         self.controller.run_current()  # offline (LINK DOWN) until a robot is connected
+        if fresh or self._demo_rebuilt:
+            self.controller.saver.flush()  # the demo layout is on disk from its first start on
 
         # ---- signals and the frame clock
-        self.topics.picked.connect(self.add_panel.start_from_topic)
-        self.services.picked.connect(self.add_panel.start_from_service)
+        self.topics.picked.connect(lambda n, t: self._start_adding(lambda: self.add_panel.start_from_topic(n, t)))
+        self.services.picked.connect(
+            lambda n, t: self._start_adding(lambda: self.add_panel.start_from_service(n, t)))
         self.palette_panel.picked.connect(self._palette_picked)
         self.link.on_client_changed(self._client_changed)
         self.connection.state_changed.connect(self._link_state)
         QtGui.QShortcut(QtGui.QKeySequence.StandardKey.Undo, self, self.undo)
         QtGui.QShortcut(QtGui.QKeySequence.StandardKey.Redo, self, self.redo)
+        self.quit_action = QtGui.QAction("Quit", self)
+        self.quit_action.setObjectName("quit")
+        quit_keys = [QtGui.QKeySequence(QtGui.QKeySequence.StandardKey.Quit), QtGui.QKeySequence("Ctrl+Q")]
+        self.quit_action.setShortcuts([k for i, k in enumerate(quit_keys) if not k.isEmpty() and k not in quit_keys[:i]])
+        self.quit_action.setShortcutContext(QtCore.Qt.ShortcutContext.ApplicationShortcut)
+        self.quit_action.triggered.connect(self.close)
+        self.addAction(self.quit_action)
         self.clock.add(self.connection.poll)
         self.clock.add(self._poll_catalog)
         self.clock.add(lambda _now: self._pump(None))
@@ -198,31 +226,83 @@ class MainWindow(QtWidgets.QMainWindow):
         self.resize(1280, 800)
 
     # ------------------------------------------------------------------------------------ workspace
+    _demo_rebuilt = False
+
     def _load_workspace(self) -> Workspace:
-        """The saved workspace; a file that cannot be read is reported on the banner and left alone."""
+        """The saved workspace; a file that cannot be read is reported on the banner and left alone (the
+        demo's own layout is moved aside once and built afresh instead)."""
         try:
             return self.store.load()
         except WorkspaceFileError as exc:
+            if self.demo is not None:
+                kept = self.store.move_aside()
+                log.warning("demo layout unreadable (%s); moved to %s, building a fresh one", exc.reason, kept)
+                self._demo_rebuilt = True
+                self.notice.show_notice(
+                    f"ℹ The saved demo layout could not be read ({exc.reason}). It was moved to {kept} and "
+                    "a fresh demo layout was built.", kind="info")
+                return self.demo()
             log.error("%s; starting with an empty workspace", exc)
             self.show_file_problem(str(exc))
             return Workspace.new()
 
     def show_file_problem(self, text: str) -> None:
-        self.banner.setText(
+        self.notice.show_notice(
             f"⚠ The layout could not be opened: {text}.\nThe file is left as it is and will not be "
-            "overwritten: changes made now are not saved."
+            "overwritten: changes made now are not saved. Start a new layout to move the file aside "
+            "(its content is kept) and save again.",
+            actions=[("Start a new layout", self.start_new_layout)],
         )
-        self.banner.show()
+
+    def start_new_layout(self) -> None:
+        """The way out of an unreadable layout: move the file aside explicitly and save from now on."""
+        kept = self.store.move_aside()
+        self.controller.saver.flush()
+        where = f" The old file was kept as {kept}." if kept is not None else ""
+        self.notice.show_notice(f"ℹ New layout started: it is saved to {self.layout_path}.{where}", kind="info")
 
     def _save_failed(self, text: str) -> None:
         if self.store.read_only:
             return  # the banner already says why nothing is saved
-        self.banner.setText(f"⚠ The layout could not be saved: {text}")
-        self.banner.show()
+        self.notice.show_notice(f"⚠ The layout could not be saved: {text}")
 
     def open_workspace(self, workspace: Workspace) -> None:
-        """Replace the workspace (the demo uses this); saved like any change."""
+        """Replace the workspace; saved like any change."""
         self.doc.replace_workspace(workspace)
+
+    def reset_demo_dialog(self) -> QtWidgets.QMessageBox | None:
+        """Ask, then replace the layout with a fresh demo layout (``rcon --demo`` only)."""
+        if self.demo is None:
+            return None
+        return self.confirm("Reset the demo layout?",
+                            "Every canvas is replaced by the demo's own layout; your changes to it are lost.",
+                            "Reset", self.reset_demo_layout)
+
+    def reset_demo_layout(self) -> None:
+        if self.demo is not None:
+            self.open_workspace(self.demo())
+
+    def confirm(self, question: str, detail: str, yes: str,
+                then: Callable[[], object]) -> QtWidgets.QMessageBox:
+        """A window-modal question with two large buttons (``yes`` and Cancel); ``then`` runs on yes.
+        Returns at once (the dialog is open), so the event loop and the robot link keep running."""
+        box = QtWidgets.QMessageBox(self)
+        box.setObjectName("confirmDialog")
+        box.setIcon(QtWidgets.QMessageBox.Icon.Warning)
+        box.setWindowTitle(question)
+        box.setText(question)
+        box.setInformativeText(detail)
+        ok = box.addButton(yes, QtWidgets.QMessageBox.ButtonRole.DestructiveRole)
+        ok.setObjectName("confirmYes")
+        cancel = box.addButton(QtWidgets.QMessageBox.StandardButton.Cancel)
+        cancel.setObjectName("confirmCancel")
+        box.setDefaultButton(cancel)
+        for button in (ok, cancel):
+            button.setMinimumWidth(max(button.sizeHint().width(), 160))
+        box.buttonClicked.connect(lambda button: then() if button is ok else None)
+        self.confirm_dialog = box
+        box.open()
+        return box
 
     def _sync_tabs(self, *_: Any) -> None:
         canvases = self.controller.workspace.canvases
@@ -259,10 +339,23 @@ class MainWindow(QtWidgets.QMainWindow):
         self.controller.duplicate_canvas(self.controller.index)
 
     def delete_canvas(self) -> None:
-        try:
-            self.controller.delete_canvas(self.controller.index)
-        except ValueError as exc:
-            self.connection.message.setText(str(exc))
+        """Delete the current canvas; one with widgets is deleted only after the operator confirms."""
+        canvas = self.controller.canvas
+
+        def delete() -> None:
+            if canvas in self.controller.workspace.canvases:
+                try:
+                    self.controller.delete_canvas(self.controller.workspace.canvases.index(canvas))
+                except ValueError as exc:
+                    self.connection.message.setText(str(exc))
+
+        if not canvas.widgets or len(self.controller.workspace.canvases) < 2:
+            delete()  # nothing to lose (or refused with a message: the last canvas stays)
+            return
+        count = len(canvas.widgets)
+        self.confirm(f"Delete canvas “{canvas.name}”?",
+                     f"It holds {count} widget{'s' if count != 1 else ''}. Undo (↶, Ctrl+Z) brings it back.",
+                     "Delete", delete)
 
     def undo(self) -> None:
         self.controller.undo()
@@ -270,8 +363,13 @@ class MainWindow(QtWidgets.QMainWindow):
     def redo(self) -> None:
         self.controller.redo()
 
-    def _lock_toggled(self, locked: bool) -> None:
-        self.controller.set_locked(locked)
+    def _mode_toggled(self, locked: bool, checked: bool) -> None:
+        """A tap on a mode segment: the tapped mode becomes current (tapping the current one keeps it)."""
+        if not checked:
+            self._show_mode(self.controller.canvas.locked)  # tapping the active segment: nothing changes
+            return
+        if locked != self.controller.canvas.locked:
+            self.controller.set_locked(locked)
         self._show_lock(locked)
 
     # -------------------------------------------------------------------------------- layout
@@ -301,20 +399,23 @@ class MainWindow(QtWidgets.QMainWindow):
         if compact != self._compact:
             self._compact = compact
             self.menu_button.setText("☰" if compact else "Canvas ▾")
-            self._show_lock(self.controller.canvas.locked)
+            self._show_mode(self.controller.canvas.locked)
+
+    def _show_mode(self, locked: bool) -> None:
+        """The mode control shows the current mode: its segment is filled (checked), the other is not."""
+        for button, checked in ((self.lock_button, locked), (self.edit_button, not locked)):
+            button.blockSignals(True)
+            button.setChecked(checked)
+            button.blockSignals(False)
+            fm = button.fontMetrics()
+            button.setMinimumWidth(fm.horizontalAdvance(button.text()) + 44)
+        self.lock_button.setToolTip("Operate (current): the canvas is locked, the widgets take your touches"
+                                    if locked else "Tap to lock the canvas for operation")
+        self.edit_button.setToolTip("Edit (current): move, resize, add and delete widgets" if not locked
+                                    else "Tap to unlock the canvas for editing")
 
     def _show_lock(self, locked: bool) -> None:
-        self.lock_button.blockSignals(True)
-        self.lock_button.setChecked(locked)
-        self.lock_button.blockSignals(False)
-        if self._compact:
-            self.lock_button.setText("Operator" if locked else "✎ Edit")
-        else:
-            self.lock_button.setText("Operator mode" if locked else "✎ Edit mode")
-        fm = self.lock_button.fontMetrics()
-        self.lock_button.setMinimumWidth(fm.horizontalAdvance(self.lock_button.text()) + 44)
-        self.lock_button.setToolTip("Operator mode: the canvas is locked; tap to edit" if locked
-                                    else "Edit mode: move and resize widgets; tap to lock the canvas")
+        self._show_mode(locked)
         for name in ("undo", "redo"):
             self.canvas_buttons[name].setEnabled(not locked)
         for name in ("rename", "delete"):
@@ -326,7 +427,21 @@ class MainWindow(QtWidgets.QMainWindow):
 
     # -------------------------------------------------------------------------------------- adding
     def _palette_picked(self, kind: str) -> None:
-        self.add_panel.start_from_widget(self.plugins.widget(kind))
+        self._start_adding(lambda: self.add_panel.start_from_widget(self.plugins.widget(kind)))
+
+    def _start_adding(self, start: Callable[[], object]) -> None:
+        """Open the add panel; on a locked canvas say why not and offer to switch to Edit mode."""
+        if not self.controller.canvas.locked:
+            start()
+            return
+
+        def unlock_and_start() -> None:
+            self.notice.dismiss()
+            self.controller.set_locked(False)
+            start()
+
+        self.notice.show_notice("ℹ Switch to Edit mode to add widgets: this canvas is in Operate mode "
+                                "(locked).", kind="info", actions=[("Switch to Edit mode", unlock_and_start)])
 
     def rank_widgets(self, type_name: str, role: Role) -> list[Candidate]:
         from rcon_core.matcher import match
@@ -379,14 +494,34 @@ class MainWindow(QtWidgets.QMainWindow):
         spec = self.plugins.widget(inst.kind)
         settings = spec.make_settings(inst.settings)
         dialog = QtWidgets.QDialog(self)
+        dialog.setObjectName("configureDialog")
         dialog.setWindowTitle(f"Configure {inst.title or spec.title}")
         col = QtWidgets.QVBoxLayout(dialog)
+        # one white page holding every label and field (no label boxes on the dialog's grey)
+        body = QtWidgets.QFrame()
+        body.setObjectName("configureBody")
+        body.setStyleSheet("QFrame#configureBody { background: #ffffff; border: 3px solid #000000;"
+                           " border-radius: 6px; }")
+        body_col = QtWidgets.QVBoxLayout(body)
+        body_col.setContentsMargins(16, 12, 16, 12)
+        heading = QtWidgets.QLabel(f"{spec.title} on {inst.binding.name}" if inst.binding.name else spec.title)
+        heading.setProperty("role", "heading")
+        body_col.addWidget(heading)
+        top = QtWidgets.QFormLayout()
+        top.setLabelAlignment(QtCore.Qt.AlignmentFlag.AlignLeft | QtCore.Qt.AlignmentFlag.AlignVCenter)
+        top.setFieldGrowthPolicy(QtWidgets.QFormLayout.FieldGrowthPolicy.AllNonFixedFieldsGrow)
         title = QtWidgets.QLineEdit(inst.title)
-        col.addWidget(title)
+        title.setObjectName("configureTitle")
+        title.setPlaceholderText(spec.title)
+        title_label = QtWidgets.QLabel("Title")
+        title_label.setBuddy(title)
+        top.addRow(title_label, title)
+        body_col.addLayout(top)
         binding = inst.binding
         form = SettingsForm(settings, context=self.child_context(lambda: binding)) if settings is not None else None
         if form is not None:
-            col.addWidget(form)
+            body_col.addWidget(form)
+        col.addWidget(body, 1)
         buttons = QtWidgets.QDialogButtonBox(
             QtWidgets.QDialogButtonBox.StandardButton.Ok | QtWidgets.QDialogButtonBox.StandardButton.Cancel
         )
@@ -453,9 +588,10 @@ class MainWindow(QtWidgets.QMainWindow):
         if self.first_paint_at is None:
             self.first_paint_at = time.perf_counter()
 
-    def connect_to(self, url: str) -> None:
+    def connect_to(self, url: str, *, remember: bool = True) -> None:
+        """Connect to ``url``; ``remember=False`` keeps it out of the URL history (the demo's robot)."""
         self.connection.url.setCurrentText(url)
-        self.connection.connect_clicked()
+        self.connection.connect_clicked(remember=remember)
 
     # -------------------------------------------------------------------------------------- closing
     def closeEvent(self, event: QtGui.QCloseEvent) -> None:

@@ -13,7 +13,18 @@ round trip; a widget whose plugin is missing keeps its settings byte for byte.
 
 Writes are atomic: a temp file in the same directory, fsync, ``os.replace``. A file that cannot be read
 (corrupt, or written by a newer RCON) raises :class:`WorkspaceFileError`; it is copied to a backup
-next to it and the store then refuses to overwrite it (``store.read_only``) until ``save(force=True)``.
+next to it (one copy per distinct content: reading the same bad file again keeps no second copy) and the
+store then refuses to overwrite it (``store.read_only``) until ``save(force=True)`` or until
+:meth:`WorkspaceStore.move_aside` moved it out of the way (the operator chose to start a new layout).
+
+Changing the saved shape
+------------------------
+Any change to what is written (a key renamed, moved, or given another meaning) must bump :data:`VERSION`
+and add a migration from the previous version in :func:`workspace_from_dict`, with a test that a file
+of the previous version still loads (``tests/test_canvas_store.py`` keeps a version 1 file for that).
+Adding a key that older versions may ignore needs no bump: unknown keys are kept and written back.
+Never change the shape under the same version number: files written by earlier builds would become
+unreadable (they are then reported, never overwritten, but the operator's layout is gone from view).
 """
 
 from __future__ import annotations
@@ -260,9 +271,24 @@ def atomic_write(path: str | os.PathLike[str], text: str) -> None:
                 os.close(dfd)
 
 
+def _same_backup(path: Path, tag: str, content: bytes) -> Path | None:
+    """An existing backup of ``path`` with exactly ``content``, if any."""
+    for old in sorted(path.parent.glob(f"{path.name}.{tag}-*")):
+        with contextlib.suppress(OSError):
+            if old.stat().st_size == len(content) and old.read_bytes() == content:
+                return old
+    return None
+
+
 def _backup(path: Path, tag: str) -> Path | None:
-    if not path.exists():
+    """Copy ``path`` next to itself (``NAME.TAG-STAMP``), unless a copy with the same content exists."""
+    try:
+        content = path.read_bytes()
+    except OSError:
         return None
+    same = _same_backup(path, tag, content)
+    if same is not None:
+        return same
     stamp = time.strftime("%Y%m%d-%H%M%S")
     dest = path.with_name(f"{path.name}.{tag}-{stamp}")
     n = 1
@@ -305,6 +331,25 @@ class WorkspaceStore:
             self.read_only_reason = exc.reason
             err_cls = type(exc)
             raise err_cls(self.path, exc.reason, backup) from exc
+
+    def move_aside(self) -> Path | None:
+        """Move a file that could not be read out of the way (the operator starts a new layout): it is
+        renamed to a backup (or removed when an identical backup already exists), and the store saves
+        normally again. Returns where the old content is kept (None when there was no file)."""
+        try:
+            content = self.path.read_bytes()
+        except FileNotFoundError:
+            self.read_only_reason = None
+            return None
+        kept = _same_backup(self.path, "unreadable", content)
+        if kept is not None:
+            self.path.unlink()
+        else:
+            kept = _backup(self.path, "unreadable")
+            if kept is not None:
+                self.path.unlink()
+        self.read_only_reason = None
+        return kept
 
     def save(self, ws: Workspace, *, force: bool = False) -> None:
         """Write the workspace atomically. Refuses (WorkspaceFileError) while read-only unless ``force``."""

@@ -1,0 +1,58 @@
+"""A bar under the connection bar that tells the operator something and offers what to do about it.
+
+Non-blocking (no modal dialog on a tablet in the field): a message, optional action buttons and a
+dismiss button. ``kind`` "problem" is red (a layout that is not saved), "info" is blue.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from qtpy import QtCore, QtWidgets
+
+
+class NoticeBar(QtWidgets.QFrame):
+    """One notice at a time; :meth:`show_notice` replaces the previous one."""
+
+    def __init__(self, name: str, parent: QtWidgets.QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.setObjectName(f"{name}Bar")
+        self.kind = ""
+        self.label = QtWidgets.QLabel()
+        self.label.setObjectName(name)
+        self.label.setWordWrap(True)
+        self.label.setTextInteractionFlags(QtCore.Qt.TextInteractionFlag.TextSelectableByMouse)
+        self._row = QtWidgets.QHBoxLayout(self)
+        self._row.setContentsMargins(0, 0, 8, 0)
+        self._row.setSpacing(8)
+        self._row.addWidget(self.label, 1)
+        self.buttons: dict[str, QtWidgets.QPushButton] = {}
+        self.dismiss_button = QtWidgets.QPushButton("Dismiss")
+        self.dismiss_button.setObjectName(f"{name}Dismiss")
+        self.dismiss_button.clicked.connect(self.dismiss)
+        self._row.addWidget(self.dismiss_button)
+        self.hide()
+
+    def show_notice(self, text: str, kind: str = "problem",
+                    actions: list[tuple[str, Callable[[], object]]] | None = None) -> None:
+        for button in self.buttons.values():
+            self._row.removeWidget(button)
+            button.deleteLater()
+        self.buttons = {}
+        for label, fn in actions or []:
+            button = QtWidgets.QPushButton(label)
+            button.setObjectName("noticeAction")
+            button.clicked.connect(lambda _=False, fn=fn: fn())
+            self._row.insertWidget(self._row.count() - 1, button)
+            self.buttons[label] = button
+        self.kind = kind
+        colour = "#b00000" if kind == "problem" else "#0040a0"
+        self.setStyleSheet(f"QFrame#{self.objectName()} {{ background: {colour}; }}"
+                           f" QLabel {{ background: {colour}; color: #ffffff; font-weight: bold;"
+                           " padding: 8px 12px; }")
+        self.label.setText(text)
+        self.show()
+
+    def dismiss(self) -> None:
+        self.kind = ""
+        self.hide()
