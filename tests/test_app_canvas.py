@@ -362,3 +362,79 @@ def test_a_touch_scrolls_from_the_background_but_never_from_a_widget(qtbot, tmp_
             assert prepare(QtCore.QPoint(view.width() - 10, view.height() - 10))
     finally:
         window.shutdown()
+
+
+def test_deleting_a_canvas_with_widgets_asks_first_and_undo_brings_it_back(qtbot, tmp_path):
+    window = open_window(qtbot, tmp_path, None)
+    try:
+        window.controller.add_canvas("Deck")
+        add_probe(window, "/battery", "sensor_msgs/BatteryState", "percentage", QtCore.QPoint(64, 64))
+
+        def ask_and_answer(name: str) -> None:
+            window.canvas_actions["delete"].trigger()
+            box = window.confirm_dialog
+            qtbot.waitUntil(box.isVisible)
+            assert "Deck" in box.text() and "1 widget" in box.informativeText()
+            [button] = [b for b in box.buttons() if b.objectName() == name]
+            assert button.height() >= 48 and button.width() >= 48  # touch-sized
+            QTest.mouseClick(button, QtCore.Qt.MouseButton.LeftButton)
+            qtbot.waitUntil(lambda: not box.isVisible())
+
+        ask_and_answer("confirmCancel")
+        assert [c.name for c in window.controller.workspace.canvases] == ["Main", "Deck"]
+        ask_and_answer("confirmYes")
+        assert [c.name for c in window.controller.workspace.canvases] == ["Main"]
+        QTest.keyClick(window, QtCore.Qt.Key.Key_Z, QtCore.Qt.KeyboardModifier.ControlModifier)
+        assert [c.name for c in window.controller.workspace.canvases] == ["Main", "Deck"]
+        assert len(window.controller.workspace.canvas_named("Deck").widgets) == 1
+        # an empty canvas goes without a question
+        window.controller.add_canvas("Empty")
+        window.canvas_actions["delete"].trigger()
+        assert "Empty" not in [c.name for c in window.controller.workspace.canvases]
+    finally:
+        window.shutdown()
+
+
+def test_duplicate_puts_the_copy_on_a_free_spot(qtbot, tmp_path):
+    window = open_window(qtbot, tmp_path, None)
+    try:
+        inst = add_probe(window, "/battery", "sensor_msgs/BatteryState", "percentage", QtCore.QPoint(16, 16))
+        add_probe(window, "/battery", "sensor_msgs/BatteryState", "percentage", QtCore.QPoint(224, 16))
+        frame = window.controller.surface.frames[inst.id]
+        menu = frame.request_menu(frame.mapToGlobal(QtCore.QPoint(10, 10)))
+        [dup] = [a for a in menu.actions() if a.objectName() == "duplicate"]
+        dup.trigger()
+        menu.close()
+        surface = window.controller.surface
+        rects = [surface.frames[w.id].geometry() for w in window.controller.canvas.widgets]
+        assert len(rects) == 3 and not overlapping(rects)
+        copy = window.controller.canvas.widgets[-1]
+        assert (copy.geometry.w, copy.geometry.h) == (inst.geometry.w, inst.geometry.h)
+        assert copy.settings == inst.settings and copy.id != inst.id
+    finally:
+        window.shutdown()
+
+
+def test_the_configure_dialog_is_a_labelled_form(qtbot, tmp_path):
+    window = open_window(qtbot, tmp_path, None)
+    try:
+        inst = add_probe(window, "/battery", "sensor_msgs/BatteryState", "percentage", QtCore.QPoint(16, 16))
+        frame = window.controller.surface.frames[inst.id]
+        menu = frame.request_menu(frame.mapToGlobal(QtCore.QPoint(10, 10)))
+        [configure] = [a for a in menu.actions() if a.objectName() == "configure"]
+        configure.trigger()
+        menu.close()
+        dialog = window.configure_dialog
+        qtbot.waitUntil(dialog.isVisible)
+        title = dialog.findChild(QtWidgets.QLineEdit, "configureTitle")
+        labels = [lbl for lbl in dialog.findChildren(QtWidgets.QLabel) if lbl.buddy() is title]
+        assert [lbl.text() for lbl in labels] == ["Title"] and labels[0].isVisible()
+        # the labels sit on the form's white page, not in boxes of their own on the dialog's grey
+        body = dialog.findChild(QtWidgets.QFrame, "configureBody")
+        assert body.isAncestorOf(labels[0]) and body.isAncestorOf(title)
+        title.selectAll()
+        QTest.keyClicks(title, "Charge")
+        dialog.accept()
+        assert window.controller.canvas.widget(inst.id).title == "Charge"
+    finally:
+        window.shutdown()

@@ -269,3 +269,38 @@ def test_a_url_without_scheme_is_ws_and_a_rejected_one_never_hides_the_active_ur
             assert "ws://" in message and f"still connected to ws://127.0.0.1:{robot.port}" in message
         finally:
             window.close()
+
+
+# ---------------------------------------------------------------------------------------- the palette
+def test_the_palette_groups_by_category_and_searches_what_a_widget_does(qtbot):
+    pytest.importorskip("rcon_widgets_sensors", reason="needs the widget packages")
+    from rcon_core.app.main import load_plugins
+    from rcon_core.app.palette_panel import PalettePanel
+
+    plugins = load_plugins()
+    panel = PalettePanel()
+    qtbot.addWidget(panel)
+    panel.set_specs(plugins.widgets())
+    panel.show()
+    groups = list(panel.groups)
+    assert "Controls" in groups and not any(g.startswith("rcon-widgets") for g in groups)
+    teleop = panel.item("sensors.teleop")
+    assert teleop.parent().text(0) == plugins.widget("sensors.teleop").category
+    assert "rcon-widgets-sensors" in teleop.toolTip(0) and "rcon-widgets-sensors" in teleop.text(0)
+
+    def shown() -> set[str]:
+        return {kind for kind, item in panel._items.items()  # noqa: SLF001
+                if not item.isHidden() and not item.parent().isHidden()}
+
+    QTest.keyClicks(panel.filter, "drive")  # in the teleop's description, not in its title
+    assert "sensors.teleop" in shown()
+    hidden_groups = [g for g, item in panel.groups.items() if item.isHidden()]
+    assert hidden_groups and all(not any(panel._items[k].parent() is panel.groups[g] for k in shown())  # noqa: SLF001
+                                 for g in hidden_groups)
+    panel.filter.clear()
+    QTest.keyClicks(panel.filter, "NavSatFix")  # an accepted type
+    assert "map.gps" in shown()
+    panel.filter.clear()
+    QTest.keyClicks(panel.filter, "no such widget at all")
+    assert not shown() and panel.no_match.isVisible()
+    assert all(item.isHidden() for item in panel.groups.values())

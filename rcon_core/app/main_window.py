@@ -521,6 +521,7 @@ class MainWindow(QtWidgets.QMainWindow):
         form = SettingsForm(settings, context=self.child_context(lambda: binding)) if settings is not None else None
         if form is not None:
             body_col.addWidget(form)
+            _align_with(top, title_label, form)
         col.addWidget(body, 1)
         buttons = QtWidgets.QDialogButtonBox(
             QtWidgets.QDialogButtonBox.StandardButton.Ok | QtWidgets.QDialogButtonBox.StandardButton.Cancel
@@ -616,6 +617,24 @@ class MainWindow(QtWidgets.QMainWindow):
         self.controller.shutdown()
         self.preview_live.stop()
         self.link.shutdown()
+
+
+def _align_with(top: QtWidgets.QFormLayout, label: QtWidgets.QLabel, form: QtWidgets.QWidget) -> None:
+    """Give the title row the settings form's margins and label column, so the dialog reads as one form."""
+    inner = form.layout()
+    if not isinstance(inner, QtWidgets.QFormLayout):
+        return
+    top.setContentsMargins(inner.contentsMargins())
+    top.setHorizontalSpacing(inner.horizontalSpacing())
+    top.setLabelAlignment(inner.labelAlignment())
+    widths = []
+    for row in range(inner.rowCount()):
+        item = inner.itemAt(row, QtWidgets.QFormLayout.ItemRole.LabelRole)
+        widget = item.widget() if item is not None else None
+        if widget is not None:
+            widths.append(widget.sizeHint().width())
+    if widths:
+        label.setMinimumWidth(max(widths))
 
 
 def _standard_types() -> Any:

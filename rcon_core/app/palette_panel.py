@@ -1,4 +1,4 @@
-"""Side panel: every widget the plugin manager found, grouped by package."""
+"""Side panel: every widget the plugin manager found, grouped by what it is for (the spec's category)."""
 
 from __future__ import annotations
 
@@ -7,11 +7,33 @@ from qtpy import QtCore, QtWidgets
 from rcon_core.plugins import WidgetSpec
 
 KIND_ROLE = QtCore.Qt.ItemDataRole.UserRole
+#: the lower-case text a search looks in: title, kind, description, category, accepted types
+SEARCH_ROLE = QtCore.Qt.ItemDataRole.UserRole + 1
+#: the group of widgets whose spec names no category
+OTHER = "Other"
 
 NO_WIDGETS = (
     "No widget plugins are installed, so there is nothing to add yet. Install a widget package "
     "(for example rcon-widgets-std) and restart RCON."
 )
+
+
+def search_text(spec: WidgetSpec) -> str:
+    """Everything a search for a widget may hit, lower-case."""
+    accepts = " ".join(spec.accepts.describe())
+    parts = (spec.title, spec.kind, spec.description, spec.category, spec.package, accepts)
+    return " ".join(p for p in parts if p).lower()
+
+
+def tooltip(spec: WidgetSpec) -> str:
+    lines = [spec.title]
+    if spec.description:
+        lines.append(spec.description)
+    accepts = spec.accepts.describe()
+    if accepts:
+        lines.append("Accepts: " + ", ".join(accepts))
+    lines.append(f"{spec.kind} · from {spec.package or 'an unnamed package'}")
+    return "\n".join(lines)
 
 
 class PalettePanel(QtWidgets.QWidget):
@@ -23,7 +45,7 @@ class PalettePanel(QtWidgets.QWidget):
         super().__init__(parent)
         self.filter = QtWidgets.QLineEdit()
         self.filter.setObjectName("widgetFilter")
-        self.filter.setPlaceholderText("Search widgets…")
+        self.filter.setPlaceholderText("Search widgets (name, type, what it does)…")
         self.filter.setClearButtonEnabled(True)
         self.filter.textChanged.connect(self._apply_filter)
         self.tree = QtWidgets.QTreeWidget()
@@ -38,47 +60,64 @@ class PalettePanel(QtWidgets.QWidget):
         self.empty.setObjectName("paletteEmpty")
         self.empty.setWordWrap(True)
         self.empty.setProperty("role", "hint")
+        self.no_match = QtWidgets.QLabel("No widget matches the search.")
+        self.no_match.setProperty("role", "hint")
+        self.no_match.hide()
         col = QtWidgets.QVBoxLayout(self)
         col.setContentsMargins(0, 0, 0, 0)
         col.addWidget(self.filter)
         col.addWidget(self.empty)
+        col.addWidget(self.no_match)
         col.addWidget(self.tree, 1)
         self._items: dict[str, QtWidgets.QTreeWidgetItem] = {}
+        self.groups: dict[str, QtWidgets.QTreeWidgetItem] = {}
         self.set_specs([])
 
     def set_specs(self, specs: list[WidgetSpec]) -> None:
         self.tree.clear()
         self._items = {}
-        groups: dict[str, QtWidgets.QTreeWidgetItem] = {}
-        for spec in sorted(specs, key=lambda s: (s.package or "", s.title.lower())):
-            package = spec.package or "other"
-            group = groups.get(package)
+        self.groups = {}
+        # groups by category, alphabetically, "Other" last; widgets by title inside a group
+        ordered = sorted(specs, key=lambda s: (not s.category, (s.category or "").lower(), s.title.lower()))
+        for spec in ordered:
+            category = spec.category or OTHER
+            group = self.groups.get(category)
             if group is None:
-                group = QtWidgets.QTreeWidgetItem([package])
+                group = QtWidgets.QTreeWidgetItem([category])
                 group.setFlags(QtCore.Qt.ItemFlag.ItemIsEnabled)
                 font = group.font(0)
                 font.setBold(True)
                 group.setFont(0, font)
-                groups[package] = group
+                self.groups[category] = group
                 self.tree.addTopLevelItem(group)
-            item = QtWidgets.QTreeWidgetItem([spec.title])
+            # the title, with where it comes from on a second line
+            item = QtWidgets.QTreeWidgetItem([f"{spec.title}\n{spec.package}" if spec.package else spec.title])
             item.setData(0, KIND_ROLE, spec.kind)
-            item.setToolTip(0, f"{spec.kind}: {spec.description}" if spec.description else spec.kind)
+            item.setData(0, SEARCH_ROLE, search_text(spec))
+            item.setToolTip(0, tooltip(spec))
             group.addChild(item)
             self._items[spec.kind] = item
         self.tree.expandAll()
         self.empty.setVisible(not specs)
         self.tree.setVisible(bool(specs))
         self.filter.setVisible(bool(specs))
+        self._apply_filter(self.filter.text())
 
     def item(self, kind: str) -> QtWidgets.QTreeWidgetItem | None:
         return self._items.get(kind)
 
     def _apply_filter(self, text: str) -> None:
         words = text.lower().split()
-        for kind, item in self._items.items():
-            hay = f"{kind} {item.text(0)}".lower()
+        for item in self._items.values():
+            hay = item.data(0, SEARCH_ROLE) or ""
             item.setHidden(not all(w in hay for w in words))
+        shown = 0
+        for group in self.groups.values():  # a group with no match is hidden, not left empty
+            children = (group.child(i) for i in range(group.childCount()))
+            visible = any(child is not None and not child.isHidden() for child in children)
+            group.setHidden(not visible)
+            shown += visible
+        self.no_match.setVisible(bool(self._items) and bool(words) and not shown)
 
     def _clicked(self, item: QtWidgets.QTreeWidgetItem, _col: int = 0) -> None:
         kind = item.data(0, KIND_ROLE)
