@@ -6,7 +6,7 @@ from typing import Any
 
 from qtpy import QtCore, QtWidgets
 
-from .view_common import BAD, MUTED, OK, Caption, vbox
+from .view_common import BAD, MUTED, OK, Caption, fit_caption, vbox
 
 
 class ButtonView(QtWidgets.QWidget):
@@ -25,7 +25,16 @@ class ButtonView(QtWidgets.QWidget):
         self.result.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
         layout.addWidget(self.result)
 
+    def resizeEvent(self, event: Any) -> None:  # noqa: N802 - Qt override
+        super().resizeEvent(event)
+        fit_caption(self, self.button, self.result)  # too small for both: the result becomes the tooltip
+
     def refresh(self, state: Any) -> None:
+        self._show_result(state)
+        if self.result.isHidden():
+            fit_caption(self, self.button, self.result)
+
+    def _show_result(self, state: Any) -> None:
         st = state.value
         if st is None:
             self.result.show_text(state.error or "", BAD if state.error else MUTED)

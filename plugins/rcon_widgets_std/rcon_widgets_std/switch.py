@@ -50,6 +50,9 @@ class SwitchValue:
     busy: bool = False  #: a service call is on its way
     wanted: bool | None = None  #: what the busy call asked for
     reply: str = ""  #: the server's message of the last call
+    #: the state ``reply`` speaks about (what the call set, or kept on a refusal); once the robot's
+    #: state moves away from it the reply is old news and is dropped
+    reply_for: bool | None = None
 
 
 class SwitchModel(StdModel):
@@ -81,8 +84,13 @@ class SwitchModel(StdModel):
             return
         self._on = on
         cur = self.state.value
-        busy = isinstance(cur, SwitchValue) and cur.busy
-        self.set_value(SwitchValue(on, busy, cur.wanted if busy else None, cur.reply if cur else ""), message=msg)
+        if not isinstance(cur, SwitchValue):
+            self.set_value(SwitchValue(on), message=msg)
+            return
+        reply, reply_for = cur.reply, cur.reply_for
+        if not cur.busy and reply and reply_for is not None and on != reply_for:
+            reply, reply_for = "", None  # the state moved on (changed elsewhere): the old answer no longer applies
+        self.set_value(SwitchValue(on, cur.busy, cur.wanted if cur.busy else None, reply, reply_for), message=msg)
 
     def on_message(self, msg: dict[str, Any]) -> None:
         path = self.binding.field_path
@@ -128,12 +136,12 @@ class SwitchModel(StdModel):
 
     def _call(self, on: bool) -> None:
         cur = self.state.value
-        reply = cur.reply if isinstance(cur, SwitchValue) else ""
-        self.set_value(SwitchValue(self._on, True, on, reply))
+        reply, reply_for = (cur.reply, cur.reply_for) if isinstance(cur, SwitchValue) else ("", None)
+        self.set_value(SwitchValue(self._on, True, on, reply, reply_for))
         try:
             req = self.request_for(on)
         except PathError as exc:
-            self.set_value(SwitchValue(self._on, False, None, reply))
+            self.set_value(SwitchValue(self._on, False, None, reply, reply_for))
             self.set_error(str(exc))
             return
 
@@ -146,14 +154,16 @@ class SwitchModel(StdModel):
         try:
             resp = await self.port.call_service(self.binding.name, req, timeout=self.call_timeout)
         except Exception as exc:
-            self.set_value(SwitchValue(self._on, False, None, str(exc)))
+            self.set_value(SwitchValue(self._on, False, None, str(exc), self._on))
             self.set_error(f"{self.binding.name}: {exc}")
             return
         ok = resp.get("success", True) is not False if isinstance(resp, dict) else True
         text = str(resp.get("message", "")) if isinstance(resp, dict) else ""
         if ok and not self.settings.state_topic:
             self._on = on
-        self.set_value(SwitchValue(self._on, False, None, text), message=resp)
+        # an accepted call speaks about the state it asked for (the state topic may confirm it before or
+        # after this answer); a refusal about the state that stayed
+        self.set_value(SwitchValue(self._on, False, None, text, on if ok else self._on), message=resp)
         if not ok:
             self.set_error(f"{self.binding.name} refused: {text or 'success is false'}")
 

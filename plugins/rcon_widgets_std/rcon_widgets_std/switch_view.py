@@ -8,7 +8,7 @@ from qtpy import QtCore, QtWidgets
 
 from rcon_core.plugins import Role
 
-from .view_common import BAD, MUTED, OK, Caption, vbox
+from .view_common import BAD, MUTED, OK, Caption, fit_caption, vbox
 
 
 class SwitchView(QtWidgets.QWidget):
@@ -61,3 +61,8 @@ class SwitchView(QtWidgets.QWidget):
         if shown != self._reply:  # show_text sets a style sheet (a re-polish): only when it changes
             self._reply = shown
             self.reply.show_text(*shown)
+            fit_caption(self, self.button, self.reply)
+
+    def resizeEvent(self, event: Any) -> None:  # noqa: N802 - Qt override
+        super().resizeEvent(event)
+        fit_caption(self, self.button, self.reply)  # too small for both: the reply becomes the tooltip

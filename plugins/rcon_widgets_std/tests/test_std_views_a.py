@@ -2,6 +2,7 @@
 reaching the robot through the model, and a screenshot of each."""
 
 import pytest
+from qtpy import QtWidgets
 from rcon_widgets_std.button import ButtonModel, ButtonSettings, CallStatus
 from rcon_widgets_std.button_view import ButtonView
 from rcon_widgets_std.label import LabelModel, LabelSettings
@@ -13,6 +14,7 @@ from rcon_widgets_std.switch_view import SwitchView
 from std_qtkit import LiveBridge, shoot, wait_until
 from std_testkit import Clock, build
 
+from rcon_core.app.theme import stylesheet
 from rcon_core.msgs import TypeRegistry
 
 
@@ -79,12 +81,61 @@ def test_switch_view_call_lights_and_show_state(qtbot, live, sim_thread, tmp_pat
     view.refresh(m.state)
     assert view.button.text() == "Lights off" and not view.button.isChecked()
     view.button.click()
-    wait_until(qtbot, lambda: getattr(m.state.value, "on", None) is True, what="lights on")
+    # /lights/state may confirm "on" before the call's answer arrives: wait for the answer too (busy
+    # over), not only the state, before reading the button's text
+    wait_until(qtbot, lambda: getattr(m.state.value, "on", None) is True and not m.state.value.busy,
+               what="lights on, and the answer")
     view.refresh(m.state)
     assert view.button.isChecked() and view.button.text() == "Lights on" and view.reply.text() == "lights on"
     assert sim_thread.robot.lights is True
     shoot(qtbot, view, "Lights", (180, 130), "switch", tmp_path)
     live.thread.call(m.stop).result(5)
+
+
+def test_switch_view_drops_an_old_reply_when_the_state_changes_elsewhere(qtbot, live, sim_thread):
+    m = SwitchModel(SwitchSettings(state_topic="/lights/state"),
+                    build(SwitchModel, None, "/lights/set", "std_srvs/SetBool", "call", "request.data").binding,
+                    live.node("switch"), types=TypeRegistry.standard(), dispatch=live.thread.call)
+    live.thread.call(m.start).result(5)
+    view = SwitchView(m)
+    qtbot.addWidget(view)
+    wait_until(qtbot, lambda: getattr(m.state.value, "on", None) is False, what="the latched state")
+    view.button.click()
+    wait_until(qtbot, lambda: m.state.value.on is True and not m.state.value.busy, what="lights on")
+    view.refresh(m.state)
+    assert view.reply.text() == "lights on"
+    other = live.node("another-console")  # someone else turns them off
+    live.thread.run(other.call_service("/lights/set", {"data": False})).result(10)
+    wait_until(qtbot, lambda: m.state.value.on is False, what="the new state")
+    view.refresh(m.state)
+    assert view.button.text() == "Off" and view.reply.text() == "" and m.state.value.reply == ""
+    live.thread.call(m.stop).result(5)
+
+
+def test_switch_view_reply_never_overlaps_the_button(qtbot):
+    m = build(SwitchModel, SwitchSettings(), "/lights/set", "std_srvs/SetBool", "call", "request.data")
+    host = QtWidgets.QWidget()
+    host.setStyleSheet(stylesheet(touch=48))  # the app's theme: touch-sized buttons
+    qtbot.addWidget(host)
+    view = SwitchView(m, host)
+    m.set_value(SwitchValue(True, reply="lights on"))
+    view.refresh(m.state)
+    host.show()
+    for height in (160, 110, 80, 60):
+        view.setGeometry(0, 0, 140, height)
+        QtWidgets.QApplication.processEvents()
+        b, r = view.button.geometry(), view.reply.geometry()
+        if view.reply.isVisible():
+            assert r.top() >= b.bottom(), f"reply over the button at {height} px"
+            assert view.button.toolTip() == ""
+        else:
+            assert view.button.toolTip() == "lights on", f"reply neither shown nor a tooltip at {height} px"
+    view.setGeometry(0, 0, 140, 160)
+    QtWidgets.QApplication.processEvents()
+    assert view.reply.isVisible() and view.reply.text() == "lights on"
+    view.setGeometry(0, 0, 140, 60)
+    QtWidgets.QApplication.processEvents()
+    assert not view.reply.isVisible()
 
 
 def test_switch_view_busy_and_refused(qtbot):
