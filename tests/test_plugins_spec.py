@@ -64,6 +64,9 @@ def test_accepts_generic_flag_and_describe():
     assert not Accepts(messages=["any"], fields=["numeric"]).is_generic
     d = Accepts(types=["std_msgs/Float64"], packages=["sensor_msgs"], fields=["numeric"]).describe()
     assert d == ["std_msgs/Float64", "sensor_msgs/*", "field:numeric"]
+    # one spelling in listings, whichever the plugin declared
+    assert Accepts(types=["geometry_msgs/msg/Twist", "std_msgs/Bool"]).describe() == [
+        "geometry_msgs/Twist", "std_msgs/Bool"]
 
 
 def test_view_is_lazy_and_missing_modules_are_named():

@@ -33,6 +33,8 @@ from typing import Any, Protocol
 
 import attrs
 
+from rcon_core.msgs.names import to_ros1
+
 __all__ = [
     "Role",
     "Accepts",
@@ -211,12 +213,22 @@ class Accepts:
         return not self.types and not self.packages and not self.fields and self.messages == ("any",)
 
     def describe(self) -> list[str]:
-        """Human-readable list, for ``rcon plugins``: ``["std_msgs/msg/Float64", "field:numeric", ...]``."""
-        out: list[str] = list(self.types)
+        """Human-readable list, for ``rcon plugins``: ``["std_msgs/Float64", "field:numeric", ...]``.
+
+        Types are shown in one spelling (ROS 1's, the shorter) whichever spelling the plugin declared.
+        """
+        out: list[str] = [_short_name(t) for t in self.types]
         out += [f"{p}/*" for p in self.packages]
         out += ["field:" + _pred_name(p) for p in self.fields]
         out += ["message:" + _pred_name(p) for p in self.messages]
         return out
+
+
+def _short_name(type_name: str) -> str:
+    try:
+        return to_ros1(type_name)
+    except ValueError:
+        return type_name
 
 
 def _pred_name(p: Any) -> str:
