@@ -101,7 +101,10 @@ def format_number(value: float, decimals: int = -1) -> str:
         return str(value) if decimals < 0 else f"{value:.{decimals}f}"
     if not math.isfinite(value):
         return str(value)
-    return f"{value:.6g}" if decimals < 0 else f"{value:.{decimals}f}"
+    text = f"{value:.6g}" if decimals < 0 else f"{value:.{decimals}f}"
+    if text.startswith("-") and float(text) == 0.0:
+        return text[1:]  # -0.001 at 2 decimals, or -0.0 itself: "0.00", never "-0.00"
+    return text
 
 
 def summarize(value: Any, max_items: int = 8, max_chars: int = 80) -> Any:
@@ -115,6 +118,8 @@ def summarize(value: Any, max_items: int = 8, max_chars: int = 80) -> Any:
             head = [summarize(v, max_items, max_chars) for v in value[:max_items]]
             return [*head, f"... {len(value) - max_items} more"]
         return [summarize(v, max_items, max_chars) for v in value]
+    if isinstance(value, float) and value == 0.0:
+        return 0.0  # -0.0 reads as a sign where there is none
     if isinstance(value, str) and len(value) > max_chars:
         return value[: max_chars - 1] + "…"
     return value

@@ -50,6 +50,22 @@ class Caption(QtWidgets.QLabel):
         self._colour = colour
         self.setStyleSheet(f"color: {colour}; background: transparent;")
 
+    def paintEvent(self, event: Any) -> None:  # noqa: N802 - Qt override
+        text, rect = self.text(), self.contentsRect()
+        if not text or "\n" in text or self.fontMetrics().horizontalAdvance(text) <= rect.width():
+            super().paintEvent(event)  # fits: QLabel's own painting
+            return
+        # too wide: a slightly smaller font, then "…" (QLabel alone would clip, centred: on both sides)
+        font, shown = fit_line(self.font(), text, rect.width(), min_px=max(8, round(_pixel_size(self.font()) * 0.8)))
+        painter = QtGui.QPainter(self)
+        painter.setFont(font)
+        painter.setPen(QtGui.QColor(self._colour or MUTED))
+        align = self.alignment()
+        if shown != text:  # elided: start at the left, so what is shown is the beginning
+            align = (align & QtCore.Qt.AlignmentFlag.AlignVertical_Mask) | QtCore.Qt.AlignmentFlag.AlignLeft
+        painter.drawText(rect, align, shown)
+        painter.end()
+
     def show_text(self, text: str, colour: str = MUTED, tooltip: str | None = None) -> None:
         self.set_colour(colour)
         if text != self.text():
@@ -57,6 +73,159 @@ class Caption(QtWidgets.QLabel):
         tip = tooltip if tooltip is not None else text
         if tip != self.toolTip():
             self.setToolTip(tip)
+
+
+def _pixel_size(font: QtGui.QFont) -> float:
+    """The font's size in pixels, whether it was given in pixels or points."""
+    if font.pixelSize() > 0:
+        return float(font.pixelSize())
+    return float(QtGui.QFontInfo(font).pixelSize())
+
+
+def fit_line(font: QtGui.QFont, text: str, width: float, min_px: int = 10) -> tuple[QtGui.QFont, str]:
+    """The largest copy of ``font`` (never larger, never below ``min_px``) in which one line of ``text`` fits
+    ``width`` pixels, and the text to draw: ``text`` itself, or elided with "…" when even ``min_px`` is
+    too wide. Never clips silently."""
+    fm = QtGui.QFontMetricsF(font)
+    full = fm.horizontalAdvance(text)
+    if full <= width or not text:
+        return font, text
+    px = _pixel_size(font)
+    f = QtGui.QFont(font)
+    size = max(min_px, int(px * width / full))
+    while True:
+        f.setPixelSize(size)
+        if QtGui.QFontMetricsF(f).horizontalAdvance(text) <= width or size <= min_px:
+            break
+        size -= 1
+    if QtGui.QFontMetricsF(f).horizontalAdvance(text) > width:
+        return f, QtGui.QFontMetrics(f).elidedText(text, QtCore.Qt.TextElideMode.ElideRight, max(0, int(width)))
+    return f, text
+
+
+class FitLabel(QtWidgets.QWidget):
+    """A value in large type that shrinks its font to fit its box (eliding with "…" only below
+    ``min_px``), so a long value is never clipped silently.
+
+    Painted directly: a new text costs one width measurement and one repaint of this widget -- no text
+    document, no style sheet, no re-layout (a selectable QLabel lays out a text document per value).
+    Multi-line text (a message as YAML) is shrunk to fit both ways, then cut per line and at the bottom.
+    """
+
+    def __init__(self, text: str = "", px: int = 30, bold: bool = True, min_px: int = 11,
+                 parent: QtWidgets.QWidget | None = None) -> None:
+        super().__init__(parent)
+        self._text = text
+        self._px, self._bold, self._colour = px, bold, ""
+        self.min_px = min_px
+        self._align = QtCore.Qt.AlignmentFlag.AlignCenter
+        self._fitted: tuple[tuple[str, int, int, int, bool], QtGui.QFont, str] | None = None
+        self._fonts: dict[tuple[int, bool], tuple[QtGui.QFont, QtGui.QFontMetricsF]] = {}
+        self._pen: QtGui.QColor | None = None  # the colour to paint in (None: the palette's text colour)
+        self.setAttribute(QtCore.Qt.WidgetAttribute.WA_OpaquePaintEvent, False)
+
+    # -- QLabel-like API -----------------------------------------------------------------------------
+    def text(self) -> str:
+        return self._text
+
+    def setText(self, text: str) -> None:  # noqa: N802 - QLabel's name
+        if text != self._text:
+            self._text = text
+            self.update()
+
+    def alignment(self) -> QtCore.Qt.AlignmentFlag:
+        return self._align
+
+    def setAlignment(self, align: QtCore.Qt.AlignmentFlag) -> None:  # noqa: N802 - QLabel's name
+        if align != self._align:
+            self._align = align
+            self.update()
+
+    def set_style(self, px: int, colour: str = "", bold: bool = True) -> None:
+        """Largest size (px), colour ("" = the palette's text colour) and weight; repaints on a change only."""
+        if (px, colour, bold) != (self._px, self._colour, self._bold):
+            self._px, self._colour, self._bold = px, colour, bold
+            self._pen = QtGui.QColor(colour) if colour else None
+            self.update()
+
+    def changeEvent(self, event: QtCore.QEvent) -> None:  # noqa: N802 - Qt override
+        if event.type() in (QtCore.QEvent.Type.FontChange, QtCore.QEvent.Type.StyleChange):
+            self._fonts.clear()  # the theme gave another family or size: measure again
+            self._fitted = None
+        super().changeEvent(event)
+
+    @property
+    def style_spec(self) -> tuple[int, str, bool]:
+        return self._px, self._colour, self._bold
+
+    def sizeHint(self) -> QtCore.QSize:  # noqa: N802 - Qt override
+        return QtCore.QSize(80, round(self._px * 1.4))
+
+    def minimumSizeHint(self) -> QtCore.QSize:  # noqa: N802 - Qt override
+        return QtCore.QSize(20, round(self.min_px * 1.4))
+
+    # -- fitting and painting ------------------------------------------------------------------------
+    def _base(self, px: int) -> tuple[QtGui.QFont, QtGui.QFontMetricsF]:
+        """The widget's font at ``px`` in the current weight, and its metrics (cached: fonts and metrics
+        are costly to build, and a value changing 20 times a second mostly fits at the same size)."""
+        key = (px, self._bold)
+        got = self._fonts.get(key)
+        if got is None:
+            if len(self._fonts) > 64:
+                self._fonts.clear()
+            font = QtGui.QFont(self.font())
+            font.setPixelSize(px)
+            font.setBold(self._bold)
+            got = self._fonts[key] = (font, QtGui.QFontMetricsF(font))
+        return got
+
+    def fitted(self) -> tuple[QtGui.QFont, str]:
+        """(font, text) as painted at the current size; cached until the text, size or style changes."""
+        rect = self.contentsRect()
+        key = (self._text, rect.width(), rect.height(), self._px, self._bold)
+        if self._fitted is not None and self._fitted[0] == key:
+            return self._fitted[1], self._fitted[2]
+        if "\n" in self._text:
+            font, shown = self._fit_block(self._base(self._px)[0], rect)
+        else:
+            # the line height must fit too (a short, wide box)
+            tall = max(self.min_px, min(self._px, int(rect.height() / 1.25))) if rect.height() > 0 else self._px
+            font, metrics = self._base(tall)
+            if metrics.horizontalAdvance(self._text) <= rect.width():
+                shown = self._text  # the usual case: fits at full size
+            else:
+                font, shown = fit_line(font, self._text, rect.width(), min(self.min_px, tall))
+        self._fitted = (key, font, shown)
+        return font, shown
+
+    def _fit_block(self, base: QtGui.QFont, rect: QtCore.QRect) -> tuple[QtGui.QFont, str]:
+        lines = self._text.split("\n")
+        fm = QtGui.QFontMetricsF(base)
+        wide = max(fm.horizontalAdvance(line) for line in lines) or 1.0
+        tall = fm.lineSpacing() * len(lines) or 1.0
+        scale = min(1.0, rect.width() / wide, rect.height() / tall)
+        font = QtGui.QFont(base)
+        font.setPixelSize(max(self.min_px, int(self._px * scale)))
+        fm = QtGui.QFontMetricsF(font)
+        if scale * self._px >= self.min_px:
+            return font, self._text
+        room = max(1, int(rect.height() // fm.lineSpacing()))
+        shown = lines[:room]
+        if len(lines) > room:
+            shown[-1] = "…"
+        metrics = QtGui.QFontMetrics(font)
+        elide = QtCore.Qt.TextElideMode.ElideRight
+        return font, "\n".join(metrics.elidedText(line, elide, rect.width()) for line in shown)
+
+    def paintEvent(self, event: Any) -> None:  # noqa: N802 - Qt override
+        if not self._text:
+            return
+        font, shown = self.fitted()
+        painter = QtGui.QPainter(self)
+        painter.setFont(font)
+        painter.setPen(self._pen if self._pen is not None else self.palette().color(QtGui.QPalette.ColorRole.WindowText))
+        painter.drawText(self.contentsRect(), int(self._align), shown)
+        painter.end()
 
 
 def vbox(widget: QtWidgets.QWidget, margins: int = 6, spacing: int = 4) -> QtWidgets.QVBoxLayout:

@@ -24,6 +24,20 @@ def test_number_formatting_with_decimals_units_and_scale():
     assert format_value({"secs": 3, "nsecs": 500_000_000}) == "3.500 s"
 
 
+def test_never_negative_zero_after_rounding():
+    m = build(LabelModel, LabelSettings(decimals=2, units="rad/s"), "/imu/data", "sensor_msgs/Imu", "subscribe",
+              "angular_velocity.z")
+    m.on_message({"angular_velocity": {"z": -0.0012}})
+    assert m.state.value.text == "0.00 rad/s"
+    m.on_message({"angular_velocity": {"z": -0.0}})
+    assert m.state.value.text == "0.00 rad/s"
+    m.on_message({"angular_velocity": {"z": -0.006}})
+    assert m.state.value.text == "-0.01 rad/s"  # a real negative value keeps its sign
+    assert format_value(-0.0) == "0" and format_value(-1e-9, 3) == "0.000" and format_value(-2, 1) == "-2.0"
+    assert format_value([-0.0001, 0.5], 1) == "[0.0, 0.5]"
+    assert "-0.0" not in format_value({"x": -0.0, "y": 1.0})
+
+
 def test_whole_message_and_long_arrays_are_summarised():
     m = build(LabelModel, LabelSettings(), "/scan", "sensor_msgs/LaserScan", "subscribe")
     m.on_message({"angle_min": -1.5, "ranges": [1.0] * 500, "header": {"frame_id": "laser"}})

@@ -2,7 +2,7 @@
 reaching the robot through the model, and a screenshot of each."""
 
 import pytest
-from qtpy import QtWidgets
+from qtpy import QtCore, QtGui, QtWidgets
 from rcon_widgets_std.button import ButtonModel, ButtonSettings, CallStatus
 from rcon_widgets_std.button_view import ButtonView
 from rcon_widgets_std.label import LabelModel, LabelSettings
@@ -39,6 +39,50 @@ def test_label_view_value_age_and_stale(qtbot, tmp_path):
     clock.now += 5
     view.refresh(m.state)
     assert view.age.text().startswith("STALE")
+
+
+def test_label_view_value_is_not_selectable_and_copies_through_its_menu(qtbot):
+    m = build(LabelModel, LabelSettings(decimals=3, units="m"), "/depth", "sensor_msgs/Range", "subscribe", "range")
+    view = LabelView(m)
+    qtbot.addWidget(view)
+    m.on_message({"range": 7.1234})
+    view.refresh(m.state)
+    assert not isinstance(view.value, QtWidgets.QLabel)  # no text document laid out per value
+    assert view.contextMenuPolicy() == QtCore.Qt.ContextMenuPolicy.ActionsContextMenu
+    assert [a.text() for a in view.actions()] == ["Copy value"]
+    view.copy_action.trigger()
+    assert QtWidgets.QApplication.clipboard().text() == "7.123 m"
+
+
+@pytest.mark.parametrize("width", [240, 150, 110, 80])
+def test_label_view_shrinks_a_long_value_to_fit_and_never_clips(qtbot, width):
+    clock = Clock()
+    m = build(LabelModel, LabelSettings(decimals=-1, stale_after=3), "/x", "std_msgs/Float64", "subscribe", "data",
+              clock=clock)
+    host = QtWidgets.QWidget()
+    host.setStyleSheet(stylesheet(touch=48))
+    qtbot.addWidget(host)
+    view = LabelView(m, host)
+    view.setGeometry(0, 0, width, 90)
+    host.show()
+    m.on_message({"data": 0.846331})
+    m._running = True
+    clock.now += 12.5
+    view.refresh(m.state)
+    QtWidgets.QApplication.processEvents()
+    font, shown = view.value.fitted()
+    room = view.value.contentsRect().width()
+    assert QtGui.QFontMetricsF(font).horizontalAdvance(shown) <= room
+    if width >= 110:
+        assert shown == "0.846331"  # shrinking was enough: nothing cut
+    else:
+        assert shown == "0.846331" or shown.endswith("…")  # elided only as a last resort, visibly
+    assert font.pixelSize() <= 30 and (width < 240 or font.pixelSize() == 30)
+    # the age caption: fits, or is visibly elided (QLabel alone cut it on both sides)
+    assert view.age.text() == "STALE · 12.5 s ago"
+    img = view.grab(view.age.geometry()).toImage()  # the caption over the view's white background
+    ink = [x for x in range(img.width()) for y in range(img.height()) if QtGui.QColor(img.pixel(x, y)).value() < 200]
+    assert ink and min(ink) > 0 and max(ink) < img.width() - 1, "caption text runs into the edges"
 
 
 def test_slider_view_drag_and_release_publish_through_the_bridge(qtbot, live, sim_thread, tmp_path):
