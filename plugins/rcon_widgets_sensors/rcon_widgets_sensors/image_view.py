@@ -19,6 +19,12 @@ from .viewport import Viewport
 
 DOUBLE_TAP_S = 0.35
 DOUBLE_TAP_PX = 40.0
+#: no new frame for this long (s): the overlay says STALE and ages on its own, without new frames
+STALE_AFTER_S = 1.0
+#: how often (ms) a stale overlay re-reads its age; only the overlay's rectangle is repainted
+OVERLAY_TICK_MS = 333
+_STALE_BG = QtGui.QColor(168, 84, 0, 230)
+_FRESH_BG = QtGui.QColor(0, 0, 0, 150)
 
 
 class ImageView(QtWidgets.QWidget):
@@ -44,6 +50,16 @@ class ImageView(QtWidgets.QWidget):
         self.setAttribute(QtCore.Qt.WidgetAttribute.WA_OpaquePaintEvent, True)
         self.setMinimumSize(80, 60)
         self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Expanding, QtWidgets.QSizePolicy.Policy.Expanding)
+        #: where the overlay was last painted (the stale ticker repaints only this, grown to the new text)
+        self.overlay_rect = QtCore.QRect()
+        #: the overlay's text as last painted (tests, accessibility)
+        self.overlay_text: list[str] = []
+        # the overlay's age is computed when painting, and a view repaints on new frames: with the link
+        # down nothing would repaint and the age would freeze. A cheap ticker ages a stale overlay.
+        self._ticker = QtCore.QTimer(self)
+        self._ticker.setInterval(OVERLAY_TICK_MS)
+        self._ticker.timeout.connect(self._tick)
+        self._ticker.start()
 
     # -- state ------------------------------------------------------------------------------------------
     def refresh(self, state: Any) -> None:
@@ -57,6 +73,22 @@ class ImageView(QtWidgets.QWidget):
                                         QtGui.QImage.Format.Format_RGB888)
             self.viewport.set_image(value.width, value.height)
         self.update()
+
+    def _tick(self) -> None:
+        """Repaint only the overlay while the shown frame is older than :data:`STALE_AFTER_S`."""
+        frame = self.frame
+        if frame is None or not self.isVisible() or time.time() - frame.received < STALE_AFTER_S:
+            return
+        lines, _bg = self._overlay_lines()
+        fm = QtGui.QFontMetrics(self._overlay_font())
+        self.update(self.overlay_rect.united(_overlay_box(fm, lines)).adjusted(-1, -1, 2, 2))
+
+    def stale_for(self) -> float | None:
+        """Seconds since the shown frame arrived when that is more than :data:`STALE_AFTER_S`, else None."""
+        if self.frame is None:
+            return None
+        idle = time.time() - self.frame.received
+        return idle if idle >= STALE_AFTER_S else None
 
     # -- painting -----------------------------------------------------------------------------------------
     def resizeEvent(self, event: QtGui.QResizeEvent) -> None:  # noqa: N802
@@ -89,9 +121,7 @@ class ImageView(QtWidgets.QWidget):
 
     def _paint_status(self, p: QtGui.QPainter) -> None:
         state, frame = self._state, self.frame
-        font = p.font()
-        font.setPointSizeF(max(7.0, font.pointSizeF() * 0.85))
-        p.setFont(font)
+        p.setFont(self._overlay_font())
         if frame is None:
             text = "waiting for images…"
             if state is not None and state.error:
@@ -102,27 +132,48 @@ class ImageView(QtWidgets.QWidget):
             p.drawText(self.rect().adjusted(8, 8, -8, -8),
                        QtCore.Qt.AlignmentFlag.AlignCenter | QtCore.Qt.TextFlag.TextWordWrap, text)
             return
-        lines = []
+        lines, bg = self._overlay_lines()
+        self.overlay_text = lines
+        if not lines:
+            self.overlay_rect = QtCore.QRect()
+            return
+        fm = QtGui.QFontMetrics(p.font())
+        box = _overlay_box(fm, lines)
+        self.overlay_rect = box
+        p.fillRect(box, bg)
+        p.setPen(QtGui.QColor(235, 240, 245) if bg is _FRESH_BG else QtGui.QColor(255, 255, 255))
+        for i, s in enumerate(lines):
+            p.drawText(QtCore.QPointF(12, 10 + fm.ascent() + i * fm.height()), s)
+
+    def _overlay_font(self) -> QtGui.QFont:
+        font = QtGui.QFont(self.font())
+        font.setPointSizeF(max(7.0, font.pointSizeF() * 0.85))
+        return font
+
+    def _overlay_lines(self) -> tuple[list[str], QtGui.QColor]:
+        """The overlay's lines and background: rate and age, or STALE with how long no frame came."""
+        state, frame = self._state, self.frame
+        lines: list[str] = []
+        bg = _FRESH_BG
+        if frame is None:
+            return lines, bg
         show = getattr(self.model.settings, "show_overlay", True)
-        if show:
+        stale = self.stale_for()
+        if stale is not None:
+            # always shown, overlay or not: an old picture must never pass for a live one
+            lines.append(f"STALE · no new frame for {_duration(stale)}")
+            bg = _STALE_BG
+        elif show:
             fps = self.painted_fps or frame.fps
             age = time.time() - (frame.stamp or frame.received)
-            age_txt = f"{age * 1000:.0f} ms" if age < 10 else f"{age:.0f} s"
-            lines.append((f"{fps:4.1f} fps" if fps > 0 else "– fps") + f" · age {age_txt}")
+            lines.append((f"{fps:4.1f} fps" if fps > 0 else "– fps") + f" · age {_duration(age)}")
+        if show:
             lines.append(frame.info)
             if not self.viewport.fitted:
                 lines.append(f"zoom ×{self.viewport.zoom:.1f} (double-tap to fit)")
         if state is not None and state.error:
             lines.append("⚠ " + state.error)
-        if not lines:
-            return
-        fm = QtGui.QFontMetrics(p.font())
-        w = max(fm.horizontalAdvance(s) for s in lines) + 12
-        h = fm.height() * len(lines) + 8
-        p.fillRect(QtCore.QRectF(6, 6, w, h), QtGui.QColor(0, 0, 0, 150))
-        p.setPen(QtGui.QColor(235, 240, 245))
-        for i, s in enumerate(lines):
-            p.drawText(QtCore.QPointF(12, 10 + fm.ascent() + i * fm.height()), s)
+        return lines, bg
 
     # -- touch: pan, pinch, double tap -----------------------------------------------------------------
     def event(self, e: QtCore.QEvent) -> bool:
@@ -207,6 +258,24 @@ class ImageView(QtWidgets.QWidget):
             pos = e.position()
             self.viewport.zoom_at(1.25 ** steps, pos.x(), pos.y())
             self.update()
+
+
+def _duration(seconds: float) -> str:
+    """``97 ms``, ``3.4 s``, ``12 s``, ``5 min``."""
+    if seconds < 1:
+        return f"{max(0.0, seconds) * 1000:.0f} ms"
+    if seconds < 10:
+        return f"{seconds:.1f} s"
+    if seconds < 120:
+        return f"{seconds:.0f} s"
+    return f"{seconds / 60:.0f} min"
+
+
+def _overlay_box(fm: QtGui.QFontMetrics, lines: list[str]) -> QtCore.QRect:
+    if not lines:
+        return QtCore.QRect()
+    w = max(fm.horizontalAdvance(s) for s in lines) + 12
+    return QtCore.QRect(6, 6, w, fm.height() * len(lines) + 8)
 
 
 def _dist(a: QtCore.QPointF, b: QtCore.QPointF) -> float:

@@ -6,6 +6,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import attrs
 import numpy as np
 import pytest
 from qtpy import QtCore, QtGui
@@ -157,3 +158,52 @@ def test_scan_and_grid_screenshots(qtbot):
     assert frame.kind == "scan" and frame.counts.valid > 0
     view.grab().save(str(SHOTS / "image-scan.png"))
     model.on_stop()
+
+
+class PaintRects(QtCore.QObject):
+    """Records the rectangle of every paint event of a widget."""
+
+    def __init__(self, widget):
+        super().__init__()
+        self.rects = []
+        widget.installEventFilter(self)
+
+    def eventFilter(self, obj, event):  # noqa: N802 - Qt override
+        if event.type() == QtCore.QEvent.Type.Paint:
+            self.rects.append(event.rect())
+        return False
+
+
+def test_overlay_ages_and_says_stale_without_new_frames(view, qtbot):
+    """Link down: no new frame, so no refresh; the overlay must still age and say STALE (it showed
+    '10.0 fps · age 97 ms' twelve seconds later), repainting only its own rectangle."""
+
+    frame = feed(view.model, camera_msg())
+    view.refresh(view.model.state)
+    qtbot.waitUntil(lambda: bool(view.overlay_text), timeout=3000)
+    assert "fps · age" in view.overlay_text[0] and view.stale_for() is None
+    old = time.time() - 12.0  # as if this frame came 12 s ago and nothing since
+    view.frame = attrs.evolve(frame, received=old, stamp=old, decoded=old)
+    paints = PaintRects(view)
+    qtbot.waitUntil(lambda: view.overlay_text and view.overlay_text[0].startswith("STALE"), timeout=3000)
+    first = view.overlay_text[0]
+    assert first.startswith("STALE · no new frame for 1") and "fps" not in first
+    view.frame = attrs.evolve(view.frame, received=old - 60)  # a minute later, still nothing
+    qtbot.waitUntil(lambda: view.overlay_text[0] != first, timeout=3000)
+    assert view.overlay_text[0] in {f"STALE · no new frame for {n} s" for n in range(72, 80)}
+    assert paints.rects and all(r.width() < view.width() // 2 and r.height() < view.height() // 2
+                                for r in paints.rects), "the ticker repainted more than the overlay"
+    img = grab(view)
+    c = QtGui.QColor(img.pixel(view.overlay_rect.left() + 2, view.overlay_rect.top() + 2))
+    assert c.red() > 120 and c.blue() < 60  # amber: cannot pass for the dark live overlay
+
+
+def test_overlay_ticker_leaves_a_fresh_picture_alone(view, qtbot):
+    frame = feed(view.model, camera_msg())
+    view.refresh(view.model.state)
+    qtbot.waitUntil(lambda: bool(view.overlay_text), timeout=3000)
+    view.frame = attrs.evolve(frame, received=time.time())
+    view._tick()  # a fresh frame: the ticker schedules nothing
+    paints = PaintRects(view)
+    QtCore.QCoreApplication.processEvents()
+    assert paints.rects == []
