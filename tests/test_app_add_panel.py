@@ -92,7 +92,10 @@ def bring_into_sight(panel: AddPanel, widget: QtWidgets.QWidget) -> None:
     """Scroll the settings page so ``widget`` is in sight with room to scroll on (as a person would have
     scrolled there)."""
     QtWidgets.QApplication.processEvents()
-    scroll_area(panel).ensureWidgetVisible(widget, 0, 60)
+    # the whole widget with 60 px to spare (ensureWidgetVisible looks at an editor's text cursor only)
+    area = scroll_area(panel)
+    centre = widget.mapTo(area.widget(), widget.rect().center())
+    area.ensureVisible(centre.x(), centre.y(), 0, widget.height() // 2 + 60)
     QtWidgets.QApplication.processEvents()
     viewport = scroll_area(panel).viewport()
     top = widget.mapTo(viewport, QtCore.QPoint(0, 0)).y()

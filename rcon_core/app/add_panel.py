@@ -21,7 +21,7 @@ with each field's type); it is hidden when there is only one, or when the widget
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import attrs
@@ -31,7 +31,7 @@ from rcon_core.app.canvas_surface import DRAFT_MIME
 from rcon_core.app.catalog_panel import short_type
 from rcon_core.app.children_editor import ChildContext
 from rcon_core.app.draft import Candidate, Draft, Target, field_type
-from rcon_core.app.settings_form import SettingsForm, guard_wheel
+from rcon_core.app.settings_form import SettingsForm, form_label, guard_wheel, tune_form
 from rcon_core.app.widget_frame import WidgetFrame
 from rcon_core.plugins import Binding, Role, SettingsError, WidgetSpec
 
@@ -139,6 +139,59 @@ class ElidingCombo(QtWidgets.QComboBox):
         opt.currentText = self.fontMetrics().elidedText(opt.currentText, QtCore.Qt.TextElideMode.ElideRight,
                                                         max(0, field.width() - 4))
         painter.drawControl(QtWidgets.QStyle.ControlElement.CE_ComboBoxLabel, opt)
+
+
+class FieldChooser(ElidingCombo):
+    """The *Field* chooser: which field of the message a widget shows or sets, listed with each field's
+    type (``voltage · float32``), best first. Used by the add panel and by Configure on a placed widget.
+
+    ``chosen(path)`` is emitted when the operator picks a field (not when the list is filled).
+    """
+
+    chosen = QtCore.Signal(str)
+
+    def __init__(self, name: str = "fieldCombo") -> None:
+        super().__init__(name)
+        self.setAccessibleDescription("Which field of the message the widget shows or sets")
+        self.currentIndexChanged.connect(self._index_changed)
+
+    def set_fields(self, paths: Sequence[str], current: str, *, types: Any = None, type_name: str = "",
+                   service: bool = False) -> bool:
+        """List ``paths`` (``current`` first when it is not among them) and select ``current``; each with its
+        type when ``types`` knows ``type_name``. Returns whether there is a choice to make (2+ fields)."""
+        listed = list(dict.fromkeys(paths))
+        if current and current not in listed:
+            listed.insert(0, current)
+        self.blockSignals(True)
+        self.clear()
+        for path in listed:
+            tp = field_type(types, type_name, path, service) if types is not None and type_name else ""
+            self.addItem(f"{path} · {type_tail(tp)}" if tp else path, path)
+            self.setItemData(self.count() - 1, f"{path}: {tp or 'type unknown'}", QtCore.Qt.ItemDataRole.ToolTipRole)
+        if listed:
+            self.setCurrentIndex(listed.index(current) if current in listed else 0)
+        self.blockSignals(False)
+        self.setToolTip(self.currentText())
+        return len(listed) > 1
+
+    def paths(self) -> list[str]:
+        return [self.itemData(i) for i in range(self.count())]
+
+    def current_path(self) -> str | None:
+        """The selected field path (None when the list is empty)."""
+        return self.currentData()
+
+    def choose(self, path: str) -> None:
+        """Select ``path``; ValueError if it is not offered."""
+        index = self.findData(path)
+        if index < 0:
+            raise ValueError(f"{path!r} is not a field this widget can use here (offered: {self.paths()})")
+        self.setCurrentIndex(index)
+
+    def _index_changed(self, index: int) -> None:
+        path = self.itemData(index)
+        if path is not None:
+            self.chosen.emit(path)
 
 
 class PreviewSlot(QtWidgets.QWidget):
@@ -339,25 +392,23 @@ class AddPanel(QtWidgets.QWidget):
         # as wide as the panel, never wider (fields shrink instead of hiding under the scroll bar)
         inner.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored, QtWidgets.QSizePolicy.Policy.Preferred)
         self.settings_col = QtWidgets.QVBoxLayout(inner)
-        binding_box = QtWidgets.QFormLayout()
-        binding_box.setRowWrapPolicy(QtWidgets.QFormLayout.RowWrapPolicy.WrapLongRows)
+        binding_box = tune_form(QtWidgets.QFormLayout())
         self.role_combo = ElidingCombo("roleCombo")
         self.role_combo.currentIndexChanged.connect(self._role_combo_changed)
         self.target_combo = ElidingCombo("targetCombo")
         self.target_combo.currentIndexChanged.connect(self._target_changed)
-        self.target_label = QtWidgets.QLabel("Topic")
-        self.field_combo = ElidingCombo("fieldCombo")
-        self.field_combo.setAccessibleDescription("Which field of the message the widget shows or sets")
-        self.field_combo.currentIndexChanged.connect(self._field_changed)
-        self.field_label = QtWidgets.QLabel("Field")
-        binding_box.addRow("Role", self.role_combo)
+        self.target_label = form_label("Topic", self.target_combo)
+        self.field_combo = FieldChooser("fieldCombo")
+        self.field_combo.chosen.connect(self._field_changed)
+        self.field_label = form_label("Field", self.field_combo)
+        binding_box.addRow(form_label("Role", self.role_combo), self.role_combo)
         binding_box.addRow(self.target_label, self.target_combo)
         binding_box.addRow(self.field_label, self.field_combo)
         self.binding_box = binding_box
         self.title_edit = QtWidgets.QLineEdit()
         self.title_edit.setObjectName("titleEdit")
         self.title_edit.textChanged.connect(self._title_changed)
-        binding_box.addRow("Title", self.title_edit)
+        binding_box.addRow(form_label("Title", self.title_edit), self.title_edit)
         self.settings_col.addLayout(binding_box)
         # the live preview first, so it is in sight while the settings below are changed
         self.settings_col.addWidget(QtWidgets.QLabel("Preview"))
@@ -538,23 +589,13 @@ class AddPanel(QtWidgets.QWidget):
         Hidden when there is no choice to make (one field, or the widget takes the whole message)."""
         assert self.draft is not None
         target = self.draft.target
-        combo = self.field_combo
-        combo.blockSignals(True)
-        combo.clear()
         paths: list[str] = []
         if target is not None and target.field_paths:
             paths = list(target.choices or target.field_paths)
-            if target.field_paths[0] not in paths:
-                paths.insert(0, target.field_paths[0])
-        types = self._types()
-        for path in paths:
-            tp = field_type(types, target.type, path, self.draft.role.is_service) if target and types else ""
-            combo.addItem(f"{path} · {type_tail(tp)}" if tp else path, path)
-            combo.setItemData(combo.count() - 1, f"{path}: {tp or 'type unknown'}", QtCore.Qt.ItemDataRole.ToolTipRole)
-        if paths and target is not None:
-            combo.setCurrentIndex(paths.index(target.field_paths[0]))
-        combo.blockSignals(False)
-        shown = len(paths) > 1
+        shown = self.field_combo.set_fields(
+            paths, target.field_paths[0] if target is not None and target.field_paths else "",
+            types=self._types(), type_name=target.type if target is not None else "",
+            service=self.draft.role.is_service)
         self.binding_box.setRowVisible(self.field_combo, shown)
 
     def _types(self) -> Any:
@@ -575,11 +616,7 @@ class AddPanel(QtWidgets.QWidget):
 
     def choose_field(self, path: str) -> None:
         """Select the field ``path`` of the chosen target; ValueError if the widget cannot use it."""
-        index = self.field_combo.findData(path)
-        if index < 0:
-            offered = [self.field_combo.itemData(i) for i in range(self.field_combo.count())]
-            raise ValueError(f"{path!r} is not a field this widget can use here (offered: {offered})")
-        self.field_combo.setCurrentIndex(index)
+        self.field_combo.choose(path)
 
     def _role_combo_changed(self, index: int) -> None:
         if self.draft is None or not 0 <= index < len(self._roles):
@@ -607,9 +644,8 @@ class AddPanel(QtWidgets.QWidget):
         self._fill_fields()
         self._rebuild_preview()
 
-    def _field_changed(self, index: int) -> None:
-        path = self.field_combo.itemData(index)
-        if self.draft is None or self.draft.target is None or path is None:
+    def _field_changed(self, path: str) -> None:
+        if self.draft is None or self.draft.target is None:
             return
         self.draft.set_field_path(path)
         self._rebuild_preview()

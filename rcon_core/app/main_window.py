@@ -8,10 +8,11 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import attrs
 from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app import theme
-from rcon_core.app.add_panel import AddPanel
+from rcon_core.app.add_panel import AddPanel, FieldChooser
 from rcon_core.app.canvas_controller import CanvasController
 from rcon_core.app.catalog_panel import CatalogList
 from rcon_core.app.children_editor import ChildContext, link_learner
@@ -24,7 +25,7 @@ from rcon_core.app.live import LiveCanvas
 from rcon_core.app.notice_bar import NoticeBar
 from rcon_core.app.palette_panel import PalettePanel
 from rcon_core.app.preview import PreviewHost
-from rcon_core.app.settings_form import SettingsForm
+from rcon_core.app.settings_form import SettingsForm, form_label, tune_form
 from rcon_core.app.widget_host import RateMeter, WidgetHost
 from rcon_core.canvas import Document, Workspace, WorkspaceFileError, WorkspaceStore
 from rcon_core.plugins import Binding, PluginManager, Role, WidgetSpec
@@ -484,7 +485,8 @@ class MainWindow(QtWidgets.QMainWindow):
         return ChildContext(self.types, self.plugins, binding, link_learner(self.link))
 
     def configure_widget(self, instance_id: str) -> None:
-        """Edit a placed widget's title and settings in a dialog."""
+        """Edit a placed widget's field, title and settings in a dialog; OK is one undo step (Ctrl+Z
+        restores all of it). A new field rebinds the running widget (the runtime rebuilds its model)."""
         try:
             _canvas, inst = self.controller.workspace.find_widget(instance_id)
         except KeyError:
@@ -493,6 +495,7 @@ class MainWindow(QtWidgets.QMainWindow):
             return
         spec = self.plugins.widget(inst.kind)
         settings = spec.make_settings(inst.settings)
+        binding = inst.binding
         dialog = QtWidgets.QDialog(self)
         dialog.setObjectName("configureDialog")
         dialog.setWindowTitle(f"Configure {inst.title or spec.title}")
@@ -504,24 +507,28 @@ class MainWindow(QtWidgets.QMainWindow):
                            " border-radius: 6px; }")
         body_col = QtWidgets.QVBoxLayout(body)
         body_col.setContentsMargins(16, 12, 16, 12)
-        heading = QtWidgets.QLabel(f"{spec.title} on {inst.binding.name}" if inst.binding.name else spec.title)
+        heading = QtWidgets.QLabel(f"{spec.title} on {binding.name}" if binding.name else spec.title)
         heading.setProperty("role", "heading")
         body_col.addWidget(heading)
         top = QtWidgets.QFormLayout()
-        top.setLabelAlignment(QtCore.Qt.AlignmentFlag.AlignLeft | QtCore.Qt.AlignmentFlag.AlignVCenter)
-        top.setFieldGrowthPolicy(QtWidgets.QFormLayout.FieldGrowthPolicy.AllNonFixedFieldsGrow)
+        tune_form(top)
+        field = FieldChooser("configureField")
+        field_label = form_label("Field", field)
+        top.addRow(field_label, field)
+        top.setRowVisible(field, field.set_fields(
+            self.field_choices(spec, binding), binding.field_path, types=self.types, type_name=binding.type,
+            service=binding.role.is_service))
         title = QtWidgets.QLineEdit(inst.title)
         title.setObjectName("configureTitle")
         title.setPlaceholderText(spec.title)
-        title_label = QtWidgets.QLabel("Title")
-        title_label.setBuddy(title)
+        title_label = form_label("Title", title)
         top.addRow(title_label, title)
         body_col.addLayout(top)
-        binding = inst.binding
         form = SettingsForm(settings, context=self.child_context(lambda: binding)) if settings is not None else None
         if form is not None:
             body_col.addWidget(form)
-            _align_with(top, title_label, form)
+            _align_with(top, (field_label, title_label), form)
+        body_col.addStretch(1)  # a taller dialog leaves the rows as they are
         col.addWidget(body, 1)
         buttons = QtWidgets.QDialogButtonBox(
             QtWidgets.QDialogButtonBox.StandardButton.Ok | QtWidgets.QDialogButtonBox.StandardButton.Cancel
@@ -530,14 +537,41 @@ class MainWindow(QtWidgets.QMainWindow):
         buttons.rejected.connect(dialog.reject)
         col.addWidget(buttons)
         self.configure_dialog = dialog
-        dialog.accepted.connect(
-            lambda: self.controller.update_instance(
+
+        def apply() -> None:
+            path = field.current_path()
+            rebound = None
+            if top.isRowVisible(field) and path is not None and path != binding.field_path:
+                rest = tuple(p for p in binding.field_paths[1:] if p != path)
+                rebound = attrs.evolve(binding, field_paths=(path, *rest))
+            self.doc.reconfigure_widget(  # one undo step for field, title and settings together
                 instance_id,
                 settings=spec.settings_to_dict(form.value()) if form is not None else None,
+                binding=rebound,
                 title=title.text(),
             )
-        )
+
+        dialog.accepted.connect(apply)
+        dialog.finished.connect(lambda _result: self._dialog_closed(dialog))
         dialog.open()
+
+    def _dialog_closed(self, dialog: QtWidgets.QDialog) -> None:
+        """The keyboard goes back to the window (Ctrl+Z right after OK undoes it), the dialog goes away."""
+        self.activateWindow()
+        dialog.deleteLater()
+
+    def field_choices(self, spec: WidgetSpec, binding: Binding) -> list[str]:
+        """The fields a widget of ``spec`` can bind on ``binding``'s type in its role, best first (the
+        matcher's ``field_paths``); empty when it takes the whole message or the type is not known."""
+        from rcon_core.matcher import match
+
+        if not binding.type or not binding.field_paths:
+            return []
+        try:
+            found = match(binding.type, binding.role, self.types, self.plugins)
+        except ValueError:  # a malformed type name in the layout: nothing to choose from
+            return []
+        return next((list(m.field_paths) for m in found if m.spec.kind == spec.kind), [])
 
     # -------------------------------------------------------------------------------------- link
     def _client_changed(self, client: Any) -> None:
@@ -619,21 +653,22 @@ class MainWindow(QtWidgets.QMainWindow):
         self.link.shutdown()
 
 
-def _align_with(top: QtWidgets.QFormLayout, label: QtWidgets.QLabel, form: QtWidgets.QWidget) -> None:
-    """Give the title row the settings form's margins and label column, so the dialog reads as one form."""
+def _align_with(top: QtWidgets.QFormLayout, labels: tuple[QtWidgets.QLabel, ...], form: QtWidgets.QWidget) -> None:
+    """Give the dialog's own rows (field, title) the settings form's margins and label column, so the
+    dialog reads as one form."""
     inner = form.layout()
     if not isinstance(inner, QtWidgets.QFormLayout):
         return
     top.setContentsMargins(inner.contentsMargins())
     top.setHorizontalSpacing(inner.horizontalSpacing())
     top.setLabelAlignment(inner.labelAlignment())
-    widths = []
+    widths = [label.sizeHint().width() for label in labels]
     for row in range(inner.rowCount()):
         item = inner.itemAt(row, QtWidgets.QFormLayout.ItemRole.LabelRole)
         widget = item.widget() if item is not None else None
         if widget is not None:
             widths.append(widget.sizeHint().width())
-    if widths:
+    for label in labels:
         label.setMinimumWidth(max(widths))
 
 

@@ -66,6 +66,60 @@ def guard_wheel(widget: QtWidgets.QWidget) -> QtWidgets.QWidget:
 
 #: editors whose value a wheel changes
 WHEEL_EDITORS = (QtWidgets.QAbstractSpinBox, QtWidgets.QComboBox, QtWidgets.QAbstractSlider)
+#: where an editor's text starts, from its outer left edge: the theme's 3 px border and 8 px padding
+TEXT_INSET = 11
+#: the narrowest a number editor gets before its row wraps (its label above it); Qt would otherwise size it
+#: for the longest number of its range (13 digits) and wrap every number row in the narrow add panel
+SPIN_MIN_WIDTH = 120
+
+
+def form_label(text: str, buddy: QtWidgets.QWidget | None = None) -> QtWidgets.QLabel:
+    """A form row's label, vertically centred on its (taller, touch-sized) field: QFormLayout gives a
+    label the whole row's height only when it may grow vertically; its text is centred in that."""
+    label = QtWidgets.QLabel(text)
+    label.setSizePolicy(QtWidgets.QSizePolicy.Policy.Preferred, QtWidgets.QSizePolicy.Policy.Expanding)
+    label.setAlignment(QtCore.Qt.AlignmentFlag.AlignLeft | QtCore.Qt.AlignmentFlag.AlignVCenter)
+    if buddy is not None:
+        label.setBuddy(buddy)
+    return label
+
+
+def tune_form(layout: QtWidgets.QFormLayout) -> QtWidgets.QFormLayout:
+    """The form look of RCON's settings: labels left of their fields and centred on them, fields taking the
+    rest of the width; a row whose label and field do not fit side by side (a very narrow panel) puts the
+    label above. Use :func:`form_label` for the labels. Returns ``layout``."""
+    layout.setFieldGrowthPolicy(QtWidgets.QFormLayout.FieldGrowthPolicy.AllNonFixedFieldsGrow)
+    layout.setRowWrapPolicy(QtWidgets.QFormLayout.RowWrapPolicy.WrapLongRows)
+    layout.setLabelAlignment(QtCore.Qt.AlignmentFlag.AlignLeft | QtCore.Qt.AlignmentFlag.AlignVCenter)
+    layout.setFormAlignment(QtCore.Qt.AlignmentFlag.AlignLeft | QtCore.Qt.AlignmentFlag.AlignTop)
+    return layout
+
+
+class _SpinTextInset(QtCore.QObject):
+    """Event filter on a spin box's inner line edit: keeps its text :data:`TEXT_INSET` px from the spin
+    box's outer edge, like a line edit's (the style sheet style places the inner edit at the very left,
+    over the border, ignoring the theme's padding)."""
+
+    def eventFilter(self, obj: QtCore.QObject, event: QtCore.QEvent) -> bool:
+        if event.type() in (QtCore.QEvent.Type.Move, QtCore.QEvent.Type.Show) and isinstance(obj, QtWidgets.QLineEdit):
+            inset = max(0, TEXT_INSET - obj.x())
+            margins = obj.textMargins()
+            if margins.left() != inset:
+                obj.setTextMargins(inset, margins.top(), margins.right(), margins.bottom())
+        return False
+
+
+def pad_spin_box(spin: QtWidgets.QAbstractSpinBox) -> QtWidgets.QAbstractSpinBox:
+    """Give ``spin``'s text the same inner padding as a line edit's, and a modest minimum width.
+    Returns ``spin``."""
+    spin.setMinimumWidth(SPIN_MIN_WIDTH)
+    edit = spin.findChild(QtWidgets.QLineEdit)
+    if edit is not None and edit.findChild(_SpinTextInset, "spinTextInset") is None:
+        inset = _SpinTextInset(edit)
+        inset.setObjectName("spinTextInset")
+        edit.installEventFilter(inset)
+        edit.setTextMargins(max(0, TEXT_INSET - edit.x()), 0, 0, 0)
+    return spin
 
 
 def _resolved_fields(cls: type) -> tuple[attrs.Attribute, ...]:
@@ -109,9 +163,8 @@ class SettingsForm(QtWidgets.QWidget):
         self._context = context
         self._editors: dict[str, tuple[QtWidgets.QWidget, typing.Callable[[], Any]]] = {}
         self.children_editors: dict[str, ChildrenEditor] = {}
-        layout = QtWidgets.QFormLayout(self)
-        layout.setFieldGrowthPolicy(QtWidgets.QFormLayout.FieldGrowthPolicy.AllNonFixedFieldsGrow)
-        layout.setRowWrapPolicy(QtWidgets.QFormLayout.RowWrapPolicy.WrapLongRows)  # narrow panel: label above
+        layout = tune_form(QtWidgets.QFormLayout(self))
+        layout.setContentsMargins(0, 0, 0, 0)  # lined up with the rows above it (add panel, Configure)
         layout.setVerticalSpacing(10)
         for field in _resolved_fields(self._cls):
             if field.name.startswith("_"):
@@ -123,6 +176,8 @@ class SettingsForm(QtWidgets.QWidget):
             editor.setObjectName(f"setting_{field.name}")
             if isinstance(editor, WHEEL_EDITORS):
                 guard_wheel(editor)
+            if isinstance(editor, QtWidgets.QAbstractSpinBox):
+                pad_spin_box(editor)
             if field.metadata.get("help"):
                 editor.setToolTip(str(field.metadata["help"]))
             self._editors[field.name] = (editor, getter)
@@ -132,7 +187,7 @@ class SettingsForm(QtWidgets.QWidget):
                 layout.addRow(heading)
                 layout.addRow(editor)
             else:
-                layout.addRow(_label(field), editor)
+                layout.addRow(form_label(_label(field), editor), editor)
         if not self._editors:
             note = QtWidgets.QLabel("This widget has no settings.")
             note.setProperty("role", "hint")

@@ -16,7 +16,7 @@ import math
 
 from qtpy import QtCore, QtGui, QtWidgets
 
-from rcon_core.app.geometry import GRID, fit_rect, scaled_about_center, snap_rect
+from rcon_core.app.geometry import GRID, fit_rect, scaled_about_center, snap_rect, snap_up
 from rcon_core.app.theme import current_touch_px, repolish
 
 LONG_PRESS_MS = 600
@@ -282,7 +282,7 @@ class FrameBody(QtWidgets.QWidget):
 class WidgetFrame(QtWidgets.QFrame):
     """One widget instance on a canvas surface."""
 
-    geometry_committed = QtCore.Signal(str, QtCore.QRect)  # instance id, new rect (snapped, on screen)
+    geometry_committed = QtCore.Signal(str, QtCore.QRect)  # instance id, new rect (snapped, on the canvas)
     action_requested = QtCore.Signal(str, str)  # instance id, "configure" | "duplicate" | "delete"
     selected_changed = QtCore.Signal(str, bool)
 
@@ -309,8 +309,6 @@ class WidgetFrame(QtWidgets.QFrame):
         self.shield = Shield(self)
         self.marks = [CornerMark(corner, self) for corner in CORNERS]
         self._pinch_start = QtCore.QRect()
-        #: where the operator put the widget; re-applied when the canvas grows back after shrinking
-        self.desired = QtCore.QRect()
 
     # content ----------------------------------------------------------------------------------------
     def set_view(self, view: QtWidgets.QWidget) -> None:
@@ -384,10 +382,28 @@ class WidgetFrame(QtWidgets.QFrame):
         parent = self.parentWidget()
         return parent.rect() if parent is not None else QtCore.QRect(0, 0, 10_000, 10_000)
 
+    def max_size(self) -> QtCore.QSize:
+        """The largest a resize or pinch may make the frame: the canvas's visible area (its scroll view),
+        on the grid, never below :meth:`min_size`. A widget loaded larger keeps its size (see
+        :meth:`_capped`)."""
+        parent = self.parentWidget()
+        view_size = getattr(parent, "view_size", None)
+        view = view_size() if callable(view_size) else parent.size() if parent is not None else None
+        low = self.min_size()
+        if view is None or view.isEmpty():
+            return QtCore.QSize(max(low.width(), 10_000), max(low.height(), 10_000))
+        return QtCore.QSize(max(snap_up(low.width()), view.width() // GRID * GRID),
+                            max(snap_up(low.height()), view.height() // GRID * GRID))
+
+    def _limit(self, start: QtCore.QRect) -> QtCore.QSize:
+        """:meth:`max_size`, or ``start``'s size where it is already larger (growing stops, nothing jumps)."""
+        cap = self.max_size()
+        return QtCore.QSize(max(cap.width(), start.width()), max(cap.height(), start.height()))
+
     def place(self, rect: QtCore.QRect, remember: bool = False) -> None:
-        """Set the frame's geometry, kept on screen (no snapping: used while dragging and on load)."""
-        if remember:
-            self.desired = QtCore.QRect(rect)
+        """Set the frame's geometry, at least :meth:`min_size` and never left of or above the canvas (no
+        snapping, no upper limit: used while dragging and on load; the canvas scrolls to cover it).
+        ``remember`` is accepted for callers that still pass it; it has no effect."""
         self.setGeometry(fit_rect(rect, self.bounds(), self.min_size()))
 
     def move_to(self, top_left: QtCore.QPoint, finished: bool = True) -> None:
@@ -396,33 +412,40 @@ class WidgetFrame(QtWidgets.QFrame):
             self.commit_geometry()
 
     def resize_corner(self, corner: str, start: QtCore.QRect, delta: QtCore.QPoint, finished: bool = True) -> None:
+        """Drag ``corner`` of ``start`` by ``delta``; the opposite corner stays, the size stays between
+        :meth:`min_size` and :meth:`max_size`."""
         r = QtCore.QRect(start)
+        low, high = self.min_size(), self._limit(start)
         if "l" in corner:
-            r.setLeft(min(r.left() + delta.x(), r.right() - self.min_size().width()))
+            r.setLeft(max(min(r.left() + delta.x(), r.right() - low.width()), r.right() + 1 - high.width()))
         else:
-            r.setRight(r.right() + delta.x())
+            r.setRight(min(r.right() + delta.x(), r.left() + high.width() - 1))
         if "t" in corner:
-            r.setTop(min(r.top() + delta.y(), r.bottom() - self.min_size().height()))
+            r.setTop(max(min(r.top() + delta.y(), r.bottom() - low.height()), r.bottom() + 1 - high.height()))
         else:
-            r.setBottom(r.bottom() + delta.y())
+            r.setBottom(min(r.bottom() + delta.y(), r.top() + high.height() - 1))
         self.place(r)
         if finished:
             self.commit_geometry()
 
     def apply_pinch(self, scale: float, start: QtCore.QRect | None = None, finished: bool = True) -> None:
-        """Resize by ``scale`` (relative to ``start``, default the current geometry) about the centre."""
+        """Resize by ``scale`` (relative to ``start``, default the current geometry) about the centre,
+        keeping the aspect; growing stops at :meth:`max_size` (the canvas's visible area)."""
         if not self.editable:
             return
-        scale = max(0.1, min(10.0, float(scale)))
-        self.place(scaled_about_center(start if start is not None else self.geometry(), scale))
+        start = QtCore.QRect(start if start is not None else self.geometry())
+        high = self._limit(start)
+        fits = min(high.width() / max(1, start.width()), high.height() / max(1, start.height()))
+        scale = max(0.1, min(float(scale), fits))
+        self.place(scaled_about_center(start, scale))
         if finished:
             self.commit_geometry()
 
     def commit_geometry(self) -> None:
-        """Snap to the grid, keep on screen and report the final geometry."""
+        """Snap to the grid (at least :meth:`min_size`, never at negative coordinates; the canvas
+        scrolls to the rest) and report the final geometry."""
         rect = fit_rect(snap_rect(self.geometry()), self.bounds(), self.min_size())
         self.setGeometry(rect)
-        self.desired = QtCore.QRect(rect)
         self.geometry_committed.emit(self.instance_id, QtCore.QRect(rect))
 
     # gestures (native pinch, e.g. trackpads; the shield receives them) ----------------------------
