@@ -9,7 +9,7 @@ from typing import Any
 import attrs
 
 from rcon_core.plugins import Role
-from rcon_core.plugins.paths import PathError
+from rcon_core.plugins.paths import PathError, get_path
 
 from .base import StdModel
 from .common import INT_LIMITS, RateLimiter, field_at, type_limits
@@ -37,9 +37,19 @@ class SliderSettings:
     decimals: int = attrs.field(default=2, metadata={"label": "Decimals", "min": 0, "max": 9})
     units: str = attrs.field(default="", metadata={"label": "Units"})
     stale_after: float = attrs.field(default=5.0, metadata={"label": "Stale after (s)", "min": 0.1})
+    initial: float = attrs.field(
+        default=0.0, metadata={"label": "Start value",
+                               "help": "publish sliders: shown until something is sent or heard (clamped to the range)"}
+    )
+    follow_topic: bool = attrs.field(
+        default=True, metadata={"label": "Follow the topic",
+                                "help": "publish sliders: also show values others publish on the topic"}
+    )
 
     def problems(self) -> list[str]:
-        return range_problems(self.minimum, self.maximum, self.step, self.rate_hz) + (
+        out = [] if isinstance(self.initial, (int, float)) and math.isfinite(self.initial) else [
+            f"start value must be a finite number, not {self.initial!r}"]
+        return out + range_problems(self.minimum, self.maximum, self.step, self.rate_hz) + (
             [] if self.publish_mode in (PUBLISH_ON_RELEASE, PUBLISH_CONTINUOUS)
             else [f"publish must be {PUBLISH_ON_RELEASE!r} or {PUBLISH_CONTINUOUS!r}, not {self.publish_mode!r}"]
         )
@@ -159,12 +169,75 @@ class NumericModel(StdModel):
         self._limiter.cancel()
 
 
+#: the value each publish slider last sent or heard, per (topic, field), for this process: a slider
+#: rebuilt after a canvas switch, a reconfiguration or a reconnect shows it instead of its start value
+_LAST_VALUES: dict[tuple[str, str], float | int] = {}
+#: seconds after our own publish during which a different value heard on the topic is taken for an echo
+#: of an earlier publish of ours (continuous mode) rather than another publisher's
+ECHO_WINDOW_S = 0.5
+
+
 class SliderModel(NumericModel):
-    """PUBLISH: the view calls :meth:`drag` while moving and :meth:`release` when let go.
+    """PUBLISH: the view calls :meth:`drag` while moving and :meth:`release` when let go. The value is
+    always shown: what was last sent or heard on the topic (this session), else the start value; with
+    ``follow_topic`` the slider also subscribes to its own topic and shows what others publish.
     SUBSCRIBE: the bound field becomes the value (a float or int)."""
 
     def __init__(self, settings: SliderSettings | None, *args: Any, **kwargs: Any) -> None:
         super().__init__(settings if settings is not None else SliderSettings(), *args, **kwargs)
+        self._follow_sub: Any = None
+        self._sent: tuple[float, float | int] | None = None  #: (when, value) of our last publish
+
+    @property
+    def _key(self) -> tuple[str, str]:
+        return (self.binding.name, self.binding.field_path)
+
+    def on_start(self) -> None:
+        super().on_start()
+        b = self.binding
+        if b.role is not Role.PUBLISH or b.problems():
+            return
+        remembered = _LAST_VALUES.get(self._key)
+        self.replace_value(self.range.coerce(remembered if remembered is not None else self.settings.initial))
+        if self.settings.follow_topic:
+            self._follow_sub = self.port.subscribe(b.name, self._on_topic, type=b.type)
+
+    def on_types_ready(self) -> None:
+        super().on_types_ready()
+        v = self.state.value
+        if self.binding.role is Role.PUBLISH and isinstance(v, (int, float)) and not isinstance(v, bool):
+            self.replace_value(self.range.coerce(v))  # the field's real type may narrow the range
+
+    def on_stop(self) -> None:
+        super().on_stop()
+        if self._follow_sub is not None:
+            try:
+                self._follow_sub.unsubscribe()
+            except Exception as exc:
+                self.set_error(f"while stopping: {exc}")
+            self._follow_sub = None
+
+    def _send(self, value: float | int) -> None:
+        if self.publish_value(value):
+            self._sent = (self._clock(), value)
+            _LAST_VALUES[self._key] = value
+            self.set_value(value)
+
+    def _on_topic(self, msg: dict[str, Any]) -> None:
+        """A value on our own topic (loop thread): ours coming back, or another publisher's."""
+        path = self.binding.field_path
+        try:
+            value = get_path(msg, path) if path else None
+        except PathError:
+            return  # a message without our field: nothing to show
+        if not isinstance(value, (int, float)) or isinstance(value, bool):
+            return
+        if self._sent is not None:
+            when, mine = self._sent
+            if value != mine and self._clock() - when < ECHO_WINDOW_S:
+                return  # an echo of an earlier publish of ours, overtaken by the last one
+        _LAST_VALUES[self._key] = value
+        self.set_value(value, message=msg)
 
     def drag(self, value: float) -> float | int:
         """The handle moved: publishes (rate-limited) only in continuous mode."""

@@ -1,6 +1,7 @@
 """Slider: ranges clamped to the field type, step snapping, rate limiting, publish and subscribe against
 the robot, types learned from the robot, a numeric field inside a larger message."""
 
+import asyncio
 import math
 
 import pytest
@@ -146,3 +147,52 @@ async def test_int8_slider_on_a_type_learned_from_the_robot_clamps_to_127(sim):
         got = await sim.wait_for_published("/rcon_test/level", timeout=10)
         assert got == {"data": 127}
         m.stop()
+
+
+async def test_publish_slider_always_shows_a_value_start_value_then_sent_then_remembered(sim):
+    async with bridge(sim) as client:
+        settings = SliderSettings(minimum=0.5, maximum=2, step=0.1, follow_topic=False)
+        m = build(SliderModel, settings, "/rcon_test/limit_a", "std_msgs/Float64", "publish", "data",
+                  client=client, node="a")
+        m.start()
+        assert m.state.value == 0.5  # start value 0 clamped to the minimum: never "–"
+        m.release(1.3)
+        await sim.wait_for_published("/rcon_test/limit_a", lambda msg: msg["data"] == 1.3, timeout=10)
+        assert m.state.value == 1.3
+        m.stop()
+        again = build(SliderModel, settings, "/rcon_test/limit_a", "std_msgs/Float64", "publish", "data",
+                      client=client, node="a2")  # the canvas was switched away and back
+        again.start()
+        assert again.state.value == 1.3
+        again.stop()
+        other = build(SliderModel, SliderSettings(minimum=0, maximum=2, initial=0.8, follow_topic=False),
+                      "/rcon_test/limit_b", "std_msgs/Float64", "publish", "data", client=client, node="b")
+        other.start()
+        assert other.state.value == 0.8
+        other.stop()
+
+
+async def test_publish_slider_follows_what_others_publish_on_its_topic(sim):
+    async with bridge(sim) as client:
+        follow = build(SliderModel, SliderSettings(minimum=0, maximum=3, step=0.1), "/rcon_test/limit_c",
+                       "std_msgs/Float64", "publish", "data", client=client, node="follow")
+        deaf = build(SliderModel, SliderSettings(minimum=0, maximum=3, step=0.1, follow_topic=False),
+                     "/rcon_test/limit_c", "std_msgs/Float64", "publish", "data", client=client, node="deaf")
+        follow.start()
+        deaf.start()
+        await until(lambda: sim.topic_subscriber_count("/rcon_test/limit_c") >= 1, what="the follow subscription")
+        stepper_console = client.node("another-console").advertise("/rcon_test/limit_c", "std_msgs/Float64")
+        stepper_console.publish({"data": 2.25})
+        await until(lambda: follow.state.value == 2.25, what="the other publisher's value")
+        assert deaf.state.value == 0.0
+        follow.release(1.0)  # and its own value still goes out and is shown
+        await sim.wait_for_published("/rcon_test/limit_c", lambda msg: msg["data"] == 1.0, timeout=10)
+        await asyncio.sleep(0.2)
+        assert follow.state.value == 1.0
+        follow.stop()
+        deaf.stop()
+        await until(lambda: sim.topic_subscriber_count("/rcon_test/limit_c") == 0, what="unsubscribed on stop")
+
+
+def test_start_value_must_be_a_number():
+    assert SliderSettings(initial=float("nan")).problems() == ["start value must be a finite number, not nan"]

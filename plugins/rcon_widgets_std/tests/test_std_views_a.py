@@ -104,6 +104,24 @@ def test_slider_view_drag_and_release_publish_through_the_bridge(qtbot, live, si
     live.thread.call(m.stop).result(5)
 
 
+def test_publish_slider_view_shows_its_value_from_the_start(qtbot, live, sim_thread):
+    m = SliderModel(SliderSettings(minimum=0.5, maximum=2, step=0.1, units="m/s"),
+                    build(SliderModel, None, "/rcon_test/limit_v", "std_msgs/Float64", "publish", "data").binding,
+                    live.node("slider-v"), types=TypeRegistry.standard(), dispatch=live.thread.call)
+    live.thread.call(m.start).result(5)
+    view = SliderView(m)
+    qtbot.addWidget(view)
+    view.refresh(m.state)
+    assert view.value.text() == "0.50 m/s" and view.slider.value() == 0  # never "–"
+    wait_until(qtbot, lambda: sim_thread.topic_subscriber_count("/rcon_test/limit_v") >= 1, what="following")
+    other = live.node("another-console")
+    live.thread.call(lambda: other.advertise("/rcon_test/limit_v", "std_msgs/Float64").publish({"data": 1.5}))
+    wait_until(qtbot, lambda: m.state.value == 1.5, what="another console's value")
+    view.refresh(m.state)
+    assert view.value.text() == "1.50 m/s" and view.slider.value() == 10
+    live.thread.call(m.stop).result(5)
+
+
 def test_slider_view_subscribe_follows_and_cannot_be_moved(qtbot):
     m = build(SliderModel, SliderSettings(minimum=0, maximum=1), "/battery", "sensor_msgs/BatteryState",
               "subscribe", "percentage")
