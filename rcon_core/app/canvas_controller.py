@@ -189,7 +189,7 @@ class CanvasController(QtCore.QObject):
         frame = self.surfaces[canvas_id].frames.get(widget.id)
         if frame is not None:
             g = widget.geometry
-            frame.place(QtCore.QRect(round(g.x), round(g.y), round(g.w), round(g.h)), remember=True)
+            frame.place(QtCore.QRect(round(g.x), round(g.y), round(g.w), round(g.h)))
             self.surfaces[canvas_id].refit()
         self.host.update_widget(widget)
         before = self._known.get(widget.id)

@@ -53,7 +53,7 @@ class CanvasSurface(QtWidgets.QWidget):
         frame.setFocusPolicy(QtCore.Qt.FocusPolicy.ClickFocus)  # focus lands on a placed widget
         frame.set_editable(self.editable)
         self._grow_to(rect)  # before placing: the frame is never clamped to a surface too small for it
-        frame.place(rect, remember=True)
+        frame.place(rect)
         frame.installEventFilter(self)
         frame.selected_changed.connect(self._selection_changed)
         frame.show()

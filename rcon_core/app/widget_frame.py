@@ -400,10 +400,9 @@ class WidgetFrame(QtWidgets.QFrame):
         cap = self.max_size()
         return QtCore.QSize(max(cap.width(), start.width()), max(cap.height(), start.height()))
 
-    def place(self, rect: QtCore.QRect, remember: bool = False) -> None:
+    def place(self, rect: QtCore.QRect) -> None:
         """Set the frame's geometry, at least :meth:`min_size` and never left of or above the canvas (no
-        snapping, no upper limit: used while dragging and on load; the canvas scrolls to cover it).
-        ``remember`` is accepted for callers that still pass it; it has no effect."""
+        snapping, no upper limit: used while dragging and on load; the canvas scrolls to cover it)."""
         self.setGeometry(fit_rect(rect, self.bounds(), self.min_size()))
 
     def move_to(self, top_left: QtCore.QPoint, finished: bool = True) -> None:
