@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import collections
 import threading
+import time
 from typing import Any
 
 import attrs
@@ -22,6 +23,11 @@ LEVELS = ("debug", "info", "warn", "error", "fatal")
 _ROS1 = {1: "debug", 2: "info", 4: "warn", 8: "error", 16: "fatal"}
 _ROS2 = {10: "debug", 20: "info", 30: "warn", 40: "error", 50: "fatal"}
 MAX_LINES_LIMIT = 50_000
+#: a log line arriving this soon (s) after subscribing, stamped before the subscription, is a latched
+#: replay (rosbridge sends each node's latched last line first, in no time order)
+REPLAY_WINDOW_S = 1.5
+#: how much older (s) than the subscription a line's stamp must be to count as replayed (clock slack)
+REPLAY_SLACK_S = 1.0
 
 
 def level_name(level: Any) -> str:
@@ -60,6 +66,8 @@ class Line:
     level: str = "info"
     node: str = ""
     stamp: float | None = None  #: seconds (the message's own stamp), when it has one
+    #: logged before we subscribed and delivered as a latched replay: shown first, in stamp order, marked
+    replayed: bool = False
 
     def matches(self, min_level: str, text: str) -> bool:
         if LEVELS.index(self.level) < LEVELS.index(min_level):
@@ -95,6 +103,13 @@ class TextViewModel(StdModel):
         self._filter_text = s.filter_text
         self._filter_version = 0
         self._echo_sub: Any = None
+        #: wall clock (log stamps are wall time); tests may replace it
+        self.wall: Any = time.time
+        self._subscribed_wall: float | None = None
+        self._subscribed_mono: float | None = None
+        #: (node, stamp, text) of the stamped lines kept: a latched line sent again (a re-subscription
+        #: after a reconnect) is not shown twice
+        self._seen: collections.OrderedDict[tuple[str, float, str], None] = collections.OrderedDict()
 
     @property
     def is_log(self) -> bool:
@@ -110,14 +125,56 @@ class TextViewModel(StdModel):
         return Line(n, str(text))
 
     def on_message(self, msg: dict[str, Any]) -> None:
+        """Lines are shown in the order received, except the latched replay a subscription starts with:
+        those lines (each node's last line from before we subscribed) come first, in stamp order, marked
+        as replayed, so the history reads in time order from the top. A stamped line already kept (sent
+        again by a re-subscription) is dropped."""
         with self._hist_lock:
             self._n += 1
             line = self.to_line(msg, self._n)
-            self._all.append(line)
-            if line.matches(self._min_level, self._filter_text):
-                self._visible.append(line)
+            if line.stamp is not None:
+                key = (line.node, line.stamp, line.text)
+                if key in self._seen:
+                    self._n -= 1
+                    return
+                self._seen[key] = None
+                while len(self._seen) > self._all.maxlen:
+                    self._seen.popitem(last=False)
+                if self._is_replay(line):
+                    line = attrs.evolve(line, replayed=True)
+            if line.replayed and self._insert_replayed(line):
+                pass  # placed among the earlier replayed lines: the view repaints everything
+            else:
+                self._all.append(line)
+                if line.matches(self._min_level, self._filter_text):
+                    self._visible.append(line)
             history = self._snapshot()
         self.set_value(history, message=msg)
+
+    def _is_replay(self, line: Line) -> bool:
+        if self._subscribed_wall is None or self._subscribed_mono is None or line.stamp is None:
+            return False
+        soon = self._clock() - self._subscribed_mono < REPLAY_WINDOW_S
+        return soon and line.stamp < self._subscribed_wall - REPLAY_SLACK_S
+
+    def _insert_replayed(self, line: Line) -> bool:
+        """Put a replayed line in stamp order within the leading replayed block. Returns False when its
+        place is the end (an ordinary append), True when it was inserted before other lines."""
+        at = 0
+        for x in self._all:
+            if not x.replayed or (x.stamp or 0.0) > (line.stamp or 0.0):
+                break
+            at += 1
+        if at == len(self._all):
+            return False
+        if len(self._all) == self._all.maxlen:
+            self._all.popleft()
+            at = max(0, at - 1)
+        self._all.insert(at, line)
+        self._visible.clear()
+        self._visible.extend(x for x in self._all if x.matches(self._min_level, self._filter_text))
+        self._filter_version += 1  # lines moved: the view paints the history again
+        return True
 
     def _snapshot(self) -> History:
         return History(tuple(self._visible), self._filter_version, self._min_level, self._filter_text, self._n)
@@ -139,6 +196,7 @@ class TextViewModel(StdModel):
 
     def clear(self) -> None:
         with self._hist_lock:
+            self._seen.clear()
             self._all.clear()
             self._visible.clear()
             self._filter_version += 1
@@ -147,6 +205,7 @@ class TextViewModel(StdModel):
 
     # -- chat: publish role --------------------------------------------------------------------------
     def on_start(self) -> None:
+        self._subscribed_wall, self._subscribed_mono = self.wall(), self._clock()
         super().on_start()
         b = self.binding
         if b.role is Role.PUBLISH and not b.problems():

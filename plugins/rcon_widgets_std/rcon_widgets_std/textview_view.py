@@ -70,6 +70,10 @@ class TextViewView(QtWidgets.QWidget):
         parts.append(line.text)
         colour = LEVEL_COLOURS.get(line.level, "#000000")
         weight = "font-weight:bold;" if line.level in ("error", "fatal") else ""
+        if getattr(line, "replayed", False):
+            # logged before this console subscribed (a node's latched last line): marked, in italics
+            parts.insert(0, "↺")
+            weight += "font-style:italic;"
         text = html.escape(" ".join(parts)).replace("  ", " &nbsp;")
         return f'<span style="color:{colour};{weight}">{text}</span>'
 

@@ -125,3 +125,52 @@ async def test_ros2_rosout_from_a_ros2_robot():
             m.stop()
     finally:
         await server.stop()
+
+
+async def test_latched_rosout_replay_comes_first_in_time_order_and_marked(sim):
+    """rosbridge delivers each node's latched last /rosout line first on subscribe, in node order, not
+    time order (the Text View showed 11:57:35 above 11:57:31). Those lines come first, sorted by stamp,
+    marked replayed; live lines follow in the order received; a line sent again is not shown twice."""
+    sim.log("/node_a", "info", "a: old line")
+    await asyncio.sleep(0.05)
+    sim.log("/node_b", "warn", "b: line")
+    await asyncio.sleep(0.05)
+    sim.log("/node_a", "info", "a: newer line")  # node_a's latched line is now newer than node_b's
+    await asyncio.sleep(1.3)  # logged well before the console subscribes
+    async with bridge(sim) as client:
+        m = build(TextViewModel, TextViewSettings(), "/rosout", "rosgraph_msgs/Log", "subscribe", client=client)
+        m.start()
+        await until(lambda: m.state.value is not None and any("a: newer" in x.text for x in m.state.value.lines)
+                    and any("b: line" in x.text for x in m.state.value.lines), what="the latched replay")
+        sim.log("/node_c", "info", "c: live line")
+        await until(lambda: any("c: live" in x.text for x in m.state.value.lines), what="a live line")
+        lines = m.state.value.lines
+        replayed = [x for x in lines if x.replayed]
+        assert [x.text for x in replayed if x.node.startswith("/node_")] == ["b: line", "a: newer line"]
+        assert [x.stamp for x in replayed] == sorted(x.stamp for x in replayed)
+        assert lines[:len(replayed)] == tuple(replayed)  # the replay block is at the top
+        live = next(x for x in lines if x.text == "c: live line")
+        assert not live.replayed
+        again = {"header": {"seq": 0, "stamp": {"secs": int(live.stamp), "nsecs": round(live.stamp % 1 * 1e9)},
+                            "frame_id": ""}, "level": 2, "name": live.node, "msg": live.text}
+        count = len(m.state.value.lines)
+        m.on_message(again)  # the same line once more (a re-subscription after a reconnect)
+        assert len(m.state.value.lines) == count
+        m.stop()
+
+
+def test_replayed_lines_are_marked_in_the_view(qtbot):
+    from rcon_widgets_std.textview_view import TextViewView
+
+    m = build(TextViewModel, TextViewSettings(), "/rosout", "rosgraph_msgs/Log", "subscribe")
+    m.wall = lambda: 1_000_000.0
+    m.on_start()  # subscribed at wall time 1e6
+    for name, secs in (("/late", 999_990), ("/early", 999_980)):  # replay order: not time order
+        m.on_message({"header": {"stamp": {"secs": secs, "nsecs": 0}}, "level": 2, "name": name, "msg": name})
+    m.on_message({"header": {"stamp": {"secs": 1_000_001, "nsecs": 0}}, "level": 2, "name": "/live", "msg": "now"})
+    view = TextViewView(m)
+    qtbot.addWidget(view)
+    view.refresh(m.state)
+    rows = view.history.toPlainText().splitlines()
+    assert [r.split()[-1] for r in rows] == ["/early", "/late", "now"]
+    assert rows[0].startswith("↺") and rows[1].startswith("↺") and not rows[2].startswith("↺")
