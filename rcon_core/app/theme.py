@@ -26,9 +26,13 @@ def stylesheet(touch: int | None = None) -> str:
     """The theme's QSS with the touch size and font sizes filled in."""
     touch = touch or touch_px()
     font = max(16, touch // 3)
-    text = resources.files("rcon_core.app").joinpath("theme.qss").read_text(encoding="utf-8")
+    here = resources.files("rcon_core.app")
+    text = here.joinpath("theme.qss").read_text(encoding="utf-8")
     return (
-        text.replace("@TOUCH@", str(touch))
+        text.replace("@ICONS@", str(here).replace("\\", "/"))  # the theme's SVG icons, next to this file
+        .replace("@SCROLLER@", str(2 * touch + 4))  # both tab scroll buttons: touch-sized
+        .replace("@ARROW@", str(max(16, touch // 2)))
+        .replace("@TOUCH@", str(touch))
         .replace("@HALF@", str(max(28, touch * 2 // 3)))
         .replace("@FONT@", str(font))
         .replace("@BIG@", str(font + 4))
