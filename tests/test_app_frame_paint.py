@@ -84,3 +84,17 @@ def test_corner_marks_show_in_edit_mode_only_and_grow_when_selected(qtbot, canva
         assert (rect.right() == frame.width() - 1) == (m.corner[1] == "r")
     frame.set_editable(False)
     assert not any(m.isVisible() for m in marks)
+
+
+@pytest.mark.parametrize("kind, text", [("down", "LINK DOWN"), ("stale", "STALE"), ("problem", "ERROR")])
+def test_status_badge_sits_in_the_title_bar_never_over_the_view(qtbot, kind, text):
+    frame = WidgetFrame("w-2", "Battery")
+    frame.set_view(QtWidgets.QLabel("85 %"))
+    frame.resize(260, 140)
+    qtbot.addWidget(frame)
+    frame.show()
+    frame.badge.show_status(kind, text)
+    badge = frame.badge.geometry()
+    assert frame.badge.isVisible() and badge.width() > 0
+    assert not badge.intersects(frame.body.geometry())
+    assert frame.title.geometry().contains(badge)

@@ -30,7 +30,7 @@ def frame_min_size() -> QtCore.QSize:
 
 
 class Badge(QtWidgets.QLabel):
-    """A small status pill painted over the frame's top-right corner."""
+    """A small status pill at the right end of the frame's title bar."""
 
     COLOURS = {"stale": "#a85400", "down": "#b00000", "problem": "#b00000", "ok": "#006b1b"}
 
@@ -491,8 +491,11 @@ class WidgetFrame(QtWidgets.QFrame):
         self.shield.setGeometry(self.rect())
         body = self.body.geometry()
         self.problems.setGeometry(body.adjusted(4, 4, -4, -4))
-        if self.badge.isVisible():
-            self.badge.move(self.width() - self.badge.width() - 6, self.title.height() + 6)
+        if self.badge.isVisible():  # in the title bar, so it never covers what the view shows
+            title = self.title.geometry()
+            self.badge.setMaximumHeight(title.height())
+            self.badge.move(title.right() - self.badge.width() - 2,
+                            title.top() + max(0, (title.height() - self.badge.height()) // 2))
         self.problems.raise_()
         self.badge.raise_()
         if self.editable:
