@@ -10,14 +10,17 @@ edits made elsewhere therefore reach the screen and the robot the same way.
 from __future__ import annotations
 
 import logging
+import os
+import re
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 from qtpy import QtCore, QtWidgets
 
 from rcon_core.app.canvas_surface import CanvasScroll, CanvasSurface
 from rcon_core.app.draft import Draft
-from rcon_core.app.geometry import on_grid
+from rcon_core.app.geometry import GRID, on_grid
 from rcon_core.app.link import OFFLINE
 from rcon_core.app.live import LiveCanvas
 from rcon_core.app.widget_frame import frame_min_size
@@ -33,9 +36,14 @@ from rcon_core.canvas import (
     WidgetInstance,
     Workspace,
     WorkspaceStore,
+    export_canvas,
+    import_canvas,
 )
 
 log = logging.getLogger(__name__)
+
+#: what an exported canvas file is called: ``Docking.rcon-canvas.json``
+CANVAS_SUFFIX = ".rcon-canvas.json"
 
 
 def _runs_differently(a: WidgetInstance, b: WidgetInstance) -> bool:
@@ -228,6 +236,37 @@ class CanvasController(QtCore.QObject):
             self.switch(max(0, index - 1) if index > 0 else 1)
         self.doc.delete_canvas(canvas.id)
 
+    # ---------------------------------------------------------------------- sharing one canvas
+    def export_canvas(self, index: int, path: str | os.PathLike[str]) -> Path:
+        """Write canvas ``index`` to its own file, atomically (read-only: allowed in operator mode).
+        Raises OSError when the file cannot be written; returns the path written."""
+        export_canvas(self._canvas_at(index), path)
+        return Path(path)
+
+    def import_canvas(self, path: str | os.PathLike[str]) -> Canvas:
+        """Add the canvas of a file written by :meth:`export_canvas` as one undo step, and show it.
+
+        Its name is made unique ("Docking (2)"), widget ids already used here get fresh ones, geometry is
+        put on the grid (never at negative coordinates), and it opens in Edit mode (↶ takes it back at once). Widgets whose plugin is not
+        installed come in as placeholders with their settings kept. Raises
+        :class:`~rcon_core.canvas.WorkspaceFileError` (corrupt, newer or not a canvas file) or
+        :class:`EditError` (the current canvas is locked, a bad name); then nothing changed.
+        """
+        if self.canvas.locked:
+            raise CanvasLocked("switch to Edit mode to import a canvas")
+        canvas = import_canvas(path)
+        canvas.name = canvas.name.strip() or name_from_file(path)
+        canvas.locked = False
+        for widget in canvas.widgets:
+            g = widget.geometry
+            # on the grid and never left of or above the canvas; the size is kept as the sender made it
+            # (a minimum frame size depends on this screen's touch metrics, not on the layout)
+            rect = on_grid(QtCore.QRect(round(g.x), round(g.y), round(g.w), round(g.h)), QtCore.QSize(GRID, GRID))
+            widget.geometry = Geometry(rect.x(), rect.y(), rect.width(), rect.height())
+        added = self.doc.add_canvas(canvas)
+        self.doc.switch_canvas(added.id)
+        return added
+
     def set_locked(self, locked: bool) -> None:
         """Operator mode on the current canvas (saved with it; a mode switch, not an undo step)."""
         self.doc.set_locked(self.canvas.id, locked, undoable=False)
@@ -323,6 +362,24 @@ class CanvasController(QtCore.QObject):
         self.saver.flush()
         self.saver.close()
         self._remove_listener()
+
+
+def file_name_for(canvas_name: str) -> str:
+    """The default file name of an exported canvas: its name made safe for any file system, plus
+    :data:`CANVAS_SUFFIX` (``"Dock/Undock"`` -> ``"Dock_Undock.rcon-canvas.json"``)."""
+    safe = re.sub(r'[\x00-\x1f<>:"/\\|?*]+', "_", canvas_name).strip(" ._") or "canvas"
+    return safe[:80] + CANVAS_SUFFIX
+
+
+def name_from_file(path: str | os.PathLike[str]) -> str:
+    """A canvas name from a file name (for a file whose canvas has none): ``Docking.rcon-canvas.json``
+    -> ``Docking``."""
+    name = Path(path).name
+    for suffix in (CANVAS_SUFFIX, ".json"):
+        if name.lower().endswith(suffix):
+            name = name[: -len(suffix)]
+            break
+    return name.strip()[:100] or "Imported canvas"
 
 
 def _copy(widget: WidgetInstance) -> WidgetInstance:

@@ -13,7 +13,7 @@ from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app import theme
 from rcon_core.app.add_panel import AddPanel, FieldChooser
-from rcon_core.app.canvas_controller import CanvasController
+from rcon_core.app.canvas_controller import CANVAS_SUFFIX, CanvasController, file_name_for
 from rcon_core.app.catalog_panel import CatalogList
 from rcon_core.app.children_editor import ChildContext, link_learner
 from rcon_core.app.config import AppConfig
@@ -27,7 +27,7 @@ from rcon_core.app.palette_panel import PalettePanel
 from rcon_core.app.preview import PreviewHost
 from rcon_core.app.settings_form import SettingsForm, form_label, tune_form
 from rcon_core.app.widget_host import RateMeter, WidgetHost
-from rcon_core.canvas import Document, Workspace, WorkspaceFileError, WorkspaceStore
+from rcon_core.canvas import Canvas, Document, EditError, Workspace, WorkspaceFileError, WorkspaceStore
 from rcon_core.plugins import Binding, PluginManager, Role, WidgetSpec
 
 log = logging.getLogger(__name__)
@@ -74,6 +74,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self._last_rate_sample = 0.0
         self.catalog: dict[str, list[tuple[str, str]]] = {"topics": [], "services": []}
         self.first_paint_at: float | None = None
+        #: where the export/import file dialogs open (the folder used last in this session)
+        self.share_dir = Path.home()
 
         # ---- widgets
         self.connection = ConnectionBar(self.link, config)
@@ -120,7 +122,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.canvas_actions: dict[str, QtGui.QAction] = {}
         menu_button = QtWidgets.QPushButton("Canvas ▾")
         menu_button.setObjectName("canvasMenuButton")
-        menu_button.setToolTip("New, rename, duplicate or delete canvases")
+        menu_button.setToolTip("New, rename, duplicate, delete, export or import canvases")
         self.menu_button = menu_button
         self._compact = False
         canvas_menu = QtWidgets.QMenu(menu_button)
@@ -129,6 +131,8 @@ class MainWindow(QtWidgets.QMainWindow):
             ("rename", "Rename…", self.rename_canvas_dialog),
             ("duplicate", "Duplicate", self.duplicate_canvas),
             ("delete", "Delete…", self.delete_canvas),
+            ("export", "Export canvas…", self.export_canvas_dialog),
+            ("import", "Import canvas…", self.import_canvas_dialog),
             *((("reset_demo", "Reset demo layout…", self.reset_demo_dialog),) if demo is not None else ()),
         ):
             action = canvas_menu.addAction(text)
@@ -358,6 +362,92 @@ class MainWindow(QtWidgets.QMainWindow):
                      f"It holds {count} widget{'s' if count != 1 else ''}. Undo (↶, Ctrl+Z) brings it back.",
                      "Delete", delete)
 
+    # ------------------------------------------------------------------------ sharing one canvas
+    def file_dialog(self, name: str, title: str, *, save: bool) -> QtWidgets.QFileDialog:
+        """A window-modal file dialog (Qt's own, not the platform's: the same on a tablet and offscreen),
+        opening in :attr:`share_dir`. The caller connects ``fileSelected`` and calls ``open()``."""
+        dialog = QtWidgets.QFileDialog(self, title, str(self.share_dir))
+        dialog.setObjectName(name)
+        dialog.setOption(QtWidgets.QFileDialog.Option.DontUseNativeDialog, True)
+        dialog.setNameFilters([f"RCON canvas (*{CANVAS_SUFFIX})", "JSON (*.json)", "All files (*)"])
+        if save:
+            dialog.setAcceptMode(QtWidgets.QFileDialog.AcceptMode.AcceptSave)
+            dialog.setFileMode(QtWidgets.QFileDialog.FileMode.AnyFile)
+            dialog.setDefaultSuffix(CANVAS_SUFFIX.lstrip("."))
+        else:
+            dialog.setAcceptMode(QtWidgets.QFileDialog.AcceptMode.AcceptOpen)
+            dialog.setFileMode(QtWidgets.QFileDialog.FileMode.ExistingFile)
+        screen = self.screen().availableGeometry() if self.screen() is not None else QtCore.QRect(0, 0, 1024, 700)
+        dialog.resize(min(1000, screen.width() - 40), min(700, screen.height() - 40))
+        dialog.finished.connect(lambda _result: self._dialog_closed(dialog))
+        self.share_dialog = dialog
+        return dialog
+
+    def export_canvas_dialog(self) -> QtWidgets.QFileDialog:
+        """Ask where to write the current canvas (default name from the canvas's name); works in Operate
+        mode too (exporting changes nothing). The dialog only picks the path: :meth:`export_canvas_to`."""
+        canvas = self.controller.canvas
+        dialog = self.file_dialog("exportDialog", f"Export canvas “{canvas.name}”", save=True)
+        dialog.selectFile(str(self.share_dir / file_name_for(canvas.name)))
+        dialog.fileSelected.connect(lambda path: self.export_canvas_to(path, canvas))
+        dialog.open()
+        return dialog
+
+    def export_canvas_to(self, path: str | Path, canvas: Canvas | None = None) -> Path | None:
+        """Write ``canvas`` (default: the current one) to ``path`` atomically; the notice bar says where,
+        or why not. Returns the path written, or None."""
+        canvas = canvas if canvas is not None else self.controller.canvas
+        canvases = self.controller.workspace.canvases
+        if canvas not in canvases:
+            self.notice.show_notice(f"⚠ Canvas “{canvas.name}” was not exported: it no longer exists.")
+            return None
+        try:
+            written = self.controller.export_canvas(canvases.index(canvas), path)
+        except OSError as exc:
+            self.notice.show_notice(f"⚠ Canvas “{canvas.name}” could not be exported to {path}: "
+                                    f"{exc.strerror or exc}.")
+            return None
+        self.share_dir = written.parent
+        self.notice.show_notice(f"ℹ Canvas “{canvas.name}” exported to {written}.", kind="info")
+        return written
+
+    def import_canvas_dialog(self) -> QtWidgets.QFileDialog | None:
+        """Ask for a canvas file to add (Edit mode only: in Operate mode the notice offers to switch).
+        The dialog only picks the path: :meth:`import_canvas_from`."""
+        opened: list[QtWidgets.QFileDialog] = []
+
+        def open_dialog() -> None:
+            dialog = self.file_dialog("importDialog", "Import canvas", save=False)
+            dialog.fileSelected.connect(self.import_canvas_from)
+            dialog.open()
+            opened.append(dialog)
+
+        self._in_edit_mode("import a canvas", open_dialog)
+        return opened[0] if opened else None
+
+    def import_canvas_from(self, path: str | Path) -> Canvas | None:
+        """Add the canvas in ``path`` (one undo step) and show it. A file that cannot be used (corrupt,
+        newer, not a canvas file) changes nothing: the notice bar says why. Returns the added canvas."""
+        path = Path(path)
+        if self.controller.canvas.locked:
+            self._in_edit_mode("import a canvas", lambda: self.import_canvas_from(path))
+            return None
+        try:
+            canvas = self.controller.import_canvas(path)
+        except (WorkspaceFileError, EditError) as exc:
+            detail = str(exc) if isinstance(exc, WorkspaceFileError) else f"{path}: {exc}"
+            self.notice.show_notice(f"⚠ The canvas could not be imported: {detail}. Nothing was changed.")
+            return None
+        self.share_dir = path.parent
+        missing = sorted({w.kind for w in canvas.widgets if not self.plugins.has_widget(w.kind)})
+        count = sum(1 for w in canvas.widgets if w.kind in missing)
+        text = f"ℹ Canvas “{canvas.name}” imported from {path.name} (↶ removes it)."
+        if missing:
+            text += (f" {count} widget{'s' if count != 1 else ''} need{'' if count != 1 else 's'} a package "
+                     f"that is not installed ({', '.join(missing)}): shown as placeholders, their settings kept.")
+        self.notice.show_notice(text, kind="info")
+        return canvas
+
     def undo(self) -> None:
         self.controller.undo()
 
@@ -432,6 +522,11 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _start_adding(self, start: Callable[[], object]) -> None:
         """Open the add panel; on a locked canvas say why not and offer to switch to Edit mode."""
+        self._in_edit_mode("add widgets", start)
+
+    def _in_edit_mode(self, what: str, start: Callable[[], object]) -> None:
+        """Run ``start`` now in Edit mode; in Operate mode the notice says why not and offers to switch
+        (then runs it)."""
         if not self.controller.canvas.locked:
             start()
             return
@@ -441,7 +536,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.controller.set_locked(False)
             start()
 
-        self.notice.show_notice("ℹ Switch to Edit mode to add widgets: this canvas is in Operate mode "
+        self.notice.show_notice(f"ℹ Switch to Edit mode to {what}: this canvas is in Operate mode "
                                 "(locked).", kind="info", actions=[("Switch to Edit mode", unlock_and_start)])
 
     def rank_widgets(self, type_name: str, role: Role) -> list[Candidate]:

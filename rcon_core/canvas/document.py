@@ -188,17 +188,20 @@ class Document:
         return canvas
 
     def add_canvas(self, canvas: Canvas) -> Canvas:
-        """Add an existing canvas object (import): fresh ids where they collide, unique name."""
+        """Add an existing canvas object (import): a copy, with fresh ids where they collide (or are empty)
+        and its name made unique ("Docking (2)"). Does not switch to it. Raises :class:`EditError` for a
+        blank or over-long name."""
+        name = _clean_name(canvas.name)
         taken_c = {c.id for c in self.workspace.canvases}
         taken_w = {w.id for c in self.workspace.canvases for w in c.widgets}
         canvas = copy.deepcopy(canvas)
-        if canvas.id in taken_c:
+        if not canvas.id or canvas.id in taken_c:
             canvas.id = new_id("c")
         for w in canvas.widgets:
-            if w.id in taken_w:
+            if not w.id or w.id in taken_w:
                 w.id = new_id("w")
             taken_w.add(w.id)
-        canvas.name = self._unique_name(canvas.name)
+        canvas.name = self._unique_name(name)
         self._run(self._insert_canvas(canvas))
         return canvas
 

@@ -374,6 +374,8 @@ def import_canvas(path: str | os.PathLike[str]) -> Canvas:
         data = json.loads(p.read_bytes())
     except FileNotFoundError:
         raise WorkspaceFileError(p, "no such file") from None
+    except OSError as exc:  # a directory, no permission...
+        raise WorkspaceFileError(p, f"cannot read: {exc.strerror or exc}") from exc
     except (ValueError, UnicodeDecodeError) as exc:
         raise WorkspaceFileError(p, f"not valid JSON ({exc})") from exc
     _check_header(data, CANVAS_FORMAT, p)
