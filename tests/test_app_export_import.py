@@ -74,6 +74,9 @@ def test_export_from_one_tablet_import_on_another_runs_on_the_robot_and_undoes(q
     assert dialog.objectName() == "exportDialog"
     assert dialog.acceptMode() == QtWidgets.QFileDialog.AcceptMode.AcceptSave
     assert [Path(f).name for f in dialog.selectedFiles()] == ["Docking.rcon-canvas.json"]
+    files = dialog.findChild(QtWidgets.QTreeView, "treeView")  # rows a finger can pick
+    qtbot.waitUntil(lambda: files.model().rowCount(files.rootIndex()) > 0, timeout=10_000)
+    assert files.visualRect(files.model().index(0, 0, files.rootIndex())).height() >= 48
     pick(dialog)
     path = tmp_path / "Docking.rcon-canvas.json"
     assert path.is_file() and sender.controller.canvas.locked

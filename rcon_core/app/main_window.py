@@ -377,8 +377,15 @@ class MainWindow(QtWidgets.QMainWindow):
         else:
             dialog.setAcceptMode(QtWidgets.QFileDialog.AcceptMode.AcceptOpen)
             dialog.setFileMode(QtWidgets.QFileDialog.FileMode.ExistingFile)
+        touch = theme.current_touch_px()  # rows a finger can pick, the file name readable in full
+        dialog.setStyleSheet(f"QTreeView::item, QListView::item {{ min-height: {touch}px; }}"
+                             " QTreeView::item:selected, QListView::item:selected"
+                             " { background: #0040a0; color: #ffffff; }")
         screen = self.screen().availableGeometry() if self.screen() is not None else QtCore.QRect(0, 0, 1024, 700)
         dialog.resize(min(1000, screen.width() - 40), min(700, screen.height() - 40))
+        files = dialog.findChild(QtWidgets.QTreeView, "treeView")
+        if files is not None:
+            files.header().resizeSection(0, max(files.header().sectionSize(0), dialog.width() // 2))
         dialog.finished.connect(lambda _result: self._dialog_closed(dialog))
         self.share_dialog = dialog
         return dialog
