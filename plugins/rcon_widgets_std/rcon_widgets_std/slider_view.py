@@ -1,19 +1,50 @@
 """Slider's Qt view: a horizontal slider with the value above it and the range underneath.
 
 Publish: dragging calls ``model.drag`` (publishes only in continuous mode, rate-limited), letting go
-``model.release`` (always publishes). Subscribe: the handle follows the robot and cannot be moved.
+``model.release`` (always publishes). Tapping the track jumps the handle there (and drags from there). Subscribe: the handle follows the robot and cannot be moved.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-from qtpy import QtCore, QtWidgets
+from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.plugins import Role
 
 from .common import format_number
 from .view_common import STALE, Caption, style_text, vbox
+
+
+class TapSlider(QtWidgets.QSlider):
+    """A slider whose track jumps to where it is tapped (a plain QSlider moves one page step), then drags
+    from there: the press puts the slider down *before* moving it, so the move is a drag (published only
+    in continuous mode) and letting go is the release (``sliderReleased``), exactly as for a handle drag."""
+
+    def mousePressEvent(self, event: QtGui.QMouseEvent) -> None:  # noqa: N802 - Qt override
+        if event.button() == QtCore.Qt.MouseButton.LeftButton and self.isEnabled():
+            value = self.value_at(event.position())
+            if value is not None:
+                self.setSliderDown(True)  # first: the jump below is part of a drag
+                self.setValue(value)
+        super().mousePressEvent(event)  # the handle is now under the finger: Qt starts dragging it
+
+    def value_at(self, pos: QtCore.QPointF) -> int | None:
+        """The value under ``pos`` on the track, or None when ``pos`` is on the handle itself."""
+        opt = QtWidgets.QStyleOptionSlider()
+        self.initStyleOption(opt)
+        style = self.style()
+        cc = QtWidgets.QStyle.ComplexControl.CC_Slider
+        handle = style.subControlRect(cc, opt, QtWidgets.QStyle.SubControl.SC_SliderHandle, self)
+        if handle.contains(pos.toPoint()):
+            return None
+        groove = style.subControlRect(cc, opt, QtWidgets.QStyle.SubControl.SC_SliderGroove, self)
+        if self.orientation() == QtCore.Qt.Orientation.Horizontal:
+            span, at = groove.width() - handle.width(), pos.x() - groove.x() - handle.width() / 2
+        else:
+            span, at = groove.height() - handle.height(), pos.y() - groove.y() - handle.height() / 2
+        return QtWidgets.QStyle.sliderValueFromPosition(
+            self.minimum(), self.maximum(), round(min(max(at, 0), max(span, 1))), max(span, 1), opt.upsideDown)
 
 
 class SliderView(QtWidgets.QWidget):
@@ -27,7 +58,7 @@ class SliderView(QtWidgets.QWidget):
         style_text(self.value, 22)
         self._stale = False  # what the value's style shows
         layout.addWidget(self.value)
-        self.slider = QtWidgets.QSlider(QtCore.Qt.Orientation.Horizontal)
+        self.slider = TapSlider(QtCore.Qt.Orientation.Horizontal)
         self.slider.setEnabled(self.publishing)
         self.slider.setMinimumHeight(32)
         layout.addWidget(self.slider)
