@@ -45,8 +45,11 @@ class Badge(QtWidgets.QLabel):
         if kind == self.kind and text == self.text():
             return
         self.kind = kind
+        frame = self.parentWidget()
         if not kind:
             self.hide()
+            if isinstance(frame, WidgetFrame):
+                frame.layout_overlays()  # the title gets its full width back
             return
         colour = self.COLOURS.get(kind, "#000000")
         self.setStyleSheet(
@@ -56,9 +59,60 @@ class Badge(QtWidgets.QLabel):
         self.adjustSize()
         self.show()
         self.raise_()
-        frame = self.parentWidget()
         if isinstance(frame, WidgetFrame):
             frame.layout_overlays()
+
+
+class FrameTitle(QtWidgets.QLabel):
+    """The frame's title on one line: cut with "…" when the frame is too narrow (never mid-letter), the
+    full title in its tooltip; :attr:`reserve` px at its right end are kept for the status badge.
+    Its side padding is a contents margin (:attr:`PAD`, not the style sheet's), so the room to elide in is
+    known: see :meth:`set_inset`."""
+
+    PAD = 6
+
+    def __init__(self, title: str, parent: QtWidgets.QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored, QtWidgets.QSizePolicy.Policy.Preferred)
+        self.full_title = ""
+        self.reserve = 0
+        self.setIndent(0)  # the text starts at the contents rect (PAD), nothing more
+        self.set_inset(0)
+        self.set_title(title)
+
+    def set_inset(self, px: int) -> None:
+        """Keep ``px`` more than the padding clear at both ends (the corner handles in Edit mode)."""
+        self.setContentsMargins(self.PAD + px, 0, self.PAD + px, 0)
+
+    def set_title(self, title: str) -> None:
+        self.full_title = title
+        self.setToolTip(title)
+        self.setAccessibleName(title)
+        self._elide()
+
+    def set_reserve(self, px: int) -> None:
+        if px != self.reserve:
+            self.reserve = px
+            self._elide()
+
+    def minimumSizeHint(self) -> QtCore.QSize:
+        return QtCore.QSize(0, super().minimumSizeHint().height())
+
+    def resizeEvent(self, event: QtGui.QResizeEvent) -> None:
+        super().resizeEvent(event)
+        self._elide()
+
+    def changeEvent(self, event: QtCore.QEvent) -> None:
+        super().changeEvent(event)
+        if event.type() in (QtCore.QEvent.Type.FontChange, QtCore.QEvent.Type.StyleChange,
+                            QtCore.QEvent.Type.ContentsRectChange):
+            self._elide()
+
+    def _elide(self) -> None:
+        room = self.contentsRect().width() - self.reserve
+        text = self.fontMetrics().elidedText(self.full_title, QtCore.Qt.TextElideMode.ElideRight, max(0, room))
+        if text != self.text():
+            self.setText(text)
 
 
 class ProblemOverlay(QtWidgets.QLabel):
@@ -293,7 +347,7 @@ class WidgetFrame(QtWidgets.QFrame):
         self.selected = False
         self.editable = True
         self.menu: QtWidgets.QMenu | None = None
-        self.title = QtWidgets.QLabel(title)
+        self.title = FrameTitle(title)
         self.title.setObjectName("frameTitle")
         self.body = FrameBody()
         self.body_layout = QtWidgets.QVBoxLayout(self.body)
@@ -329,7 +383,7 @@ class WidgetFrame(QtWidgets.QFrame):
         return label
 
     def set_title(self, title: str) -> None:
-        self.title.setText(title)
+        self.title.set_title(title)
 
     # modes ------------------------------------------------------------------------------------------
     def set_editable(self, editable: bool) -> None:
@@ -339,7 +393,7 @@ class WidgetFrame(QtWidgets.QFrame):
             mark.setVisible(editable)
         # in edit mode the title keeps clear of the corner handles
         margin = max(14, self.handle_size() // 3) + 4 if editable else 0
-        self.title.setContentsMargins(margin, 0, margin, 0)
+        self.title.set_inset(margin)
         if not editable:
             self.set_selected(False)
         self.layout_overlays()
@@ -496,6 +550,9 @@ class WidgetFrame(QtWidgets.QFrame):
             self.badge.setMaximumHeight(title.height())
             self.badge.move(title.right() - self.badge.width() - 2,
                             title.top() + max(0, (title.height() - self.badge.height()) // 2))
+            self.title.set_reserve(max(0, self.badge.width() + 6 - self.title.contentsMargins().right()))
+        else:
+            self.title.set_reserve(0)
         self.problems.raise_()
         self.badge.raise_()
         if self.editable:
