@@ -71,3 +71,120 @@ def test_the_title_leaves_room_for_the_status_badge(frame):
     QtWidgets.QApplication.processEvents()
     assert frame.title.text() == "Battery voltage, main pack"
     assert frame.title.geometry().contains(QtCore.QPoint(frame.width() // 2, frame.title.y() + 2))
+
+
+# ------------------------------------------------------------------------------------- the add panel
+@pytest.fixture(scope="module")
+def plugins():
+    from rcon_core.plugins import PluginManager
+
+    pm = PluginManager(environ={})
+    pm.load_entry_points()
+    return pm
+
+
+@pytest.fixture
+def window(qtbot, tmp_path, sim_thread, plugins):
+    pytest.importorskip("rcon_widgets_std")
+    from qtpy.QtTest import QTest
+
+    from rcon_core.app.config import AppConfig
+    from rcon_core.app.main_window import MainWindow
+
+    win = MainWindow(AppConfig(tmp_path / "config"), plugins)
+    qtbot.addWidget(win)
+    win.resize(1280, 800)
+    win.show()
+    QTest.qWaitForWindowExposed(win)
+    win.connect_to(sim_thread.url)
+    qtbot.waitUntil(lambda: win.topics.item("/cmd_vel") is not None, timeout=10_000)
+    qtbot.waitUntil(lambda: win.services.item("/dock") is not None, timeout=10_000)
+    yield win
+    win.shutdown()
+
+
+def tap(widget: QtWidgets.QWidget) -> None:
+    from qtpy.QtTest import QTest
+
+    assert widget.isVisible() and widget.isEnabled(), widget.objectName()
+    QTest.mouseClick(widget, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier,
+                     widget.rect().center())
+
+
+def tap_at(widget: QtWidgets.QWidget, pos: QtCore.QPoint) -> None:
+    from qtpy.QtTest import QTest
+
+    QTest.mouseClick(widget, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier, pos)
+
+
+def tap_item(view: QtWidgets.QAbstractItemView, index: QtCore.QModelIndex) -> None:
+    from qtpy.QtTest import QTest
+
+    view.scrollTo(index)
+    QTest.mouseClick(view.viewport(), QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier,
+                     view.visualRect(index).center())
+
+
+def pick_widget(window, catalog, name: str, role, kind: str):
+    """Tap ``name`` in the Topics or Services list, the role, then the widget ``kind``."""
+    tabs = window.side.tabBar()
+    tap_at(tabs, tabs.tabRect(window.side.indexOf(catalog)).center())
+    tap_item(catalog.tree, catalog.tree.indexFromItem(catalog.item(name)))
+    panel = window.add_panel
+    tap(panel.role_buttons[role])
+    kinds = [panel.candidates.item(i).data(QtCore.Qt.ItemDataRole.UserRole).spec.kind
+             for i in range(panel.candidates.count())]
+    tap_item(panel.candidates, panel.candidates.model().index(kinds.index(kind), 0))
+    assert panel.stack.currentWidget() is panel.settings_page
+    return panel
+
+
+def fits(widget: QtWidgets.QWidget, text: str, flags: int) -> bool:
+    """Whether ``text`` drawn with ``flags`` stays inside ``widget``'s contents."""
+    room = widget.contentsRect()
+    drawn = widget.fontMetrics().boundingRect(room, flags, text)
+    return room.contains(drawn)
+
+
+def test_the_not_ready_hint_wraps_and_field_choices_show_their_type_uncut(window, qtbot):
+    from rcon_core.plugins import Role
+
+    panel = pick_widget(window, window.topics, "/cmd_vel", Role.PUBLISH, "std.compound")
+    QtWidgets.QApplication.processEvents()
+    handle = panel.drag_handle
+    assert handle.text() == "Not ready: add at least one child widget"
+    centred_wrapped = int(QtCore.Qt.AlignmentFlag.AlignCenter) | int(QtCore.Qt.TextFlag.TextWordWrap)
+    assert fits(handle, handle.text(), centred_wrapped), (handle.contentsRect(), handle.text())
+    # the field page of "+ Add child": every choice readable with its type, the whole message's too
+    editor = panel.form.children_editors["children"]
+    tap(editor.add_button)
+    qtbot.waitUntil(lambda: editor.current_page == "fields", timeout=10_000)
+    QtWidgets.QApplication.processEvents()
+    whole = editor.field_buttons[""]
+    assert "Twist" in whole.text() and "whole message" in whole.text(), whole.text()
+    for path, button in editor.field_buttons.items():
+        lines = button.text().split("\n")
+        widest = max(button.fontMetrics().horizontalAdvance(line) for line in lines)
+        assert widest <= button.width() - 24, (path, button.text(), button.width())
+
+
+def test_message_text_settings_are_multi_line_and_take_the_rows_full_width(window):
+    from rcon_core.app.settings_form import TextBlock
+    from rcon_core.plugins import Role
+
+    panel = pick_widget(window, window.services, "/dock", Role.CALL, "std.button")
+    QtWidgets.QApplication.processEvents()
+    form = panel.form
+    row = panel.settings_scroll.viewport().width()
+    payload = form.editor("payload")
+    assert isinstance(payload, TextBlock)  # YAML or JSON: more than one line
+    assert payload.height() >= 2 * payload.fontMetrics().lineSpacing()
+    for name in ("text", "payload", "release_service", "release_type", "release_payload"):
+        editor = form.editor(name)
+        assert editor.width() >= row * 0.8, (name, editor.width(), row)
+    # typing a request: the panel's draft gets it as typed, over several lines
+    payload.setFocus()
+    from qtpy.QtTest import QTest
+
+    QTest.keyClicks(payload, "{}")
+    assert panel.draft.settings.payload == "{}"

@@ -98,7 +98,7 @@ class FieldChoice:
 
     @property
     def label(self) -> str:
-        return self.path or "(the whole message)"
+        return self.path or "the whole message"
 
     @property
     def type_label(self) -> str:
@@ -320,6 +320,36 @@ def _icon_button(glyph: str, name: str, tip: str, slot: Callable[[], None]) -> Q
     side = current_touch_px()
     b.setFixedSize(side, side)
     return b
+
+
+class FieldButton(QtWidgets.QPushButton):
+    """A field to pick: ``name · type`` on one line when it fits the button, else the type on a second line
+    (never cut off at the right)."""
+
+    def __init__(self, name: str, type_label: str, object_name: str, slot: Callable[[], None]) -> None:
+        super().__init__()
+        self.setObjectName(object_name)
+        self.name, self.type_label = name, type_label
+        self.setStyleSheet("text-align: left; padding: 4px 12px;")
+        self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored, QtWidgets.QSizePolicy.Policy.Preferred)
+        self.clicked.connect(lambda _=False: slot())
+        self._fit()
+
+    def one_line(self) -> str:
+        return f"{self.name}   ·   {self.type_label}" if self.type_label else self.name
+
+    def _fit(self) -> None:
+        text = self.one_line()
+        room = self.width() - 24 - 6  # the padding and the border
+        if self.width() > 0 and self.fontMetrics().horizontalAdvance(text) > room and self.type_label:
+            text = f"{self.name}\n{self.type_label}"
+        if text != self.text():
+            self.setText(text)
+            self.updateGeometry()
+
+    def resizeEvent(self, event: Any) -> None:
+        super().resizeEvent(event)
+        self._fit()
 
 
 class ChoiceRow(QtWidgets.QFrame):
@@ -579,9 +609,8 @@ class ChildrenEditor(QtWidgets.QWidget):
                 part_now = choice.part
                 side = "filled by the children" if choice.role is Role.PUBLISH else "shown by the children"
                 lay.addWidget(_label(f"{choice.part.capitalize()} ({side})", "hint"))
-            b = _button(f"{choice.label}   ·   {choice.type_label}", f"field_{choice.path or 'whole'}",
-                        functools.partial(self.show_kinds, choice))
-            b.setStyleSheet("text-align: left; padding-left: 12px;")
+            b = FieldButton(choice.label, choice.type_label, f"field_{choice.path or 'whole'}",
+                            functools.partial(self.show_kinds, choice))
             b.setToolTip(f"{choice.path or '(whole message)'}: {choice.type}")
             lay.addWidget(b)
             self.field_buttons[choice.path] = b

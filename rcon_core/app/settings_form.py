@@ -7,6 +7,10 @@ and any field with ``metadata={"choices": [...]}``.  Optional metadata: ``label`
 its metadata may add ``exclude_kinds`` (kinds that cannot be children).  Fields of other types keep
 their value and are not shown.
 
+Text fields are at least :data:`TEXT_MIN_WIDTH` wide, so in a narrow panel their label goes above them and
+they take the row's full width. A text field holding a message typed as YAML or JSON (metadata
+``multiline: True``, or a ``help`` that mentions YAML or JSON) gets a multi-line editor.
+
 Spin boxes, combo boxes and sliders of a form ignore the mouse wheel unless they have the keyboard focus
 (tap them first): a wheel over them scrolls the form instead of changing the value under the pointer
 (:func:`guard_wheel`, also used by the add panel's own choosers).
@@ -71,6 +75,10 @@ TEXT_INSET = 11
 #: the narrowest a number editor gets before its row wraps (its label above it); Qt would otherwise size it
 #: for the longest number of its range (13 digits) and wrap every number row in the narrow add panel
 SPIN_MIN_WIDTH = 120
+#: the narrowest a text field gets before its row wraps (label above, the field the full row's width)
+TEXT_MIN_WIDTH = 240
+#: lines a multi-line text field shows (it scrolls past that)
+TEXT_LINES = 3
 
 
 def form_label(text: str, buddy: QtWidgets.QWidget | None = None) -> QtWidgets.QLabel:
@@ -136,6 +144,39 @@ def _unwrap_optional(tp: Any) -> Any:
         if len(args) == 1:
             return args[0]
     return tp
+
+
+def _is_multiline(field: attrs.Attribute) -> bool:
+    """A text field for a message typed by a person (YAML or JSON): metadata ``multiline``, else its help."""
+    meta = field.metadata
+    if "multiline" in meta:
+        return bool(meta["multiline"])
+    help_text = str(meta.get("help", "")).lower()
+    return "yaml" in help_text or "json" in help_text
+
+
+class TextBlock(QtWidgets.QPlainTextEdit):
+    """A multi-line plain-text field (a message as YAML or JSON): :data:`TEXT_LINES` lines high, wrapping
+    at its width, as wide as the row; Tab moves on to the next field instead of typing a tab."""
+
+    def __init__(self, text: str = "") -> None:
+        super().__init__(text)
+        self.setTabChangesFocus(True)
+        self.setLineWrapMode(QtWidgets.QPlainTextEdit.LineWrapMode.WidgetWidth)
+        self.setMinimumWidth(TEXT_MIN_WIDTH)
+        self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Expanding, QtWidgets.QSizePolicy.Policy.Fixed)
+        self._fit_height()
+
+    def _fit_height(self) -> None:
+        margins = self.contentsMargins()
+        doc = int(self.document().documentMargin() * 2)
+        self.setFixedHeight(self.fontMetrics().lineSpacing() * TEXT_LINES + doc + margins.top()
+                            + margins.bottom() + 8)
+
+    def changeEvent(self, event: QtCore.QEvent) -> None:
+        super().changeEvent(event)
+        if event.type() in (QtCore.QEvent.Type.FontChange, QtCore.QEvent.Type.StyleChange):
+            self._fit_height()
 
 
 def _label(field: attrs.Attribute) -> str:
@@ -240,7 +281,13 @@ class SettingsForm(QtWidgets.QWidget):
             dspin.valueChanged.connect(self._edited)
             return dspin, dspin.value
         if tp is str:
-            line = QtWidgets.QLineEdit("" if value is None else str(value))
+            text = "" if value is None else str(value)
+            if _is_multiline(field):
+                block = TextBlock(text)
+                block.textChanged.connect(self._edited)
+                return block, block.toPlainText
+            line = QtWidgets.QLineEdit(text)
+            line.setMinimumWidth(TEXT_MIN_WIDTH)
             line.textChanged.connect(self._edited)
             return line, line.text
         return None
