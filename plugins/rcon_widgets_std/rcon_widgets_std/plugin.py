@@ -33,7 +33,7 @@ def specs() -> list[WidgetSpec]:
             accepts=Accepts(types=[*NUMERIC_TYPES, "std_msgs/String"],
                             fields=["numeric", "bool", "string", "time"], messages=["any"],
                             prefer=["data", "percentage", "value", "msg", "range", "temperature"]),
-            default_size=(160, 70), priority=20, **_refs("label", "Label"),
+            default_size=(256, 112), priority=20, **_refs("label", "Label"),
         ),
         WidgetSpec(
             kind="std.slider", title="Slider", icon="slider", category="Controls",
@@ -48,7 +48,7 @@ def specs() -> list[WidgetSpec]:
             roles={Role.PUBLISH, Role.SUBSCRIBE, Role.CALL},
             accepts=Accepts(types=["std_msgs/Bool", "std_srvs/SetBool"], fields=["bool"],
                             prefer=["data", "enable", "enabled", "on"], service_parts=["request"]),
-            default_size=(150, 70), priority=10, **_refs("switch", "Switch"),
+            default_size=(208, 144), priority=10, **_refs("switch", "Switch"),
         ),
         WidgetSpec(
             kind="std.button", title="Button", icon="button", category="Controls",
@@ -56,7 +56,7 @@ def specs() -> list[WidgetSpec]:
             roles={Role.CALL, Role.PUBLISH},
             accepts=Accepts(types=["std_srvs/Trigger", "std_srvs/Empty", "std_msgs/Empty"],
                             messages=["empty", "any"], service_parts=["request"]),
-            default_size=(160, 80), priority=5, **_refs("button", "Button"),
+            default_size=(224, 144), priority=5, **_refs("button", "Button"),
         ),
         WidgetSpec(
             kind="std.textfield", title="Text Field", icon="textfield", category="Controls",

@@ -1,4 +1,8 @@
-"""Switch's Qt view: one big toggle button with the state's text, and a line for the server's reply."""
+"""Switch's Qt view: one big toggle button with the state's text, and a line for the server's reply.
+
+While a call is in flight the button says "On…"; when the frame is too short for the reply line, the
+answer is flashed on the button itself ("✓ lights on" in green, "✗ interlock open" in red, two seconds)
+before it shows the state again: a touch operator has no tooltip to hover."""
 
 from __future__ import annotations
 
@@ -8,7 +12,7 @@ from qtpy import QtCore, QtWidgets
 
 from rcon_core.plugins import Role
 
-from .view_common import BAD, MUTED, OK, Caption, fit_caption, vbox
+from .view_common import BAD, MUTED, OK, ButtonFace, Caption, fit_caption, vbox
 
 
 class SwitchView(QtWidgets.QWidget):
@@ -20,13 +24,17 @@ class SwitchView(QtWidgets.QWidget):
         self.button.setCheckable(True)
         self.button.setSizePolicy(QtWidgets.QSizePolicy.Policy.Expanding, QtWidgets.QSizePolicy.Policy.Expanding)
         self.button.setEnabled(model.binding.role is not Role.SUBSCRIBE)
+        self.button.setMinimumWidth(40)  # the face elides; its text must not make the widget wider
         self.button.clicked.connect(self._clicked)
         layout.addWidget(self.button, 1)
+        self.face = ButtonFace(self.button, "?")
+        self._was_busy = False
         self.reply = Caption("")
         self._reply: tuple[str, str] | None = None  # (text, colour) shown in the reply line
         self.reply.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
         layout.addWidget(self.reply)
         self._paint(None, "", None)
+        self._live = False  # refreshed at least once (an error already there when built is not news)
 
     def _clicked(self, checked: bool) -> None:
         self.model.set(bool(checked))
@@ -37,6 +45,7 @@ class SwitchView(QtWidgets.QWidget):
         on = getattr(v, "on", None)
         self._paint(on, getattr(v, "reply", ""), state.error, busy=getattr(v, "busy", False),
                     wanted=getattr(v, "wanted", None))
+        self._live = True
 
     def _paint(self, on: bool | None, reply: str, error: str | None, busy: bool = False,
                wanted: bool | None = None) -> None:
@@ -44,12 +53,7 @@ class SwitchView(QtWidgets.QWidget):
         self.button.blockSignals(True)
         self.button.setChecked(bool(on))
         self.button.blockSignals(False)
-        if busy:
-            self.button.setText(f"{s.on_text if wanted else s.off_text}…")
-        elif on is None:
-            self.button.setText("?")
-        else:
-            self.button.setText(s.on_text if on else s.off_text)
+        self.face.set_label("?" if on is None else s.on_text if on else s.off_text)
         if error:
             shown = (error, BAD)
         elif busy:
@@ -58,11 +62,21 @@ class SwitchView(QtWidgets.QWidget):
             shown = (reply, OK)
         else:
             shown = ("", MUTED)
-        if shown != self._reply:  # show_text sets a style sheet (a re-polish): only when it changes
+        fresh = shown != self._reply
+        if fresh:  # show_text sets a style sheet (a re-polish): only when it changes
             self._reply = shown
             self.reply.show_text(*shown)
             fit_caption(self, self.button, self.reply)
+        if busy:
+            if not self._was_busy:
+                self.face.busy(f"{s.on_text if wanted else s.off_text}…")
+        elif fresh and shown[0] and (self._was_busy or (error and self._live)) and self.reply.isHidden():
+            self.face.answer(not error, reply or shown[0])  # the short answer, where the operator looks
+        elif self._was_busy:
+            self.face.rest()
+        self._was_busy = busy
 
     def resizeEvent(self, event: Any) -> None:  # noqa: N802 - Qt override
         super().resizeEvent(event)
+        self.face.fit()
         fit_caption(self, self.button, self.reply)  # too small for both: the reply becomes the tooltip

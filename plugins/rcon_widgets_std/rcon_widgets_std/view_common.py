@@ -278,3 +278,72 @@ def big_font(widget: QtWidgets.QWidget, factor: float = 1.8, bold: bool = True) 
     font.setPointSizeF(font.pointSizeF() * factor)
     font.setBold(bold)
     return font
+
+
+#: how long a button's face shows an answer ("✓ docked", "✗ already docked") before its label returns
+FLASH_MS = 2000
+
+
+class ButtonFace:
+    """What a push button's face says: its resting label, "<label>…" while a call is in flight, and an
+    answer flashed in green or red for :data:`FLASH_MS` before the label returns. A touch operator looks
+    at the button, not at a caption line (hidden in a short frame) or a tooltip (no hover on a touch
+    screen). The text is elided to the button's width ("✗ interlock op…"); call :meth:`fit` from the
+    owner's ``resizeEvent``."""
+
+    def __init__(self, button: QtWidgets.QPushButton, label: str) -> None:
+        self.button = button
+        self.label = label
+        self.text = label  #: what the face says now (before eliding)
+        self.flashing: str | None = None  #: the colour of the answer being flashed, None when resting
+        self._busy = False
+        self._timer = QtCore.QTimer(button)
+        self._timer.setSingleShot(True)
+        self._timer.timeout.connect(self.rest)
+        self._show(label, None)
+
+    def set_label(self, label: str) -> None:
+        """The resting text (a switch's On/Off): shown at once unless busy or flashing."""
+        self.label = label
+        if not self._busy and self.flashing is None:
+            self._show(label, None)
+
+    def busy(self, text: str | None = None) -> None:
+        """A call is in flight: "<label>…" (or ``text``) until :meth:`answer` or :meth:`rest`."""
+        self._timer.stop()
+        self._busy = True
+        self.flashing = None
+        self._show(text if text is not None else f"{self.label}…", None)
+
+    def answer(self, ok: bool, text: str, ms: int | None = None) -> None:
+        """Flash "✓ text" (green) or "✗ text" (red) for ``ms`` (default :data:`FLASH_MS`), then the label."""
+        self._busy = False
+        self.flashing = OK if ok else BAD
+        first = text.strip().splitlines()[0] if text.strip() else ""
+        self._show(f"{'✓' if ok else '✗'} {first}".strip(), self.flashing)
+        self._timer.start(FLASH_MS if ms is None else ms)
+
+    def rest(self) -> None:
+        """Back to the label now."""
+        self._timer.stop()
+        self._busy = False
+        self.flashing = None
+        self._show(self.label, None)
+
+    def fit(self) -> None:
+        """Elide the face's text to the button's current width."""
+        width = self.button.width() - 20  # the theme's padding
+        shown = self.text
+        metrics = self.button.fontMetrics()
+        if width > 0 and metrics.horizontalAdvance(shown) > width:
+            shown = metrics.elidedText(shown, QtCore.Qt.TextElideMode.ElideRight, width)
+        if shown != self.button.text():
+            self.button.setText(shown)
+
+    def _show(self, text: str, colour: str | None) -> None:
+        self.text = text
+        sheet = (f"QPushButton, QPushButton:checked {{ background: {colour}; color: #ffffff; "
+                 f"border-color: {colour}; }}") if colour else ""
+        if sheet != self.button.styleSheet():
+            self.button.setStyleSheet(sheet)
+        self.fit()

@@ -5,12 +5,54 @@ from __future__ import annotations
 
 import pytest
 from qtpy import QtCore, QtWidgets
+from rcon_widgets_std import view_common
+from rcon_widgets_std.button import ButtonModel, ButtonSettings, CallStatus
+from rcon_widgets_std.button_view import ButtonView
+from rcon_widgets_std.label import LabelModel, LabelSettings
+from rcon_widgets_std.label_view import LabelView
+from rcon_widgets_std.plugin import specs
 from rcon_widgets_std.slider import SliderModel, SliderSettings
 from rcon_widgets_std.slider_view import SliderView
+from rcon_widgets_std.switch import SwitchModel, SwitchSettings, SwitchValue
+from rcon_widgets_std.switch_view import SwitchView
 from std_qtkit import LiveBridge, wait_until
 from std_testkit import build
 
+from rcon_core.app.geometry import on_grid
+from rcon_core.app.theme import stylesheet
+from rcon_core.app.widget_frame import WidgetFrame, frame_min_size
 from rcon_core.msgs import TypeRegistry
+
+SPECS = {spec.kind: spec for spec in specs()}
+
+
+def placed(qtbot, kind: str, view: QtWidgets.QWidget, title: str, editable: bool = False,
+           size: tuple[int, int] | None = None) -> WidgetFrame:
+    """``view`` in the app's frame and theme, shown: at the size the app places ``kind`` with (its default
+    size, on the grid, at least the frame's minimum), or at ``size`` exactly (a frame squeezed smaller)."""
+    canvas = QtWidgets.QWidget()  # a canvas: the frame is a child, sized like the app sizes it
+    canvas.setStyleSheet(stylesheet(touch=48))
+    canvas.resize(800, 600)
+    frame = WidgetFrame("w-test", title, canvas)
+    frame.set_view(view)
+    frame.set_editable(editable)
+    if size is None:
+        w, h = (int(v) for v in SPECS[kind].default_size)
+        size = on_grid(QtCore.QRect(0, 0, w, h), frame_min_size()).size().toTuple()
+    frame.setGeometry(0, 0, *size)
+    qtbot.addWidget(canvas)
+    canvas.show()
+    qtbot.waitExposed(canvas)
+    QtWidgets.QApplication.processEvents()
+    frame.held_by = canvas  # the test keeps the frame, the frame keeps its canvas alive
+    return frame
+
+
+def _caption_room(view: QtWidgets.QWidget, main: QtWidgets.QWidget, caption: QtWidgets.QWidget) -> int:
+    """Pixels to spare in ``view`` below ``main`` at its minimum and ``caption`` (negative: no room)."""
+    m = view.layout().contentsMargins()
+    need = main.minimumSizeHint().height() + view.layout().spacing() + caption.sizeHint().height()
+    return view.height() - need - m.top() - m.bottom()
 
 
 @pytest.fixture
@@ -92,3 +134,96 @@ def test_tapping_the_slider_handle_itself_does_not_move_it(qtbot, live, sim_thre
     qtbot.mouseRelease(view.slider, left, pos=_track_point(view, 0.5))
     assert view.slider.value() == 10
     live.thread.call(m.stop).result(5)
+
+
+# -- Button and Switch: the answer on the control itself -----------------------------------------------
+def test_button_face_says_calling_then_the_answer_then_its_label(qtbot, live, sim_thread, monkeypatch):
+    monkeypatch.setattr(view_common, "FLASH_MS", 300)
+    m = ButtonModel(ButtonSettings(text="Dock"), build(ButtonModel, None, "/dock", "std_srvs/Trigger", "call").binding,
+                    live.node("button"), types=TypeRegistry.standard(), dispatch=live.thread.call)
+    live.thread.call(m.start).result(5)
+    view = ButtonView(m)
+    frame = placed(qtbot, "std.button", view, "Dock", size=(160, 90))  # short: the reply line is hidden
+    assert view.result.isHidden() and view.button.text() == "Dock"
+    view.button.pressed.emit()
+    view.refresh(m.state)
+    assert view.button.text() == "Dock…", "the face shows the call in flight"
+    wait_until(qtbot, lambda: m.state.value is not None and not m.state.value.busy, what="the answer")
+    view.refresh(m.state)
+    assert view.button.text().startswith("✓ dock"), view.button.text()
+    assert view_common.OK in view.button.styleSheet(), "a success is green"
+    wait_until(qtbot, lambda: view.button.text() == "Dock", what="the label back after the flash")
+    assert view.button.styleSheet() == ""
+    view.button.pressed.emit()  # the sim is docking (or docked) now: a second dock is refused
+    wait_until(qtbot, lambda: m.state.value is not None and not m.state.value.busy, what="the second answer")
+    view.refresh(m.state)
+    if m.state.value.phase == "failed":
+        assert view.button.text().startswith("✗") and view_common.BAD in view.button.styleSheet()
+    assert frame.isVisible()
+    live.thread.call(m.stop).result(5)
+
+
+def test_button_face_elides_a_long_answer_and_a_rebuilt_view_does_not_flash_an_old_one(qtbot):
+    m = build(ButtonModel, ButtonSettings(text="Dock"), "/dock", "std_srvs/Trigger", "call")
+    view = ButtonView(m)
+    frame = placed(qtbot, "std.button", view, "Dock")
+    m.set_value(CallStatus("failed", "/dock", "the robot is not anywhere near the docking station", 0, 0.1))
+    m.set_error("/dock: the robot is not anywhere near the docking station")
+    view.refresh(m.state)
+    face = view.button.text()
+    assert face.startswith("✗ the robot") and face.endswith("…")
+    assert view.button.fontMetrics().horizontalAdvance(face) <= view.button.width()
+    again = ButtonView(m)  # the canvas was switched away and back: the same old answer
+    frames = [frame, placed(qtbot, "std.button", again, "Dock")]
+    again.refresh(m.state)
+    assert again.button.text() == "Dock" and len(frames) == 2
+
+
+def test_button_and_switch_default_sizes_fit_the_reply_line(qtbot):
+    button = ButtonView(build(ButtonModel, ButtonSettings(text="Dock"), "/dock", "std_srvs/Trigger", "call"))
+    frames = [placed(qtbot, "std.button", button, "Dock", editable=True)]
+    assert button.result.isVisible() and _caption_room(button, button.button, button.result) >= 8
+    switch = SwitchView(build(SwitchModel, SwitchSettings(), "/lights/set", "std_srvs/SetBool", "call",
+                              "request.data"))
+    frames.append(placed(qtbot, "std.switch", switch, "Lights", editable=True))
+    assert switch.reply.isVisible() and _caption_room(switch, switch.button, switch.reply) >= 8
+
+
+def test_switch_flashes_the_answer_on_its_face_only_when_the_reply_line_is_hidden(qtbot, monkeypatch):
+    monkeypatch.setattr(view_common, "FLASH_MS", 300)
+    m = build(SwitchModel, SwitchSettings(on_text="Lights on", off_text="Lights off"), "/lights/set",
+              "std_srvs/SetBool", "call", "request.data")
+    short = SwitchView(m)
+    frames = [placed(qtbot, "std.switch", short, "Lights", size=(208, 90))]
+    roomy = SwitchView(m)
+    frames.append(placed(qtbot, "std.switch", roomy, "Lights"))
+    assert short.reply.isHidden() and roomy.reply.isVisible()
+    m.set_value(SwitchValue(False, True, True))
+    for view in (short, roomy):
+        view.refresh(m.state)
+        assert view.button.text() == "Lights on…"
+    m.set_value(SwitchValue(True, False, None, "lights on"))
+    for view in (short, roomy):
+        view.refresh(m.state)
+    assert short.button.text() == "✓ lights on" and view_common.OK in short.button.styleSheet()
+    assert roomy.button.text() == "Lights on" and roomy.reply.text() == "lights on"
+    wait_until(qtbot, lambda: short.button.text() == "Lights on", what="the state back on the face")
+    m.set_value(SwitchValue(True, True, False))
+    short.refresh(m.state)
+    m.set_value(SwitchValue(True, False, None, "interlock open"))
+    m.set_error("/lights/set refused: interlock open")
+    short.refresh(m.state)
+    assert short.button.text() == "✗ interlock open" and view_common.BAD in short.button.styleSheet()
+    assert all(f.isVisible() for f in frames)
+
+
+# -- Label: its default size holds a typical title ------------------------------------------------------
+@pytest.mark.parametrize("title", ["Battery voltage", "Battery percentage"])
+def test_label_default_size_fits_a_typical_title(qtbot, title):
+    m = build(LabelModel, LabelSettings(decimals=2, units="V"), "/battery", "sensor_msgs/BatteryState",
+              "subscribe", "voltage")
+    view = LabelView(m)
+    frame = placed(qtbot, "std.label", view, title, editable=True)  # edit mode: the title clears the handles
+    label = frame.title
+    room = label.contentsRect().width() - 2 * 6  # the theme's title padding
+    assert label.fontMetrics().horizontalAdvance(title) <= room, f"{title!r} cut at the default size"
