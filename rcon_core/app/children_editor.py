@@ -27,6 +27,7 @@ from typing import Any
 import attrs
 from qtpy import QtCore, QtWidgets
 
+from rcon_core.app.focus import focus_into, has_focus_inside
 from rcon_core.matcher import Match, Rank, match
 from rcon_core.msgs import names
 from rcon_core.plugins import Binding, Role, SettingsError, WidgetSpec
@@ -458,6 +459,7 @@ class ChildrenEditor(QtWidgets.QWidget):
         self._poll.timeout.connect(self._tick)
         self._poll.start()
         self._follow = False  # the form just opened: its scroll position is the panel's to set
+        self._refocus = False
         self.show_list()
         self._follow = True
 
@@ -488,10 +490,19 @@ class ChildrenEditor(QtWidgets.QWidget):
         item = self.children_list[index]
         return cat.placement_problems(item) + cat.settings_problems(item)
 
+    def _clear_page(self, lay: QtWidgets.QVBoxLayout) -> None:
+        """Empty a page before it is rebuilt; remembers whether the keyboard was in the editor (on the
+        button just tapped, which goes away), so :meth:`_show` hands it to the new page."""
+        self._refocus = self._refocus or has_focus_inside(self)
+        _clear(lay)
+
     def _show(self, name: str) -> None:
         for key, page in self.pages.items():
             page.setVisible(key == name)
         self.current_page = name
+        if self._refocus and self.isVisible():
+            focus_into(self.pages[name])  # not whatever Qt picks next (the robot URL, its text selected)
+        self._refocus = False
         if self._follow:  # a page the operator opened: bring it into sight
             QtCore.QTimer.singleShot(0, self, lambda: self._scroll_to(self.pages[name]))
 
@@ -514,7 +525,7 @@ class ChildrenEditor(QtWidgets.QWidget):
         self.editing = None
         self.child_form = None
         lay = self.page_layouts["list"]
-        _clear(lay)
+        self._clear_page(lay)
         lay.setSpacing(16)  # children apart: each row's buttons belong to the title above them
         cat = self.catalog()
         self.rows: list[QtWidgets.QFrame] = []
@@ -598,7 +609,7 @@ class ChildrenEditor(QtWidgets.QWidget):
 
     def show_fields(self, cat: ChildCatalog) -> None:
         lay = self.page_layouts["fields"]
-        _clear(lay)
+        self._clear_page(lay)
         verb = {Role.PUBLISH: "set"}.get(cat.parts()[0][2], "show") if not cat.is_service else "set or show"
         lay.addWidget(_label(f"Which field should the new child {verb}?", "heading"))
         lay.addWidget(_label(f"Fields of {cat.type_name}", "hint"))
@@ -630,7 +641,7 @@ class ChildrenEditor(QtWidgets.QWidget):
         cat = self.catalog()
         assert cat is not None
         lay = self.page_layouts["kinds"]
-        _clear(lay)
+        self._clear_page(lay)
         self.picked_field = choice
         lay.addWidget(_label(f"Which widget for {choice.label}?", "heading"))
         lay.addWidget(_label(f"{choice.type_label}; the child will {choice.role.value}", "hint"))
@@ -668,7 +679,7 @@ class ChildrenEditor(QtWidgets.QWidget):
         item = self.children_list[index]
         spec = cat.spec_of(item.kind) if cat is not None else None
         lay = self.page_layouts["child"]
-        _clear(lay)
+        self._clear_page(lay)
         self.editing = index
         self.child_form = None
         title = spec.title if spec is not None else item.kind

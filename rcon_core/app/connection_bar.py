@@ -48,6 +48,10 @@ class ConnectionBar(QtWidgets.QFrame):
         self.url.setCurrentText(config.last_url)
         line = self.url.lineEdit()
         assert line is not None  # the combo is editable
+        # only a tap on it gives it the keyboard: never Tab, never a focused button disappearing (with its
+        # text selected, one key would replace the robot's URL)
+        for w in (self.url, line):
+            w.setFocusPolicy(QtCore.Qt.FocusPolicy.ClickFocus)
         line.returnPressed.connect(self._return_pressed)
         self._return_seen = False
 

@@ -19,6 +19,7 @@ from rcon_core.app.children_editor import ChildContext, link_learner
 from rcon_core.app.config import AppConfig
 from rcon_core.app.connection_bar import ConnectionBar
 from rcon_core.app.draft import Candidate, Target
+from rcon_core.app.focus import focus_into, has_focus_inside
 from rcon_core.app.frame_clock import FrameClock, Waker
 from rcon_core.app.link import OFFLINE, Link
 from rcon_core.app.live import LiveCanvas
@@ -305,6 +306,7 @@ class MainWindow(QtWidgets.QMainWindow):
         for button in (ok, cancel):
             button.setMinimumWidth(max(button.sizeHint().width(), 160))
         box.buttonClicked.connect(lambda button: then() if button is ok else None)
+        box.finished.connect(lambda _result: self._confirm_closed())
         self.confirm_dialog = box
         box.open()
         return box
@@ -542,6 +544,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.notice.dismiss()
             self.controller.set_locked(False)
             start()
+            self.focus_work_area()  # the tapped notice button is gone: not the URL field next in line
 
         self.notice.show_notice(f"ℹ Switch to Edit mode to {what}: this canvas is in Operate mode "
                                 "(locked).", kind="info", actions=[("Switch to Edit mode", unlock_and_start)])
@@ -656,6 +659,21 @@ class MainWindow(QtWidgets.QMainWindow):
         dialog.accepted.connect(apply)
         dialog.finished.connect(lambda _result: self._dialog_closed(dialog))
         dialog.open()
+
+    def _confirm_closed(self) -> None:
+        """After a confirm dialog (either answer) the keyboard is the window's again: Ctrl+Z, Ctrl+Q work."""
+        self.activateWindow()
+        if not has_focus_inside(self):
+            self.focus_work_area()
+
+    def focus_work_area(self) -> None:
+        """Give the keyboard to what the operator works on: the add panel's page when it is open, else
+        the canvas."""
+        if self.add_panel.isVisible():
+            page = self.add_panel.stack.currentWidget()
+            focus_into(page if page is not None else self.add_panel)
+        else:
+            self.controller.surface.setFocus(QtCore.Qt.FocusReason.OtherFocusReason)
 
     def _dialog_closed(self, dialog: QtWidgets.QDialog) -> None:
         """The keyboard goes back to the window (Ctrl+Z right after OK undoes it), the dialog goes away."""
