@@ -87,6 +87,44 @@ class CompoundSettings:
             out.append("columns must be between 1 and 6")
         return out
 
+    def preferred_size(self) -> tuple[float, float]:
+        """The size (w, h) a new Compound with these children should be placed at, so that no child is
+        squeezed: the children in ``columns`` columns, each as large as its own kind's default size (a
+        box title above it), the button and the status line below. No Qt: computed from the children's
+        specs, for the app to use instead of the kind's fixed ``default_size`` (the view's
+        ``sizeHint()`` says the same once it is built)."""
+        cols = max(1, min(6, int(self.columns)))
+        sizes = []
+        for c in self.children:
+            try:
+                w, h = find_spec(c.kind).default_size
+            except KeyError:
+                w, h = 160.0, 80.0
+            sizes.append((max(float(w), CHILD_MIN[0]) + CHILD_PAD, max(float(h), CHILD_MIN[1]) + CHILD_TITLE))
+        if not sizes:
+            return DEFAULT_SIZE
+        rows = [sizes[i:i + cols] for i in range(0, len(sizes), cols)]
+        width = max(sum(w for w, _ in row) + CHILD_GAP * (len(row) - 1) for row in rows)
+        height = sum(max(h for _, h in row) for row in rows) + CHILD_GAP * (len(rows) - 1)
+        return (max(DEFAULT_SIZE[0], _grid_up(width + CHROME[0])), max(DEFAULT_SIZE[1], _grid_up(height + CHROME[1])))
+
+
+def _grid_up(v: float, grid: int = 16) -> float:
+    """``v`` rounded up to the canvas grid (the app snaps geometry to 16 px)."""
+    return float(-(-int(v) // grid) * grid)
+
+
+#: a new Compound's size without children, and what its frame and view add around the children: the
+#: frame's title bar and margins, the view's margins, the Publish/Call button and the status line
+DEFAULT_SIZE = (320.0, 360.0)
+CHROME = (64.0, 150.0)
+#: each child's box: its title above the child and its side margins, the gap between boxes, the least
+#: a child gets
+CHILD_TITLE = 28.0
+CHILD_PAD = 40.0
+CHILD_GAP = 6.0
+CHILD_MIN = (160.0, 96.0)
+
 
 def _child_settings_problems(number: int, child: ChildSpec) -> list[str]:
     """The child's own settings problems, the child named (``child 2 (Slider) on linear.x: …``)."""

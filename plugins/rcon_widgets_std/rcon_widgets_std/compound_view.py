@@ -1,6 +1,12 @@
 """Compound's Qt view: each child's own view under a small title (its field), in a grid; a Publish or
 Call button and the result underneath. Child views are built from their specs, like the app builds any
-widget view, and refreshed when their model's ``seq`` moves."""
+widget view, and refreshed when their model's ``seq`` moves.
+
+A child is never painted below its minimum size: the grid sits in a scroll area, which never makes it
+smaller than its minimum (each child's own), so a frame smaller than the children scrolls (the button
+stays in view).
+``sizeHint()`` is the size that shows every child without scrolling: what the app should give a new
+Compound (see :meth:`CompoundSettings.preferred_size` for the same without Qt)."""
 
 from __future__ import annotations
 
@@ -18,9 +24,17 @@ class CompoundView(QtWidgets.QWidget):
         super().__init__(parent)
         self.model = model
         layout = vbox(self)
-        self.grid = QtWidgets.QGridLayout()
+        self.content = QtWidgets.QWidget()
+        self.content.setObjectName("compoundChildren")
+        self.grid = QtWidgets.QGridLayout(self.content)
+        self.grid.setContentsMargins(0, 0, 0, 0)
         self.grid.setSpacing(6)
-        layout.addLayout(self.grid, 1)
+        self.scroll = QtWidgets.QScrollArea()
+        self.scroll.setWidgetResizable(True)
+        self.scroll.setFrameShape(QtWidgets.QFrame.Shape.NoFrame)
+        self.scroll.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAsNeeded)
+        self.scroll.setWidget(self.content)
+        layout.addWidget(self.scroll, 1)
         role = model.binding.role
         self.button = None
         if role is not Role.SERVE:
@@ -33,6 +47,7 @@ class CompoundView(QtWidgets.QWidget):
         self.status.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
         layout.addWidget(self.status)
         self.child_views: list[tuple[Any, QtWidgets.QWidget]] = []
+        self._boxes: list[QtWidgets.QGroupBox] = []
         self._version = -1
         self._painted: dict[int, int] = {}
         self._timer = QtCore.QTimer(self)  # children's own changes (a display child ageing, ...)
@@ -45,10 +60,11 @@ class CompoundView(QtWidgets.QWidget):
         if self._version == self.model.children_version:
             return
         self._version = self.model.children_version
-        for _child, box in self.child_views:
+        for box in self._boxes:
             self.grid.removeWidget(box)
             box.deleteLater()
         self.child_views = []
+        self._boxes = []
         self._painted = {}
         cols = max(1, int(self.model.settings.columns))
         for c in range(cols):
@@ -62,7 +78,37 @@ class CompoundView(QtWidgets.QWidget):
                 view = QtWidgets.QLabel(f"{child.cfg.kind}: {exc}")
             inner.addWidget(view)
             self.grid.addWidget(box, i // cols, i % cols)
+            self._boxes.append(box)
             self.child_views.append((child, view))
+
+        rows = -(-len(self.model.children) // cols)
+        for r in range(max(self.grid.rowCount(), rows + 1)):
+            self.grid.setRowStretch(r, 1 if r == rows else 0)  # spare height below the children, not in them
+        self.content.adjustSize()
+        self.updateGeometry()
+
+    def _chrome(self) -> QtCore.QSize:
+        """What the view needs besides the children: margins, the button and the status line."""
+        layout = self.layout()
+        m = layout.contentsMargins()
+        h = m.top() + m.bottom()
+        for w in (self.button, self.status):
+            if w is not None:
+                h += w.sizeHint().height() + layout.spacing()
+        return QtCore.QSize(m.left() + m.right(), h)
+
+    def sizeHint(self) -> QtCore.QSize:  # noqa: N802 - Qt override
+        """Every child at its preferred size, the button and the status line: nothing scrolls."""
+        chrome, content = self._chrome(), self.content.sizeHint()
+        bar = self.scroll.verticalScrollBar().sizeHint().width()
+        return QtCore.QSize(max(content.width() + bar, 160) + chrome.width(), content.height() + chrome.height())
+
+    def minimumSizeHint(self) -> QtCore.QSize:  # noqa: N802 - Qt override
+        """The smallest child and the button: anything more scrolls."""
+        chrome = self._chrome()
+        low = [b.minimumSizeHint() for b in self._boxes] or [QtCore.QSize(120, 40)]
+        w = max(q.width() for q in low) + self.scroll.verticalScrollBar().sizeHint().width()
+        return QtCore.QSize(w + chrome.width(), min(q.height() for q in low) + chrome.height())
 
     def _refresh_children(self) -> None:
         for child, view in self.child_views:

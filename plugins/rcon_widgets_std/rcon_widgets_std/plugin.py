@@ -86,7 +86,7 @@ def specs() -> list[WidgetSpec]:
             description="Child widgets composing one message, service request or service response",
             roles={Role.PUBLISH, Role.CALL, Role.SERVE},
             accepts=Accepts(messages=["any"]),
-            default_size=(300, 260), priority=0, **_refs("compound", "Compound"),
+            default_size=(320, 360), priority=0, **_refs("compound", "Compound"),
         ),
     ]
 

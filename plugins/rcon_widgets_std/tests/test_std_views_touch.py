@@ -8,6 +8,8 @@ from qtpy import QtCore, QtWidgets
 from rcon_widgets_std import view_common
 from rcon_widgets_std.button import ButtonModel, ButtonSettings, CallStatus
 from rcon_widgets_std.button_view import ButtonView
+from rcon_widgets_std.compound import ChildSpec, CompoundModel, CompoundSettings
+from rcon_widgets_std.compound_view import CompoundView
 from rcon_widgets_std.label import LabelModel, LabelSettings
 from rcon_widgets_std.label_view import LabelView
 from rcon_widgets_std.plugin import specs
@@ -22,6 +24,7 @@ from rcon_core.app.geometry import on_grid
 from rcon_core.app.theme import stylesheet
 from rcon_core.app.widget_frame import WidgetFrame, frame_min_size
 from rcon_core.msgs import TypeRegistry
+from rcon_core.plugins import Binding
 
 SPECS = {spec.kind: spec for spec in specs()}
 
@@ -227,3 +230,72 @@ def test_label_default_size_fits_a_typical_title(qtbot, title):
     label = frame.title
     room = label.contentsRect().width() - 2 * 6  # the theme's title padding
     assert label.fontMetrics().horizontalAdvance(title) <= room, f"{title!r} cut at the default size"
+
+
+# -- Compound: children never below their minimum; a default size that fits them ---------------------
+def _compound(children, columns=1):
+    settings = CompoundSettings(columns=columns, children=children)
+    m = CompoundModel(settings, Binding("/cmd_vel", "geometry_msgs/Twist", "publish"), None,
+                      types=TypeRegistry.standard())
+    m.build_children()
+    return m
+
+
+TWO = [ChildSpec("std.slider", "linear.x", {"minimum": -1, "maximum": 1}), ChildSpec("std.stepper", "angular.z")]
+THREE = [*TWO, ChildSpec("std.textfield", "linear.y"), ChildSpec("std.slider", "linear.z")]
+
+
+def _fits_without_scrolling(view: CompoundView, what: str) -> None:
+    """Every child at least its minimum and all of them inside the scroll area's viewport."""
+    port = view.scroll.viewport()
+    for box in view._boxes:
+        corner = box.mapTo(port, QtCore.QPoint(box.width(), box.height()))
+        assert corner.x() <= port.width() and corner.y() <= port.height(), f"{what}: a child needs scrolling"
+        need = box.minimumSizeHint()
+        assert box.height() >= need.height() and box.width() >= need.width(), f"{what}: a child squeezed"
+
+
+def test_compound_in_a_small_frame_keeps_children_at_their_minimum_and_scrolls(qtbot):
+    view = CompoundView(_compound(TWO))
+    frame = placed(qtbot, "std.compound", view, "Compound", size=(300, 250))  # the tester's frame
+    for box in view._boxes:
+        need = box.minimumSizeHint()
+        assert box.height() >= need.height() and box.width() >= need.width(), "a child squeezed below its minimum"
+    bar = view.scroll.verticalScrollBar()
+    assert bar.maximum() > 0, "what does not fit scrolls"
+    bar.setValue(bar.maximum())
+    QtWidgets.QApplication.processEvents()
+    last = view._boxes[-1]
+    bottom = last.mapTo(view.scroll.viewport(), QtCore.QPoint(0, last.height()))
+    assert bottom.y() <= view.scroll.viewport().height(), "the last child can be scrolled into view"
+    assert view.button.isVisible() and frame.isVisible()
+
+
+@pytest.mark.parametrize(("children", "columns"), [(TWO, 1), (TWO, 2), (THREE, 2), (THREE, 1)])
+def test_compound_preferred_size_and_size_hint_show_every_child_without_scrolling(qtbot, children, columns):
+    m = _compound(children, columns)
+    w, h = m.settings.preferred_size()
+    assert (w, h) >= SPECS["std.compound"].default_size or h > SPECS["std.compound"].default_size[1]
+    view = CompoundView(m)
+    frame = placed(qtbot, "std.compound", view, "Compound", size=(int(w), int(h)))
+    _fits_without_scrolling(view, f"{len(children)} children in {columns} column(s) at {w}x{h}")
+    hint = view.sizeHint()
+    bare = CompoundView(m)  # the view alone at its own hint: nothing scrolls either
+    qtbot.addWidget(bare)
+    bare.setStyleSheet(stylesheet(touch=48))
+    bare.show()
+    QtWidgets.QApplication.processEvents()  # polished by the theme: its real hint
+    bare.resize(bare.sizeHint())
+    QtWidgets.QApplication.processEvents()
+    _fits_without_scrolling(bare, "the view at its sizeHint")
+    assert hint.height() > 200
+    assert frame.isVisible()
+
+
+def test_compound_preferred_size_grows_with_its_children():
+    small = CompoundSettings(children=TWO[:1]).preferred_size()
+    two = CompoundSettings(children=TWO).preferred_size()
+    four = CompoundSettings(children=THREE).preferred_size()
+    wide = CompoundSettings(children=THREE, columns=2).preferred_size()
+    assert small[1] <= two[1] < four[1] and wide[0] > four[0] and wide[1] < four[1]
+    assert CompoundSettings().preferred_size() == SPECS["std.compound"].default_size
