@@ -4,6 +4,10 @@ Each pad takes its own touch points (touch events are delivered per widget), so 
 work at once with two thumbs. The first finger on a pad drives it; lifting it, a cancelled touch, the
 window losing focus or the pad being hidden all call ``model.release()`` (the model sends the zero).
 Mouse dragging works the same on a desktop.
+
+A pad the app runs offline on purpose (the add panel's preview, marked PREVIEW ONLY) says "preview: not
+driving the robot" instead of "link down": the app tells by setting ``model.dry_run = True`` (an
+attribute the model need not define; absent means a real widget).
 """
 
 from __future__ import annotations
@@ -17,6 +21,8 @@ from qtpy import QtCore, QtGui, QtWidgets
 from .teleop import TeleopValue
 
 TRAIL_S = 0.6
+#: the status line of a pad the app runs offline on purpose (the add panel's preview)
+PREVIEW_TEXT = "preview: not driving the robot"
 
 
 class TeleopView(QtWidgets.QWidget):
@@ -207,13 +213,22 @@ class TeleopView(QtWidgets.QWidget):
             p.drawText(top, QtCore.Qt.AlignmentFlag.AlignRight | QtCore.Qt.AlignmentFlag.AlignVCenter, h + " →")
         # status line
         p.setPen(pal.color(QtGui.QPalette.ColorRole.WindowText))
-        status = self._status_text(v)
+        status = self.status_text()
         p.drawText(QtCore.QRectF(4, self.height() - 20, self.width() - 8, 18),
                    QtCore.Qt.AlignmentFlag.AlignCenter, status)
         p.end()
 
-    def _status_text(self, v: TeleopValue) -> str:
+    @property
+    def dry_run(self) -> bool:
+        """Whether the app runs this pad offline on purpose (a preview): nothing it does reaches a robot."""
+        return bool(getattr(self.model, "dry_run", False))
+
+    def status_text(self) -> str:
+        """The line under the pad: what the pad is doing, or why it is not driving."""
+        v = self._value
         st = self._state
+        if self.dry_run:
+            return PREVIEW_TEXT
         if st is not None and st.link_down:
             return "link down: stopped"
         if st is not None and st.error:

@@ -149,3 +149,42 @@ def test_idle_pad_screenshot(qtbot, bridge):
     view.refresh(model.state)
     view.grab().save(str(SHOTS / "teleop-idle.png"))
     bridge[0].call(model.stop).result(5)
+
+
+def offline_pad(dry_run: bool | None):
+    """A pad run as the app runs an unconnected widget or a control's preview: on the offline client,
+    link down; ``dry_run`` as the app would set it for the add panel's preview (None: not set at all)."""
+    from rcon_core.app.link import OFFLINE
+
+    model = TeleopModel(TeleopSettings(), Binding("/cmd_vel", "geometry_msgs/Twist", "publish"),
+                        OFFLINE.node("preview-pad"), types=TypeRegistry.standard())
+    if dry_run is not None:
+        model.dry_run = dry_run
+    model.set_link(False)
+    model.start()
+    return model, TeleopView(model)
+
+
+def test_preview_pad_says_it_is_a_preview_not_link_down(qtbot):
+    model, view = offline_pad(dry_run=True)
+    qtbot.addWidget(view)
+    view.resize(300, 300)
+    view.show()
+    view.refresh(model.state)
+    assert model.state.link_down and view.status_text() == "preview: not driving the robot"
+    c, _r = centre(view)
+    QTest.mousePress(view, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier, c + QtCore.QPoint(0, -60))
+    view.refresh(model.state)
+    assert view.status_text() == "preview: not driving the robot" and not model.active
+    QTest.mouseRelease(view, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier, c)
+    view.grab().save(str(SHOTS / "teleop-preview.png"))
+    model.stop()
+
+
+@pytest.mark.parametrize("dry_run", [None, False])
+def test_offline_pad_on_the_canvas_still_says_link_down(qtbot, dry_run):
+    model, view = offline_pad(dry_run)
+    qtbot.addWidget(view)
+    view.refresh(model.state)
+    assert view.status_text() == "link down: stopped"
+    model.stop()
