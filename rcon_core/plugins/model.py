@@ -166,6 +166,9 @@ class WidgetModel:
     stale_after: float | None = 5.0
     #: timeout (seconds) for :meth:`call`; None uses the client's default
     call_timeout: float | None = None
+    #: True while the model runs as a preview in the app's add panel: it is offline on purpose and
+    #: nothing it sends reaches the robot (a view can say so instead of "link down"). Set by the app.
+    dry_run: bool = False
 
     def __init__(
         self,
