@@ -45,6 +45,7 @@ def window_standard_types(qtbot, tmp_path, sim_thread, plugins):
 def _window(qtbot, tmp_path, sim_thread, plugins, types):
     win = MainWindow(AppConfig(tmp_path / "config"), plugins, types=types)
     qtbot.addWidget(win)
+    win.resize(1280, 800)  # a 1280x800 tablet (the offscreen test screen is 800x800)
     win.show()
     QTest.qWaitForWindowExposed(win)
     win.connect_to(sim_thread.url)

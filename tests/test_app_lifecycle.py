@@ -41,6 +41,7 @@ def demo_layout() -> Workspace:
 def open_window(qtbot, config_dir, layout=None, demo=None) -> MainWindow:
     window = MainWindow(AppConfig(config_dir), make_plugins(), layout_path=layout, demo=demo)
     qtbot.addWidget(window)
+    window.resize(1280, 800)  # a 1280x800 tablet (the offscreen test screen is 800x800)
     window.show()
     QTest.qWaitForWindowExposed(window)
     return window

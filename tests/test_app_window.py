@@ -84,6 +84,7 @@ def make_window(qtbot, tmp_path, robot):
     def make(connect: bool = True) -> MainWindow:
         window = MainWindow(AppConfig(tmp_path / "config"), make_plugins())
         qtbot.addWidget(window)
+        window.resize(1280, 800)  # a 1280x800 tablet (the offscreen test screen is 800x800)
         window.show()
         QTest.qWaitForWindowExposed(window)
         if connect:

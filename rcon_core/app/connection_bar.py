@@ -43,7 +43,7 @@ class ConnectionBar(QtWidgets.QFrame):
         self.url.setObjectName("urlField")
         self.url.setEditable(True)
         self.url.setInsertPolicy(QtWidgets.QComboBox.InsertPolicy.NoInsert)
-        self.url.setMinimumWidth(320)
+        self.url.setMinimumWidth(220)  # a 1024 px screen keeps its side panel toggle and state
         self.url.addItems(config.url_history or [config.last_url])
         self.url.setCurrentText(config.last_url)
         line = self.url.lineEdit()

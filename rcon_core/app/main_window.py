@@ -33,6 +33,12 @@ from rcon_core.plugins import Binding, PluginManager, Role, WidgetSpec
 
 log = logging.getLogger(__name__)
 
+#: narrowest side panel (topics, services, widgets) and add panel
+SIDE_MIN = 330
+PANEL_MIN = 310
+#: a window narrower than this is a small screen: in Operate mode the side panel hides itself
+SMALL_WINDOW = 1100
+
 
 class MainWindow(QtWidgets.QMainWindow):
     """RCON's window. ``plugins`` and ``config`` are injected so tests use their own."""
@@ -89,12 +95,18 @@ class MainWindow(QtWidgets.QMainWindow):
         self.side.addTab(self.topics, "Topics")
         self.side.addTab(self.services, "Services")
         self.side.addTab(self.palette_panel, "Widgets")
-        self.side.setMinimumWidth(330)
+        self.side.setMinimumWidth(SIDE_MIN)
+        #: the operator's own show/hide of the side panel (the toggle), kept until the automatic choice
+        #: (small window in Operate mode, or the add panel needing the room) changes
+        self._side_override: bool | None = None
+        self._side_auto_hidden: bool | None = None
 
         self.tabs = QtWidgets.QTabBar()
         self.tabs.setObjectName("canvasTabs")
         self.tabs.setExpanding(False)
         self.tabs.setDrawBase(False)
+        self.tabs.setElideMode(QtCore.Qt.TextElideMode.ElideRight)
+        self.tabs.setUsesScrollButtons(True)
         self.tabs.currentChanged.connect(self._tab_changed)
         # the mode: a two-segment control, the active segment filled ("Edit | Operate"); lock_button is the
         # Operate segment (checked = the canvas is locked)
@@ -117,7 +129,8 @@ class MainWindow(QtWidgets.QMainWindow):
         mode_bar = QtWidgets.QFrame()
         mode_bar.setObjectName("modeBar")
         row = QtWidgets.QHBoxLayout(mode_bar)
-        row.setContentsMargins(8, 6, 8, 6)
+        row.setContentsMargins(6, 6, 12, 6)  # the last segment clear of the window's edge
+        row.setSpacing(4)
         row.addWidget(self.tabs, 1)
         self.canvas_buttons: dict[str, QtWidgets.QPushButton] = {}
         self.canvas_actions: dict[str, QtGui.QAction] = {}
@@ -146,6 +159,7 @@ class MainWindow(QtWidgets.QMainWindow):
             b = QtWidgets.QPushButton(text)
             b.setObjectName(f"canvas_{name}")
             b.setToolTip(name.capitalize())
+            b.setProperty("square", True)
             b.clicked.connect(slot)
             self.canvas_buttons[name] = b
             row.addWidget(b)
@@ -154,7 +168,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.stack = QtWidgets.QStackedWidget()
         self.add_panel = AddPanel(self.rank_widgets, self.targets_for, self.preview.build, self.preview.release,
                                   child_context=self.child_context)
-        self.add_panel.setMinimumWidth(330)
+        self.add_panel.setMinimumWidth(PANEL_MIN)
         self.add_panel.hide()
         self.add_panel.place_requested.connect(self.place_draft)
 
@@ -176,6 +190,15 @@ class MainWindow(QtWidgets.QMainWindow):
         self.center = center
         center.installEventFilter(self)  # the canvas bar gets compact when the centre is narrow
         self.add_panel.installEventFilter(self)  # the add panel gets room when it opens
+        # shows or hides the side panel (topics, services, widgets): room for the canvas on a small screen;
+        # first on the connection bar, above the side panel
+        self.side_toggle = QtWidgets.QPushButton()
+        self.side_toggle.setObjectName("sideToggle")
+        self.side_toggle.clicked.connect(self.toggle_side)
+        self.side_toggle.setProperty("square", True)
+        bar = self.connection.layout()
+        if isinstance(bar, QtWidgets.QBoxLayout):
+            bar.insertWidget(0, self.side_toggle)
         root = QtWidgets.QWidget()
         rcol = QtWidgets.QVBoxLayout(root)
         rcol.setContentsMargins(0, 0, 0, 0)
@@ -229,7 +252,7 @@ class MainWindow(QtWidgets.QMainWindow):
         app = QtWidgets.QApplication.instance()
         if isinstance(app, QtGui.QGuiApplication):
             app.applicationStateChanged.connect(self._app_state_changed)
-        self.resize(1280, 800)
+        self.resize(self.initial_size())
 
     # ------------------------------------------------------------------------------------ workspace
     _demo_rebuilt = False
@@ -320,7 +343,18 @@ class MainWindow(QtWidgets.QMainWindow):
             self.tabs.addTab(canvas.name)
         self.tabs.setCurrentIndex(self.controller.index)
         self.tabs.blockSignals(False)
+        self._fit_tabs()
         self.canvas_actions["delete"].setEnabled(len(canvases) > 1 and not self.controller.canvas.locked)
+
+    def _fit_tabs(self) -> None:
+        """The canvas tabs never get so narrow that only the scroll arrows show: room for the widest tab
+        (up to about 12 letters) and, when they overflow, the two scroll buttons."""
+        fm = self.tabs.fontMetrics()
+        widest = max((self.tabs.tabSizeHint(i).width() for i in range(self.tabs.count())), default=0)
+        readable = min(widest, fm.horizontalAdvance("M" * 12))
+        scrollers = 2 * theme.current_touch_px() + 4 if self.tabs.count() > 1 else 0
+        every = sum(self.tabs.tabSizeHint(i).width() for i in range(self.tabs.count()))
+        self.tabs.setMinimumWidth(min(every, readable + scrollers))
 
     def _tab_changed(self, index: int) -> None:
         self.controller.switch(index)
@@ -478,18 +512,83 @@ class MainWindow(QtWidgets.QMainWindow):
             self._fit_mode_bar()
         elif obj is self.add_panel and event.type() == QtCore.QEvent.Type.Show:
             self._fit_mode_bar()
+            self._update_side()  # at once, before the layout would widen the window for the panel
             QtCore.QTimer.singleShot(0, self._make_room_for_add_panel)
         elif obj is self.add_panel and event.type() == QtCore.QEvent.Type.Hide:
             self._fit_mode_bar()
+            self._update_side()
         return super().eventFilter(obj, event)
 
-    def _make_room_for_add_panel(self) -> None:
+    def initial_size(self) -> QtCore.QSize:
+        """1280x800, or the screen's free area when it is smaller (a 1024x600 tablet): never larger."""
+        screen = self.screen() or QtGui.QGuiApplication.primaryScreen()
+        size = QtCore.QSize(1280, 800)
+        if screen is not None:
+            size = size.boundedTo(screen.availableGeometry().size())
+        return size
+
+    def resizeEvent(self, event: QtGui.QResizeEvent) -> None:
+        super().resizeEvent(event)
+        self._update_side()
+
+    def _centre_min(self) -> int:
+        return self.center.minimumSizeHint().width()
+
+    def _room_for_side(self) -> bool:
+        """Whether the side panel fits beside the canvas bar (and the add panel when it is open) without
+        widening the window."""
+        need = SIDE_MIN + self._centre_min() + self.split.handleWidth()
         if self.add_panel.isVisible():
-            sizes = self.split.sizes()
-            total = sum(sizes)
-            side = max(sizes[0], self.side.minimumSizeHint().width(), 330)
-            panel = min(460, max(400, total // 3))
-            self.split.setSizes([side, max(300, total - side - panel), panel])
+            need += PANEL_MIN + self.split.handleWidth()
+        return self.width() >= need
+
+    def _side_auto_hide(self) -> bool:
+        """Whether the side panel should give its room away: a small window in Operate mode, or no room."""
+        if self.controller.canvas.locked and self.width() < SMALL_WINDOW:
+            return True
+        return not self._room_for_side()
+
+    def _update_side(self) -> None:
+        """Show or hide the side panel: the automatic choice, unless the operator used the toggle since
+        that choice last changed."""
+        if not hasattr(self, "controller"):
+            return  # still building
+        auto = self._side_auto_hide()
+        if auto != self._side_auto_hidden:
+            self._side_auto_hidden = auto
+            self._side_override = None
+        room = self._room_for_side()
+        shown = self._side_override if self._side_override is not None else not auto
+        shown = shown and room  # never by widening the window past the screen
+        if shown != self.side.isVisibleTo(self):
+            self.side.setVisible(shown)
+        self.side_toggle.setText("◀" if shown else "▶")
+        self.side_toggle.setEnabled(shown or room)
+        tip = ("Hide topics, services and widgets (more room for the canvas)" if shown
+               else "Show topics, services and widgets" if room
+               else "No room for topics, services and widgets beside the canvas"
+                    + (" and the add panel" if self.add_panel.isVisible() else ""))
+        self.side_toggle.setToolTip(tip)
+        self.side_toggle.setAccessibleName(tip)
+
+    def toggle_side(self) -> None:
+        """The operator shows or hides the side panel."""
+        self._side_override = not self.side.isVisibleTo(self)
+        self._update_side()
+        if self.add_panel.isVisible():
+            self._make_room_for_add_panel()
+
+    def _make_room_for_add_panel(self) -> None:
+        """The add panel takes its room from the side panel and the canvas, never by growing the window."""
+        self._update_side()
+        if not self.add_panel.isVisible():
+            return
+        sizes = self.split.sizes()
+        total = sum(sizes)
+        side = max(sizes[0], SIDE_MIN) if self.side.isVisibleTo(self) else 0
+        room = total - side - self._centre_min()
+        panel = max(PANEL_MIN, min(460, max(400, total // 3), room))
+        self.split.setSizes([side, max(0, total - side - panel), panel])
 
     def _fit_mode_bar(self) -> None:
         """Short labels on the canvas bar when the centre is narrow (e.g. the add panel is open), so the
@@ -516,6 +615,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _show_lock(self, locked: bool) -> None:
         self._show_mode(locked)
+        self._update_side()
         for name in ("undo", "redo"):
             self.canvas_buttons[name].setEnabled(not locked)
         for name in ("rename", "delete"):

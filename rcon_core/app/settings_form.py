@@ -222,7 +222,12 @@ class SettingsForm(QtWidgets.QWidget):
             if field.metadata.get("help"):
                 editor.setToolTip(str(field.metadata["help"]))
             self._editors[field.name] = (editor, getter)
-            if isinstance(editor, ChildrenEditor):  # full width under its heading
+            if isinstance(editor, TextBlock):  # a message: the row's full width, its label above it
+                label = QtWidgets.QLabel(_label(field))
+                label.setBuddy(editor)
+                layout.addRow(label)
+                layout.addRow(editor)
+            elif isinstance(editor, ChildrenEditor):  # full width under its heading
                 heading = QtWidgets.QLabel(_label(field))
                 heading.setProperty("role", "heading")
                 layout.addRow(heading)

@@ -1,0 +1,204 @@
+"""A small screen (a 1024x600 tablet): the window never grows past it, every toolbar button and the add panel
+stay inside, the side panel makes room (its toggle; hidden by itself in Operate mode), canvas tabs readable.
+Driven with taps against the sim, on the demo layout."""
+
+from __future__ import annotations
+
+import pytest
+from qtpy import QtCore, QtGui, QtWidgets
+from qtpy.QtTest import QTest
+
+from rcon_core.app.config import AppConfig
+from rcon_core.app.main_window import MainWindow
+from rcon_core.plugins import PluginManager, Role
+
+pytestmark = pytest.mark.usefixtures("qapp")
+
+
+@pytest.fixture(scope="module")
+def plugins() -> PluginManager:
+    pm = PluginManager(environ={})
+    pm.load_entry_points()
+    return pm
+
+
+@pytest.fixture
+def make_window(qtbot, tmp_path, sim_thread, plugins):
+    pytest.importorskip("rcon_widgets_std")
+    from rcon_core.app.demo import demo_workspace
+
+    made: list[MainWindow] = []
+
+    def make(size: tuple[int, int] | None) -> MainWindow:
+        win = MainWindow(AppConfig(tmp_path / f"config{len(made)}"), plugins, demo=lambda: demo_workspace(plugins))
+        qtbot.addWidget(win)
+        if size is not None:
+            win.resize(*size)
+        win.show()
+        QTest.qWaitForWindowExposed(win)
+        win.connect_to(sim_thread.url)
+        qtbot.waitUntil(lambda: win.topics.item("/cmd_vel") is not None, timeout=10_000)
+        made.append(win)
+        return win
+
+    yield make
+    for win in made:
+        win.shutdown()
+
+
+def tap(widget: QtWidgets.QWidget, pos: QtCore.QPoint | None = None) -> None:
+    assert widget.isVisible() and widget.isEnabled(), widget.objectName()
+    QTest.mouseClick(widget, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier,
+                     pos if pos is not None else widget.rect().center())
+
+
+def tap_topic(window: MainWindow, name: str) -> None:
+    tree = window.topics.tree
+    index = tree.indexFromItem(window.topics.item(name))
+    tree.scrollTo(index)
+    tap(tree.viewport(), tree.visualRect(index).center())
+
+
+def settle() -> None:
+    for _ in range(3):
+        QtWidgets.QApplication.processEvents()
+        QTest.qWait(10)
+
+
+def inside_window(window: MainWindow, widget: QtWidgets.QWidget) -> bool:
+    rect = QtCore.QRect(widget.mapTo(window, QtCore.QPoint(0, 0)), widget.size())
+    return window.rect().contains(rect)
+
+
+def toolbar(window: MainWindow) -> list[QtWidgets.QWidget]:
+    return [window.side_toggle, window.tabs, window.menu_button, window.canvas_buttons["undo"],
+            window.canvas_buttons["redo"], window.edit_button, window.lock_button]
+
+
+def assert_toolbar_inside(window: MainWindow) -> None:
+    for widget in toolbar(window):
+        assert widget.isVisible() and inside_window(window, widget), (widget.objectName(), widget.geometry())
+    # the last segment is not flush with the window's edge
+    right = window.lock_button.mapTo(window, QtCore.QPoint(window.lock_button.width(), 0)).x()
+    assert window.width() - right >= 8
+
+
+def assert_current_tab_readable(window: MainWindow) -> None:
+    tabs = window.tabs
+    i = tabs.currentIndex()
+    rect = tabs.tabRect(i)
+    assert tabs.rect().contains(rect), (rect, tabs.rect())
+    scrollers = [b for b in tabs.findChildren(QtWidgets.QToolButton) if b.isVisible()]
+    assert not any(b.geometry().intersects(rect) for b in scrollers), "the current tab is under the arrows"
+    assert rect.width() >= tabs.tabSizeHint(i).width()  # its whole name, not "Can"
+
+
+def test_the_window_opens_no_larger_than_the_screen(make_window):
+    window = make_window(None)
+    screen = window.screen().availableGeometry()
+    assert window.width() <= screen.width() and window.height() <= screen.height(), (window.size(), screen)
+    assert window.width() == min(1280, screen.width())
+
+
+def test_a_1024x600_window_keeps_everything_inside_with_the_add_panel_open(make_window):
+    window = make_window((1024, 600))
+    tap(window.edit_button)
+    settle()
+    assert window.size() == QtCore.QSize(1024, 600)
+    assert window.side.isVisible()  # Edit mode: topics to pick from
+    assert_toolbar_inside(window)
+    assert_current_tab_readable(window)
+
+    tap_topic(window, "/cmd_vel")
+    tap(window.add_panel.role_buttons[Role.PUBLISH])
+    settle()
+    assert window.size() == QtCore.QSize(1024, 600)  # the panel took its room, the window did not grow
+    assert window.add_panel.isVisible() and inside_window(window, window.add_panel)
+    assert window.add_panel.width() >= 300
+    assert not window.side.isVisible()  # it gave its room to the panel
+    assert_toolbar_inside(window)
+    assert_current_tab_readable(window)
+    # no room to show it beside the canvas and the panel: the toggle says so instead of growing the window
+    assert not window.side_toggle.isEnabled()
+    assert "No room" in window.side_toggle.toolTip()
+
+    [cancel] = [b for b in window.add_panel.findChildren(QtWidgets.QPushButton, "cancelButton") if b.isVisible()]
+    tap(cancel)
+    settle()
+    assert window.side.isVisible() and window.size() == QtCore.QSize(1024, 600)
+
+
+def test_operate_mode_on_a_small_window_hides_the_side_panel_and_its_toggle_brings_it_back(make_window):
+    window = make_window((1024, 600))
+    tap(window.lock_button)  # Operate
+    settle()
+    assert window.controller.canvas.locked
+    assert not window.side.isVisible()  # the canvas gets the room
+    assert_toolbar_inside(window)
+    canvas_width = window.controller.surface.scroll_area.viewport().width()
+    assert canvas_width > 900
+    tap(window.side_toggle)
+    settle()
+    assert window.side.isVisible() and window.size() == QtCore.QSize(1024, 600)
+    assert_toolbar_inside(window)
+    tap(window.side_toggle)
+    settle()
+    assert not window.side.isVisible()
+    tap(window.edit_button)  # back to Edit mode: the side panel is back for adding
+    settle()
+    assert window.side.isVisible()
+
+
+def test_canvas_tabs_stay_readable_with_the_add_panel_open_at_1280(make_window):
+    window = make_window((1280, 800))
+    tap(window.edit_button)
+    for name in ("Docking", "Cameras"):
+        window.controller.add_canvas(name)
+    window.switch_canvas(0)
+    tap_topic(window, "/battery")
+    tap(window.add_panel.role_buttons[Role.SUBSCRIBE])
+    settle()
+    assert window.size() == QtCore.QSize(1280, 800)
+    assert inside_window(window, window.add_panel)
+    assert_toolbar_inside(window)
+    assert_current_tab_readable(window)
+    window.switch_canvas(2)
+    settle()
+    assert_current_tab_readable(window)
+
+
+def test_the_stylesheet_parses_without_a_warning(qtbot):
+    """Qt prints "Could not parse application stylesheet" (and keeps going unstyled) on a QSS error."""
+    from rcon_core.app.theme import stylesheet
+
+    messages: list[str] = []
+
+    def handler(_mode, _context, text) -> None:
+        messages.append(text)
+
+    previous = QtCore.qInstallMessageHandler(handler)
+    try:
+        widget = QtWidgets.QWidget()
+        qtbot.addWidget(widget)
+        QtWidgets.QVBoxLayout(widget).addWidget(QtWidgets.QPushButton("x"))
+        widget.setStyleSheet(stylesheet(touch=48))
+        widget.show()
+        widget.ensurePolished()
+        QtWidgets.QApplication.processEvents()
+    finally:
+        QtCore.qInstallMessageHandler(previous)
+    assert not [m for m in messages if "parse" in m.lower()], messages
+    # and a broken sheet would be caught the same way
+    broken: list[str] = []
+    previous = QtCore.qInstallMessageHandler(lambda _m, _c, text: broken.append(text))
+    try:
+        other = QtWidgets.QPushButton("y")
+        qtbot.addWidget(other)
+        other.setStyleSheet(stylesheet(touch=48) + "\nQPushButton { color: ")
+        other.show()
+        other.ensurePolished()
+        QtWidgets.QApplication.processEvents()
+    finally:
+        QtCore.qInstallMessageHandler(previous)
+    assert [m for m in broken if "parse" in m.lower()], broken
+    assert isinstance(QtGui.QGuiApplication.instance(), QtWidgets.QApplication)
