@@ -672,12 +672,19 @@ class MainWindow(QtWidgets.QMainWindow):
         return out
 
     def place_draft(self) -> None:
-        draft = self.add_panel.take_draft()
+        draft = self.add_panel.take_draft()  # the panel closes
         if draft is not None:
+            self._settle_layout()  # the free spot is looked for in the canvas as it is without the panel
             try:
                 self.controller.add_draft(draft)
             except ValueError as exc:
                 self.connection.message.setText(str(exc))
+
+    def _settle_layout(self) -> None:
+        """Apply pending layout changes now (the add panel just closed, the side panel may be back), so
+        the canvas view has its new size."""
+        for _ in range(3):
+            QtWidgets.QApplication.sendPostedEvents(None, QtCore.QEvent.Type.LayoutRequest)
 
     def _dropped(self, _surface: Any, point: QtCore.QPoint) -> None:
         draft = self.add_panel.take_draft()
