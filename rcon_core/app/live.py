@@ -69,6 +69,12 @@ class LiveCanvas:
         """Tell the running models the operator's attention left (their optional ``on_focus_lost``)."""
         self._send(self._loop_focus_lost)
 
+    def keep_running_offline(self, client: Any) -> None:
+        """The link was closed on purpose (Disconnect): the running widgets keep their models and views, so
+        they show their last values with LINK DOWN, then STALE, as after a lost link; whatever starts from
+        now on (another canvas, an added or reconfigured widget) is built on ``client`` (offline)."""
+        self._send(self._loop_offline, client)
+
     def stop(self) -> None:
         """Stop every widget (returns at once; the stop runs on the bridge thread)."""
         self.running = False
@@ -139,6 +145,10 @@ class LiveCanvas:
     def _loop_focus_lost(self) -> None:
         if self._rt is not None:
             self._rt.focus_lost()
+
+    def _loop_offline(self, client: Any) -> None:
+        if self._rt is not None:
+            self._rt.client = client
 
     def _loop_stop(self) -> None:
         before = self._running_ids()

@@ -802,9 +802,14 @@ class MainWindow(QtWidgets.QMainWindow):
 
     # -------------------------------------------------------------------------------------- link
     def _client_changed(self, client: Any) -> None:
-        # widgets hold nodes of the old client: the runtime rebuilds them on the new one (or offline)
+        """A new client: the runtime rebuilds the widgets on it (they hold nodes of the old one). Disconnect
+        (no client) keeps the running widgets and their last values, LINK DOWN then STALE, like a lost
+        link: only what starts afterwards runs offline."""
         self.controller.client = client or OFFLINE
-        self.controller.run_current()
+        if client is None and self.live.running:
+            self.live.keep_running_offline(OFFLINE)
+        else:
+            self.controller.run_current()
         self.preview.restart()
 
     # -------------------------------------------------------------------------------- painting

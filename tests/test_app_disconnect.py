@@ -1,0 +1,87 @@
+"""Disconnect keeps the canvas's widgets with their last values, marked LINK DOWN (then STALE), as a lost link
+does; Connect again brings live values back. Driven with taps against the sim."""
+
+from __future__ import annotations
+
+import pytest
+from qtpy import QtCore, QtWidgets
+from qtpy.QtTest import QTest
+
+from rcon_core.app.config import AppConfig
+from rcon_core.app.main_window import MainWindow
+from rcon_core.plugins import PluginManager, Role
+
+pytestmark = pytest.mark.usefixtures("qapp")
+
+
+@pytest.fixture
+def window(qtbot, tmp_path, sim_thread):
+    pytest.importorskip("rcon_widgets_std")
+    pm = PluginManager(environ={})
+    pm.load_entry_points()
+    win = MainWindow(AppConfig(tmp_path / "config"), pm)
+    qtbot.addWidget(win)
+    win.resize(1280, 800)
+    win.show()
+    QTest.qWaitForWindowExposed(win)
+    win.connect_to(sim_thread.url)
+    qtbot.waitUntil(lambda: win.topics.item("/battery") is not None, timeout=10_000)
+    yield win
+    win.shutdown()
+
+
+def tap(widget: QtWidgets.QWidget, pos: QtCore.QPoint | None = None) -> None:
+    assert widget.isVisible() and widget.isEnabled(), widget.objectName()
+    QTest.mouseClick(widget, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier,
+                     pos if pos is not None else widget.rect().center())
+
+
+def place_battery_label(window: MainWindow) -> str:
+    tree = window.topics.tree
+    index = tree.indexFromItem(window.topics.item("/battery"))
+    tap(tree.viewport(), tree.visualRect(index).center())
+    panel = window.add_panel
+    tap(panel.role_buttons[Role.SUBSCRIBE])
+    kinds = [panel.candidates.item(i).data(QtCore.Qt.ItemDataRole.UserRole).spec.kind
+             for i in range(panel.candidates.count())]
+    cand = panel.candidates.model().index(kinds.index("std.label"), 0)
+    tap(panel.candidates.viewport(), panel.candidates.visualRect(cand).center())
+    tap(panel.place_button)
+    return window.controller.canvas.widgets[-1].id
+
+
+def shown(window: MainWindow, wid: str) -> str:
+    view = window.host.hosted[wid].view
+    return view.value.text() if view is not None else ""
+
+
+def test_disconnect_keeps_the_last_values_marked_link_down_and_connect_brings_them_back(window, qtbot):
+    wid = place_battery_label(window)
+    qtbot.waitUntil(lambda: shown(window, wid) not in ("", "–"), timeout=10_000)
+    frame = window.controller.surface.frames[wid]
+    assert not frame.badge.isVisible()
+
+    tap(window.connection.connect_button)  # "Disconnect"
+    qtbot.waitUntil(lambda: window.connection.state == "closed", timeout=5_000)
+    qtbot.waitUntil(lambda: frame.badge.isVisible() and frame.badge.text() == "LINK DOWN", timeout=5_000)
+    qtbot.wait(300)  # time for a rebuild to show up, were there one
+    QtWidgets.QApplication.processEvents()
+    last = shown(window, wid)
+    kept = window.host.hosted[wid].model
+    assert last not in ("", "–"), last  # still the last value, not "–" (no data yet)
+    assert window.connection.connect_button.text() == "Connect"
+
+    # another canvas while disconnected runs offline; back on this one, its widget shows LINK DOWN
+    window.controller.add_canvas("Other")
+    window.switch_canvas(0)
+    qtbot.waitUntil(lambda: window.host.hosted[wid].model is not kept and window.host.hosted[wid].view is not None,
+                    timeout=10_000)
+    qtbot.waitUntil(lambda: frame.badge.isVisible() and frame.badge.text() == "LINK DOWN", timeout=5_000)
+
+    tap(window.connection.connect_button)  # Connect again: live values
+    qtbot.waitUntil(lambda: window.connection.state == "connected", timeout=10_000)
+    qtbot.waitUntil(lambda: not frame.badge.isVisible(), timeout=10_000)
+    qtbot.waitUntil(lambda: shown(window, wid) not in ("", "–"), timeout=10_000)
+    # rebuilt on the new link, and taking the robot's values
+    qtbot.waitUntil(lambda: window.host.hosted[wid].model is not kept, timeout=10_000)
+    qtbot.waitUntil(lambda: window.host.hosted[wid].model.state.value is not None, timeout=10_000)
