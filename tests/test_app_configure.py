@@ -131,7 +131,7 @@ def test_configure_rebinds_a_running_label_to_another_field_and_undo_restores_it
     assert QtWidgets.QApplication.activeWindow() is window
     QTest.keyClick(window, QtCore.Qt.Key.Key_Z, QtCore.Qt.KeyboardModifier.ControlModifier)
     assert binding_of(window, wid).field_paths == ("percentage",)
-    assert window.controller.canvas.widget(wid).title == "Label"
+    assert window.controller.canvas.widget(wid).title == "battery · percentage"  # the title it got from its binding
     qtbot.waitUntil(lambda: shown_number(window, qtbot, wid) <= 1.0, timeout=10_000)
     assert window.host.hosted[wid].model.binding.field_paths == ("percentage",)
 

@@ -191,3 +191,34 @@ def test_message_text_settings_are_multi_line_and_take_the_rows_full_width(windo
 
     QTest.keyClicks(payload, "{}")
     assert panel.draft.settings.payload == "{}"
+
+
+def test_a_new_widget_is_titled_after_what_it_is_bound_to_and_the_title_stays_editable(window, qtbot):
+    from qtpy.QtTest import QTest
+
+    from rcon_core.plugins import Role
+
+    panel = pick_widget(window, window.topics, "/battery", Role.SUBSCRIBE, "std.label")
+    assert panel.title_edit.text() == "battery · percentage"
+    panel.choose_field("voltage")  # another field: the title follows
+    assert panel.title_edit.text() == "battery · voltage"
+    assert panel.preview_frame.title.full_title == "battery · voltage"
+    tap(panel.place_button)
+    placed = window.controller.canvas.widgets[-1]
+    assert placed.title == "battery · voltage"
+    assert window.controller.surface.frames[placed.id].title.full_title == "battery · voltage"
+
+    # a camera: what it shows, not its topic's plumbing
+    panel = pick_widget(window, window.topics, "/camera/front/image_raw", Role.SUBSCRIBE, "sensors.image")
+    assert panel.title_edit.text() == "front camera"
+    # typed by the operator: kept, also when the field or target changes afterwards
+    panel.title_edit.selectAll()
+    panel.title_edit.setFocus()
+    QTest.keyClicks(panel.title_edit, "Bow")
+    assert panel.draft.title == "Bow"
+    tap(panel.place_button)
+    assert window.controller.canvas.widgets[-1].title == "Bow"
+
+    # a service: its own name
+    panel = pick_widget(window, window.services, "/lights/set", Role.CALL, "std.button")
+    assert panel.title_edit.text() == "/lights/set"

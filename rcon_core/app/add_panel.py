@@ -30,7 +30,7 @@ from qtpy import QtCore, QtGui, QtWidgets
 from rcon_core.app.canvas_surface import DRAFT_MIME
 from rcon_core.app.catalog_panel import short_type
 from rcon_core.app.children_editor import ChildContext
-from rcon_core.app.draft import Candidate, Draft, Target, field_type
+from rcon_core.app.draft import Candidate, Draft, Target, field_type, suggested_title
 from rcon_core.app.settings_form import SettingsForm, form_label, guard_wheel, tune_form
 from rcon_core.app.widget_frame import WidgetFrame
 from rcon_core.plugins import Binding, Role, SettingsError, WidgetSpec
@@ -301,6 +301,7 @@ class AddPanel(QtWidgets.QWidget):
         self._pick_target = False
         self._targets: list[Target] = []
         self._roles: list[Role] = []  #: the role chooser's roles, in its order
+        self._title_typed = False  #: the operator typed a title: it no longer follows the binding
 
         self.stack = QtWidgets.QStackedWidget()
         self.role_page = self._build_role_page()
@@ -504,8 +505,10 @@ class AddPanel(QtWidgets.QWidget):
         self._pick_target = pick_target
         self._roles = role_preference(spec) if pick_target else [role]
         self._fill_roles()
+        self._title_typed = False
         self.title_edit.blockSignals(True)
         self.title_edit.setText(spec.title)
+        self.title_edit.setPlaceholderText(spec.title)
         self.title_edit.blockSignals(False)
         self._fill_targets()
         self._fill_fields()
@@ -654,6 +657,7 @@ class AddPanel(QtWidgets.QWidget):
 
     def _title_changed(self, text: str) -> None:
         if self.draft is not None:
+            self._title_typed = bool(text)  # the operator's own title; cleared: suggestions again
             self.draft.title = text
             if self.preview_frame is not None:
                 self.preview_frame.set_title(text)
@@ -664,10 +668,24 @@ class AddPanel(QtWidgets.QWidget):
             self._rebuild_preview()
 
     # -------------------------------------------------------------------------------------- preview
+    def _suggest_title(self) -> None:
+        """Unless the operator typed one, the title follows the binding: ``battery · voltage``."""
+        if self.draft is None or self._title_typed:
+            return
+        target = self.draft.target
+        title = (suggested_title(target.name, self.draft.field_path, service=self.draft.role.is_service)
+                 if target is not None else "") or self.draft.spec.title
+        self.draft.title = title
+        if self.title_edit.text() != title:
+            self.title_edit.blockSignals(True)
+            self.title_edit.setText(title)
+            self.title_edit.blockSignals(False)
+
     def _rebuild_preview(self) -> None:
         self._drop_preview()
         if self.draft is None:
             return
+        self._suggest_title()
         frame = WidgetFrame("preview", self.draft.title)
         frame.setObjectName("widgetFrame")
         frame.set_editable(False)

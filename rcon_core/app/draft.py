@@ -98,3 +98,30 @@ def field_type(types: Any, type_name: str, path: str, service: bool = False) -> 
         return str(found)
     except Exception:  # unknown type or malformed path: no type to show, nothing to fail over
         return ""
+
+
+#: last name segments that say how a topic is sent, not what it is (dropped from a suggested title)
+GENERIC_TAILS = frozenset({"image_raw", "image", "image_rect", "image_color", "image_rect_color", "raw",
+                           "compressed", "data", "state", "status"})
+#: a first segment that reads better after the rest: /camera/front -> "front camera"
+NOUN_FIRST = frozenset({"camera", "cam"})
+
+
+def suggested_title(name: str, field_path: str = "", *, service: bool = False) -> str:
+    """A short readable title for a widget on ``name``: ``battery · voltage``, ``front camera`` (from
+    ``/camera/front/image_raw``), a service's own name (``/lights/set``). "" when there is no name."""
+    if not name:
+        return ""
+    if service:
+        return name
+    parts = [p for p in name.strip("/").split("/") if p]
+    while len(parts) > 1 and parts[-1] in GENERIC_TAILS:
+        parts.pop()
+    if len(parts) == 2 and parts[0] in NOUN_FIRST:
+        parts = [parts[1], parts[0]]
+    base = " ".join(parts[-2:]).replace("_", " ") if parts else name
+    if field_path:
+        field = field_path if len(field_path) <= 20 else field_path.rsplit(".", 1)[-1]
+        return f"{base} · {field}"
+    return base
+
