@@ -372,6 +372,9 @@ def test_headings_keep_names_whole_and_the_preview_fits_the_panel(window, qtbot)
     assert "PREVIEW ONLY" in frame.badge.text()
     assert frame.rect().contains(badge)
     assert frame.height() >= 0.8 * frame.width()  # square-ish like the 320 x 320 widget
+    # the preview's model knows it is a preview (offline on purpose), so the pad says so, not "link down"
+    model = window.host.hosted[frame.instance_id].model
+    assert model.dry_run is True
 
 
 # ------------------------------------------------------------------------------------- 7 after placing

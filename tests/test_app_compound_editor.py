@@ -152,6 +152,9 @@ def test_build_a_compound_on_the_device_and_publish_what_its_children_compose(wi
     tap(panel.place_button)
     [inst] = window.controller.canvas.widgets
     assert inst.kind == "std.compound" and inst.binding.name == "/cmd_vel"
+    # placed at the size its children need, not the kind's fixed default
+    pw, ph = CompoundSettings(children=list(children)).preferred_size()
+    assert inst.geometry.w >= pw and inst.geometry.h >= ph
     assert inst.settings["children"][1] == {"kind": "std.stepper", "field_path": "angular.z", "title": "Turn",
                                             "settings": children[1].settings}
     window.lock_button.click()  # operator mode: the widgets take touches

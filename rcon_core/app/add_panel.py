@@ -691,7 +691,7 @@ class AddPanel(QtWidgets.QWidget):
         frame.set_editable(False)
         self._build_preview(self.draft, frame)
         self.preview_frame = frame
-        self.preview_slot.set_frame(frame, self.draft.spec.default_size)
+        self.preview_slot.set_frame(frame, self.draft.size())
         self._refresh_validity()
 
     def _drop_preview(self) -> None:

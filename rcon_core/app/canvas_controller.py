@@ -285,7 +285,7 @@ class CanvasController(QtCore.QObject):
         problems = draft.problems()
         if problems:
             raise ValueError("the widget is not configured: " + "; ".join(problems))
-        w, h = (int(v) for v in draft.spec.default_size)
+        w, h = draft.size()
         surface = self.surface
         size = on_grid(QtCore.QRect(0, 0, w, h), frame_min_size()).size()
         pos = at if at is not None else surface.free_spot(size)

@@ -72,6 +72,19 @@ class Draft:
     def settings_dict(self) -> dict[str, Any]:
         return self.spec.settings_to_dict(self.settings) if self.settings is not None else {}
 
+    def size(self) -> tuple[int, int]:
+        """The size a new widget gets: the kind's ``default_size``, grown to what these settings need
+        when the settings object offers ``preferred_size() -> (w, h)`` (a Compound with many children)."""
+        w, h = (int(v) for v in self.spec.default_size)
+        preferred = getattr(self.settings, "preferred_size", None)
+        if callable(preferred):
+            try:
+                pw, ph = preferred()
+                w, h = max(w, int(pw)), max(h, int(ph))
+            except Exception:  # a plugin's hint must never stop a widget from being placed
+                pass
+        return w, h
+
 
 def field_type(types: Any, type_name: str, path: str, service: bool = False) -> str:
     """The type of the field at ``path`` in ``type_name`` as the registry spells it (``float32``,

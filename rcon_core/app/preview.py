@@ -31,7 +31,7 @@ class PreviewHost:
     def build(self, draft: Any, frame: WidgetFrame) -> None:
         """Show ``draft`` in ``frame``: its view appears when the runtime has built the model."""
         self.release()
-        w, h = draft.spec.default_size
+        w, h = draft.size()
         widget = WidgetInstance(
             new_id("preview"), draft.spec.kind, draft.binding, Geometry(0, 0, w, h), draft.settings_dict(),
             draft.title,

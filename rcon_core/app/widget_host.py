@@ -107,6 +107,11 @@ class WidgetHost:
             return
         try:
             view_cls = self.plugins.widget(hosted.widget.kind).load_view()
+            if widget_id in self.dry_run:
+                try:
+                    model.dry_run = True  # a preview: offline on purpose (see the view contract)
+                except AttributeError:  # a model with __slots__ may refuse; the badge still says it
+                    pass
             hosted.view = view_cls(model)
         except (UnknownWidget, Exception) as exc:  # a broken view must not break the app
             log.warning("view of %s (%s) failed: %s", widget_id, hosted.widget.kind, exc)
