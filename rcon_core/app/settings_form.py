@@ -8,8 +8,8 @@ its metadata may add ``exclude_kinds`` (kinds that cannot be children).  Fields 
 their value and are not shown.
 
 Text fields are at least :data:`TEXT_MIN_WIDTH` wide, so in a narrow panel their label goes above them and
-they take the row's full width. A text field holding a message typed as YAML or JSON (metadata
-``multiline: True``, or a ``help`` that mentions YAML or JSON) gets a multi-line editor.
+they take the row's full width. A text field declared with metadata ``multiline: True`` (a message typed
+as YAML or JSON) gets a multi-line editor.
 
 Spin boxes, combo boxes and sliders of a form ignore the mouse wheel unless they have the keyboard focus
 (tap them first): a wheel over them scrolls the form instead of changing the value under the pointer
@@ -147,12 +147,8 @@ def _unwrap_optional(tp: Any) -> Any:
 
 
 def _is_multiline(field: attrs.Attribute) -> bool:
-    """A text field for a message typed by a person (YAML or JSON): metadata ``multiline``, else its help."""
-    meta = field.metadata
-    if "multiline" in meta:
-        return bool(meta["multiline"])
-    help_text = str(meta.get("help", "")).lower()
-    return "yaml" in help_text or "json" in help_text
+    """A text field declared ``metadata={"multiline": True}`` (a message typed as YAML or JSON)."""
+    return bool(field.metadata.get("multiline", False))
 
 
 class TextBlock(QtWidgets.QPlainTextEdit):

@@ -32,7 +32,7 @@ def _text_problem(what: str, text: str) -> list[str]:
 class ButtonSettings:
     text: str = attrs.field(default="", metadata={"label": "Text", "help": "what the button says (default: the name)"})
     payload: str = attrs.field(
-        default="", metadata={"label": "Request / message",
+        default="", metadata={"label": "Request / message", "multiline": True,
                               "help": "YAML or JSON: the service request (or the message to publish); "
                                       "missing fields take their defaults, e.g. 'data: true'"}
     )
@@ -43,7 +43,7 @@ class ButtonSettings:
         default="", metadata={"label": "Its type", "help": "type of that service (default: the pressed one's)"}
     )
     release_payload: str = attrs.field(
-        default="", metadata={"label": "Release request / message",
+        default="", metadata={"label": "Release request / message", "multiline": True,
                               "help": "YAML or JSON for the release call (or a message published on release)"}
     )
 
