@@ -11,12 +11,12 @@ import os
 from pathlib import Path
 
 import pytest
+from app_helpers import entry_point_plugins, tap, tap_item, window_session
 from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
 from rcon_core.app import add_panel
 from rcon_core.app.add_panel import AddPanel
-from rcon_core.app.config import AppConfig
 from rcon_core.app.main_window import MainWindow
 from rcon_core.app.theme import touch_px
 from rcon_core.msgs import TypeRegistry
@@ -26,43 +26,21 @@ pytest.importorskip("rcon_widgets_std")
 pytest.importorskip("rcon_widgets_sensors")
 
 pytestmark = pytest.mark.usefixtures("qapp")
-LEFT = QtCore.Qt.MouseButton.LeftButton
-NO_MOD = QtCore.Qt.KeyboardModifier.NoModifier
 
 
 @pytest.fixture(scope="module")
 def plugins() -> PluginManager:
-    pm = PluginManager(environ={})
-    pm.load_entry_points()
-    return pm
+    return entry_point_plugins()
 
 
 @pytest.fixture
 def window(qtbot, tmp_path, sim_thread, plugins):
-    win = MainWindow(AppConfig(tmp_path / "config"), plugins, types=TypeRegistry.standard())
-    qtbot.addWidget(win)
-    win.resize(1280, 800)
-    win.show()
-    QTest.qWaitForWindowExposed(win)
-    win.connect_to(sim_thread.url)
-    qtbot.waitUntil(lambda: win.connection.state == "connected", timeout=10_000)
-    qtbot.waitUntil(lambda: win.topics.item("/speed_limit") is not None, timeout=10_000)
-    qtbot.waitUntil(lambda: win.services.item("/lights/set") is not None, timeout=10_000)
-    yield win
-    win.shutdown()
+    yield from window_session(qtbot, tmp_path / "config", plugins, url=sim_thread.url,
+                              types=TypeRegistry.standard(), wait_connected=True,
+                              topics=("/speed_limit",), services=("/lights/set",))
 
 
 # ------------------------------------------------------------------------------------- a person's hands
-def tap(widget: QtWidgets.QWidget, pos: QtCore.QPoint | None = None) -> None:
-    assert widget.isVisible() and widget.isEnabled(), widget.objectName()
-    QTest.mouseClick(widget, LEFT, NO_MOD, pos if pos is not None else widget.rect().center())
-
-
-def tap_item(view: QtWidgets.QAbstractItemView, index: QtCore.QModelIndex) -> None:
-    view.scrollTo(index)
-    QTest.mouseClick(view.viewport(), LEFT, NO_MOD, view.visualRect(index).center())
-
-
 def pick(qtbot, combo: QtWidgets.QComboBox, text: str) -> None:
     """Open the combo's popup and tap the entry whose text starts with ``text``."""
     rows = [i for i in range(combo.count()) if combo.itemText(i).startswith(text)]

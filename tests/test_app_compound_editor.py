@@ -9,11 +9,11 @@ from __future__ import annotations
 import os
 
 import pytest
+from app_helpers import entry_point_plugins, tap, tap_item, window_session
 from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
 from rcon_core.app.children_editor import ChildCatalog, ChildrenEditor, child_role, children_item_class
-from rcon_core.app.config import AppConfig
 from rcon_core.app.main_window import MainWindow
 from rcon_core.app.settings_form import SettingsForm
 from rcon_core.msgs import TypeRegistry
@@ -27,9 +27,7 @@ pytestmark = pytest.mark.usefixtures("qapp")
 
 @pytest.fixture(scope="module")
 def plugins() -> PluginManager:
-    pm = PluginManager(environ={})
-    pm.load_entry_points()
-    return pm
+    return entry_point_plugins()
 
 
 @pytest.fixture
@@ -43,28 +41,9 @@ def window_standard_types(qtbot, tmp_path, sim_thread, plugins):
 
 
 def _window(qtbot, tmp_path, sim_thread, plugins, types):
-    win = MainWindow(AppConfig(tmp_path / "config"), plugins, types=types)
-    qtbot.addWidget(win)
-    win.resize(1280, 800)  # a 1280x800 tablet (the offscreen test screen is 800x800)
-    win.show()
-    QTest.qWaitForWindowExposed(win)
-    win.connect_to(sim_thread.url)
-    qtbot.waitUntil(lambda: win.connection.state == "connected", timeout=10_000)
-    qtbot.waitUntil(lambda: win.topics.item("/cmd_vel") is not None, timeout=10_000)
-    yield win
-    win.shutdown()
-
-
-def tap(widget: QtWidgets.QWidget) -> None:
-    assert widget.isVisible() and widget.isEnabled(), widget.objectName()
-    QTest.mouseClick(widget, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier,
-                     widget.rect().center())
-
-
-def tap_item(tree: QtWidgets.QAbstractItemView, index: QtCore.QModelIndex) -> None:
-    tree.scrollTo(index)
-    QTest.mouseClick(tree.viewport(), QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier,
-                     tree.visualRect(index).center())
+    # a 1280x800 tablet (the offscreen test screen is 800x800)
+    yield from window_session(qtbot, tmp_path / "config", plugins, url=sim_thread.url, types=types,
+                              wait_connected=True, topics=("/cmd_vel",))
 
 
 def button(editor: QtWidgets.QWidget, name: str) -> QtWidgets.QPushButton:

@@ -8,11 +8,11 @@ from __future__ import annotations
 import re
 
 import pytest
+from app_helpers import entry_point_plugins, window_session
 from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
 from rcon_core.app.add_panel import FieldChooser
-from rcon_core.app.config import AppConfig
 from rcon_core.app.draft import Draft, Target
 from rcon_core.app.main_window import MainWindow
 from rcon_core.app.settings_form import TEXT_INSET
@@ -27,36 +27,18 @@ NUMBER = re.compile(r"-?\d+(?:\.\d+)?")
 
 @pytest.fixture(scope="module")
 def plugins() -> PluginManager:
-    pm = PluginManager(environ={})
-    pm.load_entry_points()
-    return pm
-
-
-def open_window(qtbot, tmp_path, plugins, url: str | None = None) -> MainWindow:
-    win = MainWindow(AppConfig(tmp_path / "config"), plugins, types=TypeRegistry.standard())
-    qtbot.addWidget(win)
-    win.resize(1280, 800)
-    win.show()
-    QTest.qWaitForWindowExposed(win)
-    if url:
-        win.connect_to(url)
-        qtbot.waitUntil(lambda: win.connection.state == "connected", timeout=10_000)
-        qtbot.waitUntil(lambda: win.topics.item("/battery") is not None, timeout=10_000)
-    return win
+    return entry_point_plugins()
 
 
 @pytest.fixture
 def window(qtbot, tmp_path, plugins, sim_thread):
-    win = open_window(qtbot, tmp_path, plugins, sim_thread.url)
-    yield win
-    win.shutdown()
+    yield from window_session(qtbot, tmp_path / "config", plugins, url=sim_thread.url,
+                              types=TypeRegistry.standard(), wait_connected=True, topics=("/battery",))
 
 
 @pytest.fixture
 def offline(qtbot, tmp_path, plugins):
-    win = open_window(qtbot, tmp_path, plugins)
-    yield win
-    win.shutdown()
+    yield from window_session(qtbot, tmp_path / "config", plugins, types=TypeRegistry.standard())
 
 
 def place_label(window: MainWindow, topic: str, type_name: str) -> str:

@@ -4,10 +4,10 @@ the window after a confirm dialog (Ctrl+Q, Ctrl+Z work at once). Driven with tap
 from __future__ import annotations
 
 import pytest
+from app_helpers import entry_point_plugins, tap, tap_topic, window_session
 from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
-from rcon_core.app.config import AppConfig
 from rcon_core.app.main_window import MainWindow
 from rcon_core.plugins import PluginManager, Role
 
@@ -16,38 +16,14 @@ pytestmark = pytest.mark.usefixtures("qapp")
 
 @pytest.fixture(scope="module")
 def plugins() -> PluginManager:
-    pm = PluginManager(environ={})
-    pm.load_entry_points()
-    return pm
+    return entry_point_plugins()
 
 
 @pytest.fixture
 def window(qtbot, tmp_path, sim_thread, plugins):
     pytest.importorskip("rcon_widgets_std")
-    win = MainWindow(AppConfig(tmp_path / "config"), plugins)
-    qtbot.addWidget(win)
-    win.resize(1280, 800)
-    win.show()
-    QTest.qWaitForWindowExposed(win)
-    win.activateWindow()
-    QTest.qWaitForWindowActive(win)
-    win.connect_to(sim_thread.url)
-    qtbot.waitUntil(lambda: win.topics.item("/cmd_vel") is not None, timeout=10_000)
-    yield win
-    win.shutdown()
-
-
-def tap(widget: QtWidgets.QWidget, pos: QtCore.QPoint | None = None) -> None:
-    assert widget.isVisible() and widget.isEnabled(), widget.objectName()
-    QTest.mouseClick(widget, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier,
-                     pos if pos is not None else widget.rect().center())
-
-
-def tap_topic(window: MainWindow, name: str) -> None:
-    tree = window.topics.tree
-    index = tree.indexFromItem(window.topics.item(name))
-    tree.scrollTo(index)
-    tap(tree.viewport(), tree.visualRect(index).center())
+    yield from window_session(qtbot, tmp_path / "config", plugins, url=sim_thread.url, activate=True,
+                              topics=("/cmd_vel",))
 
 
 def url_text(window: MainWindow) -> str:

@@ -4,12 +4,11 @@ part the open panel left visible. Driven with taps against the sim."""
 from __future__ import annotations
 
 import pytest
+from app_helpers import entry_point_plugins, tap, window_session
 from qtpy import QtCore, QtWidgets
-from qtpy.QtTest import QTest
 
-from rcon_core.app.config import AppConfig
 from rcon_core.app.main_window import MainWindow
-from rcon_core.plugins import PluginManager, Role
+from rcon_core.plugins import Role
 
 pytestmark = pytest.mark.usefixtures("qapp")
 
@@ -17,23 +16,9 @@ pytestmark = pytest.mark.usefixtures("qapp")
 @pytest.fixture
 def window(qtbot, tmp_path, sim_thread):
     pytest.importorskip("rcon_widgets_std")
-    pm = PluginManager(environ={})
-    pm.load_entry_points()
-    win = MainWindow(AppConfig(tmp_path / "config"), pm)
-    qtbot.addWidget(win)
-    win.resize(1600, 900)  # a wide window: the open add panel hides a good part of the canvas
-    win.show()
-    QTest.qWaitForWindowExposed(win)
-    win.connect_to(sim_thread.url)
-    qtbot.waitUntil(lambda: win.topics.item("/battery") is not None, timeout=10_000)
-    yield win
-    win.shutdown()
-
-
-def tap(widget: QtWidgets.QWidget, pos: QtCore.QPoint | None = None) -> None:
-    assert widget.isVisible() and widget.isEnabled(), widget.objectName()
-    QTest.mouseClick(widget, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier,
-                     pos if pos is not None else widget.rect().center())
+    # a wide window: the open add panel hides a good part of the canvas
+    yield from window_session(qtbot, tmp_path / "config", entry_point_plugins(), url=sim_thread.url,
+                              size=(1600, 900), topics=("/battery",))
 
 
 def place_label(window: MainWindow) -> QtCore.QRect:

@@ -5,10 +5,10 @@ Driven with taps against the sim, on the demo layout."""
 from __future__ import annotations
 
 import pytest
+from app_helpers import entry_point_plugins, open_window, tap, tap_topic
 from qtpy import QtCore, QtGui, QtWidgets
 from qtpy.QtTest import QTest
 
-from rcon_core.app.config import AppConfig
 from rcon_core.app.main_window import MainWindow
 from rcon_core.plugins import PluginManager, Role
 
@@ -17,9 +17,7 @@ pytestmark = pytest.mark.usefixtures("qapp")
 
 @pytest.fixture(scope="module")
 def plugins() -> PluginManager:
-    pm = PluginManager(environ={})
-    pm.load_entry_points()
-    return pm
+    return entry_point_plugins()
 
 
 @pytest.fixture
@@ -30,33 +28,14 @@ def make_window(qtbot, tmp_path, sim_thread, plugins):
     made: list[MainWindow] = []
 
     def make(size: tuple[int, int] | None) -> MainWindow:
-        win = MainWindow(AppConfig(tmp_path / f"config{len(made)}"), plugins, demo=lambda: demo_workspace(plugins))
-        qtbot.addWidget(win)
-        if size is not None:
-            win.resize(*size)
-        win.show()
-        QTest.qWaitForWindowExposed(win)
-        win.connect_to(sim_thread.url)
-        qtbot.waitUntil(lambda: win.topics.item("/cmd_vel") is not None, timeout=10_000)
+        win = open_window(qtbot, tmp_path / f"config{len(made)}", plugins, url=sim_thread.url, size=size,
+                          demo=lambda: demo_workspace(plugins), topics=("/cmd_vel",))
         made.append(win)
         return win
 
     yield make
     for win in made:
         win.shutdown()
-
-
-def tap(widget: QtWidgets.QWidget, pos: QtCore.QPoint | None = None) -> None:
-    assert widget.isVisible() and widget.isEnabled(), widget.objectName()
-    QTest.mouseClick(widget, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier,
-                     pos if pos is not None else widget.rect().center())
-
-
-def tap_topic(window: MainWindow, name: str) -> None:
-    tree = window.topics.tree
-    index = tree.indexFromItem(window.topics.item(name))
-    tree.scrollTo(index)
-    tap(tree.viewport(), tree.visualRect(index).center())
 
 
 def settle() -> None:

@@ -4,6 +4,7 @@ badge), the add panel's hint wrapped, text settings wide enough for a message.""
 from __future__ import annotations
 
 import pytest
+from app_helpers import entry_point_plugins, tap, tap_item, window_session
 from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app.theme import stylesheet
@@ -76,53 +77,20 @@ def test_the_title_leaves_room_for_the_status_badge(frame):
 # ------------------------------------------------------------------------------------- the add panel
 @pytest.fixture(scope="module")
 def plugins():
-    from rcon_core.plugins import PluginManager
-
-    pm = PluginManager(environ={})
-    pm.load_entry_points()
-    return pm
+    return entry_point_plugins()
 
 
 @pytest.fixture
 def window(qtbot, tmp_path, sim_thread, plugins):
     pytest.importorskip("rcon_widgets_std")
-    from qtpy.QtTest import QTest
-
-    from rcon_core.app.config import AppConfig
-    from rcon_core.app.main_window import MainWindow
-
-    win = MainWindow(AppConfig(tmp_path / "config"), plugins)
-    qtbot.addWidget(win)
-    win.resize(1280, 800)
-    win.show()
-    QTest.qWaitForWindowExposed(win)
-    win.connect_to(sim_thread.url)
-    qtbot.waitUntil(lambda: win.topics.item("/cmd_vel") is not None, timeout=10_000)
-    qtbot.waitUntil(lambda: win.services.item("/dock") is not None, timeout=10_000)
-    yield win
-    win.shutdown()
-
-
-def tap(widget: QtWidgets.QWidget) -> None:
-    from qtpy.QtTest import QTest
-
-    assert widget.isVisible() and widget.isEnabled(), widget.objectName()
-    QTest.mouseClick(widget, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier,
-                     widget.rect().center())
+    yield from window_session(qtbot, tmp_path / "config", plugins, url=sim_thread.url,
+                              topics=("/cmd_vel",), services=("/dock",))
 
 
 def tap_at(widget: QtWidgets.QWidget, pos: QtCore.QPoint) -> None:
     from qtpy.QtTest import QTest
 
     QTest.mouseClick(widget, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier, pos)
-
-
-def tap_item(view: QtWidgets.QAbstractItemView, index: QtCore.QModelIndex) -> None:
-    from qtpy.QtTest import QTest
-
-    view.scrollTo(index)
-    QTest.mouseClick(view.viewport(), QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier,
-                     view.visualRect(index).center())
 
 
 def pick_widget(window, catalog, name: str, role, kind: str):
