@@ -13,10 +13,11 @@ from typing import Any
 from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
+from rcon_core.app.add_panel import AddPanel
 from rcon_core.app.config import AppConfig
 from rcon_core.app.main_window import MainWindow
 from rcon_core.canvas import Workspace
-from rcon_core.plugins import PluginManager
+from rcon_core.plugins import PluginManager, Role
 
 LEFT = QtCore.Qt.MouseButton.LeftButton
 NO_MOD = QtCore.Qt.KeyboardModifier.NoModifier
@@ -91,3 +92,13 @@ def tap_topic(window: MainWindow, name: str) -> None:
     index = tree.indexFromItem(window.topics.item(name))
     tree.scrollTo(index)
     tap(tree.viewport(), tree.visualRect(index).center())
+
+
+def choose_kind(window: MainWindow, role: Role, kind: str) -> AddPanel:
+    """In the open add panel, tap the ``role`` button and then the candidate widget ``kind``."""
+    panel = window.add_panel
+    tap(panel.role_buttons[role])
+    kinds = [panel.candidates.item(i).data(QtCore.Qt.ItemDataRole.UserRole).spec.kind
+             for i in range(panel.candidates.count())]
+    tap_item(panel.candidates, panel.candidates.model().index(kinds.index(kind), 0))
+    return panel

@@ -11,7 +11,7 @@ import os
 from pathlib import Path
 
 import pytest
-from app_helpers import entry_point_plugins, tap, tap_item, window_session
+from app_helpers import choose_kind, entry_point_plugins, tap, tap_item, window_session
 from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
@@ -85,11 +85,7 @@ def bring_into_sight(panel: AddPanel, widget: QtWidgets.QWidget) -> None:
 def open_from_topic(window: MainWindow, topic: str, role: Role, kind: str) -> AddPanel:
     window.side.setCurrentWidget(window.topics)
     tap_item(window.topics.tree, window.topics.tree.indexFromItem(window.topics.item(topic)))
-    panel = window.add_panel
-    tap(panel.role_buttons[role])
-    kinds = [panel.candidates.item(i).data(QtCore.Qt.ItemDataRole.UserRole).spec.kind
-             for i in range(panel.candidates.count())]
-    tap_item(panel.candidates, panel.candidates.model().index(kinds.index(kind), 0))
+    panel = choose_kind(window, role, kind)
     assert panel.stack.currentWidget() is panel.settings_page
     return panel
 

@@ -4,7 +4,7 @@ badge), the add panel's hint wrapped, text settings wide enough for a message.""
 from __future__ import annotations
 
 import pytest
-from app_helpers import entry_point_plugins, tap, tap_item, window_session
+from app_helpers import choose_kind, entry_point_plugins, tap, tap_item, window_session
 from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app.theme import stylesheet
@@ -98,11 +98,7 @@ def pick_widget(window, catalog, name: str, role, kind: str):
     tabs = window.side.tabBar()
     tap_at(tabs, tabs.tabRect(window.side.indexOf(catalog)).center())
     tap_item(catalog.tree, catalog.tree.indexFromItem(catalog.item(name)))
-    panel = window.add_panel
-    tap(panel.role_buttons[role])
-    kinds = [panel.candidates.item(i).data(QtCore.Qt.ItemDataRole.UserRole).spec.kind
-             for i in range(panel.candidates.count())]
-    tap_item(panel.candidates, panel.candidates.model().index(kinds.index(kind), 0))
+    panel = choose_kind(window, role, kind)
     assert panel.stack.currentWidget() is panel.settings_page
     return panel
 
