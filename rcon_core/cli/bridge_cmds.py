@@ -112,36 +112,31 @@ def _parse_text(text: str) -> Any:
 
 
 async def _topics(url: str, args: argparse.Namespace) -> int:
-    from rcon_core.bridge import ServiceError
-
-    client = await _connect(url)
-    if client is None:
-        return 1
-    try:
-        topics = await client.rosapi.topics()
-    except ServiceError as exc:
-        _err(str(exc))
-        return 1
-    finally:
-        await client.close()
-    print(_json(topics, indent=True)) if args.json else _table(topics)
-    return 0
+    return await _listing(url, args, lambda rosapi: rosapi.topics())
 
 
 async def _services(url: str, args: argparse.Namespace) -> int:
+    return await _listing(url, args, lambda rosapi: rosapi.services_with_types())
+
+
+async def _listing(url: str, args: argparse.Namespace, fetch: Any) -> int:
+    """Print what ``fetch(client.rosapi)`` returns ([(name, type)...]) as a table, or JSON with --json."""
     from rcon_core.bridge import ServiceError
 
     client = await _connect(url)
     if client is None:
         return 1
     try:
-        services = await client.rosapi.services_with_types()
+        rows = await fetch(client.rosapi)
     except ServiceError as exc:
         _err(str(exc))
         return 1
     finally:
         await client.close()
-    print(_json(services, indent=True)) if args.json else _table(services)
+    if args.json:
+        print(_json(rows, indent=True))
+    else:
+        _table(rows)
     return 0
 
 
