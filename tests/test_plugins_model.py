@@ -126,3 +126,10 @@ async def test_call_through_the_sim_and_dispatch(sim):
         m.stop()
     finally:
         await client.close()
+
+
+def test_binding_canonical_type():
+    assert Binding("/imu", "sensor_msgs/Imu").canonical_type == "sensor_msgs/msg/Imu"
+    assert Binding("/imu", "sensor_msgs/msg/Imu").canonical_type == "sensor_msgs/msg/Imu"
+    assert Binding("/x").canonical_type == ""
+    assert Binding("/x", "not a type").canonical_type == "not a type"

@@ -29,6 +29,8 @@ from typing import Any, Protocol
 
 import attrs
 
+from rcon_core.msgs.names import normalize
+
 from .paths import PathError, get_path, set_path, split_service_path
 from .spec import Role
 
@@ -73,6 +75,17 @@ class Binding:
     def field_path(self) -> str:
         """The first (main) field path, ``""`` for the whole message."""
         return self.field_paths[0] if self.field_paths else ""
+
+    @property
+    def canonical_type(self) -> str:
+        """The type in RCON's canonical spelling (``sensor_msgs/msg/Imu``); unchanged when it is not a
+        type name (a problem the binding reports elsewhere), ``""`` when unset."""
+        if not self.type:
+            return ""
+        try:
+            return normalize(self.type)
+        except ValueError:
+            return self.type
 
     def problems(self) -> list[str]:
         """What is missing before this binding can work; ``[]`` when complete."""

@@ -18,7 +18,6 @@ import attrs
 import cv2
 import numpy as np
 
-from rcon_core.msgs import names
 from rcon_core.msgs.values import to_base64
 from rcon_core.plugins import WidgetModel
 
@@ -144,10 +143,7 @@ class CameraModel(WidgetModel):
     @property
     def raw(self) -> bool:
         """True when bound to ``sensor_msgs/Image`` (rgb8), False for ``CompressedImage`` (jpeg)."""
-        try:
-            return names.normalize(self.binding.type) == "sensor_msgs/msg/Image"
-        except ValueError:
-            return False
+        return self.binding.canonical_type == "sensor_msgs/msg/Image"
 
     def encode(self, rgb: np.ndarray, stamp: float) -> dict[str, Any]:
         """The message for one frame."""

@@ -30,7 +30,6 @@ from typing import Any, Protocol
 
 import attrs
 
-from rcon_core.msgs import names
 from rcon_core.plugins import Role, WidgetModel
 from rcon_core.plugins.paths import PathError, get_path, set_path
 
@@ -150,10 +149,7 @@ class MotionSensorModel(WidgetModel):
     # -- the message -------------------------------------------------------------------------------------
     @property
     def canonical_type(self) -> str:
-        try:
-            return names.normalize(self.binding.type) if self.binding.type else ""
-        except ValueError:
-            return self.binding.type
+        return self.binding.canonical_type
 
     @property
     def vector_path(self) -> str:

@@ -25,7 +25,6 @@ from typing import Any
 
 import attrs
 
-from rcon_core.msgs import names
 from rcon_core.plugins import WidgetModel
 from rcon_core.plugins.paths import PathError, get_path, set_path
 
@@ -162,10 +161,7 @@ class TeleopModel(WidgetModel):
     # -- what the message looks like --------------------------------------------------------------------
     @property
     def canonical_type(self) -> str:
-        try:
-            return names.normalize(self.binding.type) if self.binding.type else ""
-        except ValueError:
-            return self.binding.type
+        return self.binding.canonical_type
 
     @property
     def body_path(self) -> str:
