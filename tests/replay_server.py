@@ -1,6 +1,6 @@
 """A scripted rosbridge server for the bridge tests: real websockets, exact recorded frames.
 
-It answers from the recordings in ``<repo>/../shared/rosbridge-ros1``: ``call_service`` requests whose
+It answers from the recorded frames in ``tests/recordings/rosbridge-ros1``: ``call_service`` requests whose
 service and args match a recorded request get the recorded ``received_text`` (only the id is swapped for
 the caller's), and a ``subscribe`` to a recorded topic gets that topic's recorded frames (text or CBOR
 bytes) for the compression asked.  Tests can add their own service handlers, push any frame, drop the
@@ -18,20 +18,14 @@ from pathlib import Path
 from typing import Any
 
 import orjson
-import pytest
 from websockets.asyncio.server import ServerConnection, serve
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "rosbridge-ros1"
-
-
-def require_shared() -> Path:
-    if not (SHARED / "README.md").exists():
-        pytest.skip(f"rosbridge recordings not found at {SHARED} (they live beside the repository)")
-    return SHARED
+RECORDINGS = Path(__file__).resolve().parent / "recordings" / "rosbridge-ros1"
 
 
 def load(name: str) -> list[dict[str, Any]]:
-    return [json.loads(line) for line in (require_shared() / name).read_text().splitlines() if line.strip()]
+    """The lines of one recording (``tests/recordings/rosbridge-ros1/NAME``), parsed."""
+    return [json.loads(line) for line in (RECORDINGS / name).read_text(encoding="utf-8").splitlines() if line.strip()]
 
 
 def received_frame(line: dict[str, Any]) -> str | bytes | None:

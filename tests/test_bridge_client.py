@@ -8,7 +8,7 @@ import math
 
 import orjson
 import pytest
-from replay_server import ScriptedServer, load, recorded, require_shared
+from replay_server import ScriptedServer, load, recorded
 
 from rcon_core.bridge import (
     ActionError,
@@ -25,7 +25,7 @@ from rcon_core.bridge import (
 from rcon_core.bridge.protocol import png_to_text
 from rcon_core.msgs.values import as_bytes
 
-pytestmark = pytest.mark.shared
+pytestmark = pytest.mark.recordings
 
 
 async def until(pred, timeout: float = 5.0) -> None:
@@ -38,7 +38,6 @@ async def until(pred, timeout: float = 5.0) -> None:
 
 @pytest.fixture
 async def server():
-    require_shared()
     async with ScriptedServer() as srv:
         yield srv
 
@@ -371,7 +370,6 @@ async def test_failed_handler_answers_with_the_response_types_default(server, ca
 
 
 async def test_set_level_status_and_auth():
-    require_shared()
     auth = {"mac": "m", "client": "127.0.0.1", "dest": "127.0.0.1", "rand": "r", "t": 1, "level": "admin", "end": 2}
     async with ScriptedServer() as server:
         c = BridgeClient(server.url, auth=auth)

@@ -22,7 +22,7 @@ from rcon_core.bridge.protocol import (
 )
 from rcon_core.bridge.rawdecode import RawDecoder, has_fixed_arrays
 
-pytestmark = pytest.mark.shared
+pytestmark = pytest.mark.recordings
 
 ALL = ["client_publish.jsonl", "client_service.jsonl", "malformed.jsonl", "publish_json.jsonl", "publish_png.jsonl", "reconnect.jsonl", "rosapi.jsonl",
        "services.jsonl", "subscribe_options.jsonl"]

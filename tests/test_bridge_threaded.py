@@ -6,7 +6,7 @@ import asyncio
 import threading
 
 import pytest
-from replay_server import ScriptedServer, require_shared
+from replay_server import ScriptedServer
 
 from rcon_core.bridge import BridgeClient
 from rcon_core.bridge.threaded import BridgeThread, LatestValue
@@ -90,7 +90,6 @@ def test_latest_value_is_thread_safe():
 
 def test_client_on_the_thread_feeds_a_mailbox_decoded():
     """The GUI pattern: the client runs on the bridge thread, the GUI thread only takes finished dicts."""
-    require_shared()
     with BridgeThread() as bt:
         server = ScriptedServer()
         bt.run(server.start()).result(5)

@@ -78,12 +78,11 @@ def test_unreachable_server(capsys):
     assert rc == 1 and "cannot connect to ws://127.0.0.1:9" in err
 
 
-@pytest.mark.shared
+@pytest.mark.recordings
 def test_call_against_the_recorded_server(capsys):
     """The exact failure text a real rosbridge sends reaches stderr (scripted server replaying services.jsonl)."""
-    from replay_server import ThreadedServer, require_shared
+    from replay_server import ThreadedServer
 
-    require_shared()
     with ThreadedServer() as server:
         rc, _, err = run(capsys, "call", "/rec/fails", "{}", "--url", server.url)
         assert rc == 1 and "error processing request: simulated failure" in err

@@ -7,17 +7,11 @@ import pytest
 
 from rcon_core.msgs import TypeRegistry
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "rosbridge-ros1"
-ROSAPI = SHARED / "rosapi.jsonl"
-
-needs_shared = pytest.mark.skipif(
-    not ROSAPI.exists(), reason=f"the rosbridge recordings are not here ({SHARED} is absent)"
-)
+RECORDINGS = Path(__file__).resolve().parent / "recordings" / "rosbridge-ros1"
+ROSAPI = RECORDINGS / "rosapi.jsonl"
 
 
 def _details_answers():
-    if not ROSAPI.exists():
-        return []
     out = []
     for lineno, line in enumerate(ROSAPI.read_text(encoding="utf-8").splitlines(), 1):
         rec = json.loads(line)
@@ -36,15 +30,13 @@ def reg():
     return TypeRegistry.standard()
 
 
-@pytest.mark.shared
-@needs_shared
+@pytest.mark.recordings
 def test_every_recorded_details_answer_is_present():
     # 18 message_details + 3 request + 3 response details in the recording
     assert len(ANSWERS) == 24
 
 
-@pytest.mark.shared
-@needs_shared
+@pytest.mark.recordings
 @pytest.mark.parametrize(("service", "type_name", "expected"), ANSWERS)
 def test_typedefs_match_the_real_server(reg, service, type_name, expected):
     if service == "message_details":
@@ -56,8 +48,7 @@ def test_typedefs_match_the_real_server(reg, service, type_name, expected):
     assert [list(td) for td in got] == [list(td) for td in expected]
 
 
-@pytest.mark.shared
-@needs_shared
+@pytest.mark.recordings
 @pytest.mark.parametrize(("service", "type_name", "expected"), ANSWERS)
 def test_learning_from_the_real_answer_gives_the_same_fields(reg, service, type_name, expected):
     empty = TypeRegistry.empty()

@@ -16,16 +16,12 @@ from rcon_core.msgs import TypeRegistry
 from rcon_core.msgs.ros1_wire import WireError
 from rcon_core.msgs.strategies import message
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "rosbridge-ros1"
-needs_shared = pytest.mark.skipif(
-    not (SHARED / "publish_cbor_raw.jsonl").exists(),
-    reason=f"the rosbridge recordings are not here ({SHARED} is absent)",
-)
+RECORDINGS = Path(__file__).resolve().parent / "recordings" / "rosbridge-ros1"
 REG = TypeRegistry.standard()
 
 
 def _records(name):
-    return [json.loads(line) for line in (SHARED / name).read_text(encoding="utf-8").splitlines()]
+    return [json.loads(line) for line in (RECORDINGS / name).read_text(encoding="utf-8").splitlines()]
 
 
 def _json_shape(value):
@@ -54,8 +50,6 @@ def _leaves(value, path=""):
 
 
 def _recorded_cbor_raw():
-    if not (SHARED / "publish_cbor_raw.jsonl").exists():
-        return []
     types, frames = {}, []
     for rec in _records("publish_cbor_raw.jsonl"):
         sent = rec.get("sent") or {}
@@ -83,8 +77,7 @@ MOVING = re.compile(
 )
 
 
-@pytest.mark.shared
-@needs_shared
+@pytest.mark.recordings
 def test_recorded_cbor_raw_decodes_like_the_json_recording():
     frames = _recorded_cbor_raw()
     assert len(frames) == 15
@@ -108,8 +101,7 @@ def test_recorded_cbor_raw_decodes_like_the_json_recording():
             assert 0 <= raw["secs"] + raw["nsecs"] / 1e9 - (stamp["secs"] + stamp["nsecs"] / 1e9) < 5
 
 
-@pytest.mark.shared
-@needs_shared
+@pytest.mark.recordings
 def test_recorded_special_values_survive():
     frames = {topic: (t, raw) for topic, t, raw in _recorded_cbor_raw()}
     json_msgs = _recorded_json()
@@ -129,8 +121,7 @@ def test_recorded_special_values_survive():
     assert isinstance(image["data"], bytes) and len(image["data"]) == image["step"] * image["height"] == 96
 
 
-@pytest.mark.shared
-@needs_shared
+@pytest.mark.recordings
 def test_recorded_bytes_serialize_back_identically():
     for _topic, type_name, raw in _recorded_cbor_raw():
         data = raw["bytes"]

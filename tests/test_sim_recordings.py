@@ -13,16 +13,13 @@ import websockets
 
 from rcon_core.sim import SimServer
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "rosbridge-ros1"
+RECORDINGS = Path(__file__).resolve().parent / "recordings" / "rosbridge-ros1"
 
-pytestmark = [
-    pytest.mark.shared,
-    pytest.mark.skipif(not SHARED.is_dir(), reason=f"rosbridge recordings not found at {SHARED}"),
-]
+pytestmark = pytest.mark.recordings
 
 
 def lines(name: str) -> list[dict[str, Any]]:
-    return [json.loads(line) for line in (SHARED / name).read_text(encoding="utf-8").splitlines() if line.strip()]
+    return [json.loads(line) for line in (RECORDINGS / name).read_text(encoding="utf-8").splitlines() if line.strip()]
 
 
 async def ask(ws: Any, frame: dict[str, Any]) -> dict[str, Any]:
