@@ -1,5 +1,8 @@
 """Text Field's Qt view. Subscribe: the data as text (read-only, selectable). Publish: a line to type
-YAML/JSON (or a plain string) and a Send button; Enter sends too. Errors name the field."""
+YAML/JSON (or a plain string) and a Send button; Enter sends too. Errors name the field.
+
+Inside a Compound the line has no Send button (nothing reaches the robot until the compound's Publish):
+each change is checked at once and the line below says "will send: …" or what is wrong."""
 
 from __future__ import annotations
 
@@ -24,9 +27,13 @@ class TextFieldView(QtWidgets.QWidget):
             self.edit.setPlaceholderText(model.settings.placeholder or "YAML or JSON, e.g. {x: 1.0}")
             self.edit.returnPressed.connect(self.send)
             row.addWidget(self.edit, 1)
-            self.button = QtWidgets.QPushButton("Send")
-            self.button.clicked.connect(self.send)
-            row.addWidget(self.button)
+            self.button = None
+            if model.in_compound:
+                self.edit.textChanged.connect(model.set_draft)
+            else:
+                self.button = QtWidgets.QPushButton("Send")
+                self.button.clicked.connect(self.send)
+                row.addWidget(self.button)
             layout.addLayout(row)
             self.text = None
         else:
@@ -39,7 +46,8 @@ class TextFieldView(QtWidgets.QWidget):
 
     def send(self) -> None:
         self.model.submit(self.edit.text())
-        self.status.show_text("sending…", MUTED)
+        if not self.model.in_compound:
+            self.status.show_text("sending…", MUTED)
 
     def refresh(self, state: Any) -> None:
         v = state.value
@@ -50,6 +58,9 @@ class TextFieldView(QtWidgets.QWidget):
             return
         if state.error:
             self.status.show_text(state.error, BAD)
+        elif self.model.in_compound:
+            ready = v is not None and v.ready
+            self.status.show_text(f"will send: {v.text}" if ready else "nothing typed yet", OK if ready else MUTED)
         elif v is not None and v.sent:
             self.status.show_text(f"sent: {v.text}", OK)
             if self.model.settings.clear_after_send and self.edit.text() == v.text:
