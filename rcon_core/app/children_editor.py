@@ -311,15 +311,14 @@ def _button(text: str, name: str, slot: Callable[[], None], primary: bool = Fals
 
 
 def _icon_button(glyph: str, name: str, tip: str, slot: Callable[[], None]) -> QtWidgets.QPushButton:
-    """A square touch-sized button with one symbol (its meaning in the tooltip and accessible name)."""
-    from rcon_core.app.theme import current_touch_px
-
+    """A square touch-sized button with one symbol (its meaning in the tooltip and accessible name). Sized
+    by the theme (``square``: the touch size plus its border), never fixed below it: a fixed touch-size
+    box clipped the border the theme draws around it."""
     b = _button(glyph, name, slot)
     b.setToolTip(tip)
     b.setAccessibleName(tip)
-    b.setStyleSheet("padding: 0px;")
-    side = current_touch_px()
-    b.setFixedSize(side, side)
+    b.setProperty("square", True)
+    b.setSizePolicy(QtWidgets.QSizePolicy.Policy.Fixed, QtWidgets.QSizePolicy.Policy.Fixed)
     return b
 
 
@@ -564,7 +563,7 @@ class ChildrenEditor(QtWidgets.QWidget):
             rc.addLayout(buttons)
             lay.addWidget(row)
             self.rows.append(row)
-        self.add_button = _button("＋ Add child", "addChildButton", self.start_add)
+        self.add_button = _button("+ Add child", "addChildButton", self.start_add)
         lay.addWidget(self.add_button)
         self._show("list")
 

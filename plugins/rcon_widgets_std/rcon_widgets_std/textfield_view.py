@@ -2,7 +2,11 @@
 YAML/JSON (or a plain string) and a Send button; Enter sends too. Errors name the field.
 
 Inside a Compound the line has no Send button (nothing reaches the robot until the compound's Publish):
-each change is checked at once and the line below says "will send: …" or what is wrong."""
+each change is checked at once and the line below says "will send: …" or what is wrong.
+
+The line under the input is shown only when the frame has room for both (``fit_caption``): in a frame too
+short for it, it becomes the input's tooltip (errors also show as the frame's ERROR badge) instead of
+being painted over the input."""
 
 from __future__ import annotations
 
@@ -12,7 +16,7 @@ from qtpy import QtWidgets
 
 from rcon_core.plugins import Role
 
-from .view_common import BAD, MUTED, OK, Caption, vbox
+from .view_common import BAD, MUTED, OK, Caption, fit_caption, vbox
 
 
 class TextFieldView(QtWidgets.QWidget):
@@ -44,6 +48,11 @@ class TextFieldView(QtWidgets.QWidget):
         self.status = Caption("")
         layout.addWidget(self.status)
 
+    def resizeEvent(self, event: Any) -> None:  # noqa: N802 - Qt override
+        super().resizeEvent(event)
+        if self.text is None:
+            fit_caption(self, self.edit, self.status)
+
     def send(self) -> None:
         self.model.submit(self.edit.text())
         if not self.model.in_compound:
@@ -67,3 +76,5 @@ class TextFieldView(QtWidgets.QWidget):
                 self.edit.clear()
         else:
             self.status.show_text("", MUTED)
+        if self.status.isHidden():
+            fit_caption(self, self.edit, self.status)  # the new text becomes the input's tooltip
