@@ -112,3 +112,83 @@ def test_topic_types_keep_their_own_name_when_the_column_is_narrow(window, qtbot
         assert "…" in type_line or width == 110
     assert type_line == "BatteryState" and name_line == "/battery"
     shoot(window, "topic-types.png")
+
+
+# ------------------------------------------------------------------------------------ the words
+def open_from_palette(window, kind: str):
+    from app_helpers import tap_item
+
+    window.side.setCurrentWidget(window.palette_panel)
+    tree = window.palette_panel.tree
+    tap_item(tree, tree.indexFromItem(window.palette_panel.item(kind)))
+    return window.add_panel
+
+
+def test_not_configured_says_a_missing_topic_once_and_decimals_in_words(window, qtbot):
+    panel = open_from_palette(window, "std.textfield")
+    assert panel.problems() == ["no topic chosen"]  # not again as "no topic type set"
+    qtbot.waitUntil(lambda: "no topic chosen" in panel.preview_frame.problems.text(), timeout=5_000)
+    assert "type set" not in panel.preview_frame.problems.text()
+    decimals = panel.form.editor("decimals")
+    assert decimals.value() == -1 and decimals.text() == "as received"  # never "-1"
+    panel.settings_scroll.ensureWidgetVisible(decimals)
+    shoot(window, "textfield-settings.png")
+    panel.cancel()
+    panel = open_from_palette(window, "std.label")
+    label_decimals = panel.form.editor("decimals")
+    label_decimals.setValue(-1)
+    assert label_decimals.text() == "as received"
+
+
+def test_a_service_widget_is_titled_without_slashes(window, qtbot):
+    from app_helpers import choose_kind
+
+    window.side.setCurrentWidget(window.services)
+    qtbot.waitUntil(lambda: window.services.item("/reset_pose") is not None, timeout=10_000)
+    tree = window.services.tree
+    index = tree.indexFromItem(window.services.item("/reset_pose"))
+    tree.scrollTo(index)
+    tap(tree.viewport(), tree.visualRect(index).center())
+    panel = choose_kind(window, Role.CALL, "std.button")
+    assert panel.title_edit.text() == "reset pose"  # like a topic's title ("battery"), not "/reset_pose"
+
+
+def test_the_lights_switch_reads_as_a_state_and_says_what_a_tap_does(window, qtbot, plugins, sim_thread):
+    binding = Binding("/lights/set", "std_srvs/SetBool", Role.CALL, ("request.data",))
+    _inst, hosted = place(window, qtbot, plugins, "std.switch", binding,
+                          settings={"state_topic": "/lights/state", "state_field": "data"}, title="Lights")
+    window.lock_button.click()
+    view = hosted.view
+    qtbot.waitUntil(lambda: view.button.text() == "○ Off", timeout=10_000)  # a lamp not lit: a state
+    assert view.reply.text() == "tap for On"
+    shoot(window, "switch-off.png")
+    tap(view.button)
+    qtbot.waitUntil(lambda: sim_thread.robot.lights is True, timeout=10_000)
+    qtbot.waitUntil(lambda: view.button.text() == "● On", timeout=10_000)
+
+
+def test_a_text_view_on_a_string_topic_has_no_level_picker(window, qtbot, plugins):
+    _i, chat = place(window, qtbot, plugins, "std.textview",
+                     Binding("/ops/chat", "std_msgs/String", Role.SUBSCRIBE), title="chat")
+    assert not chat.view.level.isVisible() and chat.view.filter.isVisible()
+    window.doc.set_geometry(_i.id, Geometry(16, 300, 420, 260))
+    _j, log = place(window, qtbot, plugins, "std.textview",
+                    Binding("/rosout", "rosgraph_msgs/Log", Role.SUBSCRIBE), title="log")
+    assert log.view.level.isVisible()
+
+
+def test_a_number_child_offers_the_slider_first_and_a_used_field_not_again(window, qtbot):
+    from test_app_compound_editor import add_child, button, open_compound_on_cmd_vel
+
+    panel, editor = open_compound_on_cmd_vel(window)
+    add_child(qtbot, editor, "linear.x", "std.slider")
+    kinds = list(editor.kind_buttons)
+    assert kinds.index("std.slider") < kinds.index("std.textfield"), kinds  # made for numbers first
+    assert kinds.index("std.stepper") < kinds.index("std.textfield"), kinds
+    tap(button(editor, "childDone"))
+    tap(editor.add_button)
+    qtbot.waitUntil(lambda: editor.current_page == "fields", timeout=10_000)
+    offered = set(editor.field_buttons)
+    assert "linear.x" not in offered  # set by child 1 already
+    assert "linear" not in offered and "" not in offered  # they hold linear.x too
+    assert {"linear.y", "angular", "angular.z"} <= offered

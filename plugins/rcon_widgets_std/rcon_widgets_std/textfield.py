@@ -28,7 +28,8 @@ __all__ = ["TextFieldSettings", "TextFieldModel", "TextValue"]
 @attrs.define
 class TextFieldSettings:
     decimals: int = attrs.field(default=-1, metadata={"label": "Decimals", "min": -1, "max": 12,
-                                                      "help": "for numbers shown; -1 as they arrive"})
+                                                      "special": "as received",
+                                                      "help": "for numbers shown; 'as received' (-1) as they arrive"})
     placeholder: str = attrs.field(default="", metadata={"label": "Hint", "help": "grey text in the empty field"})
     clear_after_send: bool = attrs.field(default=False, metadata={"label": "Clear after sending"})
     stale_after: float = attrs.field(default=10.0, metadata={"label": "Stale after (s)", "min": 0.1})
