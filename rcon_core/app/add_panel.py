@@ -32,7 +32,7 @@ from rcon_core.app.canvas_surface import DRAFT_MIME
 from rcon_core.app.catalog_panel import short_type
 from rcon_core.app.children_editor import ChildContext
 from rcon_core.app.draft import Candidate, Draft, Target, field_type, suggested_title
-from rcon_core.app.new_topic import NewTopicBox
+from rcon_core.app.new_topic import NEW_TOPIC, NewTopicBox, add_new_topic_entry, new_topic_index
 from rcon_core.app.settings_form import SettingsForm, form_label, guard_wheel, tune_form
 from rcon_core.app.widget_frame import WidgetFrame
 from rcon_core.plugins import Binding, Role, SettingsError, WidgetSpec
@@ -50,8 +50,6 @@ SENDING_FIRST = (Role.PUBLISH, Role.CALL, Role.SERVE, Role.SUBSCRIBE)
 SHOWING_FIRST = (Role.SUBSCRIBE, Role.PUBLISH, Role.CALL, Role.SERVE)
 #: item data role of the target chooser holding the role a target is compatible with
 TARGET_ROLE = QtCore.Qt.ItemDataRole.UserRole + 1
-#: item data role marking the target chooser's "+ New topic…" entry
-NEW_TOPIC = QtCore.Qt.ItemDataRole.UserRole + 2
 
 
 def role_preference(spec: WidgetSpec) -> list[Role]:
@@ -579,7 +577,9 @@ class AddPanel(QtWidgets.QWidget):
                     combo.setItemData(i, role.value, TARGET_ROLE)
                     combo.setItemData(i, f"Choosing this makes the widget {role.value} instead of {draft.role.value}",
                                       QtCore.Qt.ItemDataRole.ToolTipRole)
-            new_index = self._add_new_topic_entry()
+            new_index = None  # a widget on a topic may also make a new one (needs the type registry)
+            if not draft.role.is_service and self._child_context is not None:
+                new_index = add_new_topic_entry(combo)
             combo.setEnabled(True)
             keep = draft.target
             index = 0
@@ -602,18 +602,6 @@ class AddPanel(QtWidgets.QWidget):
             combo.setEnabled(False)
         combo.blockSignals(False)
 
-    def _add_new_topic_entry(self) -> int | None:
-        """The chooser's last entry, *+ New topic…*, for a widget on a topic (needs the type registry)."""
-        assert self.draft is not None
-        if self.draft.role.is_service or self._child_context is None:
-            return None
-        self.target_combo.addItem("+ New topic…", None)
-        index = self.target_combo.count() - 1
-        self.target_combo.setItemData(index, True, NEW_TOPIC)
-        self.target_combo.setItemData(index, "A topic the robot does not have yet: type its name, pick its type",
-                                      QtCore.Qt.ItemDataRole.ToolTipRole)
-        return index
-
     def _show_new_topic(self, on: bool) -> None:
         """Show (and fill: the widget's fitting types, also the robot's) or hide the new topic's box."""
         self._new_topic_on = on
@@ -632,10 +620,10 @@ class AddPanel(QtWidgets.QWidget):
 
     def choose_new_topic(self) -> NewTopicBox:
         """Select *+ New topic…* in the chooser (pathway 3); ValueError when it is not offered here."""
-        for i in range(self.target_combo.count()):
-            if self.target_combo.itemData(i, NEW_TOPIC) is True:
-                self.target_combo.setCurrentIndex(i)
-                return self.new_topic
+        index = new_topic_index(self.target_combo)
+        if index is not None:
+            self.target_combo.setCurrentIndex(index)
+            return self.new_topic
         raise ValueError("a new topic can only be made for a widget on a topic, chosen from the widget")
 
     def _fill_fields(self) -> None:
@@ -821,8 +809,7 @@ class AddPanel(QtWidgets.QWidget):
         self.binding_box.setRowVisible(self.field_combo, False)
         self._new_topic_on = False
         self.binding_box.setRowVisible(self.new_topic, False)
-        self.new_topic.name_edit.clear()
-        self.new_topic.search.clear()
+        self.new_topic.clear()
         self.title_edit.blockSignals(True)
         self.title_edit.clear()
         self.title_edit.blockSignals(False)

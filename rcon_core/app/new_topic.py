@@ -27,13 +27,32 @@ from rcon_core.app.draft import Target
 from rcon_core.app.settings_form import form_label, tune_form
 from rcon_core.plugins import Role, WidgetSpec
 
-__all__ = ["NewTopicBox", "topic_name_problem", "normalize_topic_name", "compatible_types", "new_target",
+__all__ = ["NEW_TOPIC", "add_new_topic_entry", "new_topic_index", "NewTopicBox", "topic_name_problem", "normalize_topic_name", "compatible_types", "new_target",
            "type_label"]
 
 _SEGMENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 #: registry entries that are parts of services and actions, not messages one publishes on a topic
 _PART_SUFFIXES = ("_Request", "_Response", "_Event")
 _PART_MARKERS = ("_SendGoal_", "_GetResult_", "_FeedbackMessage")
+
+
+#: item data role marking the target chooser's "+ New topic…" entry
+NEW_TOPIC = QtCore.Qt.ItemDataRole.UserRole + 2
+
+
+def add_new_topic_entry(combo: QtWidgets.QComboBox) -> int:
+    """Append the chooser's *+ New topic…* entry (no target as its data); returns its index."""
+    combo.addItem("+ New topic…", None)
+    index = combo.count() - 1
+    combo.setItemData(index, True, NEW_TOPIC)
+    combo.setItemData(index, "A topic the robot does not have yet: type its name, pick its type",
+                      QtCore.Qt.ItemDataRole.ToolTipRole)
+    return index
+
+
+def new_topic_index(combo: QtWidgets.QComboBox) -> int | None:
+    """The index of the chooser's *+ New topic…* entry, None when it has none."""
+    return next((i for i in range(combo.count()) if combo.itemData(i, NEW_TOPIC) is True), None)
 
 
 def normalize_topic_name(name: str) -> str:
@@ -214,6 +233,11 @@ class NewTopicBox(QtWidgets.QFrame):
         if self.problem() is not None or self._target_for is None:
             return None
         return self._target_for(self.topic_name(), self.chosen_type())
+
+    def clear(self) -> None:
+        """Forget the name and the search (the next widget starts afresh)."""
+        self.name_edit.clear()
+        self.search.clear()
 
     def _changed(self) -> None:
         problem = self.problem()
