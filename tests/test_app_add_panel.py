@@ -100,9 +100,10 @@ def open_from_palette(window: MainWindow, kind: str) -> AddPanel:
 
 
 def offered(panel: AddPanel) -> list[tuple[str, str]]:
-    """(name, role) of each target in the Topic/Service chooser, in order."""
+    """(name, role) of each target in the Topic/Service chooser, in order (not its "+ New topic…" entry)."""
     combo = panel.target_combo
-    return [(combo.itemData(i).name, combo.itemData(i, add_panel.TARGET_ROLE)) for i in range(1, combo.count())]
+    return [(combo.itemData(i).name, combo.itemData(i, add_panel.TARGET_ROLE)) for i in range(1, combo.count())
+            if combo.itemData(i, add_panel.NEW_TOPIC) is not True]
 
 
 def field_entries(panel: AddPanel) -> list[str]:

@@ -183,6 +183,6 @@ def test_a_new_widget_is_titled_after_what_it_is_bound_to_and_the_title_stays_ed
     tap(panel.place_button)
     assert window.controller.canvas.widgets[-1].title == "Bow"
 
-    # a service: its own name
+    # a service: its own name, without slashes like a topic's
     panel = pick_widget(window, window.services, "/lights/set", Role.CALL, "std.button")
-    assert panel.title_edit.text() == "/lights/set"
+    assert panel.title_edit.text() == "lights set"

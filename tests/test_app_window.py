@@ -182,7 +182,7 @@ def test_add_from_palette_then_drop_on_canvas(make_window, robot, qtbot):
     panel = window.add_panel
     assert panel.stack.currentWidget() is panel.settings_page
     assert set(panel.problems()) >= {"no topic chosen", "caption is empty"}
-    offered = [panel.target_combo.itemData(i) for i in range(1, panel.target_combo.count())]
+    offered = [t for i in range(1, panel.target_combo.count()) if (t := panel.target_combo.itemData(i))]
     names = {t.name for t in offered}
     assert "/battery" in names and "/camera/front/image_raw" not in names  # compatible ones only
     with pytest.raises(ValueError, match="not compatible"):

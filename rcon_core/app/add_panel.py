@@ -13,7 +13,8 @@ prefers to show (subscribe, then publish, call, serve); of the roles the widget 
 which the robot offers a compatible topic or service is chosen (the first one if none has any). The
 Topic/Service chooser lists the targets compatible with the current role first, then those only
 compatible with another of the widget's roles (marked ``· to <role>``); choosing one of those switches the
-role to it.
+role to it. For topics it ends with *+ New topic…*: a name and a type for a topic the robot does not
+have yet (:mod:`rcon_core.app.new_topic`).
 
 When a widget can bind several fields of the chosen type, the *Field* chooser lists them (best first,
 with each field's type); it is hidden when there is only one, or when the widget takes the whole message.
@@ -31,6 +32,7 @@ from rcon_core.app.canvas_surface import DRAFT_MIME
 from rcon_core.app.catalog_panel import short_type
 from rcon_core.app.children_editor import ChildContext
 from rcon_core.app.draft import Candidate, Draft, Target, field_type, suggested_title
+from rcon_core.app.new_topic import NEW_TOPIC, NewTopicBox, add_new_topic_entry, new_topic_index
 from rcon_core.app.settings_form import SettingsForm, form_label, guard_wheel, tune_form
 from rcon_core.app.widget_frame import WidgetFrame
 from rcon_core.plugins import Binding, Role, SettingsError, WidgetSpec
@@ -302,6 +304,7 @@ class AddPanel(QtWidgets.QWidget):
         self._targets: list[Target] = []
         self._roles: list[Role] = []  #: the role chooser's roles, in its order
         self._title_typed = False  #: the operator typed a title: it no longer follows the binding
+        self._new_topic_on = False  #: "+ New topic…" is chosen: the target is the operator's new topic
 
         self.stack = QtWidgets.QStackedWidget()
         self.role_page = self._build_role_page()
@@ -406,6 +409,10 @@ class AddPanel(QtWidgets.QWidget):
         self.field_label = form_label("Field", self.field_combo)
         binding_box.addRow(form_label("Role", self.role_combo), self.role_combo)
         binding_box.addRow(self.target_label, self.target_combo)
+        self.new_topic = NewTopicBox()
+        self.new_topic.changed.connect(self._new_topic_changed)
+        binding_box.addRow(self.new_topic)
+        binding_box.setRowVisible(self.new_topic, False)
         binding_box.addRow(self.field_label, self.field_combo)
         self.binding_box = binding_box
         self.title_edit = QtWidgets.QLineEdit()
@@ -570,15 +577,21 @@ class AddPanel(QtWidgets.QWidget):
                     combo.setItemData(i, role.value, TARGET_ROLE)
                     combo.setItemData(i, f"Choosing this makes the widget {role.value} instead of {draft.role.value}",
                                       QtCore.Qt.ItemDataRole.ToolTipRole)
+            new_index = None  # a widget on a topic may also make a new one (needs the type registry)
+            if not draft.role.is_service and self._child_context is not None:
+                new_index = add_new_topic_entry(combo)
             combo.setEnabled(True)
             keep = draft.target
             index = 0
             if keep is not None:
                 index = next((i for i in range(1, combo.count())
-                              if combo.itemData(i).name == keep.name and combo.itemData(i, TARGET_ROLE) == draft.role.value),
-                             0)
+                              if combo.itemData(i) is not None and combo.itemData(i).name == keep.name
+                              and combo.itemData(i, TARGET_ROLE) == draft.role.value), 0)
+            if self._new_topic_on and new_index is not None:
+                index = new_index  # the operator's new topic survives a role change
             combo.setCurrentIndex(index)
-            chosen = combo.currentData()
+            self._show_new_topic(combo.currentData(NEW_TOPIC) is True)
+            chosen = self.new_topic.target() if self._new_topic_on else combo.currentData()
             if chosen is not None and keep is not None and keep.name == chosen.name and keep.field_paths:
                 if keep.field_paths[0] in (chosen.choices or chosen.field_paths):  # keep the field picked
                     chosen = attrs.evolve(chosen, field_paths=keep.field_paths)
@@ -588,6 +601,30 @@ class AddPanel(QtWidgets.QWidget):
             combo.addItem(f"{fixed.name}  ({type_tail(fixed.type)})" if fixed else "—", fixed)
             combo.setEnabled(False)
         combo.blockSignals(False)
+
+    def _show_new_topic(self, on: bool) -> None:
+        """Show (and fill: the widget's fitting types, also the robot's) or hide the new topic's box."""
+        self._new_topic_on = on
+        self.binding_box.setRowVisible(self.new_topic, on)
+        if on and self.draft is not None and self._child_context is not None:
+            context, (spec, role) = self._child_context(lambda: None), (self.draft.spec, self.draft.role)
+            self.new_topic.open_for(spec, role, context.types, context.plugins,
+                                    [t.type for t in self._targets_for(spec, role)])
+
+    def _new_topic_changed(self) -> None:
+        if self.draft is None or not self._new_topic_on:
+            return
+        self.draft.target = self.new_topic.target()
+        self._fill_fields()
+        self._rebuild_preview()
+
+    def choose_new_topic(self) -> NewTopicBox:
+        """Select *+ New topic…* in the chooser (pathway 3); ValueError when it is not offered here."""
+        index = new_topic_index(self.target_combo)
+        if index is not None:
+            self.target_combo.setCurrentIndex(index)
+            return self.new_topic
+        raise ValueError("a new topic can only be made for a widget on a topic, chosen from the widget")
 
     def _fill_fields(self) -> None:
         """The field chooser: every field the widget can use on the target, with its type, best first.
@@ -616,7 +653,7 @@ class AddPanel(QtWidgets.QWidget):
             if t is not None and t.name == name:
                 self.target_combo.setCurrentIndex(i)
                 return
-        offered = [self.target_combo.itemData(i).name for i in range(1, self.target_combo.count())]
+        offered = [t.name for i in range(1, self.target_combo.count()) if (t := self.target_combo.itemData(i))]
         raise ValueError(f"{name!r} is not compatible with this widget (offered: {offered})")
 
     def choose_field(self, path: str) -> None:
@@ -638,6 +675,10 @@ class AddPanel(QtWidgets.QWidget):
 
     def _target_changed(self, index: int) -> None:
         if self.draft is None:
+            return
+        self._show_new_topic(self.target_combo.itemData(index, NEW_TOPIC) is True)
+        if self._new_topic_on:
+            self._new_topic_changed()
             return
         target = self.target_combo.itemData(index)
         tagged = self.target_combo.itemData(index, TARGET_ROLE)  # a plain str: Qt drops the enum
@@ -718,6 +759,9 @@ class AddPanel(QtWidgets.QWidget):
         if self.draft is None:
             return ["nothing chosen"]
         out = self.draft.problems()
+        new_topic = self.new_topic.problem() if self._new_topic_on else None
+        if new_topic:  # what the new topic lacks, instead of "no topic chosen"
+            out = [new_topic, *[p for p in out if not p.startswith("no topic")]]
         if self.form is not None:
             out += [p for p in self.form.problems() if p not in out]
         return out
@@ -763,6 +807,9 @@ class AddPanel(QtWidgets.QWidget):
             combo.clear()
             combo.blockSignals(False)
         self.binding_box.setRowVisible(self.field_combo, False)
+        self._new_topic_on = False
+        self.binding_box.setRowVisible(self.new_topic, False)
+        self.new_topic.clear()
         self.title_edit.blockSignals(True)
         self.title_edit.clear()
         self.title_edit.blockSignals(False)

@@ -1,8 +1,13 @@
-"""Side panel listing the robot's topics and services (name, type, live rate), with a filter."""
+"""Side panel listing the robot's topics and services (name, type, live rate), with a filter.
+
+Each row is the name over its type. A narrow column cuts each line on its own (:class:`NameTypeDelegate`):
+the name in the middle (both ends of a topic name tell), the type by its package first
+(``sensor_msgs/BatteryState`` -> ``sensor_…/BatteryState`` -> ``…/BatteryState``), so the type's own name
+is never cut while anything else can give way."""
 
 from __future__ import annotations
 
-from qtpy import QtCore, QtWidgets
+from qtpy import QtCore, QtGui, QtWidgets
 
 NAME_ROLE = QtCore.Qt.ItemDataRole.UserRole
 TYPE_ROLE = QtCore.Qt.ItemDataRole.UserRole + 1
@@ -36,6 +41,8 @@ class CatalogList(QtWidgets.QWidget):
             header.resizeSection(1, 76)
         self.tree.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
         self.tree.setTextElideMode(QtCore.Qt.TextElideMode.ElideMiddle)
+        self.delegate = NameTypeDelegate(self.tree)
+        self.tree.setItemDelegateForColumn(0, self.delegate)
         self.tree.itemClicked.connect(self._clicked)
         self.tree.itemActivated.connect(self._clicked)
         QtWidgets.QScroller.grabGesture(
@@ -98,6 +105,48 @@ class CatalogList(QtWidgets.QWidget):
 
     def _clicked(self, item: QtWidgets.QTreeWidgetItem, _col: int = 0) -> None:
         self.picked.emit(item.data(0, NAME_ROLE), item.data(0, TYPE_ROLE))
+
+
+def elide_type(metrics: QtGui.QFontMetrics, type_name: str, width: int) -> str:
+    """``type_name`` (short form) fitted into ``width`` px: the package is cut first, the type's own name
+    last (and then only at its end)."""
+    full = short_type(type_name)
+    if metrics.horizontalAdvance(full) <= width or "/" not in full:
+        return full if metrics.horizontalAdvance(full) <= width else metrics.elidedText(
+            full, QtCore.Qt.TextElideMode.ElideRight, width)
+    package, name = full.rsplit("/", 1)
+    room = width - metrics.horizontalAdvance(f"/{name}")
+    if room >= metrics.horizontalAdvance("…"):
+        return metrics.elidedText(package, QtCore.Qt.TextElideMode.ElideRight, room) + f"/{name}"
+    return metrics.elidedText(name, QtCore.Qt.TextElideMode.ElideRight, width)
+
+
+class NameTypeDelegate(QtWidgets.QStyledItemDelegate):
+    """Paints a catalog row's two lines, each cut on its own (see the module docstring)."""
+
+    def lines(self, index: QtCore.QModelIndex, option: QtWidgets.QStyleOptionViewItem) -> str:
+        """The text painted for the row at ``index`` given ``option``'s rect and font."""
+        opt = QtWidgets.QStyleOptionViewItem(option)
+        self.initStyleOption(opt, index)
+        name, type_name = index.data(NAME_ROLE), index.data(TYPE_ROLE)
+        if name is None or type_name is None:
+            return opt.text
+        widget = opt.widget
+        style = widget.style() if widget is not None else QtWidgets.QApplication.style()
+        text_rect = style.subElementRect(QtWidgets.QStyle.SubElement.SE_ItemViewItemText, opt, widget)
+        width = max(0, text_rect.width() - 8)  # the style's own text margins
+        fm = opt.fontMetrics
+        line_break = "\u2028"  # what the item delegate makes of "\\n": the style breaks lines only there
+        return f"{fm.elidedText(name, QtCore.Qt.TextElideMode.ElideMiddle, width)}{line_break}{elide_type(fm, type_name, width)}"
+
+    def paint(self, painter: QtGui.QPainter, option: QtWidgets.QStyleOptionViewItem,
+              index: QtCore.QModelIndex) -> None:
+        opt = QtWidgets.QStyleOptionViewItem(option)
+        self.initStyleOption(opt, index)
+        opt.text = self.lines(index, option)
+        widget = opt.widget
+        style = widget.style() if widget is not None else QtWidgets.QApplication.style()
+        style.drawControl(QtWidgets.QStyle.ControlElement.CE_ItemViewItem, opt, painter, widget)
 
 
 def short_type(type_name: str) -> str:

@@ -221,7 +221,17 @@ class ChildCatalog:
                          or "any" in m.spec.accepts.messages)
                 if whole:
                     offer(m)
-        return sorted(best.values(), key=lambda k: (k.rank, -k.spec.priority, k.spec.title.lower(), k.spec.kind))
+        return sorted(best.values(), key=lambda k: (k.rank, self._breadth(k.spec, choice), -k.spec.priority,
+                                                    k.spec.title.lower(), k.spec.kind))
+
+    @staticmethod
+    def _breadth(spec: WidgetSpec, choice: FieldChoice) -> int:
+        """How many kinds of field ``spec`` takes, for a leaf: of two widgets that fit a float64 equally
+        well, the one made for numbers (Slider: numeric) ranks above the one for anything (Text Field:
+        numeric, string, bool, time). 0 for messages (no tie to break this way)."""
+        if choice.is_message or not choice.rest:
+            return 0
+        return len(spec.accepts.fields) or 99
 
     # -- checking ----------------------------------------------------------------------------------
     def spec_of(self, kind: str) -> WidgetSpec | None:
@@ -300,6 +310,13 @@ async def fetch_typedefs(rosapi: Any, type_name: str, service: bool) -> list[tup
     return [(names.normalize(type_name), await rosapi.message_details(type_name))]
 
 
+def paths_overlap(a: str, b: str) -> bool:
+    """Two children on ``a`` and ``b`` would set the same value: the same field, or one inside the other
+    (``linear`` and ``linear.x``; ``""``, the whole message, holds every field)."""
+    return a == b or not a or not b or a.startswith(f"{b}.") or b.startswith(f"{a}.") or a.startswith(
+        f"{b}[") or b.startswith(f"{a}[")
+
+
 # ------------------------------------------------------------------------------------------ the editor
 def _button(text: str, name: str, slot: Callable[[], None], primary: bool = False) -> QtWidgets.QPushButton:
     b = QtWidgets.QPushButton(text)
@@ -311,15 +328,14 @@ def _button(text: str, name: str, slot: Callable[[], None], primary: bool = Fals
 
 
 def _icon_button(glyph: str, name: str, tip: str, slot: Callable[[], None]) -> QtWidgets.QPushButton:
-    """A square touch-sized button with one symbol (its meaning in the tooltip and accessible name)."""
-    from rcon_core.app.theme import current_touch_px
-
+    """A square touch-sized button with one symbol (its meaning in the tooltip and accessible name). Sized
+    by the theme (``square``: the touch size plus its border), never fixed below it: a fixed touch-size
+    box clipped the border the theme draws around it."""
     b = _button(glyph, name, slot)
     b.setToolTip(tip)
     b.setAccessibleName(tip)
-    b.setStyleSheet("padding: 0px;")
-    side = current_touch_px()
-    b.setFixedSize(side, side)
+    b.setProperty("square", True)
+    b.setSizePolicy(QtWidgets.QSizePolicy.Policy.Fixed, QtWidgets.QSizePolicy.Policy.Fixed)
     return b
 
 
@@ -564,7 +580,7 @@ class ChildrenEditor(QtWidgets.QWidget):
             rc.addLayout(buttons)
             lay.addWidget(row)
             self.rows.append(row)
-        self.add_button = _button("＋ Add child", "addChildButton", self.start_add)
+        self.add_button = _button("+ Add child", "addChildButton", self.start_add)
         lay.addWidget(self.add_button)
         self._show("list")
 
@@ -615,7 +631,10 @@ class ChildrenEditor(QtWidgets.QWidget):
         lay.addWidget(_label(f"Fields of {cat.type_name}", "hint"))
         self.field_buttons: dict[str, QtWidgets.QPushButton] = {}
         part_now = None
+        taken = [item.field_path for item in self.children_list]
         for choice in cat.fields():
+            if any(paths_overlap(choice.path, used) for used in taken):
+                continue  # another child already sets (or shows) this field, or a part of it
             if cat.is_service and choice.part != part_now:
                 part_now = choice.part
                 side = "filled by the children" if choice.role is Role.PUBLISH else "shown by the children"

@@ -122,11 +122,12 @@ NOUN_FIRST = frozenset({"camera", "cam"})
 
 def suggested_title(name: str, field_path: str = "", *, service: bool = False) -> str:
     """A short readable title for a widget on ``name``: ``battery · voltage``, ``front camera`` (from
-    ``/camera/front/image_raw``), a service's own name (``/lights/set``). "" when there is no name."""
+    ``/camera/front/image_raw``), a service's name without its slashes (``dock``, ``lights set``), like a
+    topic's. "" when there is no name."""
     if not name:
         return ""
     if service:
-        return name
+        return " ".join(p for p in name.strip("/").split("/") if p).replace("_", " ") or name
     parts = [p for p in name.strip("/").split("/") if p]
     while len(parts) > 1 and parts[-1] in GENERIC_TAILS:
         parts.pop()

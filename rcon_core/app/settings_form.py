@@ -270,6 +270,8 @@ class SettingsForm(QtWidgets.QWidget):
             spin = QtWidgets.QSpinBox()
             spin.setRange(int(meta.get("min", -INT_RANGE)), int(meta.get("max", INT_RANGE)))
             spin.setSingleStep(int(meta.get("step", 1)))
+            if meta.get("special"):  # words for the minimum: "as received", not "-1"
+                spin.setSpecialValueText(str(meta["special"]))
             spin.setValue(int(value or 0))
             spin.valueChanged.connect(self._edited)
             return spin, spin.value

@@ -95,7 +95,7 @@ class Binding:
             out.append(f"no {what} chosen")
         elif not self.name.startswith("/") and not self.name[0].isalpha():
             out.append(f"{what} name {self.name!r} is not a valid ROS name")
-        if not self.type:
+        if not self.type and self.name:  # no name: "no topic chosen" already says it (and no type)
             out.append(f"no {what} type set")
         return out
 

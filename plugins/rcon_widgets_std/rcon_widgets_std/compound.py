@@ -22,6 +22,17 @@ child is bound with role SUBSCRIBE and receives the response (CALL) or request (
 callback it subscribed with. So any widget whose model publishes through its port (``publish`` /
 ``publish_value``) provides a value and can be a child, whichever package it comes from; its kind is
 found through the ``rcon.widgets`` entry points like any widget.
+
+What the Compound sends is what its children show, decided. Just before sending, the compound asks every
+input child that defines ``shown_message()`` (loop thread) for a message of the child's bound type holding
+the value the child shows: the Slider and Stepper their shown number (also before they were touched), the
+Text Field the operator's typed text, parsed. A child that cannot say (text unsent-and-invalid, or
+nothing typed) raises ``ValueError`` (``MessageTextError`` is one) with the problem: the send is blocked
+and the status names the child (``not published: child 2 (Text Field) on angular: angular.z: expected a
+number, got 'fast'``); no type default is ever sent in a child's place. A child without the method gives
+what it last published through its port. A child can tell it is inside a compound from its port's
+``composes`` attribute (True on :class:`ChildPort`): nothing it publishes reaches the robot until the
+compound sends, so it should say what *will* be sent, not what was.
 """
 
 from __future__ import annotations
@@ -210,6 +221,9 @@ class _Feed:
 class ChildPort:
     """The port a child model gets (see the module docstring). Service calls go to the real robot."""
 
+    #: what a child publishes goes into the compound's message, not to the robot (until the compound sends)
+    composes = True
+
     def __init__(self, compound: CompoundModel, child: Child | None = None) -> None:
         self.compound = compound
         self.child = child
@@ -380,11 +394,50 @@ class CompoundModel(StdModel):
         """Publish the composed message, or call the service with the composed request (any thread)."""
         self._dispatch(self._send_now)
 
+    def _take_shown(self) -> list[str]:
+        """Set what each input child shows into the composed message (see the module docstring); the
+        problems of the children that cannot say, each child named. Loop thread."""
+        problems: list[str] = []
+        for child in self.children:
+            shown = getattr(child.model, "shown_message", None)
+            if not child.is_input or shown is None:
+                continue
+            path = child.cfg.field_path
+            _part, rest = self._split(path)
+            try:
+                msg = shown()
+                if msg is None:
+                    continue
+                value = copy.deepcopy(get_path(msg, rest) if rest else msg)
+            except (ValueError, PathError) as exc:
+                problems.append(f"{self.child_name(child)}: {exc}")
+                continue
+            except Exception as exc:  # a child package's bug blocks this send only, named
+                problems.append(f"{self.child_name(child)}: {type(exc).__name__}: {exc}")
+                continue
+            with self._lock:
+                if path:
+                    set_path(self._composed, path, value)
+                else:
+                    self._composed = value
+        return problems
+
+    def child_name(self, child: Child) -> str:
+        """``child 2 (Text Field) on angular``: how problems name a child."""
+        where = child.cfg.field_path or "the whole message"
+        return f"child {child.index + 1} ({child.cfg.title or child.spec.title}) on {where}"
+
     def _send_now(self) -> None:
         role = self.binding.role
         if not self.types_ready:
             self.set_error(f"the type {self.binding.type} is not known yet")
             return
+        if role is not Role.SERVE:
+            blocked = self._take_shown()
+            if blocked:
+                verb = "published" if role is Role.PUBLISH else "called"
+                self.set_error(f"not {verb}: " + "; ".join(blocked))
+                return
         if role is Role.PUBLISH:
             if self.publish(self.composed()):
                 self._status = CallStatus("ok", self.binding.name, "published", time.time(), 0.0)
@@ -423,8 +476,16 @@ class CompoundModel(StdModel):
 
     # -- serving -------------------------------------------------------------------------------------
     def handle_request(self, request: dict[str, Any]) -> dict[str, Any]:
-        """Answer with the response the children composed; display children show the request."""
+        """Answer with the response the children show; display children show the request. A child that
+        cannot say what it shows fails the call (ValueError), the child named."""
         self._feed_display("request", request)
+        blocked = self._take_shown()
+        if blocked:  # the caller gets a failed call, never a default in a child's place
+            problem = "; ".join(blocked)
+            self._status = CallStatus("failed", self.binding.name, f"not answered: {problem}", time.time(), 0.0)
+            self._publish_state()
+            self.set_error(f"not answered: {problem}")
+            raise ValueError(problem)
         with self._lock:
             self._composed["request"] = copy.deepcopy(request)
             response = copy.deepcopy(self._composed.get("response", {}))

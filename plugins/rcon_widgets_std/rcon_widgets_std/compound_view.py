@@ -125,7 +125,7 @@ class CompoundView(QtWidgets.QWidget):
         self._refresh_children()
         v = state.value
         st = getattr(v, "status", None)
-        if state.error:
+        if state.error:  # one line, elided (nothing under the finger moves); the child shows its own problem
             self.status.show_text(state.error, BAD)
         elif st is None:
             problems = self.model.problems()

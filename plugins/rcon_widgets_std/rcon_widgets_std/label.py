@@ -18,8 +18,8 @@ __all__ = ["LabelSettings", "LabelModel", "LabelValue"]
 @attrs.define
 class LabelSettings:
     decimals: int = attrs.field(
-        default=2, metadata={"label": "Decimals", "min": -1, "max": 12,
-                             "help": "digits after the point; -1 shows numbers as they arrive"}
+        default=2, metadata={"label": "Decimals", "min": -1, "max": 12, "special": "as received",
+                             "help": "digits after the point; 'as received' (-1) shows numbers as they arrive"}
     )
     units: str = attrs.field(default="", metadata={"label": "Units", "help": "e.g. m/s, %, V"})
     scale: float = attrs.field(

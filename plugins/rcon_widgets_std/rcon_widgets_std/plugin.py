@@ -64,7 +64,7 @@ def specs() -> list[WidgetSpec]:
             roles={Role.SUBSCRIBE, Role.PUBLISH},
             accepts=Accepts(types=["std_msgs/String"], fields=["numeric", "string", "bool", "time"],
                             messages=["any"], prefer=["data", "percentage", "value", "msg", "text", "name"]),
-            default_size=(240, 90), priority=16, **_refs("textfield", "TextField"),
+            default_size=(256, 128), priority=16, **_refs("textfield", "TextField"),
         ),
         WidgetSpec(
             kind="std.stepper", title="Stepper", icon="stepper", category="Controls",

@@ -168,6 +168,18 @@ class NumericModel(StdModel):
     def on_stop(self) -> None:
         self._limiter.cancel()
 
+    # -- inside a Compound (loop thread) ---------------------------------------------------------------
+    def shown_number(self) -> float | int | None:
+        """The number the widget shows (None before it shows one)."""
+        v = self.state.value
+        return v if isinstance(v, (int, float)) and not isinstance(v, bool) else None
+
+    def shown_message(self) -> dict[str, Any] | None:
+        """For a Compound: a message holding the number shown, also before the first touch (the start
+        value), so the compound sends what the operator sees, never the type's default."""
+        v = self.shown_number()
+        return None if v is None else self.build_message(self.range.coerce(v))
+
 
 #: the value each publish slider last sent or heard, per (topic, field), for this process: a slider
 #: rebuilt after a canvas switch, a reconfiguration or a reconnect shows it instead of its start value

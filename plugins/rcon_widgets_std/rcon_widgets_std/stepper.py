@@ -45,6 +45,9 @@ class StepperModel(NumericModel):
             return self.range.coerce(self.settings.initial)
         return self._current
 
+    def shown_number(self) -> float | int:
+        return self.current
+
     def up(self) -> float | int:
         return self.set_to(self.current + self.range.step)
 

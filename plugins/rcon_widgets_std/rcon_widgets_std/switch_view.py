@@ -1,5 +1,8 @@
 """Switch's Qt view: one big toggle button with the state's text, and a line for the server's reply.
 
+The face reads as a state, not as an action: "● On" / "○ Off" (a lamp lit or not), and, while there is
+no reply to show, the line under it says what a tap does ("tap for On").
+
 While a call is in flight the button says "On…"; when the frame is too short for the reply line, the
 answer is flashed on the button itself ("✓ lights on" in green, "✗ interlock open" in red, two seconds)
 before it shows the state again: a touch operator has no tooltip to hover."""
@@ -53,13 +56,16 @@ class SwitchView(QtWidgets.QWidget):
         self.button.blockSignals(True)
         self.button.setChecked(bool(on))
         self.button.blockSignals(False)
-        self.face.set_label("?" if on is None else s.on_text if on else s.off_text)
+        self.face.set_label("?" if on is None else f"● {s.on_text}" if on else f"○ {s.off_text}")
+        hint = False
         if error:
             shown = (error, BAD)
         elif busy:
             shown = ("asking the robot…", MUTED)
         elif reply:
             shown = (reply, OK)
+        elif on is not None and self.button.isEnabled():
+            shown, hint = (f"tap for {s.off_text if on else s.on_text}", MUTED), True
         else:
             shown = ("", MUTED)
         fresh = shown != self._reply
@@ -70,7 +76,7 @@ class SwitchView(QtWidgets.QWidget):
         if busy:
             if not self._was_busy:
                 self.face.busy(f"{s.on_text if wanted else s.off_text}…")
-        elif fresh and shown[0] and (self._was_busy or (error and self._live)) and self.reply.isHidden():
+        elif fresh and shown[0] and not hint and (self._was_busy or (error and self._live)) and self.reply.isHidden():
             self.face.answer(not error, reply or shown[0])  # the short answer, where the operator looks
         elif self._was_busy:
             self.face.rest()

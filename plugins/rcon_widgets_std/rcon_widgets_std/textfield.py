@@ -1,6 +1,11 @@
 """Text Field: shows the raw data of any topic or field (subscribe), or publishes what the operator
 types (publish). Typed text is YAML or JSON turned into the topic's type with the type registry; a
-string field takes the text as it is. Wrong text publishes nothing and the error names the field."""
+string field takes the text as it is. Wrong text publishes nothing and the error names the field.
+
+Inside a Compound (its port ``composes``) nothing reaches the robot until the compound sends: the view
+hands every change of the text to :meth:`TextFieldModel.set_draft`, which checks it at once (the error
+names the field, or the value reads "will send"), and the compound takes the typed text, parsed, when
+it sends (:meth:`TextFieldModel.shown_message`); unparsable or missing text blocks the compound's send."""
 
 from __future__ import annotations
 
@@ -23,7 +28,8 @@ __all__ = ["TextFieldSettings", "TextFieldModel", "TextValue"]
 @attrs.define
 class TextFieldSettings:
     decimals: int = attrs.field(default=-1, metadata={"label": "Decimals", "min": -1, "max": 12,
-                                                      "help": "for numbers shown; -1 as they arrive"})
+                                                      "special": "as received",
+                                                      "help": "for numbers shown; 'as received' (-1) as they arrive"})
     placeholder: str = attrs.field(default="", metadata={"label": "Hint", "help": "grey text in the empty field"})
     clear_after_send: bool = attrs.field(default=False, metadata={"label": "Clear after sending"})
     stale_after: float = attrs.field(default=10.0, metadata={"label": "Stale after (s)", "min": 0.1})
@@ -41,11 +47,19 @@ class TextFieldSettings:
 class TextValue:
     text: str  #: what arrived (subscribe) or what was sent (publish), as text
     sent: bool = False
+    #: inside a Compound: the typed text parses; it is what the compound will send
+    ready: bool = False
 
 
 class TextFieldModel(StdModel):
     def __init__(self, settings: TextFieldSettings | None, *args: Any, **kwargs: Any) -> None:
         super().__init__(settings if settings is not None else TextFieldSettings(), *args, **kwargs)
+        self._draft = ""  #: the text in the field (inside a Compound: what it will send)
+
+    @property
+    def in_compound(self) -> bool:
+        """True when this is a Compound's child: what it publishes is composed, not sent to the robot."""
+        return bool(getattr(self.port, "composes", False))
 
     @property
     def needs_types(self) -> bool:  # type: ignore[override]
@@ -77,6 +91,8 @@ class TextFieldModel(StdModel):
         if not self.types_ready:
             raise MessageTextError("", f"the type {b.type} is not known yet (asking the robot)")
         path = b.field_path
+        if not text.strip() and not self._is_string_field():
+            raise MessageTextError(path, "nothing typed")
         if not path:
             return self.types.from_text(b.type, text)
         value: Any = text if self._is_string_field() else parse_text(text)
@@ -95,7 +111,32 @@ class TextFieldModel(StdModel):
         except MessageTextError as exc:
             self.set_error(f"not sent: {exc}")
             return False
+        self._draft = text
         if self.publish(msg):
-            self.set_value(TextValue(text, sent=True), message=msg)
+            self.set_value(TextValue(text, sent=not self.in_compound, ready=self.in_compound), message=msg)
             return True
         return False
+
+    # -- inside a Compound -----------------------------------------------------------------------------
+    def set_draft(self, text: str) -> None:
+        """The operator changed the text (any thread): remembered and, inside a Compound, checked at
+        once, so the child says what will be sent or what is wrong before the compound's Publish."""
+        self._dispatch(lambda: self._check_draft(text))
+
+    def _check_draft(self, text: str) -> None:
+        self._draft = text
+        if not self.in_compound:
+            return
+        try:
+            self.parse(text)
+        except MessageTextError as exc:
+            self.replace_value(TextValue(text))
+            self.set_error(None if exc.problem == "nothing typed" else str(exc))
+            return
+        self.set_error(None)
+        self.replace_value(TextValue(text, ready=True))
+
+    def shown_message(self) -> dict[str, Any]:
+        """For a Compound: the typed text as a message of the bound type. Raises MessageTextError (a
+        ValueError: the compound blocks its send and names this child) for nothing typed or bad text."""
+        return self.parse(self._draft)

@@ -1,5 +1,12 @@
 """Text Field's Qt view. Subscribe: the data as text (read-only, selectable). Publish: a line to type
-YAML/JSON (or a plain string) and a Send button; Enter sends too. Errors name the field."""
+YAML/JSON (or a plain string) and a Send button; Enter sends too. Errors name the field.
+
+Inside a Compound the line has no Send button (nothing reaches the robot until the compound's Publish):
+each change is checked at once and the line below says "will send: …" or what is wrong.
+
+The line under the input is shown only when the frame has room for both (``fit_caption``): in a frame too
+short for it, it becomes the input's tooltip (errors also show as the frame's ERROR badge) instead of
+being painted over the input."""
 
 from __future__ import annotations
 
@@ -9,7 +16,7 @@ from qtpy import QtWidgets
 
 from rcon_core.plugins import Role
 
-from .view_common import BAD, MUTED, OK, Caption, vbox
+from .view_common import BAD, MUTED, OK, Caption, fit_caption, vbox
 
 
 class TextFieldView(QtWidgets.QWidget):
@@ -24,9 +31,13 @@ class TextFieldView(QtWidgets.QWidget):
             self.edit.setPlaceholderText(model.settings.placeholder or "YAML or JSON, e.g. {x: 1.0}")
             self.edit.returnPressed.connect(self.send)
             row.addWidget(self.edit, 1)
-            self.button = QtWidgets.QPushButton("Send")
-            self.button.clicked.connect(self.send)
-            row.addWidget(self.button)
+            self.button = None
+            if model.in_compound:
+                self.edit.textChanged.connect(model.set_draft)
+            else:
+                self.button = QtWidgets.QPushButton("Send")
+                self.button.clicked.connect(self.send)
+                row.addWidget(self.button)
             layout.addLayout(row)
             self.text = None
         else:
@@ -37,9 +48,15 @@ class TextFieldView(QtWidgets.QWidget):
         self.status = Caption("")
         layout.addWidget(self.status)
 
+    def resizeEvent(self, event: Any) -> None:  # noqa: N802 - Qt override
+        super().resizeEvent(event)
+        if self.text is None:
+            fit_caption(self, self.edit, self.status)
+
     def send(self) -> None:
         self.model.submit(self.edit.text())
-        self.status.show_text("sending…", MUTED)
+        if not self.model.in_compound:
+            self.status.show_text("sending…", MUTED)
 
     def refresh(self, state: Any) -> None:
         v = state.value
@@ -50,9 +67,14 @@ class TextFieldView(QtWidgets.QWidget):
             return
         if state.error:
             self.status.show_text(state.error, BAD)
+        elif self.model.in_compound:
+            ready = v is not None and v.ready
+            self.status.show_text(f"will send: {v.text}" if ready else "nothing typed yet", OK if ready else MUTED)
         elif v is not None and v.sent:
             self.status.show_text(f"sent: {v.text}", OK)
             if self.model.settings.clear_after_send and self.edit.text() == v.text:
                 self.edit.clear()
         else:
             self.status.show_text("", MUTED)
+        if self.status.isHidden():
+            fit_caption(self, self.edit, self.status)  # the new text becomes the input's tooltip

@@ -1,5 +1,6 @@
-"""Text View's Qt view: level and text filters on top, the coloured history, and (publish role) an input
-line underneath. Lines are appended incrementally; the widget keeps at most ``max_lines`` blocks."""
+"""Text View's Qt view: level (log topics only: a String has no levels) and text filters on top, the
+coloured history, and (publish role) an input line underneath. Lines are appended incrementally; the
+widget keeps at most ``max_lines`` blocks."""
 
 from __future__ import annotations
 
@@ -31,6 +32,7 @@ class TextViewView(QtWidgets.QWidget):
         self.filter.setClearButtonEnabled(True)
         bar.addWidget(self.level)
         bar.addWidget(self.filter, 1)
+        self.level.setVisible(model.is_log)  # a String topic has no levels to pick from
         layout.addLayout(bar)
         self.history = QtWidgets.QPlainTextEdit()
         self.history.setReadOnly(True)

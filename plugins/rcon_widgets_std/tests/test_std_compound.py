@@ -122,6 +122,25 @@ async def test_serve_a_lab_service_known_only_from_typedefs(sim):
         m.stop()
 
 
+async def test_serving_with_a_child_whose_text_does_not_parse_fails_the_call_naming_it(sim):
+    async with bridge(sim) as client:
+        settings = CompoundSettings(children=[child("std.textfield", "response.success")])
+        m = build(CompoundModel, settings, "/rcon_test/trigger2", "std_srvs/Trigger", "serve", client=client,
+                  types=TypeRegistry.standard())
+        m.start()
+        by_path(m, "response.success").set_draft("maybe")
+        await asyncio.sleep(0.1)
+        failed = await client.node("caller").call_service("/rcon_test/trigger2", {}, timeout=10)
+        # a failed handler is answered with the default response carrying the reason, not as if it were set
+        assert "child 1 (Text Field) on response.success: success: expected true or false" in failed["message"]
+        assert m.state.error.startswith("not answered: child 1 (Text Field) on response.success")
+        by_path(m, "response.success").set_draft("true")
+        await asyncio.sleep(0.1)
+        answer = await client.node("caller").call_service("/rcon_test/trigger2", {}, timeout=10)
+        assert answer == {"success": True, "message": ""}
+        m.stop()
+
+
 class Knob(WidgetModel):
     """Another package's widget: a model that publishes a value through its port."""
 

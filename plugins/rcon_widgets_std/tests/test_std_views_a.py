@@ -141,14 +141,14 @@ def test_switch_view_call_lights_and_show_state(qtbot, live, sim_thread, tmp_pat
     qtbot.addWidget(view)
     wait_until(qtbot, lambda: getattr(m.state.value, "on", None) is False, what="the latched state")
     view.refresh(m.state)
-    assert view.button.text() == "Lights off" and not view.button.isChecked()
+    assert view.button.text() == "○ Lights off" and not view.button.isChecked()
     view.button.click()
     # /lights/state may confirm "on" before the call's answer arrives: wait for the answer too (busy
     # over), not only the state, before reading the button's text
     wait_until(qtbot, lambda: getattr(m.state.value, "on", None) is True and not m.state.value.busy,
                what="lights on, and the answer")
     view.refresh(m.state)
-    assert view.button.isChecked() and view.button.text() == "Lights on" and view.reply.text() == "lights on"
+    assert view.button.isChecked() and view.button.text() == "● Lights on" and view.reply.text() == "lights on"
     assert sim_thread.robot.lights is True
     shoot(qtbot, view, "Lights", (180, 130), "switch", tmp_path)
     live.thread.call(m.stop).result(5)
@@ -170,7 +170,7 @@ def test_switch_view_drops_an_old_reply_when_the_state_changes_elsewhere(qtbot, 
     live.thread.run(other.call_service("/lights/set", {"data": False})).result(10)
     wait_until(qtbot, lambda: m.state.value.on is False, what="the new state")
     view.refresh(m.state)
-    assert view.button.text() == "Off" and view.reply.text() == "" and m.state.value.reply == ""
+    assert view.button.text() == "○ Off" and view.reply.text() == "tap for On" and m.state.value.reply == ""
     live.thread.call(m.stop).result(5)
 
 
@@ -210,7 +210,7 @@ def test_switch_view_busy_and_refused(qtbot):
     m.set_value(SwitchValue(False, False, None, "interlock open"))
     m.set_error("/arm refused: interlock open")
     view.refresh(m.state)
-    assert view.button.text() == "Off" and "interlock open" in view.reply.text()
+    assert view.button.text() == "○ Off" and "interlock open" in view.reply.text()
 
 
 def test_button_view_progress_result_and_error(qtbot, live, sim_thread, tmp_path):

@@ -214,8 +214,8 @@ def test_switch_flashes_the_answer_on_its_face_only_when_the_reply_line_is_hidde
     for view in (short, roomy):
         view.refresh(m.state)
     assert short.button.text() == "✓ lights on" and view_common.OK in short.button.styleSheet()
-    assert roomy.button.text() == "Lights on" and roomy.reply.text() == "lights on"
-    wait_until(qtbot, lambda: short.button.text() == "Lights on", what="the state back on the face")
+    assert roomy.button.text() == "● Lights on" and roomy.reply.text() == "lights on"
+    wait_until(qtbot, lambda: short.button.text() == "● Lights on", what="the state back on the face")
     m.set_value(SwitchValue(True, True, False))
     short.refresh(m.state)
     m.set_value(SwitchValue(True, False, None, "interlock open"))
