@@ -13,7 +13,7 @@ import time
 
 import pytest
 
-from rcon_core.canvas import Workspace, WorkspaceStore, loads_workspace
+from rcon_core.canvas import Workspace, WorkspaceFileError, WorkspaceStore, loads_workspace
 
 posix_only = pytest.mark.skipif(os.name != "posix", reason="symlinks, modes and flock are POSIX here")
 
@@ -68,6 +68,25 @@ def test_a_plain_file_keeps_its_mode(tmp_path):
     os.chmod(path, 0o640)
     store.save(Workspace.new("Again"))
     assert oct(path.stat().st_mode & 0o777) == oct(0o640)
+
+
+@posix_only
+def test_an_unreadable_symlinked_layout_is_kept_by_its_target_and_moved_aside_behind_the_link(tmp_path):
+    target = tmp_path / "shared" / "boat.json"
+    target.parent.mkdir()
+    target.write_text('{"format": "rcon-workspace", "version": 1, "canvases": [{"id": "c", "name": "A", '
+                      '"locked": "no"}]}')
+    bad = target.read_bytes()
+    link = tmp_path / "workspace.json"
+    link.symlink_to(target)
+    store = WorkspaceStore(link)
+    with pytest.raises(WorkspaceFileError, match="locked must be true or false") as info:
+        store.load()
+    assert info.value.backup.parent == target.parent and info.value.backup.read_bytes() == bad
+    kept = store.move_aside()  # the operator starts a new layout
+    assert kept == info.value.backup and link.is_symlink() and not target.exists()
+    store.save(Workspace.new("Fresh"))
+    assert link.is_symlink() and WorkspaceStore(target).load().canvases[0].name == "Fresh"
 
 
 # ------------------------------------------------------------------------------------ stale temp files

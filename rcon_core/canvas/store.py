@@ -56,7 +56,7 @@ import cattrs.v
 from rcon_core.plugins.model import Binding, Role
 
 from . import checks
-from .files import atomic_write, backup, clean_stale_temps, same_backup
+from .files import atomic_write, backup, clean_stale_temps, real_path, same_backup
 from .model import Canvas, Geometry, WidgetInstance, Workspace
 
 log = logging.getLogger(__name__)
@@ -362,26 +362,28 @@ class WorkspaceStore:
         except Exception as exc:  # noqa: BLE001 - loads_workspace raises only WorkspaceFileError; be sure
             reason = exc.reason if isinstance(exc, WorkspaceFileError) else f"cannot be read ({type(exc).__name__})"
             self.read_only_reason = reason
-            kept = backup(self.path, "unreadable")
+            kept = backup(real_path(self.path), "unreadable")  # next to a symlink's target
             err_cls = type(exc) if isinstance(exc, WorkspaceFileError) else WorkspaceFileError
             raise err_cls(self.path, reason, kept) from exc
 
     def move_aside(self) -> Path | None:
         """Move a file that could not be read out of the way (the operator starts a new layout): it is
         renamed to a backup (or removed when an identical backup already exists), and the store saves
-        normally again. Returns where the old content is kept (None when there was no file)."""
+        normally again. Returns where the old content is kept (None when there was no file). A symlink
+        stays: its target is moved aside, and the next save writes a new target through the link."""
+        target = real_path(self.path)
         try:
-            content = self.path.read_bytes()
+            content = target.read_bytes()
         except FileNotFoundError:
             self.read_only_reason = None
             return None
-        kept = same_backup(self.path, "unreadable", content)
+        kept = same_backup(target, "unreadable", content)
         if kept is not None:
-            self.path.unlink()
+            target.unlink()
         else:
-            kept = backup(self.path, "unreadable")
+            kept = backup(target, "unreadable")
             if kept is not None:
-                self.path.unlink()
+                target.unlink()
         self.read_only_reason = None
         return kept
 
