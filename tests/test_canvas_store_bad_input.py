@@ -8,6 +8,7 @@ import copy
 import json
 import math
 
+import attrs
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -139,21 +140,25 @@ def test_true_and_false_load_as_themselves():
         assert loads_workspace(json.dumps(layout(locked=value))).canvases[0].locked is value
 
 
-def test_a_boolean_setting_that_is_not_a_boolean_is_a_problem_sentence():
-    from rcon_core.plugins import PluginManager
+@attrs.define
+class Flags:
+    """A widget's settings with a boolean, as a plugin declares them."""
 
-    pm = PluginManager(environ={})
-    pm.load_entry_points()
-    spec = next((s for s in pm.widgets() if s.settings is not None and any(
-        a.type is bool or a.type == "bool" for a in __import__("attrs").fields(s.load_settings_class()))), None)
-    if spec is None:
-        pytest.skip("no installed widget has a boolean setting")
-    cls = spec.load_settings_class()
-    key = next(a.name for a in __import__("attrs").fields(cls) if a.type is bool or a.type == "bool")
-    problems = spec.settings_problems({key: "no"})
-    assert problems and f"{key} must be true or false, found 'no'" in problems[0], problems
-    assert spec.kind in problems[0]
-    assert not any("must be true or false" in p for p in spec.settings_problems({key: False}))
+    follow: bool = True
+    label: str = ""
+
+
+def test_a_boolean_setting_that_is_not_a_boolean_is_a_problem_sentence():
+    from rcon_core.plugins import Accepts, Role, WidgetSpec
+    from rcon_core.plugins.model import WidgetModel
+
+    spec = WidgetSpec(kind="test.flags", title="Flags", model=WidgetModel, roles={Role.SUBSCRIBE},
+                      accepts=Accepts(messages=["any"]), settings=Flags)
+    for bad, found in (("no", "'no'"), (0, "0"), (None, "None"), ("false", "'false'")):
+        assert spec.settings_problems({"follow": bad}) == [
+            f"test.flags: invalid settings: follow must be true or false, found {found}"]
+    assert spec.settings_problems({"follow": False}) == []
+    assert spec.make_settings({"follow": False}).follow is False
 
 
 # ------------------------------------------------------------------------------------ wrong types, ids
