@@ -61,3 +61,25 @@ def test_a_hostile_layout_shows_the_banner_and_is_never_overwritten(qtbot, tmp_p
     assert path.read_bytes() == content  # closing saves too: refused
     [kept] = tmp_path.glob("workspace.json.unreadable-*")
     assert kept.read_bytes() == content
+
+
+def test_start_a_new_layout_on_a_full_disk_keeps_the_file_and_says_why(qtbot, tmp_path, monkeypatch):
+    from rcon_core.canvas import files
+
+    def disk_full(src, dst, **_kw):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(files.shutil, "copy2", disk_full)
+    path = tmp_path / "workspace.json"
+    content = BAD_FILES["locked is a word"].encode()
+    path.write_bytes(content)
+    window = open_window(qtbot, tmp_path, make_plugins())
+    try:
+        assert window.notice.kind == "problem" and "locked must be true or false" in window.banner.text()
+        tap(window.notice.buttons["Start a new layout"])
+        assert window.notice.kind == "problem" and "no copy of it could be kept" in window.banner.text()
+        window.controller.add_canvas("Scratch")
+        assert window.store.read_only and path.read_bytes() == content
+    finally:
+        window.close()
+    assert path.read_bytes() == content and list(tmp_path.glob("workspace.json.unreadable-*")) == []

@@ -173,3 +173,28 @@ def test_a_writer_killed_mid_save_leaves_a_temp_file_the_next_start_removes(tmp_
     store = WorkspaceStore(path)
     assert store.cleaned == [temp] and names(tmp_path) == ["ws.json"]
     assert store.load().canvases[0].name == "First"
+
+
+# -------------------------------------------------------------------------------------- a full disk
+def test_when_no_copy_can_be_kept_the_file_is_neither_moved_nor_overwritten(tmp_path, monkeypatch):
+    from rcon_core.canvas import files
+
+    path = tmp_path / "ws.json"
+    bad = b'{"format": "rcon-workspace", "version": 1, "canvases": [{"id": "c", "name": "A", "locked": 1}]}'
+    path.write_bytes(bad)
+
+    def disk_full(src, dst, **_kw):
+        open(dst, "wb").close()  # a partial copy, then the error
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(files.shutil, "copy2", disk_full)
+    store = WorkspaceStore(path)
+    with pytest.raises(WorkspaceFileError, match="locked must be true or false") as info:
+        store.load()
+    assert info.value.backup is None and store.read_only
+    with pytest.raises(WorkspaceFileError, match="no copy of it could be kept"):
+        store.move_aside()
+    assert store.read_only and path.read_bytes() == bad
+    with pytest.raises(WorkspaceFileError, match="not saving over"):
+        store.save(Workspace.new())
+    assert names(tmp_path) == ["ws.json"]  # the partial copy is gone, the file is as it was

@@ -17,6 +17,7 @@ Stale temp files
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import re
 import shutil
@@ -28,6 +29,8 @@ try:
     import fcntl
 except ImportError:  # pragma: no cover - not POSIX
     fcntl = None  # type: ignore[assignment]
+
+log = logging.getLogger(__name__)
 
 __all__ = ["atomic_write", "clean_stale_temps", "real_path", "backup", "same_backup", "STALE_AFTER_S"]
 
@@ -140,7 +143,8 @@ def glob_escape(name: str) -> str:
 
 
 def backup(path: Path, tag: str) -> Path | None:
-    """Copy ``path`` next to itself (``NAME.TAG-STAMP``), unless a copy with the same content exists."""
+    """Copy ``path`` next to itself (``NAME.TAG-STAMP``), unless a copy with the same content exists.
+    None when there is nothing to copy or the copy failed (never raises)."""
     try:
         content = path.read_bytes()
     except OSError:
@@ -154,5 +158,11 @@ def backup(path: Path, tag: str) -> Path | None:
     while dest.exists():
         n += 1
         dest = path.with_name(f"{path.name}.{tag}-{stamp}-{n}")
-    shutil.copy2(path, dest)
+    try:
+        shutil.copy2(path, dest)
+    except OSError as exc:  # a full disk, a read-only directory: no copy (the caller says so)
+        log.error("could not copy %s to %s: %s", path, dest, exc)
+        with contextlib.suppress(OSError):
+            dest.unlink()
+        return None
     return dest

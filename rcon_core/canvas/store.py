@@ -370,20 +370,25 @@ class WorkspaceStore:
         """Move a file that could not be read out of the way (the operator starts a new layout): it is
         renamed to a backup (or removed when an identical backup already exists), and the store saves
         normally again. Returns where the old content is kept (None when there was no file). A symlink
-        stays: its target is moved aside, and the next save writes a new target through the link."""
+        stays: its target is moved aside, and the next save writes a new target through the link.
+
+        Raises WorkspaceFileError, and the store stays read-only, when no copy can be kept (a full disk):
+        the file is then left where it is, never overwritten without a copy."""
         target = real_path(self.path)
         try:
             content = target.read_bytes()
         except FileNotFoundError:
             self.read_only_reason = None
             return None
-        kept = same_backup(target, "unreadable", content)
-        if kept is not None:
+        except OSError as exc:
+            raise WorkspaceFileError(target, f"cannot read it to keep a copy: {exc.strerror or exc}") from exc
+        kept = same_backup(target, "unreadable", content) or backup(target, "unreadable")
+        if kept is None:
+            raise WorkspaceFileError(target, "no copy of it could be kept (see the log), so it was not moved aside")
+        try:
             target.unlink()
-        else:
-            kept = backup(target, "unreadable")
-            if kept is not None:
-                target.unlink()
+        except OSError as exc:
+            raise WorkspaceFileError(target, f"cannot move it aside: {exc.strerror or exc}") from exc
         self.read_only_reason = None
         return kept
 
