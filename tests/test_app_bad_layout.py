@@ -83,3 +83,23 @@ def test_start_a_new_layout_on_a_full_disk_keeps_the_file_and_says_why(qtbot, tm
     finally:
         window.close()
     assert path.read_bytes() == content and list(tmp_path.glob("workspace.json.unreadable-*")) == []
+
+
+def test_an_unreadable_demo_layout_on_a_full_disk_is_left_alone_and_reported(qtbot, tmp_path, monkeypatch):
+    from rcon_core.canvas import Workspace, files
+
+    def disk_full(src, dst, **_kw):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(files.shutil, "copy2", disk_full)
+    path = tmp_path / "workspace.json"
+    content = BAD_FILES["NaN coordinate"].encode()
+    path.write_bytes(content)
+    window = open_window(qtbot, tmp_path, make_plugins(), demo=lambda: Workspace.new("Demo"))
+    try:
+        text = window.banner.text()
+        assert window.notice.kind == "problem" and "not a finite number" in text and "no copy" in text, text
+        window.controller.add_canvas("Scratch")
+    finally:
+        window.close()
+    assert path.read_bytes() == content
