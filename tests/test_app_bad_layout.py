@@ -103,3 +103,21 @@ def test_an_unreadable_demo_layout_on_a_full_disk_is_left_alone_and_reported(qtb
     finally:
         window.close()
     assert path.read_bytes() == content
+
+
+@pytest.mark.parametrize("app_json", [
+    '{"url_history": ' + "[" * 5000 + "]" * 5000 + "}",
+    '{"version": 2, "url_history": 42}',
+    '{"version": 2, "url_history": "ws://robot:9090"}',
+])
+def test_a_hostile_app_json_does_not_keep_the_app_from_starting(qtbot, tmp_path, app_json):
+    from rcon_core.app.config import DEFAULT_URL
+
+    (tmp_path / "app.json").write_text(app_json)
+    window = open_window(qtbot, tmp_path, make_plugins())
+    try:
+        assert window.config.last_url == DEFAULT_URL and window.config.url_history == []
+        window.config.remember_url("ws://boat.local:9090")
+        assert window.config.url_history == ["ws://boat.local:9090"]
+    finally:
+        window.close()
