@@ -179,17 +179,17 @@ async def test_before_auth_a_frame_over_4_kb_is_refused_unread(guarded):
     assert guarded.connections == set()
 
 
-@pytest.mark.parametrize("first, why", [
-    (call_op("sneaky"), "authentication failed: the first frame must be an auth op (got op 'call_service')"),
-    (b"this is not json", "authentication failed: the first frame must be an auth op (it is not a JSON object)"),
-    (auth_op() + auth_op(), "authentication failed: the first frame must be an auth op (it is not a JSON object)"),
-    (auth_op("wrong"), "authentication failed: mac does not match"),
-    (auth_op(end=int(time.time()) - 100), "authentication failed: the authentication has expired"),
+@pytest.mark.parametrize("first, why", [  # frames made when the test runs: auth ops carry the time
+    (lambda: call_op("sneaky"), "authentication failed: the first frame must be an auth op (got op 'call_service')"),
+    (lambda: b"not json", "authentication failed: the first frame must be an auth op (it is not a JSON object)"),
+    (lambda: auth_op() + auth_op(), "authentication failed: the first frame must be an auth op (it is not a JSON"),
+    (lambda: auth_op("wrong"), "authentication failed: mac does not match"),
+    (lambda: auth_op(end=int(time.time()) - 100), "authentication failed: the authentication has expired"),
 ])
 async def test_anything_but_a_valid_auth_op_first_closes_with_the_reason(guarded, first, why):
     client = await RawClient.open(guarded)
     try:
-        await client.send(RawClient.frame(first), RawClient.frame(call_op("behind")))
+        await client.send(RawClient.frame(first()), RawClient.frame(call_op("behind")))
         code, reason = await client.closed()
         assert code == 4001 and reason.startswith(why), reason
     finally:
