@@ -175,6 +175,17 @@ def test_wrong_types_are_one_sentence_each(tmp_path, text, match):
     refused(tmp_path, text, match)
 
 
+def test_messages_quote_briefly_whatever_the_file_holds(tmp_path):
+    huge = "k" * 100_000
+    err = refused(tmp_path, with_value("settings", huge, "NaN"), "is not a finite number")
+    assert len(str(err)) < 600
+    err = refused(tmp_path, json.dumps({"format": huge, "version": 1}), "not an RCON workspace file")
+    assert len(str(err)) < 600
+    err = refused(tmp_path, json.dumps(layout()).replace('"name": "Main"', f'"name": 5, "id2": "{huge}"')
+                  .replace('"locked": false', f'"locked": "{huge}"'), "locked must be true or false")
+    assert len(str(err)) < 800
+
+
 def test_duplicate_ids_are_found_among_many_and_listed_briefly(tmp_path):
     data = layout()
     widget = data["canvases"][0]["widgets"][0]

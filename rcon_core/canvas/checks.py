@@ -46,6 +46,8 @@ def path_text(path: list[str | int]) -> str:
     """``["canvases", 0, "locked"]`` as ``canvases[0].locked`` (the way cattrs writes paths)."""
     out = ""
     for part in path:
+        if isinstance(part, str) and len(part) > _QUOTE:
+            part = part[: _QUOTE - 3] + "..."
         out += f"[{part}]" if isinstance(part, int) else f".{part}" if out else str(part)
     return out or "the top level"
 

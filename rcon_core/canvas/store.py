@@ -214,13 +214,13 @@ def _describe(exc: Exception, root: str = "$", data: Any = None) -> str:
 
 def _check_header(data: Any, fmt: str, path: Path | None) -> None:
     if not isinstance(data, dict) or data.get("format") != fmt:
-        found = data.get("format") if isinstance(data, dict) else type(data).__name__
+        found = checks.found(data.get("format")) if isinstance(data, dict) else type(data).__name__
         raise WorkspaceFileError(
-            path, f"not an RCON {fmt.split('-')[1]} file (format is {found!r}, expected {fmt!r})"
+            path, f"not an RCON {fmt.split('-')[1]} file (format is {found}, expected {fmt!r})"
         )
     version = data.get("version")
     if isinstance(version, bool) or not isinstance(version, int) or version < 1:
-        raise WorkspaceFileError(path, f"bad format version {version!r}")
+        raise WorkspaceFileError(path, f"bad format version {checks.found(version)}")
     if version > VERSION:
         raise NewerVersionError(
             path, f"written by a newer RCON (format version {version}; this version reads up to {VERSION})"
