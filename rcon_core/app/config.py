@@ -56,8 +56,8 @@ class AppConfig:
                 loaded = json.loads(self._file.read_text(encoding="utf-8"))
                 if isinstance(loaded, dict):
                     self._data = loaded
-            except (OSError, ValueError):
-                self._data = {}  # a damaged file must not keep the app from starting
+            except (OSError, ValueError, RecursionError):
+                self._data = {}  # a damaged (or absurdly nested) file must not keep the app from starting
         version = self._data.get("version", 1)
         if self._data and (not isinstance(version, int) or version < CONFIG_VERSION):
             # earlier builds put each demo run's embedded robot first: plain `rcon` then connected to a
@@ -82,7 +82,7 @@ class AppConfig:
     def url_history(self) -> list[str]:
         """URLs the operator connected to, newest first."""
         history = self._data.get("url_history", [])
-        return [u for u in history if isinstance(u, str)]
+        return [u for u in history if isinstance(u, str)] if isinstance(history, list) else []
 
     @property
     def last_url(self) -> str:

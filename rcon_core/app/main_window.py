@@ -264,7 +264,11 @@ class MainWindow(QtWidgets.QMainWindow):
             return self.store.load()
         except WorkspaceFileError as exc:
             if self.demo is not None:
-                kept = self.store.move_aside()
+                try:
+                    kept = self.store.move_aside()
+                except WorkspaceFileError as aside:  # no copy could be kept: leave it, say so
+                    self.show_file_problem(f"{exc}; {aside.reason}")
+                    return Workspace.new()
                 log.warning("demo layout unreadable (%s); moved to %s, building a fresh one", exc.reason, kept)
                 self._demo_rebuilt = True
                 self.notice.show_notice(
@@ -285,7 +289,11 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def start_new_layout(self) -> None:
         """The way out of an unreadable layout: move the file aside explicitly and save from now on."""
-        kept = self.store.move_aside()
+        try:
+            kept = self.store.move_aside()
+        except WorkspaceFileError as exc:
+            self.show_file_problem(str(exc))
+            return
         self.controller.saver.flush()
         where = f" The old file was kept as {kept}." if kept is not None else ""
         self.notice.show_notice(f"ℹ New layout started: it is saved to {self.layout_path}.{where}", kind="info")

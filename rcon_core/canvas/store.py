@@ -11,11 +11,20 @@ A single canvas exported to a file is ``{"format": "rcon-canvas", "version": 1, 
 Keys this version does not know are kept and written back, so a newer minor addition survives a
 round trip; a widget whose plugin is missing keeps its settings byte for byte.
 
-Writes are atomic: a temp file in the same directory, fsync, ``os.replace``. A file that cannot be read
-(corrupt, or written by a newer RCON) raises :class:`WorkspaceFileError`; it is copied to a backup
-next to it (one copy per distinct content: reading the same bad file again keeps no second copy) and the
-store then refuses to overwrite it (``store.read_only``) until ``save(force=True)`` or until
-:meth:`WorkspaceStore.move_aside` moved it out of the way (the operator chose to start a new layout).
+Writes are atomic (see :mod:`rcon_core.canvas.files`): a temp file in the same directory, fsync,
+``os.replace``; a symlinked layout stays a link and its target is written, keeping its mode. Temp files
+left by a writer that died mid-save are removed when a store is opened (only stale, unlocked ones).
+
+A file that cannot be read raises :class:`WorkspaceFileError` -- whatever the reason: corrupt JSON,
+nesting deeper than :data:`~rcon_core.canvas.checks.MAX_DEPTH`, a number that is not finite (``NaN``,
+``Infinity``, ``1e999``) or a coordinate out of range, a boolean that is not ``true``/``false``, a wrong
+type, duplicate ids, a newer format. The message names the canvas, the widget and the key and says what
+was found. The file is copied to a backup next to it (one copy per distinct content: reading the same
+bad file again keeps no second copy) and the store then refuses to overwrite it (``store.read_only``)
+until ``save(force=True)`` or until :meth:`WorkspaceStore.move_aside` moved it out of the way (the
+operator chose to start a new layout). A workspace that cannot be written as strict JSON (a non-finite
+number or a too deep structure in some settings) is refused by ``save`` with a WorkspaceFileError and
+nothing on disk changes.
 
 Changing the saved shape
 ------------------------
@@ -29,12 +38,13 @@ unreadable (they are then reported, never overwritten, but the operator's layout
 
 from __future__ import annotations
 
+import collections
 import contextlib
+import gc
 import json
+import logging
 import os
-import shutil
-import tempfile
-import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -43,9 +53,13 @@ import cattrs
 import cattrs.gen
 import cattrs.v
 
-from rcon_core.plugins.model import Binding
+from rcon_core.plugins.model import Binding, Role
 
+from . import checks
+from .files import atomic_write, backup, clean_stale_temps, real_path, same_backup
 from .model import Canvas, Geometry, WidgetInstance, Workspace
+
+log = logging.getLogger(__name__)
 
 __all__ = [
     "FORMAT",
@@ -96,11 +110,13 @@ def default_path() -> Path:
 # -- the private converter -------------------------------------------------------------------------
 
 
-def _split_extra(cls: type, data: Any, where: str) -> tuple[dict[str, Any], dict[str, Any]]:
+def _split_extra(known: frozenset[str], data: Any, where: str) -> tuple[dict[str, Any], dict[str, Any]]:
     if not isinstance(data, dict):
-        raise ValueError(f"{where} must be an object, got {type(data).__name__}")
-    known = {a.name for a in attrs.fields(cls)} - {"extra"}
+        raise ValueError(f"{where} must be an object, found {checks.found(data)}")
     return {k: v for k, v in data.items() if k in known}, {k: v for k, v in data.items() if k not in known}
+
+
+_ROLES = {r.value: r for r in Role}  # the saved spelling, looked up without Role.parse (20k widgets)
 
 
 def _make_converter() -> cattrs.Converter:
@@ -114,13 +130,11 @@ def _make_converter() -> cattrs.Converter:
             raise ValueError("binding must be an object")
         paths = data.get("field_paths", ())
         if not isinstance(paths, (list, tuple)) or not all(isinstance(p, str) for p in paths):
-            raise ValueError("binding.field_paths must be a list of strings")
-        for key in ("name", "type"):
-            if not isinstance(data.get(key, ""), str):
-                raise ValueError(f"binding.{key} must be a string")
-        return Binding(
-            data.get("name", ""), data.get("type", ""), data.get("role", "subscribe"), tuple(paths)
-        )
+            raise ValueError(f"binding.field_paths must be a list of strings, found {checks.found(paths)}")
+        for key in ("name", "type", "role"):
+            checks.strict_str(data.get(key, ""), f"binding.{key}")
+        role = data.get("role", "subscribe")
+        return Binding(data.get("name", ""), data.get("type", ""), _ROLES.get(role, role), tuple(paths))
 
     conv.register_unstructure_hook(Binding, unstructure_binding)
     conv.register_structure_hook(Binding, structure_binding)
@@ -128,15 +142,15 @@ def _make_converter() -> cattrs.Converter:
     def structure_geometry(data: Any, _t: Any) -> Geometry:
         if not isinstance(data, dict):
             raise ValueError("geometry must be an object with x, y, w, h")
-        vals = {}
-        for k in ("x", "y", "w", "h"):
-            v = data.get(k, getattr(Geometry(), k))
-            if isinstance(v, bool) or not isinstance(v, (int, float)):
-                raise ValueError(f"geometry.{k} must be a number, got {v!r}")
-            vals[k] = float(v)
+        default = Geometry()
+        vals = {k: checks.coordinate(data.get(k, getattr(default, k)), f"geometry.{k}", size=k in "wh")
+                for k in ("x", "y", "w", "h")}
         return Geometry(**vals)
 
     conv.register_structure_hook(Geometry, structure_geometry)
+    # strict scalars: cattrs would turn "no" into True and 5 into "5"
+    conv.register_structure_hook(bool, lambda v, _t: checks.strict_bool(v))
+    conv.register_structure_hook(str, lambda v, _t: checks.strict_str(v))
 
     def structure_settings(data: Any, _t: Any) -> dict[str, Any]:
         if not isinstance(data, dict):
@@ -148,8 +162,11 @@ def _make_converter() -> cattrs.Converter:
     def with_extra(cls: type, order: tuple[str, ...]) -> None:
         base_struct: cattrs.SimpleStructureHook[Any, Any] = cattrs.gen.make_dict_structure_fn(cls, conv)
 
+        names = frozenset(a.name for a in attrs.fields(cls)) - {"extra"}
+        what = {"WidgetInstance": "a widget", "Canvas": "a canvas"}.get(cls.__name__, cls.__name__)
+
         def structure(data: Any, _t: Any) -> Any:
-            known, extra = _split_extra(cls, data, cls.__name__)
+            known, extra = _split_extra(names, data, what)
             obj = base_struct(known, cls)
             obj.extra = extra
             return obj
@@ -177,21 +194,33 @@ def _format_exc(exc: BaseException, type_: Any) -> str:
     return cattrs.v.format_exception(exc, type_)
 
 
-def _describe(exc: Exception, root: str = "$") -> str:
-    if isinstance(exc, cattrs.BaseValidationError):
-        return "; ".join(cattrs.transform_error(exc, path=root, format_exception=_format_exc))
-    return str(exc)
+def _describe(exc: Exception, root: str = "$", data: Any = None) -> str:
+    """Problem sentences: where (canvas, widget, key, named from the raw ``data``) and what was found."""
+    if not isinstance(exc, cattrs.BaseValidationError):
+        return str(exc)
+    problems = []
+    for line in cattrs.transform_error(exc, path=root, format_exception=_format_exc):
+        text, _, path = line.rpartition(" @ ")
+        located = checks.where(path, data) if text else None
+        if located is None:
+            problems.append(f"{text} at {path}" if text else line)
+            continue
+        place, key = located
+        if key and not text.startswith(key.split(".")[0].split("[")[0]):
+            text = f"{key} {text}"  # the message does not name the key itself
+        problems.append(f"{place}: {text}")
+    return checks.summarize(problems)
 
 
 def _check_header(data: Any, fmt: str, path: Path | None) -> None:
     if not isinstance(data, dict) or data.get("format") != fmt:
-        found = data.get("format") if isinstance(data, dict) else type(data).__name__
+        found = checks.found(data.get("format")) if isinstance(data, dict) else type(data).__name__
         raise WorkspaceFileError(
-            path, f"not an RCON {fmt.split('-')[1]} file (format is {found!r}, expected {fmt!r})"
+            path, f"not an RCON {fmt.split('-')[1]} file (format is {found}, expected {fmt!r})"
         )
     version = data.get("version")
     if isinstance(version, bool) or not isinstance(version, int) or version < 1:
-        raise WorkspaceFileError(path, f"bad format version {version!r}")
+        raise WorkspaceFileError(path, f"bad format version {checks.found(version)}")
     if version > VERSION:
         raise NewerVersionError(
             path, f"written by a newer RCON (format version {version}; this version reads up to {VERSION})"
@@ -224,79 +253,79 @@ def workspace_from_dict(data: Any, path: Path | None = None) -> Workspace:
         ):
             raise ValueError("plugin_settings must map widget kinds to objects")
     except Exception as exc:
-        raise WorkspaceFileError(path, f"invalid workspace: {_describe(exc, 'canvases')}") from exc
-    ids = [c.id for c in canvases] + [w.id for c in canvases for w in c.widgets]
-    dup = sorted({i for i in ids if ids.count(i) > 1})
+        raise WorkspaceFileError(path, f"invalid workspace: {_describe(exc, 'canvases', data)}") from exc
+    counts = collections.Counter(c.id for c in canvases)
+    counts.update(w.id for c in canvases for w in c.widgets)
+    dup = sorted(i for i, n in counts.items() if n > 1)
     if dup:
-        raise WorkspaceFileError(path, f"invalid workspace: duplicate ids {dup}")
+        shown = ", ".join(checks.found(i) for i in dup[: checks.MAX_PROBLEMS])
+        more = f" and {len(dup) - checks.MAX_PROBLEMS} more" if len(dup) > checks.MAX_PROBLEMS else ""
+        raise WorkspaceFileError(path, f"invalid workspace: duplicate ids {shown}{more}")
     return Workspace(canvases, current, plugin_settings, body)
 
 
+def _dumps(data: Any, path: Path | None) -> str:
+    """Strict JSON text (what :func:`_loads` reads back), or WorkspaceFileError."""
+    try:
+        checks.check_tree(data)
+        return json.dumps(data, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
+    except (ValueError, TypeError, RecursionError) as exc:
+        reason = str(exc) if len(str(exc)) <= 200 else str(exc)[:197] + "..."
+        raise WorkspaceFileError(path, f"cannot be saved: {reason}") from exc
+
+
+def _loads(text: str | bytes, path: Path | None) -> Any:
+    """Parsed and checked JSON (depth, finite numbers), or WorkspaceFileError -- never anything else."""
+    try:
+        data = json.loads(text)
+    except RecursionError as exc:
+        raise WorkspaceFileError(path, f"not a layout: nested deeper than {checks.MAX_DEPTH} levels") from exc
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise WorkspaceFileError(path, f"not valid JSON ({exc})") from exc
+    try:
+        checks.check_tree(data)
+    except checks.TreeProblem as exc:
+        raise WorkspaceFileError(path, f"invalid layout: {_place(exc, data)}") from exc
+    return data
+
+
+def _place(problem: checks.TreeProblem, data: Any) -> str:
+    """A tree problem's sentence, its place named after the canvas and widget when it is inside one."""
+    path = checks.path_text(problem.path)
+    located = checks.where(path, data)
+    if located is None:
+        return f"{path} {problem.problem}"
+    place, key = located
+    return f"{place}: {key} {problem.problem}" if key else f"{place}: {problem.problem}"
+
+
 def dumps_workspace(ws: Workspace) -> str:
-    return json.dumps(workspace_to_dict(ws), indent=2, ensure_ascii=False) + "\n"
+    return _dumps(workspace_to_dict(ws), None)
+
+
+@contextlib.contextmanager
+def _gc_paused() -> Iterator[None]:
+    """Pause the cycle collector while a layout is built: every object made is kept, so collecting midway
+    is wasted work that grows with the layout (20,000 widgets: about 0.7 s instead of 0.45 s)."""
+    was_enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was_enabled:
+            gc.enable()
 
 
 def loads_workspace(text: str | bytes, path: Path | None = None) -> Workspace:
+    """Read a workspace file's text. Raises WorkspaceFileError, and only that, for anything wrong in it."""
     try:
-        data = json.loads(text)
-    except (ValueError, UnicodeDecodeError) as exc:
-        raise WorkspaceFileError(path, f"not valid JSON ({exc})") from exc
-    return workspace_from_dict(data, path)
-
-
-def atomic_write(path: str | os.PathLike[str], text: str) -> None:
-    """Replace ``path`` with ``text`` atomically: temp file in the same directory, fsync, os.replace.
-
-    If anything fails (including a crash before the replace), the old file is untouched.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
+        with _gc_paused():
+            return workspace_from_dict(_loads(text, path), path)
+    except WorkspaceFileError:
         raise
-    if hasattr(os, "O_DIRECTORY"):  # make the rename itself durable (POSIX)
-        with contextlib.suppress(OSError):
-            dfd = os.open(path.parent, os.O_DIRECTORY)
-            try:
-                os.fsync(dfd)
-            finally:
-                os.close(dfd)
-
-
-def _same_backup(path: Path, tag: str, content: bytes) -> Path | None:
-    """An existing backup of ``path`` with exactly ``content``, if any."""
-    for old in sorted(path.parent.glob(f"{path.name}.{tag}-*")):
-        with contextlib.suppress(OSError):
-            if old.stat().st_size == len(content) and old.read_bytes() == content:
-                return old
-    return None
-
-
-def _backup(path: Path, tag: str) -> Path | None:
-    """Copy ``path`` next to itself (``NAME.TAG-STAMP``), unless a copy with the same content exists."""
-    try:
-        content = path.read_bytes()
-    except OSError:
-        return None
-    same = _same_backup(path, tag, content)
-    if same is not None:
-        return same
-    stamp = time.strftime("%Y%m%d-%H%M%S")
-    dest = path.with_name(f"{path.name}.{tag}-{stamp}")
-    n = 1
-    while dest.exists():
-        n += 1
-        dest = path.with_name(f"{path.name}.{tag}-{stamp}-{n}")
-    shutil.copy2(path, dest)
-    return dest
+    except Exception as exc:  # noqa: BLE001 - a file must never crash the app: whatever it is, report it
+        raise WorkspaceFileError(path, f"invalid workspace ({type(exc).__name__}: {checks.found(str(exc))})") \
+            from exc
 
 
 class WorkspaceStore:
@@ -306,6 +335,10 @@ class WorkspaceStore:
         self.path = Path(path) if path is not None else default_path()
         #: set when the file on disk could not be read: saving would destroy it
         self.read_only_reason: str | None = None
+        #: temp files of writers that died mid-save, removed when the store was opened
+        self.cleaned: list[Path] = clean_stale_temps(self.path)
+        if self.cleaned:
+            log.info("removed %d temp file(s) left by an interrupted save of %s", len(self.cleaned), self.path)
 
     @property
     def read_only(self) -> bool:
@@ -326,28 +359,36 @@ class WorkspaceStore:
             raise WorkspaceFileError(self.path, f"cannot read: {exc.strerror or exc}") from exc
         try:
             return loads_workspace(raw, self.path)
-        except WorkspaceFileError as exc:
-            backup = _backup(self.path, "unreadable")
-            self.read_only_reason = exc.reason
-            err_cls = type(exc)
-            raise err_cls(self.path, exc.reason, backup) from exc
+        except Exception as exc:  # noqa: BLE001 - loads_workspace raises only WorkspaceFileError; be sure
+            reason = exc.reason if isinstance(exc, WorkspaceFileError) else f"cannot be read ({type(exc).__name__})"
+            self.read_only_reason = reason
+            kept = backup(real_path(self.path), "unreadable")  # next to a symlink's target
+            err_cls = type(exc) if isinstance(exc, WorkspaceFileError) else WorkspaceFileError
+            raise err_cls(self.path, reason, kept) from exc
 
     def move_aside(self) -> Path | None:
         """Move a file that could not be read out of the way (the operator starts a new layout): it is
         renamed to a backup (or removed when an identical backup already exists), and the store saves
-        normally again. Returns where the old content is kept (None when there was no file)."""
+        normally again. Returns where the old content is kept (None when there was no file). A symlink
+        stays: its target is moved aside, and the next save writes a new target through the link.
+
+        Raises WorkspaceFileError, and the store stays read-only, when no copy can be kept (a full disk):
+        the file is then left where it is, never overwritten without a copy."""
+        target = real_path(self.path)
         try:
-            content = self.path.read_bytes()
+            content = target.read_bytes()
         except FileNotFoundError:
             self.read_only_reason = None
             return None
-        kept = _same_backup(self.path, "unreadable", content)
-        if kept is not None:
-            self.path.unlink()
-        else:
-            kept = _backup(self.path, "unreadable")
-            if kept is not None:
-                self.path.unlink()
+        except OSError as exc:
+            raise WorkspaceFileError(target, f"cannot read it to keep a copy: {exc.strerror or exc}") from exc
+        kept = same_backup(target, "unreadable", content) or backup(target, "unreadable")
+        if kept is None:
+            raise WorkspaceFileError(target, "no copy of it could be kept (see the log), so it was not moved aside")
+        try:
+            target.unlink()
+        except OSError as exc:
+            raise WorkspaceFileError(target, f"cannot move it aside: {exc.strerror or exc}") from exc
         self.read_only_reason = None
         return kept
 
@@ -357,29 +398,29 @@ class WorkspaceStore:
             raise WorkspaceFileError(
                 self.path, f"not saving over a file that could not be read ({self.read_only_reason})"
             )
-        atomic_write(self.path, dumps_workspace(ws))
+        atomic_write(self.path, _dumps(workspace_to_dict(ws), self.path))
         self.read_only_reason = None
 
 
 def export_canvas(canvas: Canvas, path: str | os.PathLike[str]) -> None:
     """Write one canvas to its own file (atomically)."""
     data = {"format": CANVAS_FORMAT, "version": VERSION, "canvas": _CONV.unstructure(canvas)}
-    atomic_write(path, json.dumps(data, indent=2, ensure_ascii=False) + "\n")
+    atomic_write(path, _dumps(data, Path(path)))
 
 
 def import_canvas(path: str | os.PathLike[str]) -> Canvas:
     """Read a canvas file written by :func:`export_canvas`. Add it with ``Document.add_canvas``."""
     p = Path(path)
     try:
-        data = json.loads(p.read_bytes())
+        raw = p.read_bytes()
     except FileNotFoundError:
         raise WorkspaceFileError(p, "no such file") from None
     except OSError as exc:  # a directory, no permission...
         raise WorkspaceFileError(p, f"cannot read: {exc.strerror or exc}") from exc
-    except (ValueError, UnicodeDecodeError) as exc:
-        raise WorkspaceFileError(p, f"not valid JSON ({exc})") from exc
+    data = _loads(raw, p)
     _check_header(data, CANVAS_FORMAT, p)
     try:
         return _CONV.structure(data.get("canvas"), Canvas)
     except Exception as exc:
-        raise WorkspaceFileError(p, f"invalid canvas: {_describe(exc, 'canvas')}") from exc
+        named = {"canvases": [data.get("canvas")]}  # name the canvas and widgets as in a workspace
+        raise WorkspaceFileError(p, f"invalid canvas: {_describe(exc, 'canvases[0]', named)}") from exc

@@ -16,12 +16,17 @@ def configure(name: str, parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--rate-scale", type=float, default=1.0, metavar="X",
                         help="multiply every publish rate by X (default 1.0)")
     parser.add_argument("--auth", metavar="SECRET", help="require a rosauth 'auth' op signed with SECRET")
+    parser.add_argument("--max-frame", type=float, default=32.0, metavar="MB",
+                        help="largest message a client may send, in MB (default 32)")
     parser.add_argument("-v", "--verbose", action="store_true", help="log every client op")
 
 
 def run(name: str, args: argparse.Namespace) -> int:
     if args.rate_scale <= 0:
         print(f"rcon sim: --rate-scale must be positive, got {args.rate_scale}")
+        return 2
+    if not 0.001 <= args.max_frame <= 2048:
+        print(f"rcon sim: --max-frame must be between 0.001 and 2048 MB, got {args.max_frame:g}")
         return 2
     if not 0 <= args.port <= 65535:
         print(f"rcon sim: --port must be between 0 and 65535, got {args.port}")
@@ -38,7 +43,7 @@ async def _serve(args: argparse.Namespace) -> int:
     from rcon_core.sim import SimServer
 
     server = SimServer(host=args.host, port=args.port, ros2=args.ros2, rate_scale=args.rate_scale,
-                       auth_secret=args.auth)
+                       auth_secret=args.auth, max_frame=int(args.max_frame * 1024 * 1024))
     try:
         await server.start()
     except OSError as exc:

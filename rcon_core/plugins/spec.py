@@ -376,7 +376,31 @@ def _converter() -> Any:
         import cattrs
 
         _CONVERTER = cattrs.Converter(forbid_extra_keys=False)
+        _CONVERTER.register_structure_hook(bool, _strict_bool)  # cattrs would read "no" as True
     return _CONVERTER
+
+
+def _strict_bool(value: Any, _type: Any) -> bool:
+    if not isinstance(value, bool):
+        shown = repr(value) if len(repr(value)) <= 40 else repr(value)[:37] + "..."
+        raise ValueError(f"must be true or false, found {shown}")
+    return value
+
+
+def _format_error(exc: BaseException, type_: Any) -> str:
+    import cattrs.v
+
+    if isinstance(exc, ValueError) and str(exc).startswith("must be"):
+        return str(exc)
+    return cattrs.v.format_exception(exc, type_)
+
+
+def _key_first(line: str) -> str:
+    """``must be true or false, found 'no' @ $.follow`` as ``follow must be true or false, found 'no'``."""
+    text, _, path = line.rpartition(" @ ")
+    if text.startswith("must be") and path.startswith("$."):
+        return f"{path[2:]} {text}"
+    return line
 
 
 def _structure(cls: type | None, data: Mapping[str, Any] | None, kind: str) -> Any:
@@ -396,7 +420,7 @@ def _structure(cls: type | None, data: Mapping[str, Any] | None, kind: str) -> A
     try:
         return _converter().structure(data, cls)
     except cattrs.ClassValidationError as exc:
-        msgs = cattrs.transform_error(exc)
+        msgs = [_key_first(m) for m in cattrs.transform_error(exc, format_exception=_format_error)]
         raise SettingsError(f"{kind}: invalid settings: " + "; ".join(msgs)) from exc
     except (TypeError, ValueError) as exc:
         raise SettingsError(f"{kind}: invalid settings: {exc}") from exc

@@ -65,8 +65,6 @@ class Connection:
         self.id = client_id
         self.connected_at = time.time()
         self.fragment_size: int | None = None
-        self.authenticated = False
-        self.closing = False
         self.incoming_fragments: dict[Any, dict[int, str]] = {}
         self.subscriptions: dict[str, TopicSubscription] = {}
         self.advertised: dict[str, str] = {}  # topic -> type

@@ -1,8 +1,10 @@
 """SimServer: a rosbridge v2 server (``websockets``) around the simulated vessel.
 
 Every client op of rosbridge 0.11 is handled the way the real server does it (see the recordings'
-README): no acknowledgements except service responses, errors only in the log, lenient input parsing.
-Slow clients never stall the simulation: each connection has its own bounded, drop-oldest send queue.
+README): no acknowledgements except service responses, errors only in the log, lenient input parsing
+(in linear time, see ``frames.py``). Slow clients never stall the simulation: each connection has its own
+bounded, drop-oldest send queue. Incoming messages are limited to ``max_frame`` bytes (32 MB); with
+``auth_secret`` nothing but one small ``auth`` op is read before a client is authenticated (``gate.py``).
 """
 
 from __future__ import annotations
@@ -12,7 +14,6 @@ import collections
 import contextlib
 import inspect
 import itertools
-import json
 import logging
 import threading
 import time
@@ -22,11 +23,11 @@ from typing import Any
 from websockets.asyncio.server import Server, ServerConnection, serve
 from websockets.exceptions import ConnectionClosed
 
-from . import encoding
-from .auth import check_auth
+from . import encoding, gate
 from .connection import Connection, SubOptions, TopicSubscription
 from .convert import ConversionError
 from .flavour import Flavour
+from .frames import parse_frame
 from .graph import BRIDGE_NODE, ROSOUT_NODE, InternalCallback, Service, ServiceFailure, ServiceHandler, Topic
 from .params import ParamTree
 from .typesource import TypeSource
@@ -35,15 +36,23 @@ log = logging.getLogger("rcon.sim")
 
 COMPRESSIONS = {"none", "png", "cbor", "cbor-raw"}
 PUBLISHED_KEEP = 500
+MAX_FRAGMENTED = 64  # partial (fragmented) messages a client may have in flight
 
 
 class SimServer:
     """The embedded simulated robot, served over rosbridge v2."""
 
     def __init__(self, host: str = "127.0.0.1", port: int = 0, ros2: bool = False, rate_scale: float = 1.0,
-                 auth_secret: str | None = None, *, robot: bool = True) -> None:
+                 auth_secret: str | None = None, *, robot: bool = True, max_frame: int = gate.DEFAULT_MAX_FRAME,
+                 auth_frame_limit: int = gate.AUTH_FRAME_LIMIT, auth_timeout: float = gate.AUTH_TIMEOUT_S) -> None:
         if rate_scale <= 0:
             raise ValueError(f"rate_scale must be positive, got {rate_scale}")
+        if max_frame < 1024 or auth_frame_limit < 256 or auth_timeout <= 0:
+            raise ValueError("max_frame must be at least 1024 bytes, auth_frame_limit at least 256 bytes and "
+                             "auth_timeout positive")
+        self.max_frame = max_frame
+        self.auth_frame_limit = auth_frame_limit
+        self.auth_timeout = auth_timeout
         self.host = host
         self._requested_port = port
         self.ros2 = ros2
@@ -104,8 +113,12 @@ class SimServer:
                 from .actions import NavigateActionServer
 
                 self._actions = NavigateActionServer(self, self._robot_node)
-        self._server = await serve(self._handle, self.host, self._requested_port, max_size=None,
-                                   compression=None, ping_interval=20, ping_timeout=20)
+        limits: dict[str, Any] = {"max_size": self.max_frame}
+        if self.auth_secret is not None:  # the first message is small; the gate raises the limit after it
+            limits = {"max_size": self.auth_frame_limit,
+                      "create_connection": gate.gated_connection(self.auth_secret, self.max_frame)}
+        self._server = await serve(self._handle, self.host, self._requested_port, compression=None,
+                                   ping_interval=20, ping_timeout=20, **limits)
         sock = next(iter(self._server.sockets))
         self._port = sock.getsockname()[1]
         self.publish("/client_count", {"data": 0}, BRIDGE_NODE)
@@ -327,9 +340,31 @@ class SimServer:
 
     # -- connections ----------------------------------------------------------------------------------
 
+    async def _authenticate(self, ws: ServerConnection) -> bool:
+        """Read the one small ``auth`` op (judged by the gate as it arrived); close the connection unless
+        it was valid."""
+        try:
+            async with asyncio.timeout(self.auth_timeout):
+                await ws.recv()
+        except TimeoutError:
+            problem = f"authentication timed out (no auth op within {self.auth_timeout:g} s)"
+        except ConnectionClosed:
+            return False  # gone, or its first message was too big (closed with 1009)
+        else:
+            verdict = getattr(ws, "auth_problem", gate.PENDING)
+            if verdict is None:
+                log.info("client %s has authenticated.", ws.remote_address)
+                return True
+            problem = f"authentication failed: {verdict}"
+        log.warning("client %s: %s. Closing connection.", ws.remote_address, problem)
+        with contextlib.suppress(Exception):
+            await ws.close(4001, gate.close_reason(problem))
+        return False
+
     async def _handle(self, ws: ServerConnection) -> None:
+        if self.auth_secret is not None and not await self._authenticate(ws):
+            return
         conn = Connection(ws, next(self._client_ids))
-        conn.authenticated = self.auth_secret is None
         conn.start()
         self.connections.add(conn)
         self.log(BRIDGE_NODE, "info", f"Client connected.  {len(self.connections)} clients total.")
@@ -340,8 +375,6 @@ class SimServer:
                     await self._receive(conn, message)
                 except Exception:  # noqa: BLE001 - bad input never takes the connection down
                     log.exception("%s failed to handle a frame", conn.label)
-                if conn.closing:
-                    break
         except ConnectionClosed:
             pass
         finally:
@@ -366,27 +399,8 @@ class SimServer:
             self._remove_client_service(svc, "the providing client disconnected")
 
     async def _receive(self, conn: Connection, message: str | bytes) -> None:
-        for frame in _parse_frames(message, conn):
-            if not conn.authenticated:
-                self._authenticate(conn, frame)
-                if not conn.authenticated:
-                    return
-                continue
+        for frame in parse_frame(message, conn.label):
             await self._dispatch(conn, frame)
-
-    def _authenticate(self, conn: Connection, frame: Any) -> None:
-        assert self.auth_secret is not None
-        if isinstance(frame, dict) and frame.get("op") == "auth":
-            problem = check_auth(self.auth_secret, frame)
-            if problem is None:
-                conn.authenticated = True
-                log.info("%s has authenticated.", conn.label)
-                return
-            log.warning("%s failed to authenticate: %s. Closing connection.", conn.label, problem)
-        else:
-            log.warning("%s did not authenticate. Closing connection.", conn.label)
-        conn.closing = True
-        self._spawn(conn.ws.close(4001, "authentication required"))
 
     async def _dispatch(self, conn: Connection, msg: Any) -> None:
         if not isinstance(msg, dict) or "op" not in msg:
@@ -562,6 +576,12 @@ class SimServer:
         data, num, total = msg.get("data"), msg.get("num"), msg.get("total")
         if not isinstance(data, str) or not isinstance(num, int) or not isinstance(total, int | float):
             raise _OpError("fragment needs string data, integer num and numeric total")
+        held = sum(len(d) for p in conn.incoming_fragments.values() for d in p.values())
+        if held + len(data) > self.max_frame or (frag_id not in conn.incoming_fragments
+                                                and len(conn.incoming_fragments) >= MAX_FRAGMENTED):
+            conn.incoming_fragments.clear()
+            raise _OpError(f"fragments held exceed {self.max_frame} bytes or {MAX_FRAGMENTED} messages; "
+                           "all partial messages were dropped")
         parts = conn.incoming_fragments.setdefault(frag_id, {})
         parts[num] = data
         count = int(total)
@@ -704,41 +724,3 @@ def _retype(topic: Topic, type_name: str) -> Topic:
     topic.type = type_name
     topic.latched_msgs.clear()
     return topic
-
-
-_json_decoder = json.JSONDecoder()
-
-
-def _parse_frames(message: str | bytes, conn: Connection) -> list[Any]:
-    """The JSON values in one frame, as leniently as rosbridge 0.11 reads them.
-
-    Several objects in one frame are all returned, a ``NaN`` literal is accepted, JSON text in a binary
-    frame is read; anything else is logged and dropped.
-    """
-    if isinstance(message, bytes):
-        try:
-            message = message.decode("utf-8")
-        except UnicodeDecodeError:
-            log.warning("%s ignored a binary frame that is not JSON text", conn.label)
-            return []
-    try:
-        return [encoding.loads(message)]
-    except Exception:  # noqa: BLE001 - fall back to the lenient scanner
-        pass
-    frames: list[Any] = []
-    index = 0
-    text = message.strip()
-    while index < len(text):
-        start = text.find("{", index)
-        if start < 0:
-            break
-        try:
-            value, end = _json_decoder.raw_decode(text, start)
-        except ValueError:
-            index = start + 1
-            continue
-        frames.append(value)
-        index = end
-    if not frames and text:
-        log.warning("%s ignored a frame that is not valid JSON", conn.label)
-    return frames

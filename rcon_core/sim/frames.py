@@ -1,0 +1,105 @@
+"""Reading one client frame of the sim: the JSON values in it, as leniently as rosbridge 0.11 reads them,
+in time linear in the frame's size.
+
+* One JSON value (the normal case): ``orjson``.
+* A ``NaN`` or ``Infinity`` literal (Python's ``json.dumps`` writes them): the standard library's parser.
+* Several objects back to back in one frame (``{...}{...}``), or garbage between objects: each balanced
+  top-level ``{...}`` is found with a brace matcher that skips strings (regular expressions, no
+  backtracking), then parsed once; one that does not parse is skipped as a whole. At most
+  :data:`MAX_VALUES` objects are tried per frame, and only frames up to :data:`LENIENT_LIMIT` bytes are
+  scanned this way (a bigger frame must be one JSON value).
+
+The old scanner retried ``raw_decode`` at every ``{`` after a failure; each failure builds an error
+message that counts the lines before its position, so a 1 MB frame of ``{`` took many seconds.
+Nothing here raises: what cannot be read is logged (bounded) and dropped.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import re
+from typing import Any
+
+import orjson
+
+log = logging.getLogger("rcon.sim")
+
+__all__ = ["parse_frame", "scan_objects", "LENIENT_LIMIT", "MAX_VALUES"]
+
+#: frames larger than this must be a single JSON value (no scanning for several objects)
+LENIENT_LIMIT = 1024 * 1024
+#: at most this many objects are tried in one frame
+MAX_VALUES = 1000
+
+_decoder = json.JSONDecoder()
+_TOKEN = re.compile(r'\{+|\}+|"')
+_STRING_REST = re.compile(r'(?:[^"\\]++|\\.)*+"', re.DOTALL)  # possessive: never backtracks
+
+
+def _segment_end(text: str, start: int) -> int | None:
+    """The index after the ``}`` that closes the ``{`` at ``start`` (strings skipped), or None."""
+    depth = 0
+    pos = start
+    while True:
+        m = _TOKEN.search(text, pos)
+        if m is None:
+            return None
+        token = m.group()
+        if token == '"':
+            rest = _STRING_REST.match(text, m.end())
+            if rest is None:
+                return None  # an unterminated string: nothing after it closes
+            pos = rest.end()
+        elif token[0] == "{":
+            depth += len(token)
+            pos = m.end()
+        elif len(token) >= depth:
+            return m.start() + depth
+        else:
+            depth -= len(token)
+            pos = m.end()
+
+
+def scan_objects(text: str) -> list[Any]:
+    """Every balanced top-level ``{...}`` in ``text`` that parses (``NaN`` accepted), in order."""
+    values: list[Any] = []
+    pos = 0
+    for _ in range(MAX_VALUES):
+        start = text.find("{", pos)
+        if start < 0:
+            break
+        end = _segment_end(text, start)
+        if end is None:
+            break
+        try:
+            values.append(_decoder.decode(text[start:end]))
+        except (ValueError, RecursionError):
+            pass  # this object is broken: skip it whole
+        pos = end
+    return values
+
+
+def parse_frame(message: str | bytes, label: str) -> list[Any]:
+    """The JSON values in one frame (``label`` names the client in log lines)."""
+    if isinstance(message, bytes):
+        try:
+            message = message.decode("utf-8")
+        except UnicodeDecodeError:
+            log.warning("%s ignored a binary frame that is not JSON text", label)
+            return []
+    try:
+        return [orjson.loads(message)]
+    except orjson.JSONDecodeError:
+        pass
+    text = message.strip()
+    if len(text) > LENIENT_LIMIT:
+        try:
+            return [_decoder.decode(text)]  # one value with NaN/Infinity literals
+        except (ValueError, RecursionError):
+            log.warning("%s ignored a frame of %d characters that is not one JSON value", label, len(text))
+            return []
+    frames = scan_objects(text)
+    if not frames and text:
+        log.warning("%s ignored a frame that is not valid JSON", label)
+    return frames
