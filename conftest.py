@@ -1,3 +1,6 @@
 """Root conftest: shared fixtures for the core's tests and the bundled plugins' tests."""
 
 pytest_plugins = ["rcon_core.testing"]
+
+# a lab package with its own tests and pytest settings; tests/test_plugins_example.py runs them installed
+collect_ignore = ["tests/example_plugin"]

@@ -63,7 +63,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.plugins = plugins
         #: builds the demo layout (``rcon --demo``): used when there is none yet, or it cannot be read
         self.demo = demo
-        self.types = types if types is not None else _standard_types()
+        self.types = types if types is not None else plugins.type_registry()  # with plugins' types
         self.link = link or Link()
         self.clock = FrameClock(self)
         #: wakes the GUI as soon as the bridge thread has something (a value, new models)
@@ -903,8 +903,3 @@ def _align_with(top: QtWidgets.QFormLayout, labels: tuple[QtWidgets.QLabel, ...]
     for label in labels:
         label.setMinimumWidth(max(widths))
 
-
-def _standard_types() -> Any:
-    from rcon_core.msgs import TypeRegistry
-
-    return TypeRegistry.standard(ros2=False)

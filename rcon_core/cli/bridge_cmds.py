@@ -95,11 +95,12 @@ def _table(rows: dict[str, str]) -> None:
 
 
 def _registry() -> Any:
-    try:
-        from rcon_core.msgs import TypeRegistry
-    except ImportError:
-        return None
-    return TypeRegistry.standard()
+    """The standard types plus those installed widget plugins contribute (a lab's own lab_msgs)."""
+    from rcon_core.plugins import PluginManager
+
+    pm = PluginManager()
+    pm.load_entry_points()
+    return pm.type_registry()
 
 
 def _parse_text(text: str) -> Any:
@@ -206,11 +207,12 @@ async def _type(url: str, args: argparse.Namespace) -> int:
     reg = _registry()
     if reg is not None and reg.has(name):
         if args.json:
-            print(_json({"type": name, "source": "standard", "definition": reg.definition_text(name)}, indent=True))
+            print(_json({"type": name, "source": "local", "definition": reg.definition_text(name)}, indent=True))
         else:
             print(reg.definition_text(name))
         return 0
-    _err(f"unknown type {name} (not on the server at {url} and not a standard type)")
+    _err(f"unknown type {name} (not on the server at {url}, not a standard type and not contributed by an "
+         "installed widget plugin)")
     return 1
 
 

@@ -16,6 +16,9 @@ def configure(name: str, parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--rate-scale", type=float, default=1.0, metavar="X",
                         help="multiply every publish rate by X (default 1.0)")
     parser.add_argument("--auth", metavar="SECRET", help="require a rosauth 'auth' op signed with SECRET")
+    parser.add_argument("--no-plugin-types", action="store_true",
+                        help="do not load the message types installed widget plugins contribute (the sim then "
+                        "refuses them, like a robot without the lab's package)")
     parser.add_argument("-v", "--verbose", action="store_true", help="log every client op")
 
 
@@ -38,7 +41,7 @@ async def _serve(args: argparse.Namespace) -> int:
     from rcon_core.sim import SimServer
 
     server = SimServer(host=args.host, port=args.port, ros2=args.ros2, rate_scale=args.rate_scale,
-                       auth_secret=args.auth)
+                       auth_secret=args.auth, plugin_types=not args.no_plugin_types)
     try:
         await server.start()
     except OSError as exc:
@@ -46,6 +49,8 @@ async def _serve(args: argparse.Namespace) -> int:
         return 1
     flavour = "ROS 2" if args.ros2 else "ROS 1"
     print(f"rcon sim: {flavour} Kingfisher simulator on {server.url} (Ctrl+C to stop)", flush=True)
+    if server.types.plugin_type_names:
+        print(f"rcon sim: plugin types: {', '.join(server.types.plugin_type_names)}", flush=True)
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
     for sig in (signal.SIGINT, signal.SIGTERM):

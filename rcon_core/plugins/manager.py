@@ -9,6 +9,7 @@
     pm.widget("std.slider")                    # one spec, or UnknownWidget
     pm.plugins / pm.failed                     # PluginInfo: name, dist, version, status, error, widgets
     pm.apply_types(type_registry)              # add contributed .msg/.srv definitions
+    pm.type_registry(ros2=False)               # a standard TypeRegistry plus every contributed type
 
 A plugin is "broken" when importing its entry point raises, or when one of its hooks raises: it is
 recorded with status ``"failed"`` and the reason, and every other plugin still loads.
@@ -17,6 +18,7 @@ recorded with status ``"failed"`` and the reason, and every other plugin still l
 from __future__ import annotations
 
 import importlib.metadata as md
+import logging
 import os
 import traceback
 from collections.abc import Iterable, Mapping
@@ -29,10 +31,14 @@ from . import hookspecs
 from .registry import TypeContributions, TypeDefinition, WidgetRegistry
 from .spec import WidgetSpec
 
-__all__ = ["PluginManager", "PluginInfo", "UnknownWidget", "ENTRY_POINT_GROUP", "DISABLE_ENV"]
+__all__ = [
+    "PluginManager", "PluginInfo", "UnknownWidget", "ENTRY_POINT_GROUP", "DISABLE_ENV", "installed_plugin_types",
+]
 
 ENTRY_POINT_GROUP = "rcon.widgets"
 DISABLE_ENV = "RCON_DISABLE_PLUGINS"
+
+log = logging.getLogger(__name__)
 
 
 class UnknownWidget(KeyError):
@@ -276,6 +282,46 @@ class PluginManager:
                 continue
             added += mine
         return added
+
+    def type_problems(self, types: Any) -> dict[str, list[str]]:
+        """After :meth:`apply_types`: per plugin name, each contributed type that does not resolve in
+        ``types`` (it uses a type nobody defines, often a misspelt builtin such as ``flaot64``)."""
+        out: dict[str, list[str]] = {}
+        for info in self.plugins:
+            if info.status != "loaded":
+                continue
+            for d in info.types:
+                try:
+                    if d.kind == "srv":
+                        for part in ("request", "response"):
+                            types.service_typedefs(_interface_name(d.name, d.kind), part)
+                    elif d.kind == "msg":
+                        types.typedefs(d.name)
+                except Exception as exc:
+                    out.setdefault(info.name, []).append(f"type {d.name}: {exc}")
+        return out
+
+    def type_registry(self, ros2: bool = False) -> Any:
+        """A standard ``rcon_core.msgs.TypeRegistry`` for the flavour plus every type the loaded plugins
+        contribute: the one registry every type look-up (app, CLI, matcher, sim) starts from."""
+        from rcon_core.msgs import TypeRegistry
+
+        types = TypeRegistry.standard(ros2=ros2)
+        self.apply_types(types)
+        return types
+
+
+def installed_plugin_types(types: Any) -> list[str]:
+    """Add the types of every installed (enabled) plugin to ``types``; returns the names added.
+
+    A plugin that fails is skipped (and logged), like everywhere else.
+    """
+    pm = PluginManager()
+    pm.load_entry_points()
+    added = pm.apply_types(types)
+    for info in pm.failed:
+        log.warning("plugin %s failed, its types are not loaded: %s", info.name, info.error)
+    return added
 
 
 def _interface_name(name: str, kind: str) -> str:

@@ -41,7 +41,7 @@ class SimServer:
     """The embedded simulated robot, served over rosbridge v2."""
 
     def __init__(self, host: str = "127.0.0.1", port: int = 0, ros2: bool = False, rate_scale: float = 1.0,
-                 auth_secret: str | None = None, *, robot: bool = True) -> None:
+                 auth_secret: str | None = None, *, robot: bool = True, plugin_types: bool = False) -> None:
         if rate_scale <= 0:
             raise ValueError(f"rate_scale must be positive, got {rate_scale}")
         self.host = host
@@ -50,7 +50,8 @@ class SimServer:
         self.rate_scale = rate_scale
         self.auth_secret = auth_secret
         self.flavour = Flavour(ros2)
-        self.types = TypeSource(ros2, lambda: self.flavour.time())
+        #: ``plugin_types``: also know the types installed widget plugins contribute (see TypeSource)
+        self.types = TypeSource(ros2, lambda: self.flavour.time(), plugin_types=plugin_types)
         self.topics: dict[str, Topic] = {}
         self.services: dict[str, Service] = {}
         self.connections: set[Connection] = set()
@@ -88,6 +89,8 @@ class SimServer:
         self.loop = asyncio.get_running_loop()
         self._published_event = asyncio.Event()
         self.started_at = time.time()
+        if self.types.plugin_types:
+            _ = self.types.registry  # load the plugins' definitions now, not on a client's first op
         self.advertise_internal("/rosout", self.flavour.msg("rosgraph_msgs", "Log") if not self.ros2
                                 else self.flavour.msg("rcl_interfaces", "Log"), ROSOUT_NODE, latched=True)
         if not self.ros2:
