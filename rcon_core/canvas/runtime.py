@@ -25,8 +25,9 @@ does not know lab_msgs/Winch (is its package installed there?)", so the frame sh
 NO DATA. A server that reports a failed subscribe/advertise with a ``status`` op sets the error too.
 
 A widget whose plugin is missing gets a :class:`MissingWidgetModel` (shows why, talks to nobody); a
-widget whose model cannot be built (bad settings, import error) gets a :class:`BrokenWidgetModel`; the
-other widgets run either way. The instance data is never touched, so it saves back unchanged.
+widget whose stored settings hold a value of the wrong type gets an :class:`UnconfiguredWidgetModel` (its
+frame shows the "not configured" warning with one sentence per bad value); a widget whose model cannot
+be built otherwise (an import error) gets a :class:`BrokenWidgetModel`; the other widgets run either way. The instance data is never touched, so it saves back unchanged.
 """
 
 from __future__ import annotations
@@ -40,12 +41,28 @@ from typing import Any
 from rcon_core.bridge.typecheck import TypeChecker, status_failure
 from rcon_core.plugins.manager import UnknownWidget
 from rcon_core.plugins.model import Binding, WidgetModel
+from rcon_core.plugins.spec import SettingsError
 
 from .model import Canvas, WidgetInstance
 
-__all__ = ["CanvasRuntime", "MissingWidgetModel", "BrokenWidgetModel"]
+__all__ = ["CanvasRuntime", "MissingWidgetModel", "BrokenWidgetModel", "UnconfiguredWidgetModel"]
 
 log = logging.getLogger(__name__)
+
+
+_LOGGED: set[tuple[Any, ...]] = set()
+_LOGGED_MAX = 1000
+
+
+def _log_once(level: int, fmt: str, *args: Any) -> None:
+    """Log a widget's standing problem once per process, not at every (re)start of its canvas."""
+    key = (fmt, *map(str, args))
+    if key in _LOGGED:
+        return
+    if len(_LOGGED) >= _LOGGED_MAX:
+        _LOGGED.clear()
+    _LOGGED.add(key)
+    log.log(level, fmt, *args)
 
 
 class _NoPort:
@@ -82,6 +99,20 @@ class MissingWidgetModel(WidgetModel):
 
 class BrokenWidgetModel(MissingWidgetModel):
     """Stands in for a widget whose model could not be built; ``reason`` says why."""
+
+
+class UnconfiguredWidgetModel(MissingWidgetModel):
+    """Stands in for a widget whose stored settings cannot be read (a value of the wrong type): not an
+    error but the "not configured" warning, one sentence per bad value (``problems()``)."""
+
+    def __init__(self, instance: WidgetInstance, problems: list[str]) -> None:
+        WidgetModel.__init__(self, None, instance.binding, _NoPort())
+        self.kind = instance.kind
+        self.reason = "; ".join(problems)
+        self._problems = list(problems)
+
+    def problems(self) -> list[str]:
+        return list(self._problems)
 
 
 class _WatchedPort:
@@ -224,8 +255,15 @@ class CanvasRuntime:
         except UnknownWidget as exc:
             return MissingWidgetModel(inst, str(exc))
         try:
-            model_cls = spec.load_model()
             settings = spec.make_settings(inst.settings)
+        except SettingsError as exc:
+            _log_once(logging.INFO, "widget %s (%s) is not configured: %s", inst.id, inst.kind, exc)
+            return UnconfiguredWidgetModel(inst, exc.problems)
+        except Exception as exc:
+            log.warning("widget %s (%s) could not be built: %s", inst.id, inst.kind, exc)
+            return BrokenWidgetModel(inst, f"{inst.kind}: {exc}")
+        try:
+            model_cls = spec.load_model()
             shared = spec.make_plugin_settings(self.plugin_settings.get(inst.kind))
             binding = Binding(
                 inst.binding.name, inst.binding.type, inst.binding.role, inst.binding.field_paths
