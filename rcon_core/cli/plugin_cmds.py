@@ -71,6 +71,8 @@ def _plugins(pm: Any, args: argparse.Namespace) -> int:
             print(f"  {spec.kind:<24} {spec.title:<20} {roles:<28} {accepts}")
         for d in info.types:
             print(f"  type {d.name} ({d.kind})")
+        for t in info.templates:
+            print(f"  template {t.title!r} ({t.path.name})")
     return status
 
 
@@ -78,6 +80,13 @@ def _check(pm: Any, types: Any) -> int:
     """``--check``: each failed plugin and why on stderr (also a contributed type that does not resolve);
     1 if any failed, else 0."""
     unresolved = pm.type_problems(types)
+    for template in pm.canvas_templates():  # a template file must be a usable canvas
+        from rcon_core.cli.layout_cmd import check_layout
+
+        problems, _ = check_layout(template.path, pm)
+        if problems:
+            name = next(i.name for i in pm.plugins if i.package == template.package)
+            unresolved.setdefault(name, []).extend(f"template {template.title!r}: {p}" for p in problems)
     failed = [i for i in pm.plugins if i.status == "failed" or i.name in unresolved]
     for info in failed:
         where = f"{info.dist} {info.version}".strip() or info.value

@@ -9,6 +9,7 @@
     pm.widget("std.slider")                    # one spec, or UnknownWidget
     pm.plugins / pm.failed                     # PluginInfo: name, dist, version, status, error, widgets
     pm.apply_types(type_registry)              # add contributed .msg/.srv definitions
+    pm.canvas_templates()                      # example canvases plugins offer (New canvas from template)
     pm.type_registry(ros2=False)               # a standard TypeRegistry plus every contributed type
 
 A plugin is "broken" when importing its entry point raises, or when one of its hooks raises: it is
@@ -28,7 +29,7 @@ import attrs
 import pluggy
 
 from . import hookspecs
-from .registry import TypeContributions, TypeDefinition, WidgetRegistry
+from .registry import CanvasTemplate, TemplateRegistry, TypeContributions, TypeDefinition, WidgetRegistry
 from .spec import WidgetSpec
 
 __all__ = [
@@ -61,6 +62,7 @@ class PluginInfo:
     details: str | None = None  #: traceback text when failed
     widgets: list[WidgetSpec] = attrs.field(factory=list)
     types: list[TypeDefinition] = attrs.field(factory=list)
+    templates: list[CanvasTemplate] = attrs.field(factory=list)
     plugin: Any = attrs.field(default=None, repr=False)
 
     @property
@@ -86,6 +88,7 @@ class PluginInfo:
                 for s in self.widgets
             ],
             "types": [d.name for d in self.types],
+            "templates": [t.title for t in self.templates],
         }
 
 
@@ -186,6 +189,7 @@ class PluginManager:
         info.details = "".join(traceback.format_exception(exc))
         info.widgets.clear()
         info.types.clear()
+        info.templates.clear()
         if info.plugin is not None and self.pluggy.is_registered(info.plugin):
             self.pluggy.unregister(info.plugin)
 
@@ -198,6 +202,7 @@ class PluginManager:
         for info in self._infos.values():
             info.widgets.clear()
             info.types.clear()
+            info.templates.clear()
         for impl in self.pluggy.hook.rcon_register_widgets.get_hookimpls():  # registration order
             info = self._infos[impl.plugin_name]
             reg = WidgetRegistry(info.package, self._specs)
@@ -222,6 +227,19 @@ class PluginManager:
                 self._fail(info, exc)
                 continue
             info.types.extend(contrib.definitions)
+        for impl in self.pluggy.hook.rcon_canvas_templates.get_hookimpls():
+            info = self._infos[impl.plugin_name]
+            if info.status == "failed":
+                continue
+            templates = TemplateRegistry(info.package)
+            try:
+                impl.function(registry=templates)
+            except Exception as exc:
+                for spec in info.widgets:
+                    self._specs.pop(spec.kind, None)
+                self._fail(info, exc)
+                continue
+            info.templates.extend(templates.templates)
 
     @property
     def plugins(self) -> list[PluginInfo]:
@@ -252,6 +270,10 @@ class PluginManager:
     def has_widget(self, kind: str) -> bool:
         self._collect()
         return kind in self._specs
+
+    def canvas_templates(self) -> list[CanvasTemplate]:
+        """Every example canvas the loaded plugins offer (``rcon_canvas_templates``), in plugin order."""
+        return [t for p in self.plugins if p.status == "loaded" for t in p.templates]
 
     def type_definitions(self) -> list[TypeDefinition]:
         """Every definition contributed through ``rcon_register_types`` by loaded plugins."""
