@@ -103,7 +103,7 @@ def test_the_shell_block_runs_in_a_copy_of_the_package(tmp_path):
         proc = subprocess.run(argv, cwd=package, env=env, capture_output=True, text=True, timeout=300)
         assert proc.returncode == 0, f"{' '.join(cmd)}:\n{proc.stdout}\n{proc.stderr}"
         outputs.append(proc.stdout)
-    assert "1 passed" in outputs[1]
+    assert "2 passed" in outputs[1]
     assert "rcon-example-lab 0.3.1" in outputs[2] and "lab.gripper" in outputs[2]
     assert outputs[3].splitlines()[0].split()[:2] == ["exact", "lab.gripper"]
 

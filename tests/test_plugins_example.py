@@ -141,7 +141,7 @@ def test_the_packages_own_tests_pass_against_the_sim(lab_path):
     proc = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "tests"],
                           cwd=EXAMPLE, capture_output=True, text=True, env=env, timeout=300)
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    assert "1 passed" in proc.stdout
+    assert "2 passed" in proc.stdout
 
 
 def _start_sim(lab_path, *extra):
