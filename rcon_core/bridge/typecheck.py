@@ -104,7 +104,13 @@ class TypeChecker:
 
     async def problem(self, type_name: str, service: bool = False) -> str | None:
         """The sentence to show when the robot does not know ``type_name``; None otherwise."""
-        if not type_name or is_standard(type_name, service):
+        if not type_name:
+            return None
+        if len(_STANDARD) == 2:
+            standard = is_standard(type_name, service)
+        else:  # building the standard registries takes a few hundred ms: not on the bridge loop
+            standard = await asyncio.get_running_loop().run_in_executor(None, is_standard, type_name, service)
+        if standard:
             return None
         key = (type_name, service)
         if key in self._known:
