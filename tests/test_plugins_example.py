@@ -55,8 +55,10 @@ def test_rcon_plugins_lists_it(lab_path):
     assert lab["dist"] == "rcon-example-lab" and lab["version"] == "0.3.1" and lab["status"] == "loaded"
     assert lab["widgets"] == [{"kind": "lab.gripper", "title": "Gripper", "roles": ["subscribe"],
                                "accepts": ["lab_msgs/Gripper"]}]
-    text = run(lab_path, "plugins")
+    assert lab["templates"] == ["Gripper station"]
+    text = run(lab_path, "plugins", "--check")  # also checks the template canvas against the widget
     assert "rcon-example-lab 0.3.1" in text and "lab.gripper" in text and "type lab_msgs/Gripper" in text
+    assert "template 'Gripper station' (gripper_station.json)" in text
     off = run(lab_path, "plugins", env_extra={"RCON_DISABLE_PLUGINS": "lab"})
     assert "rcon-example-lab 0.3.1 (entry point 'lab' -> rcon_example_lab.plugin): disabled" in off
 
