@@ -6,3 +6,6 @@ import os
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 
 pytest_plugins = ["rcon_core.testing"]
+
+# a lab package with its own tests and pytest settings; tests/test_plugins_example.py runs them installed
+collect_ignore = ["tests/example_plugin"]

@@ -156,7 +156,7 @@ def test_a_boolean_setting_that_is_not_a_boolean_is_a_problem_sentence():
                       accepts=Accepts(messages=["any"]), settings=Flags)
     for bad, found in (("no", "'no'"), (0, "0"), (None, "None"), ("false", "'false'")):
         assert spec.settings_problems({"follow": bad}) == [
-            f"test.flags: invalid settings: follow must be true or false, found {found}"]
+            f"invalid settings: follow must be true or false (got {found})"]
     assert spec.settings_problems({"follow": False}) == []
     assert spec.make_settings({"follow": False}).follow is False
 

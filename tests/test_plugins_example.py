@@ -55,8 +55,10 @@ def test_rcon_plugins_lists_it(lab_path):
     assert lab["dist"] == "rcon-example-lab" and lab["version"] == "0.3.1" and lab["status"] == "loaded"
     assert lab["widgets"] == [{"kind": "lab.gripper", "title": "Gripper", "roles": ["subscribe"],
                                "accepts": ["lab_msgs/Gripper"]}]
-    text = run(lab_path, "plugins")
+    assert lab["templates"] == ["Gripper station"]
+    text = run(lab_path, "plugins", "--check")  # also checks the template canvas against the widget
     assert "rcon-example-lab 0.3.1" in text and "lab.gripper" in text and "type lab_msgs/Gripper" in text
+    assert "template 'Gripper station' (gripper_station.json)" in text
     off = run(lab_path, "plugins", env_extra={"RCON_DISABLE_PLUGINS": "lab"})
     assert "rcon-example-lab 0.3.1 (entry point 'lab' -> rcon_example_lab.plugin): disabled" in off
 
@@ -132,3 +134,45 @@ def test_layout_survives_the_plugin_being_uninstalled(lab_path, tmp_path):
     doc.undo()
     store.save(doc.workspace)
     assert path.read_bytes() == before
+
+
+def test_the_packages_own_tests_pass_against_the_sim(lab_path):
+    """issue 15.1: the sim fixture knows the types installed plugins contribute (lab_msgs/Gripper), so the
+    lab's `async def test_gripper(sim)` runs with no extra step."""
+    env = dict(os.environ, PYTHONPATH=str(lab_path), QT_QPA_PLATFORM="offscreen")
+    proc = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "tests"],
+                          cwd=EXAMPLE, capture_output=True, text=True, env=env, timeout=300)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "2 passed" in proc.stdout
+
+
+def _start_sim(lab_path, *extra):
+    env = dict(os.environ, PYTHONPATH=str(lab_path))
+    proc = subprocess.Popen([sys.executable, "-m", "rcon_core", "sim", "--port", "0", *extra],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    first = proc.stdout.readline()
+    assert " on ws://" in first, first + proc.stderr.read()
+    return proc, first.split(" on ")[1].split()[0]
+
+
+@pytest.mark.parametrize("extra, source", [((), "server"), (("--no-plugin-types",), "local")])
+def test_rcon_sim_serves_the_plugin_types_unless_told(lab_path, extra, source):
+    """issue 15.1: `rcon sim` knows plugin types by default; --no-plugin-types plays a robot without them
+    (then `rcon type` still knows the type locally: issue 15.2)."""
+    proc, url = _start_sim(lab_path, *extra)
+    try:
+        data = json.loads(run(lab_path, "type", "lab_msgs/Gripper", "--url", url, "--json"))
+    finally:
+        proc.terminate()
+        proc.wait(timeout=20)
+        proc.stdout.close()
+        proc.stderr.close()
+    assert data["source"] == source
+    text = json.dumps(data)
+    assert "opening" in text and "grasping" in text
+
+
+def test_rcon_type_knows_the_contributed_type_without_a_server(lab_path):
+    """issue 15.2: `rcon type lab_msgs/Winch` said "unknown type" although a plugin contributes it."""
+    out = run(lab_path, "type", "lab_msgs/Gripper", "--url", "ws://127.0.0.1:1")
+    assert "float64 opening" in out and "string tool_id" in out

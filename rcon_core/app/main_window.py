@@ -27,6 +27,7 @@ from rcon_core.app.notice_bar import NoticeBar
 from rcon_core.app.palette_panel import PalettePanel
 from rcon_core.app.preview import PreviewHost
 from rcon_core.app.settings_form import SettingsForm, form_label, tune_form
+from rcon_core.app.template_menu import add_template_menu
 from rcon_core.app.widget_host import RateMeter, WidgetHost
 from rcon_core.canvas import Canvas, Document, EditError, Workspace, WorkspaceFileError, WorkspaceStore
 from rcon_core.plugins import Binding, PluginManager, Role, WidgetSpec
@@ -63,7 +64,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.plugins = plugins
         #: builds the demo layout (``rcon --demo``): used when there is none yet, or it cannot be read
         self.demo = demo
-        self.types = types if types is not None else _standard_types()
+        self.types = types if types is not None else plugins.type_registry()  # with plugins' types
         self.link = link or Link()
         self.clock = FrameClock(self)
         #: wakes the GUI as soon as the bridge thread has something (a value, new models)
@@ -153,6 +154,7 @@ class MainWindow(QtWidgets.QMainWindow):
             action.setObjectName(f"canvas_{name}")
             action.triggered.connect(slot)
             self.canvas_actions[name] = action
+        self.template_menu = add_template_menu(self, canvas_menu, before=self.canvas_actions["rename"])
         menu_button.setMenu(canvas_menu)
         row.addWidget(menu_button)
         for name, text, slot in (("undo", "↶", self.undo), ("redo", "↷", self.redo)):
@@ -911,8 +913,3 @@ def _align_with(top: QtWidgets.QFormLayout, labels: tuple[QtWidgets.QLabel, ...]
     for label in labels:
         label.setMinimumWidth(max(widths))
 
-
-def _standard_types() -> Any:
-    from rcon_core.msgs import TypeRegistry
-
-    return TypeRegistry.standard(ros2=False)

@@ -17,7 +17,7 @@ from typing import Any
 
 from rcon_core.app.widget_frame import WidgetFrame
 from rcon_core.canvas import WidgetInstance
-from rcon_core.canvas.runtime import BrokenWidgetModel, MissingWidgetModel
+from rcon_core.canvas.runtime import BrokenWidgetModel, MissingWidgetModel, UnconfiguredWidgetModel
 from rcon_core.plugins import PluginManager, UnknownWidget
 
 log = logging.getLogger(__name__)
@@ -96,6 +96,10 @@ class WidgetHost:
         if model is None:
             frame.set_placeholder("")
             frame.problems.set_problems([])
+            return
+        if isinstance(model, UnconfiguredWidgetModel):  # settings it cannot read: the warning, no view
+            frame.set_placeholder("")
+            frame.problems.set_problems(list(model.problems()))
             return
         if isinstance(model, MissingWidgetModel):
             if isinstance(model, BrokenWidgetModel):

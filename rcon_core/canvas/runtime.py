@@ -18,9 +18,16 @@ polling on its next frame.
 Call these on the bridge loop thread (from the GUI: ``bridge_thread.call(rt.switch, canvas)``); pass
 ``dispatch=bridge_thread.call`` so the models' GUI-side actions reach the loop thread too.
 
+The robot may not know a widget's type (a lab's own message whose package is not installed there), and
+rosbridge 0.11 does not say so on the wire: for a type that is not standard the runtime asks the robot
+(:class:`~rcon_core.bridge.typecheck.TypeChecker`) and, on a refusal, sets the model's error to "the robot
+does not know lab_msgs/Winch (is its package installed there?)", so the frame shows ERROR rather than
+NO DATA. A server that reports a failed subscribe/advertise with a ``status`` op sets the error too.
+
 A widget whose plugin is missing gets a :class:`MissingWidgetModel` (shows why, talks to nobody); a
-widget whose model cannot be built (bad settings, import error) gets a :class:`BrokenWidgetModel`; the
-other widgets run either way. The instance data is never touched, so it saves back unchanged.
+widget whose stored settings hold a value of the wrong type gets an :class:`UnconfiguredWidgetModel` (its
+frame shows the "not configured" warning with one sentence per bad value); a widget whose model cannot
+be built otherwise (an import error) gets a :class:`BrokenWidgetModel`; the other widgets run either way. The instance data is never touched, so it saves back unchanged.
 """
 
 from __future__ import annotations
@@ -31,14 +38,31 @@ import logging
 from collections.abc import Callable
 from typing import Any
 
+from rcon_core.bridge.typecheck import TypeChecker, status_failure
 from rcon_core.plugins.manager import UnknownWidget
 from rcon_core.plugins.model import Binding, WidgetModel
+from rcon_core.plugins.spec import SettingsError
 
 from .model import Canvas, WidgetInstance
 
-__all__ = ["CanvasRuntime", "MissingWidgetModel", "BrokenWidgetModel"]
+__all__ = ["CanvasRuntime", "MissingWidgetModel", "BrokenWidgetModel", "UnconfiguredWidgetModel"]
 
 log = logging.getLogger(__name__)
+
+
+_LOGGED: set[tuple[Any, ...]] = set()
+_LOGGED_MAX = 1000
+
+
+def _log_once(level: int, fmt: str, *args: Any) -> None:
+    """Log a widget's standing problem once per process, not at every (re)start of its canvas."""
+    key = (fmt, *map(str, args))
+    if key in _LOGGED:
+        return
+    if len(_LOGGED) >= _LOGGED_MAX:
+        _LOGGED.clear()
+    _LOGGED.add(key)
+    log.log(level, fmt, *args)
 
 
 class _NoPort:
@@ -75,6 +99,20 @@ class MissingWidgetModel(WidgetModel):
 
 class BrokenWidgetModel(MissingWidgetModel):
     """Stands in for a widget whose model could not be built; ``reason`` says why."""
+
+
+class UnconfiguredWidgetModel(MissingWidgetModel):
+    """Stands in for a widget whose stored settings cannot be read (a value of the wrong type): not an
+    error but the "not configured" warning, one sentence per bad value (``problems()``)."""
+
+    def __init__(self, instance: WidgetInstance, problems: list[str]) -> None:
+        WidgetModel.__init__(self, None, instance.binding, _NoPort())
+        self.kind = instance.kind
+        self.reason = "; ".join(problems)
+        self._problems = list(problems)
+
+    def problems(self) -> list[str]:
+        return list(self._problems)
 
 
 class _WatchedPort:
@@ -149,7 +187,10 @@ class CanvasRuntime:
         self.models: dict[str, WidgetModel] = {}
         self._nodes: dict[str, Any] = {}
         self._remove_listener: Callable[[], None] | None = None
+        self._remove_status_listener: Callable[[], None] | None = None
         self._link_up = True
+        self._checker: TypeChecker | None = None
+        self._checks: set[asyncio.Task[Any]] = set()
 
     # -- lifecycle -----------------------------------------------------------------------------------
     def start(self, canvas: Canvas) -> None:
@@ -159,6 +200,8 @@ class CanvasRuntime:
         self.canvas = canvas
         if self._remove_listener is None and hasattr(self.client, "add_state_listener"):
             self._remove_listener = self.client.add_state_listener(self._on_state)
+        if self._remove_status_listener is None and hasattr(self.client, "add_status_listener"):
+            self._remove_status_listener = self.client.add_status_listener(self._on_status)
         self._link_up = self._client_up()
         for inst in canvas.widgets:
             self._start_widget(inst)
@@ -169,9 +212,14 @@ class CanvasRuntime:
         for widget_id in list(self.models):
             self._stop_widget(widget_id)
         self.canvas = None
+        for task in list(self._checks):
+            task.cancel()
         if self._remove_listener is not None:
             self._remove_listener()
             self._remove_listener = None
+        if self._remove_status_listener is not None:
+            self._remove_status_listener()
+            self._remove_status_listener = None
 
     def switch(self, canvas: Canvas) -> None:
         """Stop the current canvas's widgets and start ``canvas``'s."""
@@ -207,8 +255,15 @@ class CanvasRuntime:
         except UnknownWidget as exc:
             return MissingWidgetModel(inst, str(exc))
         try:
-            model_cls = spec.load_model()
             settings = spec.make_settings(inst.settings)
+        except SettingsError as exc:
+            _log_once(logging.INFO, "widget %s (%s) is not configured: %s", inst.id, inst.kind, exc)
+            return UnconfiguredWidgetModel(inst, exc.problems)
+        except Exception as exc:
+            log.warning("widget %s (%s) could not be built: %s", inst.id, inst.kind, exc)
+            return BrokenWidgetModel(inst, f"{inst.kind}: {exc}")
+        try:
+            model_cls = spec.load_model()
             shared = spec.make_plugin_settings(self.plugin_settings.get(inst.kind))
             binding = Binding(
                 inst.binding.name, inst.binding.type, inst.binding.role, inst.binding.field_paths
@@ -239,7 +294,58 @@ class CanvasRuntime:
         except Exception as exc:
             log.warning("widget %s (%s) failed to start: %s", inst.id, inst.kind, exc)
             model.set_error(f"could not start: {exc}")
+            return model
+        self._check_type(inst.id, model)
         return model
+
+    # -- does the robot know the type? ---------------------------------------------------------------
+    def _check_type(self, widget_id: str, model: WidgetModel) -> None:
+        """Ask the robot (once per type and connection) whether it knows a non-standard bound type."""
+        b = model.binding
+        if isinstance(model, MissingWidgetModel) or b.problems() or getattr(model, "dry_run", False):
+            return
+        if getattr(self.client, "rosapi", None) is None:
+            return
+        try:
+            loop = asyncio.get_running_loop()
+        except RuntimeError:  # not on the bridge loop (a test building models by hand)
+            return
+        if self._checker is None or self._checker.client is not self.client:
+            self._checker = TypeChecker(self.client)
+        checker = self._checker
+
+        async def check() -> None:
+            problem = await checker.problem(b.type, service=b.role.is_service)
+            if problem and self.models.get(widget_id) is model:
+                model.set_error(problem)
+                self._notify(widget_id)
+
+        task = loop.create_task(check())
+        self._checks.add(task)
+        task.add_done_callback(self._check_done)
+
+    def _check_done(self, task: asyncio.Task[Any]) -> None:
+        self._checks.discard(task)
+        if not task.cancelled() and task.exception() is not None:
+            log.warning("checking a widget's type failed: %s", task.exception())
+
+    def _on_status(self, frame: dict[str, Any]) -> None:
+        """A ``status`` op of level error naming one of our subscribe/advertise ops (newer servers)."""
+        failure = status_failure(frame)
+        if failure is None:
+            return
+        topic, text = failure
+        for widget_id, model in list(self.models.items()):
+            if model.binding.name == topic and not model.binding.role.is_service:
+                model.set_error(f"the robot refused {topic}: {text}")
+                self._notify(widget_id)
+
+    def _notify(self, widget_id: str) -> None:
+        if self.on_activity is not None:
+            try:
+                self.on_activity(widget_id)
+            except Exception:
+                log.exception("activity listener failed")
 
     def _stop_widget(self, widget_id: str) -> None:
         model = self.models.pop(widget_id, None)

@@ -1,7 +1,10 @@
 """``rcon topics|services|type|echo|pub|call``: the robot's graph and traffic from a terminal.
 
-Every command takes ``--url`` (default ws://localhost:9090) and ``--json``.  Failures print the server's
-own message on stderr and exit non-zero: 1 for a failed call or connection, 2 for bad input.
+Every command takes ``--url`` (default ws://localhost:9090), ``--json`` and ``--timeout`` (how long to wait
+for the robot; ``echo`` waits for ever unless given one).  Failures print one line on stderr (the server's
+own message where it sent one) and exit non-zero: 1 for a failed call, connection or refusal, 2 for bad
+input.  ``pub`` and ``echo`` of a type that is not standard first ask the robot whether it knows it
+(rosbridge 0.11 refuses such a type only in its log; see :mod:`rcon_core.bridge.typecheck`).
 """
 
 from __future__ import annotations
@@ -9,6 +12,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import base64
+import logging
 import os
 import sys
 from typing import Any
@@ -44,10 +48,25 @@ def configure(name: str, parser: argparse.ArgumentParser) -> None:
         parser.add_argument("args", nargs="?", default=None, metavar="ARGS",
                             help="request as YAML or JSON text, e.g. '{data: true}'")
         parser.add_argument("--timeout", type=float, default=10.0, metavar="S", help="seconds to wait (default 10)")
+    if name == "echo":
+        parser.add_argument("--timeout", type=float, default=None, metavar="S",
+                            help="exit 1 when no message arrives for S seconds (default: wait for ever)")
+    elif name != "call":
+        parser.add_argument("--timeout", type=float, default=10.0, metavar="S",
+                            help="seconds to wait for the robot's answers (default 10)")
 
 
 def run(name: str, args: argparse.Namespace) -> int:
     url = getattr(args, "bridge_url", None) or getattr(args, "url", None) or DEFAULT_URL
+    if not url.startswith(("ws://", "wss://")):
+        _err(f"--url must be a ws:// or wss:// URL, got {url!r}")
+        return 2
+    timeout = getattr(args, "timeout", None)
+    if timeout is not None and not timeout > 0:
+        _err(f"--timeout must be a positive number of seconds, got {timeout}")
+        return 2
+    # the command prints its own one-line errors; the bridge's log lines would repeat them
+    logging.getLogger("rcon_core.bridge").addHandler(logging.NullHandler())
     handler = {"topics": _topics, "services": _services, "type": _type, "echo": _echo, "pub": _pub,
                "call": _call}[name]
     try:
@@ -95,11 +114,12 @@ def _table(rows: dict[str, str]) -> None:
 
 
 def _registry() -> Any:
-    try:
-        from rcon_core.msgs import TypeRegistry
-    except ImportError:
-        return None
-    return TypeRegistry.standard()
+    """The standard types plus those installed widget plugins contribute (a lab's own lab_msgs)."""
+    from rcon_core.plugins import PluginManager
+
+    pm = PluginManager()
+    pm.load_entry_points()
+    return pm.type_registry()
 
 
 def _parse_text(text: str) -> Any:
@@ -127,7 +147,10 @@ async def _listing(url: str, args: argparse.Namespace, fetch: Any) -> int:
     if client is None:
         return 1
     try:
-        rows = await fetch(client.rosapi)
+        rows = await asyncio.wait_for(fetch(client.rosapi), args.timeout)
+    except TimeoutError:
+        _err(f"no answer from {url} within {args.timeout:g} s")
+        return 1
     except ServiceError as exc:
         _err(str(exc))
         return 1
@@ -156,11 +179,11 @@ def typedefs_text(typedefs: list[dict[str, Any]]) -> str:
     return "\n".join(blocks)
 
 
-async def _server_definition(url: str, name: str) -> tuple[Any, str] | None:
+async def _server_definition(url: str, name: str, timeout: float = 5.0) -> tuple[Any, str] | None:
     """(typedefs, text) from the server, or None when it is unreachable or does not know the type."""
     from rcon_core.bridge import BridgeClient, BridgeError
 
-    client = BridgeClient(url, reconnect=False, call_timeout=5.0)
+    client = BridgeClient(url, reconnect=False, call_timeout=timeout)
     try:
         await asyncio.wait_for(client.connect(), 2.0)
     except Exception:
@@ -198,7 +221,7 @@ async def _is_service_type(client: Any, name: str) -> bool:
 
 async def _type(url: str, args: argparse.Namespace) -> int:
     name = args.type_name
-    found = await _server_definition(url, name)
+    found = await _server_definition(url, name, args.timeout)
     if found is not None:
         typedefs, text = found
         print(_json({"type": name, "source": "server", "typedefs": typedefs}, indent=True) if args.json else text)
@@ -206,26 +229,32 @@ async def _type(url: str, args: argparse.Namespace) -> int:
     reg = _registry()
     if reg is not None and reg.has(name):
         if args.json:
-            print(_json({"type": name, "source": "standard", "definition": reg.definition_text(name)}, indent=True))
+            print(_json({"type": name, "source": "local", "definition": reg.definition_text(name)}, indent=True))
         else:
             print(reg.definition_text(name))
         return 0
-    _err(f"unknown type {name} (not on the server at {url} and not a standard type)")
+    _err(f"unknown type {name} (not on the server at {url}, not a standard type and not contributed by an "
+         "installed widget plugin)")
     return 1
 
 
 async def _echo(url: str, args: argparse.Namespace) -> int:
+    from rcon_core.cli.refusals import StatusErrors, silent_for, type_refusal
+
     client = await _connect(url)
     if client is None:
         return 1
     done = asyncio.Event()
     count = 0
+    loop = asyncio.get_running_loop()
+    last_seen = loop.time()
 
     def on_msg(msg: dict[str, Any]) -> None:
-        nonlocal count
+        nonlocal count, last_seen
         if done.is_set():
             return
         count += 1
+        last_seen = loop.time()
         if args.json:
             text = _json(msg)
         else:
@@ -241,19 +270,34 @@ async def _echo(url: str, args: argparse.Namespace) -> int:
         if args.n and count >= args.n:
             done.set()
 
+    status = StatusErrors(client, args.topic)
     try:
+        refusal = await type_refusal(client, args.msg_type)
+        if refusal:
+            _err(refusal)
+            return 1
         client.node("rcon-echo").subscribe(args.topic, on_msg, type=args.msg_type, throttle_rate=args.throttle,
                                            compression=args.compression)
-        closed = asyncio.ensure_future(_until_closed(client))
-        waiter = asyncio.ensure_future(done.wait())
-        await asyncio.wait({waiter, closed}, return_when=asyncio.FIRST_COMPLETED)
-        waiter.cancel()
-        closed.cancel()
-        if not done.is_set():
+        waits = {asyncio.ensure_future(done.wait()), asyncio.ensure_future(_until_closed(client)),
+                 asyncio.ensure_future(status.event.wait())}
+        silence = None
+        if args.timeout is not None:
+            silence = asyncio.ensure_future(silent_for(args.timeout, lambda: last_seen))
+            waits.add(silence)
+        await asyncio.wait(waits, return_when=asyncio.FIRST_COMPLETED)
+        for w in waits:
+            w.cancel()
+        if done.is_set():
+            return 0
+        if status.errors:
+            _err(status.sentence())
+        elif silence is not None and silence.done() and client.connected:
+            _err(f"no message on {args.topic} within {args.timeout:g} s")
+        else:
             _err(f"connection to {url} lost")
-            return 1
-        return 0
+        return 1
     finally:
+        status.close()
         await client.close()
 
 
@@ -291,24 +335,38 @@ async def _pub(url: str, args: argparse.Namespace) -> int:
     if args.rate is not None and args.rate <= 0:
         _err("--rate must be positive")
         return 2
+    from rcon_core.cli.refusals import StatusErrors, type_refusal
+
     client = await _connect(url)
     if client is None:
         return 1
+    status = StatusErrors(client, args.topic)
     try:
+        refusal = await type_refusal(client, args.msg_type, args.timeout)
+        if refusal:
+            _err(refusal)
+            return 1
         pub = client.node("rcon-pub").advertise(args.topic, args.msg_type, latch=args.latch)
         if args.rate is None or args.once:
             pub.publish(msg)
-            await asyncio.sleep(0.3)  # let the frame leave before the socket closes
-            return 0
-        period = 1.0 / args.rate
-        sent = 0
-        while client.connected and (not args.count or sent < args.count):
-            pub.publish(msg)
-            sent += 1
-            await asyncio.sleep(period)
-        await asyncio.sleep(0.1)
-        return 0 if client.connected else 1
+            await asyncio.sleep(0.3)  # let the frame leave before the socket closes (and hear a refusal)
+        else:
+            period = 1.0 / args.rate
+            sent = 0
+            while client.connected and not status.errors and (not args.count or sent < args.count):
+                pub.publish(msg)
+                sent += 1
+                await asyncio.sleep(period)
+            await asyncio.sleep(0.1)
+        if status.errors:
+            _err(status.sentence())
+            return 1
+        if not client.connected:
+            _err(f"connection to {url} lost")
+            return 1
+        return 0
     finally:
+        status.close()
         await client.close()
 
 

@@ -22,6 +22,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "call": ("rcon_core.cli.bridge_cmds", "call a service"),
     "plugins": ("rcon_core.cli.plugin_cmds", "list installed widget packages and their widgets"),
     "match": ("rcon_core.cli.plugin_cmds", "list the widgets that fit a type and role, ranked"),
+    "new-widget": ("rcon_core.cli.new_widget", "write a new widget package (pyproject, plugin, model, view, tests)"),
+    "layout": ("rcon_core.cli.layout_cmd", "check a layout file (rcon layout validate FILE) or print its schema"),
 }
 
 

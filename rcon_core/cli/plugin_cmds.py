@@ -16,6 +16,9 @@ def configure(name: str, parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--disable", action="append", default=[], metavar="NAME", help="do not load this plugin (repeatable)"
     )
+    if name == "plugins":
+        parser.add_argument("--check", action="store_true",
+                            help="exit 1 when a plugin failed, naming each and why (for a package's CI)")
     if name == "match":
         parser.add_argument("type", help="message or service type, e.g. sensor_msgs/BatteryState")
         parser.add_argument(
@@ -40,13 +43,18 @@ def run(name: str, args: argparse.Namespace) -> int:
 
 
 def _plugins(pm: Any, args: argparse.Namespace) -> int:
+    from rcon_core.msgs import TypeRegistry
+
+    types = TypeRegistry.standard()
+    pm.apply_types(types)  # a contributed definition that does not parse fails its plugin
     infos = pm.plugins
+    status = _check(pm, types) if args.check else 0
     if args.json:
         print(json.dumps({"plugins": [i.to_dict() for i in infos]}, indent=2))
-        return 0
+        return status
     if not infos:
         print("no widget plugins installed (entry-point group 'rcon.widgets')")
-        return 0
+        return status
     for info in infos:
         head = f"{info.dist or info.name} {info.version}".strip()
         origin = f"(entry point {info.name!r} -> {info.value})"
@@ -63,7 +71,31 @@ def _plugins(pm: Any, args: argparse.Namespace) -> int:
             print(f"  {spec.kind:<24} {spec.title:<20} {roles:<28} {accepts}")
         for d in info.types:
             print(f"  type {d.name} ({d.kind})")
-    return 0
+        for t in info.templates:
+            print(f"  template {t.title!r} ({t.path.name})")
+    return status
+
+
+def _check(pm: Any, types: Any) -> int:
+    """``--check``: each failed plugin and why on stderr (also a contributed type that does not resolve);
+    1 if any failed, else 0."""
+    unresolved = pm.type_problems(types)
+    for template in pm.canvas_templates():  # a template file must be a usable canvas
+        from rcon_core.cli.layout_cmd import check_layout
+
+        problems, _ = check_layout(template.path, pm)
+        if problems:
+            name = next(i.name for i in pm.plugins if i.package == template.package)
+            unresolved.setdefault(name, []).extend(f"template {template.title!r}: {p}" for p in problems)
+    failed = [i for i in pm.plugins if i.status == "failed" or i.name in unresolved]
+    for info in failed:
+        where = f"{info.dist} {info.version}".strip() or info.value
+        why = [info.error] if info.status == "failed" else unresolved[info.name]
+        for reason in why:
+            print(f"rcon plugins: plugin {info.name!r} ({where}) failed: {reason}", file=sys.stderr)
+    if failed:
+        print(f"rcon plugins: {len(failed)} plugin(s) failed", file=sys.stderr)
+    return 1 if failed else 0
 
 
 def _match(pm: Any, args: argparse.Namespace) -> int:

@@ -18,6 +18,9 @@ def configure(name: str, parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--auth", metavar="SECRET", help="require a rosauth 'auth' op signed with SECRET")
     parser.add_argument("--max-frame", type=float, default=32.0, metavar="MB",
                         help="largest message a client may send, in MB (default 32)")
+    parser.add_argument("--no-plugin-types", action="store_true",
+                        help="do not load the message types installed widget plugins contribute (the sim then "
+                        "refuses them, like a robot without the lab's package)")
     parser.add_argument("-v", "--verbose", action="store_true", help="log every client op")
 
 
@@ -43,7 +46,8 @@ async def _serve(args: argparse.Namespace) -> int:
     from rcon_core.sim import SimServer
 
     server = SimServer(host=args.host, port=args.port, ros2=args.ros2, rate_scale=args.rate_scale,
-                       auth_secret=args.auth, max_frame=int(args.max_frame * 1024 * 1024))
+                       auth_secret=args.auth, max_frame=int(args.max_frame * 1024 * 1024),
+                       plugin_types=not args.no_plugin_types)
     try:
         await server.start()
     except OSError as exc:
@@ -51,6 +55,8 @@ async def _serve(args: argparse.Namespace) -> int:
         return 1
     flavour = "ROS 2" if args.ros2 else "ROS 1"
     print(f"rcon sim: {flavour} Kingfisher simulator on {server.url} (Ctrl+C to stop)", flush=True)
+    if server.types.plugin_type_names:
+        print(f"rcon sim: plugin types: {', '.join(server.types.plugin_type_names)}", flush=True)
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
     for sig in (signal.SIGINT, signal.SIGTERM):

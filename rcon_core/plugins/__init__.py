@@ -11,7 +11,14 @@ from .hookspecs import hookimpl, hookspec
 from .manager import DISABLE_ENV, ENTRY_POINT_GROUP, PluginInfo, PluginManager, UnknownWidget
 from .model import Binding, BridgePort, WidgetModel, WidgetState
 from .paths import PathError, get_path, set_path
-from .registry import DuplicateWidget, TypeContributions, TypeDefinition, WidgetRegistry
+from .registry import (
+    CanvasTemplate,
+    DuplicateWidget,
+    TemplateRegistry,
+    TypeContributions,
+    TypeDefinition,
+    WidgetRegistry,
+)
 from .spec import (
     FIELD_PREDICATES,
     MESSAGE_PREDICATES,
@@ -45,6 +52,8 @@ __all__ = [
     "BridgePort",
     "WidgetRegistry",
     "TypeContributions",
+    "TemplateRegistry",
+    "CanvasTemplate",
     "TypeDefinition",
     "DuplicateWidget",
     "PathError",

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 import pluggy
 
 if TYPE_CHECKING:
-    from .registry import TypeContributions, WidgetRegistry
+    from .registry import TemplateRegistry, TypeContributions, WidgetRegistry
 
 #: pluggy project name; also the prefix of every hook
 PROJECT = "rcon"
@@ -47,4 +47,15 @@ def rcon_register_types(registry: TypeContributions) -> None:
     ``registry.add_typedefs(typedefs)`` with rosapi ``message_details`` typedefs. Either type-name
     spelling is accepted. The definitions are added to the app's type registry before widgets are
     matched, so the matcher and ``rcon type`` know them even when offline.
+    """
+
+
+@hookspec
+def rcon_canvas_templates(registry: TemplateRegistry) -> None:
+    """Offer example canvases (ready layouts for the package's widgets) under "New canvas from template".
+
+    ``registry.add(title, path, description="")`` with a canvas file in the ``rcon-canvas`` format (what
+    "Export canvas…" writes; see ``docs/layout-format.md``), usually shipped as package data:
+    ``registry.add("Gripper station", importlib.resources.files(__package__) / "gripper.json")``.
+    A missing file fails this plugin only. Check a file with ``rcon layout validate FILE``.
     """

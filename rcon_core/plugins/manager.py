@@ -9,6 +9,8 @@
     pm.widget("std.slider")                    # one spec, or UnknownWidget
     pm.plugins / pm.failed                     # PluginInfo: name, dist, version, status, error, widgets
     pm.apply_types(type_registry)              # add contributed .msg/.srv definitions
+    pm.canvas_templates()                      # example canvases plugins offer (New canvas from template)
+    pm.type_registry(ros2=False)               # a standard TypeRegistry plus every contributed type
 
 A plugin is "broken" when importing its entry point raises, or when one of its hooks raises: it is
 recorded with status ``"failed"`` and the reason, and every other plugin still loads.
@@ -17,6 +19,7 @@ recorded with status ``"failed"`` and the reason, and every other plugin still l
 from __future__ import annotations
 
 import importlib.metadata as md
+import logging
 import os
 import traceback
 from collections.abc import Iterable, Mapping
@@ -26,13 +29,17 @@ import attrs
 import pluggy
 
 from . import hookspecs
-from .registry import TypeContributions, TypeDefinition, WidgetRegistry
+from .registry import CanvasTemplate, TemplateRegistry, TypeContributions, TypeDefinition, WidgetRegistry
 from .spec import WidgetSpec
 
-__all__ = ["PluginManager", "PluginInfo", "UnknownWidget", "ENTRY_POINT_GROUP", "DISABLE_ENV"]
+__all__ = [
+    "PluginManager", "PluginInfo", "UnknownWidget", "ENTRY_POINT_GROUP", "DISABLE_ENV", "installed_plugin_types",
+]
 
 ENTRY_POINT_GROUP = "rcon.widgets"
 DISABLE_ENV = "RCON_DISABLE_PLUGINS"
+
+log = logging.getLogger(__name__)
 
 
 class UnknownWidget(KeyError):
@@ -55,6 +62,7 @@ class PluginInfo:
     details: str | None = None  #: traceback text when failed
     widgets: list[WidgetSpec] = attrs.field(factory=list)
     types: list[TypeDefinition] = attrs.field(factory=list)
+    templates: list[CanvasTemplate] = attrs.field(factory=list)
     plugin: Any = attrs.field(default=None, repr=False)
 
     @property
@@ -80,6 +88,7 @@ class PluginInfo:
                 for s in self.widgets
             ],
             "types": [d.name for d in self.types],
+            "templates": [t.title for t in self.templates],
         }
 
 
@@ -180,6 +189,7 @@ class PluginManager:
         info.details = "".join(traceback.format_exception(exc))
         info.widgets.clear()
         info.types.clear()
+        info.templates.clear()
         if info.plugin is not None and self.pluggy.is_registered(info.plugin):
             self.pluggy.unregister(info.plugin)
 
@@ -192,6 +202,7 @@ class PluginManager:
         for info in self._infos.values():
             info.widgets.clear()
             info.types.clear()
+            info.templates.clear()
         for impl in self.pluggy.hook.rcon_register_widgets.get_hookimpls():  # registration order
             info = self._infos[impl.plugin_name]
             reg = WidgetRegistry(info.package, self._specs)
@@ -216,6 +227,19 @@ class PluginManager:
                 self._fail(info, exc)
                 continue
             info.types.extend(contrib.definitions)
+        for impl in self.pluggy.hook.rcon_canvas_templates.get_hookimpls():
+            info = self._infos[impl.plugin_name]
+            if info.status == "failed":
+                continue
+            templates = TemplateRegistry(info.package)
+            try:
+                impl.function(registry=templates)
+            except Exception as exc:
+                for spec in info.widgets:
+                    self._specs.pop(spec.kind, None)
+                self._fail(info, exc)
+                continue
+            info.templates.extend(templates.templates)
 
     @property
     def plugins(self) -> list[PluginInfo]:
@@ -247,6 +271,10 @@ class PluginManager:
         self._collect()
         return kind in self._specs
 
+    def canvas_templates(self) -> list[CanvasTemplate]:
+        """Every example canvas the loaded plugins offer (``rcon_canvas_templates``), in plugin order."""
+        return [t for p in self.plugins if p.status == "loaded" for t in p.templates]
+
     def type_definitions(self) -> list[TypeDefinition]:
         """Every definition contributed through ``rcon_register_types`` by loaded plugins."""
         return [d for p in self.plugins if p.status == "loaded" for d in p.types]
@@ -276,6 +304,46 @@ class PluginManager:
                 continue
             added += mine
         return added
+
+    def type_problems(self, types: Any) -> dict[str, list[str]]:
+        """After :meth:`apply_types`: per plugin name, each contributed type that does not resolve in
+        ``types`` (it uses a type nobody defines, often a misspelt builtin such as ``flaot64``)."""
+        out: dict[str, list[str]] = {}
+        for info in self.plugins:
+            if info.status != "loaded":
+                continue
+            for d in info.types:
+                try:
+                    if d.kind == "srv":
+                        for part in ("request", "response"):
+                            types.service_typedefs(_interface_name(d.name, d.kind), part)
+                    elif d.kind == "msg":
+                        types.typedefs(d.name)
+                except Exception as exc:
+                    out.setdefault(info.name, []).append(f"type {d.name}: {exc}")
+        return out
+
+    def type_registry(self, ros2: bool = False) -> Any:
+        """A standard ``rcon_core.msgs.TypeRegistry`` for the flavour plus every type the loaded plugins
+        contribute: the one registry every type look-up (app, CLI, matcher, sim) starts from."""
+        from rcon_core.msgs import TypeRegistry
+
+        types = TypeRegistry.standard(ros2=ros2)
+        self.apply_types(types)
+        return types
+
+
+def installed_plugin_types(types: Any) -> list[str]:
+    """Add the types of every installed (enabled) plugin to ``types``; returns the names added.
+
+    A plugin that fails is skipped (and logged), like everywhere else.
+    """
+    pm = PluginManager()
+    pm.load_entry_points()
+    added = pm.apply_types(types)
+    for info in pm.failed:
+        log.warning("plugin %s failed, its types are not loaded: %s", info.name, info.error)
+    return added
 
 
 def _interface_name(name: str, kind: str) -> str:

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import os
+from pathlib import Path
 from typing import Any
 
 import attrs
 
 from .spec import SpecError, WidgetSpec
 
-__all__ = ["WidgetRegistry", "TypeContributions", "TypeDefinition", "DuplicateWidget"]
+__all__ = ["WidgetRegistry", "TypeContributions", "TypeDefinition", "DuplicateWidget", "TemplateRegistry",
+           "CanvasTemplate"]
 
 
 class DuplicateWidget(SpecError):
@@ -93,3 +96,38 @@ class TypeContributions:
             raise SpecError(f"type name {name!r} must look like 'pkg/Type' or 'pkg/{kind}/Type'")
         if not isinstance(text, str):
             raise SpecError(f"definition of {name!r} must be text")
+
+
+@attrs.frozen
+class CanvasTemplate:
+    """An example canvas a plugin offers: a canvas file (``rcon-canvas`` format) shown under "New canvas
+    from template"."""
+
+    title: str
+    path: Path
+    description: str = ""
+    package: str = ""
+
+
+class TemplateRegistry:
+    """Given to ``rcon_canvas_templates``: collects the example canvases of one plugin."""
+
+    def __init__(self, package: str) -> None:
+        self._package = package
+        self.templates: list[CanvasTemplate] = []
+
+    @property
+    def package(self) -> str:
+        return self._package
+
+    def add(self, title: str, path: str | os.PathLike[str] | Any, description: str = "") -> CanvasTemplate:
+        """Offer the canvas file at ``path`` (e.g. ``importlib.resources.files(__package__) / "x.json"``)
+        as ``title``. The file must exist; it is read when the operator picks the template."""
+        if not isinstance(title, str) or not title.strip():
+            raise SpecError("a canvas template needs a non-empty title")
+        file = Path(str(path))
+        if not file.is_file():
+            raise SpecError(f"canvas template {title!r}: no file at {file}")
+        template = CanvasTemplate(title.strip(), file, description, self._package)
+        self.templates.append(template)
+        return template

@@ -56,7 +56,15 @@ class SpecError(ValueError):
 
 
 class SettingsError(ValueError):
-    """Stored settings could not be turned into the widget's settings class; ``str()`` says why."""
+    """Stored settings could not be turned into the widget's settings class; ``str()`` says why.
+
+    ``problems`` holds one sentence per bad value ("invalid settings: max_length must be a number (got
+    'abc')"): the widget's "not configured" warning.
+    """
+
+    def __init__(self, message: str, problems: list[str] | None = None) -> None:
+        super().__init__(message)
+        self.problems: list[str] = list(problems) if problems else [message]
 
 
 class Role(enum.StrEnum):
@@ -355,7 +363,7 @@ class WidgetSpec:
         try:
             obj = self.make_settings(data)
         except SettingsError as exc:
-            return [str(exc)]
+            return list(exc.problems)
         if obj is None or not hasattr(obj, "problems"):
             return []
         return list(obj.problems())
@@ -382,25 +390,10 @@ def _converter() -> Any:
 
 def _strict_bool(value: Any, _type: Any) -> bool:
     if not isinstance(value, bool):
-        shown = repr(value) if len(repr(value)) <= 40 else repr(value)[:37] + "..."
-        raise ValueError(f"must be true or false, found {shown}")
+        raise ValueError("must be true or false")
     return value
 
 
-def _format_error(exc: BaseException, type_: Any) -> str:
-    import cattrs.v
-
-    if isinstance(exc, ValueError) and str(exc).startswith("must be"):
-        return str(exc)
-    return cattrs.v.format_exception(exc, type_)
-
-
-def _key_first(line: str) -> str:
-    """``must be true or false, found 'no' @ $.follow`` as ``follow must be true or false, found 'no'``."""
-    text, _, path = line.rpartition(" @ ")
-    if text.startswith("must be") and path.startswith("$."):
-        return f"{path[2:]} {text}"
-    return line
 
 
 def _structure(cls: type | None, data: Mapping[str, Any] | None, kind: str) -> Any:
@@ -420,7 +413,47 @@ def _structure(cls: type | None, data: Mapping[str, Any] | None, kind: str) -> A
     try:
         return _converter().structure(data, cls)
     except cattrs.ClassValidationError as exc:
-        msgs = [_key_first(m) for m in cattrs.transform_error(exc, format_exception=_format_error)]
-        raise SettingsError(f"{kind}: invalid settings: " + "; ".join(msgs)) from exc
+        problems = [_sentence(m, data) for m in cattrs.transform_error(exc, format_exception=_expected)]
+        raise SettingsError(f"{kind}: " + "; ".join(problems), problems) from exc
     except (TypeError, ValueError) as exc:
-        raise SettingsError(f"{kind}: invalid settings: {exc}") from exc
+        raise SettingsError(f"{kind}: invalid settings: {exc}", [f"invalid settings: {exc}"]) from exc
+
+
+_EXPECTED = {float: "a number", int: "a whole number", bool: "true or false", str: "text"}
+
+
+def _expected(exc: BaseException, type_: Any) -> str:
+    """cattrs' per-value message, in words: "must be a number"."""
+    if isinstance(exc, ValueError) and str(exc).startswith("must be"):
+        return str(exc)  # our own hooks' words (strict booleans)
+    if type_ in _EXPECTED:
+        return f"must be {_EXPECTED[type_]}"
+    if isinstance(exc, KeyError):
+        return "is required"
+    name = getattr(type_, "__name__", None) or str(type_)
+    return f"must be {name}" if type_ is not None else f"is not valid ({exc})"
+
+
+def _sentence(message: str, data: Mapping[str, Any]) -> str:
+    """``"must be a number @ $.max_length"`` -> ``"invalid settings: max_length must be a number (got 'abc')"``."""
+    text, _, where = message.rpartition(" @ ")
+    path = where[2:] if where.startswith("$.") else where.lstrip("$")
+    value: Any = data
+    for part in path.replace("[", ".").replace("]", "").split("."):
+        if isinstance(value, Mapping) and part in value:
+            value = value[part]
+        elif isinstance(value, list) and part.isdigit() and int(part) < len(value):
+            value = value[int(part)]
+        else:
+            value = _MISSING
+            break
+    got = "" if value is _MISSING else f" (got {_short(value)})"
+    return f"invalid settings: {path or 'the settings'} {text or 'is not valid'}{got}"
+
+
+_MISSING = object()
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."

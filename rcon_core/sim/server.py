@@ -44,7 +44,8 @@ class SimServer:
 
     def __init__(self, host: str = "127.0.0.1", port: int = 0, ros2: bool = False, rate_scale: float = 1.0,
                  auth_secret: str | None = None, *, robot: bool = True, max_frame: int = gate.DEFAULT_MAX_FRAME,
-                 auth_frame_limit: int = gate.AUTH_FRAME_LIMIT, auth_timeout: float = gate.AUTH_TIMEOUT_S) -> None:
+                 auth_frame_limit: int = gate.AUTH_FRAME_LIMIT, auth_timeout: float = gate.AUTH_TIMEOUT_S,
+                 plugin_types: bool = False) -> None:
         if rate_scale <= 0:
             raise ValueError(f"rate_scale must be positive, got {rate_scale}")
         if max_frame < 1024 or auth_frame_limit < 256 or auth_timeout <= 0:
@@ -59,7 +60,8 @@ class SimServer:
         self.rate_scale = rate_scale
         self.auth_secret = auth_secret
         self.flavour = Flavour(ros2)
-        self.types = TypeSource(ros2, lambda: self.flavour.time())
+        #: ``plugin_types``: also know the types installed widget plugins contribute (see TypeSource)
+        self.types = TypeSource(ros2, lambda: self.flavour.time(), plugin_types=plugin_types)
         self.topics: dict[str, Topic] = {}
         self.services: dict[str, Service] = {}
         self.connections: set[Connection] = set()
@@ -97,6 +99,8 @@ class SimServer:
         self.loop = asyncio.get_running_loop()
         self._published_event = asyncio.Event()
         self.started_at = time.time()
+        if self.types.plugin_types:
+            _ = self.types.registry  # load the plugins' definitions now, not on a client's first op
         self.advertise_internal("/rosout", self.flavour.msg("rosgraph_msgs", "Log") if not self.ros2
                                 else self.flavour.msg("rcl_interfaces", "Log"), ROSOUT_NODE, latched=True)
         if not self.ros2:

@@ -1,4 +1,9 @@
-"""The sim's access to message definitions (``rcon_core.msgs.TypeRegistry``), with per-type caches."""
+"""The sim's access to message definitions (``rcon_core.msgs.TypeRegistry``), with per-type caches.
+
+With ``plugin_types=True`` the registry also holds the types installed widget plugins contribute
+(``rcon_register_types``), so a lab's widget can be tested on its own message type against the sim; with
+False the sim refuses them, like a robot that does not have the lab's package.
+"""
 
 from __future__ import annotations
 
@@ -14,8 +19,11 @@ log = logging.getLogger(__name__)
 class TypeSource:
     """Typedefs, converters and ROS 1 serialization for the sim, in the flavour's type spelling."""
 
-    def __init__(self, ros2: bool, now: Callable[[], dict[str, int]]) -> None:
+    def __init__(self, ros2: bool, now: Callable[[], dict[str, int]], plugin_types: bool = False) -> None:
         self.ros2 = ros2
+        self.plugin_types = plugin_types
+        #: the names of the types the installed plugins added (filled when the registry is first used)
+        self.plugin_type_names: list[str] = []
         self._now = now
         self._registry: Any = None
         self._loaded = False
@@ -29,6 +37,10 @@ class TypeSource:
                 from rcon_core.msgs import TypeRegistry
 
                 self._registry = TypeRegistry.standard(ros2=self.ros2)
+                if self.plugin_types:
+                    from rcon_core.plugins.manager import installed_plugin_types
+
+                    self.plugin_type_names = installed_plugin_types(self._registry)
             except Exception as exc:  # noqa: BLE001 - the sim still runs, without type checks
                 log.warning("message definitions unavailable (%s); client messages are not checked", exc)
         return self._registry

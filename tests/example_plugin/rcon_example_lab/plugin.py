@@ -1,5 +1,7 @@
 """Entry point (group ``rcon.widgets``): hooks only, no Qt."""
 
+from importlib.resources import files
+
 from rcon_core.plugins import Accepts, Role, WidgetSpec, hookimpl
 
 GRIPPER_MSG = """\
@@ -31,3 +33,9 @@ def rcon_register_widgets(registry):
             view="rcon_example_lab.gripper_view:GripperView",
         )
     )
+
+
+@hookimpl
+def rcon_canvas_templates(registry):  # optional: a ready canvas, under "New canvas from template"
+    registry.add("Gripper station", files(__package__) / "gripper_station.json",
+                 description="The gripper's state, bound to /gripper")

@@ -1,0 +1,113 @@
+"""``rcon layout validate FILE``: is a layout file (a workspace, or one exported canvas) usable here?
+
+Reads the file with the store's own loaders (``loads_workspace``, ``import_canvas``: exactly what the
+app does), then checks each widget against the installed plugins: its kind is installed, it may take its
+binding's role, its binding is complete and its settings are configured. Prints one line per problem
+and exits 1, or prints a summary and exits 0. The format is described in ``docs/layout-format.md`` and
+by the JSON Schema shipped in the package (``rcon layout schema`` prints it).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from importlib.resources import files
+from pathlib import Path
+from typing import Any
+
+SCHEMA = "layout.schema.json"
+
+
+def configure(name: str, parser: argparse.ArgumentParser) -> None:
+    actions = parser.add_subparsers(dest="layout_action", metavar="ACTION", required=True)
+    validate = actions.add_parser("validate", help="list the problems of a layout file; exit 1 if any")
+    validate.add_argument("file", metavar="FILE", help="a workspace (rcon-workspace) or canvas (rcon-canvas) file")
+    validate.add_argument("--json", action="store_true", help="print JSON instead of text")
+    actions.add_parser("schema", help="print the JSON Schema of layout files")
+
+
+def schema_text() -> str:
+    """The JSON Schema of layout files, as shipped in the package."""
+    return files("rcon_core.canvas").joinpath(SCHEMA).read_text(encoding="utf-8")
+
+
+def run(name: str, args: argparse.Namespace) -> int:
+    if args.layout_action == "schema":
+        print(schema_text(), end="")
+        return 0
+    from rcon_core.plugins import PluginManager
+
+    pm = PluginManager()
+    pm.load_entry_points()
+    path = Path(args.file)
+    problems, summary = check_layout(path, pm)
+    if args.json:
+        print(json.dumps({"file": str(path), "ok": not problems, "problems": problems, "summary": summary},
+                         indent=2))
+    elif problems:
+        for p in problems:
+            print(f"{path}: {p}", file=sys.stderr)
+    else:
+        print(f"{path}: OK ({summary})")
+    return 1 if problems else 0
+
+
+def check_layout(path: Path, pm: Any) -> tuple[list[str], str]:
+    """(problems, summary) for the layout file at ``path``; no problems means the app can use it as is."""
+    from rcon_core.canvas import WorkspaceFileError, import_canvas, loads_workspace
+
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        return ["no such file"], ""
+    except OSError as exc:
+        return [f"cannot read: {exc.strerror or exc}"], ""
+    try:
+        head = json.loads(raw)
+    except (ValueError, UnicodeDecodeError) as exc:
+        return [f"not valid JSON ({exc})"], ""
+    except RecursionError:
+        return ["not valid JSON (nested too deeply)"], ""
+    fmt = head.get("format") if isinstance(head, dict) else None
+    try:
+        if fmt == "rcon-canvas":
+            canvases = [import_canvas(path)]
+            current = canvases[0].id
+        else:
+            ws = loads_workspace(raw, path)
+            canvases, current = ws.canvases, ws.current
+    except WorkspaceFileError as exc:
+        return [exc.reason], ""
+    except (RecursionError, ValueError) as exc:  # whatever the store lets through is still a problem
+        return [f"cannot be read: {type(exc).__name__}: {str(exc)[:200]}"], ""
+    problems: list[str] = []
+    if fmt != "rcon-canvas" and current and current not in {c.id for c in canvases}:
+        problems.append(f"current canvas {current!r} is not one of the canvases")
+    widgets = 0
+    for canvas in canvases:
+        for w in canvas.widgets:
+            widgets += 1
+            where = f"canvas {canvas.name!r}, widget {w.id} ({w.kind})"
+            problems += [f"{where}: {p}" for p in _widget_problems(w, pm)]
+    summary = f"{len(canvases)} canvas{'es' if len(canvases) != 1 else ''}, {widgets} widget{'s' if widgets != 1 else ''}"
+    return problems, summary
+
+
+def _widget_problems(w: Any, pm: Any) -> list[str]:
+    out: list[str] = []
+    g = w.geometry
+    if not (g.w > 0 and g.h > 0):
+        out.append(f"geometry: width and height must be more than 0 (got {g.w:g} x {g.h:g})")
+    if not pm.has_widget(w.kind):
+        return [*out, "no installed widget plugin offers this kind (`rcon plugins` lists them)"]
+    spec = pm.widget(w.kind)
+    if w.binding.role not in spec.roles:
+        can = ", ".join(sorted(r.value for r in spec.roles))
+        out.append(f"{spec.title} cannot {w.binding.role.value} (it can: {can})")
+    out += w.binding.problems()
+    try:
+        out += spec.settings_problems(w.settings)
+    except Exception as exc:  # a plugin's problems() that raises is reported, not fatal
+        out.append(f"settings could not be checked: {type(exc).__name__}: {exc}")
+    return out
