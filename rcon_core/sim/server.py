@@ -41,7 +41,7 @@ class SimServer:
     """The embedded simulated robot, served over rosbridge v2."""
 
     def __init__(self, host: str = "127.0.0.1", port: int = 0, ros2: bool = False, rate_scale: float = 1.0,
-                 auth_secret: str | None = None, *, robot: bool = True) -> None:
+                 auth_secret: str | None = None, *, robot: bool = True, ssl: Any = None) -> None:
         if rate_scale <= 0:
             raise ValueError(f"rate_scale must be positive, got {rate_scale}")
         self.host = host
@@ -49,6 +49,7 @@ class SimServer:
         self.ros2 = ros2
         self.rate_scale = rate_scale
         self.auth_secret = auth_secret
+        self.ssl = ssl  # an ssl.SSLContext (server side): serve wss://
         self.flavour = Flavour(ros2)
         self.types = TypeSource(ros2, lambda: self.flavour.time())
         self.topics: dict[str, Topic] = {}
@@ -79,7 +80,7 @@ class SimServer:
     @property
     def url(self) -> str:
         host = f"[{self.host}]" if ":" in self.host else self.host
-        return f"ws://{host}:{self._port}"
+        return f"{'wss' if self.ssl is not None else 'ws'}://{host}:{self._port}"
 
     async def start(self) -> None:
         """Bind the socket, set up rosapi and the robot, and start simulating."""
@@ -104,7 +105,7 @@ class SimServer:
                 from .actions import NavigateActionServer
 
                 self._actions = NavigateActionServer(self, self._robot_node)
-        self._server = await serve(self._handle, self.host, self._requested_port, max_size=None,
+        self._server = await serve(self._handle, self.host, self._requested_port, max_size=None, ssl=self.ssl,
                                    compression=None, ping_interval=20, ping_timeout=20)
         sock = next(iter(self._server.sockets))
         self._port = sock.getsockname()[1]
