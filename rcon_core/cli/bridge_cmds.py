@@ -1,6 +1,7 @@
 """``rcon topics|services|type|echo|pub|call``: the robot's graph and traffic from a terminal.
 
-Every command takes ``--url`` (default ws://localhost:9090) and ``--json``.  Failures print the server's
+Every command takes ``--url`` (default ws://localhost:9090), ``--json`` and the secure-link options
+(``--ca-file``, ``--client-cert``/``--client-key``, ``--auth-secret-file`` or ``$RCON_AUTH_SECRET``).  Failures print the server's
 own message on stderr and exit non-zero: 1 for a failed call or connection, 2 for bad input.
 """
 
@@ -15,14 +16,16 @@ from typing import Any
 
 import orjson
 
+from rcon_core.cli.link_options import add_link_options, open_client
+
 DEFAULT_URL = "ws://localhost:9090"
-CONNECT_TIMEOUT = 5.0
 
 
 def configure(name: str, parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--url", dest="bridge_url", metavar="URL",
                         help=f"rosbridge WebSocket URL (default {DEFAULT_URL})")
     parser.add_argument("--json", action="store_true", help="machine-readable JSON output")
+    add_link_options(parser)
     if name == "type":
         parser.add_argument("type_name", metavar="TYPE", help="message or service type, e.g. sensor_msgs/Imu")
     elif name == "echo":
@@ -76,16 +79,9 @@ def _json(value: Any, indent: bool = False) -> str:
     return orjson.dumps(value, default=_default, option=opts).decode()
 
 
-async def _connect(url: str) -> Any:
-    from rcon_core.bridge import BridgeClient
-
-    client = BridgeClient(url, reconnect=False, call_timeout=10.0)
-    try:
-        await asyncio.wait_for(client.connect(), CONNECT_TIMEOUT)
-    except (OSError, TimeoutError, Exception) as exc:
-        _err(f"cannot connect to {url}: {exc or type(exc).__name__}")
-        return None
-    return client
+async def _connect(url: str, args: argparse.Namespace) -> Any:
+    """A connected client, or None after one line saying why not (see ``link_options.open_client``)."""
+    return await open_client(url, args, call_timeout=10.0)
 
 
 def _table(rows: dict[str, str]) -> None:
@@ -123,7 +119,7 @@ async def _listing(url: str, args: argparse.Namespace, fetch: Any) -> int:
     """Print what ``fetch(client.rosapi)`` returns ([(name, type)...]) as a table, or JSON with --json."""
     from rcon_core.bridge import ServiceError
 
-    client = await _connect(url)
+    client = await _connect(url, args)
     if client is None:
         return 1
     try:
@@ -215,7 +211,7 @@ async def _type(url: str, args: argparse.Namespace) -> int:
 
 
 async def _echo(url: str, args: argparse.Namespace) -> int:
-    client = await _connect(url)
+    client = await _connect(url, args)
     if client is None:
         return 1
     done = asyncio.Event()
@@ -291,7 +287,7 @@ async def _pub(url: str, args: argparse.Namespace) -> int:
     if args.rate is not None and args.rate <= 0:
         _err("--rate must be positive")
         return 2
-    client = await _connect(url)
+    client = await _connect(url, args)
     if client is None:
         return 1
     try:
@@ -325,7 +321,7 @@ async def _call(url: str, args: argparse.Namespace) -> int:
         if request is not None and not isinstance(request, dict | list):
             _err("ARGS must be a mapping like '{data: true}' or a list")
             return 2
-    client = await _connect(url)
+    client = await _connect(url, args)
     if client is None:
         return 1
     try:
