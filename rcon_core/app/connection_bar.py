@@ -1,11 +1,25 @@
-"""The bar across the top: robot URL (with history), connect/disconnect, link state and latency."""
+"""The bar across the top: robot URL (with history), connect/disconnect, the robot's connection settings
+(Security, the lock button), link state, latency, and a one-line message.
+
+The message says why a link is not up, in the words of :mod:`rcon_core.bridge.reasons` ("connection
+refused · retrying in 3 s", "certificate not trusted (self-signed? pass the CA file)"), within a frame of
+the failed attempt; a fatal failure (TLS, refused authentication) ends the link, a retried one counts down.
+No text changes the window's width: the message is elided, the whole of it in its tooltip.  A URL enters
+the history once its link has come up.
+"""
 
 from __future__ import annotations
 
-from qtpy import QtCore, QtWidgets
+from importlib import resources
+from typing import Any
+
+from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app.config import AppConfig
-from rcon_core.app.link import BadUrl, Link
+from rcon_core.app.elided_label import ElidedLabel
+from rcon_core.app.link import BadUrl, Link, LinkSettings, check_url
+from rcon_core.app.link_settings import LinkSettingsDialog
+from rcon_core.app.secret_store import SecretStore
 from rcon_core.app.theme import repolish
 
 
@@ -36,7 +50,15 @@ class ConnectionBar(QtWidgets.QFrame):
         super().__init__(parent)
         self.setObjectName("connectionBar")
         self.link, self.config = link, config
+        self.secrets = SecretStore()
+        #: settings from the command line (--ca-file, --client-cert/--client-key, the secret from
+        #: RCON_AUTH_SECRET or --auth-secret-file): they apply to every robot of this run
+        self.overrides = LinkSettings()
         self.state = "closed"
+        self.failure: Any = None  # the last reasons.Failure shown, until the link comes up
+        self.note = ""  # a rejected URL, said before the failure of the link still in use
+        self.dialog: LinkSettingsDialog | None = None
+        self._remember: str | None = None  # the URL to put in the history once connected
         self._last_latency_text = ""
 
         self.url = QtWidgets.QComboBox()
@@ -44,6 +66,9 @@ class ConnectionBar(QtWidgets.QFrame):
         self.url.setEditable(True)
         self.url.setInsertPolicy(QtWidgets.QComboBox.InsertPolicy.NoInsert)
         self.url.setMinimumWidth(220)  # a 1024 px screen keeps its side panel toggle and state
+        # a long URL in the history never widens the bar (and so the window)
+        self.url.setSizeAdjustPolicy(QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+        self.url.setMinimumContentsLength(16)
         self.url.addItems(config.url_history or [config.last_url])
         self.url.setCurrentText(config.last_url)
         line = self.url.lineEdit()
@@ -62,13 +87,25 @@ class ConnectionBar(QtWidgets.QFrame):
         fm = self.connect_button.fontMetrics()  # room for the longer label: "Disconnect" is never cut
         self.connect_button.setMinimumWidth(max(fm.horizontalAdvance(t) for t in ("Connect", "Disconnect")) + 48)
 
+        # a square lock button (a word would not fit a 1024 px bar): the robot's connection settings
+        self.settings_button = QtWidgets.QPushButton()
+        self.settings_button.setObjectName("linkSettingsButton")
+        self.settings_button.setProperty("square", True)
+        self.settings_button.setIcon(QtGui.QIcon(str(resources.files("rcon_core.app") / "link-settings.svg")))
+        self.settings_button.setIconSize(QtCore.QSize(22, 22))
+        self.settings_button.setAccessibleName("Security")
+        self.settings_button.setToolTip("Security: this robot's connection settings (CA file, client "
+                                        "certificate, rosauth secret)")
+        self.settings_button.clicked.connect(lambda: self.open_settings())
+
         self.state_label = QtWidgets.QLabel()
         self.state_label.setObjectName("linkState")
         self.state_label.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
         self.latency_label = QtWidgets.QLabel("—")
         self.latency_label.setObjectName("latency")
         self.latency_label.setToolTip("round-trip time to the robot")
-        self.message = QtWidgets.QLabel()
+        self.message = ElidedLabel()
+        self.message.setObjectName("linkMessage")
         self.message.setProperty("role", "problem")
 
         row = QtWidgets.QHBoxLayout(self)
@@ -77,9 +114,10 @@ class ConnectionBar(QtWidgets.QFrame):
         row.addWidget(QtWidgets.QLabel("Robot"))
         row.addWidget(self.url, 1)
         row.addWidget(self.connect_button)
+        row.addWidget(self.settings_button)
         row.addWidget(self.state_label)
         row.addWidget(self.latency_label)
-        row.addWidget(self.message, 1)
+        row.addWidget(self.message, 2)  # the message gets the room: the reason comes first, then the countdown
         self._show_state("closed")
 
     # ---------------------------------------------------------------------------------------- actions
@@ -88,6 +126,8 @@ class ConnectionBar(QtWidgets.QFrame):
             self.connect_clicked()
         else:
             self.link.disconnect()
+            self.failure, self.note = None, ""
+            self.message.clear()
             self._show_state("closed")
 
     def _return_pressed(self) -> None:
@@ -104,20 +144,60 @@ class ConnectionBar(QtWidgets.QFrame):
         demo's embedded robot, whose port is gone after the run)."""
         text = normalize_url(self.url.currentText())
         try:
-            self.link.connect_to(text)
+            text = check_url(text)
         except BadUrl as exc:
-            active = self.link.url if self.link.client is not None else None
-            if active:  # the field shows the URL actually in use, never the rejected text
-                self._set_field(active)
-                self.message.setText(f"{exc}; still connected to {active}")
-            else:
-                self.message.setText(str(exc))
+            self._bad_url(exc)
             return
+        settings = self.settings_for(text)
+        if settings is None:  # the robot checks a secret and none is known in this run
+            self.message.setText("this robot checks a secret: enter it in Security (the lock)")
+            self.open_settings(ask_secret=True)
+            return
+        self.failure, self.note = None, ""
+        self.link.connect_to(text, settings)
         self.message.clear()
-        if remember:
-            self.config.remember_url(text)
+        self._remember = text if remember else None
         self._set_field(text)
         self._show_state("connecting")
+
+    def _bad_url(self, exc: BadUrl) -> None:
+        active = self.link.url if self.link.client is not None else None
+        if active:  # the field shows the URL actually in use, never the rejected text
+            self._set_field(active)
+            verb = "still connected to" if self.state == "connected" else "still trying"
+            self.note = f"{exc} · {verb} {active}"
+        else:
+            self.note = str(exc)
+        self.message.setText(self.note if self.failure is None else f"{self.note}: {self.failure.text()}")
+
+    def settings_for(self, url: str) -> LinkSettings | None:
+        """How to connect to ``url``: its saved settings under this run's command-line ones; None when it
+        checks a secret and none is known (not from the command line, the credential store or this run)."""
+        saved = self.config.robot_settings(url)
+        cli = self.overrides
+        secret = cli.secret
+        if saved["auth"] and not secret:
+            secret = self.secrets.get(url)
+            if not secret:
+                return None
+        return LinkSettings(ca_file=cli.ca_file or saved["ca_file"] or None,
+                            client_cert=cli.client_cert or saved["client_cert"] or None,
+                            client_key=cli.client_key or saved["client_key"] or None, secret=secret)
+
+    def open_settings(self, ask_secret: bool = False) -> LinkSettingsDialog | None:
+        """Open the Security dialog for the URL in the field; saving it connects with the new settings."""
+        try:
+            url = check_url(normalize_url(self.url.currentText()))
+        except BadUrl as exc:
+            self._bad_url(exc)
+            return None
+        if self.dialog is not None:
+            self.dialog.close()
+        dialog = LinkSettingsDialog(url, self.config, self.secrets, self.window(), ask_secret=ask_secret)
+        dialog.accepted.connect(lambda: self.connect_clicked())
+        self.dialog = dialog
+        dialog.open()
+        return dialog
 
     def _set_field(self, text: str) -> None:
         self.url.blockSignals(True)
@@ -134,6 +214,17 @@ class ConnectionBar(QtWidgets.QFrame):
         ok, error = self.link.error_box.take()
         if ok and self.link.client is not None:
             self.message.setText(str(error))
+        ok, failure = self.link.failure_box.take()
+        if ok and (failure is not None or not getattr(self.failure, "fatal", False)):
+            self.failure = failure
+            if failure is not None and failure.fatal:
+                self.link.disconnect()  # retrying cannot help: the operator changes a setting first
+                self._show_state("closed")
+            elif failure is None and self.state != "connected":
+                self.message.clear()
+        if self.failure is not None:
+            why = self.failure.text()
+            self.message.setText(f"{self.note}: {why}" if self.note else why)
         latency = self.link.latency if self.state == "connected" else None
         text = "—" if latency is None else ("<1 ms" if latency < 0.0005 else f"{latency * 1000:.0f} ms")
         if text != self._last_latency_text:
@@ -147,5 +238,10 @@ class ConnectionBar(QtWidgets.QFrame):
         repolish(self.state_label)
         self.connect_button.setText("Connect" if self.link.client is None else "Disconnect")
         if state == "connected":
+            self.failure, self.note = None, ""
             self.message.clear()
+            if self._remember is not None and self._remember == self.link.url:
+                self.config.remember_url(self._remember)
+                self._set_field(self._remember)
+            self._remember = None
         self.state_changed.emit(state)
