@@ -5,7 +5,7 @@ The message says why a link is not up, in the words of :mod:`rcon_core.bridge.re
 refused · retrying in 3 s", "certificate not trusted (self-signed? pass the CA file)"), within a frame of
 the failed attempt; a fatal failure (TLS, refused authentication) ends the link, a retried one counts down.
 No text changes the window's width: the message is elided, the whole of it in its tooltip.  A URL enters
-the history once its link has come up.
+the history once its robot has answered a call (so not a robot that refused the secret).
 """
 
 from __future__ import annotations
@@ -222,6 +222,12 @@ class ConnectionBar(QtWidgets.QFrame):
                 self._show_state("closed")
             elif failure is None and self.state != "connected":
                 self.message.clear()
+        ok, answered = self.link.answered_box.take()
+        if ok and answered is not None and answered == self._remember == self.link.url:
+            self._remember = None  # the robot answered: a URL worth keeping
+            self.config.remember_url(answered)
+            if not self.url.lineEdit().hasFocus():
+                self._set_field(answered)
         if self.failure is not None:
             why = self.failure.text()
             self.message.setText(f"{self.note}: {why}" if self.note else why)
@@ -237,11 +243,9 @@ class ConnectionBar(QtWidgets.QFrame):
         self.state_label.setProperty("state", state)
         repolish(self.state_label)
         self.connect_button.setText("Connect" if self.link.client is None else "Disconnect")
+        # a latency means something only while connected; otherwise its room goes to the message
+        self.latency_label.setVisible(state == "connected")
         if state == "connected":
             self.failure, self.note = None, ""
             self.message.clear()
-            if self._remember is not None and self._remember == self.link.url:
-                self.config.remember_url(self._remember)
-                self._set_field(self._remember)
-            self._remember = None
         self.state_changed.emit(state)

@@ -20,7 +20,7 @@ from typing import Any
 from urllib.parse import urlparse
 
 from rcon_core.bridge import BridgeClient, ConnectionState
-from rcon_core.bridge.secure import rosauth
+from rcon_core.bridge.secure import confirm_auth, rosauth
 from rcon_core.bridge.threaded import BridgeThread, LatestValue
 
 log = logging.getLogger(__name__)
@@ -100,6 +100,8 @@ class Link:
         self.catalog_box = LatestValue()
         self.error_box = LatestValue()
         self.failure_box = LatestValue()
+        #: the URL of a link whose robot answered a call (so it goes into the URL history)
+        self.answered_box = LatestValue()
         self._catalog_task: asyncio.Task | None = None
         self._generation = 0
         self._listeners: list[Callable[[BridgeClient | None], None]] = []
@@ -181,6 +183,12 @@ class Link:
         if gen == self._generation:
             self.state_box.put(state_name(client.state))
             self._start_catalog(client, gen)
+        try:  # the robot answers a call: it accepted the link (and the auth op, if any)
+            await confirm_auth(client)
+        except Exception:  # refused: the client reports it as a fatal failure
+            return
+        if gen == self._generation:
+            self.answered_box.put(client.url)
 
     def _start_catalog(self, client: BridgeClient, gen: int) -> None:
         if self._catalog_task is not None and not self._catalog_task.done():

@@ -13,21 +13,24 @@ from rcon_core.app.secret_store import SecretStore
 from rcon_core.bridge import LinkSettingsError
 from rcon_core.bridge.secure import ssl_context
 
+#: (key, label, placeholder, tooltip)
 FILE_FIELDS = (
-    ("ca_file", "CA file", "the certificate authority (PEM) that signed the robot's certificate"),
-    ("client_cert", "Client certificate", "only for a robot that asks for one (PEM)"),
-    ("client_key", "Client key", "the client certificate's private key (PEM)"),
+    ("ca_file", "CA file", "none: the system's CAs", "the certificate authority (PEM) that signed the robot's "
+                                                      "certificate (wss:// only)"),
+    ("client_cert", "Client certificate", "none", "only for a robot that asks for one (PEM)"),
+    ("client_key", "Client key", "none", "the client certificate's private key (PEM)"),
 )
 
 
 class PathField(QtWidgets.QWidget):
     """A file path: typed, or chosen with a file dialog."""
 
-    def __init__(self, name: str, placeholder: str, parent: QtWidgets.QWidget | None = None) -> None:
+    def __init__(self, name: str, placeholder: str, tooltip: str, parent: QtWidgets.QWidget | None = None) -> None:
         super().__init__(parent)
         self.edit = QtWidgets.QLineEdit()
         self.edit.setObjectName(f"{name}Field")
         self.edit.setPlaceholderText(placeholder)
+        self.edit.setToolTip(tooltip)
         self.edit.setClearButtonEnabled(True)
         self.choose = QtWidgets.QPushButton("Choose…")
         self.choose.setObjectName(f"{name}Choose")
@@ -68,8 +71,8 @@ class LinkSettingsDialog(QtWidgets.QDialog):
         title.setWordWrap(True)
         form = QtWidgets.QFormLayout()
         self.paths: dict[str, PathField] = {}
-        for key, label, placeholder in FILE_FIELDS:
-            field = PathField(key, placeholder)
+        for key, label, placeholder, tooltip in FILE_FIELDS:
+            field = PathField(key, placeholder, tooltip)
             field.edit.setText(saved[key])
             self.paths[key] = field
             form.addRow(label, field)
@@ -109,7 +112,8 @@ class LinkSettingsDialog(QtWidgets.QDialog):
         col.addLayout(form)
         col.addWidget(self.problem)
         col.addWidget(buttons)
-        self.setMinimumWidth(min(520, max(360, self.sizeHint().width())))
+        room = parent.window().width() - 40 if parent is not None else 640
+        self.setMinimumWidth(max(360, min(640, room)))
         if ask_secret:
             QtCore.QTimer.singleShot(0, self.secret.setFocus)
 
