@@ -226,7 +226,8 @@ class ConnectionBar(QtWidgets.QFrame):
         if ok and answered is not None and answered == self._remember == self.link.url:
             self._remember = None  # the robot answered: a URL worth keeping
             self.config.remember_url(answered)
-            if not self.url.lineEdit().hasFocus():
+            line = self.url.lineEdit()
+            if line is None or not line.hasFocus():
                 self._set_field(answered)
         if self.failure is not None:
             why = self.failure.text()
