@@ -122,3 +122,14 @@ def test_sim_warns_loudly_when_open_to_the_network(capsys):
 def test_sim_tls_options_go_together(capsys, pki):
     assert main(["sim", "--port", "0", "--tls-cert", str(pki.server.cert)]) == 2
     assert "--tls-cert and --tls-key go together" in capsys.readouterr().err
+
+
+def test_client_certificate_for_a_robot_that_asks_for_one(pki, capsys):
+    with SimServer.in_thread(port=0, robot=False, ssl=pki.server.server_context(client_ca=pki.ca)) as server:
+        rc, out, err, _ = run(capsys, "services", "--url", server.url, "--ca-file", str(pki.ca),
+                              "--client-cert", str(pki.client.cert), "--client-key", str(pki.client.key))
+        assert rc == 0 and "/rosapi/get_time" in out, err
+        rc, _, err, _ = run(capsys, "services", "--url", server.url, "--ca-file", str(pki.ca))
+    assert rc == 1
+    assert err == (f"rcon: cannot connect to {server.url}: connection closed during the handshake "
+                   "(does the robot ask for a client certificate?)\n")
