@@ -197,4 +197,5 @@ def test_refusal_needs_a_close_frame_on_an_authenticating_link():
     assert reasons.refused_auth(1005, "", auth_sent=True, seconds_open=0.2)  # rosbridge: close(), no code
     assert not reasons.refused_auth(1005, "", auth_sent=True, seconds_open=30)
     assert not reasons.refused_auth(1006, "", auth_sent=True, seconds_open=0.2)  # robot gone: no close frame
+    assert not reasons.refused_auth(1001, "", auth_sent=True, seconds_open=0.2)  # robot shutting down
     assert not reasons.refused_auth(4001, "authentication required", auth_sent=False, seconds_open=0.2)

@@ -289,7 +289,8 @@ class BridgeClient:
                 log.exception("failure listener raised")
 
     def _why(self, exc: BaseException) -> Failure:
-        return describe(exc, ca_file=self.ca_file, wss_without_cert=self.url.startswith("wss:") and not self.client_cert)
+        without_cert = self.url.startswith("wss:") and not self.client_cert
+        return describe(exc, ca_file=self.ca_file, wss_without_cert=without_cert)
 
     def _set_state(self, state: ConnectionState) -> None:
         if state is self._state:

@@ -17,10 +17,11 @@ Decisions
 
 Refused authentication
     rosbridge sends no answer to the ``auth`` op: a bad one makes the server close the connection.  So a
-    close *frame* from the server (a close code other than 1006, "no close frame") within
+    close *frame* from the server (code 1000, 1005 "no code" or 1008 "policy violation") within
     :data:`AUTH_WINDOW` seconds of opening, on a link that sent ``auth``, is read as a refusal; the sim
     closes with code 4001, which is read as a refusal at any time.  A robot restarting drops the TCP
-    connection without a close frame, so it is not mistaken for a refusal.
+    connection without a close frame (1006) or says it is going away (1001), so it is not mistaken for a
+    refusal.
 """
 
 from __future__ import annotations
@@ -46,6 +47,9 @@ AUTH_WINDOW = 3.0
 #: the close code the sim (and RCON's own servers) use for "authentication required"
 AUTH_CLOSE_CODE = 4001
 DETAIL_LIMIT = 200
+#: close codes a refusing rosbridge sends: 1005 (tornado's close() without a code), 1000, 1008 (policy);
+#: not 1001 "going away" or 1012 "restart", which a robot shutting down sends
+_REFUSAL_CODES = {1000, 1005, 1008}
 
 NOT_TRUSTED = "certificate not trusted (self-signed? pass the CA file)"
 WRONG_HOST = "wrong host name in certificate"
@@ -181,4 +185,4 @@ def refused_auth(close_code: int | None, close_reason: str | None, *, auth_sent:
         return False
     if close_code == AUTH_CLOSE_CODE or "auth" in (close_reason or "").lower():
         return True
-    return seconds_open < AUTH_WINDOW
+    return close_code in _REFUSAL_CODES and seconds_open < AUTH_WINDOW
