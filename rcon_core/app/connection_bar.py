@@ -65,7 +65,8 @@ class ConnectionBar(QtWidgets.QFrame):
         self.url.setObjectName("urlField")
         self.url.setEditable(True)
         self.url.setInsertPolicy(QtWidgets.QComboBox.InsertPolicy.NoInsert)
-        self.url.setMinimumWidth(220)  # a 1024 px screen keeps its side panel toggle and state
+        # an 800 px window keeps its side panel toggle, the lock and the state
+        self.url.setMinimumWidth(200)
         # a long URL in the history never widens the bar (and so the window)
         self.url.setSizeAdjustPolicy(QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
         self.url.setMinimumContentsLength(16)
@@ -73,6 +74,9 @@ class ConnectionBar(QtWidgets.QFrame):
         self.url.setCurrentText(config.last_url)
         line = self.url.lineEdit()
         assert line is not None  # the combo is editable
+        # the field names itself (no "Robot" label beside it: the bar keeps its room for the lock and state)
+        line.setPlaceholderText("robot URL, e.g. ws://192.168.1.10:9090")
+        self.url.setToolTip("The robot's rosbridge URL (ws:// or wss://)")
         # only a tap on it gives it the keyboard: never Tab, never a focused button disappearing (with its
         # text selected, one key would replace the robot's URL)
         for w in (self.url, line):
@@ -84,8 +88,6 @@ class ConnectionBar(QtWidgets.QFrame):
         self.connect_button.setObjectName("connectButton")
         self.connect_button.setProperty("primary", True)
         self.connect_button.clicked.connect(self.toggle)
-        fm = self.connect_button.fontMetrics()  # room for the longer label: "Disconnect" is never cut
-        self.connect_button.setMinimumWidth(max(fm.horizontalAdvance(t) for t in ("Connect", "Disconnect")) + 48)
 
         # a square lock button (a word would not fit a 1024 px bar): the robot's connection settings
         self.settings_button = QtWidgets.QPushButton()
@@ -101,6 +103,7 @@ class ConnectionBar(QtWidgets.QFrame):
         self.state_label = QtWidgets.QLabel()
         self.state_label.setObjectName("linkState")
         self.state_label.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
+        self.state_label.setProperty("state", "closed")
         self.latency_label = QtWidgets.QLabel("—")
         self.latency_label.setObjectName("latency")
         self.latency_label.setToolTip("round-trip time to the robot")
@@ -111,7 +114,6 @@ class ConnectionBar(QtWidgets.QFrame):
         row = QtWidgets.QHBoxLayout(self)
         row.setContentsMargins(10, 8, 10, 8)
         row.setSpacing(10)
-        row.addWidget(QtWidgets.QLabel("Robot"))
         row.addWidget(self.url, 1)
         row.addWidget(self.connect_button)
         row.addWidget(self.settings_button)
@@ -206,6 +208,32 @@ class ConnectionBar(QtWidgets.QFrame):
         self.url.setCurrentText(text)
         self.url.blockSignals(False)
 
+    def _fit_widths(self) -> None:
+        """Room for the button's longer label, measured with its styled font (known once the theme is
+        applied, so measured again at each state change): "Disconnect" is never cut, and the bar's minimum
+        width is the same in every state."""
+        button = self.connect_button
+        shown = button.text()
+        widths = []
+        for text in ("Connect", "Disconnect"):
+            button.setText(text)
+            widths.append(button.sizeHint().width())  # text, padding and border as styled
+        button.setText(shown)
+        button.setMinimumWidth(max(widths))
+        # the state label likewise keeps the width of its longest word (DISCONNECTED, RECONNECTING)
+        label = self.state_label
+        shown, widths = label.text(), []
+        label.setMinimumWidth(0)
+        for text in STATE_TEXT.values():
+            label.setText(text)
+            widths.append(label.sizeHint().width())
+        label.setText(shown)
+        label.setMinimumWidth(max(widths))
+
+    def showEvent(self, event: QtGui.QShowEvent) -> None:  # noqa: N802 - Qt's name
+        super().showEvent(event)
+        self._fit_widths()  # the stylesheet's font is in force by now
+
     # ------------------------------------------------------------------------------------ per frame
     def poll(self, _now: float = 0.0) -> None:
         ok, state = self.link.state_box.take()
@@ -244,8 +272,18 @@ class ConnectionBar(QtWidgets.QFrame):
         self.state_label.setProperty("state", state)
         repolish(self.state_label)
         self.connect_button.setText("Connect" if self.link.client is None else "Disconnect")
-        # a latency means something only while connected; otherwise its room goes to the message
-        self.latency_label.setVisible(state == "connected")
+        self._fit_widths()
+        # a latency means something only while connected; otherwise its room goes to the message, which
+        # then asks for that room as its minimum: the bar's minimum width is the same in every state
+        # (the smaller minimum first, so the bar never asks for both at once, not even for one layout pass)
+        connected = state == "connected"
+        spacing = layout.spacing() if (layout := self.layout()) is not None else 0
+        if connected:
+            self.message.setMinimumWidth(0)
+            self.latency_label.setVisible(True)
+        else:
+            self.latency_label.setVisible(False)
+            self.message.setMinimumWidth(self.latency_label.minimumSizeHint().width() + spacing)
         if state == "connected":
             self.failure, self.note = None, ""
             self.message.clear()
