@@ -5,7 +5,8 @@ The message says why a link is not up, in the words of :mod:`rcon_core.bridge.re
 refused · retrying in 3 s", "certificate not trusted (self-signed? pass the CA file)"), within a frame of
 the failed attempt; a fatal failure (TLS, refused authentication) ends the link, a retried one counts down.
 No text changes the window's width: the message is elided, the whole of it in its tooltip.  A URL enters
-the history once its robot has answered a call (so not a robot that refused the secret).
+the history once its link has come up, or, with rosauth, once its robot answered a call after the auth
+op (a robot refusing the secret opens the link and then closes it).
 """
 
 from __future__ import annotations
@@ -59,6 +60,7 @@ class ConnectionBar(QtWidgets.QFrame):
         self.note = ""  # a rejected URL, said before the failure of the link still in use
         self.dialog: LinkSettingsDialog | None = None
         self._remember: str | None = None  # the URL to put in the history once connected
+        self._remember_on_answer = False
         self._last_latency_text = ""
 
         self.url = QtWidgets.QComboBox()
@@ -159,6 +161,9 @@ class ConnectionBar(QtWidgets.QFrame):
         self.link.connect_to(text, settings)
         self.message.clear()
         self._remember = text if remember else None
+        # without auth a link that comes up is a robot that accepted it; with auth, only an answer after
+        # the auth op tells (a robot refusing the secret opens the link and then closes it)
+        self._remember_on_answer = settings.secret is not None
         self._set_field(text)
         self._show_state("connecting")
 
@@ -208,6 +213,16 @@ class ConnectionBar(QtWidgets.QFrame):
         self.url.setCurrentText(text)
         self.url.blockSignals(False)
 
+    def _keep_url(self) -> None:
+        """The robot at ``_remember`` accepted the link: a URL worth keeping in the history."""
+        url, self._remember = self._remember, None
+        if url is None:
+            return
+        self.config.remember_url(url)
+        line = self.url.lineEdit()
+        if line is None or not line.hasFocus():
+            self._set_field(url)
+
     def _fit_widths(self) -> None:
         """Room for the button's longer label, measured with its styled font (known once the theme is
         applied, so measured again at each state change): "Disconnect" is never cut, and the bar's minimum
@@ -252,11 +267,7 @@ class ConnectionBar(QtWidgets.QFrame):
                 self.message.clear()
         ok, answered = self.link.answered_box.take()
         if ok and answered is not None and answered == self._remember == self.link.url:
-            self._remember = None  # the robot answered: a URL worth keeping
-            self.config.remember_url(answered)
-            line = self.url.lineEdit()
-            if line is None or not line.hasFocus():
-                self._set_field(answered)
+            self._keep_url()
         if self.failure is not None:
             why = self.failure.text()
             self.message.setText(f"{self.note}: {why}" if self.note else why)
@@ -287,4 +298,6 @@ class ConnectionBar(QtWidgets.QFrame):
         if state == "connected":
             self.failure, self.note = None, ""
             self.message.clear()
+            if self._remember is not None and self._remember == self.link.url and not self._remember_on_answer:
+                self._keep_url()
         self.state_changed.emit(state)
