@@ -1,6 +1,7 @@
 """The connection bar says why a robot cannot be reached, keeps retrying with a countdown, clears the
 previous robot's lists, rejects a URL that cannot work before connecting, keeps only URLs that once
-connected in the history, and no message ever widens the window (issue 12, items 2 and 3).
+connected in the history, and no message ever widens the window or pushes the UI down (issue 12, items 2
+and 3).
 
 Screenshots of the bar in each state go to /tmp/sec-link/ (set RCON_SHOTS to another folder)."""
 
@@ -127,6 +128,7 @@ def test_no_message_widens_the_window_and_the_message_is_true(qtbot, window, rob
     least = window.minimumSizeHint().width()
     assert least <= 1024  # a 1024 px tablet fits it
     bar_least = {"closed": bar.minimumSizeHint().width()}
+    height = bar.height()
     type_url(window, "ws://127.0.0.1:1")  # only connecting, never connected
     qtbot.waitUntil(lambda: bar.message.text().startswith("connection refused"), timeout=SAY_WHY_MS)
     bar_least["connecting"] = bar.minimumSizeHint().width()
@@ -148,7 +150,9 @@ def test_no_message_widens_the_window_and_the_message_is_true(qtbot, window, rob
     assert bar.message.toolTip() == message
     bar.message.setText("a very long reason " * 60)
     QtWidgets.QApplication.processEvents()
+    # a second line where the bar has the height for one, then "…"; nothing moves down
     assert bar.message.shown().endswith("…") and len(bar.message.shown()) < len(bar.message.text())
+    assert bar.message.shown().count("\n") <= 1 and bar.height() == height
     assert window.width() == width and window.minimumSizeHint().width() == least
     assert bar.message.geometry().right() <= bar.width()
     assert window.lock_button.mapTo(window, window.lock_button.rect().topRight()).x() <= window.width()

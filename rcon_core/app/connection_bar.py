@@ -4,7 +4,8 @@
 The message says why a link is not up, in the words of :mod:`rcon_core.bridge.reasons` ("connection
 refused · retrying in 3 s", "certificate not trusted (self-signed? pass the CA file)"), within a frame of
 the failed attempt; a fatal failure (TLS, refused authentication) ends the link, a retried one counts down.
-No text changes the window's width: the message is elided, the whole of it in its tooltip.  A URL enters
+No text changes the window's width or the bar's height: the message takes a second line where the bar
+has the height, then is elided, the whole of it in its tooltip.  A URL enters
 the history once its link has come up, or, with rosauth, once its robot answered a call after the auth
 op (a robot refusing the secret opens the link and then closes it).
 """

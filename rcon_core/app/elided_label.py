@@ -1,4 +1,6 @@
-"""A one-line label that never widens its window: long text is cut with "…", the whole text in its tooltip."""
+"""A label that never widens (or heightens) its window: text that does not fit on one line goes on a second
+line when the height it was given has room for two, and what still does not fit is cut with "…"; the
+whole text is in its tooltip."""
 
 from __future__ import annotations
 
@@ -6,8 +8,8 @@ from qtpy import QtCore, QtWidgets
 
 
 class ElidedLabel(QtWidgets.QLabel):
-    """Asks for no minimum width (a layout may give it any width) and shows as much of its text as fits;
-    ``text()`` is the whole text, ``shown()`` what is on screen."""
+    """Asks for no minimum width (a layout may give it any width) and one line's height, and shows as much
+    of its text as fits; ``text()`` is the whole text, ``shown()`` what is on screen."""
 
     def __init__(self, text: str = "", parent: QtWidgets.QWidget | None = None) -> None:
         super().__init__(parent)
@@ -33,18 +35,35 @@ class ElidedLabel(QtWidgets.QLabel):
     def clear(self) -> None:
         self.setText("")
 
+    def _line_height(self) -> int:
+        margins = self.contentsMargins()
+        return self.fontMetrics().height() + margins.top() + margins.bottom() + 2 * self.margin()
+
     def minimumSizeHint(self) -> QtCore.QSize:  # noqa: N802
-        return QtCore.QSize(0, super().minimumSizeHint().height())
+        return QtCore.QSize(0, self._line_height())
 
     def sizeHint(self) -> QtCore.QSize:  # noqa: N802
-        return QtCore.QSize(0, super().sizeHint().height())
+        return QtCore.QSize(0, self._line_height())
 
     def resizeEvent(self, event: object) -> None:  # noqa: N802
         super().resizeEvent(event)  # type: ignore[arg-type]
         self._elide()
 
     def _elide(self) -> None:
-        width = max(0, self.contentsRect().width())
-        shown = self.fontMetrics().elidedText(self._full, QtCore.Qt.TextElideMode.ElideRight, width)
+        rect = self.contentsRect()
+        width = max(0, rect.width())
+        fm = self.fontMetrics()
+        full = self._full
+        shown = fm.elidedText(full, QtCore.Qt.TextElideMode.ElideRight, width)
+        if shown != full and rect.height() >= 2 * fm.lineSpacing():
+            words, first = full.split(" "), ""
+            for n in range(1, len(words) + 1):  # the most words that fit on the first line
+                candidate = " ".join(words[:n])
+                if fm.horizontalAdvance(candidate) > width:
+                    break
+                first = candidate
+            if first:
+                rest = full[len(first):].strip()
+                shown = first + "\n" + fm.elidedText(rest, QtCore.Qt.TextElideMode.ElideRight, width)
         if shown != super().text():
             super().setText(shown)
