@@ -1,4 +1,6 @@
-"""Where the app keeps its state on disk: the workspace file and the URL history.
+"""Where the app keeps its state on disk: the workspace file, the URL history and each robot's connection
+settings (CA file, client certificate and key paths, whether it uses rosauth; never the secret, which
+lives in the OS credential store, see ``secret_store.py``).
 
 Everything lives under one config directory (platformdirs' user config dir by default; tests and the
 benchmark pass a temporary one), so a restart of the app finds what the operator left.
@@ -9,9 +11,12 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
+from typing import Any
 from urllib.parse import urlparse
 
 DEFAULT_URL = "ws://127.0.0.1:9090"
+#: the path settings a robot's connection keeps
+ROBOT_PATHS = ("ca_file", "client_cert", "client_key")
 HISTORY_LIMIT = 12
 #: ports the OS hands out for port 0 (Linux starts at 32768, Windows and macOS at 49152)
 EPHEMERAL_PORTS = range(32768, 65536)
@@ -80,7 +85,8 @@ class AppConfig:
 
     @property
     def url_history(self) -> list[str]:
-        """URLs the operator connected to, newest first."""
+        """URLs the operator connected to (each once connected; the bar records a URL when its link comes
+        up, so a typo or an unreachable robot never enters the history), newest first."""
         history = self._data.get("url_history", [])
         return [u for u in history if isinstance(u, str)] if isinstance(history, list) else []
 
@@ -98,6 +104,26 @@ class AppConfig:
             return
         history = [u for u in self.url_history if u != url]
         self._data["url_history"] = [url, *history][:HISTORY_LIMIT]
+        self.save()
+
+    def robot_settings(self, url: str) -> dict[str, Any]:
+        """The connection settings saved for ``url``: ``ca_file``, ``client_cert``, ``client_key`` (paths or
+        "") and ``auth`` (bool)."""
+        robots = self._data.get("robots")
+        saved = robots.get(url) if isinstance(robots, dict) else None
+        saved = saved if isinstance(saved, dict) else {}
+        out: dict[str, Any] = {k: str(saved.get(k) or "") for k in ROBOT_PATHS}
+        out["auth"] = bool(saved.get("auth", False))
+        return out
+
+    def set_robot_settings(self, url: str, settings: dict[str, Any]) -> None:
+        """Save ``url``'s connection settings (only the known keys; never a secret)."""
+        robots = self._data.get("robots")
+        robots = robots if isinstance(robots, dict) else {}
+        entry: dict[str, Any] = {k: str(settings.get(k) or "") for k in ROBOT_PATHS}
+        entry["auth"] = bool(settings.get("auth", False))
+        robots[url] = entry
+        self._data["robots"] = robots
         self.save()
 
     def save(self) -> None:

@@ -1,11 +1,27 @@
-"""The bar across the top: robot URL (with history), connect/disconnect, link state and latency."""
+"""The bar across the top: robot URL (with history), connect/disconnect, the robot's connection settings
+(Security, the lock button), link state, latency, and a one-line message.
+
+The message says why a link is not up, in the words of :mod:`rcon_core.bridge.reasons` ("connection
+refused · retrying in 3 s", "certificate not trusted (self-signed? pass the CA file)"), within a frame of
+the failed attempt; a fatal failure (TLS, refused authentication) ends the link, a retried one counts down.
+No text changes the window's width or the bar's height: the message takes a second line where the bar
+has the height, then is elided, the whole of it in its tooltip.  A URL enters
+the history once its link has come up, or, with rosauth, once its robot answered a call after the auth
+op (a robot refusing the secret opens the link and then closes it).
+"""
 
 from __future__ import annotations
 
-from qtpy import QtCore, QtWidgets
+from importlib import resources
+from typing import Any
+
+from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app.config import AppConfig
-from rcon_core.app.link import BadUrl, Link
+from rcon_core.app.elided_label import ElidedLabel
+from rcon_core.app.link import BadUrl, Link, LinkSettings, check_url
+from rcon_core.app.link_settings import LinkSettingsDialog
+from rcon_core.app.secret_store import SecretStore
 from rcon_core.app.theme import repolish
 
 
@@ -36,18 +52,34 @@ class ConnectionBar(QtWidgets.QFrame):
         super().__init__(parent)
         self.setObjectName("connectionBar")
         self.link, self.config = link, config
+        self.secrets = SecretStore()
+        #: settings from the command line (--ca-file, --client-cert/--client-key, the secret from
+        #: RCON_AUTH_SECRET or --auth-secret-file): they apply to every robot of this run
+        self.overrides = LinkSettings()
         self.state = "closed"
+        self.failure: Any = None  # the last reasons.Failure shown, until the link comes up
+        self.note = ""  # a rejected URL, said before the failure of the link still in use
+        self.dialog: LinkSettingsDialog | None = None
+        self._remember: str | None = None  # the URL to put in the history once connected
+        self._remember_on_answer = False
         self._last_latency_text = ""
 
         self.url = QtWidgets.QComboBox()
         self.url.setObjectName("urlField")
         self.url.setEditable(True)
         self.url.setInsertPolicy(QtWidgets.QComboBox.InsertPolicy.NoInsert)
-        self.url.setMinimumWidth(220)  # a 1024 px screen keeps its side panel toggle and state
+        # an 800 px window keeps its side panel toggle, the lock and the state
+        self.url.setMinimumWidth(200)
+        # a long URL in the history never widens the bar (and so the window)
+        self.url.setSizeAdjustPolicy(QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+        self.url.setMinimumContentsLength(16)
         self.url.addItems(config.url_history or [config.last_url])
         self.url.setCurrentText(config.last_url)
         line = self.url.lineEdit()
         assert line is not None  # the combo is editable
+        # the field names itself (no "Robot" label beside it: the bar keeps its room for the lock and state)
+        line.setPlaceholderText("robot URL, e.g. ws://192.168.1.10:9090")
+        self.url.setToolTip("The robot's rosbridge URL (ws:// or wss://)")
         # only a tap on it gives it the keyboard: never Tab, never a focused button disappearing (with its
         # text selected, one key would replace the robot's URL)
         for w in (self.url, line):
@@ -59,27 +91,38 @@ class ConnectionBar(QtWidgets.QFrame):
         self.connect_button.setObjectName("connectButton")
         self.connect_button.setProperty("primary", True)
         self.connect_button.clicked.connect(self.toggle)
-        fm = self.connect_button.fontMetrics()  # room for the longer label: "Disconnect" is never cut
-        self.connect_button.setMinimumWidth(max(fm.horizontalAdvance(t) for t in ("Connect", "Disconnect")) + 48)
+
+        # a square lock button (a word would not fit a 1024 px bar): the robot's connection settings
+        self.settings_button = QtWidgets.QPushButton()
+        self.settings_button.setObjectName("linkSettingsButton")
+        self.settings_button.setProperty("square", True)
+        self.settings_button.setIcon(QtGui.QIcon(str(resources.files("rcon_core.app") / "link-settings.svg")))
+        self.settings_button.setIconSize(QtCore.QSize(22, 22))
+        self.settings_button.setAccessibleName("Security")
+        self.settings_button.setToolTip("Security: this robot's connection settings (CA file, client "
+                                        "certificate, rosauth secret)")
+        self.settings_button.clicked.connect(lambda: self.open_settings())
 
         self.state_label = QtWidgets.QLabel()
         self.state_label.setObjectName("linkState")
         self.state_label.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
+        self.state_label.setProperty("state", "closed")
         self.latency_label = QtWidgets.QLabel("—")
         self.latency_label.setObjectName("latency")
         self.latency_label.setToolTip("round-trip time to the robot")
-        self.message = QtWidgets.QLabel()
+        self.message = ElidedLabel()
+        self.message.setObjectName("linkMessage")
         self.message.setProperty("role", "problem")
 
         row = QtWidgets.QHBoxLayout(self)
         row.setContentsMargins(10, 8, 10, 8)
         row.setSpacing(10)
-        row.addWidget(QtWidgets.QLabel("Robot"))
         row.addWidget(self.url, 1)
         row.addWidget(self.connect_button)
+        row.addWidget(self.settings_button)
         row.addWidget(self.state_label)
         row.addWidget(self.latency_label)
-        row.addWidget(self.message, 1)
+        row.addWidget(self.message, 2)  # the message gets the room: the reason comes first, then the countdown
         self._show_state("closed")
 
     # ---------------------------------------------------------------------------------------- actions
@@ -88,6 +131,8 @@ class ConnectionBar(QtWidgets.QFrame):
             self.connect_clicked()
         else:
             self.link.disconnect()
+            self.failure, self.note = None, ""
+            self.message.clear()
             self._show_state("closed")
 
     def _return_pressed(self) -> None:
@@ -104,20 +149,63 @@ class ConnectionBar(QtWidgets.QFrame):
         demo's embedded robot, whose port is gone after the run)."""
         text = normalize_url(self.url.currentText())
         try:
-            self.link.connect_to(text)
+            text = check_url(text)
         except BadUrl as exc:
-            active = self.link.url if self.link.client is not None else None
-            if active:  # the field shows the URL actually in use, never the rejected text
-                self._set_field(active)
-                self.message.setText(f"{exc}; still connected to {active}")
-            else:
-                self.message.setText(str(exc))
+            self._bad_url(exc)
             return
+        settings = self.settings_for(text)
+        if settings is None:  # the robot checks a secret and none is known in this run
+            self.message.setText("this robot checks a secret: enter it in Security (the lock)")
+            self.open_settings(ask_secret=True)
+            return
+        self.failure, self.note = None, ""
+        self.link.connect_to(text, settings)
         self.message.clear()
-        if remember:
-            self.config.remember_url(text)
+        self._remember = text if remember else None
+        # without auth a link that comes up is a robot that accepted it; with auth, only an answer after
+        # the auth op tells (a robot refusing the secret opens the link and then closes it)
+        self._remember_on_answer = settings.secret is not None
         self._set_field(text)
         self._show_state("connecting")
+
+    def _bad_url(self, exc: BadUrl) -> None:
+        active = self.link.url if self.link.client is not None else None
+        if active:  # the field shows the URL actually in use, never the rejected text
+            self._set_field(active)
+            verb = "still connected to" if self.state == "connected" else "still trying"
+            self.note = f"{exc} · {verb} {active}"
+        else:
+            self.note = str(exc)
+        self.message.setText(self.note if self.failure is None else f"{self.note}: {self.failure.text()}")
+
+    def settings_for(self, url: str) -> LinkSettings | None:
+        """How to connect to ``url``: its saved settings under this run's command-line ones; None when it
+        checks a secret and none is known (not from the command line, the credential store or this run)."""
+        saved = self.config.robot_settings(url)
+        cli = self.overrides
+        secret = cli.secret
+        if saved["auth"] and not secret:
+            secret = self.secrets.get(url)
+            if not secret:
+                return None
+        return LinkSettings(ca_file=cli.ca_file or saved["ca_file"] or None,
+                            client_cert=cli.client_cert or saved["client_cert"] or None,
+                            client_key=cli.client_key or saved["client_key"] or None, secret=secret)
+
+    def open_settings(self, ask_secret: bool = False) -> LinkSettingsDialog | None:
+        """Open the Security dialog for the URL in the field; saving it connects with the new settings."""
+        try:
+            url = check_url(normalize_url(self.url.currentText()))
+        except BadUrl as exc:
+            self._bad_url(exc)
+            return None
+        if self.dialog is not None:
+            self.dialog.close()
+        dialog = LinkSettingsDialog(url, self.config, self.secrets, self.window(), ask_secret=ask_secret)
+        dialog.accepted.connect(lambda: self.connect_clicked())
+        self.dialog = dialog
+        dialog.open()
+        return dialog
 
     def _set_field(self, text: str) -> None:
         self.url.blockSignals(True)
@@ -125,6 +213,42 @@ class ConnectionBar(QtWidgets.QFrame):
         self.url.addItems(self.config.url_history)
         self.url.setCurrentText(text)
         self.url.blockSignals(False)
+
+    def _keep_url(self) -> None:
+        """The robot at ``_remember`` accepted the link: a URL worth keeping in the history."""
+        url, self._remember = self._remember, None
+        if url is None:
+            return
+        self.config.remember_url(url)
+        line = self.url.lineEdit()
+        if line is None or not line.hasFocus():
+            self._set_field(url)
+
+    def _fit_widths(self) -> None:
+        """Room for the button's longer label, measured with its styled font (known once the theme is
+        applied, so measured again at each state change): "Disconnect" is never cut, and the bar's minimum
+        width is the same in every state."""
+        button = self.connect_button
+        shown = button.text()
+        widths = []
+        for text in ("Connect", "Disconnect"):
+            button.setText(text)
+            widths.append(button.sizeHint().width())  # text, padding and border as styled
+        button.setText(shown)
+        button.setMinimumWidth(max(widths))
+        # the state label likewise keeps the width of its longest word (DISCONNECTED, RECONNECTING)
+        label = self.state_label
+        shown, widths = label.text(), []
+        label.setMinimumWidth(0)
+        for text in STATE_TEXT.values():
+            label.setText(text)
+            widths.append(label.sizeHint().width())
+        label.setText(shown)
+        label.setMinimumWidth(max(widths))
+
+    def showEvent(self, event: QtGui.QShowEvent) -> None:  # noqa: N802 - Qt's name
+        super().showEvent(event)
+        self._fit_widths()  # the stylesheet's font is in force by now
 
     # ------------------------------------------------------------------------------------ per frame
     def poll(self, _now: float = 0.0) -> None:
@@ -134,6 +258,20 @@ class ConnectionBar(QtWidgets.QFrame):
         ok, error = self.link.error_box.take()
         if ok and self.link.client is not None:
             self.message.setText(str(error))
+        ok, failure = self.link.failure_box.take()
+        if ok and (failure is not None or not getattr(self.failure, "fatal", False)):
+            self.failure = failure
+            if failure is not None and failure.fatal:
+                self.link.disconnect()  # retrying cannot help: the operator changes a setting first
+                self._show_state("closed")
+            elif failure is None and self.state != "connected":
+                self.message.clear()
+        ok, answered = self.link.answered_box.take()
+        if ok and answered is not None and answered == self._remember == self.link.url:
+            self._keep_url()
+        if self.failure is not None:
+            why = self.failure.text()
+            self.message.setText(f"{self.note}: {why}" if self.note else why)
         latency = self.link.latency if self.state == "connected" else None
         text = "—" if latency is None else ("<1 ms" if latency < 0.0005 else f"{latency * 1000:.0f} ms")
         if text != self._last_latency_text:
@@ -146,6 +284,21 @@ class ConnectionBar(QtWidgets.QFrame):
         self.state_label.setProperty("state", state)
         repolish(self.state_label)
         self.connect_button.setText("Connect" if self.link.client is None else "Disconnect")
+        self._fit_widths()
+        # a latency means something only while connected; otherwise its room goes to the message, which
+        # then asks for that room as its minimum: the bar's minimum width is the same in every state
+        # (the smaller minimum first, so the bar never asks for both at once, not even for one layout pass)
+        connected = state == "connected"
+        spacing = layout.spacing() if (layout := self.layout()) is not None else 0
+        if connected:
+            self.message.setMinimumWidth(0)
+            self.latency_label.setVisible(True)
+        else:
+            self.latency_label.setVisible(False)
+            self.message.setMinimumWidth(self.latency_label.minimumSizeHint().width() + spacing)
         if state == "connected":
+            self.failure, self.note = None, ""
             self.message.clear()
+            if self._remember is not None and self._remember == self.link.url and not self._remember_on_answer:
+                self._keep_url()
         self.state_changed.emit(state)

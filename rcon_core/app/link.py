@@ -1,19 +1,26 @@
 """The app's link to the robot: one BridgeClient living on a BridgeThread, seen from the GUI thread.
 
 Every network operation runs on the bridge thread.  The GUI reads what the bridge thread left behind:
-the connection state in a :class:`LatestValue` mailbox, the latency as a float attribute, and the topic
-and service catalogue in another mailbox.  Nothing here blocks the GUI thread.
+the connection state in a :class:`LatestValue` mailbox, the latency as a float attribute, the topic
+and service catalogue in another mailbox, and why the last attempt failed (a
+:class:`rcon_core.bridge.reasons.Failure`, None once connected) in a third.  Nothing here blocks the GUI
+thread.  Connecting to another robot, or disconnecting, empties the catalogue at once: the previous
+robot's topics never stay on screen as if they were the new one's.
 """
 
 from __future__ import annotations
 
 import asyncio
+import ipaddress
 import logging
+import re
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 from urllib.parse import urlparse
 
 from rcon_core.bridge import BridgeClient, ConnectionState
+from rcon_core.bridge.secure import confirm_auth, rosauth
 from rcon_core.bridge.threaded import BridgeThread, LatestValue
 
 log = logging.getLogger(__name__)
@@ -36,11 +43,41 @@ def check_url(url: str) -> str:
         raise BadUrl(f"{url!r}: the URL must start with ws:// or wss://")
     if not parsed.hostname:
         raise BadUrl(f"{url!r}: the URL has no host name")
+    if not _host_ok(parsed.hostname):
+        raise BadUrl(f"{parsed.hostname!r} is not a host name or an IP address")
     try:
         parsed.port  # noqa: B018 - raises on a bad port
     except ValueError:
         raise BadUrl(f"{url!r}: the port is not a number between 0 and 65535") from None
     return url
+
+
+_LABEL = re.compile(r"^[A-Za-z0-9_]([A-Za-z0-9_-]{0,61}[A-Za-z0-9_])?$")
+EMPTY_CATALOG: dict[str, list[tuple[str, str]]] = {"topics": [], "services": []}
+
+
+def _host_ok(host: str) -> bool:
+    try:
+        ipaddress.ip_address(host)
+        return True
+    except ValueError:
+        pass
+    labels = host[:-1].split(".") if host.endswith(".") else host.split(".")
+    return len(host) <= 253 and all(_LABEL.match(label) for label in labels)
+
+
+@dataclass(frozen=True)
+class LinkSettings:
+    """How to reach one robot securely: TLS files (paths) and the rosauth secret (None: no auth)."""
+
+    ca_file: str | None = None
+    client_cert: str | None = None
+    client_key: str | None = None
+    secret: str | None = None
+
+    def client_options(self, url: str) -> dict[str, Any]:
+        return {"ca_file": self.ca_file or None, "client_cert": self.client_cert or None,
+                "client_key": self.client_key or None, "auth": rosauth(self.secret, url) if self.secret else None}
 
 
 def state_name(state: Any) -> str:
@@ -62,6 +99,9 @@ class Link:
         self.state_box = LatestValue()
         self.catalog_box = LatestValue()
         self.error_box = LatestValue()
+        self.failure_box = LatestValue()
+        #: the URL of a link whose robot answered a call (so it goes into the URL history)
+        self.answered_box = LatestValue()
         self._catalog_task: asyncio.Task | None = None
         self._generation = 0
         self._listeners: list[Callable[[BridgeClient | None], None]] = []
@@ -72,13 +112,13 @@ class Link:
         """``fn(client)`` is called (on the GUI thread, from :meth:`connect_to`) when the client changes."""
         self._listeners.append(fn)
 
-    def connect_to(self, url: str) -> None:
+    def connect_to(self, url: str, settings: LinkSettings | None = None) -> None:
         """Close any current client and connect to ``url`` (with automatic reconnection)."""
         url = check_url(url)
         self.disconnect()
         self._generation += 1
         gen = self._generation
-        client = BridgeClient(url, reconnect=True)
+        client = BridgeClient(url, reconnect=True, **(settings or LinkSettings()).client_options(url))
         self.client, self.url = client, url
         self.state_box.put("connecting")
         self.thread.call(self._wire, client, gen)
@@ -89,6 +129,8 @@ class Link:
         """Close the current client, if any (returns at once; the close runs on the bridge thread)."""
         client, self.client = self.client, None
         self._generation += 1
+        self.failure_box.put(None)
+        self.catalog_box.put(EMPTY_CATALOG)
         if client is None:
             return
         for fn in self._listeners:
@@ -120,21 +162,33 @@ class Link:
             if gen == self._generation:
                 self.state_box.put(state_name(state))
                 if state_name(state) == "connected":
+                    self.failure_box.put(None)
                     self._start_catalog(client, gen)
 
+        def on_failure(failure: Any) -> None:
+            if gen == self._generation:
+                self.failure_box.put(failure)
+
         client.add_state_listener(on_state)
+        client.add_failure_listener(on_failure)
         asyncio.ensure_future(self._connect(client, gen))
 
     async def _connect(self, client: BridgeClient, gen: int) -> None:
         try:
             await client.connect()
         except Exception as exc:  # with reconnect=True the client keeps trying on its own
-            if gen == self._generation:
+            if gen == self._generation and client.failure is None:  # else failure_box says why, in words
                 self.error_box.put(f"could not connect: {exc}")
             return
         if gen == self._generation:
             self.state_box.put(state_name(client.state))
             self._start_catalog(client, gen)
+        try:  # the robot answers a call: it accepted the link (and the auth op, if any)
+            await confirm_auth(client)
+        except Exception:  # refused: the client reports it as a fatal failure
+            return
+        if gen == self._generation:
+            self.answered_box.put(client.url)
 
     def _start_catalog(self, client: BridgeClient, gen: int) -> None:
         if self._catalog_task is not None and not self._catalog_task.done():
@@ -145,7 +199,9 @@ class Link:
         while gen == self._generation:
             if state_name(client.state) == "connected":
                 try:
-                    self.catalog_box.put(await fetch_catalog(client))
+                    catalog = await fetch_catalog(client)
+                    if gen == self._generation:
+                        self.catalog_box.put(catalog)
                 except Exception as exc:
                     log.debug("catalogue refresh failed: %s", exc)
             await asyncio.sleep(CATALOG_PERIOD)
@@ -167,9 +223,12 @@ class Link:
 
         async def once() -> None:
             try:
-                self.catalog_box.put(await fetch_catalog(client))
+                catalog = await fetch_catalog(client)
             except Exception as exc:
                 self.error_box.put(f"could not list topics: {exc}")
+                return
+            if client is self.client:
+                self.catalog_box.put(catalog)
 
         self.thread.run(once())
 

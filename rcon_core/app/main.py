@@ -1,4 +1,5 @@
-"""``rcon`` without a subcommand: open the app (``--url``, ``--layout``, ``--demo``, ``--screenshot``)."""
+"""``rcon`` without a subcommand: open the app (``--url``, ``--layout``, ``--demo``, ``--screenshot``, and
+the secure-link options ``--ca-file``, ``--client-cert``/``--client-key``, ``--auth-secret-file``)."""
 
 from __future__ import annotations
 
@@ -51,6 +52,21 @@ def closing_on_signals(windows: list[Any]) -> Any:
             signal.signal(sig, old)
 
 
+def link_overrides(args: Any) -> Any:
+    """The command line's --ca-file, --client-cert/--client-key and secret (``RCON_AUTH_SECRET`` or
+    --auth-secret-file) as :class:`~rcon_core.app.link.LinkSettings`; a file that cannot be used raises
+    ``LinkSettingsError`` (a ValueError) naming it."""
+    from rcon_core.app.link import LinkSettings
+    from rcon_core.bridge.secure import read_secret, ssl_context
+
+    ca_file = getattr(args, "ca_file", None)
+    cert, key = getattr(args, "client_cert", None), getattr(args, "client_key", None)
+    if ca_file or cert or key:
+        ssl_context(ca_file, cert, key)
+    return LinkSettings(ca_file=ca_file, client_cert=cert, client_key=key,
+                        secret=read_secret(getattr(args, "auth_secret_file", None)))
+
+
 def run_app(args: Any) -> int:
     """Open the window; returns the process exit code."""
     from qtpy import QtCore, QtWidgets
@@ -68,6 +84,11 @@ def run_app(args: Any) -> int:
         except BadUrl as exc:
             print(f"rcon: {exc}", file=sys.stderr)
             return 2
+    try:
+        overrides = link_overrides(args)
+    except ValueError as exc:
+        print(f"rcon: {exc}", file=sys.stderr)
+        return 2
     demo = bool(getattr(args, "demo", False))
     if getattr(args, "reset_layout", False) and not demo:
         print("rcon: --reset-layout resets the demo layout; use it with --demo", file=sys.stderr)
@@ -99,6 +120,7 @@ def run_app(args: Any) -> int:
         # the demo layout is built on its first start only (or when it cannot be read); edits persist
         window = MainWindow(config, plugins, layout_path=layout, demo=demo_factory)
         windows.append(window)
+        window.connection.overrides = overrides
         if demo and getattr(args, "reset_layout", False):
             window.reset_demo_layout()
         window.show()

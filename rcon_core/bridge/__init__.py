@@ -4,8 +4,10 @@ from .client import BridgeClient, ConnectionState
 from .errors import (
     ActionError,
     ActionTimeoutError,
+    AuthRefusedError,
     BridgeError,
     ConnectionLostError,
+    LinkSettingsError,
     NotConnectedError,
     ProtocolError,
     ServiceError,
@@ -14,7 +16,7 @@ from .errors import (
 from .nodes import ActionGoal, GoalStatus, Node, Publisher, ServiceServer, Subscription
 
 __all__ = [
-    "ActionError", "ActionGoal", "ActionTimeoutError", "BridgeClient", "BridgeError", "ConnectionLostError",
-    "ConnectionState", "GoalStatus", "Node", "NotConnectedError", "ProtocolError", "Publisher", "ServiceError",
+    "ActionError", "ActionGoal", "ActionTimeoutError", "AuthRefusedError", "BridgeClient", "BridgeError", "ConnectionLostError",
+    "ConnectionState", "GoalStatus", "LinkSettingsError", "Node", "NotConnectedError", "ProtocolError", "Publisher", "ServiceError",
     "ServiceServer", "ServiceTimeoutError", "Subscription",
 ]

@@ -7,7 +7,9 @@ Reconnect
     exponential backoff (``backoff_min`` doubling up to ``backoff_max``) with full jitter.  After every
     (re)connect the client sends, in order: ``auth`` (when configured), ``set_level`` (when set), every
     advertisement, every advertised service, then every subscription -- rosbridge forgets all of them with
-    the connection (README point 30).  TLS certificate errors are fatal rather than retried.
+    the connection (README point 30).  TLS certificate errors and a refused ``auth`` are fatal rather
+    than retried.  Each failed attempt is put in words by ``reasons.describe``; ``client.failure`` holds
+    the last one and failure listeners get it, with the time of the next attempt (``retry_at``).
 
 State
     CONNECTING (first attempt) -> CONNECTED -> RECONNECTING (link lost, retrying) -> CONNECTED ...;
@@ -72,12 +74,13 @@ import inspect
 import logging
 import random
 import ssl
+import time
 from collections import deque
 from collections.abc import Awaitable, Callable, Generator
 from typing import Any
 
 import orjson
-from websockets.asyncio.client import ClientConnection, connect, process_exception
+from websockets.asyncio.client import ClientConnection, connect
 from websockets.exceptions import ConnectionClosed
 from websockets.protocol import State
 
@@ -85,6 +88,7 @@ from .defaults import default_from_typedefs
 from .errors import (
     ActionError,
     ActionTimeoutError,
+    AuthRefusedError,
     BridgeError,
     ConnectionLostError,
     NotConnectedError,
@@ -94,6 +98,8 @@ from .errors import (
 from .nodes import ActionGoal, Node, Publisher, ServiceServer, Subscription
 from .protocol import FragmentAssembler, decode_binary, decode_png, encode
 from .rawdecode import RawDecoder, _short, has_fixed_arrays
+from .reasons import Failure, describe, refused_auth
+from .secure import ssl_context
 from .topics import AdvertEntry, TopicEntry
 
 log = logging.getLogger(__name__)
@@ -183,7 +189,8 @@ class BridgeClient:
                  registry: Any = None, typed_arrays: str = "list", backoff_min: float = 0.25,
                  backoff_max: float = 10.0, latency_interval: float = 2.0, pong_timeout: float = 10.0,
                  open_timeout: float = 10.0, max_message_size: int = 64 << 20,
-                 max_frame_size: int = 256 << 20, fragment_timeout: float = 10.0) -> None:
+                 max_frame_size: int = 256 << 20, fragment_timeout: float = 10.0,
+                 client_cert: str | None = None, client_key: str | None = None) -> None:
         if not isinstance(url, str) or not url.startswith(("ws://", "wss://")):
             raise ValueError(f"url must start with ws:// or wss://, got {url!r}")
         if typed_arrays not in ("list", "numpy"):
@@ -193,6 +200,7 @@ class BridgeClient:
         self.url = url
         self.reconnect = reconnect
         self.ca_file = ca_file
+        self.client_cert, self.client_key = client_cert, client_key
         self.auth = auth
         self.call_timeout = call_timeout
         self.registry = registry
@@ -206,6 +214,8 @@ class BridgeClient:
         self.max_frame_size = max_frame_size
         self.latency: float | None = None
         self.last_error: BaseException | None = None
+        self.failure: Failure | None = None
+        self._failure_listeners: list[Callable[[Failure], None]] = []
         self.stats: dict[str, int] = {"connects": 0, "bad_frames": 0, "dropped_while_down": 0,
                                       "dropped_on_disconnect": 0, "oversize_frames": 0}
         self._state = ConnectionState.CLOSED
@@ -264,6 +274,24 @@ class BridgeClient:
         self._status_listeners.append(fn)
         return lambda: self._status_listeners.remove(fn) if fn in self._status_listeners else None
 
+    def add_failure_listener(self, fn: Callable[[Failure], None]) -> Callable[[], None]:
+        """Call ``fn(failure)`` (on the loop thread) for each failed attempt: why in words, whether it is
+        fatal, and ``retry_at`` (``time.monotonic()``) of the next attempt; returns a remover."""
+        self._failure_listeners.append(fn)
+        return lambda: self._failure_listeners.remove(fn) if fn in self._failure_listeners else None
+
+    def _report(self, failure: Failure) -> None:
+        self.failure = failure
+        for fn in list(self._failure_listeners):
+            try:
+                fn(failure)
+            except Exception:
+                log.exception("failure listener raised")
+
+    def _why(self, exc: BaseException) -> Failure:
+        without_cert = self.url.startswith("wss:") and not self.client_cert
+        return describe(exc, ca_file=self.ca_file, wss_without_cert=without_cert)
+
     def _set_state(self, state: ConnectionState) -> None:
         if state is self._state:
             return
@@ -290,22 +318,24 @@ class BridgeClient:
     def _ssl_context(self) -> ssl.SSLContext | None:
         if not self.url.startswith("wss://"):
             return None
-        ctx = ssl.create_default_context(cafile=self.ca_file) if self.ca_file else ssl.create_default_context()
-        return ctx
+        return ssl_context(self.ca_file, self.client_cert, self.client_key)
 
     def _delays(self) -> Generator[float]:
         delay = self.backoff_min
         while True:
-            yield random.uniform(self.backoff_min / 2, delay)  # jitter
+            wait = random.uniform(self.backoff_min / 2, delay)  # jitter
+            if self.last_error is not None:  # drawn right after a failed attempt: say why, and when next
+                self._report(self._why(self.last_error).retrying(wait))
+            yield wait
             delay = min(delay * 2, self.backoff_max)
 
     def _process_exception(self, exc: Exception) -> Exception | None:
         self.last_error = exc
-        if isinstance(exc, ssl.SSLCertVerificationError):
-            return exc  # retrying cannot fix a certificate problem
+        if describe(exc).fatal:
+            return exc  # retrying cannot fix a certificate problem, a bad URL...
         if self._state is not ConnectionState.CLOSED:
             log.info("connecting to %s failed: %s", self.url, exc)
-        return process_exception(exc)
+        return None
 
     def _connector(self) -> connect:
         return connect(self.url, ssl=self._ssl_context(), compression=None, ping_interval=None,
@@ -326,6 +356,8 @@ class BridgeClient:
                     ws = await self._connector()
                 except BaseException as exc:
                     self.last_error = exc
+                    if isinstance(exc, Exception):
+                        self._report(self._why(exc))
                     self._set_state(ConnectionState.CLOSED)
                     raise
                 self._task = asyncio.create_task(self._serve_once(ws))
@@ -372,15 +404,20 @@ class BridgeClient:
     async def _run(self) -> None:
         try:
             async for ws in self._connector():
+                opened = time.monotonic()
                 await self._serve_once(ws, final=False)
                 if self._closing:
                     break
+                if refused_auth(ws.close_code, ws.close_reason, auth_sent=self.auth is not None,
+                                seconds_open=time.monotonic() - opened):
+                    raise AuthRefusedError(f"{self.url} closed the link after the auth op")
                 self._set_state(ConnectionState.RECONNECTING)
                 await asyncio.sleep(random.uniform(0, self.backoff_min))  # never a tight reconnect loop
         except asyncio.CancelledError:
             raise
         except Exception as exc:
             self.last_error = exc
+            self._report(self._why(exc))
             log.error("giving up on %s: %s", self.url, exc)
             raise
         finally:

@@ -61,3 +61,13 @@ class ActionTimeoutError(ActionError, TimeoutError):
 
 class ProtocolError(BridgeError):
     """A frame from the server could not be understood (logged, never raised out of the reader)."""
+
+
+class AuthRefusedError(BridgeError):
+    """The robot closed the link right after the ``auth`` op: it refused the rosauth credentials (a wrong
+    secret, or a clock too far from the robot's).  Fatal: the client does not retry."""
+
+
+class LinkSettingsError(BridgeError, ValueError):
+    """A CA file, client certificate, key or auth secret that cannot be used; the message says which and
+    why.  Fatal: nothing is retried with settings that cannot work."""

@@ -1,10 +1,12 @@
 """``rcon topics|services|type|echo|pub|call``: the robot's graph and traffic from a terminal.
 
-Every command takes ``--url`` (default ws://localhost:9090), ``--json`` and ``--timeout`` (how long to wait
-for the robot; ``echo`` waits for ever unless given one).  Failures print one line on stderr (the server's
-own message where it sent one) and exit non-zero: 1 for a failed call, connection or refusal, 2 for bad
-input.  ``pub`` and ``echo`` of a type that is not standard first ask the robot whether it knows it
-(rosbridge 0.11 refuses such a type only in its log; see :mod:`rcon_core.bridge.typecheck`).
+Every command takes ``--url`` (default ws://localhost:9090), ``--json``, ``--timeout`` (how long to wait
+for the robot; ``echo`` waits for ever unless given one) and the secure-link options (``--ca-file``,
+``--client-cert``/``--client-key``, ``--auth-secret-file`` or ``$RCON_AUTH_SECRET``).  Failures print one
+line on stderr (the server's own message where it sent one) and exit non-zero: 1 for a failed call,
+connection or refusal, 2 for bad input.  ``pub`` and ``echo`` of a type that is not standard first ask the
+robot whether it knows it (rosbridge 0.11 refuses such a type only in its log; see
+:mod:`rcon_core.bridge.typecheck`).
 """
 
 from __future__ import annotations
@@ -19,14 +21,16 @@ from typing import Any
 
 import orjson
 
+from rcon_core.cli.link_options import add_link_options, open_client
+
 DEFAULT_URL = "ws://localhost:9090"
-CONNECT_TIMEOUT = 5.0
 
 
 def configure(name: str, parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--url", dest="bridge_url", metavar="URL",
                         help=f"rosbridge WebSocket URL (default {DEFAULT_URL})")
     parser.add_argument("--json", action="store_true", help="machine-readable JSON output")
+    add_link_options(parser)
     if name == "type":
         parser.add_argument("type_name", metavar="TYPE", help="message or service type, e.g. sensor_msgs/Imu")
     elif name == "echo":
@@ -95,16 +99,9 @@ def _json(value: Any, indent: bool = False) -> str:
     return orjson.dumps(value, default=_default, option=opts).decode()
 
 
-async def _connect(url: str) -> Any:
-    from rcon_core.bridge import BridgeClient
-
-    client = BridgeClient(url, reconnect=False, call_timeout=10.0)
-    try:
-        await asyncio.wait_for(client.connect(), CONNECT_TIMEOUT)
-    except (OSError, TimeoutError, Exception) as exc:
-        _err(f"cannot connect to {url}: {exc or type(exc).__name__}")
-        return None
-    return client
+async def _connect(url: str, args: argparse.Namespace) -> Any:
+    """A connected client, or None after one line saying why not (see ``link_options.open_client``)."""
+    return await open_client(url, args, call_timeout=10.0)
 
 
 def _table(rows: dict[str, str]) -> None:
@@ -143,7 +140,7 @@ async def _listing(url: str, args: argparse.Namespace, fetch: Any) -> int:
     """Print what ``fetch(client.rosapi)`` returns ([(name, type)...]) as a table, or JSON with --json."""
     from rcon_core.bridge import ServiceError
 
-    client = await _connect(url)
+    client = await _connect(url, args)
     if client is None:
         return 1
     try:
@@ -241,7 +238,7 @@ async def _type(url: str, args: argparse.Namespace) -> int:
 async def _echo(url: str, args: argparse.Namespace) -> int:
     from rcon_core.cli.refusals import StatusErrors, silent_for, type_refusal
 
-    client = await _connect(url)
+    client = await _connect(url, args)
     if client is None:
         return 1
     done = asyncio.Event()
@@ -337,7 +334,7 @@ async def _pub(url: str, args: argparse.Namespace) -> int:
         return 2
     from rcon_core.cli.refusals import StatusErrors, type_refusal
 
-    client = await _connect(url)
+    client = await _connect(url, args)
     if client is None:
         return 1
     status = StatusErrors(client, args.topic)
@@ -383,7 +380,7 @@ async def _call(url: str, args: argparse.Namespace) -> int:
         if request is not None and not isinstance(request, dict | list):
             _err("ARGS must be a mapping like '{data: true}' or a list")
             return 2
-    client = await _connect(url)
+    client = await _connect(url, args)
     if client is None:
         return 1
     try:

@@ -40,6 +40,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="with --demo: replace the saved demo layout by a fresh one")
     parser.add_argument("--screenshot", metavar="PATH", help="write a PNG of the window, then exit")
     parser.add_argument("--quit-after", type=float, metavar="SECONDS", help="quit after this many seconds")
+    from rcon_core.cli.link_options import add_link_options
+
+    add_link_options(parser)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, (module, help_text) in COMMANDS.items():
         p = sub.add_parser(name, help=help_text, description=help_text)

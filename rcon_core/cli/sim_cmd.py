@@ -5,8 +5,16 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
+import ipaddress
 import logging
 import signal
+import ssl
+import sys
+
+OPEN_WARNING = """\
+rcon sim: WARNING: listening on {host} without --auth.
+rcon sim: WARNING: anyone who can reach this address can drive the simulated robot and read everything;
+rcon sim: WARNING: add --auth SECRET (and --tls-cert/--tls-key), or listen on 127.0.0.1 only."""
 
 
 def configure(name: str, parser: argparse.ArgumentParser) -> None:
@@ -21,6 +29,8 @@ def configure(name: str, parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-plugin-types", action="store_true",
                         help="do not load the message types installed widget plugins contribute (the sim then "
                         "refuses them, like a robot without the lab's package)")
+    parser.add_argument("--tls-cert", metavar="FILE", help="serve wss:// with this certificate (PEM)")
+    parser.add_argument("--tls-key", metavar="FILE", help="the certificate's private key (PEM)")
     parser.add_argument("-v", "--verbose", action="store_true", help="log every client op")
 
 
@@ -34,20 +44,45 @@ def run(name: str, args: argparse.Namespace) -> int:
     if not 0 <= args.port <= 65535:
         print(f"rcon sim: --port must be between 0 and 65535, got {args.port}")
         return 2
+    if bool(args.tls_cert) != bool(args.tls_key):
+        print("rcon sim: --tls-cert and --tls-key go together", file=sys.stderr)
+        return 2
+    try:
+        tls = _tls_context(args.tls_cert, args.tls_key) if args.tls_cert else None
+    except (OSError, ssl.SSLError) as exc:
+        print(f"rcon sim: cannot use {args.tls_cert} / {args.tls_key}: {exc}", file=sys.stderr)
+        return 2
+    if not _loopback(args.host) and not args.auth:
+        print(OPEN_WARNING.format(host=args.host), file=sys.stderr, flush=True)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     try:
-        return asyncio.run(_serve(args))
+        return asyncio.run(_serve(args, tls))
     except KeyboardInterrupt:
         return 0
 
 
-async def _serve(args: argparse.Namespace) -> int:
+def _loopback(host: str) -> bool:
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def _tls_context(cert: str, key: str) -> ssl.SSLContext:
+    ctx = ssl.SSLContext(ssl.PROTOCOL_TLS_SERVER)
+    ctx.load_cert_chain(cert, key)
+    return ctx
+
+
+async def _serve(args: argparse.Namespace, tls: ssl.SSLContext | None = None) -> int:
     from rcon_core.sim import SimServer
 
     server = SimServer(host=args.host, port=args.port, ros2=args.ros2, rate_scale=args.rate_scale,
                        auth_secret=args.auth, max_frame=int(args.max_frame * 1024 * 1024),
-                       plugin_types=not args.no_plugin_types)
+                       plugin_types=not args.no_plugin_types, ssl=tls)
     try:
         await server.start()
     except OSError as exc:

@@ -45,7 +45,7 @@ class SimServer:
     def __init__(self, host: str = "127.0.0.1", port: int = 0, ros2: bool = False, rate_scale: float = 1.0,
                  auth_secret: str | None = None, *, robot: bool = True, max_frame: int = gate.DEFAULT_MAX_FRAME,
                  auth_frame_limit: int = gate.AUTH_FRAME_LIMIT, auth_timeout: float = gate.AUTH_TIMEOUT_S,
-                 plugin_types: bool = False) -> None:
+                 plugin_types: bool = False, ssl: Any = None) -> None:
         if rate_scale <= 0:
             raise ValueError(f"rate_scale must be positive, got {rate_scale}")
         if max_frame < 1024 or auth_frame_limit < 256 or auth_timeout <= 0:
@@ -59,6 +59,7 @@ class SimServer:
         self.ros2 = ros2
         self.rate_scale = rate_scale
         self.auth_secret = auth_secret
+        self.ssl = ssl  # an ssl.SSLContext (server side): serve wss://
         self.flavour = Flavour(ros2)
         #: ``plugin_types``: also know the types installed widget plugins contribute (see TypeSource)
         self.types = TypeSource(ros2, lambda: self.flavour.time(), plugin_types=plugin_types)
@@ -90,7 +91,7 @@ class SimServer:
     @property
     def url(self) -> str:
         host = f"[{self.host}]" if ":" in self.host else self.host
-        return f"ws://{host}:{self._port}"
+        return f"{'wss' if self.ssl is not None else 'ws'}://{host}:{self._port}"
 
     async def start(self) -> None:
         """Bind the socket, set up rosapi and the robot, and start simulating."""
@@ -121,7 +122,7 @@ class SimServer:
         if self.auth_secret is not None:  # the first message is small; the gate raises the limit after it
             limits = {"max_size": self.auth_frame_limit,
                       "create_connection": gate.gated_connection(self.auth_secret, self.max_frame)}
-        self._server = await serve(self._handle, self.host, self._requested_port, compression=None,
+        self._server = await serve(self._handle, self.host, self._requested_port, ssl=self.ssl, compression=None,
                                    ping_interval=20, ping_timeout=20, **limits)
         sock = next(iter(self._server.sockets))
         self._port = sock.getsockname()[1]
