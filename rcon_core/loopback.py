@@ -15,7 +15,7 @@ import asyncio
 import contextlib
 import socket
 import struct
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from typing import Any
 
 import orjson
@@ -28,7 +28,8 @@ class HostileServer:
     """A rosbridge-protocol server under the test's control.
 
     ``received`` holds every op a client sent (parsed), ``connections`` counts accepted connections.
-    ``on_subscribe(op) -> frames`` (optional) answers a subscribe with frames; ``send(frame, text=None)``
+    ``on_subscribe(op) -> frames`` (optional) answers a subscribe with frames (each a ``str``, ``bytes``
+    or ``(payload, text)``); ``send(frame, text=None)``
     pushes a frame to the current connection (``bytes`` with ``text=True`` is sent as a text frame without
     any UTF-8 check: the way to send invalid UTF-8).  ``drop()`` closes the current connection.
     """
@@ -37,7 +38,7 @@ class HostileServer:
         self.received: list[dict[str, Any]] = []
         self.connections = 0
         self.ws: ServerConnection | None = None
-        self.on_subscribe: Callable[[dict[str, Any]], list[Frame]] | None = None
+        self.on_subscribe: Callable[[dict[str, Any]], Iterable[Frame | tuple[Frame, bool]]] | None = None
         self._server: Any = None
         self._changed = asyncio.Event()
 
@@ -78,7 +79,10 @@ class HostileServer:
                 self._notify()
                 if op.get("op") == "subscribe" and self.on_subscribe is not None:
                     for frame in self.on_subscribe(op):
-                        await self._send(ws, frame)
+                        if isinstance(frame, tuple):  # (payload, text)
+                            await self._send(ws, *frame)
+                        else:
+                            await self._send(ws, frame)
         except Exception:  # noqa: BLE001 - a dropped connection ends this handler, nothing else
             pass
         finally:
