@@ -71,7 +71,7 @@ class _Hostile:
                          {"a": {"b": []}}, [[[]]], "\u0000\ud7ff", -0.0])
 
     def k_invalid_utf8(self) -> FuzzFrame:
-        if self.rng.random() < 0.2:  # rare: each one costs a reconnect
+        if self.rng.random() < 0.04:  # rare: each one costs a reconnect
             return FuzzFrame(b'{"op":"publish","topic":"' + self.topic.encode() + b'","msg":{"s":"\xff\xfe"}}',
                              True, fatal=True, kind="invalid-utf8")
         return self.k_bad_json()
