@@ -160,12 +160,14 @@ class _Hostile:
 
 def fuzz_frames(seed: int, count: int, topic: str = "/fuzz", valid_share: float = 0.3,
                 bomb_pixels: int = 5 << 20) -> Iterator[FuzzFrame]:
-    """``count`` frames, about ``valid_share`` of them valid publishes on ``topic``; deterministic per seed.
-    PNG bombs declare about ``bomb_pixels`` bytes of pixels (more than the client accepts)."""
+    """``count`` frames (a few more when the last valid message is cut into fragments), about
+    ``valid_share`` of the draws valid publishes on ``topic``; deterministic per seed.  PNG bombs declare
+    about ``bomb_pixels`` bytes of pixels (more than the client accepts)."""
     rng = random.Random(seed)
     hostile = _Hostile(rng, topic, bomb_pixels)
-    seq = 0
-    for _ in range(count):
+    seq = sent = 0
+    while sent < count:
+        sent += 1
         if rng.random() >= valid_share:
             yield hostile.make()
             continue
@@ -181,6 +183,7 @@ def fuzz_frames(seed: int, count: int, topic: str = "/fuzz", valid_share: float 
             yield FuzzFrame(png_frame(text), True, valid=seq, kind="valid-png")
         else:
             parts = fragments(text, rng.randint(5, 20))
+            sent += len(parts) - 1
             for part in parts[:-1]:
                 yield FuzzFrame(part, True, kind="valid-fragment")
             yield FuzzFrame(parts[-1], True, valid=seq, kind="valid-fragment")

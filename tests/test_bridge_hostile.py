@@ -14,7 +14,7 @@ import pytest
 from rcon_core.bridge import BridgeClient, ConnectionState
 from rcon_core.bridge.safety import bounded_repr, png_decoded_size, safe_text
 from rcon_core.loopback import HostileServer, png_data
-from rcon_core.sim.encoding import png_frame
+from rcon_core.sim.encoding import fragments, png_frame
 
 DEEP = "[" * 1000 + "]" * 1000  # orjson accepts it (its limit is 1024 levels); repr() of it recurses too deep
 
@@ -158,6 +158,25 @@ async def test_big_frames_are_decoded_in_a_worker_and_keep_their_order(hostile, 
     assert got[3]["blob"] == b"c" * (3 << 20) and got[5]["blob"] == noise
     assert client.stats["big_frames"] == 3 and client.stats["bad_frames"] == 0
     assert any(t.name.startswith("rcon-bridge-decode") for t in threading.enumerate())
+
+
+async def test_big_messages_completed_by_fragments_are_decoded_in_the_worker_in_order(hostile, client):
+    """A 2 MB publish cut into rosbridge fragments, and a big png frame sent as pieces of its base64 data
+    (``png`` with num/total): both are decoded off the loop, between small frames, in order."""
+    got = await subscribe(hostile, client)
+    big = orjson.dumps({"op": "publish", "topic": "/t", "msg": {"n": 2, "blob": "f" * (2 << 20)}}).decode()
+    noise = os.urandom(1 << 20).hex()
+    data = png_data(orjson.dumps({"op": "publish", "topic": "/t", "msg": {"n": 4, "blob": noise}}), 1000, 800)
+    size = len(data) // 3 + 1
+    pieces = [{"op": "png", "id": "p", "data": data[i:i + size], "num": n, "total": 3}
+              for n, i in enumerate(range(0, len(data), size))]
+    frames = [{"op": "publish", "topic": "/t", "msg": {"n": 1}}, *fragments(big, 400_000),
+              {"op": "publish", "topic": "/t", "msg": {"n": 3}}, *pieces, {"op": "publish", "topic": "/t", "msg": {"n": 5}}]
+    for frame in frames:
+        await hostile.send(frame)
+    await until(lambda: len(got) == 5)
+    assert [m["n"] for m in got] == [1, 2, 3, 4, 5] and got[3]["blob"] == noise
+    assert client.stats["big_frames"] == 2 and client.stats["bad_frames"] == 0
 
 
 async def test_a_broken_big_frame_is_a_bad_frame(hostile, client):

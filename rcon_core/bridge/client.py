@@ -113,7 +113,7 @@ from .errors import (
 )
 from .freshness import LinkWatch, TimedFrame, watch_link
 from .nodes import ActionGoal, Node, Publisher, ServiceServer, Subscription
-from .offload import BigFrames
+from .offload import BigFrames, decode_big
 from .protocol import FragmentAssembler, RefusedFrame, decode_binary, decode_png, encode
 from .rawdecode import RawDecoder, _short, has_fixed_arrays
 from .safety import bounded_repr, safe_text
@@ -235,6 +235,7 @@ class BridgeClient:
         self.stall_timeout = stall_timeout
         self._watch: LinkWatch | None = None
         self._big = BigFrames(typed_arrays, self.max_message_size)
+        self._deferred: Callable[[], Awaitable[Any]] | None = None
         self.latency: float | None = None
         self.last_error: BaseException | None = None
         self.stats: dict[str, int] = {"connects": 0, "bad_frames": 0, "dropped_while_down": 0,
@@ -470,6 +471,7 @@ class BridgeClient:
             self._sync_topic(topic)
 
     def _on_disconnect(self) -> None:
+        self._deferred = None  # a big message of the lost connection is not delivered on the next one
         dropped = len(self._out)
         if dropped:
             self.stats["dropped_on_disconnect"] += dropped
@@ -531,7 +533,7 @@ class BridgeClient:
 
     async def _pinger(self, ws: ClientConnection) -> None:
         """Without stall detection (``stall_timeout=None``): a ping every ``latency_interval``; a pong
-        missing for ``pong_timeout`` drops the link.  With it, :meth:`_watchdog` (see ``freshness.py``)."""
+        missing for ``pong_timeout`` drops the link.  With it, ``freshness.watch_link``."""
         if self.stall_timeout is not None:
             probe_interval = min(self.latency_interval, self.stall_timeout / 4)
             self._watch = LinkWatch(self.stall_timeout, probe_interval, _monotonic())
@@ -605,15 +607,19 @@ class BridgeClient:
                     entry = topics[m["topic"]] if m["op"] == "publish" else None
                     msg = m["msg"]
                 except (KeyError, TypeError):  # not a publish of a subscribed topic, or malformed: slow path
-                    other(m)
+                    entry = None
+                if entry is not None and msg.__class__ is dict:
+                    try:
+                        entry.fast(msg)
+                    except Exception:
+                        entry.callback_failed()
                     continue
-                if entry is None or msg.__class__ is not dict:
-                    other(m)
-                    continue
-                try:
-                    entry.fast(msg)
-                except Exception:
-                    entry.callback_failed()
+                other(m)
+                while self._deferred is not None:  # a big message completed by fragments: decoded off the loop
+                    job, self._deferred = self._deferred, None
+                    inner = await job()
+                    if inner is not None:
+                        other(inner)
             except Exception as exc:
                 self._frame_failed(exc)
 
@@ -622,13 +628,16 @@ class BridgeClient:
         if len(raw) > self.max_message_size:
             self._oversize(raw)
             return None
+        return await self._offloaded(decode_big, raw, self.typed_arrays, self.max_message_size)
+
+    async def _offloaded(self, fn: Callable[..., Any], *args: Any) -> Any:
         self.stats["big_frames"] += 1
         try:
-            return await self._big.decode(raw)
+            return await self._big.run(fn, *args)
         except ProtocolError as exc:
             if isinstance(exc, RefusedFrame):
                 self.stats["png_refused"] += 1
-            self._bad_frame("big", f"frame of {len(raw)} bytes dropped: {exc}")
+            self._bad_frame("big", f"big frame dropped: {exc}")
             return None
 
     def _frame_failed(self, exc: BaseException) -> None:
@@ -718,7 +727,9 @@ class BridgeClient:
         except ProtocolError as exc:
             self._bad_frame("fragment", str(exc))
             return
-        if text is not None:
+        if text is not None and len(text) > self.big_frame:
+            self._deferred = lambda: self._decode_big(text)  # the read loop awaits it (order is kept)
+        elif text is not None:
             self._dispatch_text(text)
 
     def _on_png(self, m: dict[str, Any]) -> None:
@@ -730,6 +741,9 @@ class BridgeClient:
                     return
             if not isinstance(data, str):
                 raise ProtocolError(f"png frame: 'data' must be a string, got {type(data).__name__}")
+            if len(data) > self.big_frame:
+                self._deferred = lambda: self._offloaded(decode_png, data, self.max_message_size)
+                return
             inner = decode_png(data, self.max_message_size)
         except ProtocolError as exc:
             if isinstance(exc, RefusedFrame):

@@ -6,8 +6,9 @@ Decisions:
   is about 1.2 MB) is decoded in one worker thread (``run_in_executor``) instead of on the event loop:
   JSON or CBOR, and for a complete ``png`` frame also the PNG and the JSON inside it.  The read loop
   awaits the result before it reads the next frame, so delivery keeps the order of arrival (per topic and
-  overall) while the loop goes on serving pings, writes, timers and other tasks.  Small frames never come
-  here: their path is one length comparison longer than before.
+  overall) while the loop goes on serving pings, writes, timers and other tasks.  The same holds for a big
+  message completed by ``fragment`` frames and for the base64 data of a ``png`` frame assembled from
+  pieces.  Small frames never come here: their path is one length comparison longer than before.
 * One worker thread per client, started on the first big frame and shut down by ``close()``.
 * What the worker cannot decode raises :class:`~rcon_core.bridge.errors.ProtocolError`, which the client
   counts as a bad frame.  (orjson does not release the GIL while it parses, so a huge JSON frame still
@@ -54,15 +55,20 @@ class BigFrames:
         self._pool: ThreadPoolExecutor | None = None
 
     async def decode(self, raw: str | bytes) -> Any:
+        """One frame, completely decoded (:func:`decode_big`) in the worker."""
+        return await self.run(decode_big, raw, self.typed_arrays, self.max_bytes)
+
+    async def run(self, fn: Any, *args: Any) -> Any:
+        """``fn(*args)`` in the worker; what it raises becomes a ProtocolError."""
         if self._pool is None:
             self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="rcon-bridge-decode")
         loop = asyncio.get_running_loop()
         try:
-            return await loop.run_in_executor(self._pool, decode_big, raw, self.typed_arrays, self.max_bytes)
+            return await loop.run_in_executor(self._pool, fn, *args)
         except ProtocolError:
             raise
         except (MemoryError, RecursionError, ValueError, TypeError) as exc:
-            raise ProtocolError(f"frame of {len(raw)} bytes cannot be decoded ({safe_text(exc)})") from None
+            raise ProtocolError(f"a big frame cannot be decoded ({safe_text(exc)})") from None
 
     def close(self) -> None:
         pool, self._pool = self._pool, None
