@@ -123,3 +123,34 @@ def test_link_watch_says_why_a_link_is_stalled_and_whether_commands_are_at_risk(
     assert w.stalled(10.9) is None and "500 bytes not drained" in w.stalled(11.0)
     w.buffer(400, 11.0)  # draining: not stuck
     assert w.stalled(11.5) is None
+
+
+async def test_commands_queued_behind_a_full_write_buffer_are_dropped_once_past_their_limit():
+    """The server stops reading: bulk data fills the socket buffers and the client's outgoing queue; commands
+    published behind it wait longer than 0.25 s and are dropped when their turn comes, never written."""
+    from rcon_core.loopback import HostileServer
+
+    async with HostileServer() as server:
+        c = BridgeClient(server.url, stall_timeout=None)  # the queue rule alone, without stall detection
+        await c.connect(timeout=5)
+        try:
+            node = c.node("n")
+            bulk = node.advertise("/bulk", "std_msgs/String", max_age=None)
+            cmd = node.advertise("/cmd", "std_msgs/String")
+            await server.wait_for("advertise", count=2)
+            server.ws.transport.pause_reading()
+            blob = "x" * 100_000
+            for _ in range(300):  # 30 MB: far more than the loopback socket buffers hold
+                bulk.publish({"data": blob})
+            for i in range(5):
+                assert cmd.publish({"data": str(i)})  # accepted (queued), not yet written
+            await asyncio.sleep(0.6)
+            server.ws.transport.resume_reading()
+            await server.wait_for("publish", count=300, topic="/bulk", timeout=20)
+            bulk.publish({"data": "last"})
+            await server.wait(lambda: any(m.get("msg") == {"data": "last"} for m in server.ops("publish")), 10)
+            assert server.ops("publish", topic="/cmd") == []
+            assert cmd.dropped == 5 and cmd.sent == 0 and c.stats["stale_dropped"] == 5
+            assert bulk.dropped == 0 and c.state is ConnectionState.CONNECTED
+        finally:
+            await c.close()
