@@ -38,6 +38,7 @@ def normalize_url(text: str) -> str:
 STATE_TEXT = {
     "connecting": "CONNECTING",
     "connected": "CONNECTED",
+    "degraded": "DEGRADED",  # connected, but the link is stalled: commands are not sent (bridge/freshness.py)
     "reconnecting": "RECONNECTING",
     "closed": "DISCONNECTED",
 }
@@ -272,7 +273,7 @@ class ConnectionBar(QtWidgets.QFrame):
         if self.failure is not None:
             why = self.failure.text()
             self.message.setText(f"{self.note}: {why}" if self.note else why)
-        latency = self.link.latency if self.state == "connected" else None
+        latency = self.link.latency if self.state in ("connected", "degraded") else None
         text = "—" if latency is None else ("<1 ms" if latency < 0.0005 else f"{latency * 1000:.0f} ms")
         if text != self._last_latency_text:
             self._last_latency_text = text

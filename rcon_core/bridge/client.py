@@ -14,17 +14,27 @@ Reconnect
 State
     CONNECTING (first attempt) -> CONNECTED -> RECONNECTING (link lost, retrying) -> CONNECTED ...;
     CLOSED after ``close()`` or a fatal error.  Listeners get ``fn(state)`` on the loop thread.
+    CONNECTED <-> DEGRADED while the socket is open but the link is stalled (``freshness.py``): DEGRADED is
+    a state of its own so every listener sees it and treats it as "not usable" (the app shows it, widgets
+    mark their values link-down, teleop stops), while ``client.connected`` -- "a socket is open" -- stays
+    True and nothing is restored when the link recovers.
 
-Latency
-    A WebSocket ping every ``latency_interval`` (2 s) seconds; ``client.latency`` is the ping/pong
-    round trip.  It needs no rosapi and works on any server; a pong missing for ``pong_timeout`` seconds
-    drops the link (then it reconnects).
+Latency and stall detection
+    With ``stall_timeout`` (1 s, the default) a WebSocket ping goes out every ``stall_timeout / 4`` while
+    none is in flight; a ping unanswered for ``stall_timeout`` (or a write buffer not draining as long) is
+    DEGRADED, and when commands written since the last answered ping are unconfirmed the link is cut with
+    a TCP reset so they are never delivered late (``freshness.py``).  ``stall_timeout=None``: a ping every
+    ``latency_interval`` (2 s) only.  ``client.latency`` is the ping/pong round trip.  It needs no rosapi and
+    works on any server; a pong missing for ``pong_timeout`` seconds drops the link (then it reconnects).
 
-Publishing while the link is down
+Publishing while the link is down or stalled
     Nothing is queued for later, so a robot never receives a burst of stale commands.  For a **latched**
     topic only the latest value is kept and sent right after the advertisement is restored; every other
     publish made while down is dropped and counted (``Publisher.dropped``, ``client.stats``).  Frames
-    still in the outgoing queue when the link drops are dropped too (counted).
+    still in the outgoing queue when the link drops are dropped too (counted).  A publisher's ``max_age``
+    (0.25 s by default for non-latched topics) is its freshness limit: a publish is never written after it
+    -- dropped while DEGRADED or stalling, or when it waited that long in the outgoing queue (counted in
+    ``stats["stale_dropped"]``); see ``freshness.py``.
 
 Writing and reading (the hot paths)
     There is no batching and no timer: a frame (a publish, a subscribe...) is written to the transport
@@ -32,7 +42,9 @@ Writing and reading (the hot paths)
     above its high-water mark; then it waits in a queue that a writer task drains with ``ws.send`` (which
     waits for the transport), so frames always leave in order.  asyncio turns Nagle off on TCP sockets.
     The read loop does one ``recv``, one ``orjson.loads`` and calls a one-consumer topic's callback
-    directly; anything else takes the slow path (``_handle_other``).
+    directly; anything else takes the slow path (``_handle_other``).  Frames above ``big_frame`` (1 MB)
+    are decoded in a worker thread while the read loop waits for them, so the event loop keeps serving
+    and the order of delivery is kept (``offload.py``).
 
 Service calls
     Every call has a client-side timeout (``timeout`` or ``call_timeout``) even though rosbridge 0.11
@@ -58,11 +70,17 @@ ROS 2 actions
     ROS 1 rosbridge drops ``send_action_goal`` without any answer.
 
 Bad input from the server
-    Invalid JSON, unknown ops, missing or mistyped fields, broken fragments and frames above
-    ``max_message_size`` are logged (rate limited, counted in ``client.stats``) and dropped; the
-    connection, the process and other subscriptions carry on.  A callback that raises is logged and
-    does not affect other callbacks.  Frames above the hard ``max_frame_size`` make the websockets
-    library close the link, which then reconnects.
+    No exception raised while handling one frame ends the read loop: the loop body and the slow path
+    catch everything at the frame boundary (``stats["frame_errors"]``).  Invalid JSON, unknown ops,
+    missing or mistyped fields, JSON nested too deep to format, broken fragments, ``png`` data that is no
+    image, PNGs whose header declares more pixel bytes than ``max_size`` (refused before decoding,
+    ``stats["png_refused"]``), publish frames whose ``msg`` is not an object
+    (``stats["non_object_msgs"]``) and frames above ``max_size`` (32 MB by default, room for a 1080p
+    rgb8 image in JSON; ``max_message_size`` is its older name) are logged (rate limited, with a bounded
+    repr from ``safety.py``: never ``str()`` of an untrusted value), counted in ``client.stats`` and
+    dropped; the connection, the process and other subscriptions carry on.  A callback that raises is
+    logged and does not affect other callbacks.  Frames above the hard ``max_frame_size`` (by default
+    twice ``max_size``) make the websockets library close the link, which then reconnects.
 """
 
 from __future__ import annotations
@@ -92,13 +110,17 @@ from .errors import (
     BridgeError,
     ConnectionLostError,
     NotConnectedError,
+    ProtocolError,
     ServiceError,
     ServiceTimeoutError,
 )
+from .freshness import LinkWatch, TimedFrame, watch_link
 from .nodes import ActionGoal, Node, Publisher, ServiceServer, Subscription
-from .protocol import FragmentAssembler, decode_binary, decode_png, encode
+from .offload import BigFrames, decode_big
+from .protocol import FragmentAssembler, RefusedFrame, decode_binary, decode_png, encode
 from .rawdecode import RawDecoder, _short, has_fixed_arrays
 from .reasons import Failure, describe, refused_auth
+from .safety import bounded_repr, safe_text
 from .secure import ssl_context
 from .topics import AdvertEntry, TopicEntry
 
@@ -108,6 +130,7 @@ _OPEN = State.OPEN
 _loads = orjson.loads
 _dumps = orjson.dumps
 _NUMPY = orjson.OPT_SERIALIZE_NUMPY
+_monotonic = time.monotonic
 LOG_LEVELS = ("info", "warning", "error", "none")
 AUTH_FIELDS = ("mac", "client", "dest", "rand", "t", "level", "end")
 
@@ -115,6 +138,7 @@ AUTH_FIELDS = ("mac", "client", "dest", "rand", "t", "level", "end")
 class ConnectionState(enum.Enum):
     CONNECTING = "connecting"
     CONNECTED = "connected"
+    DEGRADED = "degraded"
     RECONNECTING = "reconnecting"
     CLOSED = "closed"
 
@@ -134,7 +158,7 @@ def _failure_text(values: Any) -> str:
         return values
     if isinstance(values, dict) and isinstance(values.get("message"), str) and values["message"]:
         return values["message"]
-    return str(values)
+    return bounded_repr(values, 200)
 
 
 def _check_auth(auth: dict[str, Any]) -> dict[str, Any]:
@@ -188,9 +212,10 @@ class BridgeClient:
                  auth: dict[str, Any] | Callable[[], Any] | None = None, call_timeout: float = 10.0,
                  registry: Any = None, typed_arrays: str = "list", backoff_min: float = 0.25,
                  backoff_max: float = 10.0, latency_interval: float = 2.0, pong_timeout: float = 10.0,
-                 open_timeout: float = 10.0, max_message_size: int = 64 << 20,
-                 max_frame_size: int = 256 << 20, fragment_timeout: float = 10.0,
-                 client_cert: str | None = None, client_key: str | None = None) -> None:
+                 open_timeout: float = 10.0, max_size: int = 32 << 20, max_message_size: int | None = None,
+                 max_frame_size: int | None = None, fragment_timeout: float = 10.0, big_frame: int = 1 << 20,
+                 stall_timeout: float | None = 1.0, client_cert: str | None = None,
+                 client_key: str | None = None) -> None:
         if not isinstance(url, str) or not url.startswith(("ws://", "wss://")):
             raise ValueError(f"url must start with ws:// or wss://, got {url!r}")
         if typed_arrays not in ("list", "numpy"):
@@ -210,14 +235,22 @@ class BridgeClient:
         self.latency_interval = latency_interval
         self.pong_timeout = pong_timeout
         self.open_timeout = open_timeout
-        self.max_message_size = max_message_size
-        self.max_frame_size = max_frame_size
+        #: the largest frame the client accepts (``max_message_size`` is the older name of the same limit)
+        self.max_size = self.max_message_size = max_size if max_message_size is None else max_message_size
+        self.max_frame_size = max_frame_size or max(2 * self.max_message_size, self.max_message_size + (1 << 20))
+        self.big_frame = min(big_frame, self.max_message_size)
+        self.stall_timeout = stall_timeout
+        self._watch: LinkWatch | None = None
+        self._big = BigFrames(typed_arrays, self.max_message_size)
+        self._deferred: Callable[[], Awaitable[Any]] | None = None
         self.latency: float | None = None
         self.last_error: BaseException | None = None
         self.failure: Failure | None = None
         self._failure_listeners: list[Callable[[Failure], None]] = []
         self.stats: dict[str, int] = {"connects": 0, "bad_frames": 0, "dropped_while_down": 0,
-                                      "dropped_on_disconnect": 0, "oversize_frames": 0}
+                                      "dropped_on_disconnect": 0, "oversize_frames": 0, "frame_errors": 0,
+                                      "png_refused": 0, "non_object_msgs": 0, "big_frames": 0,
+                                      "stale_dropped": 0, "degraded": 0, "stall_cuts": 0}
         self._state = ConnectionState.CLOSED
         self._state_listeners: list[Callable[[ConnectionState], None]] = []
         self._status_listeners: list[Callable[[dict[str, Any]], None]] = []
@@ -225,7 +258,7 @@ class BridgeClient:
         self._task: asyncio.Task[None] | None = None
         self._connected = asyncio.Event()
         self._closing = False
-        self._out: deque[bytes] = deque()
+        self._out: deque[bytes | TimedFrame] = deque()
         self._out_event = asyncio.Event()
         self._write_now: Callable[[bytes], bool] | None = None
         self._nodes: dict[str, Node] = {}
@@ -238,8 +271,8 @@ class BridgeClient:
         self._response_defaults: dict[str, tuple[dict[str, Any], set[str]]] = {}
         self._raw = RawDecoder()
         warn = self._fragment_warning
-        self._fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_message_size, warn=warn)
-        self._png_fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_message_size, warn=warn)
+        self._fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=self.max_message_size, warn=warn)
+        self._png_fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=self.max_message_size, warn=warn)
         self._level: str | None = None
         self._seq = 0
         self._bad_counts: dict[str, int] = {}
@@ -392,6 +425,7 @@ class BridgeClient:
                 pass
         for t in list(self._tasks):
             t.cancel()
+        self._big.close()
         self._set_state(ConnectionState.CLOSED)
 
     async def __aenter__(self) -> BridgeClient:
@@ -438,6 +472,7 @@ class BridgeClient:
             self.last_error = exc
         finally:
             self._ws = None
+            self._watch = None
             self._write_now = None
             self._connected.clear()
             writer.cancel()
@@ -472,6 +507,7 @@ class BridgeClient:
             self._sync_topic(topic)
 
     def _on_disconnect(self) -> None:
+        self._deferred = None  # a big message of the lost connection is not delivered on the next one
         dropped = len(self._out)
         if dropped:
             self.stats["dropped_on_disconnect"] += dropped
@@ -516,13 +552,29 @@ class BridgeClient:
         try:
             while True:
                 while out:
-                    await ws.send(out.popleft(), text=True)
+                    item = out.popleft()
+                    if item.__class__ is TimedFrame:  # a command: never written after its freshness limit
+                        now = _monotonic()
+                        if now > item.deadline or self._state is ConnectionState.DEGRADED:  # type: ignore[union-attr]
+                            self._drop_stale(item.pub, counted_sent=True)  # type: ignore[union-attr]
+                            continue
+                        if self._watch is not None:
+                            self._watch.command(now)
+                        item = item.data  # type: ignore[union-attr]
+                    await ws.send(item, text=True)
                 event.clear()
                 await event.wait()
         except ConnectionClosed:
             pass
 
     async def _pinger(self, ws: ClientConnection) -> None:
+        """Without stall detection (``stall_timeout=None``): a ping every ``latency_interval``; a pong
+        missing for ``pong_timeout`` drops the link.  With it, ``freshness.watch_link``."""
+        if self.stall_timeout is not None:
+            probe_interval = min(self.latency_interval, self.stall_timeout / 4)
+            self._watch = LinkWatch(self.stall_timeout, probe_interval, _monotonic())
+            await watch_link(ws, self._watch, self.pong_timeout, self._link_event)
+            return
         try:
             while True:
                 waiter = await ws.ping()
@@ -536,6 +588,28 @@ class BridgeClient:
         except ConnectionClosed:
             pass
 
+    def _link_event(self, event: str, detail: Any) -> bool:
+        """What the watchdog (``freshness.watch_link``) reports; True when a stall counts (CONNECTED)."""
+        if event == "latency":
+            self.latency = detail
+        elif event == "stalled":
+            if self._state is not ConnectionState.CONNECTED:
+                return False
+            self.stats["degraded"] += 1
+            log.warning("link to %s is degraded: %s", self.url, detail)
+            self._set_state(ConnectionState.DEGRADED)
+        elif event == "recovered":
+            log.info("link to %s has recovered", self.url)
+            if self._state is ConnectionState.DEGRADED:
+                self._set_state(ConnectionState.CONNECTED)
+        elif event == "cut":
+            self.stats["stall_cuts"] += 1
+            log.warning("link to %s stalled (%s) with commands in flight; cut it so they are never delivered "
+                        "late; reconnecting", self.url, detail)
+        else:
+            log.warning("%s from %s; dropping the link", detail, self.url)
+        return True
+
     # ================================================================== reading (hot path)
 
     async def _read(self, ws: ClientConnection) -> None:
@@ -545,37 +619,67 @@ class BridgeClient:
         goes to ``_handle_other``."""
         loads = _loads
         topics = self._topics
-        limit = self.max_message_size
+        big = self.big_frame
         other = self._handle_other
         recv = ws.recv
         while True:
             raw = await recv()
-            if len(raw) > limit:
-                self._oversize(raw)
-                continue
-            if isinstance(raw, str):
+            try:  # the frame boundary: nothing raised while handling one frame ends the loop
+                if len(raw) > big:
+                    m = await self._decode_big(raw)
+                    if m is None:
+                        continue
+                elif isinstance(raw, str):
+                    try:
+                        m = loads(raw)
+                    except orjson.JSONDecodeError as exc:
+                        self._bad_frame("json", f"text frame is not valid JSON ({exc}): {raw[:80]!r}")
+                        continue
+                else:
+                    m = self._decode_binary(raw)
+                    if m is None:
+                        continue
                 try:
-                    m = loads(raw)
-                except orjson.JSONDecodeError as exc:
-                    self._bad_frame("json", f"text frame is not valid JSON ({exc}): {raw[:80]!r}")
+                    entry = topics[m["topic"]] if m["op"] == "publish" else None
+                    msg = m["msg"]
+                except (KeyError, TypeError):  # not a publish of a subscribed topic, or malformed: slow path
+                    entry = None
+                if entry is not None and msg.__class__ is dict:
+                    try:
+                        entry.fast(msg)
+                    except Exception:
+                        entry.callback_failed()
                     continue
-            else:
-                m = self._decode_binary(raw)
-                if m is None:
-                    continue
-            try:
-                entry = topics[m["topic"]] if m["op"] == "publish" else None
-                msg = m["msg"]
-            except (KeyError, TypeError):  # not a publish of a subscribed topic, or malformed: slow path
                 other(m)
-                continue
-            if entry is None:
-                other(m)
-                continue
-            try:
-                entry.fast(msg)
-            except Exception:
-                entry.callback_failed()
+                while self._deferred is not None:  # a big message completed by fragments: decoded off the loop
+                    job, self._deferred = self._deferred, None
+                    inner = await job()
+                    if inner is not None:
+                        other(inner)
+            except Exception as exc:
+                self._frame_failed(exc)
+
+    async def _decode_big(self, raw: str | bytes) -> Any:
+        """Decode a frame above ``big_frame`` in the worker thread (see ``offload.py``); None when dropped."""
+        if len(raw) > self.max_message_size:
+            self._oversize(raw)
+            return None
+        return await self._offloaded(decode_big, raw, self.typed_arrays, self.max_message_size)
+
+    async def _offloaded(self, fn: Callable[..., Any], *args: Any) -> Any:
+        self.stats["big_frames"] += 1
+        try:
+            return await self._big.run(fn, *args)
+        except ProtocolError as exc:
+            if isinstance(exc, RefusedFrame):
+                self.stats["png_refused"] += 1
+            self._bad_frame("big", f"big frame dropped: {exc}")
+            return None
+
+    def _frame_failed(self, exc: BaseException) -> None:
+        """A frame whose handling raised: counted, logged with a bounded text, dropped; the loop goes on."""
+        self.stats["frame_errors"] += 1
+        self._bad_frame("error", f"handling a frame failed, dropped it ({safe_text(exc)})")
 
     def _dispatch_text(self, text: str | bytes) -> None:
         """Handle a frame reconstructed from fragments or a png frame."""
@@ -611,6 +715,13 @@ class BridgeClient:
                         self.url, message, kind)
 
     def _handle_other(self, m: Any) -> None:
+        """The slow path (and what fragments and png frames carry); never raises."""
+        try:
+            self._handle_op(m)
+        except Exception as exc:
+            self._frame_failed(exc)
+
+    def _handle_op(self, m: Any) -> None:
         if not isinstance(m, dict):
             self._bad_frame("shape", f"frame is a JSON {type(m).__name__}, not an object; ignored")
             return
@@ -618,14 +729,14 @@ class BridgeClient:
         handler = self._ops.get(op) if isinstance(op, str) else None
         if handler is None:
             if "op" not in m:
-                self._bad_frame("op", f"frame without 'op' ignored: {str(m)[:80]}")
+                self._bad_frame("op", f"frame without 'op' ignored: {bounded_repr(m, 80)}")
             else:
-                self._bad_frame("op", f"unknown op {op!r} ignored")
+                self._bad_frame("op", f"unknown op {bounded_repr(op, 80)} ignored")
             return
         try:
             handler(m)
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
-            self._bad_frame("field", f"malformed {op!r} frame ignored ({type(exc).__name__}: {exc})")
+            self._bad_frame("field", f"malformed {op!r} frame ignored ({safe_text(exc)})")
 
     # ------------------------------------------------------------------ op handlers (slow path)
 
@@ -636,23 +747,28 @@ class BridgeClient:
         if "msg" not in m:
             raise KeyError("publish frame has no 'msg'")
         entry = self._topics.get(topic)
-        if entry is not None:
-            entry.deliver(m["msg"])
+        if entry is None:
+            return
+        msg = m["msg"]
+        if not isinstance(msg, dict):
+            self.stats["non_object_msgs"] += 1
+            self._bad_frame("msg", f"publish on {topic}: 'msg' is a JSON {type(msg).__name__}, not an object; "
+                                   "dropped")
+            return
+        entry.deliver(msg)
 
     def _on_fragment(self, m: dict[str, Any]) -> None:
-        from .errors import ProtocolError
-
         try:
             text = self._fragments.add(m)
         except ProtocolError as exc:
             self._bad_frame("fragment", str(exc))
             return
-        if text is not None:
+        if text is not None and len(text) > self.big_frame:
+            self._deferred = lambda: self._decode_big(text)  # the read loop awaits it (order is kept)
+        elif text is not None:
             self._dispatch_text(text)
 
     def _on_png(self, m: dict[str, Any]) -> None:
-        from .errors import ProtocolError
-
         try:
             data = m["data"]
             if "num" in m and "total" in m:
@@ -661,8 +777,13 @@ class BridgeClient:
                     return
             if not isinstance(data, str):
                 raise ProtocolError(f"png frame: 'data' must be a string, got {type(data).__name__}")
-            inner = decode_png(data)
+            if len(data) > self.big_frame:
+                self._deferred = lambda: self._offloaded(decode_png, data, self.max_message_size)
+                return
+            inner = decode_png(data, self.max_message_size)
         except ProtocolError as exc:
+            if isinstance(exc, RefusedFrame):
+                self.stats["png_refused"] += 1
             self._bad_frame("png", str(exc))
             return
         self._handle_other(inner)
@@ -685,8 +806,12 @@ class BridgeClient:
         level = m.get("level", "info")
         text = m.get("msg", "")
         sid = m.get("id")
+        if not isinstance(level, str):
+            level = bounded_repr(level, 40)
+        if not isinstance(text, str):
+            text = bounded_repr(text, 200)
         pylevel = {"error": logging.ERROR, "warning": logging.WARNING}.get(level, logging.INFO)
-        log.log(pylevel, "server status (%s)%s: %s", level, f" for {sid}" if sid else "", text)
+        log.log(pylevel, "server status (%s)%s: %s", level, f" for {bounded_repr(sid, 80)}" if sid else "", text)
         if level == "error" and isinstance(sid, str):
             fut = self._pending.pop(sid, None)
             if fut is not None and not fut.done():
@@ -839,6 +964,8 @@ class BridgeClient:
     def _publish(self, pub: Publisher, msg: dict[str, Any]) -> bool:
         entry = self._adverts[pub.topic]
         if self._ws is not None and entry.active:
+            if pub.max_age is not None:
+                return self._publish_command(entry, pub, msg)
             self._send_publish(entry, msg)
             pub.sent += 1
             return True
@@ -849,6 +976,31 @@ class BridgeClient:
         entry.dropped += 1
         self.stats["dropped_while_down"] += 1
         return False
+
+    def _publish_command(self, entry: AdvertEntry, pub: Publisher, msg: dict[str, Any]) -> bool:
+        """Publish with a freshness limit (``freshness.py``): dropped when the link cannot carry it in time,
+        else written now or queued with its deadline."""
+        now = _monotonic()
+        watch = self._watch
+        if self._state is ConnectionState.DEGRADED or (watch is not None and watch.overdue(now) > pub.max_age):
+            self._drop_stale(pub)
+            return False
+        data = b"".join((entry.head, _dumps(msg, option=_NUMPY), b',"latch":true}' if entry.latch else b"}"))
+        write_now = self._write_now
+        if not self._out and write_now is not None and write_now(data):
+            if watch is not None:
+                watch.command(now)
+        else:
+            self._out.append(TimedFrame(data, now + pub.max_age, pub))  # type: ignore[arg-type]
+            self._out_event.set()
+        pub.sent += 1
+        return True
+
+    def _drop_stale(self, pub: Publisher, counted_sent: bool = False) -> None:
+        if counted_sent:
+            pub.sent -= 1
+        pub.dropped += 1
+        self.stats["stale_dropped"] += 1
 
     def _send_publish(self, entry: AdvertEntry, msg: dict[str, Any]) -> None:
         # The frame around the message is encoded once per advertisement (``entry.head``); latch is repeated
@@ -1067,7 +1219,7 @@ class BridgeClient:
         status = m.get("status")
         goal.status = status if isinstance(status, int) and not isinstance(status, bool) else None
         if m.get("result", True) is False:
-            text = values if isinstance(values, str) else str(values)
+            text = values if isinstance(values, str) else bounded_repr(values, 200)
             goal._settle(error=ActionError(text or "the server could not run the goal", goal.action, goal.status))
         else:
             goal._settle({} if values is None else values)

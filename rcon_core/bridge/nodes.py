@@ -14,6 +14,7 @@ from collections.abc import Awaitable, Callable
 from typing import TYPE_CHECKING, Any
 
 from .errors import BridgeError
+from .freshness import AUTO, resolve_max_age
 from .protocol import COMPRESSIONS
 
 if TYPE_CHECKING:
@@ -58,16 +59,21 @@ class Publisher:
 
     While the link is down a publish is not queued, except for latched topics whose latest value is kept
     and sent once the advertisement is restored after a reconnect; ``dropped`` counts the others.
+    ``max_age`` is the freshness limit in seconds (None: none): a publish that cannot be written within it
+    -- the link is DEGRADED or stalling, or the frame waited that long in the outgoing queue -- is dropped
+    and counted in ``dropped`` too (see ``freshness.py``).
     """
 
-    __slots__ = ("node", "topic", "type", "latch", "queue_size", "active", "sent", "dropped")
+    __slots__ = ("node", "topic", "type", "latch", "queue_size", "max_age", "active", "sent", "dropped")
 
-    def __init__(self, node: Node, topic: str, type: str, latch: bool, queue_size: int) -> None:
+    def __init__(self, node: Node, topic: str, type: str, latch: bool, queue_size: int,
+                 max_age: float | None = None) -> None:
         self.node = node
         self.topic = topic
         self.type = type
         self.latch = latch
         self.queue_size = queue_size
+        self.max_age = max_age
         self.active = True
         self.sent = 0
         self.dropped = 0
@@ -233,13 +239,16 @@ class Node:
         self.client._add_subscription(sub)
         return sub
 
-    def advertise(self, topic: str, type: str, latch: bool = False, queue_size: int = 100) -> Publisher:
+    def advertise(self, topic: str, type: str, latch: bool = False, queue_size: int = 100,
+                  max_age: Any = AUTO) -> Publisher:
+        """Advertise ``topic``.  ``max_age``: the freshness limit of each publish in seconds; by default
+        0.25 s for a non-latched topic (a command) and None (no limit) for a latched one."""
         self._check()
         if not isinstance(topic, str) or not topic:
             raise ValueError(f"topic must be a non-empty string, got {topic!r}")
         if not isinstance(type, str) or "/" not in type:
             raise ValueError(f"type must be a message type name like 'std_msgs/String', got {type!r}")
-        pub = Publisher(self, topic, type, bool(latch), int(queue_size))
+        pub = Publisher(self, topic, type, bool(latch), int(queue_size), resolve_max_age(max_age, bool(latch)))
         self.client._add_publisher(pub)  # may raise on a type conflict
         self._pubs.add(pub)
         return pub

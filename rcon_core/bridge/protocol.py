@@ -12,6 +12,9 @@ Decisions (the recordings in ``shared/rosbridge-ros1`` are the ground truth):
 * A binary frame that is not CBOR but JSON text (rosbridge itself accepts that) is parsed as JSON.
 * ``png`` frames hold a base64 PNG whose RGB pixel bytes are the JSON text of the real frame padded with
   ``\\n``; it is decoded with OpenCV (imported lazily) and the padding is ignored by the JSON parser.
+  Its IHDR header is checked first (``safety.check_png``): a PNG whose pixels would exceed the largest
+  frame the client accepts is refused without decoding (a PNG bomb), and anything OpenCV cannot read is a
+  ``ProtocolError``, never an OpenCV exception.
 * ``fragment`` frames: ``total`` may be a float (rosbridge 0.11 computes it that way); the number of
   fragments is ``floor(total)``, ``num`` runs from 0.  ``id`` is 0 for every message, so fragments are
   reassembled by arrival order per id: a ``num == 0`` starts a new message and drops any unfinished
@@ -34,6 +37,7 @@ import numpy as np
 import orjson
 
 from .errors import ProtocolError
+from .safety import PngRefused, PngTooLarge, check_png, safe_text
 
 log = logging.getLogger(__name__)
 
@@ -121,18 +125,31 @@ def decode_binary(data: bytes, typed_arrays: str = "list") -> Any:
 # --------------------------------------------------------------------------- png frames
 
 
-def png_to_text(data_b64: str) -> bytes:
+class RefusedFrame(ProtocolError):
+    """A frame refused because it would need more memory than the client accepts (e.g. a PNG bomb)."""
+
+
+
+def png_to_text(data_b64: str, max_bytes: int = 64 << 20) -> bytes:
     """The JSON bytes hidden in a ``png`` frame's ``data`` (base64 PNG of the text's bytes as RGB pixels).
 
-    The trailing ``\\n`` padding is stripped.  Raises ProtocolError when the data is not a PNG.
+    The trailing ``\\n`` padding is stripped.  Raises ProtocolError when the data is not a PNG, or when its
+    header declares pixels of more than ``max_bytes`` (checked before decoding: a PNG bomb is refused).
     """
     try:
         png = base64.b64decode(data_b64, validate=False)
     except (binascii.Error, ValueError, TypeError) as exc:
         raise ProtocolError(f"png frame: data is not base64 ({exc})") from None
+    try:
+        check_png(png, max_bytes)
+    except PngRefused as exc:
+        raise (RefusedFrame if isinstance(exc, PngTooLarge) else ProtocolError)(f"png frame: {exc}") from None
     import cv2  # lazily: OpenCV is only needed by png subscriptions
 
-    img = cv2.imdecode(np.frombuffer(png, np.uint8), cv2.IMREAD_UNCHANGED)
+    try:
+        img = cv2.imdecode(np.frombuffer(png, np.uint8), cv2.IMREAD_UNCHANGED)
+    except Exception as exc:  # cv2.error on data OpenCV cannot read
+        raise ProtocolError(f"png frame: OpenCV cannot decode the image ({safe_text(exc, 120)})") from None
     if img is None:
         raise ProtocolError("png frame: data is not a PNG image")
     if img.ndim == 3 and img.shape[2] == 3:
@@ -142,9 +159,10 @@ def png_to_text(data_b64: str) -> bytes:
     return np.ascontiguousarray(img).tobytes().rstrip(b"\n\x00")
 
 
-def decode_png(data_b64: str) -> Any:
-    """Decode a (complete) ``png`` frame's payload into the frame it carries."""
-    text = png_to_text(data_b64)
+def decode_png(data_b64: str, max_bytes: int = 64 << 20) -> Any:
+    """Decode a (complete) ``png`` frame's payload into the frame it carries (``max_bytes``: see
+    :func:`png_to_text`)."""
+    text = png_to_text(data_b64, max_bytes)
     try:
         return loads(text)
     except orjson.JSONDecodeError as exc:

@@ -280,7 +280,7 @@ class WidgetModel:
         return {}
 
     def advertise_options(self) -> dict[str, Any]:
-        """Extra keywords for ``port.advertise`` (latch, queue_size)."""
+        """Extra keywords for ``port.advertise`` (latch, queue_size, max_age: the freshness limit)."""
         return {}
 
     # -- incoming (bridge loop thread) ---------------------------------------------------------------

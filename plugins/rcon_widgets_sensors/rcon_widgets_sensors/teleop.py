@@ -8,6 +8,9 @@ a timer on the bridge loop; when it lifts it publishes one zero command at once 
 Safety: the zero is also sent, immediately, when the model is stopped (the canvas is left), when the link
 goes down (sent again once it is back, then silence), and by the view on touch cancel and focus loss.
 After a forced stop the pad ignores the finger until it is lifted and put down again.
+A stalled link (the client's DEGRADED state) counts as down. Every command has a freshness limit of
+``COMMAND_MAX_AGE`` (the publisher's ``max_age``): the bridge drops a command it could not write within it,
+so a stall never delivers a burst of old commands (see ``rcon_core/bridge/freshness.py``).
 
 Several pads bound to the same topic on the same connection (two thumbs: linear on one, angular on the
 other) form a group: their axes are merged into one message, published by one of them at its rate, so
@@ -59,6 +62,9 @@ for _stamped, _inner, _key in (("TwistStamped", "Twist", "twist"), ("AccelStampe
                                ("Vector3Stamped", "Vector3", "vector"), ("PointStamped", "Point", "point")):
     _FALLBACK[f"geometry_msgs/msg/{_stamped}"] = {"header": _STAMP_HEADER,
                                                   _key: _FALLBACK[f"geometry_msgs/msg/{_inner}"]}
+
+#: freshness limit of a motion command (s): older ones are dropped by the bridge, never sent late
+COMMAND_MAX_AGE = 0.25
 
 _AXIS_RE = re.compile(r"^(auto|-?[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*)?$")
 
@@ -239,6 +245,9 @@ class TeleopModel(WidgetModel):
             limit = s.max_angular if rel.startswith("angular") or leaf == "theta" else s.max_linear
             out[self._abs(rel)] = out.get(self._abs(rel), 0.0) + sign * v * limit + 0.0
         return out
+
+    def advertise_options(self) -> dict[str, Any]:
+        return {"max_age": COMMAND_MAX_AGE}
 
     # -- view -> model (any thread) ---------------------------------------------------------------------
     def set_axes(self, x: float, y: float) -> None:

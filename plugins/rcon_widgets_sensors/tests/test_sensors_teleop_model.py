@@ -300,3 +300,51 @@ async def test_client_closed_then_reopened_sends_one_zero(sim):
     finally:
         model.stop()
         await client.close()
+
+
+async def test_silent_stall_stops_the_pad_and_never_delivers_a_late_command(sim):
+    """Issue 11 item 5: a 2.5 s stall with no FIN nor RST while the finger is down.  The link goes DEGRADED
+    (down for the pad: forced stop, locked), no command reaches the robot later than its freshness limit,
+    and the zero arrives once the link is back."""
+    from rcon_widgets_sensors.teleop import COMMAND_MAX_AGE
+
+    from rcon_core.loopback import StallProxy
+
+    arrivals = []  # (age at arrival in s, msg)
+
+    def on_cmd(msg):
+        stamp = msg["header"]["stamp"]
+        arrivals.append((time.time() - stamp["secs"] - stamp["nsecs"] * 1e-9, msg))
+
+    sim.subscribe_internal("/cmd_stamped", "geometry_msgs/TwistStamped", "/rcon_test_receiver", on_cmd)
+    async with StallProxy("127.0.0.1", sim.port) as proxy:
+        c = BridgeClient(proxy.url, backoff_min=0.05, backoff_max=0.2)
+        await c.connect()
+        model = pad(c, TeleopSettings(rate_hz=20), name="/cmd_stamped", type_name="geometry_msgs/TwistStamped")
+        states = []
+
+        def on_state(st):
+            states.append(st)
+            model.set_link(st is ConnectionState.CONNECTED)
+
+        c.add_state_listener(on_state)
+        model.start()
+        try:
+            model.set_axes(0.0, 1.0)
+            await until(lambda: len(arrivals) >= 3, 3.0, "driving")
+            proxy.stall()
+            await until(lambda: ConnectionState.DEGRADED in states, 1.5, "DEGRADED within 1.5 s")
+            assert model.state.value.locked and model.state.value.reason == "link down"
+            await asyncio.sleep(1.5)
+            n = len(arrivals)
+            proxy.resume()
+            await until(lambda: states[-1] is ConnectionState.CONNECTED, 5.0, "link back")
+            await until(lambda: any(is_zero(m["twist"]) for _age, m in arrivals[n:]), 3.0, "a zero after the stall")
+            late = [round(age, 2) for age, _m in arrivals if age > COMMAND_MAX_AGE + 0.5]
+            assert late == [], f"commands delivered late: {late}"
+            assert all(is_zero(m["twist"]) for _age, m in arrivals[n:])  # never the old command again
+            assert c.stats["stale_dropped"] >= 1  # the zero sent while DEGRADED could not go out in time
+        finally:
+            model.release()
+            model.stop()
+            await c.close()

@@ -1,0 +1,117 @@
+"""Guards for untrusted input from the server: bounded text for logs and PNG header checks.
+
+Decisions:
+
+* Nothing that came from the server is formatted with ``str``/``repr``/``%r`` directly: a JSON value
+  nested 1000 deep (orjson accepts up to 1024 levels) makes those recurse past Python's limit, and a large
+  one costs its whole size in time and memory for a log line.  :func:`bounded_repr` walks at most
+  ``depth`` levels and ``limit`` characters, never recurses further and never raises.
+* :func:`safe_text` turns an exception into at most ``limit`` characters the same way (an exception's
+  message may itself hold untrusted data, e.g. a ``KeyError`` of a deep list).
+* A ``png`` frame is checked before it is decoded: :func:`png_decoded_size` reads the IHDR chunk (the
+  first 33 bytes) and the frame is refused when its pixels would need more than the largest frame the
+  client accepts (``max_size``) -- a 114-byte PNG may declare 16000 x 16000 pixels (1.2 GB).
+"""
+
+from __future__ import annotations
+
+import struct
+from typing import Any
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+_IHDR = struct.Struct(">I4sIIBBBBB")  # length, b"IHDR", width, height, depth, color type, ...
+#: PNG colour type -> samples per pixel
+_CHANNELS = {0: 1, 2: 3, 3: 1, 4: 2, 6: 4}
+
+
+def bounded_repr(value: Any, limit: int = 120, depth: int = 4) -> str:
+    """A ``repr``-like text of ``value`` of at most ``limit`` characters, looking at most ``depth`` levels
+    into dicts, lists and tuples (deeper parts are shown as ``...``).  Never raises, never recurses
+    unbounded: safe for any value parsed from an untrusted frame."""
+    out: list[str] = []
+    budget = [max(limit, 8) + 1]
+
+    def put(text: str) -> bool:
+        if budget[0] <= 0:
+            return False
+        out.append(text[:budget[0]])
+        budget[0] -= len(text)
+        return budget[0] > 0
+
+    def walk(v: Any, level: int) -> bool:
+        if isinstance(v, dict):
+            if level >= depth:
+                return put("{...}")
+            if not put("{"):
+                return False
+            for i, (k, item) in enumerate(v.items()):
+                if (i and not put(", ")) or not walk(k, level + 1) or not put(": ") or not walk(item, level + 1):
+                    return False
+            return put("}")
+        if isinstance(v, list | tuple):
+            open_, close = ("[", "]") if isinstance(v, list) else ("(", ")")
+            if level >= depth:
+                return put(open_ + "..." + close)
+            if not put(open_):
+                return False
+            for i, item in enumerate(v):
+                if (i and not put(", ")) or not walk(item, level + 1):
+                    return False
+            return put(close)
+        if isinstance(v, str | bytes | bytearray):
+            return put(repr(v[:limit]))
+        if v is None or isinstance(v, bool | int | float):
+            text = repr(v) if not isinstance(v, int) or v.bit_length() < 256 else f"<int of {v.bit_length()} bits>"
+            return put(text)
+        return put(f"<{type(v).__name__}>")
+
+    try:
+        walk(value, 0)
+    except Exception:  # noqa: BLE001 - a log helper must never raise
+        return f"<{type(value).__name__}>"
+    text = "".join(out)
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+def safe_text(exc: BaseException, limit: int = 200) -> str:
+    """``"Type: message"`` of an exception, at most ``limit`` characters; never raises."""
+    try:
+        text = str(exc)
+    except Exception:  # noqa: BLE001 - e.g. RecursionError while formatting a deep argument
+        text = bounded_repr(exc.args, limit)
+    if len(text) > limit:
+        text = text[:limit - 3] + "..."
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+class PngRefused(ValueError):
+    """A ``png`` frame whose header is missing, broken, or declares too many pixels."""
+
+
+class PngTooLarge(PngRefused):
+    """A PNG whose header declares more pixel bytes than the client accepts (a PNG bomb)."""
+
+
+def png_decoded_size(png: bytes) -> int:
+    """Bytes the decoded pixels of ``png`` need (width x height x samples x bytes per sample), from its
+    IHDR chunk alone.  Raises :class:`PngRefused` when ``png`` does not start like a PNG."""
+    if len(png) < len(PNG_SIGNATURE) + _IHDR.size:
+        raise PngRefused(f"data is not a PNG image ({len(png)} bytes, too short for a PNG header)")
+    if not png.startswith(PNG_SIGNATURE):
+        raise PngRefused("data is not a PNG image (no PNG signature)")
+    _, name, width, height, bit_depth, color_type, *_ = _IHDR.unpack_from(png, len(PNG_SIGNATURE))
+    channels = _CHANNELS.get(color_type)
+    if name != b"IHDR" or channels is None or bit_depth not in (1, 2, 4, 8, 16):
+        raise PngRefused("data is not a PNG image (broken IHDR header)")
+    if width == 0 or height == 0:
+        raise PngRefused(f"PNG image is {width} x {height} pixels (empty)")
+    return width * height * channels * max(bit_depth // 8, 1)
+
+
+def check_png(png: bytes, max_bytes: int) -> None:
+    """Refuse ``png`` (raise :class:`PngRefused`) when it is not a PNG or its decoded pixels would exceed
+    ``max_bytes``; the check reads only the header, before any decoding."""
+    size = png_decoded_size(png)
+    if size > max_bytes:
+        raise PngTooLarge(f"PNG image would decode to {size} bytes, more than the {max_bytes} bytes the client "
+                         "accepts in one frame; refused")
