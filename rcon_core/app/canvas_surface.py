@@ -18,6 +18,15 @@ from rcon_core.app.widget_frame import WidgetFrame
 DRAFT_MIME = "application/x-rcon-widget-draft"
 
 
+#: the empty canvas's hint, by whether the side panel (topics, services, widgets) is on screen: it never
+#: points at a panel that is hidden, it says what to tap instead
+EMPTY_HINTS = {
+    True: "This canvas is empty.\nPick a topic, a service or a widget on the left to add one.",
+    False: "This canvas is empty.\nTap ▶ at the top left to show the topics, services and widgets,\n"
+           "then pick one to add it.",
+}
+
+
 class CanvasSurface(QtWidgets.QWidget):
     """Frames are children positioned in canvas units (device-independent pixels)."""
 
@@ -36,13 +45,15 @@ class CanvasSurface(QtWidgets.QWidget):
         self.order: list[str] = []
         #: the scroll area showing this surface (set by CanvasScroll)
         self.scroll_area: CanvasScroll | None = None
-        self.placeholder = QtWidgets.QLabel(
-            "This canvas is empty.\nPick a topic, a service or a widget on the left to add one.", self
-        )
+        self.placeholder = QtWidgets.QLabel(EMPTY_HINTS[True], self)
         self.placeholder.setObjectName("emptyCanvas")
         self.placeholder.setProperty("role", "hint")
         self.placeholder.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
         self.placeholder.setAttribute(QtCore.Qt.WidgetAttribute.WA_TransparentForMouseEvents)
+
+    def set_side_shown(self, shown: bool) -> None:
+        """Word the empty-canvas hint for the side panel being shown or hidden."""
+        self.placeholder.setText(EMPTY_HINTS[bool(shown)])
 
     # frames -----------------------------------------------------------------------------------------
     def add_frame(self, frame: WidgetFrame, rect: QtCore.QRect) -> WidgetFrame:

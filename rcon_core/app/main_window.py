@@ -563,6 +563,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if shown != self.side.isVisibleTo(self):
             self.side.setVisible(shown)
         self.side_toggle.setText("◀" if shown else "▶")
+        self.controller.set_side_shown(shown)
         self.side_toggle.setEnabled(shown or room)
         tip = ("Hide topics, services and widgets (more room for the canvas)" if shown
                else "Show topics, services and widgets" if room
