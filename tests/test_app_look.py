@@ -6,11 +6,8 @@ still take a finger; a checked box shows a tick; the empty canvas's hint never p
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
-
 import pytest
-from app_helpers import LEFT, NO_MOD, choose_kind, entry_point_plugins, open_window, tap, tap_topic
+from app_helpers import LEFT, NO_MOD, choose_kind, entry_point_plugins, open_window, snap, tap, tap_topic
 from qtpy import QtCore, QtGui, QtWidgets
 from qtpy.QtTest import QTest
 
@@ -49,14 +46,6 @@ def settle(ms: int = 30) -> None:
     for _ in range(3):
         QtWidgets.QApplication.processEvents()
         QTest.qWait(ms // 3 or 1)
-
-
-def snap(window: QtWidgets.QWidget, name: str) -> None:
-    out = os.environ.get("RCON_SCREENSHOTS", "")
-    if out and out != "1":
-        settle()
-        Path(out).mkdir(parents=True, exist_ok=True)
-        window.grab().save(str(Path(out) / f"{name}.png"))
 
 
 # ------------------------------------------------------------------------------------- scroll bars

@@ -1,6 +1,7 @@
 """Text Field: shows the raw data of any topic or field (subscribe), or publishes what the operator
 types (publish). Typed text is YAML or JSON turned into the topic's type with the type registry; a
-string field takes the text as it is. Wrong text publishes nothing and the error names the field."""
+string field takes the text as it is. Wrong text publishes nothing and the error names the field; NaN and
+infinity count as wrong unless the "Allow NaN and infinity" setting is on."""
 
 from __future__ import annotations
 
@@ -27,6 +28,9 @@ class TextFieldSettings:
     placeholder: str = attrs.field(default="", metadata={"label": "Hint", "help": "grey text in the empty field"})
     clear_after_send: bool = attrs.field(default=False, metadata={"label": "Clear after sending"})
     stale_after: float = attrs.field(default=10.0, metadata={"label": "Stale after (s)", "min": 0.1})
+    allow_nonfinite: bool = attrs.field(
+        default=False, metadata={"label": "Allow NaN and infinity",
+                                 "help": "off: nan, inf and null are refused for numbers (JSON sends them as null)"})
 
     def problems(self) -> list[str]:
         out = []
@@ -77,13 +81,14 @@ class TextFieldModel(StdModel):
         if not self.types_ready:
             raise MessageTextError("", f"the type {b.type} is not known yet (asking the robot)")
         path = b.field_path
+        finite = not self.settings.allow_nonfinite  # NaN/inf only when the operator allowed them
         if not path:
-            return self.types.from_text(b.type, text)
+            return self.types.from_text(b.type, text, finite=finite)
         value: Any = text if self._is_string_field() else parse_text(text)
         if value == {} and not text.strip():
             raise MessageTextError(path, "nothing typed")
         msg = set_path(copy.deepcopy(self.types.default(b.type)), path, value)
-        return self.types.complete(b.type, msg)
+        return self.types.complete(b.type, msg, finite=finite)
 
     def submit(self, text: str) -> None:
         """Parse and publish ``text`` on the bridge thread (any thread may call this)."""
