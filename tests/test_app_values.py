@@ -1,11 +1,12 @@
 """What widgets show and send is true, on the real window against the sim: a typed ``nan`` is refused
-with a reason (not sent as ``null``)."""
+with a reason (not sent as ``null``); a latched map that delivered once is not called STALE."""
 
 from __future__ import annotations
 
 import pytest
 from app_helpers import choose_kind, entry_point_plugins, snap, tap, tap_topic, window_session
 from qtpy import QtWidgets
+from qtpy.QtCore import Qt
 from qtpy.QtTest import QTest
 
 from rcon_core.msgs import TypeRegistry
@@ -27,15 +28,24 @@ def window(qtbot, tmp_path, sim_thread, plugins):
 
 
 def place(window, qtbot, topic: str, role: Role, kind: str, settings: dict | None = None):
-    """Add a widget from the topic list with the add panel's Place button; returns (instance, hosted),
-    running in Operate mode."""
+    """Add a widget from the topic list with the add panel's Place button, ``settings`` set in its form
+    (a tap on a check box, typing into a number box); returns (instance, hosted), running in Operate mode."""
     tap_topic(window, topic)
     panel = choose_kind(window, role, kind)
     for name, value in (settings or {}).items():
-        [box] = [b for b in panel.settings_page.findChildren(QtWidgets.QCheckBox, f"setting_{name}")]
-        if box.isChecked() != value:
-            panel.settings_scroll.ensureWidgetVisible(box)
-            box.click()
+        [editor] = [e for e in panel.settings_page.findChildren(QtWidgets.QWidget, f"setting_{name}")]
+        panel.settings_scroll.ensureWidgetVisible(editor)
+        QtWidgets.QApplication.processEvents()
+        if isinstance(editor, QtWidgets.QCheckBox):
+            if editor.isChecked() != value:
+                editor.click()
+        else:
+            line = editor.findChild(QtWidgets.QLineEdit)
+            tap(line)
+            QTest.keyClick(line, Qt.Key.Key_A, Qt.KeyboardModifier.ControlModifier)
+            QTest.keyClicks(line, str(value))
+            QTest.keyClick(line, Qt.Key.Key_Tab)
+            assert editor.value() == value
     tap(panel.place_button)
     inst = window.controller.canvas.widgets[-1]
     tap(window.lock_button)
@@ -74,3 +84,18 @@ def test_nan_goes_out_only_where_the_widget_allows_it(window, qtbot, sim_thread)
     type_and_send(hosted.view, "nan")
     sim_thread.wait_for_published_sync("/speed_limit", timeout=10)  # sent, as the operator asked
     assert "finite" not in hosted.view.status.text()
+
+
+def test_a_latched_map_that_delivered_once_is_not_called_stale(window, qtbot, sim_thread):
+    inst, hosted = place(window, qtbot, "/map", Role.SUBSCRIBE, "sensors.image", {"stale_after": 0.5})
+    assert hosted.model.settings.stale_after == 0.5
+    qtbot.waitUntil(lambda: hosted.model.state.count >= 1 and hosted.view.frame is not None, timeout=10_000)
+    qtbot.wait(1500)  # three times the widget's stale_after, and the view's own 1 s
+    state = hosted.model.state
+    assert state.count == 1 and state.age > 1.0  # one map, long ago: the sim sends it once (latched)
+    assert state.static and not state.stale
+    window.host.refresh()
+    snap(window, "latched-map-not-stale")
+    badge = hosted.frame.badge
+    assert badge.kind != "stale" and "STALE" not in badge.text()
+    assert hosted.view.stale_for() is None  # no "STALE · no new frame" over the map either

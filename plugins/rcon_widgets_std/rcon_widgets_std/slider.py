@@ -36,7 +36,8 @@ class SliderSettings:
     )
     decimals: int = attrs.field(default=2, metadata={"label": "Decimals", "min": 0, "max": 9})
     units: str = attrs.field(default="", metadata={"label": "Units"})
-    stale_after: float = attrs.field(default=5.0, metadata={"label": "Stale after (s)", "min": 0.1})
+    stale_after: float = attrs.field(default=5.0, metadata={"label": "Stale after (s)", "min": 0.0,
+                                                           "help": "0 = a static (latched) topic: never stale once it delivered"})
     initial: float = attrs.field(
         default=0.0, metadata={"label": "Start value",
                                "help": "publish sliders: shown until something is sent or heard (clamped to the range)"}

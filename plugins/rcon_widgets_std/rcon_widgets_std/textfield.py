@@ -27,7 +27,8 @@ class TextFieldSettings:
                                                       "help": "for numbers shown; -1 as they arrive"})
     placeholder: str = attrs.field(default="", metadata={"label": "Hint", "help": "grey text in the empty field"})
     clear_after_send: bool = attrs.field(default=False, metadata={"label": "Clear after sending"})
-    stale_after: float = attrs.field(default=10.0, metadata={"label": "Stale after (s)", "min": 0.1})
+    stale_after: float = attrs.field(default=10.0, metadata={"label": "Stale after (s)", "min": 0.0,
+                                                            "help": "0 = a static (latched) topic: never stale once it delivered"})
     allow_nonfinite: bool = attrs.field(
         default=False, metadata={"label": "Allow NaN and infinity",
                                  "help": "off: nan, inf and null are refused for numbers (JSON sends them as null)"})
@@ -36,8 +37,8 @@ class TextFieldSettings:
         out = []
         if not -1 <= self.decimals <= 12:
             out.append(f"decimals must be between -1 and 12, not {self.decimals}")
-        if not self.stale_after > 0:
-            out.append("'stale after' must be more than 0 s")
+        if not self.stale_after >= 0:
+            out.append("'stale after' cannot be negative (0 = a static topic)")
         return out
 
 
