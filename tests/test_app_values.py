@@ -1,10 +1,11 @@
 """What widgets show and send is true, on the real window against the sim: a typed ``nan`` is refused
-with a reason (not sent as ``null``); a latched map that delivered once is not called STALE."""
+with a reason (not sent as ``null``); a latched map that delivered once is not called STALE; the demo's
+speed-limit slider does not show a limit nobody set."""
 
 from __future__ import annotations
 
 import pytest
-from app_helpers import choose_kind, entry_point_plugins, snap, tap, tap_topic, window_session
+from app_helpers import choose_kind, entry_point_plugins, open_window, snap, tap, tap_topic, window_session
 from qtpy import QtWidgets
 from qtpy.QtCore import Qt
 from qtpy.QtTest import QTest
@@ -99,3 +100,37 @@ def test_a_latched_map_that_delivered_once_is_not_called_stale(window, qtbot, si
     badge = hosted.frame.badge
     assert badge.kind != "stale" and "STALE" not in badge.text()
     assert hosted.view.stale_for() is None  # no "STALE · no new frame" over the map either
+
+
+@pytest.mark.parametrize("size", [(1280, 800), (1024, 600)])
+def test_the_demo_speed_limit_reads_not_set_until_a_limit_is_sent(qtbot, tmp_path, sim_thread, plugins,
+                                                                   monkeypatch, size):
+    from rcon_widgets_std import slider
+
+    from rcon_core.app.demo import demo_workspace
+
+    monkeypatch.setattr(slider, "_LAST_VALUES", {})  # nothing sent in this session (other tests send some)
+    window = open_window(qtbot, tmp_path / "config", plugins, url=sim_thread.url, size=size,
+                         demo=lambda: demo_workspace(plugins), wait_connected=True)
+    try:
+        [inst] = [w for w in window.controller.canvas.widgets if w.title == "Speed limit"]
+        hosted = window.host.hosted[inst.id]
+        qtbot.waitUntil(lambda: hosted.view is not None and hosted.model.running, timeout=10_000)
+        window.controller.surface.reveal(hosted.frame.geometry())
+        qtbot.waitUntil(lambda: hosted.view.value.isVisible() and hosted.view.value.text() == "not set",
+                        timeout=5_000)
+        assert sim_thread.robot.speed_limit is None  # the robot has none: a number here would be a lie
+        qtbot.wait(300)
+        window.host.refresh()
+        assert hosted.view.value.text() == "not set"
+        snap(window, f"speed-limit-not-set-{size[0]}")
+        track = hosted.view.slider
+        tap(track, track.rect().center())  # the middle of 0..3 m/s
+        qtbot.waitUntil(lambda: sim_thread.robot.speed_limit is not None, timeout=10_000)
+        limit = sim_thread.robot.speed_limit
+        assert 1.0 < limit < 2.0
+        window.host.refresh()
+        qtbot.waitUntil(lambda: hosted.view.value.text() == f"{limit:.1f} m/s", timeout=5_000)
+        snap(window, f"speed-limit-set-{size[0]}")
+    finally:
+        window.shutdown()
