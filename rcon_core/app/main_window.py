@@ -207,9 +207,9 @@ class MainWindow(QtWidgets.QMainWindow):
         #: a layout file that could not be read: says so, that it will not be overwritten, and the way out
         self.notice = NoticeBar("fileBanner")
         self.banner = self.notice.label
-        rcol.addWidget(self.notice)
         rcol.addWidget(split, 1)
         self.setCentralWidget(root)
+        self.notice.float_over(root)  # over the bottom edge: a notice never pushes a control away
 
         # ---- workspace
         self.layout_path = Path(layout_path) if layout_path is not None else config.workspace_path

@@ -1,0 +1,95 @@
+"""Nothing under the operator's finger moves on its own, on the real window against the sim: a notice
+floats over the bottom edge instead of pushing the window's content down.
+
+``RCON_SCREENSHOTS=DIR`` writes a PNG of the window at each step.
+"""
+
+from __future__ import annotations
+
+import pytest
+from app_helpers import entry_point_plugins, open_window, snap, tap, tap_topic
+from qtpy import QtCore, QtWidgets
+from qtpy.QtTest import QTest
+
+from rcon_core.app.main_window import MainWindow
+from rcon_core.plugins import PluginManager
+
+pytestmark = pytest.mark.usefixtures("qapp")
+
+
+@pytest.fixture(scope="module")
+def plugins() -> PluginManager:
+    pytest.importorskip("rcon_widgets_std")
+    pytest.importorskip("rcon_widgets_sensors")
+    return entry_point_plugins()
+
+
+@pytest.fixture
+def make_window(qtbot, tmp_path, sim_thread, plugins):
+    made: list[MainWindow] = []
+
+    def make(size: tuple[int, int], demo: bool = True) -> MainWindow:
+        from rcon_core.app.demo import demo_workspace
+
+        win = open_window(qtbot, tmp_path / f"config{len(made)}", plugins, url=sim_thread.url, size=size,
+                          demo=(lambda: demo_workspace(plugins)) if demo else None, wait_connected=True,
+                          topics=("/battery",))
+        made.append(win)
+        return win
+
+    yield make
+    for win in made:
+        win.shutdown()
+
+
+def settle() -> None:
+    for _ in range(3):
+        QtWidgets.QApplication.processEvents()
+        QTest.qWait(10)
+
+
+def where(window: QtWidgets.QWidget, widget: QtWidgets.QWidget) -> QtCore.QRect:
+    return QtCore.QRect(widget.mapTo(window, QtCore.QPoint(0, 0)), widget.size())
+
+
+@pytest.mark.parametrize("size", [(1280, 800), (1024, 600)])
+def test_a_notice_moves_nothing_under_the_finger(make_window, qtbot, size):
+    window = make_window(size)
+    settle()
+    if not window.side.isVisible():
+        tap(window.side_toggle)  # a small screen in Operate mode: the operator brings the topics back
+        settle()
+    frames = [window.host.hosted[w.id].frame for w in window.controller.canvas.widgets]
+    controls = [window.side_toggle, window.tabs, window.edit_button, window.lock_button, window.topics.tree,
+                *frames]
+    before = [where(window, w) for w in controls]
+    tap_topic(window, "/battery")  # in Operate mode: the notice offers to switch to Edit mode
+    notice = window.notice
+    qtbot.waitUntil(notice.isVisible, timeout=5_000)
+    settle()
+    snap(window, f"notice-{size[0]}")
+    assert [where(window, w) for w in controls] == before  # nothing moved
+    # it floats over the bottom edge, inside the window, leaving the bars above uncovered
+    rect = where(window, notice)
+    assert window.rect().contains(rect) and rect.bottom() == window.rect().bottom()
+    assert rect.top() > where(window, window.lock_button).bottom()
+    assert rect.width() == window.width()
+    [action] = notice.buttons.values()
+    assert window.rect().contains(where(window, action))
+    tap(action)  # "Switch to Edit mode": taken at once, and the panel opens for /battery
+    settle()
+    assert not notice.isVisible() and not window.controller.canvas.locked
+    assert window.add_panel.isVisible()
+
+
+def test_a_notice_follows_the_window_size(make_window, qtbot):
+    window = make_window((1280, 800), demo=False)
+    window.notice.show_notice("⚠ The layout could not be saved: disk full")
+    settle()
+    assert where(window, window.notice).bottom() == window.rect().bottom()
+    window.resize(1024, 600)
+    settle()
+    rect = where(window, window.notice)
+    assert rect.bottom() == window.rect().bottom() and rect.width() == 1024
+    tap(window.notice.dismiss_button)
+    assert not window.notice.isVisible()
