@@ -1,5 +1,6 @@
 """Nothing under the operator's finger moves on its own, on the real window against the sim: a notice
-floats over the bottom edge instead of pushing the window's content down.
+floats over the bottom edge instead of pushing the window's content down; a preview dropped while the add
+panel is open stays where it was dropped when the panel closes.
 
 ``RCON_SCREENSHOTS=DIR`` writes a PNG of the window at each step.
 """
@@ -7,12 +8,13 @@ floats over the bottom edge instead of pushing the window's content down.
 from __future__ import annotations
 
 import pytest
-from app_helpers import entry_point_plugins, open_window, snap, tap, tap_topic
-from qtpy import QtCore, QtWidgets
+from app_helpers import LEFT, NO_MOD, choose_kind, entry_point_plugins, open_window, snap, tap, tap_topic
+from qtpy import QtCore, QtGui, QtWidgets
 from qtpy.QtTest import QTest
 
+from rcon_core.app.canvas_surface import DRAFT_MIME
 from rcon_core.app.main_window import MainWindow
-from rcon_core.plugins import PluginManager
+from rcon_core.plugins import PluginManager, Role
 
 pytestmark = pytest.mark.usefixtures("qapp")
 
@@ -93,3 +95,44 @@ def test_a_notice_follows_the_window_size(make_window, qtbot):
     assert rect.bottom() == window.rect().bottom() and rect.width() == 1024
     tap(window.notice.dismiss_button)
     assert not window.notice.isVisible()
+
+
+def send_drop(surface: QtWidgets.QWidget, at: QtCore.QPoint) -> None:
+    """What Qt delivers to the canvas when the operator lets go of the dragged preview over it."""
+    mime = QtCore.QMimeData()
+    mime.setData(DRAFT_MIME, QtCore.QByteArray(b"draft"))
+    for cls in (QtGui.QDragEnterEvent, QtGui.QDragMoveEvent):
+        QtWidgets.QApplication.sendEvent(surface, cls(at, QtCore.Qt.DropAction.CopyAction, mime, LEFT, NO_MOD))
+    QtWidgets.QApplication.sendEvent(surface, QtGui.QDropEvent(QtCore.QPointF(at), QtCore.Qt.DropAction.CopyAction,
+                                                               mime, LEFT, NO_MOD))
+
+
+@pytest.mark.parametrize("size", [(1280, 800), (1024, 600)])
+def test_a_dropped_preview_stays_where_it_was_dropped_when_the_panel_closes(make_window, qtbot, size):
+    window = make_window(size, demo=False)
+    tap(window.edit_button)
+    settle()
+    tap_topic(window, "/battery")
+    panel = choose_kind(window, Role.SUBSCRIBE, "std.label")
+    qtbot.waitUntil(lambda: panel.drag_handle.isEnabled(), timeout=5_000)
+    settle()
+    side_before = window.side.isVisible()
+    surface = window.controller.surface
+    viewport = surface.scroll_area.viewport()
+    aimed = QtCore.QPoint(120, 100)  # where the finger lets go, in the canvas's view
+    finger = viewport.mapTo(window, aimed)
+    send_drop(surface, surface.mapFrom(viewport, aimed))
+    [inst] = window.controller.canvas.widgets
+    frame = window.host.hosted[inst.id].frame
+    placed = where(window, frame)
+    assert (placed.topLeft() - finger).manhattanLength() <= 32  # under the finger (snapped to the grid)
+    for _ in range(5):
+        settle()
+    snap(window, f"dropped-{size[0]}")
+    assert not panel.isVisible()
+    assert where(window, frame) == placed  # the panel closed and nothing moved sideways
+    assert window.side.isVisible() == side_before  # the side panel did not come back by itself...
+    if not side_before:
+        tap(window.side_toggle)  # ...the operator brings it back when wanted
+        settle()
+        assert window.side.isVisible()

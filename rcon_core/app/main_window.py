@@ -688,7 +688,13 @@ class MainWindow(QtWidgets.QMainWindow):
             QtWidgets.QApplication.sendPostedEvents(None, QtCore.QEvent.Type.LayoutRequest)
 
     def _dropped(self, _surface: Any, point: QtCore.QPoint) -> None:
-        draft = self.add_panel.take_draft()
+        side_hidden = not self.side.isVisibleTo(self)
+        draft = self.add_panel.take_draft()  # the panel closes
+        if side_hidden and self.side.isVisibleTo(self):
+            # the side panel gave its room to the add panel; coming back now it would push the canvas
+            # (and the widget just dropped under the finger) sideways: it stays hidden until ▶ is tapped
+            self._side_override = False
+            self._update_side()
         if draft is not None:
             self.controller.add_draft(draft, point)
 
