@@ -181,3 +181,24 @@ def test_the_stylesheet_parses_without_a_warning(qtbot):
         QtCore.qInstallMessageHandler(previous)
     assert [m for m in broken if "parse" in m.lower()], broken
     assert isinstance(QtGui.QGuiApplication.instance(), QtWidgets.QApplication)
+
+
+@pytest.mark.parametrize("size", [(1280, 800), (1024, 600)])
+def test_the_add_panel_shows_its_preview_without_scrolling(make_window, qtbot, size):
+    from app_helpers import choose_kind, snap
+
+    window = make_window(size)
+    tap(window.edit_button)
+    tap_topic(window, "/cmd_vel")
+    panel = choose_kind(window, Role.PUBLISH, "std.slider")
+    qtbot.waitUntil(lambda: panel.preview_frame is not None and panel.preview_frame.isVisible(), timeout=10_000)
+    settle()
+    snap(window, f"add-panel-preview-{size[0]}")
+    frame = panel.preview_frame
+    assert inside_window(window, frame)  # all of it in sight, not below the fold of the settings
+    assert window.childAt(frame.mapTo(window, frame.rect().center())) in (frame, *frame.findChildren(QtWidgets.QWidget))
+    scroll = panel.settings_scroll
+    assert scroll.verticalScrollBar().value() == 0  # nothing scrolled to see it
+    # the settings below keep room for a few rows, and Place stays in sight
+    assert scroll.viewport().height() >= 3 * 48, scroll.viewport().height()
+    assert inside_window(window, panel.place_button) and panel.place_button.isVisible()

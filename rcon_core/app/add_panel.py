@@ -196,9 +196,11 @@ class FieldChooser(ElidingCombo):
 
 class PreviewSlot(QtWidgets.QWidget):
     """Holds the preview frame: as wide as the panel allows, never wider, its height following the
-    widget's default aspect (clamped), so a big widget shows scaled down instead of cut."""
+    widget's default aspect (clamped, and at most :attr:`room` on a short screen: then narrower, keeping
+    its shape), so a big widget shows scaled down instead of cut."""
 
     MIN_H, MAX_H = 150, 320  # room for the "not configured" warning listing a few problems
+    room = MAX_H  #: the most height the panel can give (set by the panel from its own height)
 
     def __init__(self) -> None:
         super().__init__()
@@ -226,11 +228,18 @@ class PreviewSlot(QtWidgets.QWidget):
         super().resizeEvent(event)
         self._fit()
 
+    def set_room(self, room: int) -> None:
+        self.room = max(self.MIN_H, min(self.MAX_H, room))
+        self._fit()
+
     def _fit(self) -> None:
         if self.frame is None:
             self.setFixedHeight(0)
             return
-        height = int(max(self.MIN_H, min(self.MAX_H, self.width() * self.aspect)))
+        height = int(max(self.MIN_H, min(self.room, self.width() * self.aspect)))
+        # capped by the room: narrower too, so a square widget stays square (centred)
+        side = max(0, (self.width() - round(height / self.aspect)) // 2) if self.aspect > 0 else 0
+        self.col.setContentsMargins(side, 0, side, 0)
         if height != self.height() or self.minimumHeight() != height:
             self.setFixedHeight(height)
 
@@ -314,6 +323,10 @@ class AddPanel(QtWidgets.QWidget):
         col.addWidget(self.stack)
 
     # --------------------------------------------------------------------------------------- pages
+    def resizeEvent(self, event: QtGui.QResizeEvent) -> None:  # noqa: N802 - Qt override
+        super().resizeEvent(event)
+        self.preview_slot.set_room(self.height() // 3)  # the settings below keep the most room
+
     def _nav(self, back: Callable[[], None] | None) -> QtWidgets.QHBoxLayout:
         row = QtWidgets.QHBoxLayout()
         if back is not None:
@@ -384,6 +397,10 @@ class AddPanel(QtWidgets.QWidget):
         self.settings_error.setWordWrap(True)
         self.settings_error.hide()
         outer.addWidget(self.settings_error)
+        # the live preview is pinned above the settings (not scrolled with them): in sight while they are
+        # changed, also on a 600 px tall screen
+        self.preview_slot = PreviewSlot()
+        outer.addWidget(self.preview_slot)
         self.settings_scroll = scroll = QtWidgets.QScrollArea()
         scroll.setObjectName("settingsScroll")
         scroll.setWidgetResizable(True)
@@ -413,10 +430,6 @@ class AddPanel(QtWidgets.QWidget):
         self.title_edit.textChanged.connect(self._title_changed)
         binding_box.addRow(form_label("Title", self.title_edit), self.title_edit)
         self.settings_col.addLayout(binding_box)
-        # the live preview first, so it is in sight while the settings below are changed
-        self.settings_col.addWidget(QtWidgets.QLabel("Preview"))
-        self.preview_slot = PreviewSlot()
-        self.settings_col.addWidget(self.preview_slot)
         self.form_slot = QtWidgets.QVBoxLayout()
         self.settings_col.addLayout(self.form_slot)
         self.settings_col.addStretch(1)
@@ -428,8 +441,13 @@ class AddPanel(QtWidgets.QWidget):
         self.place_button.setProperty("primary", True)
         self.place_button.clicked.connect(self._place_clicked)
         outer.addWidget(self.drag_handle)
-        outer.addWidget(self.place_button)
-        outer.addLayout(self._nav(self._settings_back))
+        nav = self._nav(self._settings_back)  # one row: ‹ Back, Place on canvas, Cancel (room for the form)
+        for i in range(nav.count()):
+            if nav.itemAt(i).spacerItem() is not None:
+                nav.takeAt(i)  # the Place button takes the room between Back and Cancel
+                nav.insertWidget(i, self.place_button, 1)
+                break
+        outer.addLayout(nav)
         return page
 
     # -------------------------------------------------------------------------------------- entries
