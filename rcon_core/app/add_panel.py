@@ -31,6 +31,7 @@ from rcon_core.app.canvas_surface import DRAFT_MIME
 from rcon_core.app.catalog_panel import short_type
 from rcon_core.app.children_editor import ChildContext
 from rcon_core.app.draft import Candidate, Draft, Target, field_type, suggested_title
+from rcon_core.app.preview_slot import PreviewSlot
 from rcon_core.app.settings_form import SettingsForm, form_label, guard_wheel, tune_form
 from rcon_core.app.widget_frame import WidgetFrame
 from rcon_core.plugins import Binding, Role, SettingsError, WidgetSpec
@@ -192,56 +193,6 @@ class FieldChooser(ElidingCombo):
         path = self.itemData(index)
         if path is not None:
             self.chosen.emit(path)
-
-
-class PreviewSlot(QtWidgets.QWidget):
-    """Holds the preview frame: as wide as the panel allows, never wider, its height following the
-    widget's default aspect (clamped, and at most :attr:`room` on a short screen: then narrower, keeping
-    its shape), so a big widget shows scaled down instead of cut."""
-
-    MIN_H, MAX_H = 150, 320  # room for the "not configured" warning listing a few problems
-    room = MAX_H  #: the most height the panel can give (set by the panel from its own height)
-
-    def __init__(self) -> None:
-        super().__init__()
-        self.setObjectName("previewSlot")
-        self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored, QtWidgets.QSizePolicy.Policy.Fixed)
-        self.col = QtWidgets.QVBoxLayout(self)
-        self.col.setContentsMargins(0, 0, 0, 0)
-        self.aspect = 0.5  # height / width
-        self.frame: QtWidgets.QWidget | None = None
-        self.setFixedHeight(0)
-
-    def set_frame(self, frame: QtWidgets.QWidget | None, size: tuple[float, float] = (160.0, 80.0)) -> None:
-        if self.frame is not None:
-            self.col.removeWidget(self.frame)
-        self.frame = frame
-        if frame is not None:
-            w, h = size
-            self.aspect = (h / w) if w > 0 and h > 0 else 0.5
-            frame.setMinimumSize(60, self.MIN_H)  # explicit: the view's own minimum never widens the panel
-            frame.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored, QtWidgets.QSizePolicy.Policy.Ignored)
-            self.col.addWidget(frame)
-        self._fit()
-
-    def resizeEvent(self, event: QtGui.QResizeEvent) -> None:
-        super().resizeEvent(event)
-        self._fit()
-
-    def set_room(self, room: int) -> None:
-        self.room = max(self.MIN_H, min(self.MAX_H, room))
-        self._fit()
-
-    def _fit(self) -> None:
-        if self.frame is None:
-            self.setFixedHeight(0)
-            return
-        height = int(max(self.MIN_H, min(self.room, self.width() * self.aspect)))
-        # capped by the room: narrower too, so a square widget stays square (centred)
-        side = max(0, (self.width() - round(height / self.aspect)) // 2) if self.aspect > 0 else 0
-        self.col.setContentsMargins(side, 0, side, 0)
-        if height != self.height() or self.minimumHeight() != height:
-            self.setFixedHeight(height)
 
 
 class DragHandle(QtWidgets.QLabel):
