@@ -136,3 +136,30 @@ def test_a_dropped_preview_stays_where_it_was_dropped_when_the_panel_closes(make
         tap(window.side_toggle)  # ...the operator brings it back when wanted
         settle()
         assert window.side.isVisible()
+
+
+@pytest.mark.parametrize("mode", ["operate", "edit"])
+def test_dragging_the_canvas_background_with_the_mouse_scrolls_it(make_window, qtbot, mode):
+    window = make_window((1024, 600))
+    if mode == "edit":
+        tap(window.edit_button)
+    settle()
+    surface = window.controller.surface
+    bar = surface.scroll_area.verticalScrollBar()
+    qtbot.waitUntil(lambda: bar.maximum() > 100, timeout=5_000)
+    content = surface.content_rect()
+    start = QtCore.QPoint(content.right() + 40, 300)  # the background right of the widgets
+    assert surface.childAt(start) in (None, surface.placeholder)
+    frames = {w.id: where(window, window.host.hosted[w.id].frame) for w in window.controller.canvas.widgets}
+    layout = {w.id: w.geometry for w in window.controller.canvas.widgets}
+    QTest.mousePress(surface, LEFT, NO_MOD, start)
+    for step in range(1, 11):  # the hand moves up 100 px: the canvas follows it
+        QTest.mouseMove(surface, start - QtCore.QPoint(0, 10 * step) + QtCore.QPoint(0, bar.value()))
+    QTest.mouseRelease(surface, LEFT, NO_MOD, start - QtCore.QPoint(0, 100) + QtCore.QPoint(0, bar.value()))
+    settle()
+    assert 90 <= bar.value() <= 110, bar.value()
+    snap(window, f"panned-{mode}")
+    # the layout did not change: only the view moved
+    assert {w.id: w.geometry for w in window.controller.canvas.widgets} == layout
+    moved = {i: where(window, window.host.hosted[i].frame).translated(0, bar.value()) for i in frames}
+    assert moved == frames

@@ -2,7 +2,8 @@
 
 A :class:`CanvasSurface` is as large as its widgets need (plus a margin), never smaller than the view;
 it sits in a :class:`CanvasScroll`, so a small window or an open side panel shows scrollbars instead of
-squeezing the widgets. A widget's geometry is the layout's, never the window's.
+squeezing the widgets. A widget's geometry is the layout's, never the window's. Dragging the background
+scrolls it, with a finger (QScroller) and with the mouse alike.
 """
 
 from __future__ import annotations
@@ -25,6 +26,15 @@ EMPTY_HINTS = {
     False: "This canvas is empty.\nTap ▶ at the top left to show the topics, services and widgets,\n"
            "then pick one to add it.",
 }
+
+
+class _Pan:
+    """A mouse drag on the canvas background: where it began and the scroll position then."""
+
+    __slots__ = ("start", "h", "v", "moving")
+
+    def __init__(self, start: QtCore.QPoint, h: int, v: int) -> None:
+        self.start, self.h, self.v, self.moving = start, h, v, False
 
 
 class CanvasSurface(QtWidgets.QWidget):
@@ -50,6 +60,7 @@ class CanvasSurface(QtWidgets.QWidget):
         self.placeholder.setProperty("role", "hint")
         self.placeholder.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
         self.placeholder.setAttribute(QtCore.Qt.WidgetAttribute.WA_TransparentForMouseEvents)
+        self._pan: _Pan | None = None  #: a mouse drag on the background, scrolling the canvas
 
     def set_side_shown(self, shown: bool) -> None:
         """Word the empty-canvas hint for the side panel being shown or hidden."""
@@ -201,9 +212,33 @@ class CanvasSurface(QtWidgets.QWidget):
         super().resizeEvent(event)
         self.placeholder.setGeometry(QtCore.QRect(QtCore.QPoint(0, 0), self.view_size()))
 
+    # panning: dragging the background with the mouse scrolls the canvas, as a finger does (QScroller)
     def mousePressEvent(self, event: QtGui.QMouseEvent) -> None:
         self.background_pressed.emit()
+        if event.button() == QtCore.Qt.MouseButton.LeftButton and self.scroll_area is not None:
+            bars = self.scroll_area.horizontalScrollBar(), self.scroll_area.verticalScrollBar()
+            self._pan = _Pan(event.globalPosition().toPoint(), bars[0].value(), bars[1].value())
         super().mousePressEvent(event)
+
+    def mouseMoveEvent(self, event: QtGui.QMouseEvent) -> None:
+        pan = self._pan
+        if pan is None or self.scroll_area is None or not event.buttons() & QtCore.Qt.MouseButton.LeftButton:
+            super().mouseMoveEvent(event)
+            return
+        moved = event.globalPosition().toPoint() - pan.start
+        if not pan.moving and moved.manhattanLength() < QtWidgets.QApplication.startDragDistance():
+            return  # a tap, not a pan (yet)
+        if not pan.moving:
+            pan.moving = True
+            self.setCursor(QtCore.Qt.CursorShape.ClosedHandCursor)
+        self.scroll_area.horizontalScrollBar().setValue(pan.h - moved.x())
+        self.scroll_area.verticalScrollBar().setValue(pan.v - moved.y())
+
+    def mouseReleaseEvent(self, event: QtGui.QMouseEvent) -> None:
+        if self._pan is not None and self._pan.moving:
+            self.unsetCursor()
+        self._pan = None
+        super().mouseReleaseEvent(event)
 
     # drops ------------------------------------------------------------------------------------------
     def dragEnterEvent(self, event: QtGui.QDragEnterEvent) -> None:
