@@ -75,8 +75,7 @@ def painted_span(bar: QtWidgets.QScrollBar, behind: QtGui.QColor) -> tuple[int, 
 @pytest.mark.parametrize("size", [(1280, 800), (1024, 600)])
 def test_scroll_bars_are_slim_and_light_but_take_a_finger(make_window, qtbot, size):
     window = make_window(size, demo=True)
-    if size == (1280, 800):
-        window.resize(1280, 560)  # the demo fits 1280x800: a shorter window makes the canvas scroll
+    window.resize(size[0], size[1] * 2 // 3)  # the demo fits the screen: a shorter window makes the canvas scroll
     settle(100)
     scroll = window.controller.surface.scroll_area
     bar = scroll.verticalScrollBar()
@@ -163,3 +162,19 @@ def test_the_empty_canvas_hint_says_what_to_tap_when_the_side_panel_is_hidden(ma
     tap(window.side_toggle)
     settle()
     assert window.side.isVisible() and "on the left" in window.controller.surface.placeholder.text()
+
+
+def test_the_empty_canvas_hint_points_at_the_add_panel_while_it_is_open(make_window, qtbot):
+    window = make_window((1024, 600))
+    tap(window.edit_button)
+    tap_topic(window, "/battery")
+    tap(window.add_panel.role_buttons[Role.SUBSCRIBE])
+    settle()
+    hint = window.controller.surface.placeholder
+    assert not window.side.isVisible() and not window.side_toggle.isEnabled()  # no room: ▶ cannot help
+    snap(window, "empty-canvas-adding")
+    assert "on the right" in hint.text() and "▶" not in hint.text()
+    [cancel] = [b for b in window.add_panel.findChildren(QtWidgets.QPushButton, "cancelButton") if b.isVisible()]
+    tap(cancel)
+    settle()
+    assert window.side.isVisible() and "on the left" in hint.text()

@@ -141,6 +141,7 @@ def test_a_dropped_preview_stays_where_it_was_dropped_when_the_panel_closes(make
 @pytest.mark.parametrize("mode", ["operate", "edit"])
 def test_dragging_the_canvas_background_with_the_mouse_scrolls_it(make_window, qtbot, mode):
     window = make_window((1024, 600))
+    window.resize(1024, 420)  # the demo fits 1024x600: a shorter window makes its canvas scroll
     if mode == "edit":
         tap(window.edit_button)
     settle()

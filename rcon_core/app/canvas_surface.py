@@ -19,12 +19,15 @@ from rcon_core.app.widget_frame import WidgetFrame
 DRAFT_MIME = "application/x-rcon-widget-draft"
 
 
-#: the empty canvas's hint, by whether the side panel (topics, services, widgets) is on screen: it never
-#: points at a panel that is hidden, it says what to tap instead
+#: the empty canvas's hint, by what is on screen: it never points at a panel that is hidden, it says
+#: what to tap instead. "side": the side panel (topics, services, widgets) is shown; "hidden": it is not;
+#: "adding": the add panel is open on the right (the side panel gave it its room)
 EMPTY_HINTS = {
-    True: "This canvas is empty.\nPick a topic, a service or a widget on the left to add one.",
-    False: "This canvas is empty.\nTap ▶ at the top left to show the topics, services and widgets,\n"
-           "then pick one to add it.",
+    "side": "This canvas is empty.\nPick a topic, a service or a widget on the left to add one.",
+    "hidden": "This canvas is empty.\nTap ▶ at the top left to show the topics, services and widgets,\n"
+              "then pick one to add it.",
+    "adding": "This canvas is empty.\nChoose in the panel on the right, then drag the preview here\n"
+              "or tap Place on canvas.",
 }
 
 
@@ -55,16 +58,16 @@ class CanvasSurface(QtWidgets.QWidget):
         self.order: list[str] = []
         #: the scroll area showing this surface (set by CanvasScroll)
         self.scroll_area: CanvasScroll | None = None
-        self.placeholder = QtWidgets.QLabel(EMPTY_HINTS[True], self)
+        self.placeholder = QtWidgets.QLabel(EMPTY_HINTS["side"], self)
         self.placeholder.setObjectName("emptyCanvas")
         self.placeholder.setProperty("role", "hint")
         self.placeholder.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
         self.placeholder.setAttribute(QtCore.Qt.WidgetAttribute.WA_TransparentForMouseEvents)
         self._pan: _Pan | None = None  #: a mouse drag on the background, scrolling the canvas
 
-    def set_side_shown(self, shown: bool) -> None:
-        """Word the empty-canvas hint for the side panel being shown or hidden."""
-        self.placeholder.setText(EMPTY_HINTS[bool(shown)])
+    def set_hint(self, where: str) -> None:
+        """Word the empty-canvas hint for what is on screen (a key of :data:`EMPTY_HINTS`)."""
+        self.placeholder.setText(EMPTY_HINTS[where])
 
     # frames -----------------------------------------------------------------------------------------
     def add_frame(self, frame: WidgetFrame, rect: QtCore.QRect) -> WidgetFrame:

@@ -14,6 +14,7 @@ from qtpy import QtCore, QtGui, QtWidgets
 from rcon_core.app import theme
 from rcon_core.app.add_panel import AddPanel, FieldChooser
 from rcon_core.app.canvas_controller import CANVAS_SUFFIX, CanvasController, file_name_for
+from rcon_core.app.canvas_tabs import CanvasTabs
 from rcon_core.app.catalog_panel import CatalogList
 from rcon_core.app.children_editor import ChildContext, link_learner
 from rcon_core.app.config import AppConfig
@@ -101,12 +102,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self._side_override: bool | None = None
         self._side_auto_hidden: bool | None = None
 
-        self.tabs = QtWidgets.QTabBar()
-        self.tabs.setObjectName("canvasTabs")
-        self.tabs.setExpanding(False)
-        self.tabs.setDrawBase(False)
-        self.tabs.setElideMode(QtCore.Qt.TextElideMode.ElideRight)
-        self.tabs.setUsesScrollButtons(True)
+        self.tabs = CanvasTabs()  # whole names, scrolling when they do not all fit
         self.tabs.currentChanged.connect(self._tab_changed)
         # the mode: a two-segment control, the active segment filled ("Edit | Operate"); lock_button is the
         # Operate segment (checked = the canvas is locked)
@@ -563,7 +559,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if shown != self.side.isVisibleTo(self):
             self.side.setVisible(shown)
         self.side_toggle.setText("◀" if shown else "▶")
-        self.controller.set_side_shown(shown)
+        self.controller.set_hint("side" if shown else "adding" if self.add_panel.isVisible() else "hidden")
         self.side_toggle.setEnabled(shown or room)
         tip = ("Hide topics, services and widgets (more room for the canvas)" if shown
                else "Show topics, services and widgets" if room
