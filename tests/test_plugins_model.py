@@ -175,9 +175,15 @@ def test_a_latched_topic_that_delivered_is_never_stale_but_a_stream_that_stops_i
         port.deliver({"data": [1]})
     clock.now += 6
     assert stream.state.stale and not stream.state.static
-    # one message long after subscribing is not a latched delivery: stale after stale_after
+    # a big latched map over a slow link: seconds to arrive, still static
+    slow, port = started()
+    clock.now += 3
+    port.deliver({"data": [0] * 1000})
+    clock.now += 60
+    assert slow.state.static and not slow.state.stale
+    # one message after the widget already said NO DATA is not a latched delivery: stale after stale_after
     late, port = started()
-    clock.now += 2
+    clock.now += 6
     port.deliver({"data": [2]})
     clock.now += 6
     assert late.state.stale and not late.state.static

@@ -21,10 +21,11 @@ Staleness (decided here for every widget, see :attr:`WidgetState.stale`). A subs
 value came for ``stale_after`` seconds, except on a *static* topic, which delivers once and then stays
 quiet by design (a latched ``/map``, a robot description):
 
-- a topic that delivered exactly one message, and that one within :data:`LATCHED_WITHIN` seconds of
-  subscribing (what a latched topic does), counts as static until a second message arrives. rosbridge
-  does not say whether a topic is latched; this is what it looks like from the client. A stream that
-  dies right after its first message looks the same: the value's age still shows how old it is.
+- a topic that delivered exactly one message since subscribing, that one before the widget would have
+  said NO DATA (what a latched topic does: it sends its message on subscribe, a big map over a slow
+  link taking a few seconds), counts as static until a second message arrives. rosbridge does not say
+  whether a topic is latched; this is what it looks like from the client. A stream that dies right
+  after its first message looks the same: the value's age still shows how old it is.
 - the operator can say so: a settings object with ``stale_after = 0`` means "static: never stale once
   a value came" (the widget still shows NO DATA when nothing came for :data:`NO_DATA_AFTER` seconds).
 
@@ -143,8 +144,6 @@ class BridgePort(Protocol):
     def close(self) -> None: ...
 
 
-#: a first message this soon after subscribing, and no second one, is what a latched topic delivers
-LATCHED_WITHIN = 0.5
 #: with ``stale_after = 0`` (a static topic), how long nothing at all may come before NO DATA
 NO_DATA_AFTER = 5.0
 
@@ -499,8 +498,9 @@ class WidgetModel:
             return False
         if self.stale_after == 0:
             return True
+        no_data_after = self.stale_after if self.stale_after is not None else NO_DATA_AFTER
         return (self._deliveries == 1 and self._first_delivery is not None
-                and self._first_delivery <= LATCHED_WITHIN)
+                and self._first_delivery <= no_data_after)
 
     def problems(self) -> list[str]:
         """Everything that keeps this widget from working, as sentences (binding + settings)."""
