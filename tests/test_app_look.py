@@ -104,8 +104,9 @@ def test_scroll_bars_are_slim_and_light_but_take_a_finger(make_window, qtbot, si
 
 
 # ------------------------------------------------------------------------------------- checkbox tick
-def test_a_checked_checkbox_shows_a_tick(make_window, qtbot):
-    window = make_window((1280, 800))
+@pytest.mark.parametrize("size", [(1280, 800), (1024, 600)])
+def test_a_checked_checkbox_shows_a_tick(make_window, qtbot, size):
+    window = make_window(size)
     tap_topic(window, "/camera/front/image_raw")
     panel = choose_kind(window, Role.SUBSCRIBE, "sensors.image")
     boxes = [b for b in panel.settings_page.findChildren(QtWidgets.QCheckBox) if b.isVisible()]
@@ -130,7 +131,7 @@ def test_a_checked_checkbox_shows_a_tick(make_window, qtbot):
     if not box.isChecked():
         tap(box, on_box)
     assert box.isChecked()
-    snap(window, "checkbox-checked")
+    snap(window, f"checkbox-checked-{size[0]}")
     checked = indicator_colours()
     assert (255, 255, 255) in checked, "no white tick on the checked box"
     assert any(b > 120 and r < 60 for r, _g, b in checked), "the checked box is not blue"

@@ -22,9 +22,9 @@ def plugins() -> PluginManager:
     return entry_point_plugins()
 
 
-@pytest.fixture
-def window(qtbot, tmp_path, sim_thread, plugins):
-    yield from window_session(qtbot, tmp_path / "config", plugins, url=sim_thread.url,
+@pytest.fixture(params=[(1280, 800), (1024, 600)], ids=["1280x800", "1024x600"])
+def window(request, qtbot, tmp_path, sim_thread, plugins):
+    yield from window_session(qtbot, tmp_path / "config", plugins, url=sim_thread.url, size=request.param,
                               types=TypeRegistry.standard(), wait_connected=True, topics=("/speed_limit",))
 
 
@@ -71,7 +71,7 @@ def test_a_typed_nan_is_refused_with_a_reason_and_nothing_is_sent(window, qtbot,
         type_and_send(view, text)
         qtbot.waitUntil(lambda: "finite" in view.status.text(), timeout=5_000)
         assert view.status.text().startswith(f"not sent: data: {named} is not a finite number")
-    snap(window, "textfield-nan-refused")
+    snap(window, f"textfield-nan-refused-{window.width()}")
     type_and_send(view, "1.25")
     got = sim_thread.wait_for_published_sync("/speed_limit", timeout=10)
     assert got == {"data": 1.25}
@@ -96,7 +96,7 @@ def test_a_latched_map_that_delivered_once_is_not_called_stale(window, qtbot, si
     assert state.count == 1 and state.age > 1.0  # one map, long ago: the sim sends it once (latched)
     assert state.static and not state.stale
     window.host.refresh()
-    snap(window, "latched-map-not-stale")
+    snap(window, f"latched-map-not-stale-{window.width()}")
     badge = hosted.frame.badge
     assert badge.kind != "stale" and "STALE" not in badge.text()
     assert hosted.view.stale_for() is None  # no "STALE · no new frame" over the map either
