@@ -71,11 +71,13 @@ def test_a_notice_moves_nothing_under_the_finger(make_window, qtbot, size):
     settle()
     snap(window, f"notice-{size[0]}")
     assert [where(window, w) for w in controls] == before  # nothing moved
-    # it floats over the bottom edge, inside the window, leaving the bars above uncovered
+    # it floats over the bottom edge of the canvas, leaving the bars and the side panel uncovered
     rect = where(window, notice)
-    assert window.rect().contains(rect) and rect.bottom() == window.rect().bottom()
+    canvas = where(window, window.controller.surface.scroll_area)
+    assert window.rect().contains(rect) and rect.bottom() == window.rect().bottom() == canvas.bottom()
     assert rect.top() > where(window, window.lock_button).bottom()
-    assert rect.width() == window.width()
+    assert rect.left() == canvas.left() and rect.width() >= canvas.width()
+    assert not rect.intersects(where(window, window.side))
     [action] = notice.buttons.values()
     assert window.rect().contains(where(window, action))
     tap(action)  # "Switch to Edit mode": taken at once, and the panel opens for /battery
@@ -84,15 +86,26 @@ def test_a_notice_moves_nothing_under_the_finger(make_window, qtbot, size):
     assert window.add_panel.isVisible()
 
 
-def test_a_notice_follows_the_window_size(make_window, qtbot):
+def test_a_notice_follows_the_window_size_and_leaves_the_add_panel_uncovered(make_window, qtbot):
     window = make_window((1280, 800), demo=False)
-    window.notice.show_notice("⚠ The layout could not be saved: disk full")
+    tap(window.edit_button)
+    window.notice.show_notice("⚠ The layout could not be saved: disk full",
+                              actions=[("Start a new layout", lambda: None)])
     settle()
     assert where(window, window.notice).bottom() == window.rect().bottom()
     window.resize(1024, 600)
     settle()
     rect = where(window, window.notice)
-    assert rect.bottom() == window.rect().bottom() and rect.width() == 1024
+    assert rect.bottom() == window.rect().bottom()
+    assert rect.width() == where(window, window.controller.surface.scroll_area).width()
+    tap_topic(window, "/battery")
+    panel = choose_kind(window, Role.SUBSCRIBE, "std.label")
+    settle()
+    snap(window, "notice-with-add-panel")
+    rect = where(window, window.notice)
+    for button in (panel.place_button, *panel.findChildren(QtWidgets.QPushButton, "cancelButton")):
+        if button.isVisible():  # the panel's buttons stay where the finger expects them, uncovered
+            assert not rect.intersects(where(window, button)), button.objectName()
     tap(window.notice.dismiss_button)
     assert not window.notice.isVisible()
 

@@ -205,7 +205,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.banner = self.notice.label
         rcol.addWidget(split, 1)
         self.setCentralWidget(root)
-        self.notice.float_over(root)  # over the bottom edge: a notice never pushes a control away
+        # over the bottom edge of the canvas column: a notice never pushes a control away, and it leaves the
+        # bars, the side panel and the add panel (its Place button) uncovered
+        self.notice.float_over(center)
 
         # ---- workspace
         self.layout_path = Path(layout_path) if layout_path is not None else config.workspace_path

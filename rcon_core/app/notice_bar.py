@@ -3,10 +3,10 @@
 Non-blocking (no modal dialog on a tablet in the field): a message, optional action buttons and a
 dismiss button. ``kind`` "problem" is red (a layout that is not saved), "info" is blue.
 
-It floats over the bottom edge of its host (:meth:`NoticeBar.float_over`) instead of taking a row in a
-layout: a notice that pushed the window's content down would move the control under the operator's
-finger just before the next tap. The bottom edge keeps the connection bar, the canvas tabs and the mode
-switch uncovered.
+It floats over the bottom edge of its host (:meth:`NoticeBar.float_over`; the window puts it over the
+canvas column) instead of taking a row in a layout: a notice that pushed the window's content down would
+move the control under the operator's finger just before the next tap. The bottom of the canvas column
+keeps the connection bar, the canvas tabs, the mode switch, the side panel and the add panel uncovered.
 """
 
 from __future__ import annotations
