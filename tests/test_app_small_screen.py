@@ -241,4 +241,5 @@ def test_the_demo_fits_without_scrolling_with_a_camera_beside_the_drive_pad(make
     QTest.mouseRelease(view, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier,
                        centre - QtCore.QPoint(0, 60))
     sim_thread.wait_for_published_sync("/cmd_vel", lambda m: m["linear"]["x"] == 0, timeout=10)  # the stop
-    assert camera.isVisible() and hosted["Front camera"].model.state.count > 0
+    assert camera.isVisible()
+    qtbot.waitUntil(lambda: hosted["Front camera"].model.state.count > 0, timeout=10_000)  # and it shows
