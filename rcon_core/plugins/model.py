@@ -21,9 +21,10 @@ Staleness (decided here for every widget, see :attr:`WidgetState.stale`). A subs
 value came for ``stale_after`` seconds, except on a *static* topic, which delivers once and then stays
 quiet by design (a latched ``/map``, a robot description):
 
-- a topic that delivered exactly one message since subscribing, that one before the widget would have
-  said NO DATA (what a latched topic does: it sends its message on subscribe, a big map over a slow
-  link taking a few seconds), counts as static until a second message arrives. rosbridge does not say
+- a topic that delivered exactly one message since subscribing, that one within :data:`NO_DATA_AFTER`
+  seconds (or ``stale_after`` when longer; what a latched topic does: it sends its message on
+  subscribe, a big map over a slow link taking a few seconds), counts as static until a second message
+  arrives. rosbridge does not say
   whether a topic is latched; this is what it looks like from the client. A stream that dies right
   after its first message looks the same: the value's age still shows how old it is.
 - the operator can say so: a settings object with ``stale_after = 0`` means "static: never stale once
@@ -144,7 +145,8 @@ class BridgePort(Protocol):
     def close(self) -> None: ...
 
 
-#: with ``stale_after = 0`` (a static topic), how long nothing at all may come before NO DATA
+#: with ``stale_after = 0`` (a static topic), how long nothing at all may come before NO DATA; also how
+#: long a latched topic's one message may take to arrive after subscribing (at least)
 NO_DATA_AFTER = 5.0
 
 #: runs a plain function on the bridge loop thread (e.g. ``BridgeThread.call``); default: call it now
@@ -498,9 +500,8 @@ class WidgetModel:
             return False
         if self.stale_after == 0:
             return True
-        no_data_after = self.stale_after if self.stale_after is not None else NO_DATA_AFTER
-        return (self._deliveries == 1 and self._first_delivery is not None
-                and self._first_delivery <= no_data_after)
+        window = max(NO_DATA_AFTER, self.stale_after or 0.0)
+        return self._deliveries == 1 and self._first_delivery is not None and self._first_delivery <= window
 
     def problems(self) -> list[str]:
         """Everything that keeps this widget from working, as sentences (binding + settings)."""
