@@ -45,7 +45,9 @@ class ImageSettings:
     scan_range: float = 0.0
     show_overlay: bool = True
     smooth: bool = True
-    stale_after: float = 3.0  #: 0 = a static (latched) topic, e.g. a map: never stale once it delivered
+    stale_after: float = attrs.field(
+        default=3.0, metadata={"label": "Stale after (s)", "min": 0.0,
+                               "help": "0 = a static (latched) topic, e.g. a map: never stale once it delivered"})
 
     def problems(self) -> list[str]:
         out = []
