@@ -6,6 +6,7 @@ fixtures that call these with what genuinely differs (window size, type registry
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -102,3 +103,13 @@ def choose_kind(window: MainWindow, role: Role, kind: str) -> AddPanel:
              for i in range(panel.candidates.count())]
     tap_item(panel.candidates, panel.candidates.model().index(kinds.index(kind), 0))
     return panel
+
+
+def snap(window: QtWidgets.QWidget, name: str) -> None:
+    """With ``RCON_SCREENSHOTS=DIR`` set, save a PNG of ``window`` as it is now (to look at it as a person
+    would); otherwise nothing."""
+    out = os.environ.get("RCON_SCREENSHOTS", "")
+    if out and out != "1":
+        QtWidgets.QApplication.processEvents()
+        Path(out).mkdir(parents=True, exist_ok=True)
+        window.grab().save(str(Path(out) / f"{name}.png"))

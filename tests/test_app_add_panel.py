@@ -340,9 +340,12 @@ def test_headings_keep_names_whole_and_the_preview_fits_the_panel(window, qtbot)
     qtbot.waitUntil(lambda: panel.preview_frame is not None and panel.preview_frame.badge.isVisible(), timeout=10_000)
     snap(panel, "teleop-preview")
     frame = panel.preview_frame
-    viewport = scroll_area(panel).viewport()
-    left = frame.mapTo(viewport, QtCore.QPoint(0, 0)).x()
-    assert left >= 0 and left + frame.width() <= viewport.width()  # scaled to the panel, not cut
+    left = frame.mapTo(panel, QtCore.QPoint(0, 0)).x()
+    assert left >= 0 and left + frame.width() <= panel.width()  # scaled to the panel, not cut
+    # pinned above the settings (in sight while they are changed), and the settings keep most of the room
+    assert frame.mapTo(panel, QtCore.QPoint(0, frame.height())).y() <= scroll_area(panel).mapTo(
+        panel, QtCore.QPoint(0, 0)).y()
+    assert frame.height() <= panel.height() // 3 + 1
     badge = frame.badge.geometry()
     assert "PREVIEW ONLY" in frame.badge.text()
     assert frame.rect().contains(badge)

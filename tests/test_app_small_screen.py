@@ -181,3 +181,65 @@ def test_the_stylesheet_parses_without_a_warning(qtbot):
         QtCore.qInstallMessageHandler(previous)
     assert [m for m in broken if "parse" in m.lower()], broken
     assert isinstance(QtGui.QGuiApplication.instance(), QtWidgets.QApplication)
+
+
+@pytest.mark.parametrize("size", [(1280, 800), (1024, 600)])
+def test_the_add_panel_shows_its_preview_without_scrolling(make_window, qtbot, size):
+    from app_helpers import choose_kind, snap
+
+    window = make_window(size)
+    tap(window.edit_button)
+    tap_topic(window, "/cmd_vel")
+    panel = choose_kind(window, Role.PUBLISH, "std.slider")
+    qtbot.waitUntil(lambda: panel.preview_frame is not None and panel.preview_frame.isVisible(), timeout=10_000)
+    settle()
+    snap(window, f"add-panel-preview-{size[0]}")
+    frame = panel.preview_frame
+    assert inside_window(window, frame)  # all of it in sight, not below the fold of the settings
+    assert window.childAt(frame.mapTo(window, frame.rect().center())) in (frame, *frame.findChildren(QtWidgets.QWidget))
+    scroll = panel.settings_scroll
+    assert scroll.verticalScrollBar().value() == 0  # nothing scrolled to see it
+    # the settings below keep room for a few rows, and Place stays in sight
+    assert scroll.viewport().height() >= 3 * 48, scroll.viewport().height()
+    assert inside_window(window, panel.place_button) and panel.place_button.isVisible()
+
+
+@pytest.mark.parametrize("size", [(1280, 800), (1024, 600)])
+def test_the_demo_fits_without_scrolling_with_a_camera_beside_the_drive_pad(make_window, qtbot, sim_thread, size):
+    from app_helpers import snap
+
+    window = make_window(size)
+    settle()
+    scroll = window.controller.surface.scroll_area
+    for index, name in enumerate(("Drive", "Cameras", "Sensors")):
+        window.switch_canvas(index)
+        settle()
+        assert window.tabs.tabText(index) == name
+        scroll = window.controller.surface.scroll_area
+        viewport = scroll.viewport()
+        hosted = {w.title: window.host.hosted[w.id] for w in window.controller.canvas.widgets}
+        for title, h in hosted.items():  # every widget in sight, nothing to scroll to
+            corner = h.frame.mapTo(viewport, QtCore.QPoint(0, 0))
+            assert viewport.rect().contains(QtCore.QRect(corner, h.frame.size())), (name, title, size)
+        assert scroll.verticalScrollBar().maximum() == 0 and scroll.horizontalScrollBar().maximum() == 0, name
+        snap(window, f"demo-{name.lower()}-{size[0]}")
+    window.switch_canvas(0)
+    settle()
+    hosted = {w.title: window.host.hosted[w.id] for w in window.controller.canvas.widgets}
+    camera, pad = hosted["Front camera"].frame, hosted["Drive"].frame
+    assert camera.geometry().right() < pad.geometry().left()  # side by side...
+    assert camera.geometry().top() == pad.geometry().top()  # ...on the same row
+    # watching and driving at once: a finger on the pad drives while the camera stays in sight
+    view = hosted["Drive"].view
+    qtbot.waitUntil(lambda: view is not None and view.isVisible() and hosted["Drive"].model.running,
+                    timeout=10_000)
+    centre = view.rect().center()
+    QTest.mousePress(view, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier, centre)
+    QTest.mouseMove(view, centre - QtCore.QPoint(0, 60))
+    moving = sim_thread.wait_for_published_sync("/cmd_vel", lambda m: m["linear"]["x"] > 0.1, timeout=10)
+    assert moving["linear"]["x"] > 0.1
+    QTest.mouseRelease(view, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier,
+                       centre - QtCore.QPoint(0, 60))
+    sim_thread.wait_for_published_sync("/cmd_vel", lambda m: m["linear"]["x"] == 0, timeout=10)  # the stop
+    assert camera.isVisible()
+    qtbot.waitUntil(lambda: hosted["Front camera"].model.state.count > 0, timeout=10_000)  # and it shows

@@ -47,8 +47,23 @@ def test_values_are_converted_to_the_wire_shape():
     assert REG.from_text("std_msgs/Header", "stamp: {sec: 3, nanosec: 4}")["stamp"] == {"secs": 3, "nsecs": 4}
     assert REG2.from_text("std_msgs/Header", "stamp: {secs: 3, nsecs: 4}")["stamp"] == {"sec": 3, "nanosec": 4}
     assert REG.from_text("std_msgs/Float64", "data: 1e-5") == {"data": 1e-5}  # YAML 1.1 would say "1e-5"
-    scan = REG.from_text("sensor_msgs/LaserScan", "ranges: [1, .inf, .nan, null, nan]")["ranges"]
+    # NaN and infinity only where the caller allows them (a laser scan's "no return")
+    scan = REG.from_text("sensor_msgs/LaserScan", "ranges: [1, .inf, .nan, null, nan]", finite=False)["ranges"]
     assert scan[0] == 1.0 and math.isinf(scan[1]) and all(math.isnan(v) for v in scan[2:])
+
+
+@pytest.mark.parametrize("text", ["nan", ".nan", "data: NaN", "inf", "-.inf", "data: -Infinity", "data: null",
+                                  "1e400"])
+def test_typed_non_finite_numbers_are_refused_unless_allowed(text):
+    with pytest.raises(MessageTextError) as info:
+        REG.from_text("std_msgs/Float64", text)
+    assert info.value.path == "data" and "not a finite number" in info.value.problem
+    with pytest.raises(MessageTextError, match=r"ranges\[1\]: .*not a finite number"):
+        REG.from_text("sensor_msgs/LaserScan", "ranges: [1, .inf]")
+    assert REG.from_text("std_msgs/Float64", "2.5") == {"data": 2.5}
+    # a dict made by code is still checked as before, unless told
+    assert math.isnan(REG.complete("std_msgs/Float64", {"data": math.nan})["data"])
+    assert REG.validate("std_msgs/Float64", {"data": math.inf}, finite=True)
 
 
 @pytest.mark.parametrize(

@@ -134,3 +134,81 @@ def test_binding_canonical_type():
     assert Binding("/imu", "sensor_msgs/msg/Imu").canonical_type == "sensor_msgs/msg/Imu"
     assert Binding("/x").canonical_type == ""
     assert Binding("/x", "not a type").canonical_type == "not a type"
+
+
+class Port:
+    """A bridge port that hands the test the subscription's callback (``deliver``)."""
+
+    def subscribe(self, topic, callback, **options):
+        self.deliver = callback
+        return self
+
+    def unsubscribe(self):
+        pass
+
+
+def test_a_latched_topic_that_delivered_is_never_stale_but_a_stream_that_stops_is():
+    clock = Clock()
+
+    def started(settings=None):
+        port = Port()
+        m = WidgetModel(settings, Binding("/map", "nav_msgs/OccupancyGrid", "subscribe"), port, clock=clock)
+        m.start()
+        return m, port
+
+    # a latched topic: one message right after subscribing, then silence
+    latched, port = started()
+    clock.now += 0.05
+    port.deliver({"data": [0]})
+    clock.now += 600
+    assert latched.state.static and not latched.state.stale and latched.state.age == 600
+    # the link drops and comes back: delivered again, still static
+    latched.set_link(False)
+    latched.set_link(True)
+    clock.now += 0.1
+    port.deliver({"data": [0]})
+    clock.now += 60
+    assert latched.state.static and not latched.state.stale
+    # a stream that stops after some messages: stale as before
+    stream, port = started()
+    for _ in range(3):
+        clock.now += 0.1
+        port.deliver({"data": [1]})
+    clock.now += 6
+    assert stream.state.stale and not stream.state.static
+    # a big latched map over a slow link: seconds to arrive, still static
+    slow, port = started()
+    clock.now += 3
+    port.deliver({"data": [0] * 1000})
+    clock.now += 60
+    assert slow.state.static and not slow.state.stale
+    # one message after the widget already said NO DATA is not a latched delivery: stale after stale_after
+    late, port = started()
+    clock.now += 6
+    port.deliver({"data": [2]})
+    clock.now += 6
+    assert late.state.stale and not late.state.static
+    # nothing at all: NO DATA (stale with count 0), latched or not
+    quiet, _port = started()
+    clock.now += 6
+    assert quiet.state.stale and quiet.state.count == 0
+
+
+def test_stale_after_zero_in_the_settings_means_a_static_topic():
+    clock = Clock()
+
+    class Static:
+        stale_after = 0.0
+
+    port = Port()
+    m = WidgetModel(Static(), Binding("/robot_description", "std_msgs/String", "subscribe", "data"), port,
+                    clock=clock)
+    m.start()
+    clock.now += 4
+    assert not m.state.stale  # nothing yet, but not for long
+    clock.now += 2
+    assert m.state.stale and m.state.count == 0  # NO DATA after NO_DATA_AFTER
+    clock.now += 1
+    port.deliver({"data": "<robot/>"})  # long after subscribing: static because the settings say so
+    clock.now += 3600
+    assert m.state.static and not m.state.stale

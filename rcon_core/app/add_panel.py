@@ -33,6 +33,7 @@ from rcon_core.app.catalog_panel import short_type
 from rcon_core.app.children_editor import ChildContext
 from rcon_core.app.draft import Candidate, Draft, Target, field_type, suggested_title
 from rcon_core.app.new_topic import NEW_TOPIC, NewTopicBox, add_new_topic_entry, new_topic_index
+from rcon_core.app.preview_slot import PreviewSlot
 from rcon_core.app.settings_form import SettingsForm, form_label, guard_wheel, tune_form
 from rcon_core.app.widget_frame import WidgetFrame
 from rcon_core.plugins import Binding, Role, SettingsError, WidgetSpec
@@ -196,47 +197,6 @@ class FieldChooser(ElidingCombo):
             self.chosen.emit(path)
 
 
-class PreviewSlot(QtWidgets.QWidget):
-    """Holds the preview frame: as wide as the panel allows, never wider, its height following the
-    widget's default aspect (clamped), so a big widget shows scaled down instead of cut."""
-
-    MIN_H, MAX_H = 150, 320  # room for the "not configured" warning listing a few problems
-
-    def __init__(self) -> None:
-        super().__init__()
-        self.setObjectName("previewSlot")
-        self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored, QtWidgets.QSizePolicy.Policy.Fixed)
-        self.col = QtWidgets.QVBoxLayout(self)
-        self.col.setContentsMargins(0, 0, 0, 0)
-        self.aspect = 0.5  # height / width
-        self.frame: QtWidgets.QWidget | None = None
-        self.setFixedHeight(0)
-
-    def set_frame(self, frame: QtWidgets.QWidget | None, size: tuple[float, float] = (160.0, 80.0)) -> None:
-        if self.frame is not None:
-            self.col.removeWidget(self.frame)
-        self.frame = frame
-        if frame is not None:
-            w, h = size
-            self.aspect = (h / w) if w > 0 and h > 0 else 0.5
-            frame.setMinimumSize(60, self.MIN_H)  # explicit: the view's own minimum never widens the panel
-            frame.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored, QtWidgets.QSizePolicy.Policy.Ignored)
-            self.col.addWidget(frame)
-        self._fit()
-
-    def resizeEvent(self, event: QtGui.QResizeEvent) -> None:
-        super().resizeEvent(event)
-        self._fit()
-
-    def _fit(self) -> None:
-        if self.frame is None:
-            self.setFixedHeight(0)
-            return
-        height = int(max(self.MIN_H, min(self.MAX_H, self.width() * self.aspect)))
-        if height != self.height() or self.minimumHeight() != height:
-            self.setFixedHeight(height)
-
-
 class DragHandle(QtWidgets.QLabel):
     """Press and drag this onto a canvas to drop the draft there."""
 
@@ -317,6 +277,10 @@ class AddPanel(QtWidgets.QWidget):
         col.addWidget(self.stack)
 
     # --------------------------------------------------------------------------------------- pages
+    def resizeEvent(self, event: QtGui.QResizeEvent) -> None:  # noqa: N802 - Qt override
+        super().resizeEvent(event)
+        self.preview_slot.set_room(self.height() // 3)  # the settings below keep the most room
+
     def _nav(self, back: Callable[[], None] | None) -> QtWidgets.QHBoxLayout:
         row = QtWidgets.QHBoxLayout()
         if back is not None:
@@ -387,6 +351,10 @@ class AddPanel(QtWidgets.QWidget):
         self.settings_error.setWordWrap(True)
         self.settings_error.hide()
         outer.addWidget(self.settings_error)
+        # the live preview is pinned above the settings (not scrolled with them): in sight while they are
+        # changed, also on a 600 px tall screen
+        self.preview_slot = PreviewSlot()
+        outer.addWidget(self.preview_slot)
         self.settings_scroll = scroll = QtWidgets.QScrollArea()
         scroll.setObjectName("settingsScroll")
         scroll.setWidgetResizable(True)
@@ -420,10 +388,6 @@ class AddPanel(QtWidgets.QWidget):
         self.title_edit.textChanged.connect(self._title_changed)
         binding_box.addRow(form_label("Title", self.title_edit), self.title_edit)
         self.settings_col.addLayout(binding_box)
-        # the live preview first, so it is in sight while the settings below are changed
-        self.settings_col.addWidget(QtWidgets.QLabel("Preview"))
-        self.preview_slot = PreviewSlot()
-        self.settings_col.addWidget(self.preview_slot)
         self.form_slot = QtWidgets.QVBoxLayout()
         self.settings_col.addLayout(self.form_slot)
         self.settings_col.addStretch(1)
@@ -435,8 +399,13 @@ class AddPanel(QtWidgets.QWidget):
         self.place_button.setProperty("primary", True)
         self.place_button.clicked.connect(self._place_clicked)
         outer.addWidget(self.drag_handle)
-        outer.addWidget(self.place_button)
-        outer.addLayout(self._nav(self._settings_back))
+        nav = self._nav(self._settings_back)  # one row: ‹ Back, Place on canvas, Cancel (room for the form)
+        for i in range(nav.count()):
+            if nav.itemAt(i).spacerItem() is not None:
+                nav.takeAt(i)  # the Place button takes the room between Back and Cancel
+                nav.insertWidget(i, self.place_button, 1)
+                break
+        outer.addLayout(nav)
         return page
 
     # -------------------------------------------------------------------------------------- entries

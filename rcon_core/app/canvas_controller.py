@@ -68,6 +68,7 @@ class CanvasController(QtCore.QObject):
         self.live = live
         self.stack = stack
         self.surfaces: dict[str, CanvasSurface] = {}
+        self.hint = "side"  #: what the empty-canvas hint points at (canvas_surface.EMPTY_HINTS)
         self._known: dict[str, WidgetInstance] = {}  # what the runtime was last given, per widget
         self.on_drop: Callable[[CanvasSurface, QtCore.QPoint], Any] | None = None  # set by the window
         self.on_configure: Callable[[str], Any] | None = None
@@ -111,6 +112,7 @@ class CanvasController(QtCore.QObject):
 
     def _make_surface(self, canvas: Canvas) -> CanvasSurface:
         surface = CanvasSurface(canvas.name)
+        surface.set_hint(self.hint)
         scroll = CanvasScroll(surface)
         self.stack.insertWidget(self.workspace.canvases.index(canvas), scroll)
         scroll.resize(self.stack.size())
@@ -122,6 +124,12 @@ class CanvasController(QtCore.QObject):
         surface.dropped.connect(lambda pt, s=surface: self.on_drop and self.on_drop(s, pt))
         surface.background_pressed.connect(lambda s=surface: self._deselect(s))
         return surface
+
+    def set_hint(self, where: str) -> None:
+        """The window's side or add panel was shown or hidden: every empty canvas's hint follows."""
+        self.hint = where
+        for surface in self.surfaces.values():
+            surface.set_hint(where)
 
     def _drop_surface(self, canvas_id: str) -> None:
         surface = self.surfaces.pop(canvas_id)

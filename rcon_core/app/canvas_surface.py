@@ -2,7 +2,8 @@
 
 A :class:`CanvasSurface` is as large as its widgets need (plus a margin), never smaller than the view;
 it sits in a :class:`CanvasScroll`, so a small window or an open side panel shows scrollbars instead of
-squeezing the widgets. A widget's geometry is the layout's, never the window's.
+squeezing the widgets. A widget's geometry is the layout's, never the window's. Dragging the background
+scrolls it, with a finger (QScroller) and with the mouse alike.
 """
 
 from __future__ import annotations
@@ -16,6 +17,27 @@ from rcon_core.app.widget_frame import WidgetFrame
 
 #: mime type of a widget draft dragged from the settings preview onto a canvas
 DRAFT_MIME = "application/x-rcon-widget-draft"
+
+
+#: the empty canvas's hint, by what is on screen: it never points at a panel that is hidden, it says
+#: what to tap instead. "side": the side panel (topics, services, widgets) is shown; "hidden": it is not;
+#: "adding": the add panel is open on the right (the side panel gave it its room)
+EMPTY_HINTS = {
+    "side": "This canvas is empty.\nPick a topic, a service or a widget on the left to add one.",
+    "hidden": "This canvas is empty.\nTap ▶ at the top left to show the topics, services and widgets,\n"
+              "then pick one to add it.",
+    "adding": "This canvas is empty.\nChoose in the panel on the right, then drag the preview here\n"
+              "or tap Place on canvas.",
+}
+
+
+class _Pan:
+    """A mouse drag on the canvas background: where it began and the scroll position then."""
+
+    __slots__ = ("start", "h", "v", "moving")
+
+    def __init__(self, start: QtCore.QPoint, h: int, v: int) -> None:
+        self.start, self.h, self.v, self.moving = start, h, v, False
 
 
 class CanvasSurface(QtWidgets.QWidget):
@@ -36,13 +58,16 @@ class CanvasSurface(QtWidgets.QWidget):
         self.order: list[str] = []
         #: the scroll area showing this surface (set by CanvasScroll)
         self.scroll_area: CanvasScroll | None = None
-        self.placeholder = QtWidgets.QLabel(
-            "This canvas is empty.\nPick a topic, a service or a widget on the left to add one.", self
-        )
+        self.placeholder = QtWidgets.QLabel(EMPTY_HINTS["side"], self)
         self.placeholder.setObjectName("emptyCanvas")
         self.placeholder.setProperty("role", "hint")
         self.placeholder.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
         self.placeholder.setAttribute(QtCore.Qt.WidgetAttribute.WA_TransparentForMouseEvents)
+        self._pan: _Pan | None = None  #: a mouse drag on the background, scrolling the canvas
+
+    def set_hint(self, where: str) -> None:
+        """Word the empty-canvas hint for what is on screen (a key of :data:`EMPTY_HINTS`)."""
+        self.placeholder.setText(EMPTY_HINTS[where])
 
     # frames -----------------------------------------------------------------------------------------
     def add_frame(self, frame: WidgetFrame, rect: QtCore.QRect) -> WidgetFrame:
@@ -190,9 +215,33 @@ class CanvasSurface(QtWidgets.QWidget):
         super().resizeEvent(event)
         self.placeholder.setGeometry(QtCore.QRect(QtCore.QPoint(0, 0), self.view_size()))
 
+    # panning: dragging the background with the mouse scrolls the canvas, as a finger does (QScroller)
     def mousePressEvent(self, event: QtGui.QMouseEvent) -> None:
         self.background_pressed.emit()
+        if event.button() == QtCore.Qt.MouseButton.LeftButton and self.scroll_area is not None:
+            bars = self.scroll_area.horizontalScrollBar(), self.scroll_area.verticalScrollBar()
+            self._pan = _Pan(event.globalPosition().toPoint(), bars[0].value(), bars[1].value())
         super().mousePressEvent(event)
+
+    def mouseMoveEvent(self, event: QtGui.QMouseEvent) -> None:
+        pan = self._pan
+        if pan is None or self.scroll_area is None or not event.buttons() & QtCore.Qt.MouseButton.LeftButton:
+            super().mouseMoveEvent(event)
+            return
+        moved = event.globalPosition().toPoint() - pan.start
+        if not pan.moving and moved.manhattanLength() < QtWidgets.QApplication.startDragDistance():
+            return  # a tap, not a pan (yet)
+        if not pan.moving:
+            pan.moving = True
+            self.setCursor(QtCore.Qt.CursorShape.ClosedHandCursor)
+        self.scroll_area.horizontalScrollBar().setValue(pan.h - moved.x())
+        self.scroll_area.verticalScrollBar().setValue(pan.v - moved.y())
+
+    def mouseReleaseEvent(self, event: QtGui.QMouseEvent) -> None:
+        if self._pan is not None and self._pan.moving:
+            self.unsetCursor()
+        self._pan = None
+        super().mouseReleaseEvent(event)
 
     # drops ------------------------------------------------------------------------------------------
     def dragEnterEvent(self, event: QtGui.QDragEnterEvent) -> None:

@@ -1,5 +1,7 @@
-"""The demo layout on the embedded robot (fits the canvas of a 1280 x 800 window without scrolling): canvas "Drive" (cameras, teleop pad, controls) and "Sensors"
-(GPS map, battery, IMU, depth, log).
+"""The demo layout on the embedded robot. Every canvas fits a 1024 x 600 tablet in Operate mode (the side
+panel hidden) without scrolling, and a 1280 x 800 window with the side panel shown: "Drive" (the front
+camera beside the teleop pad, speed limit, battery, lights, dock, depth), "Cameras" (front and rear side
+by side) and "Sensors" (GPS map, battery, depth, IMU, log).
 
 Widget kinds come from whatever plugins are installed: each slot names the kinds it would like, best
 first; the first installed one is used, with the settings written for it (each slot's settings are
@@ -17,33 +19,41 @@ from rcon_core.plugins import Binding, PluginManager, Role
 #: one slot: title, {kind: settings} best first, topic or service, type, role, field paths, (x, y, w, h)
 Slot = tuple[str, dict[str, dict[str, Any]], str, str, Role, tuple[str, ...], tuple[int, int, int, int]]
 
+#: the drive canvas fits the canvas of a 1024 x 600 tablet in Operate mode (912 x 432 with its margin)
+#: with nothing to scroll: the front camera beside the teleop pad, so the operator watches while driving
 DRIVE: list[Slot] = [
     ("Front camera", {"sensors.image": {"max_fps": 15.0}}, "/camera/front/image_raw",
-     "sensor_msgs/Image", Role.SUBSCRIBE, (), (16, 16, 416, 304)),
-    ("Rear camera", {"sensors.image": {"max_fps": 15.0}}, "/camera/rear/image_raw/compressed",
-     "sensor_msgs/CompressedImage", Role.SUBSCRIBE, (), (448, 16, 416, 304)),
+     "sensor_msgs/Image", Role.SUBSCRIBE, (), (16, 16, 432, 304)),
     ("Drive", {"sensors.teleop": {"max_linear": 2.0, "max_angular": 1.0}}, "/cmd_vel",
-     "geometry_msgs/Twist", Role.PUBLISH, (), (16, 336, 320, 304)),
+     "geometry_msgs/Twist", Role.PUBLISH, (), (464, 16, 288, 416)),
     ("Speed limit", {"std.slider": {"minimum": 0.0, "maximum": 3.0, "step": 0.1, "decimals": 1,
                                     "units": "m/s"}},
-     "/speed_limit", "std_msgs/Float64", Role.PUBLISH, ("data",), (352, 336, 256, 96)),
-    ("Lights", {"std.switch": {"state_topic": "/lights/state", "state_field": "data"}}, "/lights/set",
-     "std_srvs/SetBool", Role.CALL, ("request.data",), (624, 336, 240, 96)),
+     "/speed_limit", "std_msgs/Float64", Role.PUBLISH, ("data",), (16, 336, 272, 96)),
     ("Battery", {"std.label": {"decimals": 0, "units": "%", "scale": 100.0}}, "/battery",
-     "sensor_msgs/BatteryState", Role.SUBSCRIBE, ("percentage",), (352, 448, 256, 96)),
+     "sensor_msgs/BatteryState", Role.SUBSCRIBE, ("percentage",), (768, 16, 144, 96)),
+    ("Lights", {"std.switch": {"state_topic": "/lights/state", "state_field": "data"}}, "/lights/set",
+     "std_srvs/SetBool", Role.CALL, ("request.data",), (768, 128, 144, 96)),
     ("Dock", {"std.button": {"text": "Dock"}}, "/dock", "std_srvs/Trigger", Role.CALL, (),
-     (624, 448, 240, 96)),
+     (768, 240, 144, 96)),
+    ("Depth", {"std.label": {"decimals": 1, "units": "m"}}, "/depth", "sensor_msgs/Range", Role.SUBSCRIBE,
+     ("range",), (304, 336, 144, 96)),
+]
+CAMERAS: list[Slot] = [
+    ("Front camera", {"sensors.image": {"max_fps": 15.0}}, "/camera/front/image_raw",
+     "sensor_msgs/Image", Role.SUBSCRIBE, (), (16, 16, 432, 320)),
+    ("Rear camera", {"sensors.image": {"max_fps": 15.0}}, "/camera/rear/image_raw/compressed",
+     "sensor_msgs/CompressedImage", Role.SUBSCRIBE, (), (464, 16, 448, 320)),
 ]
 SENSORS: list[Slot] = [
-    ("GPS", {"map.gps": {}}, "/gps/fix", "sensor_msgs/NavSatFix", Role.SUBSCRIBE, (), (16, 16, 512, 416)),
+    ("GPS", {"map.gps": {}}, "/gps/fix", "sensor_msgs/NavSatFix", Role.SUBSCRIBE, (), (16, 16, 432, 416)),
     ("Battery", {"std.label": {"decimals": 0, "units": "%", "scale": 100.0}}, "/battery",
-     "sensor_msgs/BatteryState", Role.SUBSCRIBE, ("percentage",), (544, 16, 320, 96)),
-    ("Yaw rate", {"std.label": {"decimals": 2, "units": "rad/s"}}, "/imu/data", "sensor_msgs/Imu",
-     Role.SUBSCRIBE, ("angular_velocity.z",), (544, 128, 320, 96)),
+     "sensor_msgs/BatteryState", Role.SUBSCRIBE, ("percentage",), (464, 16, 208, 96)),
     ("Depth", {"std.label": {"decimals": 1, "units": "m"}}, "/depth", "sensor_msgs/Range", Role.SUBSCRIBE,
-     ("range",), (544, 240, 320, 96)),
+     ("range",), (688, 16, 224, 96)),
+    ("Yaw rate", {"std.label": {"decimals": 2, "units": "rad/s"}}, "/imu/data", "sensor_msgs/Imu",
+     Role.SUBSCRIBE, ("angular_velocity.z",), (464, 128, 448, 96)),
     ("Log", {"std.textview": {"min_level": "info"}}, "/rosout", "rosgraph_msgs/Log", Role.SUBSCRIBE, (),
-     (16, 448, 848, 192)),
+     (464, 240, 448, 192)),
 ]
 
 
@@ -73,5 +83,6 @@ def _canvas(name: str, slots: list[Slot], plugins: PluginManager) -> Canvas:
 
 
 def demo_workspace(plugins: PluginManager) -> Workspace:
-    canvases = [_canvas("Drive", DRIVE, plugins), _canvas("Sensors", SENSORS, plugins)]
+    canvases = [_canvas("Drive", DRIVE, plugins), _canvas("Cameras", CAMERAS, plugins),
+                _canvas("Sensors", SENSORS, plugins)]
     return Workspace(canvases, canvases[0].id)

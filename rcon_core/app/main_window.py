@@ -14,6 +14,7 @@ from qtpy import QtCore, QtGui, QtWidgets
 from rcon_core.app import theme
 from rcon_core.app.add_panel import AddPanel, FieldChooser
 from rcon_core.app.canvas_controller import CANVAS_SUFFIX, CanvasController, file_name_for
+from rcon_core.app.canvas_tabs import CanvasTabs
 from rcon_core.app.catalog_panel import CatalogList
 from rcon_core.app.children_editor import ChildContext, link_learner
 from rcon_core.app.config import AppConfig
@@ -102,12 +103,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self._side_override: bool | None = None
         self._side_auto_hidden: bool | None = None
 
-        self.tabs = QtWidgets.QTabBar()
-        self.tabs.setObjectName("canvasTabs")
-        self.tabs.setExpanding(False)
-        self.tabs.setDrawBase(False)
-        self.tabs.setElideMode(QtCore.Qt.TextElideMode.ElideRight)
-        self.tabs.setUsesScrollButtons(True)
+        self.tabs = CanvasTabs()  # whole names, scrolling when they do not all fit
         self.tabs.currentChanged.connect(self._tab_changed)
         # the mode: a two-segment control, the active segment filled ("Edit | Operate"); lock_button is the
         # Operate segment (checked = the canvas is locked)
@@ -209,9 +205,11 @@ class MainWindow(QtWidgets.QMainWindow):
         #: a layout file that could not be read: says so, that it will not be overwritten, and the way out
         self.notice = NoticeBar("fileBanner")
         self.banner = self.notice.label
-        rcol.addWidget(self.notice)
         rcol.addWidget(split, 1)
         self.setCentralWidget(root)
+        # over the bottom edge of the canvas column: a notice never pushes a control away, and it leaves the
+        # bars, the side panel and the add panel (its Place button) uncovered
+        self.notice.float_over(center)
 
         # ---- workspace
         self.layout_path = Path(layout_path) if layout_path is not None else config.workspace_path
@@ -573,6 +571,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if shown != self.side.isVisibleTo(self):
             self.side.setVisible(shown)
         self.side_toggle.setText("◀" if shown else "▶")
+        self.controller.set_hint("side" if shown else "adding" if self.add_panel.isVisible() else "hidden")
         self.side_toggle.setEnabled(shown or room)
         tip = ("Hide topics, services and widgets (more room for the canvas)" if shown
                else "Show topics, services and widgets" if room
@@ -697,7 +696,13 @@ class MainWindow(QtWidgets.QMainWindow):
             QtWidgets.QApplication.sendPostedEvents(None, QtCore.QEvent.Type.LayoutRequest)
 
     def _dropped(self, _surface: Any, point: QtCore.QPoint) -> None:
-        draft = self.add_panel.take_draft()
+        side_hidden = not self.side.isVisibleTo(self)
+        draft = self.add_panel.take_draft()  # the panel closes
+        if side_hidden and self.side.isVisibleTo(self):
+            # the side panel gave its room to the add panel; coming back now it would push the canvas
+            # (and the widget just dropped under the finger) sideways: it stays hidden until ▶ is tapped
+            self._side_override = False
+            self._update_side()
         if draft is not None:
             self.controller.add_draft(draft, point)
 

@@ -1,7 +1,12 @@
-"""A bar under the connection bar that tells the operator something and offers what to do about it.
+"""A bar that tells the operator something and offers what to do about it.
 
 Non-blocking (no modal dialog on a tablet in the field): a message, optional action buttons and a
 dismiss button. ``kind`` "problem" is red (a layout that is not saved), "info" is blue.
+
+It floats over the bottom edge of its host (:meth:`NoticeBar.float_over`; the window puts it over the
+canvas column) instead of taking a row in a layout: a notice that pushed the window's content down would
+move the control under the operator's finger just before the next tap. The bottom of the canvas column
+keeps the connection bar, the canvas tabs, the mode switch, the side panel and the add panel uncovered.
 """
 
 from __future__ import annotations
@@ -33,6 +38,29 @@ class NoticeBar(QtWidgets.QFrame):
         self._row.addWidget(self.dismiss_button)
         self.hide()
 
+    def float_over(self, host: QtWidgets.QWidget) -> None:
+        """Float over the bottom edge of ``host`` (full width), following its size; takes no room."""
+        self.setParent(host)
+        self._host = host
+        host.installEventFilter(self)
+        self._place()
+
+    def eventFilter(self, obj: QtCore.QObject, event: QtCore.QEvent) -> bool:  # noqa: N802 - Qt override
+        if obj is getattr(self, "_host", None) and event.type() in (QtCore.QEvent.Type.Resize,
+                                                                      QtCore.QEvent.Type.LayoutRequest):
+            self._place()
+        return super().eventFilter(obj, event)
+
+    def _place(self) -> None:
+        host = getattr(self, "_host", None)
+        if host is None:
+            return
+        width = host.width()
+        height = self.heightForWidth(width) if self.hasHeightForWidth() else -1
+        height = max(height, self.sizeHint().height(), self.minimumSizeHint().height())
+        self.setGeometry(0, max(0, host.height() - height), width, height)
+        self.raise_()
+
     def show_notice(self, text: str, kind: str = "problem",
                     actions: list[tuple[str, Callable[[], object]]] | None = None) -> None:
         for button in self.buttons.values():
@@ -52,6 +80,7 @@ class NoticeBar(QtWidgets.QFrame):
                            " padding: 8px 12px; }")
         self.label.setText(text)
         self.show()
+        self._place()
 
     def dismiss(self) -> None:
         self.kind = ""

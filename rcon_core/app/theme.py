@@ -28,8 +28,15 @@ def stylesheet(touch: int | None = None) -> str:
     font = max(16, touch // 3)
     here = resources.files("rcon_core.app")
     text = here.joinpath("theme.qss").read_text(encoding="utf-8")
+    bar = max(24, touch * 2 // 3)  # the scroll bar's strip: a finger finds it, it hides little
+    thumb = max(6, bar // 3)  # the thumb at rest: slim and light
+    wide = max(12, bar * 2 // 3)  # under the mouse or the finger
     return (
-        text.replace("@ICONS@", str(here).replace("\\", "/"))  # the theme's SVG icons, next to this file
+        text.replace("@BAR@", str(bar))
+        .replace("@THUMB_GAP_WIDE@", str((bar - wide) // 2))
+        .replace("@THUMB_GAP@", str((bar - thumb) // 2))
+        .replace("@THUMB_R@", str(thumb // 2))
+        .replace("@ICONS@", str(here).replace("\\", "/"))  # the theme's SVG icons, next to this file
         .replace("@SCROLLER@", str(2 * touch + 4))  # both tab scroll buttons: touch-sized
         .replace("@ARROW@", str(max(16, touch // 2)))
         .replace("@TOUCH@", str(touch))

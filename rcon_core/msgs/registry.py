@@ -276,11 +276,12 @@ class TypeRegistry:
         """An instance of a :meth:`typed` class -> a wire-shape dict."""
         return self._typed_factory().unstructure(obj)
 
-    def from_text(self, name: str, text: str) -> dict[str, Any]:
-        """YAML or JSON typed by a person -> a complete wire-shape message; raises MessageTextError."""
+    def from_text(self, name: str, text: str, *, finite: bool = True) -> dict[str, Any]:
+        """YAML or JSON typed by a person -> a complete wire-shape message; raises MessageTextError.
+        NaN and infinity are refused unless ``finite=False``."""
         from .text import from_text
 
-        return from_text(self, name, text)
+        return from_text(self, name, text, finite=finite)
 
     def to_text(self, msg: dict[str, Any]) -> str:
         """A message as YAML for a person to edit; :meth:`from_text` reads it back unchanged."""
@@ -288,17 +289,18 @@ class TypeRegistry:
 
         return to_text(msg)
 
-    def complete(self, name: str, msg: Any) -> dict[str, Any]:
-        """Check and fill a (partial) message dict; raises MessageTextError at the first problem."""
+    def complete(self, name: str, msg: Any, *, finite: bool = False) -> dict[str, Any]:
+        """Check and fill a (partial) message dict; raises MessageTextError at the first problem.
+        ``finite``: refuse NaN and infinity too."""
         from .text import complete
 
-        return complete(self, name, msg)
+        return complete(self, name, msg, finite=finite)
 
-    def validate(self, name: str, msg: Any) -> list[Any]:
+    def validate(self, name: str, msg: Any, *, finite: bool = False) -> list[Any]:
         """Every problem in a message dict, as :class:`~rcon_core.msgs.text.Problem` (empty when fine)."""
         from .text import validate
 
-        return validate(self, name, msg)
+        return validate(self, name, msg, finite=finite)
 
     def serialize_ros1(self, name: str, msg: dict[str, Any]) -> bytes:
         """ROS 1 binary serialization (no 4-byte length prefix)."""

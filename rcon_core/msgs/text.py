@@ -4,11 +4,18 @@
 carry a ``path`` in the message (``linear.x``, ``covariance[3]``, ``header.stamp.secs``) and a
 ``problem`` in words ("expected a number, got 'abc'").
 
-Accepted spellings: numbers for floats (ints too; ``null``, ``nan``, ``inf`` for NaN/inf), integral
+Accepted spellings: numbers for floats (ints too; ``null``, ``nan``, ``inf`` for NaN/inf only where
+non-finite numbers are allowed, see below), integral
 numbers for ints (range-checked for the type), ``true``/``false`` (or 0/1) for bool, base64 text, bytes or
 a list of 0..255 for ``uint8[]``/``char[]``, time as ``{secs, nsecs}`` or ``{sec, nanosec}`` or a number
 of seconds. A message with a single field also accepts that field's value alone (``5`` for
 ``std_msgs/Float64``). Missing fields take their default; unknown fields are an error.
+
+Non-finite floats. Text typed by a person (:func:`from_text`) refuses NaN and infinity unless the caller
+passes ``finite=False``: ``nan`` is almost always a slip, and on the JSON wire it travels as ``null``,
+which a robot reads as something else or refuses. A widget allows them only where its operator said so
+(the Text Field's "Allow NaN and infinity"). :func:`complete` and :func:`validate` check dicts made by
+code and keep accepting them unless told ``finite=True``.
 """
 
 from __future__ import annotations
@@ -59,9 +66,14 @@ def _join(path: str, name: str) -> str:
     return f"{path}.{name}" if path else name
 
 
+#: what a refused non-finite number is told
+NONFINITE = "is not a finite number (NaN and infinity are refused here: JSON would send them as null)"
+
+
 class _Walker:
-    def __init__(self, reg: TypeRegistry) -> None:
+    def __init__(self, reg: TypeRegistry, finite: bool = False) -> None:
         self.reg = reg
+        self.finite = finite  #: refuse NaN and infinity in float fields
         self.problems: list[Problem] = []
 
     def bad(self, path: str, problem: str) -> None:
@@ -157,9 +169,15 @@ class _Walker:
 
     def float_(self, p: Any, value: Any, path: str) -> float:
         if value is None:
+            if self.finite:
+                self.bad(path, f"null {NONFINITE}")
+                return 0.0
             return math.nan
         if isinstance(value, bool) or not isinstance(value, int | float):
             if isinstance(value, str) and value.strip().lower() in ("nan", "inf", "+inf", "-inf", "infinity", "-infinity"):
+                if self.finite:
+                    self.bad(path, f"{value.strip()} {NONFINITE}")
+                    return 0.0
                 return float(value.strip())
             try:
                 number = float(value) if not isinstance(value, str | bool) else None
@@ -170,6 +188,9 @@ class _Walker:
                 return 0.0
             value = number
         out = float(value)
+        if self.finite and not math.isfinite(out):
+            self.bad(path, f"{value} {NONFINITE}")
+            return 0.0
         if p.hi is not None and math.isfinite(out) and abs(out) > p.hi:
             self.bad(path, f"value {value} out of range for {p.name}")
             return 0.0
@@ -221,9 +242,10 @@ class _Walker:
         return out
 
 
-def complete(reg: TypeRegistry, name: str, msg: Any) -> dict[str, Any]:
-    """Check ``msg`` against ``name`` and fill every missing field; raises :class:`MessageTextError`."""
-    w = _Walker(reg)
+def complete(reg: TypeRegistry, name: str, msg: Any, *, finite: bool = False) -> dict[str, Any]:
+    """Check ``msg`` against ``name`` and fill every missing field; raises :class:`MessageTextError`.
+    ``finite``: refuse NaN and infinity in float fields."""
+    w = _Walker(reg, finite)
     out = w.message(reg.resolve(name), msg, "")
     if w.problems:
         first = w.problems[0]
@@ -231,9 +253,9 @@ def complete(reg: TypeRegistry, name: str, msg: Any) -> dict[str, Any]:
     return out
 
 
-def validate(reg: TypeRegistry, name: str, msg: Any) -> list[Problem]:
+def validate(reg: TypeRegistry, name: str, msg: Any, *, finite: bool = False) -> list[Problem]:
     """Every problem in ``msg`` as a message of type ``name``; an empty list when it is fine."""
-    w = _Walker(reg)
+    w = _Walker(reg, finite)
     w.message(reg.resolve(name), msg, "")
     return w.problems
 
@@ -295,6 +317,7 @@ def parse_text(text: str) -> Any:
         raise MessageTextError("", f"not valid YAML or JSON{where}: {what}") from None
 
 
-def from_text(reg: TypeRegistry, name: str, text: str) -> dict[str, Any]:
-    """Parse YAML/JSON text typed by a person into a complete message of type ``name``."""
-    return complete(reg, name, parse_text(text))
+def from_text(reg: TypeRegistry, name: str, text: str, *, finite: bool = True) -> dict[str, Any]:
+    """Parse YAML/JSON text typed by a person into a complete message of type ``name``. NaN and infinity
+    are refused unless ``finite=False``."""
+    return complete(reg, name, parse_text(text), finite=finite)

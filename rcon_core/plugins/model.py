@@ -16,6 +16,22 @@ Compare ``state.seq`` with the last painted one to skip repaints: it increases o
 
 A subclass usually overrides only :meth:`on_message` (turn a message into a value and call
 :meth:`set_value`), and, for a server, :meth:`handle_request`. Everything else has a sensible default.
+
+Staleness (decided here for every widget, see :attr:`WidgetState.stale`). A subscriber is stale when no
+value came for ``stale_after`` seconds, except on a *static* topic, which delivers once and then stays
+quiet by design (a latched ``/map``, a robot description):
+
+- a topic that delivered exactly one message since subscribing, that one within :data:`NO_DATA_AFTER`
+  seconds (or ``stale_after`` when longer; what a latched topic does: it sends its message on
+  subscribe, a big map over a slow link taking a few seconds), counts as static until a second message
+  arrives. rosbridge does not say
+  whether a topic is latched; this is what it looks like from the client. A stream that dies right
+  after its first message looks the same: the value's age still shows how old it is.
+- the operator can say so: a settings object with ``stale_after = 0`` means "static: never stale once
+  a value came" (the widget still shows NO DATA when nothing came for :data:`NO_DATA_AFTER` seconds).
+
+After the link comes back the subscription is made again and a latched topic delivers again, so the
+count of deliveries starts over.
 """
 
 from __future__ import annotations
@@ -129,6 +145,10 @@ class BridgePort(Protocol):
     def close(self) -> None: ...
 
 
+#: with ``stale_after = 0`` (a static topic), how long nothing at all may come before NO DATA; also how
+#: long a latched topic's one message may take to arrive after subscribing (at least)
+NO_DATA_AFTER = 5.0
+
 #: runs a plain function on the bridge loop thread (e.g. ``BridgeThread.call``); default: call it now
 Dispatch = Callable[[Callable[[], Any]], Any]
 
@@ -144,7 +164,9 @@ class WidgetState:
     ``value``: the widget's value (the bound field, or whatever the model's ``set_value`` gave).
     ``message``: the last whole message (or service response) the value came from, or None.
     ``count``: values received so far. ``age``: seconds since the last value, None if never.
-    ``stale``: True when ``age`` exceeds the model's ``stale_after`` (or nothing came since start).
+    ``stale``: True when ``age`` exceeds the model's ``stale_after`` (or nothing came since start);
+    never for a static topic that delivered (see the module docstring). ``static``: the value came from
+    a topic that looks latched or that the settings call static (``stale_after = 0``).
     ``link_down``: the bridge connection is down. ``error``: last problem as a sentence, or None.
     ``running``: the model is started. ``seq``: increases on every change (not on mere ageing).
     """
@@ -158,6 +180,7 @@ class WidgetState:
     error: str | None = None
     running: bool = False
     seq: int = 0
+    static: bool = False
 
 
 class WidgetModel:
@@ -174,8 +197,9 @@ class WidgetModel:
     - ``clock``: monotonic seconds, for ages (tests may pass a fake).
     """
 
-    #: seconds without a value after which ``state.stale`` is True; None disables. A settings object
-    #: with a ``stale_after`` attribute overrides it per instance.
+    #: seconds without a value after which ``state.stale`` is True; None disables; 0 = a static topic
+    #: (never stale once a value came). A settings object with a ``stale_after`` attribute overrides it
+    #: per instance.
     stale_after: float | None = 5.0
     #: timeout (seconds) for :meth:`call`; None uses the client's default
     call_timeout: float | None = None
@@ -207,6 +231,9 @@ class WidgetModel:
         self._count = 0
         self._stamp: float | None = None
         self._started_at: float | None = None
+        self._subscribed_at: float | None = None  # when the subscription was (re)made
+        self._deliveries = 0  # messages since then
+        self._first_delivery: float | None = None  # seconds from subscribing to the first of them
         self._link_down = False
         self._error: str | None = None
         self._seq = 0
@@ -243,7 +270,8 @@ class WidgetModel:
                 self._srv = self.port.advertise_service(b.name, b.type, self._serve)
         with self._lock:
             self._running = True
-            self._started_at = self._clock()
+            self._started_at = self._subscribed_at = self._clock()
+            self._deliveries, self._first_delivery = 0, None
             self._seq += 1
         self.on_start()
 
@@ -285,6 +313,10 @@ class WidgetModel:
 
     # -- incoming (bridge loop thread) ---------------------------------------------------------------
     def _receive(self, msg: dict[str, Any]) -> None:
+        with self._lock:
+            self._deliveries += 1
+            if self._deliveries == 1 and self._subscribed_at is not None:
+                self._first_delivery = self._clock() - self._subscribed_at
         try:
             self.on_message(msg)
         except Exception as exc:  # a bad message must not break the bridge's callback loop
@@ -431,6 +463,9 @@ class WidgetModel:
             if self._link_down == up:
                 self._link_down = not up
                 self._seq += 1
+                if up:  # subscribed again: a latched topic delivers again
+                    self._subscribed_at = self._clock()
+                    self._deliveries, self._first_delivery = 0, None
 
     @property
     def state(self) -> WidgetState:
@@ -438,10 +473,13 @@ class WidgetModel:
         with self._lock:
             now = self._clock()
             age = None if self._stamp is None else max(0.0, now - self._stamp)
+            static = self._static()
             stale = False
             if self.stale_after is not None and self._running and self.binding.role is Role.SUBSCRIBE:
-                since = age if age is not None else (now - (self._started_at or now))
-                stale = since > self.stale_after
+                if age is None:  # nothing yet: NO DATA
+                    stale = now - (self._started_at or now) > (self.stale_after or NO_DATA_AFTER)
+                elif not static:
+                    stale = age > self.stale_after
             return WidgetState(
                 value=self._value,
                 message=self._message,
@@ -452,7 +490,18 @@ class WidgetModel:
                 error=self._error,
                 running=self._running,
                 seq=self._seq,
+                static=static,
             )
+
+    def _static(self) -> bool:
+        """Whether the value came from a static topic (under the lock): the settings say so, or it looks
+        latched (one delivery, right after subscribing)."""
+        if self._stamp is None:
+            return False
+        if self.stale_after == 0:
+            return True
+        window = max(NO_DATA_AFTER, self.stale_after or 0.0)
+        return self._deliveries == 1 and self._first_delivery is not None and self._first_delivery <= window
 
     def problems(self) -> list[str]:
         """Everything that keeps this widget from working, as sentences (binding + settings)."""

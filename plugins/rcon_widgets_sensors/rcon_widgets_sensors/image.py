@@ -45,7 +45,9 @@ class ImageSettings:
     scan_range: float = 0.0
     show_overlay: bool = True
     smooth: bool = True
-    stale_after: float = 3.0
+    stale_after: float = attrs.field(
+        default=3.0, metadata={"label": "Stale after (s)", "min": 0.0,
+                               "help": "0 = a static (latched) topic, e.g. a map: never stale once it delivered"})
 
     def problems(self) -> list[str]:
         out = []
@@ -60,8 +62,8 @@ class ImageSettings:
                        "set both to 0 for automatic")
         if self.scan_range < 0:
             out.append("the scan range cannot be negative (0 = the scan's own maximum)")
-        if not self.stale_after > 0:
-            out.append("'stale after' must be more than 0 s")
+        if not self.stale_after >= 0:
+            out.append("'stale after' cannot be negative (0 = a static topic)")
         return out
 
 

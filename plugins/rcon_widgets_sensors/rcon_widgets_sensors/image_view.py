@@ -77,15 +77,16 @@ class ImageView(QtWidgets.QWidget):
     def _tick(self) -> None:
         """Repaint only the overlay while the shown frame is older than :data:`STALE_AFTER_S`."""
         frame = self.frame
-        if frame is None or not self.isVisible() or time.time() - frame.received < STALE_AFTER_S:
+        if frame is None or not self.isVisible() or self.stale_for() is None:
             return
         lines, _bg = self._overlay_lines()
         fm = QtGui.QFontMetrics(self._overlay_font())
         self.update(self.overlay_rect.united(_overlay_box(fm, lines)).adjusted(-1, -1, 2, 2))
 
     def stale_for(self) -> float | None:
-        """Seconds since the shown frame arrived when that is more than :data:`STALE_AFTER_S`, else None."""
-        if self.frame is None:
+        """Seconds since the shown frame arrived when that is more than :data:`STALE_AFTER_S`, else None.
+        Never for a static topic (a latched map: the model's ``state.static``), which sends one frame."""
+        if self.frame is None or getattr(self._state, "static", False):
             return None
         idle = time.time() - self.frame.received
         return idle if idle >= STALE_AFTER_S else None

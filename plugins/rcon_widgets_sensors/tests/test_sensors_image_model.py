@@ -134,7 +134,7 @@ def test_decoding_never_blocks_the_caller_and_latest_wins():
 
 def test_settings_validation_and_options():
     assert ImageSettings().problems() == []
-    bad = ImageSettings(max_fps=500, compression="zip", depth_min=5, depth_max=1, scan_range=-1, stale_after=0)
+    bad = ImageSettings(max_fps=500, compression="zip", depth_min=5, depth_max=1, scan_range=-1, stale_after=-1)
     text = " | ".join(bad.problems())
     for part in ("between 0 (no limit) and 120", "compression must be one of", "min < max", "cannot be negative",
                  "'stale after'"):

@@ -26,16 +26,17 @@ class LabelSettings:
         default=1.0, metadata={"label": "Scale", "help": "numbers are multiplied by this (100 for a 0..1 fraction in %)"}
     )
     stale_after: float = attrs.field(
-        default=5.0, metadata={"label": "Stale after (s)", "min": 0.1, "max": 3600.0,
-                               "help": "mark the value stale when nothing new arrived for this long"}
+        default=5.0, metadata={"label": "Stale after (s)", "min": 0.0, "max": 3600.0,
+                               "help": "mark the value stale when nothing new arrived for this long; "
+                                       "0 = a static (latched) topic: never stale once it delivered"}
     )
 
     def problems(self) -> list[str]:
         out = []
         if not -1 <= self.decimals <= 12:
             out.append(f"decimals must be between -1 and 12, not {self.decimals}")
-        if not self.stale_after > 0:
-            out.append(f"'stale after' must be more than 0 s, not {self.stale_after}")
+        if not self.stale_after >= 0:
+            out.append(f"'stale after' cannot be negative (0 = a static topic), not {self.stale_after}")
         if self.scale == 0:
             out.append("scale must not be 0")
         return out

@@ -36,10 +36,12 @@ class SliderSettings:
     )
     decimals: int = attrs.field(default=2, metadata={"label": "Decimals", "min": 0, "max": 9})
     units: str = attrs.field(default="", metadata={"label": "Units"})
-    stale_after: float = attrs.field(default=5.0, metadata={"label": "Stale after (s)", "min": 0.1})
+    stale_after: float = attrs.field(default=5.0, metadata={"label": "Stale after (s)", "min": 0.0,
+                                                           "help": "0 = a static (latched) topic: never stale once it delivered"})
     initial: float = attrs.field(
         default=0.0, metadata={"label": "Start value",
-                               "help": "publish sliders: shown until something is sent or heard (clamped to the range)"}
+                               "help": "publish sliders: where the handle rests until something is sent or heard "
+                                       "(the value reads \"not set\" until then)"}
     )
     follow_topic: bool = attrs.field(
         default=True, metadata={"label": "Follow the topic",
@@ -191,7 +193,8 @@ ECHO_WINDOW_S = 0.5
 
 class SliderModel(NumericModel):
     """PUBLISH: the view calls :meth:`drag` while moving and :meth:`release` when let go. The value is
-    always shown: what was last sent or heard on the topic (this session), else the start value; with
+    what was last sent or heard on the topic (this session); None until then (the view says "not set":
+    a start value shown as if it were applied would be a lie), with the handle at :attr:`resting`. With
     ``follow_topic`` the slider also subscribes to its own topic and shows what others publish.
     SUBSCRIBE: the bound field becomes the value (a float or int)."""
 
@@ -210,9 +213,15 @@ class SliderModel(NumericModel):
         if b.role is not Role.PUBLISH or b.problems():
             return
         remembered = _LAST_VALUES.get(self._key)
-        self.replace_value(self.range.coerce(remembered if remembered is not None else self.settings.initial))
+        if remembered is not None:
+            self.replace_value(self.range.coerce(remembered))
         if self.settings.follow_topic:
             self._follow_sub = self.port.subscribe(b.name, self._on_topic, type=b.type)
+
+    @property
+    def resting(self) -> float | int:
+        """Where a publish slider's handle rests while nothing was sent or heard: the start value, in range."""
+        return self.range.coerce(self.settings.initial)
 
     def on_types_ready(self) -> None:
         super().on_types_ready()

@@ -1,7 +1,9 @@
 """Slider's Qt view: a horizontal slider with the value above it and the range underneath.
 
 Publish: dragging calls ``model.drag`` (publishes only in continuous mode, rate-limited), letting go
-``model.release`` (always publishes). Tapping the track jumps the handle there (and drags from there). Subscribe: the handle follows the robot and cannot be moved.
+``model.release`` (always publishes). Tapping the track jumps the handle there (and drags from there).
+Until something is sent or heard the value reads "not set" (the handle rests at the start value).
+Subscribe: the handle follows the robot and cannot be moved.
 """
 
 from __future__ import annotations
@@ -14,6 +16,9 @@ from rcon_core.plugins import Role
 
 from .common import format_number
 from .view_common import STALE, Caption, style_text, vbox
+
+#: what a publish slider's value reads before anything was sent or heard on its topic
+NOT_SET = "not set"
 
 
 class TapSlider(QtWidgets.QSlider):
@@ -70,9 +75,13 @@ class SliderView(QtWidgets.QWidget):
         layout.addLayout(ends)
         self._range = None
         self._apply_range()
-        self.slider.blockSignals(True)  # nothing sent or received yet: rest at 0 (or the nearest end)
-        self.slider.setValue(self._position(self._range.coerce(0)))
+        # nothing sent or received yet: the handle rests at the start value, the value says "not set"
+        resting = getattr(model, "resting", None) if self.publishing else None
+        self.slider.blockSignals(True)
+        self.slider.setValue(self._position(resting if resting is not None else self._range.coerce(0)))
         self.slider.blockSignals(False)
+        if self.publishing:
+            self._show_unset()
         self.slider.valueChanged.connect(self._moved)
         self.slider.sliderReleased.connect(self._released)
 
@@ -121,6 +130,14 @@ class SliderView(QtWidgets.QWidget):
         text = f"{self._fmt(v)} {units}".strip()
         if text != self.value.text():
             self.value.setText(text)
+            self.value.setToolTip("")
+
+    def _show_unset(self) -> None:
+        """Nothing was sent or heard on the topic: no number that could pass for the robot's setting."""
+        if self.value.text() != NOT_SET:
+            self.value.setText(NOT_SET)
+            self.value.setToolTip(f"nothing sent or heard on {self.model.binding.name} yet; "
+                                  "move the slider to set it")
 
     # -- state ----------------------------------------------------------------------------------------
     def refresh(self, state: Any) -> None:
@@ -132,6 +149,8 @@ class SliderView(QtWidgets.QWidget):
                 self.slider.setValue(self._position(min(self._range.maximum, max(self._range.minimum, v))))
                 self.slider.blockSignals(False)
             self._show(v)
+        elif v is None and self.publishing and not self.slider.isSliderDown():
+            self._show_unset()
         stale = state.stale and not self.publishing
         if stale != self._stale:  # a style sheet re-polishes the label: only when staleness flips
             self._stale = stale

@@ -1,4 +1,5 @@
-"""Stepper's Qt view: − value + ; holding a button repeats (the model limits the publish rate)."""
+"""Stepper's Qt view: − value + ; holding a button repeats (the model limits the publish rate). Until the
+first step the value reads "not set" (the first step starts from the start value)."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ from typing import Any
 from qtpy import QtCore, QtWidgets
 
 from .common import format_number
+from .slider_view import NOT_SET
 from .view_common import BAD, Caption, style_text, vbox
 
 
@@ -36,13 +38,14 @@ class StepperView(QtWidgets.QWidget):
         layout.addWidget(self.note)
         self.minus.clicked.connect(lambda: self._show(model.down()))
         self.plus.clicked.connect(lambda: self._show(model.up()))
-        self._show(model.current)
+        self._show(model.current, shown=False)  # nothing sent yet: no number that passes for the robot's
 
-    def _show(self, v: float) -> None:
+    def _show(self, v: float, shown: bool = True) -> None:
         s = self.model.settings
         r = self.model.range
         text = format_number(v, -1 if r.integer else s.decimals)
-        self.value.setText(f"{text} {s.units}".strip())
+        self.value.setText(f"{text} {s.units}".strip() if shown else NOT_SET)
+        self.value.setToolTip("" if shown else f"nothing sent yet; the first step starts from {text} {s.units}".strip())
         self.minus.setEnabled(v > r.minimum)
         self.plus.setEnabled(v < r.maximum)
 

@@ -31,7 +31,8 @@ class SwitchSettings:
                               "help": "service switches: a topic with the robot's real state, e.g. /lights/state"}
     )
     state_field: str = attrs.field(default="data", metadata={"label": "State field", "help": "bool field in it"})
-    stale_after: float = attrs.field(default=30.0, metadata={"label": "Stale after (s)", "min": 0.1})
+    stale_after: float = attrs.field(default=30.0, metadata={"label": "Stale after (s)", "min": 0.0,
+                                                            "help": "0 = a static (latched) topic: never stale once it delivered"})
 
     def problems(self) -> list[str]:
         out = []
@@ -39,8 +40,8 @@ class SwitchSettings:
             out.append(f"state topic {self.state_topic!r} must start with '/'")
         if self.state_topic and not self.state_field:
             out.append("state field must name the bool field of the state topic (e.g. data)")
-        if not self.stale_after > 0:
-            out.append("'stale after' must be more than 0 s")
+        if not self.stale_after >= 0:
+            out.append("'stale after' cannot be negative (0 = a static topic)")
         return out
 
 

@@ -1,6 +1,7 @@
 """Text Field: shows the raw data of any topic or field (subscribe), or publishes what the operator
 types (publish). Typed text is YAML or JSON turned into the topic's type with the type registry; a
-string field takes the text as it is. Wrong text publishes nothing and the error names the field.
+string field takes the text as it is. Wrong text publishes nothing and the error names the field; NaN and
+infinity count as wrong unless the "Allow NaN and infinity" setting is on.
 
 Inside a Compound (its port ``composes``) nothing reaches the robot until the compound sends: the view
 hands every change of the text to :meth:`TextFieldModel.set_draft`, which checks it at once (the error
@@ -32,14 +33,18 @@ class TextFieldSettings:
                                                       "help": "for numbers shown; 'as received' (-1) as they arrive"})
     placeholder: str = attrs.field(default="", metadata={"label": "Hint", "help": "grey text in the empty field"})
     clear_after_send: bool = attrs.field(default=False, metadata={"label": "Clear after sending"})
-    stale_after: float = attrs.field(default=10.0, metadata={"label": "Stale after (s)", "min": 0.1})
+    stale_after: float = attrs.field(default=10.0, metadata={"label": "Stale after (s)", "min": 0.0,
+                                                            "help": "0 = a static (latched) topic: never stale once it delivered"})
+    allow_nonfinite: bool = attrs.field(
+        default=False, metadata={"label": "Allow NaN and infinity",
+                                 "help": "off: nan, inf and null are refused for numbers (JSON sends them as null)"})
 
     def problems(self) -> list[str]:
         out = []
         if not -1 <= self.decimals <= 12:
             out.append(f"decimals must be between -1 and 12, not {self.decimals}")
-        if not self.stale_after > 0:
-            out.append("'stale after' must be more than 0 s")
+        if not self.stale_after >= 0:
+            out.append("'stale after' cannot be negative (0 = a static topic)")
         return out
 
 
@@ -93,13 +98,14 @@ class TextFieldModel(StdModel):
         path = b.field_path
         if not text.strip() and not self._is_string_field():
             raise MessageTextError(path, "nothing typed")
+        finite = not self.settings.allow_nonfinite  # NaN/inf only when the operator allowed them
         if not path:
-            return self.types.from_text(b.type, text)
+            return self.types.from_text(b.type, text, finite=finite)
         value: Any = text if self._is_string_field() else parse_text(text)
         if value == {} and not text.strip():
             raise MessageTextError(path, "nothing typed")
         msg = set_path(copy.deepcopy(self.types.default(b.type)), path, value)
-        return self.types.complete(b.type, msg)
+        return self.types.complete(b.type, msg, finite=finite)
 
     def submit(self, text: str) -> None:
         """Parse and publish ``text`` on the bridge thread (any thread may call this)."""

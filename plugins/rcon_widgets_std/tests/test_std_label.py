@@ -87,7 +87,7 @@ def test_age_and_stale_after_setting():
 
 def test_settings_problems():
     assert LabelSettings().problems() == []
-    p = LabelSettings(decimals=20, stale_after=0, scale=0).problems()
+    p = LabelSettings(decimals=20, stale_after=-1, scale=0).problems()
     assert any("decimals" in x for x in p) and any("stale" in x for x in p) and any("scale" in x for x in p)
 
 

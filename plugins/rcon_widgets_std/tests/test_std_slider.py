@@ -149,13 +149,14 @@ async def test_int8_slider_on_a_type_learned_from_the_robot_clamps_to_127(sim):
         m.stop()
 
 
-async def test_publish_slider_always_shows_a_value_start_value_then_sent_then_remembered(sim):
+async def test_publish_slider_says_not_set_then_sent_then_remembered(sim):
     async with bridge(sim) as client:
         settings = SliderSettings(minimum=0.5, maximum=2, step=0.1, follow_topic=False)
         m = build(SliderModel, settings, "/rcon_test/limit_a", "std_msgs/Float64", "publish", "data",
                   client=client, node="a")
         m.start()
-        assert m.state.value == 0.5  # start value 0 clamped to the minimum: never "–"
+        assert m.state.value is None  # nothing sent or heard: no value that could pass for the robot's
+        assert m.resting == 0.5  # the handle rests at the start value 0 clamped to the minimum
         m.release(1.3)
         await sim.wait_for_published("/rcon_test/limit_a", lambda msg: msg["data"] == 1.3, timeout=10)
         assert m.state.value == 1.3
@@ -168,7 +169,7 @@ async def test_publish_slider_always_shows_a_value_start_value_then_sent_then_re
         other = build(SliderModel, SliderSettings(minimum=0, maximum=2, initial=0.8, follow_topic=False),
                       "/rcon_test/limit_b", "std_msgs/Float64", "publish", "data", client=client, node="b")
         other.start()
-        assert other.state.value == 0.8
+        assert other.state.value is None and other.resting == 0.8
         other.stop()
 
 
@@ -184,7 +185,7 @@ async def test_publish_slider_follows_what_others_publish_on_its_topic(sim):
         stepper_console = client.node("another-console").advertise("/rcon_test/limit_c", "std_msgs/Float64")
         stepper_console.publish({"data": 2.25})
         await until(lambda: follow.state.value == 2.25, what="the other publisher's value")
-        assert deaf.state.value == 0.0
+        assert deaf.state.value is None
         follow.release(1.0)  # and its own value still goes out and is shown
         await sim.wait_for_published("/rcon_test/limit_c", lambda msg: msg["data"] == 1.0, timeout=10)
         await asyncio.sleep(0.2)

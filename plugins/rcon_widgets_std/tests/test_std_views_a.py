@@ -104,7 +104,7 @@ def test_slider_view_drag_and_release_publish_through_the_bridge(qtbot, live, si
     live.thread.call(m.stop).result(5)
 
 
-def test_publish_slider_view_shows_its_value_from_the_start(qtbot, live, sim_thread):
+def test_publish_slider_view_says_not_set_until_a_value_is_sent_or_heard(qtbot, live, sim_thread):
     m = SliderModel(SliderSettings(minimum=0.5, maximum=2, step=0.1, units="m/s"),
                     build(SliderModel, None, "/rcon_test/limit_v", "std_msgs/Float64", "publish", "data").binding,
                     live.node("slider-v"), types=TypeRegistry.standard(), dispatch=live.thread.call)
@@ -112,7 +112,7 @@ def test_publish_slider_view_shows_its_value_from_the_start(qtbot, live, sim_thr
     view = SliderView(m)
     qtbot.addWidget(view)
     view.refresh(m.state)
-    assert view.value.text() == "0.50 m/s" and view.slider.value() == 0  # never "–"
+    assert view.value.text() == "not set" and view.slider.value() == 0  # no number passes for the robot's
     wait_until(qtbot, lambda: sim_thread.topic_subscriber_count("/rcon_test/limit_v") >= 1, what="following")
     other = live.node("another-console")
     live.thread.call(lambda: other.advertise("/rcon_test/limit_v", "std_msgs/Float64").publish({"data": 1.5}))

@@ -67,8 +67,8 @@ def test_stepper_view_buttons_publish(qtbot, live, sim_thread, tmp_path):
     live.thread.call(m.start).result(5)
     view = StepperView(m)
     qtbot.addWidget(view)
-    assert view.value.text() == "1.00 m/s"
-    view.plus.click()
+    assert view.value.text() == "not set"  # nothing sent: no number that could pass for the robot's limit
+    view.plus.click()  # the first step starts from the start value, 1.00
     view.plus.click()
     assert view.value.text() == "1.50 m/s"
     wait_until(qtbot, lambda: sim_thread.robot.speed_limit == 1.5, what="the robot's limit")
