@@ -81,6 +81,7 @@ from websockets.asyncio.client import ClientConnection, connect, process_excepti
 from websockets.exceptions import ConnectionClosed
 from websockets.protocol import State
 
+from .action_server import ProvidedActions
 from .defaults import default_from_typedefs
 from .errors import (
     ActionError,
@@ -234,11 +235,13 @@ class BridgeClient:
         self._seq = 0
         self._bad_counts: dict[str, int] = {}
         self._tasks: set[asyncio.Task[Any]] = set()
+        self.provided_actions = ProvidedActions(self._send)  # actions this client serves (ROS 2)
         self._ops: dict[str, Callable[[dict[str, Any]], None]] = {
             "publish": self._on_publish, "fragment": self._on_fragment, "png": self._on_png,
             "service_response": self._on_service_response, "call_service": self._on_call_service,
             "status": self._on_status, "action_feedback": self._on_action_feedback,
-            "action_result": self._on_action_result,
+            "action_result": self._on_action_result, "send_action_goal": self.provided_actions.on_goal,
+            "cancel_action_goal": self.provided_actions.on_cancel,
         }
         from .rosapi import Rosapi
 
@@ -429,6 +432,7 @@ class BridgeClient:
                 advert.pending = None
         for srv in self._services.values():
             self._send({"op": "advertise_service", "service": srv.service, "type": srv.type})
+        self.provided_actions.restore()
         for topic in self._topics.values():
             topic.sid = None
             topic.sent_options = None
@@ -451,6 +455,7 @@ class BridgeClient:
         for gid, goal in list(self._goals.items()):
             goal._settle(error=ConnectionLostError(f"connection lost while goal {gid} was active"))
         self._goals.clear()
+        self.provided_actions.disconnected()
 
     # ================================================================== writing
 
