@@ -93,8 +93,11 @@ from .errors import (
     ServiceTimeoutError,
 )
 from .nodes import ActionGoal, Node, Publisher, ServiceServer, Subscription
+from .params import Params
 from .protocol import FragmentAssembler, decode_binary, decode_png, encode
 from .rawdecode import RawDecoder, _short, has_fixed_arrays
+from .rosinfo import RosInfo
+from .rosinfo import detect as detect_ros
 from .topics import AdvertEntry, TopicEntry
 
 log = logging.getLogger(__name__)
@@ -246,6 +249,8 @@ class BridgeClient:
         from .rosapi import Rosapi
 
         self.rosapi = Rosapi(self)
+        self.ros_info: RosInfo | None = None  # set by detect_ros(); see rosinfo.py
+        self.params = Params(self)  # ROS 1 and ROS 2 parameters; see params.py
 
     # ================================================================== state
 
@@ -256,6 +261,17 @@ class BridgeClient:
     @property
     def connected(self) -> bool:
         return self._ws is not None
+
+    @property
+    def ros_version(self) -> int | None:
+        """1 or 2 once ``detect_ros()`` found out (or ``ros_info`` was set), else None."""
+        return self.ros_info.version if self.ros_info is not None else None
+
+    async def detect_ros(self, refresh: bool = False) -> RosInfo:
+        """Which ROS the server runs (asked once; ``refresh`` asks again).  See ``rosinfo.py``."""
+        if self.ros_info is None or refresh:
+            self.ros_info = await detect_ros(self)
+        return self.ros_info
 
     def add_state_listener(self, fn: Callable[[ConnectionState], None]) -> Callable[[], None]:
         """Call ``fn(state)`` on every change; returns a function that removes the listener."""
