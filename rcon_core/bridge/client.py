@@ -82,6 +82,7 @@ from websockets.exceptions import ConnectionClosed
 from websockets.protocol import State
 
 from .action_server import ProvidedActions
+from .cdrdecode import CdrDecoder, flavour_from_typedefs
 from .defaults import default_from_typedefs
 from .errors import (
     ActionError,
@@ -231,6 +232,7 @@ class BridgeClient:
         self._typedefs: dict[str, list[dict[str, Any]]] = {}
         self._response_defaults: dict[str, tuple[dict[str, Any], set[str]]] = {}
         self._raw = RawDecoder()
+        self._cdr = CdrDecoder()  # cbor-raw from ROS 2 servers (CDR)
         warn = self._fragment_warning
         self._fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_message_size, warn=warn)
         self._png_fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_message_size, warn=warn)
@@ -736,6 +738,8 @@ class BridgeClient:
                 log.info("%s [%s] has fixed-size arrays, which rosbridge's cbor encoder cannot send; "
                          "using cbor-raw instead", entry.topic, type_name)
                 opts["compression"] = "cbor-raw"
+            if opts["compression"] == "cbor-raw":
+                await self._learn_raw_flavour(typedefs)
         except Exception as exc:
             log.warning("%s: cannot prepare %s compression (%s); subscribing without compression",
                         entry.topic, opts["compression"], exc)
@@ -757,9 +761,20 @@ class BridgeClient:
         if old is not None:
             self._send({"op": "unsubscribe", "id": old, "topic": entry.topic})
 
+    async def _learn_raw_flavour(self, typedefs: list[dict[str, Any]]) -> None:
+        """cbor-raw is CDR from a ROS 2 server: hand the typedefs to the CDR decoder when the server is (or
+        its typedefs look) ROS 2; ask the server only when neither tells."""
+        version = self.ros_version or flavour_from_typedefs(typedefs)
+        if version is None:
+            version = (await self.detect_ros()).version
+        if version == 2:
+            self._cdr.add_typedefs(typedefs)
+
     def _raw_decoder(self, type_name: str) -> Any:
-        """cbor-raw decoding: the registry's ``deserialize_ros1`` when a registry is given and knows the
+        """cbor-raw decoding: CDR for types learned from a ROS 2 server; else the registry's ``deserialize_ros1`` when a registry is given and knows the
         type (it learns the server's typedefs in ``typedefs()``), else the built-in typedef-driven decoder."""
+        if self._cdr.knows(type_name):
+            return self._cdr
         reg = self.registry
         if reg is not None and hasattr(reg, "deserialize_ros1"):
             try:
