@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import base64
 import json
 from collections.abc import AsyncIterator
 from typing import Any
@@ -51,7 +52,9 @@ async def test_rosapi_2x_service_set_and_types(sim2: SimServer) -> None:
     assert {"/rosapi/get_ros_version", "/rosapi/topics_and_raw_types", "/rosapi/action_servers"} <= set(rosapi)
     assert types["/rosapi/topics"] == "rosapi_msgs/srv/Topics"
     assert types["/rosapi/get_ros_version"] == "rosapi_msgs/srv/GetROSVersion"
-    assert all(t.startswith("rosapi_msgs/srv/") for t in types.values())
+    # rosapi's own services; the rosapi node's parameter services share the prefix, as on a real robot
+    assert all(t.startswith("rosapi_msgs/srv/") or t.startswith("rcl_interfaces/srv/") for t in types.values())
+    assert types["/rosapi/get_parameters"] == "rcl_interfaces/srv/GetParameters"
     assert version == {"op": "service_response", "service": "/rosapi/get_ros_version", "id": "c" + str(raw.n - 1),
                        "values": {"version": 2, "distro": "jazzy"}, "result": True}
     assert missing["result"] is False and "does not exist" in missing["values"]
@@ -127,3 +130,29 @@ async def test_parameters_per_node(sim2: SimServer) -> None:
     assert malformed == {"value": ""}
     assert bad_json["result"] is False and "JSON" in bad_json["values"]
     assert deleted["result"] is True and gone == {"exists": False}
+
+
+async def test_each_node_serves_its_parameters(sim2: SimServer) -> None:
+    """The ROS 2 node parameter services, as rosbridge's own tests use them to read ``actual_port``."""
+    async with websockets.connect(sim2.url) as ws:
+        raw = Raw(ws)
+        services = (await raw.call("/rosapi/services"))["values"]["services"]
+        kind = (await raw.call("/rosapi/service_type", {"service": "/kingfisher/set_parameters"}))["values"]
+        port = await raw.call("/rosbridge_websocket/get_parameters", {"names": ["actual_port", "nope"]})
+        listed = (await raw.call("/kingfisher/list_parameters", {"prefixes": ["gps"]}))["values"]
+        refused = (await raw.call("/kingfisher/set_parameters", {"parameters": [
+            {"name": "max_speed", "value": {"type": 2, "integer_value": 3}},
+            {"name": "max_yaw_rate", "value": {"type": 3, "double_value": 0.5}}]}))["values"]
+        via_rosapi = (await raw.call("/rosapi/get_param", {"name": "/kingfisher:max_yaw_rate"}))["values"]
+        types = (await raw.call("/kingfisher/get_parameter_types", {"names": ["frame_id", "use_sim_time"]}))["values"]
+    for node in ("/kingfisher", "/rosbridge_websocket", "/rosapi"):
+        assert {f"{node}/get_parameters", f"{node}/set_parameters", f"{node}/list_parameters"} <= set(services)
+    assert kind == {"type": "rcl_interfaces/srv/SetParameters"}
+    values = port["values"]["values"]
+    assert values[0]["type"] == 2 and values[0]["integer_value"] == sim2.port
+    assert values[1]["type"] == 0
+    assert listed == {"result": {"names": ["gps.origin_lat", "gps.origin_lon"], "prefixes": ["gps"]}}
+    assert refused["results"][0]["successful"] is False and "double" in refused["results"][0]["reason"]
+    assert refused["results"][1] == {"successful": True, "reason": ""}
+    assert via_rosapi == {"value": "0.5"}
+    assert base64.b64decode(types["types"]) == bytes([4, 1])  # uint8[] travels as base64

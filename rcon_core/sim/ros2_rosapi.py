@@ -9,7 +9,8 @@ Differences from the ROS 1 rosapi (``rosapi.py``), as the ros2 branch's ``rosapi
 * ``message_details`` of a type it cannot load answers an empty ``typedefs`` list (rosapi logs the error);
 * ``action_servers`` lists every action with a server: the sim's own and those clients advertised
   (rosapi finds them from the hidden ``<action>/_action/{feedback,status}`` topics);
-* no ``get_loggers``/``set_logger_level`` services (those are ROS 1 node services).
+* no ``get_loggers``/``set_logger_level`` services (those are ROS 1 node services); every node has its
+  ROS 2 parameter services instead (``ros2_param_services.py``).
 """
 
 from __future__ import annotations
@@ -122,5 +123,9 @@ def install(server: SimServer) -> Ros2Rosapi:
     for name, type_base in _SERVICES:
         server.add_service(f"/rosapi/{name}", f"rosapi_msgs/srv/{type_base}", ROSAPI_NODE, getattr(api, name))
     server.rosapi = api
+    from .ros2_param_services import add_parameter_services
+
+    for node in (BRIDGE_NODE, ROSAPI_NODE):
+        add_parameter_services(server, node)
     server.log(ROSAPI_NODE, "info", "Rosapi started", function="<module>")
     return api
