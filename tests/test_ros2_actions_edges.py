@@ -116,3 +116,26 @@ async def test_a_provided_action_survives_a_reconnect() -> None:
         await caller.close()
         await second.stop()
     assert hanging.done  # the caller's goal failed with the lost link, it did not hang
+
+
+async def test_action_part_layouts_come_from_the_local_registry(sim2: SimServer) -> None:
+    """rosapi 2.1.0 answers [] for an action's parts; the client falls back to its registry."""
+    from rcon_core.bridge import BridgeError
+    from rcon_core.msgs import TypeRegistry
+
+    with_registry = BridgeClient(sim2.url, call_timeout=3, registry=TypeRegistry.standard(ros2=True))
+    bare = BridgeClient(sim2.url, call_timeout=3)
+    await with_registry.connect(timeout=5)
+    await bare.connect(timeout=5)
+    try:
+        typedefs = await with_registry.typedefs("rcon_sim/action/NavigateToFix_Goal")
+        assert typedefs[0]["fieldnames"] == ["target"]
+        try:
+            await bare.typedefs("rcon_sim/action/NavigateToFix_Goal")
+        except BridgeError as exc:
+            assert "no definition" in str(exc)
+        else:
+            raise AssertionError("a server answer of [] must not pass for a definition")
+    finally:
+        await with_registry.close()
+        await bare.close()

@@ -812,6 +812,8 @@ class BridgeClient:
                 raise
             log.info("rosapi message_details failed for %s (%s); using the local registry", type_name, exc)
             typedefs = self.registry.typedefs(type_name)
+        if not typedefs and self.registry is not None and self.registry.has(type_name):
+            typedefs = self.registry.typedefs(type_name)  # rosapi 2.x answers [] for what it cannot load
         if not typedefs:
             raise BridgeError(f"the server has no definition for {type_name}")
         self._typedefs[key] = typedefs

@@ -7,6 +7,8 @@ Differences from the ROS 1 rosapi (``rosapi.py``), as the ros2 branch's ``rosapi
 * parameters belong to nodes and are named ``<node>:<param>`` (``ros2_params.py``); ``get_param``'s request
   field is ``default_value``;
 * ``message_details`` of a type it cannot load answers an empty ``typedefs`` list (rosapi logs the error);
+  that includes an action's parts (``pkg/action/<Name>_Goal``, ``_Result``, ``_Feedback``): rosapi looks
+  for them as attributes of the package's ``action`` module, which exports only ``<Name>``;
 * ``action_servers`` lists every action with a server: the sim's own and those clients advertised
   (rosapi finds them from the hidden ``<action>/_action/{feedback,status}`` topics);
 * no ``get_loggers``/``set_logger_level`` services (those are ROS 1 node services); every node has its
@@ -82,7 +84,10 @@ class Ros2Rosapi(Rosapi):
         return {"version": 2, "distro": self.distro}
 
     def message_details(self, args: dict[str, Any]) -> dict[str, Any]:
-        return {"typedefs": self.server.types.typedefs(args.get("type", "")) or []}
+        type_name = args.get("type", "")
+        if "/action/" in type_name:
+            return {"typedefs": []}  # rosapi loads pkg.action.<Name>_Goal, which the package does not export
+        return {"typedefs": self.server.types.typedefs(type_name) or []}
 
     def action_servers(self, args: dict[str, Any]) -> dict[str, Any]:
         hub = self.server.action_hub
