@@ -52,6 +52,18 @@ def _bridge_parameters(server: SimServer) -> dict[str, Any]:
             "topics_glob": "", "services_glob": "", "params_glob": ""}
 
 
+def _is_action_part(registry: Any, type_name: str) -> bool:
+    """True when ``type_name`` (any spelling) names a part of an action (``<Name>_Goal`` ...)."""
+    if registry is None:
+        return "/action/" in type_name
+    from rcon_core.msgs import names
+
+    try:
+        return names.action_part(registry.resolve(type_name)) is not None
+    except (KeyError, ValueError):
+        return False
+
+
 class Ros2Rosapi(Rosapi):
     """rosapi 2.x handlers; graph queries are shared with the ROS 1 flavour."""
 
@@ -85,8 +97,8 @@ class Ros2Rosapi(Rosapi):
 
     def message_details(self, args: dict[str, Any]) -> dict[str, Any]:
         type_name = args.get("type", "")
-        if "/action/" in type_name:
-            return {"typedefs": []}  # rosapi loads pkg.action.<Name>_Goal, which the package does not export
+        if _is_action_part(self.server.types.registry, type_name):
+            return {"typedefs": []}  # rosapi looks for <Name>_Goal where the package does not export it
         return {"typedefs": self.server.types.typedefs(type_name) or []}
 
     def action_servers(self, args: dict[str, Any]) -> dict[str, Any]:
