@@ -116,6 +116,7 @@ async def test_a_provided_action_survives_a_reconnect() -> None:
         await caller.close()
         await second.stop()
     assert hanging.done  # the caller's goal failed with the lost link, it did not hang
+    assert hanging.outcome == "unknown (link lost)" and not hanging.succeeded
 
 
 async def test_action_part_layouts_come_from_the_local_registry(sim2: SimServer) -> None:

@@ -1066,6 +1066,7 @@ class BridgeClient:
             log.debug("action_feedback for unknown goal %r", m.get("id"))
             return
         goal.feedback_count += 1
+        goal.last_feedback = m.get("values")
         if goal.feedback_callback is not None:
             values = m.get("values")
             try:
