@@ -140,3 +140,22 @@ async def test_action_part_layouts_come_from_the_local_registry(sim2: SimServer)
     finally:
         await with_registry.close()
         await bare.close()
+
+
+async def test_an_advertisers_bad_feedback_or_result_is_refused_and_the_goal_stays_open(sim2: SimServer) -> None:
+    async with websockets.connect(sim2.url) as a, websockets.connect(sim2.url) as b:
+        await a.send(json.dumps({"op": "advertise_action", "action": ACTION, "type": TYPE}))
+        await call(a, "/rosapi/action_servers", "sync")
+        await b.send(json.dumps({"op": "send_action_goal", "id": "g", "action": ACTION, "action_type": TYPE,
+                                 "args": {"order": 3}, "feedback": True}))
+        goal = json.loads(await asyncio.wait_for(a.recv(), 5))
+        gid = goal["id"]
+        await a.send(json.dumps({"op": "action_feedback", "action": ACTION, "id": gid,
+                                 "values": {"sequence": "not a list"}}))
+        await a.send(json.dumps({"op": "action_result", "action": ACTION, "id": gid, "status": 4, "result": True,
+                                 "values": {"sequence": ["x"]}}))
+        await a.send(json.dumps({"op": "action_result", "action": ACTION, "id": gid, "status": 4, "result": True,
+                                 "values": {"sequence": [0, 1, 1, 2]}}))
+        result = json.loads(await asyncio.wait_for(b.recv(), 5))  # no feedback frame came before it
+    assert result == {"op": "action_result", "action": ACTION, "values": {"sequence": [0, 1, 1, 2]}, "status": 4,
+                      "result": True, "id": "g"}
