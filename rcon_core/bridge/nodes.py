@@ -228,7 +228,7 @@ class Node:
         self._pubs: set[Publisher] = set()
         self._services: set[ServiceServer] = set()
         self._goals: set[ActionGoal] = set()
-        self._action_servers: set[Any] = set()
+        self.action_servers: set[Any] = set()  # provided actions (action_server.ActionServer)
         self.closed = False
 
     def __repr__(self) -> str:
@@ -323,7 +323,7 @@ class Node:
         module for feedback, cancel and failure handling."""
         self._check()
         srv = self.client.provided_actions.create(self, action, type, handler)
-        self._action_servers.add(srv)
+        self.action_servers.add(srv)
         return srv
 
     def close(self) -> None:
@@ -336,7 +336,7 @@ class Node:
             p.unadvertise()
         for srv in list(self._services):
             srv.unadvertise()
-        for action in list(self._action_servers):
+        for action in list(self.action_servers):
             action.unadvertise()
         for g in list(self._goals):
             g.cancel()
