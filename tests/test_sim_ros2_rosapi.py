@@ -157,3 +157,19 @@ async def test_each_node_serves_its_parameters(sim2: SimServer) -> None:
     assert refused["results"][1] == {"successful": True, "reason": ""}
     assert via_rosapi == {"value": "0.5"}
     assert base64.b64decode(types["types"]) == bytes([4, 1])  # uint8[] travels as base64
+
+
+async def test_time_fields_take_either_spelling_and_now(sim2: SimServer) -> None:
+    """rosbridge 2.x fills builtin_interfaces/Time from sec/nanosec or secs/nsecs, and from "now"."""
+    frames = [{"header": {"stamp": {"secs": 5, "nsecs": 6}, "frame_id": "a"}, "point": {"x": 1.0}},
+              {"header": {"stamp": {"sec": 7}, "frame_id": "b"}},
+              {"header": {"stamp": "now", "frame_id": "c"}}]
+    async with websockets.connect(sim2.url) as ws:
+        await ws.send(json.dumps({"op": "advertise", "topic": "/clicked", "type": "geometry_msgs/PointStamped"}))
+        for msg in frames:
+            await ws.send(json.dumps({"op": "publish", "topic": "/clicked", "msg": msg}))
+        await sim2.wait_for_published("/clicked", lambda m: m["header"]["frame_id"] == "c")
+    a, b, c = sim2.published("/clicked")
+    assert a["header"]["stamp"] == {"sec": 5, "nanosec": 6} and a["point"] == {"x": 1.0, "y": 0.0, "z": 0.0}
+    assert b["header"]["stamp"] == {"sec": 7, "nanosec": 0}
+    assert c["header"]["stamp"]["sec"] > 1_600_000_000
