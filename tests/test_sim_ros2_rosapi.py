@@ -84,7 +84,12 @@ async def test_topics_and_raw_types_and_message_details(sim2: SimServer) -> None
     assert list(listing) == ["topics", "types", "typedefs_full_text"]
     assert len(listing["topics"]) == len(listing["types"]) == len(listing["typedefs_full_text"])
     text = dict(zip(listing["topics"], listing["typedefs_full_text"], strict=True))
-    assert "float64 latitude" in text["/gps/fix"]
+    gps = text["/gps/fix"]
+    assert "float64 latitude" in gps and "std_msgs/Header header" in gps and "/msg/" not in gps
+    # depth first from the last field, as rosapi 2.x walks its stack; time is a message there
+    assert [line for line in gps.splitlines() if line.startswith("MSG: ")] == [
+        "MSG: sensor_msgs/NavSatStatus", "MSG: std_msgs/Header", "MSG: builtin_interfaces/Time"]
+    assert gps.endswith("MSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n")
     # rosapi 2.x logs a type it cannot load and answers an empty list (no failure)
     assert unknown["result"] is True and unknown["values"] == {"typedefs": []}
     # nor the parts of an action (rosapi 2.1.0 looks for them where the package does not export them)

@@ -17,14 +17,26 @@ Differences from the ROS 1 rosapi (``rosapi.py``), as the ros2 branch's ``rosapi
 
 from __future__ import annotations
 
+import re
 from typing import TYPE_CHECKING, Any
 
 from .graph import BRIDGE_NODE, ROSAPI_NODE, ROSOUT_NODE
 from .ros2_params import NodeParameters, get_param_value, set_param_value, split_name
-from .rosapi import Rosapi, _fail
+from .rosapi import SEPARATOR, Rosapi, _fail
 
 if TYPE_CHECKING:
     from .server import SimServer
+
+_MSG_SPELLING = re.compile(r"\b([A-Za-z][A-Za-z0-9_]*)/msg/")
+_TIME_MSGS = {"time": "builtin_interfaces/Time", "duration": "builtin_interfaces/Duration"}
+_TIME_TEXT = {"builtin_interfaces/Time": "int32 sec\nuint32 nanosec\n",
+              "builtin_interfaces/Duration": "int32 sec\nuint32 nanosec\n"}
+
+
+def _short(name: str) -> str:
+    parts = name.strip("/").split("/")
+    return f"{parts[0]}/{parts[-1]}" if len(parts) == 3 else name
+
 
 #: what ``get_ros_version`` reports as ``distro`` (the ROS_DISTRO of the machine running rosapi)
 DISTRO = "jazzy"
@@ -104,6 +116,35 @@ class Ros2Rosapi(Rosapi):
     def action_servers(self, args: dict[str, Any]) -> dict[str, Any]:
         hub = self.server.action_hub
         return {"action_servers": hub.names() if hub is not None else []}
+
+    def _full_text(self, type_name: str) -> str:
+        """rosapi 2.x's ``typedefs_full_text``: the root's definition, then each message type it uses once,
+        depth first from the *last* field (rosapi walks a stack), each after a ``====`` line and
+        ``MSG: pkg/Type``; types are written ``pkg/Type`` and the time types are
+        ``builtin_interfaces/Time``/``Duration`` messages.  (A real server sends the .msg files' text,
+        comments included; the sim has no comments to give.)"""
+        reg = self.server.types.registry
+        if reg is None:
+            return ""
+        try:
+            out, seen, stack, first = [], set(), [type_name], True
+            while stack:
+                name = stack.pop()
+                if not first:
+                    out.append(f"\n{SEPARATOR}\nMSG: {_short(name)}\n")
+                first = False
+                if name in _TIME_TEXT:
+                    out.append(_TIME_TEXT[name])
+                    continue
+                out.append(_MSG_SPELLING.sub(r"\1/", reg.definition_text(name)))
+                for f in reg.fields(name):
+                    dep = _TIME_MSGS.get(f.base) or (f.base if not f.is_builtin else None)
+                    if dep is not None and _short(dep) not in seen:
+                        seen.add(_short(dep))
+                        stack.append(dep)
+            return "".join(out)
+        except Exception:  # noqa: BLE001 - a type without text still lists
+            return ""
 
     # -- parameters -----------------------------------------------------------------------------------
 
