@@ -13,7 +13,9 @@ Rules of the body (offsets count from the end of the header):
   (the IDL's placeholder member).
 
 A big-endian header (``00 00``) is read too.  A few zero bytes of padding after the message (some
-middlewares round the size up to 4) are accepted.  Deserialized dicts have the ROS 2 wire shape with
+middlewares round the size up to 4) are accepted.  Per type a decoder is compiled once (cached in the
+registry); consecutive fixed-size scalars are read with one ``struct`` call (a layout per start alignment
+modulo 8), numeric arrays with ``numpy.frombuffer``.  Deserialized dicts have the ROS 2 wire shape with
 ``uint8[]``/``char[]``/``byte[]`` as ``bytes`` and NaN/inf as floats, like ``ros1_wire``.
 """
 
