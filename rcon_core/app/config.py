@@ -1,4 +1,5 @@
-"""Where the app keeps its state on disk: the workspace file and the URL history.
+"""Where the app keeps its state on disk: the workspace file, the URL history, the operator PIN (hashed,
+see :mod:`rcon_core.app.pin`) and which robot URLs are view-only.
 
 Everything lives under one config directory (platformdirs' user config dir by default; tests and the
 benchmark pass a temporary one), so a restart of the app finds what the operator left.
@@ -98,6 +99,30 @@ class AppConfig:
             return
         history = [u for u in self.url_history if u != url]
         self._data["url_history"] = [url, *history][:HISTORY_LIMIT]
+        self.save()
+
+    @property
+    def pin_record(self) -> dict | None:
+        """The operator PIN's stored form (salt and scrypt hash, never the PIN), or None when unset."""
+        record = self._data.get("operator_pin")
+        return record if isinstance(record, dict) else None
+
+    def set_pin_record(self, record: dict | None) -> None:
+        if record is None:
+            self._data.pop("operator_pin", None)
+        else:
+            self._data["operator_pin"] = record
+        self.save()
+
+    def is_view_only(self, url: str) -> bool:
+        """Whether the robot at ``url`` is marked view-only (its widgets never send anything)."""
+        urls = self._data.get("view_only_urls", [])
+        return isinstance(urls, list) and url.strip() in urls
+
+    def set_view_only(self, url: str, view_only: bool) -> None:
+        url = url.strip()
+        urls = [u for u in self._data.get("view_only_urls", []) if isinstance(u, str) and u != url]
+        self._data["view_only_urls"] = [*urls, url] if view_only else urls
         self.save()
 
     def save(self) -> None:

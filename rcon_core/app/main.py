@@ -1,4 +1,5 @@
-"""``rcon`` without a subcommand: open the app (``--url``, ``--layout``, ``--demo``, ``--screenshot``)."""
+"""``rcon`` without a subcommand: open the app (``--url``, ``--layout``, ``--demo``, ``--locked``,
+``--screenshot``)."""
 
 from __future__ import annotations
 
@@ -28,8 +29,8 @@ def closing_on_signals(windows: list[Any]) -> Any:
     from qtpy import QtCore
 
     def close_all() -> None:
-        for window in windows:
-            window.close()
+        for window in windows:  # a signal from a shell closes even a locked window (close_now)
+            getattr(window, "close_now", window.close)()
 
     def handler(_signum: int, _frame: Any) -> None:
         QtCore.QTimer.singleShot(0, close_all)
@@ -51,8 +52,9 @@ def closing_on_signals(windows: list[Any]) -> Any:
             signal.signal(sig, old)
 
 
-def run_app(args: Any) -> int:
-    """Open the window; returns the process exit code."""
+def run_app(args: Any, on_window: Any = None) -> int:
+    """Open the window; returns the process exit code. ``on_window(window)`` (tests) is called once the
+    window is shown."""
     from qtpy import QtCore, QtWidgets
 
     from rcon_core.app import theme
@@ -78,8 +80,13 @@ def run_app(args: Any) -> int:
     app = existing if isinstance(existing, QtWidgets.QApplication) else QtWidgets.QApplication(sys.argv[:1])
     app.setApplicationName("RCON")
     theme.apply(app)
-    plugins = load_plugins()
     config = AppConfig()
+    locked = bool(getattr(args, "locked", False))
+    if locked and config.pin_record is None:
+        print("rcon: --locked needs an operator PIN: set one in the app (Canvas ▾ → Operator PIN…) first",
+              file=sys.stderr)
+        return 2
+    plugins = load_plugins()
     windows: list[Any] = []
     with contextlib.ExitStack() as stack:
         stack.enter_context(closing_on_signals(windows))
@@ -101,7 +108,12 @@ def run_app(args: Any) -> int:
         windows.append(window)
         if demo and getattr(args, "reset_layout", False):
             window.reset_demo_layout()
-        window.show()
+        if locked:  # kiosk: the operator lock on from the start, full screen
+            window.operator_lock.engage()
+            window.show()  # first shown normally: a first showFullScreen() is not kept on every platform
+            window.showFullScreen()
+        else:
+            window.show()
         # the embedded robot's URL is not put in the history: its port is gone after this run
         window.connect_to(url or config.last_url, remember=not demo)
         if getattr(args, "screenshot", None):
@@ -113,8 +125,14 @@ def run_app(args: Any) -> int:
 
             delay = max(0.5, (args.quit_after or 3.0) - 0.3)
             QtCore.QTimer.singleShot(int(delay * 1000), shoot)
+        if on_window is not None:
+            on_window(window)
         if getattr(args, "quit_after", None):
-            QtCore.QTimer.singleShot(int(args.quit_after * 1000), app.quit)
+            def quit_now() -> None:  # Qt's quit asks the windows, and a locked one would refuse
+                window.close_now()
+                app.quit()
+
+            QtCore.QTimer.singleShot(int(args.quit_after * 1000), quit_now)
         try:
             rc = app.exec()
         finally:

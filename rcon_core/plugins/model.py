@@ -223,7 +223,10 @@ class WidgetModel:
     def view_only(self) -> str | None:
         """Why this widget may not send anything (its port is view-only), or None. Views show their
         controls disabled with this reason; the port refuses regardless (see ``rcon_core.canvas.port``)."""
-        reason = getattr(self.port, "view_only", None)
+        try:
+            reason = getattr(self.port, "view_only", None)
+        except Exception:  # a port that refuses every use (a placeholder's) sends nothing either way
+            return None
         return reason if isinstance(reason, str) and reason else None
 
     # -- lifecycle (bridge loop thread) --------------------------------------------------------------
