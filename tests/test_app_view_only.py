@@ -7,7 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from app_helpers import entry_point_plugins, open_window
+from app_helpers import all_sent, entry_point_plugins, open_window
 from rogue_widget import CMD, RoguePlugin
 
 from rcon_core.canvas import Binding, Geometry
@@ -40,14 +40,6 @@ def model_of(window, qtbot, widget_id, view_only: bool):
     return window.host.hosted[widget_id]
 
 
-def settle(window, sim, qtbot):
-    """Everything the app sent before this point has reached the sim: a rosapi call on the same link,
-    answered after the earlier frames (one connection is handled in order)."""
-    before = sim.ops_received[("call_service", "/rosapi/topics")]
-    window.link.refresh_catalog()
-    qtbot.waitUntil(lambda: sim.ops_received[("call_service", "/rosapi/topics")] > before, timeout=10_000)
-
-
 def test_a_view_only_canvas_disables_controls_and_a_rogue_widget_reaches_nothing(window, qtbot, sim_thread):
     sim = sim_thread
     lights = sim.robot.lights
@@ -69,7 +61,7 @@ def test_a_view_only_canvas_disables_controls_and_a_rogue_widget_reaches_nothing
     lights_button = model_of(window, qtbot, button.id, True)
     label = model_of(window, qtbot, battery.id, True)
     qtbot.waitUntil(lambda: label.model.state.count > 0, timeout=10_000)  # still shows what arrives
-    settle(window, sim, qtbot)
+    all_sent(qtbot, window, sim)
 
     assert {s: sim.ops_received[s] for s in SENDS} == sim_sends_before  # not one more frame reached the sim
     assert sim.robot.lights == lights
@@ -102,7 +94,7 @@ def test_a_view_only_robot_is_remembered_and_its_widgets_send_nothing(window, qt
     hosted = model_of(window, qtbot, rogue.id, True)
     assert hosted.model.view_only == f"robot {sim_url} is view-only"
     qtbot.waitUntil(lambda: "call" in hosted.model.attempts, timeout=10_000)
-    settle(window, sim, qtbot)
+    all_sent(qtbot, window, sim)
     assert {s: sim.ops_received[s] for s in SENDS} == before
     assert not window.controller.canvas.view_only  # the robot's mark, not the canvas's
 
@@ -112,7 +104,7 @@ def test_a_view_only_robot_is_remembered_and_its_widgets_send_nothing(window, qt
     qtbot.waitUntil(lambda: window.connection.state == "connected", timeout=10_000)
     hosted = model_of(window, qtbot, rogue.id, True)
     qtbot.waitUntil(lambda: "call" in hosted.model.attempts, timeout=10_000)
-    settle(window, sim, qtbot)
+    all_sent(qtbot, window, sim)
     assert {s: sim.ops_received[s] for s in SENDS} == before
 
 
