@@ -4,6 +4,7 @@ hashed), Operate mode that only the PIN leaves (editing, canvases, the robot, qu
 
 from __future__ import annotations
 
+import contextlib
 import json
 from pathlib import Path
 
@@ -13,7 +14,7 @@ from qtpy import QtCore, QtGui
 from qtpy.QtTest import QTest
 
 from rcon_core.app.config import AppConfig
-from rcon_core.app.main import run_app
+from rcon_core.app.main import open_app, run_app
 from rcon_core.app.operator_lock import PinDialog
 from rcon_core.app.pin import check_pin, make_record
 from rcon_core.cli.main import build_parser
@@ -167,17 +168,19 @@ def rcon_args(*argv: str):
 def test_rcon_locked_starts_full_screen_with_the_lock_on(qtbot, tmp_path, sim_url, monkeypatch):
     monkeypatch.setenv("RCON_CONFIG_DIR", str(tmp_path))
     AppConfig(tmp_path).set_pin_record(make_record("1357"))
-    seen = {}
-
-    def check(window) -> None:
-        seen.update(full=window.isFullScreen(), engaged=window.operator_lock.engaged,
-                    operate=window.controller.canvas.locked)
-        window.close()  # refused while locked: the PIN dialog opens instead
-        seen["still_open"] = window.isVisible()
-        seen["asked"] = window.operator_lock.dialog is not None
-
-    assert run_app(rcon_args("--locked", "--url", sim_url, "--quit-after", "1"), on_window=check) == 0
-    assert seen == {"full": True, "engaged": True, "operate": True, "still_open": True, "asked": True}
+    with contextlib.ExitStack() as stack:  # what `rcon --locked --url …` does before its event loop runs
+        window = open_app(rcon_args("--locked", "--url", sim_url), stack)
+        qtbot.addWidget(window)
+        try:
+            assert window.isFullScreen() and window.operator_lock.engaged and window.controller.canvas.locked
+            qtbot.waitUntil(lambda: window.connection.state == "connected", timeout=10_000)
+            window.close()  # refused while locked: the PIN dialog opens instead
+            dialog = pin_dialog(window, qtbot)
+            assert window.isVisible() and "quit" in dialog.findChild(type(dialog.message), "pinPrompt").text()
+            cancel(dialog, qtbot)
+        finally:
+            window.close_now()
+            window.shutdown()
 
 
 def test_rcon_locked_without_a_pin_says_how_to_set_one(tmp_path, monkeypatch, capsys):
