@@ -46,11 +46,13 @@ class LiveCanvas:
         self.running = False
 
     # ---------------------------------------------------------------------------------- GUI thread
-    def start(self, client: Any, canvas: Canvas, plugin_settings: dict[str, Any] | None = None) -> None:
-        """(Re)build the runtime on ``client`` and start ``canvas`` (replacing whatever ran before)."""
+    def start(self, client: Any, canvas: Canvas, plugin_settings: dict[str, Any] | None = None, *,
+              view_only: str | None = None) -> None:
+        """(Re)build the runtime on ``client`` and start ``canvas`` (replacing whatever ran before);
+        ``view_only``: why the robot connection may not be commanded (see ``rcon_core.canvas.port``)."""
         self.running = True
         snap, shared = copy.deepcopy(canvas), copy.deepcopy(plugin_settings or {})
-        self._send(self._loop_start, client, snap, shared)
+        self._send(self._loop_start, client, snap, shared, view_only)
 
     def switch(self, canvas: Canvas) -> None:
         """Stop the running canvas's widgets (after telling them focus is lost), start ``canvas``'s."""
@@ -112,13 +114,13 @@ class LiveCanvas:
     def _running_ids(self) -> set[str]:
         return set(self._rt.models) if self._rt is not None else set()
 
-    def _loop_start(self, client: Any, canvas: Canvas, shared: dict[str, Any]) -> None:
+    def _loop_start(self, client: Any, canvas: Canvas, shared: dict[str, Any], view_only: str | None) -> None:
         before = self._running_ids()
         if self._rt is not None:
             self._rt.stop()
         self._rt = CanvasRuntime(
             self.plugins, client, types=self.types, plugin_settings=shared, dispatch=self.thread.call,
-            on_activity=self.notify,
+            on_activity=self.notify, view_only=view_only,
         )
         self._rt.start(canvas)
         self._post_reset(before)

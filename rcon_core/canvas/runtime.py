@@ -15,6 +15,10 @@
 an incoming message, service request or service response, so a front end can repaint at once instead of
 polling on its next frame.
 
+Every model gets a :class:`rcon_core.canvas.port.GuardedPort` onto its node, never the node itself.
+``CanvasRuntime(..., view_only="reason")`` (the robot connection is view-only) or a canvas with
+``view_only`` set makes those ports refuse to publish, call or serve (``rt.view_only_reason(canvas)``).
+
 Call these on the bridge loop thread (from the GUI: ``bridge_thread.call(rt.switch, canvas)``); pass
 ``dispatch=bridge_thread.call`` so the models' GUI-side actions reach the loop thread too.
 
@@ -33,7 +37,6 @@ be built otherwise (an import error) gets a :class:`BrokenWidgetModel`; the othe
 from __future__ import annotations
 
 import asyncio
-import inspect
 import logging
 from collections.abc import Callable
 from typing import Any
@@ -44,6 +47,7 @@ from rcon_core.plugins.model import Binding, WidgetModel
 from rcon_core.plugins.spec import SettingsError
 
 from .model import Canvas, WidgetInstance
+from .port import GuardedPort
 
 __all__ = ["CanvasRuntime", "MissingWidgetModel", "BrokenWidgetModel", "UnconfiguredWidgetModel"]
 
@@ -115,55 +119,6 @@ class UnconfiguredWidgetModel(MissingWidgetModel):
         return list(self._problems)
 
 
-class _WatchedPort:
-    """A widget's node that reports activity after each incoming message, request or response."""
-
-    def __init__(self, node: Any, notify: Callable[[], None]) -> None:
-        self._node = node
-        self._notify = notify
-
-    def _ping(self) -> None:
-        try:
-            self._notify()
-        except Exception:
-            log.exception("activity listener failed")
-
-    def subscribe(self, topic: str, callback: Callable[[Any], Any], **options: Any) -> Any:
-        def watched(msg: Any) -> Any:
-            try:
-                return callback(msg)
-            finally:
-                self._ping()
-
-        return self._node.subscribe(topic, watched, **options)
-
-    def advertise_service(self, name: str, type: str, handler: Callable[[Any], Any]) -> Any:
-        def watched(request: Any) -> Any:
-            result = handler(request)
-            if inspect.isawaitable(result):
-                async def finish() -> Any:
-                    try:
-                        return await result
-                    finally:
-                        self._ping()
-
-                return finish()
-            self._ping()
-            return result
-
-        return self._node.advertise_service(name, type, watched)
-
-    async def call_service(self, name: str, args: Any = None, timeout: float | None = None) -> Any:
-        try:
-            return await self._node.call_service(name, args, timeout=timeout)
-        finally:
-            # after the caller's on_response, which runs in the same task step as this return
-            asyncio.get_running_loop().call_soon(self._ping)
-
-    def __getattr__(self, name: str) -> Any:  # advertise, close, ...
-        return getattr(self._node, name)
-
-
 class CanvasRuntime:
     """Creates, starts and stops the models of one canvas at a time."""
 
@@ -176,8 +131,11 @@ class CanvasRuntime:
         plugin_settings: dict[str, dict[str, Any]] | None = None,
         dispatch: Callable[[Callable[[], Any]], Any] | None = None,
         on_activity: Callable[[str], Any] | None = None,
+        view_only: str | None = None,
     ) -> None:
         self.pm = plugin_manager
+        #: the robot connection is view-only: why (None: it may be commanded); see :meth:`view_only_reason`
+        self.view_only = view_only
         self.on_activity = on_activity
         self.client = client
         self.types = types
@@ -279,13 +237,34 @@ class CanvasRuntime:
             log.warning("widget %s (%s) could not be built: %s", inst.id, inst.kind, exc)
             return BrokenWidgetModel(inst, f"{inst.kind}: {exc}")
 
+    def view_only_reason(self, canvas: Canvas | None = None) -> str | None:
+        """Why the widgets of ``canvas`` (default: the running one) may not send anything, or None."""
+        if self.view_only:
+            return self.view_only
+        canvas = canvas if canvas is not None else self.canvas
+        if canvas is not None and canvas.view_only:
+            return f"canvas “{canvas.name}” is view-only"
+        return None
+
     def _start_widget(self, inst: WidgetInstance) -> WidgetModel:
         node = self.client.node(inst.id)
-        port = node
+        built: list[WidgetModel] = []
+        notify = None
         if self.on_activity is not None:
-            notify, widget_id = self.on_activity, inst.id
-            port = _WatchedPort(node, lambda: notify(widget_id))
+            on_activity, widget_id = self.on_activity, inst.id
+
+            def notify() -> None:
+                on_activity(widget_id)
+
+        def refused(text: str) -> None:
+            for m in built:
+                m.set_error(text)
+
+        # the model never gets the node itself: only this port (view-only enforced here, see canvas.port)
+        port = GuardedPort(node, notify=notify, view_only=self.view_only_reason(), on_refused=refused,
+                           link=id(self.client))
         model = self.build_model(inst, port)
+        built.append(model)
         self._nodes[inst.id] = node
         self.models[inst.id] = model
         model.set_link(self._link_up)

@@ -39,6 +39,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--demo", action="store_true", help="start the embedded robot and open the demo layout")
     parser.add_argument("--reset-layout", action="store_true",
                         help="with --demo: replace the saved demo layout by a fresh one")
+    parser.add_argument("--locked", action="store_true",
+                        help="kiosk: start full screen with the operator lock on (needs an operator PIN)")
     parser.add_argument("--screenshot", metavar="PATH", help="write a PNG of the window, then exit")
     parser.add_argument("--quit-after", type=float, metavar="SECONDS", help="quit after this many seconds")
     from rcon_core.cli.link_options import add_link_options

@@ -82,6 +82,8 @@ class SimServer:
         self._published_lock = threading.Lock()
         self._published_event: asyncio.Event | None = None
         self._tasks: set[asyncio.Task[Any]] = set()
+        #: every operation clients sent, by (op, topic/service/action name): what tests check reached it
+        self.ops_received: collections.Counter[tuple[str, str]] = collections.Counter()
 
     # -- lifecycle ------------------------------------------------------------------------------------
 
@@ -426,6 +428,8 @@ class SimServer:
                           "one of: %s.", conn.label, sorted(self._ops()))
             return
         op = msg["op"]
+        target = msg.get("topic") or msg.get("service") or msg.get("action") or ""
+        self.ops_received[(str(op), target if isinstance(target, str) else "")] += 1
         handler = self._ops().get(op) if isinstance(op, str) else None
         if handler is None:
             log.error("%s [id: %s] Unknown operation: %s.  Allowed operations: %s", conn.label, msg.get("id"),
