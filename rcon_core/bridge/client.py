@@ -81,6 +81,8 @@ from websockets.asyncio.client import ClientConnection, connect, process_excepti
 from websockets.exceptions import ConnectionClosed
 from websockets.protocol import State
 
+from .action_server import ProvidedActions
+from .cdrdecode import CdrDecoder, flavour_from_typedefs
 from .defaults import default_from_typedefs
 from .errors import (
     ActionError,
@@ -92,8 +94,11 @@ from .errors import (
     ServiceTimeoutError,
 )
 from .nodes import ActionGoal, Node, Publisher, ServiceServer, Subscription
+from .params import Params
 from .protocol import FragmentAssembler, decode_binary, decode_png, encode
 from .rawdecode import RawDecoder, _short, has_fixed_arrays
+from .rosinfo import RosInfo
+from .rosinfo import detect as detect_ros
 from .topics import AdvertEntry, TopicEntry
 
 log = logging.getLogger(__name__)
@@ -227,6 +232,7 @@ class BridgeClient:
         self._typedefs: dict[str, list[dict[str, Any]]] = {}
         self._response_defaults: dict[str, tuple[dict[str, Any], set[str]]] = {}
         self._raw = RawDecoder()
+        self._cdr = CdrDecoder()  # cbor-raw from ROS 2 servers (CDR)
         warn = self._fragment_warning
         self._fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_message_size, warn=warn)
         self._png_fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_message_size, warn=warn)
@@ -234,15 +240,19 @@ class BridgeClient:
         self._seq = 0
         self._bad_counts: dict[str, int] = {}
         self._tasks: set[asyncio.Task[Any]] = set()
+        self.provided_actions = ProvidedActions(self._send)  # actions this client serves (ROS 2)
         self._ops: dict[str, Callable[[dict[str, Any]], None]] = {
             "publish": self._on_publish, "fragment": self._on_fragment, "png": self._on_png,
             "service_response": self._on_service_response, "call_service": self._on_call_service,
             "status": self._on_status, "action_feedback": self._on_action_feedback,
-            "action_result": self._on_action_result,
+            "action_result": self._on_action_result, "send_action_goal": self.provided_actions.on_goal,
+            "cancel_action_goal": self.provided_actions.on_cancel,
         }
         from .rosapi import Rosapi
 
         self.rosapi = Rosapi(self)
+        self.ros_info: RosInfo | None = None  # set by detect_ros(); see rosinfo.py
+        self.params = Params(self)  # ROS 1 and ROS 2 parameters; see params.py
 
     # ================================================================== state
 
@@ -253,6 +263,17 @@ class BridgeClient:
     @property
     def connected(self) -> bool:
         return self._ws is not None
+
+    @property
+    def ros_version(self) -> int | None:
+        """1 or 2 once ``detect_ros()`` found out (or ``ros_info`` was set), else None."""
+        return self.ros_info.version if self.ros_info is not None else None
+
+    async def detect_ros(self, refresh: bool = False) -> RosInfo:
+        """Which ROS the server runs (asked once; ``refresh`` asks again).  See ``rosinfo.py``."""
+        if self.ros_info is None or refresh:
+            self.ros_info = await detect_ros(self)
+        return self.ros_info
 
     def add_state_listener(self, fn: Callable[[ConnectionState], None]) -> Callable[[], None]:
         """Call ``fn(state)`` on every change; returns a function that removes the listener."""
@@ -429,6 +450,7 @@ class BridgeClient:
                 advert.pending = None
         for srv in self._services.values():
             self._send({"op": "advertise_service", "service": srv.service, "type": srv.type})
+        self.provided_actions.restore()
         for topic in self._topics.values():
             topic.sid = None
             topic.sent_options = None
@@ -451,6 +473,7 @@ class BridgeClient:
         for gid, goal in list(self._goals.items()):
             goal._settle(error=ConnectionLostError(f"connection lost while goal {gid} was active"))
         self._goals.clear()
+        self.provided_actions.disconnected()
 
     # ================================================================== writing
 
@@ -715,6 +738,8 @@ class BridgeClient:
                 log.info("%s [%s] has fixed-size arrays, which rosbridge's cbor encoder cannot send; "
                          "using cbor-raw instead", entry.topic, type_name)
                 opts["compression"] = "cbor-raw"
+            if opts["compression"] == "cbor-raw":
+                await self._learn_raw_flavour(typedefs)
         except Exception as exc:
             log.warning("%s: cannot prepare %s compression (%s); subscribing without compression",
                         entry.topic, opts["compression"], exc)
@@ -736,9 +761,20 @@ class BridgeClient:
         if old is not None:
             self._send({"op": "unsubscribe", "id": old, "topic": entry.topic})
 
+    async def _learn_raw_flavour(self, typedefs: list[dict[str, Any]]) -> None:
+        """cbor-raw is CDR from a ROS 2 server: hand the typedefs to the CDR decoder when the server is (or
+        its typedefs look) ROS 2; ask the server only when neither tells."""
+        version = self.ros_version or flavour_from_typedefs(typedefs)
+        if version is None:
+            version = (await self.detect_ros()).version
+        if version == 2:
+            self._cdr.add_typedefs(typedefs)
+
     def _raw_decoder(self, type_name: str) -> Any:
-        """cbor-raw decoding: the registry's ``deserialize_ros1`` when a registry is given and knows the
+        """cbor-raw decoding: CDR for types learned from a ROS 2 server; else the registry's ``deserialize_ros1`` when a registry is given and knows the
         type (it learns the server's typedefs in ``typedefs()``), else the built-in typedef-driven decoder."""
+        if self._cdr.knows(type_name):
+            return self._cdr
         reg = self.registry
         if reg is not None and hasattr(reg, "deserialize_ros1"):
             try:

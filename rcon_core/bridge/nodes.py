@@ -1,6 +1,6 @@
 """Nodes: every consumer of the bridge (a widget, a CLI command, a panel) is a node with a unique id.
 
-A node owns what it asked for (subscriptions, publishers, advertised services, action goals) and
+A node owns what it asked for (subscriptions, publishers, advertised services and actions, action goals) and
 ``node.close()`` ends all of it.  Messages are routed only to the nodes that subscribed; nodes on the
 same topic share one rosbridge subscription (see ``topics.py``).  All methods run on the client's loop.
 """
@@ -199,6 +199,7 @@ class Node:
         self._pubs: set[Publisher] = set()
         self._services: set[ServiceServer] = set()
         self._goals: set[ActionGoal] = set()
+        self._action_servers: set[Any] = set()
         self.closed = False
 
     def __repr__(self) -> str:
@@ -287,8 +288,17 @@ class Node:
         goal._future.add_done_callback(lambda _f: self._goals.discard(goal))
         return goal
 
+    def advertise_action(self, action: str, type: str, handler: Callable[[Any], Any]) -> Any:
+        """Provide the ROS 2 action ``action`` (``advertise_action``); ``handler(goal)`` runs each goal other
+        parties send and returns the result message.  Returns an ``action_server.ActionServer``; see that
+        module for feedback, cancel and failure handling."""
+        self._check()
+        srv = self.client.provided_actions.create(self, action, type, handler)
+        self._action_servers.add(srv)
+        return srv
+
     def close(self) -> None:
-        """End every subscription, advertisement, service and goal of this node."""
+        """End every subscription, advertisement, service, provided action and goal of this node."""
         if self.closed:
             return
         for s in list(self._subs):
@@ -297,6 +307,8 @@ class Node:
             p.unadvertise()
         for srv in list(self._services):
             srv.unadvertise()
+        for action in list(self._action_servers):
+            action.unadvertise()
         for g in list(self._goals):
             g.cancel()
         self.closed = True

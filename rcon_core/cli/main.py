@@ -20,6 +20,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "echo": ("rcon_core.cli.bridge_cmds", "print messages arriving on a topic"),
     "pub": ("rcon_core.cli.bridge_cmds", "publish a message on a topic"),
     "call": ("rcon_core.cli.bridge_cmds", "call a service"),
+    "info": ("rcon_core.cli.info_cmd", "which ROS the robot runs (version, distro) and its rosbridge capabilities"),
     "plugins": ("rcon_core.cli.plugin_cmds", "list installed widget packages and their widgets"),
     "match": ("rcon_core.cli.plugin_cmds", "list the widgets that fit a type and role, ranked"),
 }

@@ -1,4 +1,7 @@
-"""The /rosapi services of the sim, answering in the real rosapi's shapes (rosbridge_suite 0.11.17)."""
+"""The /rosapi services of the sim, answering in the real rosapi's shapes (rosbridge_suite 0.11.17).
+
+ROS 2 mode uses the subclass in ``ros2_rosapi.py`` (rosapi 2.x: ``rosapi_msgs`` types, node parameters).
+"""
 
 from __future__ import annotations
 
@@ -246,7 +249,12 @@ def add_logger_services(server: SimServer, api: Rosapi, node: str) -> None:
 
 
 def install(server: SimServer) -> Rosapi:
-    """Register the /rosapi services (and the bridge nodes' logger services) on ``server``."""
+    """Register the /rosapi services (and the bridge nodes' logger services) on ``server``; in ROS 2 mode
+    the rosapi 2.x set of ``ros2_rosapi.py``."""
+    if server.ros2:
+        from .ros2_rosapi import install as install_ros2
+
+        return install_ros2(server)
     api = Rosapi(server)
     add_logger_services(server, api, ROSOUT_NODE)
     add_logger_services(server, api, ROSAPI_NODE)

@@ -62,6 +62,7 @@ class SimServer:
         self.robot: Any = None
         self._robot_node: Any = None
         self._actions: Any = None
+        self.action_hub: Any = None  # ROS 2: ros2_actions.ActionHub
         self._server: Server | None = None
         self._port = 0
         self._client_ids = itertools.count(0)
@@ -93,6 +94,11 @@ class SimServer:
         if not self.ros2:
             self.advertise_internal("/rosout_agg", self.flavour.msg("rosgraph_msgs", "Log"), ROSOUT_NODE)
         self.advertise_internal("/client_count", self.flavour.msg("std_msgs", "Int32"), BRIDGE_NODE, latched=True)
+        if self.ros2:
+            from .ros2_actions import ActionHub, FibonacciServer
+
+            self.action_hub = ActionHub(self)
+            self.action_hub.add(FibonacciServer(self.action_hub))
         rosapi.install(self)
         if self._with_robot:
             from .robot_node import RobotNode
@@ -104,6 +110,7 @@ class SimServer:
                 from .actions import NavigateActionServer
 
                 self._actions = NavigateActionServer(self, self._robot_node)
+                self.action_hub.add(self._actions)
         self._server = await serve(self._handle, self.host, self._requested_port, max_size=None,
                                    compression=None, ping_interval=20, ping_timeout=20)
         sock = next(iter(self._server.sockets))
@@ -116,8 +123,8 @@ class SimServer:
         """Stop simulating and close every connection."""
         if self._robot_node is not None:
             await self._robot_node.stop()
-        if self._actions is not None:
-            await self._actions.stop()
+        if self.action_hub is not None:
+            await self.action_hub.stop()
         for task in list(self._tasks):
             task.cancel()
         for task in list(self._tasks):
@@ -364,6 +371,8 @@ class SimServer:
             self._unadvertise(conn, name)
         for svc in [s for s in self.services.values() if s.provider is conn]:
             self._remove_client_service(svc, "the providing client disconnected")
+        if self.action_hub is not None:
+            self.action_hub.connection_closed(conn)
 
     async def _receive(self, conn: Connection, message: str | bytes) -> None:
         for frame in _parse_frames(message, conn):
@@ -425,9 +434,8 @@ class SimServer:
             "set_level": lambda conn, msg: None,
             "auth": lambda conn, msg: None,  # already authenticated (or no auth configured)
         }
-        if self._actions is not None:
-            ops["send_action_goal"] = self._actions.op_send_goal
-            ops["cancel_action_goal"] = self._actions.op_cancel_goal
+        if self.action_hub is not None:
+            ops.update(self.action_hub.ops())
         return ops
 
     # -- topic ops ------------------------------------------------------------------------------------
