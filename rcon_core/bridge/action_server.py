@@ -15,7 +15,7 @@ A ``cancel_action_goal`` from the server sets ``goal.cancel_requested``, sets th
 event and calls ``goal.on_cancel`` when set; the handler decides how to stop (typically: return with
 ``goal.status = GoalStatus.CANCELED``).  Advertised actions are sent again after a reconnect; goals in
 flight when the link drops are abandoned (their handler tasks are cancelled: the server has already
-aborted them for their callers).  All of it runs on the client's loop.
+aborted them for their callers) and their ``status`` becomes UNKNOWN.  All of it runs on the client's loop.
 """
 
 from __future__ import annotations
@@ -103,8 +103,10 @@ class ActionServer:
             self.node.client.provided_actions.remove(self)
 
     def _abandon(self) -> None:
+        """Drop every goal in flight without answering (link lost, unadvertised): status UNKNOWN."""
         for goal in list(self.goals.values()):
             goal.done = True
+            goal.status = GoalStatus.UNKNOWN
             if goal.task is not None:
                 goal.task.cancel()
         self.goals.clear()

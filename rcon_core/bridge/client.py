@@ -53,7 +53,13 @@ ROS 2 actions
     bad args; ``values`` is then the error string), an error ``status`` naming the goal, or the optional
     client-side ``timeout`` raise ``ActionError``.  By default the client also asks
     ``/rosapi/action_servers`` and fails a goal to an unlisted action within ``call_timeout``, because a
-    ROS 1 rosbridge drops ``send_action_goal`` without any answer.
+    ROS 1 rosbridge drops ``send_action_goal`` without any answer.  Actions this client *provides*
+    (``node.advertise_action``) live in ``action_server.py``: the server's ``send_action_goal`` and
+    ``cancel_action_goal`` frames go to ``client.provided_actions``.
+
+ROS 1 or ROS 2
+    ``detect_ros()`` / ``ros_version`` (``rosinfo.py``); ``client.params`` names parameters the way the
+    server's ROS does (``params.py``); ``cbor-raw`` payloads of a ROS 2 server are CDR (``cdrdecode.py``).
 
 Bad input from the server
     Invalid JSON, unknown ops, missing or mistyped fields, broken fragments and frames above

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from .graph import BRIDGE_NODE, ROSAPI_NODE
+from .graph import BRIDGE_NODE, ROSAPI_NODE, ROSOUT_NODE
 from .ros2_params import NodeParameters, get_param_value, set_param_value, split_name
 from .rosapi import Rosapi, _fail
 
@@ -72,7 +72,8 @@ class Ros2Rosapi(Rosapi):
         nodes = self._node_names()
         if BRIDGE_NODE not in nodes:
             nodes.append(BRIDGE_NODE)
-        return [n for n in nodes if n != ROSAPI_NODE]
+        # rosapi leaves itself out; /rosout is the sim's stand-in publisher of /rosout, no ROS 2 node
+        return [n for n in nodes if n not in (ROSAPI_NODE, ROSOUT_NODE)]
 
     # -- versions and types ---------------------------------------------------------------------------
 
