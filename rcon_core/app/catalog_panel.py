@@ -1,4 +1,4 @@
-"""Side panel listing the robot's topics and services (name, type, live rate), with a filter.
+"""Side panel listing the robot's topics, services and actions (name, type, live rate), with a filter.
 
 Each row is the name over its type. A narrow column cuts each line on its own (:class:`NameTypeDelegate`):
 the name in the middle (both ends of a topic name tell), the type by its package first
@@ -14,11 +14,12 @@ TYPE_ROLE = QtCore.Qt.ItemDataRole.UserRole + 1
 
 
 class CatalogList(QtWidgets.QWidget):
-    """One filterable list (topics or services). ``picked(name, type)`` fires on tap."""
+    """One filterable list (topics, services or actions). ``picked(name, type)`` fires on tap."""
 
     picked = QtCore.Signal(str, str)
 
-    def __init__(self, what: str, with_rate: bool, parent: QtWidgets.QWidget | None = None) -> None:
+    def __init__(self, what: str, with_rate: bool, parent: QtWidgets.QWidget | None = None, *,
+                 empty: str = "") -> None:
         super().__init__(parent)
         self.what = what
         self.filter = QtWidgets.QLineEdit()
@@ -31,7 +32,7 @@ class CatalogList(QtWidgets.QWidget):
         self.tree.setRootIsDecorated(False)
         self.tree.setUniformRowHeights(True)
         # the name with its type on a second line: the panel is narrow, names are long
-        label = "Topic" if what == "topics" else "Service"
+        label = what[:-1].capitalize()  # "topics" -> "Topic"
         self.tree.setHeaderLabels([f"{label} / type", "Rate"] if with_rate else [f"{label} / type"])
         header = self.tree.header()
         header.setSectionResizeMode(0, QtWidgets.QHeaderView.ResizeMode.Stretch)
@@ -48,7 +49,7 @@ class CatalogList(QtWidgets.QWidget):
         QtWidgets.QScroller.grabGesture(
             self.tree.viewport(), QtWidgets.QScroller.ScrollerGestureType.LeftMouseButtonGesture
         )
-        self.empty = QtWidgets.QLabel(f"No {what} yet: connect to a robot.")
+        self.empty = QtWidgets.QLabel(empty or f"No {what} yet: connect to a robot.")
         self.empty.setProperty("role", "hint")
         self.empty.setWordWrap(True)
         col = QtWidgets.QVBoxLayout(self)

@@ -36,6 +36,7 @@ log = logging.getLogger(__name__)
 #: narrowest side panel (topics, services, widgets) and add panel
 SIDE_MIN = 330
 PANEL_MIN = 310
+ACTIONS_EMPTY = "No actions: a ROS 2 robot's action servers are listed here once connected."
 #: a window narrower than this is a small screen: in Operate mode the side panel hides itself
 SMALL_WINDOW = 1100
 
@@ -79,7 +80,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.focus_losses = 0
         self.rates = RateMeter()
         self._last_rate_sample = 0.0
-        self.catalog: dict[str, list[tuple[str, str]]] = {"topics": [], "services": []}
+        self.catalog: dict[str, list[tuple[str, str]]] = {"topics": [], "services": [], "actions": []}
         self.first_paint_at: float | None = None
         #: where the export/import file dialogs open (the folder used last in this session)
         self.share_dir = Path.home()
@@ -88,12 +89,14 @@ class MainWindow(QtWidgets.QMainWindow):
         self.connection = ConnectionBar(self.link, config)
         self.topics = CatalogList("topics", with_rate=True)
         self.services = CatalogList("services", with_rate=False)
+        self.actions = CatalogList("actions", with_rate=False, empty=ACTIONS_EMPTY)
         self.palette_panel = PalettePanel()
         self.palette_panel.set_specs(plugins.widgets())
         self.side = QtWidgets.QTabWidget()
         self.side.setObjectName("sidePanel")
         self.side.addTab(self.topics, "Topics")
         self.side.addTab(self.services, "Services")
+        self.side.addTab(self.actions, "Actions")
         self.side.addTab(self.palette_panel, "Widgets")
         self.side.setMinimumWidth(SIDE_MIN)
         #: the operator's own show/hide of the side panel (the toggle), kept until the automatic choice
@@ -233,6 +236,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.topics.picked.connect(lambda n, t: self._start_adding(lambda: self.add_panel.start_from_topic(n, t)))
         self.services.picked.connect(
             lambda n, t: self._start_adding(lambda: self.add_panel.start_from_service(n, t)))
+        self.actions.picked.connect(lambda n, t: self._start_adding(lambda: self.add_panel.start_from_action(n, t)))
         self.palette_panel.picked.connect(self._palette_picked)
         self.link.on_client_changed(self._client_changed)
         self.connection.state_changed.connect(self._link_state)
@@ -661,7 +665,7 @@ class MainWindow(QtWidgets.QMainWindow):
     def targets_for(self, spec: WidgetSpec, role: Role) -> list[Target]:
         from rcon_core.matcher import match
 
-        entries = self.catalog["services" if role.is_service else "topics"]
+        entries = self.catalog.get(f"{role.noun}s", [])
         out = []
         for name, type_name in entries:
             for m in match(type_name, role, self.types, self.plugins):
@@ -849,6 +853,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.catalog = catalog
             self.topics.set_entries(catalog["topics"])
             self.services.set_entries(catalog["services"])
+            self.actions.set_entries(catalog.get("actions", []))
         if now - self._last_rate_sample >= 1.0:
             self._last_rate_sample = now
             self.topics.set_rates(self.rates.sample(self.host.topic_counts(), now))

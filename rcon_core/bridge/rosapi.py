@@ -77,6 +77,21 @@ class Rosapi:
     async def action_servers(self) -> list[str]:
         return list((await self._call("action_servers")).get("action_servers", []))
 
+    async def action_type(self, action: str) -> str | None:
+        """``pkg/action/X`` of a ROS 2 action, from the type of its hidden feedback topic
+        (``<action>/_action/feedback`` carries ``pkg/action/X_FeedbackMessage``); None when unknown."""
+        topic_type = await self.topic_type(f"{action.rstrip('/')}/_action/feedback")
+        suffix = "_FeedbackMessage"
+        if topic_type and topic_type.endswith(suffix):
+            return topic_type[: -len(suffix)]
+        return None
+
+    async def action_servers_with_types(self) -> dict[str, str]:
+        """``{action: type}`` of every action server (``""`` where the type cannot be found)."""
+        names = await self.action_servers()
+        types = await asyncio.gather(*(self.action_type(n) for n in names), return_exceptions=True)
+        return {n: (t if isinstance(t, str) else "") for n, t in zip(names, types, strict=True)}
+
     async def get_time(self) -> dict[str, int]:
         """The server's ROS time: ``{"secs", "nsecs"}`` (ROS 1) or ``{"sec", "nanosec"}`` (ROS 2)."""
         return dict((await self._call("get_time")).get("time", {}))

@@ -122,6 +122,18 @@ class _WatchedPort:
             # after the caller's on_response, which runs in the same task step as this return
             asyncio.get_running_loop().call_soon(self._ping)
 
+    def send_action_goal(self, action: str, action_type: str, args: Any = None,
+                         feedback: Callable[[Any], Any] | None = None, **options: Any) -> Any:
+        watched = None
+        if feedback is not None:
+            def watched(values: Any) -> Any:
+                try:
+                    return feedback(values)
+                finally:
+                    self._ping()
+
+        return self._node.send_action_goal(action, action_type, args, feedback=watched, **options)
+
     def __getattr__(self, name: str) -> Any:  # advertise, close, ...
         return getattr(self._node, name)
 

@@ -60,10 +60,10 @@ def _role(value: str | Role) -> Role:
 class Binding:
     """What a widget instance is bound to.
 
-    ``name``: the topic or service name (``""`` = not bound yet). ``type``: its type, either spelling.
-    ``role``: how the widget uses it. ``field_paths``: the field(s) the widget shows or sets, e.g.
-    ``("percentage",)``; empty means the whole message. On a service, paths begin with ``request`` or
-    ``response`` (``"request.data"``).
+    ``name``: the topic, service or action name (``""`` = not bound yet). ``type``: its type, either
+    spelling. ``role``: how the widget uses it. ``field_paths``: the field(s) the widget shows or sets,
+    e.g. ``("percentage",)``; empty means the whole message. On a service, paths begin with ``request``
+    or ``response`` (``"request.data"``); on an action with ``goal``, ``feedback`` or ``result``.
     """
 
     name: str = ""
@@ -90,7 +90,7 @@ class Binding:
     def problems(self) -> list[str]:
         """What is missing before this binding can work; ``[]`` when complete."""
         out = []
-        what = "service" if self.role.is_service else "topic"
+        what = self.role.noun
         if not self.name:
             out.append(f"no {what} chosen")
         elif not self.name.startswith("/") and not self.name[0].isalpha():
@@ -224,7 +224,8 @@ class WidgetModel:
         return self._running
 
     def start(self) -> None:
-        """Open what the role needs: subscribe, advertise a topic, or advertise a service. Idempotent.
+        """Open what the role needs: subscribe, advertise a topic, or advertise a service (role ACTION
+        opens nothing: the model sends goals when asked). Idempotent.
 
         Does nothing but mark the model running when the binding is incomplete (``problems()``), so
         an unconfigured widget shows its warning instead of failing.

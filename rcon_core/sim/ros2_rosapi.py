@@ -8,7 +8,9 @@ Differences from the ROS 1 rosapi (``rosapi.py``), as the ros2 branch's ``rosapi
   field is ``default_value``;
 * ``message_details`` of a type it cannot load answers an empty ``typedefs`` list (rosapi logs the error);
 * ``action_servers`` lists every action with a server: the sim's own and those clients advertised
-  (rosapi finds them from the hidden ``<action>/_action/{feedback,status}`` topics);
+  (rosapi finds them from the hidden ``<action>/_action/{feedback,status}`` topics); ``topic_type`` of those
+  hidden topics answers their types (``<pkg>/action/<X>_FeedbackMessage``), which is how a client learns
+  an action's type (``Rosapi.action_type``);
 * no ``get_loggers``/``set_logger_level`` services (those are ROS 1 node services).
 """
 
@@ -86,6 +88,22 @@ class Ros2Rosapi(Rosapi):
     def action_servers(self, args: dict[str, Any]) -> dict[str, Any]:
         hub = self.server.action_hub
         return {"action_servers": hub.names() if hub is not None else []}
+
+    def topic_type(self, args: dict[str, Any]) -> dict[str, Any]:
+        """Also the hidden topics of each action (``<action>/_action/feedback`` and ``/status``), which a
+        ROS 2 graph has and rosapi's ``topic_type`` reports: how a client finds an action's type."""
+        topic = args.get("topic", "")
+        hub = self.server.action_hub
+        base, sep, tail = topic.rpartition("/_action/")
+        if sep and hub is not None and base in hub.providers:
+            kind = str(hub.providers[base].type)
+            parts = kind.strip("/").split("/")
+            canonical = f"{parts[0]}/action/{parts[-1]}"
+            if tail == "feedback":
+                return {"type": f"{canonical}_FeedbackMessage"}
+            if tail == "status":
+                return {"type": "action_msgs/msg/GoalStatusArray"}
+        return super().topic_type(args)
 
     # -- parameters -----------------------------------------------------------------------------------
 
