@@ -25,6 +25,7 @@ from rcon_core.app.link import OFFLINE, Link
 from rcon_core.app.live import LiveCanvas
 from rcon_core.app.notice_bar import NoticeBar
 from rcon_core.app.palette_panel import PalettePanel
+from rcon_core.app.params_panel import ParamsPanel
 from rcon_core.app.preview import PreviewHost
 from rcon_core.app.settings_form import SettingsForm, form_label, tune_form
 from rcon_core.app.widget_host import RateMeter, WidgetHost
@@ -97,7 +98,10 @@ class MainWindow(QtWidgets.QMainWindow):
         self.side.addTab(self.topics, "Topics")
         self.side.addTab(self.services, "Services")
         self.side.addTab(self.actions, "Actions")
+        self.params_panel = ParamsPanel(self.link, self.confirm)
+        self.side.addTab(self.params_panel, "Params")
         self.side.addTab(self.palette_panel, "Widgets")
+        self.side.setTabPosition(QtWidgets.QTabWidget.TabPosition.West)  # five tabs: all in sight
         self.side.setMinimumWidth(SIDE_MIN)
         #: the operator's own show/hide of the side panel (the toggle), kept until the automatic choice
         #: (small window in Operate mode, or the add panel needing the room) changes
@@ -239,6 +243,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.actions.picked.connect(lambda n, t: self._start_adding(lambda: self.add_panel.start_from_action(n, t)))
         self.palette_panel.picked.connect(self._palette_picked)
         self.link.on_client_changed(self._client_changed)
+        self.link.on_client_changed(self.params_panel.client_changed)
         self.connection.state_changed.connect(self._link_state)
         QtGui.QShortcut(QtGui.QKeySequence.StandardKey.Undo, self, self.undo)
         QtGui.QShortcut(QtGui.QKeySequence.StandardKey.Redo, self, self.redo)
