@@ -35,7 +35,7 @@ from rcon_core.plugins import Binding, PluginManager, Role, WidgetSpec
 log = logging.getLogger(__name__)
 
 #: narrowest side panel (topics, services, widgets) and add panel
-SIDE_MIN = 330
+SIDE_MIN = 372  # with the tab column down its left edge (about 42 px)
 PANEL_MIN = 310
 ACTIONS_EMPTY = "No actions: a ROS 2 robot's action servers are listed here once connected."
 #: a window narrower than this is a small screen: in Operate mode the side panel hides itself
@@ -191,7 +191,7 @@ class MainWindow(QtWidgets.QMainWindow):
         split.addWidget(center)
         split.addWidget(self.add_panel)
         split.setStretchFactor(1, 1)
-        split.setSizes([320, 900, 380])
+        split.setSizes([SIDE_MIN, 900, 380])
         split.setChildrenCollapsible(False)
         self.split = split
         self.center = center

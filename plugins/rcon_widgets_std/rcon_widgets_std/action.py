@@ -329,11 +329,10 @@ class ActionModel(StdModel):
             self._end(handle, "failed", str(exc) or type(exc).__name__)
             return
         phase = STATUS_PHASE.get(handle.status, "unknown")
-        text = {"succeeded": "succeeded", "canceled": "canceled", "aborted": "aborted"}.get(
-            phase, f"ended with status {handle.status}: fate unknown")
+        text = "" if phase != "unknown" else f"ended with status {handle.status}: its fate is unknown"
         message = result.get("message") if isinstance(result, dict) else None
-        if isinstance(message, str) and message:
-            text += f": {message}"
+        if isinstance(message, str) and message:  # the server's own words ("arrived within 1.9 m")
+            text = f"{text}: {message}" if text else message
         self._end(handle, phase, text, result)
 
     def _end(self, handle: Any, phase: str, text: str, result: Any = None) -> None:
