@@ -116,3 +116,46 @@ async def test_a_provided_action_survives_a_reconnect() -> None:
         await caller.close()
         await second.stop()
     assert hanging.done  # the caller's goal failed with the lost link, it did not hang
+    assert hanging.outcome == "unknown (link lost)" and not hanging.succeeded
+
+
+async def test_action_part_layouts_come_from_the_local_registry(sim2: SimServer) -> None:
+    """rosapi 2.1.0 answers [] for an action's parts; the client falls back to its registry."""
+    from rcon_core.bridge import BridgeError
+    from rcon_core.msgs import TypeRegistry
+
+    with_registry = BridgeClient(sim2.url, call_timeout=3, registry=TypeRegistry.standard(ros2=True))
+    bare = BridgeClient(sim2.url, call_timeout=3)
+    await with_registry.connect(timeout=5)
+    await bare.connect(timeout=5)
+    try:
+        typedefs = await with_registry.typedefs("rcon_sim/action/NavigateToFix_Goal")
+        assert typedefs[0]["fieldnames"] == ["target"]
+        try:
+            await bare.typedefs("rcon_sim/action/NavigateToFix_Goal")
+        except BridgeError as exc:
+            assert "no definition" in str(exc)
+        else:
+            raise AssertionError("a server answer of [] must not pass for a definition")
+    finally:
+        await with_registry.close()
+        await bare.close()
+
+
+async def test_an_advertisers_bad_feedback_or_result_is_refused_and_the_goal_stays_open(sim2: SimServer) -> None:
+    async with websockets.connect(sim2.url) as a, websockets.connect(sim2.url) as b:
+        await a.send(json.dumps({"op": "advertise_action", "action": ACTION, "type": TYPE}))
+        await call(a, "/rosapi/action_servers", "sync")
+        await b.send(json.dumps({"op": "send_action_goal", "id": "g", "action": ACTION, "action_type": TYPE,
+                                 "args": {"order": 3}, "feedback": True}))
+        goal = json.loads(await asyncio.wait_for(a.recv(), 5))
+        gid = goal["id"]
+        await a.send(json.dumps({"op": "action_feedback", "action": ACTION, "id": gid,
+                                 "values": {"sequence": "not a list"}}))
+        await a.send(json.dumps({"op": "action_result", "action": ACTION, "id": gid, "status": 4, "result": True,
+                                 "values": {"sequence": ["x"]}}))
+        await a.send(json.dumps({"op": "action_result", "action": ACTION, "id": gid, "status": 4, "result": True,
+                                 "values": {"sequence": [0, 1, 1, 2]}}))
+        result = json.loads(await asyncio.wait_for(b.recv(), 5))  # no feedback frame came before it
+    assert result == {"op": "action_result", "action": ACTION, "values": {"sequence": [0, 1, 1, 2]}, "status": 4,
+                      "result": True, "id": "g"}

@@ -142,3 +142,33 @@ def test_flavour_from_typedefs() -> None:
     ros1 = TypeRegistry.standard(ros2=False).typedefs("sensor_msgs/Imu")
     assert flavour_from_typedefs(ros2) == 2 and flavour_from_typedefs(ros1) == 1
     assert flavour_from_typedefs([{"type": "std_msgs/String", "fieldtypes": ["string"]}]) is None
+
+
+async def test_client_reads_cdr_of_a_type_that_does_not_tell_its_ros(sim2: SimServer) -> None:
+    """std_msgs/String's typedefs look the same on ROS 1 and 2: the client sniffs the CDR header rather than
+    asking the server, and gets the string (the upstream multiple_subscribers_raw case, with our client)."""
+    a, b = BridgeClient(sim2.url, call_timeout=5), BridgeClient(sim2.url, call_timeout=5)
+    await a.connect(timeout=5)
+    await b.connect(timeout=5)
+    try:
+        got_a: list[dict[str, Any]] = []
+        got_b: list[dict[str, Any]] = []
+        a.node("s").subscribe("/a_topic", got_a.append, type="std_msgs/String", compression="cbor-raw")
+        b.node("s").subscribe("/a_topic", got_b.append, type="std_msgs/msg/String", compression="cbor-raw")
+        for _ in range(200):
+            if sim2.topic_subscriber_count("/a_topic") == 2:
+                break
+            await asyncio.sleep(0.02)
+        await asyncio.sleep(0.1)
+        pub = a.node("p").advertise("/a_topic", "std_msgs/msg/String")
+        pub.publish({"data": "hello"})
+        for _ in range(200):
+            if got_a and got_b:
+                break
+            await asyncio.sleep(0.02)
+        assert got_a == got_b == [{"data": "hello"}]
+        assert a.stats["bad_frames"] == b.stats["bad_frames"] == 0
+        assert a.ros_version is None  # nothing was asked
+    finally:
+        await a.close()
+        await b.close()

@@ -162,8 +162,9 @@ async def test_client_provides_an_action_with_two_concurrent_goals(pair: tuple[B
     release.set()
     assert await g3.result(timeout=5) == {"sequence": [0, 1, 1, 2]}
     assert await g5.result(timeout=5) == {"sequence": [0, 1, 1, 2, 3, 5]}
-    assert g3.status == GoalStatus.SUCCEEDED and g5.succeeded
+    assert g3.status == GoalStatus.SUCCEEDED and g5.succeeded and g3.outcome == "succeeded"
     assert feedback3 == [{"sequence": [0, 1, 1]}, {"sequence": [0, 1, 1, 2]}]
+    assert g3.last_feedback == {"sequence": [0, 1, 1, 2]}
     assert g5.feedback_count == 0  # asked for none
     assert srv.received == 2 and srv.failures == 0 and not srv.goals
 
@@ -181,8 +182,9 @@ async def test_cancel_reaches_the_client_provider(pair: tuple[BridgeClient, Brid
     goal = caller.node("ui").send_action_goal(ACTION, "example_interfaces/action/Fibonacci", {"order": 9})
     await asyncio.sleep(0.2)
     goal.cancel()
+    assert goal.outcome == "canceling"
     assert await goal.result(timeout=5) == {"sequence": [0]}
-    assert goal.status == GoalStatus.CANCELED
+    assert goal.status == GoalStatus.CANCELED and goal.outcome == "canceled"
 
 
 async def test_a_failing_handler_aborts_the_callers_goal(pair: tuple[BridgeClient, BridgeClient]) -> None:
@@ -193,6 +195,7 @@ async def test_a_failing_handler_aborts_the_callers_goal(pair: tuple[BridgeClien
     goal = caller.node("ui").send_action_goal(ACTION, "example_interfaces/action/Fibonacci", {"order": 2})
     assert await goal.result(timeout=5) == {"sequence": []}
     assert goal.status == GoalStatus.ABORTED and srv.failures == 1
+    assert goal.outcome == "aborted" and GoalStatus(goal.status).word == "aborted"
 
 
 async def test_unadvertise_aborts_goals_and_unlists(pair: tuple[BridgeClient, BridgeClient]) -> None:
@@ -273,6 +276,7 @@ async def test_wrong_action_type_fails_clearly(pair: tuple[BridgeClient, BridgeC
     goal = caller.node("ui").send_action_goal("/fibonacci", "example_interfaces/action/Fibonacci", {"order": 2})
     with pytest.raises(ActionError, match="serves action_tutorials_interfaces/action/Fibonacci"):
         await goal.result(timeout=5)
+    assert goal.outcome == "failed"
 
 
 async def test_services_and_subscribers_with_our_client(sim2: SimServer, pair: tuple[BridgeClient, BridgeClient]) -> None:

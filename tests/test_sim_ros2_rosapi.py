@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import base64
 import json
 from collections.abc import AsyncIterator
 from typing import Any
@@ -51,7 +52,9 @@ async def test_rosapi_2x_service_set_and_types(sim2: SimServer) -> None:
     assert {"/rosapi/get_ros_version", "/rosapi/topics_and_raw_types", "/rosapi/action_servers"} <= set(rosapi)
     assert types["/rosapi/topics"] == "rosapi_msgs/srv/Topics"
     assert types["/rosapi/get_ros_version"] == "rosapi_msgs/srv/GetROSVersion"
-    assert all(t.startswith("rosapi_msgs/srv/") for t in types.values())
+    # rosapi's own services; the rosapi node's parameter services share the prefix, as on a real robot
+    assert all(t.startswith("rosapi_msgs/srv/") or t.startswith("rcl_interfaces/srv/") for t in types.values())
+    assert types["/rosapi/get_parameters"] == "rcl_interfaces/srv/GetParameters"
     assert version == {"op": "service_response", "service": "/rosapi/get_ros_version", "id": "c" + str(raw.n - 1),
                        "values": {"version": 2, "distro": "jazzy"}, "result": True}
     assert missing["result"] is False and "does not exist" in missing["values"]
@@ -77,14 +80,20 @@ async def test_topics_and_raw_types_and_message_details(sim2: SimServer) -> None
         raw = Raw(ws)
         listing = (await raw.call("/rosapi/topics_and_raw_types"))["values"]
         unknown = await raw.call("/rosapi/message_details", {"type": "no_pkg/msg/Nothing"})
-        goal = (await raw.call("/rosapi/message_details", {"type": "example_interfaces/action/Fibonacci_Goal"}))
+        goal = await raw.call("/rosapi/message_details", {"type": "example_interfaces/action/Fibonacci_Goal"})
     assert list(listing) == ["topics", "types", "typedefs_full_text"]
     assert len(listing["topics"]) == len(listing["types"]) == len(listing["typedefs_full_text"])
     text = dict(zip(listing["topics"], listing["typedefs_full_text"], strict=True))
-    assert "float64 latitude" in text["/gps/fix"]
+    gps = text["/gps/fix"]
+    assert "float64 latitude" in gps and "std_msgs/Header header" in gps and "/msg/" not in gps
+    # depth first from the last field, as rosapi 2.x walks its stack; time is a message there
+    assert [line for line in gps.splitlines() if line.startswith("MSG: ")] == [
+        "MSG: sensor_msgs/NavSatStatus", "MSG: std_msgs/Header", "MSG: builtin_interfaces/Time"]
+    assert gps.endswith("MSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n")
     # rosapi 2.x logs a type it cannot load and answers an empty list (no failure)
     assert unknown["result"] is True and unknown["values"] == {"typedefs": []}
-    assert goal["values"]["typedefs"][0]["fieldnames"] == ["order"]
+    # nor the parts of an action (rosapi 2.1.0 looks for them where the package does not export them)
+    assert goal["result"] is True and goal["values"] == {"typedefs": []}
 
 
 async def test_parameters_per_node(sim2: SimServer) -> None:
@@ -127,3 +136,45 @@ async def test_parameters_per_node(sim2: SimServer) -> None:
     assert malformed == {"value": ""}
     assert bad_json["result"] is False and "JSON" in bad_json["values"]
     assert deleted["result"] is True and gone == {"exists": False}
+
+
+async def test_each_node_serves_its_parameters(sim2: SimServer) -> None:
+    """The ROS 2 node parameter services, as rosbridge's own tests use them to read ``actual_port``."""
+    async with websockets.connect(sim2.url) as ws:
+        raw = Raw(ws)
+        services = (await raw.call("/rosapi/services"))["values"]["services"]
+        kind = (await raw.call("/rosapi/service_type", {"service": "/kingfisher/set_parameters"}))["values"]
+        port = await raw.call("/rosbridge_websocket/get_parameters", {"names": ["actual_port", "nope"]})
+        listed = (await raw.call("/kingfisher/list_parameters", {"prefixes": ["gps"]}))["values"]
+        refused = (await raw.call("/kingfisher/set_parameters", {"parameters": [
+            {"name": "max_speed", "value": {"type": 2, "integer_value": 3}},
+            {"name": "max_yaw_rate", "value": {"type": 3, "double_value": 0.5}}]}))["values"]
+        via_rosapi = (await raw.call("/rosapi/get_param", {"name": "/kingfisher:max_yaw_rate"}))["values"]
+        types = (await raw.call("/kingfisher/get_parameter_types", {"names": ["frame_id", "use_sim_time"]}))["values"]
+    for node in ("/kingfisher", "/rosbridge_websocket", "/rosapi"):
+        assert {f"{node}/get_parameters", f"{node}/set_parameters", f"{node}/list_parameters"} <= set(services)
+    assert kind == {"type": "rcl_interfaces/srv/SetParameters"}
+    values = port["values"]["values"]
+    assert values[0]["type"] == 2 and values[0]["integer_value"] == sim2.port
+    assert values[1]["type"] == 0
+    assert listed == {"result": {"names": ["gps.origin_lat", "gps.origin_lon"], "prefixes": ["gps"]}}
+    assert refused["results"][0]["successful"] is False and "double" in refused["results"][0]["reason"]
+    assert refused["results"][1] == {"successful": True, "reason": ""}
+    assert via_rosapi == {"value": "0.5"}
+    assert base64.b64decode(types["types"]) == bytes([4, 1])  # uint8[] travels as base64
+
+
+async def test_time_fields_take_either_spelling_and_now(sim2: SimServer) -> None:
+    """rosbridge 2.x fills builtin_interfaces/Time from sec/nanosec or secs/nsecs, and from "now"."""
+    frames = [{"header": {"stamp": {"secs": 5, "nsecs": 6}, "frame_id": "a"}, "point": {"x": 1.0}},
+              {"header": {"stamp": {"sec": 7}, "frame_id": "b"}},
+              {"header": {"stamp": "now", "frame_id": "c"}}]
+    async with websockets.connect(sim2.url) as ws:
+        await ws.send(json.dumps({"op": "advertise", "topic": "/clicked", "type": "geometry_msgs/PointStamped"}))
+        for msg in frames:
+            await ws.send(json.dumps({"op": "publish", "topic": "/clicked", "msg": msg}))
+        await sim2.wait_for_published("/clicked", lambda m: m["header"]["frame_id"] == "c")
+    a, b, c = sim2.published("/clicked")
+    assert a["header"]["stamp"] == {"sec": 5, "nanosec": 6} and a["point"] == {"x": 1.0, "y": 0.0, "z": 0.0}
+    assert b["header"]["stamp"] == {"sec": 7, "nanosec": 0}
+    assert c["header"]["stamp"]["sec"] > 1_600_000_000

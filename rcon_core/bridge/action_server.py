@@ -58,12 +58,12 @@ class ServedGoal:
             return False
         if not isinstance(values, dict):
             raise TypeError(f"feedback must be a dict, got {type(values).__name__}")
-        sent = self.server._send({"op": "action_feedback", "id": self.id, "action": self.server.action,
+        sent = self.server.send_frame({"op": "action_feedback", "id": self.id, "action": self.server.action,
                                   "values": values})
         self.feedback_sent += int(sent)
         return sent
 
-    def _cancel(self) -> None:
+    def request_cancel(self) -> None:
         if self.cancel_requested or self.done:
             return
         self.cancel_requested = True
@@ -91,7 +91,7 @@ class ActionServer:
         self.goals: dict[str, ServedGoal] = {}
         self.received = 0
         self.failures = 0
-        self._send = send
+        self.send_frame = send
 
     def advertise_op(self) -> dict[str, Any]:
         return {"op": "advertise_action", "action": self.action, "type": self.type}
@@ -99,10 +99,10 @@ class ActionServer:
     def unadvertise(self) -> None:
         if self.active:
             self.active = False
-            self.node._action_servers.discard(self)
+            self.node.action_servers.discard(self)
             self.node.client.provided_actions.remove(self)
 
-    def _abandon(self) -> None:
+    def abandon(self) -> None:
         """Drop every goal in flight without answering (link lost, unadvertised): status UNKNOWN."""
         for goal in list(self.goals.values()):
             goal.done = True
@@ -113,7 +113,7 @@ class ActionServer:
 
     # -- one goal -------------------------------------------------------------------------------------
 
-    def _start(self, goal_id: str, args: Any) -> None:
+    def start_goal(self, goal_id: str, args: Any) -> None:
         goal = ServedGoal(self, goal_id, args if isinstance(args, dict) else {})
         self.goals[goal_id] = goal
         self.received += 1
@@ -165,7 +165,7 @@ class ActionServer:
             return
         goal.done = True
         self.goals.pop(goal.id, None)
-        self._send({"op": "action_result", "id": goal.id, "action": self.action, **body})
+        self.send_frame({"op": "action_result", "id": goal.id, "action": self.action, **body})
 
     def __repr__(self) -> str:
         return f"<ActionServer {self.action} [{self.type}] node={self.node.id} active={self.active}>"
@@ -195,7 +195,7 @@ class ProvidedActions:
     def remove(self, srv: ActionServer) -> None:
         if self.servers.get(srv.action) is srv:
             del self.servers[srv.action]
-            srv._abandon()
+            srv.abandon()
             self._send({"op": "unadvertise_action", "action": srv.action})
 
     def restore(self) -> None:
@@ -205,7 +205,7 @@ class ProvidedActions:
 
     def disconnected(self) -> None:
         for srv in self.servers.values():
-            srv._abandon()
+            srv.abandon()
 
     # -- frames from the server -----------------------------------------------------------------------
 
@@ -219,7 +219,7 @@ class ProvidedActions:
             self._send({"op": "action_result", "id": goal_id, "action": action, "values": {},
                         "status": GoalStatus.ABORTED, "result": False})
             return
-        srv._start(goal_id, m.get("args"))
+        srv.start_goal(goal_id, m.get("args"))
 
     def on_cancel(self, m: dict[str, Any]) -> None:
         srv = self.servers.get(m["action"])
@@ -227,4 +227,4 @@ class ProvidedActions:
         if goal is None:
             log.debug("cancel_action_goal for an unknown or finished goal %r", m.get("id"))
             return
-        goal._cancel()
+        goal.request_cancel()

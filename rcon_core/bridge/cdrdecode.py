@@ -4,7 +4,10 @@ The decoder learns the server's own ``message_details`` typedefs (rosapi 2.x spe
 base names, ``builtin_interfaces/Time``) into a private ROS 2 :class:`~rcon_core.msgs.TypeRegistry`, so it
 decodes any type the server knows, as the ROS 1 ``RawDecoder`` does.  :func:`flavour_from_typedefs` tells
 from typedefs alone which ROS wrote them when the field types give it away (``double`` and
-``builtin_interfaces/Time`` are ROS 2 spellings; ``float64`` and ``time`` are ROS 1 ones).
+``builtin_interfaces/Time`` are ROS 2 spellings; ``float64`` and ``time`` are ROS 1 ones).  When neither
+the typedefs nor ``client.ros_version`` tell (``std_msgs/String`` has only a ``string``), no question is
+sent to the server: :class:`SniffingDecoder` reads each payload as CDR when it starts with a CDR header and
+decodes as such, else as ROS 1.
 """
 
 from __future__ import annotations
@@ -36,6 +39,7 @@ class CdrDecoder:
     def __init__(self) -> None:
         self._registry: Any = None
         self._known: set[str] = set()
+        self.uncertain: set[str] = set()  # types whose server flavour is not known (see SniffingDecoder)
 
     @staticmethod
     def _short(name: str) -> str:
@@ -63,3 +67,23 @@ class CdrDecoder:
             return self._registry.deserialize_cdr(type_name, data)
         except ValueError as exc:
             raise ProtocolError(f"cbor-raw {type_name}: {exc}") from None
+
+
+class SniffingDecoder:
+    """For a type whose server flavour is unknown: CDR when the payload has a CDR header and decodes as
+    CDR, else the ROS 1 decoder."""
+
+    __slots__ = ("cdr", "ros1")
+
+    def __init__(self, cdr: CdrDecoder, ros1: Any) -> None:
+        self.cdr = cdr
+        self.ros1 = ros1
+
+    def decode(self, type_name: str, data: bytes | bytearray | memoryview) -> dict[str, Any]:
+        head = bytes(data[:4])
+        if head in (b"\x00\x01\x00\x00", b"\x00\x00\x00\x00"):
+            try:
+                return self.cdr.decode(type_name, data)
+            except ProtocolError:
+                pass
+        return self.ros1.decode(type_name, data)

@@ -88,7 +88,7 @@ from websockets.exceptions import ConnectionClosed
 from websockets.protocol import State
 
 from .action_server import ProvidedActions
-from .cdrdecode import CdrDecoder, flavour_from_typedefs
+from .cdrdecode import CdrDecoder, SniffingDecoder, flavour_from_typedefs
 from .defaults import default_from_typedefs
 from .errors import (
     ActionError,
@@ -745,7 +745,7 @@ class BridgeClient:
                          "using cbor-raw instead", entry.topic, type_name)
                 opts["compression"] = "cbor-raw"
             if opts["compression"] == "cbor-raw":
-                await self._learn_raw_flavour(typedefs)
+                self._learn_raw_flavour(type_name, typedefs)
         except Exception as exc:
             log.warning("%s: cannot prepare %s compression (%s); subscribing without compression",
                         entry.topic, opts["compression"], exc)
@@ -767,20 +767,28 @@ class BridgeClient:
         if old is not None:
             self._send({"op": "unsubscribe", "id": old, "topic": entry.topic})
 
-    async def _learn_raw_flavour(self, typedefs: list[dict[str, Any]]) -> None:
+    def _learn_raw_flavour(self, type_name: str, typedefs: list[dict[str, Any]]) -> None:
         """cbor-raw is CDR from a ROS 2 server: hand the typedefs to the CDR decoder when the server is (or
-        its typedefs look) ROS 2; ask the server only when neither tells."""
+        its typedefs look) ROS 2; when neither tells, each payload is sniffed (``cdrdecode.py``)."""
         version = self.ros_version or flavour_from_typedefs(typedefs)
-        if version is None:
-            version = (await self.detect_ros()).version
-        if version == 2:
+        if version != 1:
             self._cdr.add_typedefs(typedefs)
+        if version is None:
+            self._cdr.uncertain.add(_short(type_name))
+        else:
+            self._cdr.uncertain.discard(_short(type_name))
 
     def _raw_decoder(self, type_name: str) -> Any:
-        """cbor-raw decoding: CDR for types learned from a ROS 2 server; else the registry's ``deserialize_ros1`` when a registry is given and knows the
-        type (it learns the server's typedefs in ``typedefs()``), else the built-in typedef-driven decoder."""
+        """cbor-raw decoding: CDR for types learned from a ROS 2 server (sniffed per payload when the flavour
+        is unknown); else the registry's ``deserialize_ros1`` when a registry is given and knows the type (it
+        learns the server's typedefs in ``typedefs()``), else the built-in typedef-driven decoder."""
         if self._cdr.knows(type_name):
+            if _short(type_name) in self._cdr.uncertain:
+                return SniffingDecoder(self._cdr, self._ros1_decoder(type_name))
             return self._cdr
+        return self._ros1_decoder(type_name)
+
+    def _ros1_decoder(self, type_name: str) -> Any:
         reg = self.registry
         if reg is not None and hasattr(reg, "deserialize_ros1"):
             try:
@@ -804,6 +812,8 @@ class BridgeClient:
                 raise
             log.info("rosapi message_details failed for %s (%s); using the local registry", type_name, exc)
             typedefs = self.registry.typedefs(type_name)
+        if not typedefs and self.registry is not None and self.registry.has(type_name):
+            typedefs = self.registry.typedefs(type_name)  # rosapi 2.x answers [] for what it cannot load
         if not typedefs:
             raise BridgeError(f"the server has no definition for {type_name}")
         self._typedefs[key] = typedefs
@@ -1056,6 +1066,7 @@ class BridgeClient:
             log.debug("action_feedback for unknown goal %r", m.get("id"))
             return
         goal.feedback_count += 1
+        goal.last_feedback = m.get("values")
         if goal.feedback_callback is not None:
             values = m.get("values")
             try:

@@ -127,6 +127,11 @@ class GoalStatus(enum.IntEnum):
     CANCELED = 5
     ABORTED = 6
 
+    @property
+    def word(self) -> str:
+        """The status in words: ``"succeeded"``, ``"canceled"``, ``"aborted"``, ``"executing"``..."""
+        return self.name.lower()
+
 
 class ActionGoal:
     """A goal sent with ``send_action_goal``.  ``await goal.result()``; ``goal.cancel()``.
@@ -145,6 +150,7 @@ class ActionGoal:
         self.id = goal_id
         self.feedback_callback = feedback
         self.feedback_count = 0
+        self.last_feedback: dict[str, Any] | None = None
         self.status: int | None = None
         self.cancel_requested = False
         self._timer: asyncio.TimerHandle | None = None
@@ -153,6 +159,29 @@ class ActionGoal:
     @property
     def done(self) -> bool:
         return self._future.done()
+
+    @property
+    def outcome(self) -> str:
+        """How the goal stands, in words: ``running``, ``canceling``, ``succeeded``, ``canceled``,
+        ``aborted``, ``timed out``, ``failed`` (could not be run) or ``unknown (link lost)``: a goal
+        whose link dropped never reads as a success."""
+        if not self._future.done():
+            return "canceling" if self.cancel_requested else "running"
+        if self._future.cancelled():
+            return "failed"
+        error = self._future.exception()
+        if error is None:
+            try:
+                return GoalStatus(self.status).word
+            except ValueError:
+                return f"ended with status {self.status}"
+        from .errors import ActionTimeoutError, ConnectionLostError
+
+        if isinstance(error, ConnectionLostError):
+            return "unknown (link lost)"
+        if isinstance(error, ActionTimeoutError):
+            return "timed out"
+        return "failed"
 
     @property
     def succeeded(self) -> bool:
@@ -199,7 +228,7 @@ class Node:
         self._pubs: set[Publisher] = set()
         self._services: set[ServiceServer] = set()
         self._goals: set[ActionGoal] = set()
-        self._action_servers: set[Any] = set()
+        self.action_servers: set[Any] = set()  # provided actions (action_server.ActionServer)
         self.closed = False
 
     def __repr__(self) -> str:
@@ -294,7 +323,7 @@ class Node:
         module for feedback, cancel and failure handling."""
         self._check()
         srv = self.client.provided_actions.create(self, action, type, handler)
-        self._action_servers.add(srv)
+        self.action_servers.add(srv)
         return srv
 
     def close(self) -> None:
@@ -307,7 +336,7 @@ class Node:
             p.unadvertise()
         for srv in list(self._services):
             srv.unadvertise()
-        for action in list(self._action_servers):
+        for action in list(self.action_servers):
             action.unadvertise()
         for g in list(self._goals):
             g.cancel()

@@ -13,7 +13,9 @@ Rules of the body (offsets count from the end of the header):
   (the IDL's placeholder member).
 
 A big-endian header (``00 00``) is read too.  A few zero bytes of padding after the message (some
-middlewares round the size up to 4) are accepted.  Deserialized dicts have the ROS 2 wire shape with
+middlewares round the size up to 4) are accepted.  Per type a decoder is compiled once (cached in the
+registry); consecutive fixed-size scalars are read with one ``struct`` call (a layout per start alignment
+modulo 8), numeric arrays with ``numpy.frombuffer``.  Deserialized dicts have the ROS 2 wire shape with
 ``uint8[]``/``char[]``/``byte[]`` as ``bytes`` and NaN/inf as floats, like ``ros1_wire``.
 """
 
@@ -76,15 +78,68 @@ class _Dec:
                 return {}, pos + 1
 
             return empty
-        steps = [(f.name, self._field(f)) for f in fields]
+        steps: list[Callable[[Any, int, dict[str, Any]], int]] = []
+        run: list[tuple[str, str]] = []  # consecutive fixed-size scalars: (name, struct code or "T" for time)
+        for f in fields:
+            p = primitive(f.base, True)
+            if f.array_len is None and (f.base in TIME_TYPES or (p is not None and p.code)):
+                run.append((f.name, "T" if f.base in TIME_TYPES else p.code))  # type: ignore[union-attr]
+                continue
+            if run:
+                steps.append(self._run(run))
+                run = []
+            steps.append(self._step(f.name, self._field(f)))
+        if run:
+            steps.append(self._run(run))
 
         def decode(buf: Any, pos: int) -> tuple[dict[str, Any], int]:
             out: dict[str, Any] = {}
-            for fname, read in steps:
-                out[fname], pos = read(buf, pos)
+            for step in steps:
+                pos = step(buf, pos, out)
             return out, pos
 
         return decode
+
+    @staticmethod
+    def _step(fname: str, read: Reader) -> Callable[[Any, int, dict[str, Any]], int]:
+        def step(buf: Any, pos: int, out: dict[str, Any]) -> int:
+            out[fname], pos = read(buf, pos)
+            return pos
+
+        return step
+
+    def _run(self, items: list[tuple[str, str]]) -> Callable[[Any, int, dict[str, Any]], int]:
+        """One ``struct`` call for consecutive fixed-size scalars.  The padding between them depends on where
+        the run starts modulo 8, so a format is built (once) for each start alignment seen."""
+        order, ta, tb = self.order, self.ta, self.tb
+        layouts: dict[int, tuple[struct.Struct, list[tuple[str, bool]]]] = {}
+
+        def layout(mod: int) -> tuple[struct.Struct, list[tuple[str, bool]]]:
+            fmt, pos, keys = [order], mod, []
+            for fname, code in items:
+                size, codes = (4, "iI") if code == "T" else (_SIZES[code], code)
+                pad = -pos % size
+                fmt.append("x" * pad + codes)
+                pos += pad + (8 if code == "T" else size)
+                keys.append((fname, code == "T"))
+            built = layouts[mod] = (struct.Struct("".join(fmt)), keys)
+            return built
+
+        def read_run(buf: Any, pos: int, out: dict[str, Any]) -> int:
+            mod = pos & 7
+            st, keys = layouts.get(mod) or layout(mod)
+            values = st.unpack_from(buf, pos)
+            i = 0
+            for fname, is_time in keys:
+                if is_time:
+                    out[fname] = {ta: values[i], tb: values[i + 1]}
+                    i += 2
+                else:
+                    out[fname] = values[i]
+                    i += 1
+            return pos + st.size
+
+        return read_run
 
     def _element(self, f: FieldDef) -> Reader:
         if f.base in TIME_TYPES:

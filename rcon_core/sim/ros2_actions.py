@@ -265,13 +265,25 @@ class ActionHub:
             raise _OpError(f"no goal in flight with id {msg.get('id')!r} on {name}")
         return provider, goal
 
+    def _typed(self, provider: ClientAction, part: str, values: Any) -> Any:
+        """The advertiser's values as a whole ``part`` message (defaults filled in), as rosbridge fills a
+        ROS message from them; refused with the reason when they do not fit."""
+        from .convert import ConversionError
+        from .server import _OpError
+
+        converter = self.server.types.converter(f"{action_name(provider.type)}_{part}")
+        if converter is None:
+            return values
+        if not isinstance(values, dict):
+            raise _OpError(f"Expected field values to be one of (<class 'dict'>,). Invalid value: {values}")
+        try:
+            return converter.convert(values)
+        except ConversionError as exc:
+            raise _OpError(str(exc)) from exc
+
     def op_feedback(self, conn: Connection, msg: dict[str, Any]) -> None:
         provider, goal = self._advertised(conn, msg)
-        values = msg.get("values", {})
-        converter = self.server.types.converter(f"{action_name(provider.type)}_Feedback")
-        if converter is not None and isinstance(values, dict):
-            values = converter.convert(values)
-        self.send_feedback(goal, values)
+        self.send_feedback(goal, self._typed(provider, "Feedback", msg.get("values", {})))
 
     def op_result(self, conn: Connection, msg: dict[str, Any]) -> None:
         from .server import _field, _OpError
@@ -281,14 +293,12 @@ class ActionHub:
         if not isinstance(result, bool):
             raise _OpError(f"Expected field result to be one of (<class 'bool'>,). Invalid value: {result}")
         provider, goal = self._advertised(conn, msg)
-        del provider.goals[goal.server_id]
         if not result:
+            del provider.goals[goal.server_id]
             self.finish(goal, STATUS_ABORTED, self.default_result(provider.type))
             return
-        values = msg.get("values", {})
-        converter = self.server.types.converter(f"{action_name(provider.type)}_Result")
-        if converter is not None and isinstance(values, dict):
-            values = converter.convert(values)
+        values = self._typed(provider, "Result", msg.get("values", {}))  # a bad result leaves the goal open
+        del provider.goals[goal.server_id]
         status = msg["status"] if msg["status"] in (STATUS_SUCCEEDED, STATUS_CANCELED) else STATUS_ABORTED
         self.finish(goal, status, values)
 

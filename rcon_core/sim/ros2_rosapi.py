@@ -7,23 +7,38 @@ Differences from the ROS 1 rosapi (``rosapi.py``), as the ros2 branch's ``rosapi
 * parameters belong to nodes and are named ``<node>:<param>`` (``ros2_params.py``); ``get_param``'s request
   field is ``default_value``;
 * ``message_details`` of a type it cannot load answers an empty ``typedefs`` list (rosapi logs the error);
+  that includes an action's parts (``pkg/action/<Name>_Goal``, ``_Result``, ``_Feedback``): rosapi looks
+  for them as attributes of the package's ``action`` module, which exports only ``<Name>``;
 * ``action_servers`` lists every action with a server: the sim's own and those clients advertised
   (rosapi finds them from the hidden ``<action>/_action/{feedback,status}`` topics); ``topic_type`` of those
   hidden topics answers their types (``<pkg>/action/<X>_FeedbackMessage``), which is how a client learns
   an action's type (``Rosapi.action_type``);
-* no ``get_loggers``/``set_logger_level`` services (those are ROS 1 node services).
+* no ``get_loggers``/``set_logger_level`` services (those are ROS 1 node services); every node has its
+  ROS 2 parameter services instead (``ros2_param_services.py``).
 """
 
 from __future__ import annotations
 
+import re
 from typing import TYPE_CHECKING, Any
 
 from .graph import BRIDGE_NODE, ROSAPI_NODE, ROSOUT_NODE
 from .ros2_params import NodeParameters, get_param_value, set_param_value, split_name
-from .rosapi import Rosapi, _fail
+from .rosapi import SEPARATOR, Rosapi, _fail
 
 if TYPE_CHECKING:
     from .server import SimServer
+
+_MSG_SPELLING = re.compile(r"\b([A-Za-z][A-Za-z0-9_]*)/msg/")
+_TIME_MSGS = {"time": "builtin_interfaces/Time", "duration": "builtin_interfaces/Duration"}
+_TIME_TEXT = {"builtin_interfaces/Time": "int32 sec\nuint32 nanosec\n",
+              "builtin_interfaces/Duration": "int32 sec\nuint32 nanosec\n"}
+
+
+def _short(name: str) -> str:
+    parts = name.strip("/").split("/")
+    return f"{parts[0]}/{parts[-1]}" if len(parts) == 3 else name
+
 
 #: what ``get_ros_version`` reports as ``distro`` (the ROS_DISTRO of the machine running rosapi)
 DISTRO = "jazzy"
@@ -49,6 +64,18 @@ def _bridge_parameters(server: SimServer) -> dict[str, Any]:
             "send_action_goals_in_new_thread": False, "fragment_timeout": 600, "delay_between_messages": 0.0,
             "max_message_size": 10_000_000, "unregister_timeout": 10.0, "bson_only_mode": False,
             "topics_glob": "", "services_glob": "", "params_glob": ""}
+
+
+def _is_action_part(registry: Any, type_name: str) -> bool:
+    """True when ``type_name`` (any spelling) names a part of an action (``<Name>_Goal`` ...)."""
+    if registry is None:
+        return "/action/" in type_name
+    from rcon_core.msgs import names
+
+    try:
+        return names.action_part(registry.resolve(type_name)) is not None
+    except (KeyError, ValueError):
+        return False
 
 
 class Ros2Rosapi(Rosapi):
@@ -83,7 +110,10 @@ class Ros2Rosapi(Rosapi):
         return {"version": 2, "distro": self.distro}
 
     def message_details(self, args: dict[str, Any]) -> dict[str, Any]:
-        return {"typedefs": self.server.types.typedefs(args.get("type", "")) or []}
+        type_name = args.get("type", "")
+        if _is_action_part(self.server.types.registry, type_name):
+            return {"typedefs": []}  # rosapi looks for <Name>_Goal where the package does not export it
+        return {"typedefs": self.server.types.typedefs(type_name) or []}
 
     def action_servers(self, args: dict[str, Any]) -> dict[str, Any]:
         hub = self.server.action_hub
@@ -104,6 +134,35 @@ class Ros2Rosapi(Rosapi):
             if tail == "status":
                 return {"type": "action_msgs/msg/GoalStatusArray"}
         return super().topic_type(args)
+
+    def _full_text(self, type_name: str) -> str:
+        """rosapi 2.x's ``typedefs_full_text``: the root's definition, then each message type it uses once,
+        depth first from the *last* field (rosapi walks a stack), each after a ``====`` line and
+        ``MSG: pkg/Type``; types are written ``pkg/Type`` and the time types are
+        ``builtin_interfaces/Time``/``Duration`` messages.  (A real server sends the .msg files' text,
+        comments included; the sim has no comments to give.)"""
+        reg = self.server.types.registry
+        if reg is None:
+            return ""
+        try:
+            out, seen, stack, first = [], set(), [type_name], True
+            while stack:
+                name = stack.pop()
+                if not first:
+                    out.append(f"\n{SEPARATOR}\nMSG: {_short(name)}\n")
+                first = False
+                if name in _TIME_TEXT:
+                    out.append(_TIME_TEXT[name])
+                    continue
+                out.append(_MSG_SPELLING.sub(r"\1/", reg.definition_text(name)))
+                for f in reg.fields(name):
+                    dep = _TIME_MSGS.get(f.base) or (f.base if not f.is_builtin else None)
+                    if dep is not None and _short(dep) not in seen:
+                        seen.add(_short(dep))
+                        stack.append(dep)
+            return "".join(out)
+        except Exception:  # noqa: BLE001 - a type without text still lists
+            return ""
 
     # -- parameters -----------------------------------------------------------------------------------
 
@@ -140,5 +199,9 @@ def install(server: SimServer) -> Ros2Rosapi:
     for name, type_base in _SERVICES:
         server.add_service(f"/rosapi/{name}", f"rosapi_msgs/srv/{type_base}", ROSAPI_NODE, getattr(api, name))
     server.rosapi = api
+    from .ros2_param_services import add_parameter_services
+
+    for node in (BRIDGE_NODE, ROSAPI_NODE):
+        add_parameter_services(server, node)
     server.log(ROSAPI_NODE, "info", "Rosapi started", function="<module>")
     return api

@@ -241,8 +241,12 @@ _SERVICES: list[tuple[str, str]] = [
 
 
 def add_logger_services(server: SimServer, api: Rosapi, node: str) -> None:
-    """``<node>/get_loggers`` and ``<node>/set_logger_level``, as every rospy node has."""
+    """``<node>/get_loggers`` and ``<node>/set_logger_level``, as every rospy node has; in ROS 2 mode the
+    node's parameter services instead (``ros2_param_services.py``)."""
     if server.ros2:
+        from .ros2_param_services import add_parameter_services
+
+        add_parameter_services(server, node)
         return
     server.add_service(f"{node}/get_loggers", "roscpp/GetLoggers", node, api.get_loggers_for(node))
     server.add_service(f"{node}/set_logger_level", "roscpp/SetLoggerLevel", node, api.set_logger_level_for(node))
