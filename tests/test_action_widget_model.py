@@ -141,3 +141,17 @@ async def test_stop_with_a_goal_in_flight_cancels_it_and_the_next_model_says_so(
     node.close()
     again = ActionModel(ActionSettings(), binding, client.node("w3"), types=types)
     assert again.state.value.phase == "canceled" and "canvas switched away" in again.state.value.text
+
+
+async def test_an_unknown_action_type_is_learned_from_the_robot(client):
+    from rcon_core.msgs import TypeRegistry as Registry
+
+    fresh = Registry.empty()  # knows no action: the goal form comes from the robot's typedefs
+    model = ActionModel(ActionSettings(), Binding(NAV, NAV_TYPE, Role.ACTION), client.node("w4"), types=fresh)
+    assert model.goal_fields() == []
+    model.start()
+    await _until(lambda: model.goal_fields() != [] or model.state.error is not None)
+    assert model.state.error is None
+    assert [f.path for f in model.goal_fields()][:2] == ["target.latitude", "target.longitude"]
+    assert fresh.fields(fresh.action_part_name(NAV_TYPE, "feedback"))[0].name == "distance_remaining"
+    model.stop()

@@ -8,7 +8,9 @@ Differences from the ROS 1 rosapi (``rosapi.py``), as the ros2 branch's ``rosapi
   field is ``default_value``;
 * ``message_details`` of a type it cannot load answers an empty ``typedefs`` list (rosapi logs the error);
   that includes an action's parts (``pkg/action/<Name>_Goal``, ``_Result``, ``_Feedback``): rosapi looks
-  for them as attributes of the package's ``action`` module, which exports only ``<Name>``;
+  for them as attributes of the package's ``action`` module, which exports only ``<Name>``; the parts'
+  typedefs come from ``action_goal_details``/``action_result_details``/``action_feedback_details``
+  (request ``type``: ``pkg/action/<Name>``);
 * ``action_servers`` lists every action with a server: the sim's own and those clients advertised
   (rosapi finds them from the hidden ``<action>/_action/{feedback,status}`` topics); ``topic_type`` of those
   hidden topics answers their types (``<pkg>/action/<X>_FeedbackMessage``), which is how a client learns
@@ -53,6 +55,8 @@ _SERVICES: list[tuple[str, str]] = [
     ("service_response_details", "ServiceResponseDetails"), ("set_param", "SetParam"),
     ("get_param", "GetParam"), ("has_param", "HasParam"), ("delete_param", "DeleteParam"),
     ("get_param_names", "GetParamNames"), ("get_time", "GetTime"), ("get_ros_version", "GetROSVersion"),
+    ("action_goal_details", "ActionGoalDetails"), ("action_result_details", "ActionResultDetails"),
+    ("action_feedback_details", "ActionFeedbackDetails"),
 ]
 
 
@@ -114,6 +118,23 @@ class Ros2Rosapi(Rosapi):
         if _is_action_part(self.server.types.registry, type_name):
             return {"typedefs": []}  # rosapi looks for <Name>_Goal where the package does not export it
         return {"typedefs": self.server.types.typedefs(type_name) or []}
+
+    def _action_part_details(self, args: dict[str, Any], part: str) -> dict[str, Any]:
+        """rosapi 2.x's ``action_{goal,result,feedback}_details``: the typedefs of one part of the action
+        type ``type`` (``pkg/action/X``), empty for a type it cannot load."""
+        parts = str(args.get("type", "")).strip("/").split("/")
+        if len(parts) not in (2, 3) or not all(parts):
+            return {"typedefs": []}
+        return {"typedefs": self.server.types.typedefs(f"{parts[0]}/action/{parts[-1]}_{part}") or []}
+
+    def action_goal_details(self, args: dict[str, Any]) -> dict[str, Any]:
+        return self._action_part_details(args, "Goal")
+
+    def action_result_details(self, args: dict[str, Any]) -> dict[str, Any]:
+        return self._action_part_details(args, "Result")
+
+    def action_feedback_details(self, args: dict[str, Any]) -> dict[str, Any]:
+        return self._action_part_details(args, "Feedback")
 
     def action_servers(self, args: dict[str, Any]) -> dict[str, Any]:
         hub = self.server.action_hub

@@ -177,14 +177,24 @@ class ActionModel(StdModel):
         return bool(self.binding.type)
 
     async def _learn(self) -> None:
-        """Ask the robot for the goal, result and feedback typedefs (``message_details`` of each part)."""
+        """Ask the robot for the goal, result and feedback typedefs: rosapi 2.x's
+        ``/rosapi/action_{goal,result,feedback}_details`` (``message_details`` of a part answers nothing
+        there: the package's module does not export the parts), else ``message_details``."""
         from rcon_core.msgs import names
 
         try:
             for part in ("goal", "result", "feedback"):
                 name = names.part_name(self.binding.type, part)
-                answer = await self.port.call_service("/rosapi/message_details", {"type": name})
-                defs = answer.get("typedefs", []) if isinstance(answer, dict) else []
+                defs: list[Any] = []
+                for service, what in ((f"/rosapi/action_{part}_details", self.binding.type),
+                                      ("/rosapi/message_details", name)):
+                    try:
+                        answer = await self.port.call_service(service, {"type": what})
+                    except Exception:  # an older rosapi without the service: try the next way
+                        continue
+                    defs = answer.get("typedefs", []) if isinstance(answer, dict) else []
+                    if defs:
+                        break
                 if defs:
                     self.types.add_typedefs(defs, root=name)
         except Exception as exc:
