@@ -177,3 +177,12 @@ def test_lost_link_shows_the_fate_unknown_never_success(qtbot, tmp_path, plugins
     assert phase(view) == "unknown" and "fate is unknown" in view.status.text()
     assert "Succeeded" not in view.status.text()
     window.shutdown()
+
+
+def test_an_action_whose_type_is_unknown_offers_no_widget_and_says_so(window, qtbot):
+    window.add_panel.start_from_action("/mystery", "")  # a robot that did not tell the action's type
+    panel = window.add_panel
+    assert panel.role_type.text() == "type unknown"
+    tap(panel.role_buttons[Role.ACTION])
+    assert panel.candidates.count() == 0 and panel.no_candidates.isVisible()
+    assert "No installed widget can action" in panel.no_candidates.text()

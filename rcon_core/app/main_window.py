@@ -662,7 +662,11 @@ class MainWindow(QtWidgets.QMainWindow):
         from rcon_core.matcher import match
 
         out = []
-        for m in match(type_name, role, self.types, self.plugins):
+        try:
+            found = match(type_name, role, self.types, self.plugins)
+        except ValueError:  # no type known (an action whose type the robot did not tell): nothing fits
+            return []
+        for m in found:
             paths = (m.field_path,) if m.field_path else ()
             out.append(Candidate(m.spec, paths, float(int(m.rank)), m.reason, tuple(m.field_paths)))
         return out
