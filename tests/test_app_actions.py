@@ -186,3 +186,11 @@ def test_an_action_whose_type_is_unknown_offers_no_widget_and_says_so(window, qt
     tap(panel.role_buttons[Role.ACTION])
     assert panel.candidates.count() == 0 and panel.no_candidates.isVisible()
     assert "No installed widget can action" in panel.no_candidates.text()
+
+
+def test_a_ros1_robot_lists_no_actions_and_says_why(qtbot, tmp_path, sim_thread, plugins):
+    for window in window_session(qtbot, tmp_path / "config", plugins, url=sim_thread.url, wait_connected=True,
+                                 topics=("/cmd_vel",)):
+        window.side.setCurrentWidget(window.actions)
+        assert window.catalog["actions"] == [] and window.actions.tree.topLevelItemCount() == 0
+        assert window.actions.empty.isVisible() and "ROS 2" in window.actions.empty.text()

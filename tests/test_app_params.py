@@ -159,3 +159,27 @@ def shoot(window, name: str) -> None:
     SHOTS.mkdir(parents=True, exist_ok=True)
     QtWidgets.QApplication.processEvents()
     window.grab().save(str(SHOTS / name))
+
+
+@pytest.fixture
+def ros2_window(qtbot, tmp_path, plugins):
+    """ROS 2 only: a ROS 1 parameter server takes any name, nothing there refuses a value."""
+    with SimServer.in_thread(host="127.0.0.1", port=0, rate_scale=TEST_RATE_SCALE, ros2=True) as sim:
+        for win in window_session(qtbot, tmp_path / "config", plugins, url=sim.url, wait_connected=True):
+            yield win, sim
+
+
+def test_a_value_the_node_refuses_is_said_refused_not_set(ros2_window, qtbot):
+    window, sim = ros2_window
+    version = 2
+    panel = open_params(window, qtbot)
+    name = name_of(version, "max_yaw_rate")
+    sim.rosapi.node_params.delete("/kingfisher", "max_yaw_rate")  # undeclared behind the operator's back
+    tap_param(panel, name)
+    type_into(panel.edit_value, "0.9")
+    tap(panel.set_button)
+    qtbot.waitUntil(lambda: window.confirm_dialog.isVisible(), timeout=TIMEOUT_MS)
+    tap(window.confirm_dialog.findChild(QtWidgets.QPushButton, "confirmYes"))
+    qtbot.waitUntil(lambda: panel.status.text().startswith("✗"), timeout=TIMEOUT_MS)
+    assert "refused" in panel.status.text() and "not declared" in panel.edit_problem.text()
+    assert panel.shown_value(name) == "1.2"  # the list still shows what it last read, not the refused value
