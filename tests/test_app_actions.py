@@ -194,3 +194,19 @@ def test_a_ros1_robot_lists_no_actions_and_says_why(qtbot, tmp_path, sim_thread,
         window.side.setCurrentWidget(window.actions)
         assert window.catalog["actions"] == [] and window.actions.tree.topLevelItemCount() == 0
         assert window.actions.empty.isVisible() and "ROS 2" in window.actions.empty.text()
+
+
+def test_a_bad_new_goal_while_one_runs_is_named_and_the_run_goes_on(window, sim2, qtbot, plugins):
+    _inst, view = place_action(window, qtbot, plugins)
+    send_goal(view, *fix_at(sim2, 300.0, 0.0))
+    qtbot.waitUntil(lambda: fb(view) >= 1, timeout=TIMEOUT_MS)
+    type_into(view.editors["target.longitude"], "west")
+    tap(view.send_button)  # "Send new goal"
+    qtbot.waitUntil(lambda: "target.longitude" in view.result.text(), timeout=TIMEOUT_MS)
+    assert view.result.colour == PHASE_TEXT["failed"][1] and phase(view) == "active"
+    assert view.status.text().startswith(PHASE_TEXT["active"][0])
+    seen = fb(view)
+    qtbot.waitUntil(lambda: fb(view) >= seen + 3, timeout=TIMEOUT_MS)  # feedback goes on arriving...
+    assert "target.longitude" in view.result.text()  # ...and the refusal stays said
+    tap(view.cancel_button)
+    qtbot.waitUntil(lambda: view.status.text().startswith("⊘ Canceled"), timeout=TIMEOUT_MS)

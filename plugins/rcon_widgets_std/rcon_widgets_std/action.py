@@ -14,6 +14,8 @@ What the view paints is ``state.value``, an :class:`ActionStatus`:
   ``progress``: 0..1 when a feedback field looks like progress (``progress``, ``percent``, ``completion``:
   a fraction, or a percentage above 1) or a distance remaining (progress = 1 - remaining / first remaining).
 * ``result``: the result message once the goal ended.
+* ``problem``: why the operator's last Send went nowhere (a form entry that does not fit its field), kept
+  while a goal runs on; cleared by the next goal sent or when the running goal ends (its end is then said).
 
 A goal in flight when the widget stops (its canvas is switched away, the app closes, the widget is
 removed) is cancelled -- a robot must not carry on driving while nobody watches it -- and the widget built
@@ -95,6 +97,7 @@ class ActionStatus:
     result: Any = None
     started: float = 0.0
     seconds: float | None = None
+    problem: str = ""  #: why the operator's last Send went nowhere (kept until a goal is sent)
 
     @property
     def final(self) -> bool:
@@ -267,23 +270,27 @@ class ActionModel(StdModel):
 
     # -- actions (any thread) ---------------------------------------------------------------------
     def send(self, texts: dict[str, str]) -> bool:
-        """Check the form and send the goal; False (and ``state.error``) when the form is wrong."""
+        """Send a goal from the form's texts (any thread). The texts are checked on the bridge thread (the
+        GUI thread parses nothing): a bad one is named in ``state.error`` and nothing is sent. False when
+        nothing can be sent at all (a preview, an incomplete binding)."""
         if self.dry_run:
             self.set_error("preview: nothing is sent to the robot")
             return False
         if self.binding.problems():
             self.set_error("; ".join(self.binding.problems()))
             return False
+        texts = dict(texts)
+        self._dispatch(lambda: self._check_and_send(texts))
+        return True
+
+    def _check_and_send(self, texts: dict[str, str]) -> None:
         try:
             goal = self.build_goal(texts)
-        except MessageTextError as exc:
-            self.set_error(f"not sent: {exc}")
-            return False
-        except (KeyError, ValueError) as exc:
-            self.set_error(f"not sent: {exc}")
-            return False
-        self._dispatch(lambda: self._send_now(goal))
-        return True
+        except (KeyError, ValueError) as exc:  # MessageTextError is a ValueError: it names the field
+            # kept in the status, not as state.error: the next feedback would wipe that within 0.2 s
+            self._show(attrs.evolve(self._status, problem=f"not sent: {exc}"))
+            return
+        self._send_now(goal)
 
     def cancel(self) -> None:
         self._dispatch(self._cancel_now)
@@ -350,7 +357,7 @@ class ActionModel(StdModel):
             return
         st = self._status
         took = time.monotonic() - st.started if st.started else None
-        self._show(attrs.evolve(st, phase=phase, text=text, result=result, seconds=took,
+        self._show(attrs.evolve(st, phase=phase, text=text, result=result, seconds=took, problem="",
                                 progress=1.0 if phase == "succeeded" and st.progress is not None else st.progress))
 
     def on_stop(self) -> None:

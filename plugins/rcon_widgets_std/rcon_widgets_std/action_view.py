@@ -139,8 +139,9 @@ class ActionView(QtWidgets.QWidget):
         phase = getattr(st, "phase", "idle")
         words, colour = PHASE_TEXT.get(phase, (phase, MUTED))
         detail = getattr(st, "text", "") or ""
-        if state.error and (st is None or not st.running):
-            words, colour, detail = "✗ Problem", BAD, state.error  # e.g. "not sent: target.latitude: ..."
+        problem = state.error or getattr(st, "problem", "")  # e.g. "not sent: target.latitude: ..."
+        if problem and (st is None or not st.running):
+            words, colour, detail = "✗ Problem", BAD, problem
         elif state.link_down and st is not None and st.running:
             words, colour, detail = "? Link down", STALE, "the goal's fate is unknown until the link is back"
         self.status.show_text(f"{words}: {detail}" if detail else words, colour, tooltip=detail or words)
@@ -148,6 +149,8 @@ class ActionView(QtWidgets.QWidget):
         self.cancel_button.setEnabled(running and phase != "canceling")
         self.send_button.setText("Send new goal" if running else "Send goal")
         self._show_feedback(st)
+        if problem and running:  # a new goal refused while one runs: said under it, the run stays in sight
+            self.result.show_text(f"✗ {problem}", BAD, tooltip=problem)
 
     def _show_feedback(self, st: Any) -> None:
         if st is None:
