@@ -94,3 +94,44 @@ def test_long_press_navigate_here_drives_and_stop_cancels(qtbot, ros2_bridge):
     qtbot.mouseClick(view, Qt.MouseButton.LeftButton, pos=QtCore.QPoint(100, 300))
     assert view.pending is not None and view.nav.pending is None and view.bubble.send.text() == "Send goal"
     bt.call(model.stop).result(5)
+
+
+def _nav_model(qtbot, client, bt):
+    model = MapModel(MapSettings(zoom=18, **NAV), Binding("/gps/fix", "sensor_msgs/NavSatFix", "subscribe"),
+                     client.node("map-nav"), types=TYPES, plugin_settings=MapPluginSettings(), dispatch=bt.call)
+    bt.call(model.start).result(5)
+    qtbot.waitUntil(lambda: model.state.count > 0, timeout=10_000)  # the vessel's first fix
+    return model
+
+
+def _far_point(sim):
+    lat, lon = sim.robot.lat_lon()
+    return lat, lon + 0.004  # about 320 m east
+
+
+def test_stopping_the_map_cancels_the_navigation_and_says_so(qtbot, ros2_bridge):
+    sim, bt, client = ros2_bridge
+    model = _nav_model(qtbot, client, bt)
+    assert model.navigate(*_far_point(sim))
+    qtbot.waitUntil(lambda: (n := model.state.value.nav) is not None and n.remaining_m is not None, timeout=10_000)
+    bt.call(model.stop).result(5)  # the canvas is left
+    assert model.navigator.state.phase == "canceled" and "map stopped" in model.navigator.state.text
+    qtbot.waitUntil(lambda: sim.robot.cmd_surge == 0.0, timeout=10_000)
+
+
+def test_a_lost_link_leaves_the_navigation_unknown_never_arrived(qtbot):
+    with SimServer.in_thread(host="127.0.0.1", port=0, rate_scale=2.0, ros2=True) as sim:
+        bt = BridgeThread().start()
+        client = BridgeClient(sim.url, reconnect=False)
+        bt.run(client.connect()).result(10)
+        model = _nav_model(qtbot, client, bt)
+        assert model.navigate(*_far_point(sim))
+        qtbot.waitUntil(lambda: (n := model.state.value.nav) is not None and n.remaining_m is not None,
+                        timeout=10_000)
+    # the robot went away with the goal running
+    qtbot.waitUntil(lambda: model.state.value.nav.phase != "active", timeout=10_000)
+    nav = model.state.value.nav
+    assert nav.phase == "unknown" and "fate is unknown" in nav.text
+    bt.call(model.stop).result(5)
+    bt.run(client.close()).result(10)
+    bt.stop()
