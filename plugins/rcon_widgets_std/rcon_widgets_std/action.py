@@ -348,7 +348,8 @@ class ActionModel(StdModel):
         phase = STATUS_PHASE.get(handle.status, "unknown")
         text = "" if phase != "unknown" else f"ended with status {handle.status}: its fate is unknown"
         message = result.get("message") if isinstance(result, dict) else None
-        if isinstance(message, str) and message:  # the server's own words ("arrived within 1.9 m")
+        if isinstance(message, str) and message and message.strip().lower().rstrip(".") not in (phase, "cancelled"):
+            # the server's own words ("arrived within 1.9 m"), unless they only repeat the status
             text = f"{text}: {message}" if text else message
         self._end(handle, phase, text, result)
 
