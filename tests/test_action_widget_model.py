@@ -155,3 +155,11 @@ async def test_an_unknown_action_type_is_learned_from_the_robot(client):
     assert [f.path for f in model.goal_fields()][:2] == ["target.latitude", "target.longitude"]
     assert fresh.fields(fresh.action_part_name(NAV_TYPE, "feedback"))[0].name == "distance_remaining"
     model.stop()
+
+
+async def test_action_types_come_from_rosapi_action_type(client):
+    assert await client.rosapi.action_type(NAV) == NAV_TYPE
+    assert await client.rosapi.action_type("/nowhere") is None
+    assert await client.rosapi.action_servers_with_types() == {FIB: FIB_TYPE, NAV: NAV_TYPE}
+    # rosapi's topic_type ignores the hidden action topics (as rosapi 2.x does)
+    assert await client.rosapi.topic_type(f"{NAV}/_action/feedback") is None

@@ -93,7 +93,7 @@ def phase(view) -> str:
 
 def test_actions_list_and_the_add_pathway_place_an_action_widget(window, qtbot, plugins):
     qtbot.waitUntil(lambda: window.actions.item(NAV) is not None, timeout=TIMEOUT_MS)
-    assert window.actions.item(NAV).data(0, 257) == NAV_TYPE  # the type, found from the action's feedback topic
+    assert window.actions.item(NAV).data(0, 257) == NAV_TYPE  # the type, from /rosapi/action_type
     assert window.actions.item("/fibonacci") is not None
     window.side.setCurrentWidget(window.actions)
     shoot(window, "actions-list.png")

@@ -78,13 +78,14 @@ class Rosapi:
         return list((await self._call("action_servers")).get("action_servers", []))
 
     async def action_type(self, action: str) -> str | None:
-        """``pkg/action/X`` of a ROS 2 action, from the type of its hidden feedback topic
-        (``<action>/_action/feedback`` carries ``pkg/action/X_FeedbackMessage``); None when unknown."""
-        topic_type = await self.topic_type(f"{action.rstrip('/')}/_action/feedback")
-        suffix = "_FeedbackMessage"
-        if topic_type and topic_type.endswith(suffix):
-            return topic_type[: -len(suffix)]
-        return None
+        """``pkg/action/X`` of a ROS 2 action from rosapi's ``action_type`` (added after rosapi 2.1.0); None
+        when the action has no server or the rosapi is older (2.1.0 cannot tell an action's type at all:
+        ``topic_type`` ignores the hidden ``<action>/_action/*`` topics)."""
+        try:
+            answer = await self._call("action_type", {"action": action})
+        except ServiceError:
+            return None
+        return str(answer.get("type") or "") or None
 
     async def action_servers_with_types(self) -> dict[str, str]:
         """``{action: type}`` of every action server (``""`` where the type cannot be found)."""

@@ -8,13 +8,13 @@ Differences from the ROS 1 rosapi (``rosapi.py``), as the ros2 branch's ``rosapi
   field is ``default_value``;
 * ``message_details`` of a type it cannot load answers an empty ``typedefs`` list (rosapi logs the error);
   that includes an action's parts (``pkg/action/<Name>_Goal``, ``_Result``, ``_Feedback``): rosapi looks
-  for them as attributes of the package's ``action`` module, which exports only ``<Name>``; the parts'
-  typedefs come from ``action_goal_details``/``action_result_details``/``action_feedback_details``
-  (request ``type``: ``pkg/action/<Name>``);
+  for them as attributes of the package's ``action`` module, which exports only ``<Name>``;
 * ``action_servers`` lists every action with a server: the sim's own and those clients advertised
-  (rosapi finds them from the hidden ``<action>/_action/{feedback,status}`` topics); ``topic_type`` of those
-  hidden topics answers their types (``<pkg>/action/<X>_FeedbackMessage``), which is how a client learns
-  an action's type (``Rosapi.action_type``);
+  (rosapi finds them from the hidden ``<action>/_action/{feedback,status}`` topics, which ``topic_type``
+  ignores);
+* like rosapi after 2.1.0 (its ros2 branch now), ``action_type`` (``action`` -> ``type``) and
+  ``action_{goal,result,feedback}_details`` (``type`` -> ``typedefs``) tell an action's type and layout;
+  a 2.1.0 server has neither, and a client falls back (``Rosapi.action_type`` answers None);
 * no ``get_loggers``/``set_logger_level`` services (those are ROS 1 node services); every node has its
   ROS 2 parameter services instead (``ros2_param_services.py``).
 """
@@ -55,8 +55,9 @@ _SERVICES: list[tuple[str, str]] = [
     ("service_response_details", "ServiceResponseDetails"), ("set_param", "SetParam"),
     ("get_param", "GetParam"), ("has_param", "HasParam"), ("delete_param", "DeleteParam"),
     ("get_param_names", "GetParamNames"), ("get_time", "GetTime"), ("get_ros_version", "GetROSVersion"),
-    ("action_goal_details", "ActionGoalDetails"), ("action_result_details", "ActionResultDetails"),
-    ("action_feedback_details", "ActionFeedbackDetails"),
+    # added to rosapi after 2.1.0 (its ros2 branch now): how a client learns an action's type and layout
+    ("action_type", "ActionType"), ("action_goal_details", "ActionGoalDetails"),
+    ("action_result_details", "ActionResultDetails"), ("action_feedback_details", "ActionFeedbackDetails"),
 ]
 
 
@@ -140,21 +141,14 @@ class Ros2Rosapi(Rosapi):
         hub = self.server.action_hub
         return {"action_servers": hub.names() if hub is not None else []}
 
-    def topic_type(self, args: dict[str, Any]) -> dict[str, Any]:
-        """Also the hidden topics of each action (``<action>/_action/feedback`` and ``/status``), which a
-        ROS 2 graph has and rosapi's ``topic_type`` reports: how a client finds an action's type."""
-        topic = args.get("topic", "")
+    def action_type(self, args: dict[str, Any]) -> dict[str, Any]:
+        """rosapi's ``action_type`` (after 2.1.0): the type of the action named ``action``, ``""`` when none."""
         hub = self.server.action_hub
-        base, sep, tail = topic.rpartition("/_action/")
-        if sep and hub is not None and base in hub.providers:
-            kind = str(hub.providers[base].type)
-            parts = kind.strip("/").split("/")
-            canonical = f"{parts[0]}/action/{parts[-1]}"
-            if tail == "feedback":
-                return {"type": f"{canonical}_FeedbackMessage"}
-            if tail == "status":
-                return {"type": "action_msgs/msg/GoalStatusArray"}
-        return super().topic_type(args)
+        provider = hub.providers.get(str(args.get("action", ""))) if hub is not None else None
+        if provider is None:
+            return {"type": ""}
+        parts = str(provider.type).strip("/").split("/")
+        return {"type": f"{parts[0]}/action/{parts[-1]}"}
 
     def _full_text(self, type_name: str) -> str:
         """rosapi 2.x's ``typedefs_full_text``: the root's definition, then each message type it uses once,
