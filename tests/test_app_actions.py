@@ -179,11 +179,32 @@ def test_lost_link_shows_the_fate_unknown_never_success(qtbot, tmp_path, plugins
     window.shutdown()
 
 
-def test_an_action_whose_type_is_unknown_offers_no_widget_and_says_so(window, qtbot):
-    window.add_panel.start_from_action("/mystery", "")  # a robot that did not tell the action's type
+def test_an_action_listed_without_its_type_asks_for_it_then_places_the_widget(qtbot, tmp_path, plugins):
+    with SimServer.in_thread(host="127.0.0.1", port=0, rate_scale=TEST_RATE_SCALE, ros2=True) as sim:
+        del sim.services["/rosapi/action_type"]  # a rosapi 2.1.0: it cannot tell an action's type
+        for window in window_session(qtbot, tmp_path / "config", plugins, url=sim.url, wait_connected=True):
+            qtbot.waitUntil(lambda actions=window.actions: actions.item(NAV) is not None, timeout=TIMEOUT_MS)
+            assert window.actions.item(NAV).data(0, 257) == ""
+            assert window.actions.item(NAV).text(0).endswith("type unknown")
+            window.side.setCurrentWidget(window.actions)
+            tree = window.actions.tree
+            tap_item(tree, tree.indexFromItem(window.actions.item(NAV)))
+            panel = window.add_panel
+            assert panel.role_type.text() == "type unknown" and panel.action_type_box.isVisible()
+            assert not panel.role_buttons[Role.ACTION].isEnabled()  # nothing fits a type nobody knows
+            panel.action_type_box.choose(NAV_TYPE)
+            assert panel.role_type.text() == NAV_TYPE and panel.role_buttons[Role.ACTION].isEnabled()
+            choose_kind(window, Role.ACTION, "std.action")
+            tap(panel.place_button)
+            placed = [i for i in window.controller.canvas.widgets if i.kind == "std.action"]
+            assert len(placed) == 1 and placed[0].binding.type == NAV_TYPE
+
+
+def test_no_type_at_all_offers_no_widget_and_says_so(window, qtbot):
     panel = window.add_panel
-    assert panel.role_type.text() == "type unknown"
-    tap(panel.role_buttons[Role.ACTION])
+    panel.start_from_action("/mystery", "")
+    assert panel.action_type_box.isVisible() and not panel.role_buttons[Role.ACTION].isEnabled()
+    panel.choose_role(Role.ACTION)  # what the disabled button would do: nothing fits, said, no exception
     assert panel.candidates.count() == 0 and panel.no_candidates.isVisible()
     assert "No installed widget can action" in panel.no_candidates.text()
 

@@ -29,6 +29,7 @@ from typing import Any
 import attrs
 from qtpy import QtCore, QtGui, QtWidgets
 
+from rcon_core.app.action_type import ActionTypeBox
 from rcon_core.app.canvas_surface import DRAFT_MIME
 from rcon_core.app.catalog_panel import short_type
 from rcon_core.app.children_editor import ChildContext
@@ -342,6 +343,9 @@ class AddPanel(QtWidgets.QWidget):
         self.role_type.setProperty("role", "hint")
         col.addWidget(self.role_title)
         col.addWidget(self.role_type)
+        self.action_type_box = ActionTypeBox()  # an action listed without its type: the operator picks it
+        self.action_type_box.chosen.connect(self._action_type_chosen)
+        col.addWidget(self.action_type_box)
         col.addWidget(QtWidgets.QLabel("What should the widget do?"))
         self.role_buttons: dict[Role, QtWidgets.QPushButton] = {}
         for role in Role:
@@ -453,6 +457,15 @@ class AddPanel(QtWidgets.QWidget):
     def start_from_action(self, name: str, type_name: str) -> None:
         """Pathway 4: a (ROS 2) action was picked."""
         self._start_target(Target(name, type_name), service=False, action=True)
+        if not type_name and self._child_context is not None:
+            self.action_type_box.open_for(self._child_context(lambda: None).types)
+            self.role_buttons[Role.ACTION].setEnabled(False)
+
+    def _action_type_chosen(self, type_name: str) -> None:
+        if self._picked is not None:
+            self._picked = Target(self._picked.name, type_name)
+            self.role_type.setText(type_name)
+            self.role_buttons[Role.ACTION].setEnabled(True)
 
     def _start_target(self, target: Target, service: bool, action: bool = False) -> None:
         self._reset()
@@ -461,6 +474,8 @@ class AddPanel(QtWidgets.QWidget):
         self.role_type.setText(target.type or "type unknown")
         for role, button in self.role_buttons.items():
             button.setVisible(role.is_action == action and role.is_service == service)
+            button.setEnabled(True)
+        self.action_type_box.hide()
         self.stack.setCurrentWidget(self.role_page)
         self.show()
 

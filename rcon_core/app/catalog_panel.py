@@ -10,6 +10,8 @@ from __future__ import annotations
 from qtpy import QtCore, QtGui, QtWidgets
 
 NAME_ROLE = QtCore.Qt.ItemDataRole.UserRole
+#: the second line of an entry whose type the robot did not tell
+UNKNOWN = "type unknown"
 TYPE_ROLE = QtCore.Qt.ItemDataRole.UserRole + 1
 
 
@@ -69,7 +71,7 @@ class CatalogList(QtWidgets.QWidget):
         self.tree.clear()
         self._items = {}
         for name, type_name in entries:
-            item = QtWidgets.QTreeWidgetItem([f"{name}\n{short_type(type_name)}"])
+            item = QtWidgets.QTreeWidgetItem([f"{name}\n{short_type(type_name) or UNKNOWN}"])
             item.setData(0, NAME_ROLE, name)
             item.setData(0, TYPE_ROLE, type_name)
             item.setToolTip(0, f"{name}\n{type_name}")
@@ -138,7 +140,8 @@ class NameTypeDelegate(QtWidgets.QStyledItemDelegate):
         width = max(0, text_rect.width() - 8)  # the style's own text margins
         fm = opt.fontMetrics
         line_break = "\u2028"  # what the item delegate makes of "\\n": the style breaks lines only there
-        return f"{fm.elidedText(name, QtCore.Qt.TextElideMode.ElideMiddle, width)}{line_break}{elide_type(fm, type_name, width)}"
+        shown = elide_type(fm, type_name, width) if type_name else UNKNOWN
+        return f"{fm.elidedText(name, QtCore.Qt.TextElideMode.ElideMiddle, width)}{line_break}{shown}"
 
     def paint(self, painter: QtGui.QPainter, option: QtWidgets.QStyleOptionViewItem,
               index: QtCore.QModelIndex) -> None:
