@@ -262,7 +262,7 @@ class CanvasRuntime:
 
         # the model never gets the node itself: only this port (view-only enforced here, see canvas.port)
         port = GuardedPort(node, notify=notify, view_only=self.view_only_reason(), on_refused=refused,
-                           link=id(self.client))
+                           link=id(self.client), widget_id=inst.id)
         model = self.build_model(inst, port)
         built.append(model)
         self._nodes[inst.id] = node
