@@ -10,7 +10,8 @@ service types every installed widget plugin contributes (``rcon_register_types``
 is tested on its own type with no extra step.
 
 A package loads these fixtures with ``pytest_plugins = ["rcon_core.testing"]`` in its ``conftest.py``.
-:func:`until` waits for a condition without sleeping a fixed time.
+:func:`until` waits for a condition without sleeping a fixed time; :class:`ManualClock` is a clock (and a
+timer loop) that moves only when the test advances it, so rates are tested without the wall clock.
 
 View tests: :class:`RecordingPort` (a port that reaches no robot and records publishes), :func:`widget_state`
 (a state as a running model gives it), :func:`build_view` and :func:`grab_view` (``View(model)`` refreshed
@@ -32,14 +33,76 @@ from rcon_core.sim import SimServer
 TEST_RATE_SCALE = 2.0
 
 
-async def until(predicate: Callable[[], Any], timeout: float = 10.0, what: str = "condition") -> None:
-    """Wait (polling every 10 ms) until ``predicate()`` is true; fail the test after ``timeout`` s."""
+async def until(predicate: Callable[[], Any], timeout: float = 10.0, what: str = "condition") -> Any:
+    """Wait (polling every 10 ms on the running loop) until ``predicate()`` is truthy and return its value;
+    fail the test with an ``AssertionError`` naming ``what`` after ``timeout`` s. The one copy every test
+    uses (core and plugins alike): a test waits for a condition, never a fixed time."""
     deadline = time.monotonic() + timeout
-    while not predicate():
+    while True:
+        got = predicate()
+        if got:
+            return got
         if time.monotonic() > deadline:
             raise AssertionError(f"timed out after {timeout} s waiting for {what}")
         await asyncio.sleep(0.01)
 
+
+
+class ManualClock:
+    """A clock that moves only when the test says so, for deterministic rate tests.
+
+    Call it for the time (``clock()``: as ``time.monotonic``, for a model's or limiter's ``clock=``); it also
+    has the part of an asyncio loop a periodic timer uses (``time()``, ``call_at``, ``call_later``, each
+    returning a handle with ``cancel()``), so a ``LoopTicker`` or a ``RateLimiter``'s ``schedule`` can run on
+    it. :meth:`advance` moves the time forward and runs every call that falls due, in time order, each seeing
+    its own due time as now.
+    """
+
+    def __init__(self, now: float = 100.0) -> None:
+        self.now = now
+        self._calls: list[_ManualCall] = []
+
+    def __call__(self) -> float:
+        return self.now
+
+    def time(self) -> float:
+        return self.now
+
+    def call_at(self, when: float, fn: Callable[..., Any], *args: Any) -> _ManualCall:
+        call = _ManualCall(when, fn, args)
+        self._calls.append(call)
+        return call
+
+    def call_later(self, delay: float, fn: Callable[..., Any], *args: Any) -> _ManualCall:
+        return self.call_at(self.now + max(0.0, delay), fn, *args)
+
+    @property
+    def pending(self) -> int:
+        """How many scheduled calls are still waiting."""
+        return sum(1 for c in self._calls if not c.cancelled)
+
+    def advance(self, seconds: float) -> None:
+        """Move the time ``seconds`` forward, running the calls due on the way (and those they schedule)."""
+        end = self.now + seconds
+        while True:
+            self._calls = [c for c in self._calls if not c.cancelled]
+            due = [c for c in self._calls if c.when <= end]
+            if not due:
+                break
+            call = min(due, key=lambda c: c.when)
+            self._calls.remove(call)
+            self.now = max(self.now, call.when)
+            call.fn(*call.args)
+        self.now = end
+
+
+class _ManualCall:
+    def __init__(self, when: float, fn: Callable[..., Any], args: tuple[Any, ...]) -> None:
+        self.when, self.fn, self.args = when, fn, args
+        self.cancelled = False
+
+    def cancel(self) -> None:
+        self.cancelled = True
 
 @pytest_asyncio.fixture
 async def sim() -> AsyncIterator[SimServer]:

@@ -9,14 +9,7 @@ import time
 import pytest
 
 from rcon_core.bridge import BridgeClient, ServiceError
-
-
-async def until(pred, timeout: float = 10.0) -> None:
-    async def poll():
-        while not pred():
-            await asyncio.sleep(0.02)
-
-    await asyncio.wait_for(poll(), timeout)
+from rcon_core.testing import until
 
 
 @pytest.fixture

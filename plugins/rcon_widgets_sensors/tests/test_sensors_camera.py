@@ -13,12 +13,12 @@ import numpy as np
 import pytest
 from rcon_widgets_sensors.camera import CameraModel, CameraSettings, TestPattern
 from rcon_widgets_sensors.image import Frame
-from sensors_helpers import until
 
 from rcon_core.bridge import BridgeClient
 from rcon_core.msgs import TypeRegistry
 from rcon_core.msgs.values import as_bytes
 from rcon_core.plugins import Binding
+from rcon_core.testing import until
 
 #: set RCON_SCREENSHOTS=1 to refresh the PNGs in docs/screenshots/sensors (otherwise they go to a temp dir)
 SHOTS = (Path(__file__).resolve().parents[3] / "docs" / "screenshots" / "sensors" if os.environ.get("RCON_SCREENSHOTS")

@@ -15,11 +15,11 @@ from rcon_widgets_sensors.motion_sensors import (
     SensorValue,
     synthetic_reading,
 )
-from sensors_helpers import until
 
 from rcon_core.bridge import BridgeClient
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding
+from rcon_core.testing import until
 
 
 @pytest.fixture

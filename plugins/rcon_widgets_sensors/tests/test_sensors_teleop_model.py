@@ -6,11 +6,11 @@ import time
 
 import pytest
 from rcon_widgets_sensors.teleop import TeleopModel, TeleopSettings, TeleopValue, shape_axes
-from sensors_helpers import until
 
 from rcon_core.bridge import BridgeClient, ConnectionState
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding
+from rcon_core.testing import until
 
 TWIST = "geometry_msgs/Twist"
 

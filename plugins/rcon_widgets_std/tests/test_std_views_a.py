@@ -12,10 +12,11 @@ from rcon_widgets_std.slider_view import SliderView
 from rcon_widgets_std.switch import SwitchModel, SwitchSettings, SwitchValue
 from rcon_widgets_std.switch_view import SwitchView
 from std_qtkit import LiveBridge, shoot, wait_until
-from std_testkit import Clock, build
+from std_testkit import build
 
 from rcon_core.app.theme import stylesheet
 from rcon_core.msgs import TypeRegistry
+from rcon_core.testing import ManualClock
 
 
 @pytest.fixture
@@ -26,7 +27,7 @@ def live(sim_url):
 
 
 def test_label_view_value_age_and_stale(qtbot, tmp_path):
-    clock = Clock()
+    clock = ManualClock()
     m = build(LabelModel, LabelSettings(decimals=1, units="%", scale=100, stale_after=3), "/battery",
               "sensor_msgs/BatteryState", "subscribe", "percentage", clock=clock)
     view = LabelView(m)
@@ -56,7 +57,7 @@ def test_label_view_value_is_not_selectable_and_copies_through_its_menu(qtbot):
 
 @pytest.mark.parametrize("width", [240, 150, 110, 80])
 def test_label_view_shrinks_a_long_value_to_fit_and_never_clips(qtbot, width):
-    clock = Clock()
+    clock = ManualClock()
     m = build(LabelModel, LabelSettings(decimals=-1, stale_after=3), "/x", "std_msgs/Float64", "subscribe", "data",
               clock=clock)
     host = QtWidgets.QWidget()
