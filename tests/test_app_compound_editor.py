@@ -143,7 +143,7 @@ def test_build_a_compound_on_the_device_and_publish_what_its_children_compose(wi
     view = hosted.view
     (_c1, slider), (_c2, stepper) = view.child_views
     qtbot.waitUntil(lambda: stepper.plus.isVisible() and slider.slider.isVisible(), timeout=5_000)
-    slider.slider.setValue(slider._position(1.5))
+    slider.slider.setValue(slider.position_of(1.5))
     tap(stepper.plus)
     tap(stepper.plus)
     qtbot.waitUntil(lambda: hosted.model.composed()["angular"]["z"] == 0.5, timeout=5_000)

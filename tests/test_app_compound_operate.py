@@ -61,7 +61,7 @@ def test_publish_sends_the_text_child_as_typed_not_a_default(window, sim_thread,
     hosted, view, slider, text = place_compound(window, qtbot, plugins)
     # inside a Compound the text child has no Send of its own and never says "sent"
     assert not getattr(text, "button", None) or not text.button.isVisible()
-    slider.slider.setValue(slider._position(1.5))
+    slider.slider.setValue(slider.position_of(1.5))
     type_into(text.edit, "{z: 0.3}")
     qtbot.waitUntil(lambda: "will send" in text.status.text(), timeout=5_000)
     assert "sent:" not in text.status.text()

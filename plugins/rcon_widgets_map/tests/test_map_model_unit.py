@@ -72,7 +72,7 @@ def test_trail_is_bounded_and_spaced():
 
 def test_bad_messages_give_an_error_not_a_crash():
     m = model()
-    m._receive({"data": 1.0})
+    m.on_message({"data": 1.0})
     assert "no latitude/longitude" in m.state.error
     m2 = MapModel(MapSettings(), Binding("/x", "lab/Boat", "subscribe", ("position",)), port=None, types=TYPES)
     m2.on_message({"other": 1})

@@ -141,6 +141,12 @@ class CameraModel(WidgetModel):
         self.source_factory = open_source  # tests may replace it
 
     @property
+    def capturing(self) -> bool:
+        """True while the capture thread runs (from start until stop)."""
+        thread = self._thread
+        return thread is not None and thread.is_alive()
+
+    @property
     def raw(self) -> bool:
         """True when bound to ``sensor_msgs/Image`` (rgb8), False for ``CompressedImage`` (jpeg)."""
         return self.binding.canonical_type == "sensor_msgs/msg/Image"

@@ -60,6 +60,7 @@ async def test_test_pattern_jpegs_reach_another_client(sim, clients):
     model.start()
     try:
         await until(lambda: len(received) >= 3, 10.0, "three frames at the other client")
+        assert model.capturing
         t0 = time.monotonic()
         await asyncio.sleep(1.0)
         n = sum(1 for t, _m in received if t >= t0)
@@ -75,7 +76,7 @@ async def test_test_pattern_jpegs_reach_another_client(sim, clients):
         assert set(capture_threads) == {"rcon-camera"}  # capture and encoding on the capture thread
     finally:
         model.stop()
-    assert model._thread is None
+    assert not model.capturing
     n = len(received)
     await asyncio.sleep(0.4)
     assert len(received) == n  # stopped: nothing more

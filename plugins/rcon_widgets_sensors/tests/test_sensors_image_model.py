@@ -155,7 +155,7 @@ async def test_stop_ends_the_worker_thread(sim, client):
                        client.node("w"))
     model.start()
     await in_thread(model.wait_frame, 0, 10.0)
-    worker = model._worker
+    worker = model.worker
     model.stop()
     await asyncio.sleep(0)
     assert worker is not None and not worker.alive

@@ -203,7 +203,7 @@ def test_overlay_ticker_leaves_a_fresh_picture_alone(view, qtbot):
     view.refresh(view.model.state)
     qtbot.waitUntil(lambda: bool(view.overlay_text), timeout=3000)
     view.frame = attrs.evolve(frame, received=time.time())
-    view._tick()  # a fresh frame: the ticker schedules nothing
+    view.age_overlay()  # a fresh frame: the ticker schedules nothing
     paints = PaintRects(view)
     QtCore.QCoreApplication.processEvents()
     assert paints.rects == []

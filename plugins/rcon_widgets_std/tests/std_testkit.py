@@ -19,10 +19,12 @@ async def bridge(sim):
         await client.close()
 
 
-def build(model_cls, settings, name, type_, role, paths=(), *, client=None, types=None, node="w", clock=None):
-    """A model bound as given, on its own node of ``client`` (or no port)."""
+def build(model_cls, settings, name, type_, role, paths=(), *, client=None, types=None, node="w", clock=None,
+          port=None):
+    """A model bound as given, on its own node of ``client``, on ``port`` (e.g. a ``RecordingPort``) or on
+    no port."""
     kwargs = {"types": types if types is not None else TypeRegistry.standard()}
     if clock is not None:
         kwargs["clock"] = clock
-    port = client.node(node) if client is not None else None
+    port = client.node(node) if client is not None else port
     return model_cls(settings, Binding(name, type_, role, paths), port, **kwargs)
