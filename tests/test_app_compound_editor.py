@@ -6,8 +6,6 @@ registry, so the bound type's fields come from the robot's rosapi typedefs.
 
 from __future__ import annotations
 
-import os
-
 import pytest
 from app_helpers import entry_point_plugins, tap, tap_item, window_session
 from qtpy import QtCore, QtWidgets
@@ -124,8 +122,6 @@ def test_build_a_compound_on_the_device_and_publish_what_its_children_compose(wi
         ("std.slider", "linear.x", ""), ("std.stepper", "angular.z", "Turn")]
     assert children[0].settings["maximum"] == 2.0 and children[1].settings["step"] == 0.25
     assert panel.problems() == [] and panel.place_button.isEnabled()
-    if os.environ.get("RCON_SCREENSHOTS") == "1":
-        _screenshot(window, editor)
 
     # place it, operate the children, publish: the robot gets one Twist with both values
     tap(panel.place_button)
@@ -176,20 +172,6 @@ def test_configure_a_placed_compound_edits_its_children_in_the_dialog(window, qt
     _c, saved = window.controller.workspace.find_widget(inst.id)
     assert [(c["field_path"], c["settings"]["maximum"]) for c in saved.settings["children"]] == [
         ("linear.x", 4.0), ("angular.z", 1.0)]
-
-
-def _screenshot(window: MainWindow, editor: ChildrenEditor) -> None:
-    """docs/screenshots/8-compound-children.png: the add panel with the children list (RCON_SCREENSHOTS=1)."""
-    from pathlib import Path
-
-    window.resize(1280, 800)
-    QtWidgets.QApplication.processEvents()
-    scroll = window.add_panel.settings_page.findChild(QtWidgets.QScrollArea)
-    scroll.ensureWidgetVisible(editor.add_button)
-    QtWidgets.QApplication.processEvents()
-    out = Path(__file__).resolve().parent.parent / "docs" / "screenshots" / "8-compound-children.png"
-    window.grab().scaled(1024, 640, QtCore.Qt.AspectRatioMode.KeepAspectRatio,
-                         QtCore.Qt.TransformationMode.SmoothTransformation).save(str(out), "PNG")
 
 
 # ------------------------------------------------------------------------------------- the catalog

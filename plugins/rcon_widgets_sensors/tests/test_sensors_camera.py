@@ -1,12 +1,9 @@
 """Camera widget: the synthetic source published as JPEG on the sim and read back by another client (valid
-JPEGs), rgb8 raw, no camera -> a clear error, capture off the GUI thread, settings; preview screenshot."""
+JPEGs), rgb8 raw, no camera -> a clear error, capture off the GUI thread, settings; the preview."""
 
 import asyncio
-import os
-import tempfile
 import threading
 import time
-from pathlib import Path
 
 import cv2
 import numpy as np
@@ -19,10 +16,6 @@ from rcon_core.msgs import TypeRegistry
 from rcon_core.msgs.values import as_bytes
 from rcon_core.plugins import Binding
 from rcon_core.testing import until
-
-#: set RCON_SCREENSHOTS=1 to refresh the PNGs in docs/screenshots/sensors (otherwise they go to a temp dir)
-SHOTS = (Path(__file__).resolve().parents[3] / "docs" / "screenshots" / "sensors" if os.environ.get("RCON_SCREENSHOTS")
-         else Path(tempfile.mkdtemp(prefix="rcon-shots-")))
 
 
 def loop_dispatch():
@@ -124,21 +117,3 @@ def test_pattern_moves():
     p = TestPattern(160, 120)
     a, b = p.read(), p.read()
     assert a.shape == (120, 160, 3) and not np.array_equal(a, b)
-
-
-def test_preview_screenshot(qtbot):
-    from rcon_widgets_sensors.camera_view import CameraView
-
-    model = CameraModel(CameraSettings(source="test pattern"), Binding("/phone/camera/compressed",
-                                                                       "sensor_msgs/CompressedImage", "publish"), None)
-    rgb = TestPattern(640, 480).read()
-    model.set_value(Frame(rgb=rgb, kind="camera", info="640×480 jpeg q80, 38 KiB → /phone/camera/compressed",
-                          stamp=time.time(), received=time.time(), decoded=time.time(), index=1, fps=10.0))
-    view = CameraView(model)
-    qtbot.addWidget(view)
-    view.resize(360, 280)
-    view.show()
-    view.refresh(model.state)
-    SHOTS.mkdir(parents=True, exist_ok=True)
-    view.grab().save(str(SHOTS / "camera.png"))
-    assert view.frame is model.state.value
