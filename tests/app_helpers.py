@@ -2,6 +2,8 @@
 
 Plain helpers, imported explicitly by the ``test_app_*`` modules; each module keeps its own small
 fixtures that call these with what genuinely differs (window size, type registry, what to wait for).
+The one fixture every app module shares, ``plugins`` (the installed widget plugins), is in
+``tests/conftest.py``; a module that needs other plugins defines its own.
 """
 
 from __future__ import annotations
@@ -26,7 +28,8 @@ TIMEOUT_MS = 10_000
 
 
 def entry_point_plugins() -> PluginManager:
-    """A plugin manager holding every widget plugin installed through the entry points."""
+    """A plugin manager holding every widget plugin installed through the entry points (as the shared
+    ``plugins`` fixture of ``tests/conftest.py``, for a module that registers more on its own copy)."""
     pm = PluginManager(environ={})
     pm.load_entry_points()
     return pm
@@ -73,6 +76,32 @@ def window_session(qtbot, config_dir: Path, plugins: PluginManager, **options: A
     win = open_window(qtbot, config_dir, plugins, **options)
     yield win
     win.shutdown()
+
+
+def window_maker(qtbot, config_root: Path, plugins: PluginManager, *, demo: bool = False,
+                 **options: Any) -> Iterator[Callable[..., MainWindow]]:
+    """For a fixture's ``yield from``: ``make(size, demo=...)`` opens one more window (:func:`open_window`
+    with ``options``, its own config folder; ``demo``: on the demo layout), each shut down after the test."""
+    made: list[MainWindow] = []
+
+    def make(size: tuple[int, int] | None, demo: bool = demo) -> MainWindow:
+        from rcon_core.app.demo import demo_workspace
+
+        win = open_window(qtbot, config_root / f"config{len(made)}", plugins, size=size,
+                          demo=(lambda: demo_workspace(plugins)) if demo else None, **options)
+        made.append(win)
+        return win
+
+    yield make
+    for win in made:
+        win.shutdown()
+
+
+def settle(ms: int = 30) -> None:
+    """Let layouts and repaints catch up (events processed three times over ``ms``)."""
+    for _ in range(3):
+        QtWidgets.QApplication.processEvents()
+        QTest.qWait(ms // 3 or 1)
 
 
 def all_sent(qtbot, window: MainWindow, sim: Any) -> None:

@@ -7,25 +7,20 @@ registry, so the bound type's fields come from the robot's rosapi typedefs.
 from __future__ import annotations
 
 import pytest
-from app_helpers import entry_point_plugins, tap, tap_item, window_session
-from qtpy import QtCore, QtWidgets
+from app_helpers import choose_kind, tap, tap_item, tap_topic, window_session
+from qtpy import QtWidgets
 from qtpy.QtTest import QTest
 
 from rcon_core.app.children_editor import ChildCatalog, ChildrenEditor, child_role, children_item_class
 from rcon_core.app.main_window import MainWindow
 from rcon_core.app.settings_form import SettingsForm
 from rcon_core.msgs import TypeRegistry
-from rcon_core.plugins import Binding, PluginManager, Role
+from rcon_core.plugins import Binding, Role
 
 pytest.importorskip("rcon_widgets_std")
 from rcon_widgets_std.compound import ChildSpec, CompoundSettings  # noqa: E402
 
 pytestmark = pytest.mark.usefixtures("qapp")
-
-
-@pytest.fixture(scope="module")
-def plugins() -> PluginManager:
-    return entry_point_plugins()
 
 
 @pytest.fixture
@@ -70,12 +65,8 @@ def add_child(qtbot, editor: ChildrenEditor, path: str, kind: str, offered_not: 
 
 
 def open_compound_on_cmd_vel(window: MainWindow):
-    tap_item(window.topics.tree, window.topics.tree.indexFromItem(window.topics.item("/cmd_vel")))
-    panel = window.add_panel
-    tap(panel.role_buttons[Role.PUBLISH])
-    kinds = [panel.candidates.item(i).data(QtCore.Qt.ItemDataRole.UserRole).spec.kind
-             for i in range(panel.candidates.count())]
-    tap_item(panel.candidates, panel.candidates.model().index(kinds.index("std.compound"), 0))
+    tap_topic(window, "/cmd_vel")
+    panel = choose_kind(window, Role.PUBLISH, "std.compound")
     assert panel.stack.currentWidget() is panel.settings_page
     return panel, panel.form.children_editors["children"]
 

@@ -8,22 +8,17 @@ mode, against the embedded robot: the operator types in the text child and taps 
 from __future__ import annotations
 
 import pytest
-from app_helpers import entry_point_plugins, snap, tap, window_session
+from app_helpers import snap, tap, window_session
 from qtpy import QtWidgets
 from qtpy.QtTest import QTest
 
 from rcon_core.canvas import Geometry
-from rcon_core.plugins import Binding, PluginManager, Role
+from rcon_core.plugins import Binding, Role
 
 pytest.importorskip("rcon_widgets_std")
 from rcon_widgets_std.compound import ChildSpec, CompoundSettings  # noqa: E402
 
 pytestmark = pytest.mark.usefixtures("qapp")
-
-
-@pytest.fixture(scope="module")
-def plugins() -> PluginManager:
-    return entry_point_plugins()
 
 
 @pytest.fixture

@@ -8,7 +8,7 @@ from __future__ import annotations
 import re
 
 import pytest
-from app_helpers import entry_point_plugins, window_session
+from app_helpers import window_session
 from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
@@ -17,17 +17,12 @@ from rcon_core.app.draft import Draft, Target
 from rcon_core.app.main_window import MainWindow
 from rcon_core.app.settings_form import TEXT_INSET
 from rcon_core.msgs import TypeRegistry
-from rcon_core.plugins import PluginManager, Role
+from rcon_core.plugins import Role
 
 pytest.importorskip("rcon_widgets_std")
 
 pytestmark = pytest.mark.usefixtures("qapp")
 NUMBER = re.compile(r"-?\d+(?:\.\d+)?")
-
-
-@pytest.fixture(scope="module")
-def plugins() -> PluginManager:
-    return entry_point_plugins()
 
 
 @pytest.fixture
