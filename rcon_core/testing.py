@@ -1,7 +1,7 @@
 """pytest fixtures for the embedded simulated robot (loaded by the root conftest; usable by plugins).
 
 - ``sim``: an async fixture giving a started :class:`~rcon_core.sim.SimServer` on a free loopback port,
-  stopped cleanly afterwards.
+  stopped cleanly afterwards; ``sim_ros2``: the same in ROS 2 flavour.
 - ``sim_thread``: a SimServer running on its own loop in a daemon thread, for sync code (roslibpy, Qt).
 - ``sim_url``: the ``ws://`` URL of a threaded sim (usable from sync and async tests alike).
 
@@ -108,6 +108,18 @@ class _ManualCall:
 async def sim() -> AsyncIterator[SimServer]:
     """A started SimServer on a free loopback port (the test's event loop)."""
     server = SimServer(host="127.0.0.1", port=0, rate_scale=TEST_RATE_SCALE, plugin_types=True)
+    await server.start()
+    try:
+        yield server
+    finally:
+        await server.stop()
+
+
+@pytest_asyncio.fixture
+async def sim_ros2() -> AsyncIterator[SimServer]:
+    """A started SimServer in ROS 2 flavour (rosbridge 2.x: actions, parameters, CDR) on a free loopback
+    port, its streams four times the real rates."""
+    server = SimServer(host="127.0.0.1", port=0, ros2=True, rate_scale=4.0)
     await server.start()
     try:
         yield server
