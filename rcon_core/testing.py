@@ -2,6 +2,7 @@
 
 - ``sim``: an async fixture giving a started :class:`~rcon_core.sim.SimServer` on a free loopback port,
   stopped cleanly afterwards; ``sim_ros2``: the same in ROS 2 flavour.
+- ``client``: a ``BridgeClient`` connected to ``sim`` (no reconnect); :func:`connected` for other options.
 - ``sim_thread``: a SimServer running on its own loop in a daemon thread, for sync code (roslibpy, Qt).
 - ``sim_url``: the ``ws://`` URL of a threaded sim (usable from sync and async tests alike).
 
@@ -23,11 +24,13 @@ from __future__ import annotations
 import asyncio
 import time
 from collections.abc import AsyncIterator, Callable, Iterator
+from contextlib import asynccontextmanager
 from typing import Any
 
 import pytest
 import pytest_asyncio
 
+from rcon_core.bridge import BridgeClient
 from rcon_core.sim import SimServer
 
 TEST_RATE_SCALE = 2.0
@@ -113,6 +116,26 @@ async def sim() -> AsyncIterator[SimServer]:
         yield server
     finally:
         await server.stop()
+
+
+@asynccontextmanager
+async def connected(url: str, *, timeout: float = 10.0, **options: Any) -> AsyncIterator[BridgeClient]:
+    """``async with connected(sim.url, call_timeout=5) as client:`` a :class:`BridgeClient` on ``url``
+    (``options`` as it takes them), connected within ``timeout`` s, and closed afterwards."""
+    client = BridgeClient(url, **options)
+    await client.connect(timeout=timeout)
+    try:
+        yield client
+    finally:
+        await client.close()
+
+
+@pytest_asyncio.fixture
+async def client(sim: SimServer) -> AsyncIterator[BridgeClient]:
+    """A :class:`BridgeClient` connected to ``sim``, without reconnecting (a module that needs other options
+    defines its own ``client``, usually with :func:`connected`)."""
+    async with connected(sim.url, reconnect=False) as c:
+        yield c
 
 
 @pytest_asyncio.fixture

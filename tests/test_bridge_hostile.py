@@ -14,7 +14,7 @@ from rcon_core.bridge import BridgeClient, ConnectionState
 from rcon_core.bridge.safety import bounded_repr, png_decoded_size, safe_text
 from rcon_core.loopback import HostileServer, png_data
 from rcon_core.sim.encoding import fragments, png_frame
-from rcon_core.testing import until
+from rcon_core.testing import connected, until
 
 DEEP = "[" * 1000 + "]" * 1000  # orjson accepts it (its limit is 1024 levels); repr() of it recurses too deep
 
@@ -27,10 +27,8 @@ async def hostile():
 
 @pytest.fixture
 async def client(hostile):
-    c = BridgeClient(hostile.url, backoff_min=0.05, backoff_max=0.2, call_timeout=5)
-    await c.connect(timeout=5)
-    yield c
-    await c.close()
+    async with connected(hostile.url, backoff_min=0.05, backoff_max=0.2, call_timeout=5) as c:
+        yield c
 
 
 async def subscribe(srv: HostileServer, client: BridgeClient, topic: str = "/t") -> list:

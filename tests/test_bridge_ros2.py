@@ -12,6 +12,7 @@ import pytest_asyncio
 
 from rcon_core.bridge import ActionError, BridgeClient, GoalStatus
 from rcon_core.sim import SimServer
+from rcon_core.testing import connected
 
 ACTION = "/navigate_to_fix"
 ACTION_TYPE = "rcon_sim/action/NavigateToFix"
@@ -19,10 +20,8 @@ ACTION_TYPE = "rcon_sim/action/NavigateToFix"
 
 @pytest_asyncio.fixture
 async def client(sim_ros2: SimServer) -> AsyncIterator[BridgeClient]:
-    c = BridgeClient(sim_ros2.url, call_timeout=3)
-    await c.connect(timeout=5)
-    yield c
-    await c.close()
+    async with connected(sim_ros2.url, call_timeout=3) as c:
+        yield c
 
 
 def target_ahead(sim: SimServer, metres: float) -> dict[str, float]:

@@ -10,22 +10,19 @@ import pytest_asyncio
 from rcon_core.bridge import BridgeClient, ParamNotFoundError, ParamRejectedError
 from rcon_core.bridge.params import parse_like, split
 from rcon_core.sim import SimServer
+from rcon_core.testing import connected
 
 
 @pytest_asyncio.fixture
 async def client2(sim_ros2: SimServer) -> AsyncIterator[BridgeClient]:
-    c = BridgeClient(sim_ros2.url, call_timeout=3)
-    await c.connect(timeout=5)
-    yield c
-    await c.close()
+    async with connected(sim_ros2.url, call_timeout=3) as c:
+        yield c
 
 
 @pytest_asyncio.fixture
 async def client1(sim: SimServer) -> AsyncIterator[BridgeClient]:
-    c = BridgeClient(sim.url, call_timeout=3)
-    await c.connect(timeout=5)
-    yield c
-    await c.close()
+    async with connected(sim.url, call_timeout=3) as c:
+        yield c
 
 
 async def test_detects_ros2_and_its_distro(client2: BridgeClient) -> None:

@@ -9,15 +9,13 @@ import time
 import pytest
 
 from rcon_core.bridge import BridgeClient, ServiceError
-from rcon_core.testing import until
+from rcon_core.testing import connected, until
 
 
 @pytest.fixture
 async def client(sim):
-    c = BridgeClient(sim.url, call_timeout=5)
-    await c.connect(timeout=5)
-    yield c
-    await c.close()
+    async with connected(sim.url, call_timeout=5) as c:
+        yield c
 
 
 async def test_subscribe_every_compression_on_the_sim(sim, client):

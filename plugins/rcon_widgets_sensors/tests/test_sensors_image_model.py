@@ -6,22 +6,12 @@ import threading
 import time
 
 import numpy as np
-import pytest
 from rcon_widgets_sensors.image import Frame, ImageModel, ImageSettings
 from sensors_helpers import in_thread
 
-from rcon_core.bridge import BridgeClient
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding, PluginManager
 from rcon_core.testing import until
-
-
-@pytest.fixture
-async def client(sim):
-    c = BridgeClient(sim.url, reconnect=False)
-    await c.connect()
-    yield c
-    await c.close()
 
 
 def sim_options(sim, topic):

@@ -16,18 +16,9 @@ from rcon_widgets_sensors.motion_sensors import (
     synthetic_reading,
 )
 
-from rcon_core.bridge import BridgeClient
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding
 from rcon_core.testing import ManualClock, RecordingPort, until
-
-
-@pytest.fixture
-async def client(sim):
-    c = BridgeClient(sim.url, reconnect=False)
-    await c.connect()
-    yield c
-    await c.close()
 
 
 def make(cls, client, topic, type_name, role="publish", path=(), types=True, **settings):

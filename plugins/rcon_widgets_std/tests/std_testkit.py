@@ -2,21 +2,14 @@
 
 from __future__ import annotations
 
-from contextlib import asynccontextmanager
-
-from rcon_core.bridge import BridgeClient
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding
+from rcon_core.testing import connected
 
 
-@asynccontextmanager
-async def bridge(sim):
-    client = BridgeClient(sim.url, reconnect=False)
-    await client.connect()
-    try:
-        yield client
-    finally:
-        await client.close()
+def bridge(sim):
+    """``async with bridge(sim) as client:`` a client connected to ``sim``, closed afterwards."""
+    return connected(sim.url, reconnect=False)
 
 
 def build(model_cls, settings, name, type_, role, paths=(), *, client=None, types=None, node="w", clock=None,
