@@ -104,6 +104,17 @@ def settle(ms: int = 30) -> None:
         QTest.qWait(ms // 3 or 1)
 
 
+def compound_in_operate(qtbot, window: MainWindow, widget_id: str, children: int) -> tuple[Any, Any]:
+    """Operate mode (the widgets take touches), then wait until the placed Compound ``widget_id`` shows its
+    ``children`` child views: (its hosted widget, its view)."""
+    if not window.controller.canvas.locked:
+        window.lock_button.click()
+    hosted = window.host.hosted[widget_id]
+    qtbot.waitUntil(lambda: hosted.view is not None and len(getattr(hosted.view, "child_views", [])) == children,
+                    timeout=TIMEOUT_MS)
+    return hosted, hosted.view
+
+
 def all_sent(qtbot, window: MainWindow, sim: Any) -> None:
     """Wait until everything the window sent so far has reached ``sim``: a rosapi call on the same link is
     counted by the sim after the frames sent before it (one connection is handled in order)."""

@@ -7,7 +7,7 @@ registry, so the bound type's fields come from the robot's rosapi typedefs.
 from __future__ import annotations
 
 import pytest
-from app_helpers import choose_kind, tap, tap_item, tap_topic, window_session
+from app_helpers import choose_kind, compound_in_operate, tap, tap_item, tap_topic, window_session
 from qtpy import QtWidgets
 from qtpy.QtTest import QTest
 
@@ -123,11 +123,7 @@ def test_build_a_compound_on_the_device_and_publish_what_its_children_compose(wi
     assert inst.geometry.w >= pw and inst.geometry.h >= ph
     assert inst.settings["children"][1] == {"kind": "std.stepper", "field_path": "angular.z", "title": "Turn",
                                             "settings": children[1].settings}
-    window.lock_button.click()  # operator mode: the widgets take touches
-    hosted = window.host.hosted[inst.id]
-    qtbot.waitUntil(lambda: hosted.view is not None and len(getattr(hosted.view, "child_views", [])) == 2,
-                    timeout=10_000)
-    view = hosted.view
+    hosted, view = compound_in_operate(qtbot, window, inst.id, 2)
     (_c1, slider), (_c2, stepper) = view.child_views
     qtbot.waitUntil(lambda: stepper.plus.isVisible() and slider.slider.isVisible(), timeout=5_000)
     slider.slider.setValue(slider.position_of(1.5))

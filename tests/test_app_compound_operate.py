@@ -8,7 +8,7 @@ mode, against the embedded robot: the operator types in the text child and taps 
 from __future__ import annotations
 
 import pytest
-from app_helpers import snap, tap, window_session
+from app_helpers import compound_in_operate, snap, tap, window_session
 from qtpy import QtWidgets
 from qtpy.QtTest import QTest
 
@@ -35,12 +35,7 @@ def place_compound(window, qtbot, plugins):
                                  Binding("/cmd_vel", "geometry_msgs/Twist", Role.PUBLISH),
                                  Geometry(16, 16, *settings.preferred_size()),
                                  plugins.widget("std.compound").settings_to_dict(settings), "Drive")
-    if not window.controller.canvas.locked:
-        window.lock_button.click()  # Operate mode: the widgets take touches
-    hosted = window.host.hosted[inst.id]
-    qtbot.waitUntil(lambda: hosted.view is not None and len(getattr(hosted.view, "child_views", [])) == 2,
-                    timeout=10_000)
-    view = hosted.view
+    hosted, view = compound_in_operate(qtbot, window, inst.id, 2)
     (_c1, slider), (_c2, text) = view.child_views
     qtbot.waitUntil(lambda: text.edit.isVisible() and slider.slider.isVisible(), timeout=5_000)
     return hosted, view, slider, text
