@@ -3,6 +3,8 @@
 - ``sim``: an async fixture giving a started :class:`~rcon_core.sim.SimServer` on a free loopback port,
   stopped cleanly afterwards; ``sim_ros2``: the same in ROS 2 flavour.
 - ``client``: a ``BridgeClient`` connected to ``sim`` (no reconnect); :func:`connected` for other options.
+- ``plugins``: the installed widget plugins (entry points), one manager per test module.
+- ``threaded_client``: a client on its own loop thread, connected to ``sim_thread`` (for Qt tests).
 - ``sim_thread``: a SimServer running on its own loop in a daemon thread, for sync code (roslibpy, Qt).
 - ``sim_url``: the ``ws://`` URL of a threaded sim (usable from sync and async tests alike).
 
@@ -118,6 +120,17 @@ async def sim() -> AsyncIterator[SimServer]:
         await server.stop()
 
 
+@pytest.fixture(scope="module")
+def plugins() -> Any:
+    """A ``PluginManager`` holding every widget plugin installed through the entry points, as the app loads
+    them (a module that needs other plugins defines its own ``plugins``)."""
+    from rcon_core.plugins import PluginManager
+
+    pm = PluginManager(environ={})
+    pm.load_entry_points()
+    return pm
+
+
 @asynccontextmanager
 async def connected(url: str, *, timeout: float = 10.0, **options: Any) -> AsyncIterator[BridgeClient]:
     """``async with connected(sim.url, call_timeout=5) as client:`` a :class:`BridgeClient` on ``url``
@@ -162,6 +175,22 @@ def sim_thread() -> Iterator[SimServer]:
 def sim_url(sim_thread: SimServer) -> str:
     """The WebSocket URL of ``sim_thread``."""
     return sim_thread.url
+
+
+@pytest.fixture
+def threaded_client(sim_thread: SimServer) -> Iterator[tuple[Any, BridgeClient]]:
+    """``(bridge_thread, client)``: a ``BridgeThread`` running a client connected to ``sim_thread``, as the
+    app runs its link (models get ``dispatch=bridge_thread.call``); closed and stopped afterwards."""
+    from rcon_core.bridge.threaded import BridgeThread
+
+    bt = BridgeThread().start()
+    c = BridgeClient(sim_thread.url, reconnect=False)
+    try:
+        bt.run(c.connect()).result(10)
+        yield bt, c
+        bt.run(c.close()).result(10)
+    finally:
+        bt.stop()
 
 
 # ------------------------------------------------------------------------------------- view harness

@@ -2,8 +2,8 @@
 
 Plain helpers, imported explicitly by the ``test_app_*`` modules; each module keeps its own small
 fixtures that call these with what genuinely differs (window size, type registry, what to wait for).
-The one fixture every app module shares, ``plugins`` (the installed widget plugins), is in
-``tests/conftest.py``; a module that needs other plugins defines its own.
+The one fixture every app module shares, ``plugins`` (the installed widget plugins), comes with the sim
+fixtures from ``rcon_core.testing``; a module that needs other plugins defines its own.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ TIMEOUT_MS = 10_000
 
 def entry_point_plugins() -> PluginManager:
     """A plugin manager holding every widget plugin installed through the entry points (as the shared
-    ``plugins`` fixture of ``tests/conftest.py``, for a module that registers more on its own copy)."""
+    ``plugins`` fixture, for a module that registers more on its own copy)."""
     pm = PluginManager(environ={})
     pm.load_entry_points()
     return pm

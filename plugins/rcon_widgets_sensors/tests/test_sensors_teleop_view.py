@@ -9,8 +9,6 @@ from qtpy.QtTest import QTest
 from rcon_widgets_sensors.teleop import TeleopModel, TeleopSettings
 from rcon_widgets_sensors.teleop_view import TeleopView
 
-from rcon_core.bridge import BridgeClient
-from rcon_core.bridge.threaded import BridgeThread
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding
 
@@ -31,18 +29,8 @@ def zero(m):
     return not any(m["linear"].values()) and not any(m["angular"].values())
 
 
-@pytest.fixture
-def bridge(sim_thread):
-    bt = BridgeThread().start()
-    client = BridgeClient(sim_thread.url, reconnect=False)
-    bt.run(client.connect()).result(10)
-    yield bt, client
-    bt.run(client.close()).result(10)
-    bt.stop()
-
-
-def make_pad(bridge, settings, node):
-    bt, client = bridge
+def make_pad(threaded_client, settings, node):
+    bt, client = threaded_client
     model = TeleopModel(settings, Binding("/cmd_vel", "geometry_msgs/Twist", "publish"), client.node(node),
                         types=TypeRegistry.standard(), dispatch=bt.call)
     bt.call(model.start).result(5)
@@ -55,9 +43,9 @@ def wait(qtbot, pred, timeout=3000):
 
 
 @pytest.fixture
-def two_pads(qtbot, bridge):
-    left_m, left = make_pad(bridge, TeleopSettings(horizontal="", vertical="linear.x", dead_zone=0), "left")
-    right_m, right = make_pad(bridge, TeleopSettings(horizontal="-angular.z", vertical="", dead_zone=0), "right")
+def two_pads(qtbot, threaded_client):
+    left_m, left = make_pad(threaded_client, TeleopSettings(horizontal="", vertical="linear.x", dead_zone=0), "left")
+    right_m, right = make_pad(threaded_client, TeleopSettings(horizontal="-angular.z", vertical="", dead_zone=0), "right")
     win = QtWidgets.QWidget()
     lay = QtWidgets.QHBoxLayout(win)
     lay.addWidget(left)
@@ -67,7 +55,7 @@ def two_pads(qtbot, bridge):
     win.show()
     qtbot.waitExposed(win)
     yield win, left, right
-    bt = bridge[0]
+    bt = threaded_client[0]
     for m in (left_m, right_m):
         bt.call(m.stop).result(5)
 
