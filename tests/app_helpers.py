@@ -44,14 +44,16 @@ def open_window(
     size: tuple[int, int] | None = (1280, 800),
     types: Any = None,
     demo: Callable[[], Workspace] | None = None,
+    layout: Path | None = None,
     activate: bool = False,
     wait_connected: bool = False,
     topics: tuple[str, ...] = (),
     services: tuple[str, ...] = (),
 ) -> MainWindow:
-    """Show a main window (1280x800 unless told) and, given ``url``, connect it and wait for
-    the connection (if ``wait_connected``) and then for each of ``topics`` and ``services`` to be listed."""
-    win = MainWindow(AppConfig(config_dir), plugins, types=types, demo=demo)
+    """Show a main window (1280x800 unless told; ``size=None``: the screen's) on ``layout`` (a workspace file)
+    if given and, given ``url``, connect it and wait for the connection (if ``wait_connected``) and then for
+    each of ``topics`` and ``services`` to be listed."""
+    win = MainWindow(AppConfig(config_dir), plugins, types=types, demo=demo, layout_path=layout)
     qtbot.addWidget(win)
     if size is not None:
         win.resize(*size)
@@ -113,6 +115,20 @@ def compound_in_operate(qtbot, window: MainWindow, widget_id: str, children: int
     qtbot.waitUntil(lambda: hosted.view is not None and len(getattr(hosted.view, "child_views", [])) == children,
                     timeout=TIMEOUT_MS)
     return hosted, hosted.view
+
+
+class Pinch:
+    """A two-finger pinch as ``WidgetFrame.pinch_gesture`` reads it from a ``QPinchGesture`` (its state and
+    total scale factor), for resizing a frame as a person's fingers would."""
+
+    def __init__(self, state: Any, total: float) -> None:
+        self._state, self._total = state, total
+
+    def state(self) -> Any:
+        return self._state
+
+    def totalScaleFactor(self) -> float:  # noqa: N802 - Qt's name
+        return self._total
 
 
 def all_sent(qtbot, window: MainWindow, sim: Any) -> None:

@@ -13,9 +13,11 @@ import sys
 import time
 
 import pytest
+from app_helpers import open_window as open_app_window
+from app_helpers import tap, tap_item
 from qtpy import QtCore
 from qtpy.QtTest import QTest
-from test_app_window import make_plugins, tap, tap_item
+from test_app_window import make_plugins
 
 from rcon_core.app.config import AppConfig
 from rcon_core.app.main_window import MainWindow
@@ -39,12 +41,8 @@ def demo_layout() -> Workspace:
 
 
 def open_window(qtbot, config_dir, layout=None, demo=None) -> MainWindow:
-    window = MainWindow(AppConfig(config_dir), make_plugins(), layout_path=layout, demo=demo)
-    qtbot.addWidget(window)
-    window.resize(1280, 800)  # a 1280x800 tablet (the offscreen test screen is 800x800)
-    window.show()
-    QTest.qWaitForWindowExposed(window)
-    return window
+    """The probe plugin's window, 1280x800 (a tablet; the offscreen screen is 800x800), on ``layout``."""
+    return open_app_window(qtbot, config_dir, make_plugins(), layout=layout, demo=demo)
 
 
 def menu_action(window: MainWindow, name: str) -> None:
