@@ -207,9 +207,10 @@ def test_the_demo_fits_without_scrolling_with_a_camera_beside_the_drive_pad(make
     assert camera.geometry().right() < pad.geometry().left()  # side by side...
     assert camera.geometry().top() == pad.geometry().top()  # ...on the same row
     # watching and driving at once: a finger on the pad drives while the camera stays in sight
-    view = hosted["Drive"].view
-    qtbot.waitUntil(lambda: view is not None and view.isVisible() and hosted["Drive"].model.running,
+    drive = hosted["Drive"]  # its view may be built after the switch: read it once it is there
+    qtbot.waitUntil(lambda: drive.view is not None and drive.view.isVisible() and drive.model.running,
                     timeout=10_000)
+    view = drive.view
     centre = view.rect().center()
     QTest.mousePress(view, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier, centre)
     QTest.mouseMove(view, centre - QtCore.QPoint(0, 60))

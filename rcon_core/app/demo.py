@@ -19,41 +19,41 @@ from rcon_core.plugins import Binding, PluginManager, Role
 #: one slot: title, {kind: settings} best first, topic or service, type, role, field paths, (x, y, w, h)
 Slot = tuple[str, dict[str, dict[str, Any]], str, str, Role, tuple[str, ...], tuple[int, int, int, int]]
 
-#: the drive canvas fits the canvas of a 1024 x 600 tablet in Operate mode (912 x 432 with its margin)
-#: with nothing to scroll: the front camera beside the teleop pad, so the operator watches while driving
+#: every canvas is at most 880 x 432 with its margin: it fits a 1024 x 600 tablet in Operate mode and a
+#: 1280 x 800 window beside the side panel (896 px) with nothing to scroll;: the front camera beside the teleop pad, so the operator watches while driving
 DRIVE: list[Slot] = [
     ("Front camera", {"sensors.image": {"max_fps": 15.0}}, "/camera/front/image_raw",
-     "sensor_msgs/Image", Role.SUBSCRIBE, (), (16, 16, 432, 304)),
+     "sensor_msgs/Image", Role.SUBSCRIBE, (), (16, 16, 400, 304)),
     ("Drive", {"sensors.teleop": {"max_linear": 2.0, "max_angular": 1.0}}, "/cmd_vel",
-     "geometry_msgs/Twist", Role.PUBLISH, (), (464, 16, 288, 416)),
+     "geometry_msgs/Twist", Role.PUBLISH, (), (432, 16, 272, 416)),
     ("Speed limit", {"std.slider": {"minimum": 0.0, "maximum": 3.0, "step": 0.1, "decimals": 1,
                                     "units": "m/s"}},
-     "/speed_limit", "std_msgs/Float64", Role.PUBLISH, ("data",), (16, 336, 272, 96)),
+     "/speed_limit", "std_msgs/Float64", Role.PUBLISH, ("data",), (16, 336, 256, 96)),
     ("Battery", {"std.label": {"decimals": 0, "units": "%", "scale": 100.0}}, "/battery",
-     "sensor_msgs/BatteryState", Role.SUBSCRIBE, ("percentage",), (768, 16, 144, 96)),
+     "sensor_msgs/BatteryState", Role.SUBSCRIBE, ("percentage",), (720, 16, 144, 96)),
     ("Lights", {"std.switch": {"state_topic": "/lights/state", "state_field": "data"}}, "/lights/set",
-     "std_srvs/SetBool", Role.CALL, ("request.data",), (768, 128, 144, 96)),
+     "std_srvs/SetBool", Role.CALL, ("request.data",), (720, 128, 144, 96)),
     ("Dock", {"std.button": {"text": "Dock"}}, "/dock", "std_srvs/Trigger", Role.CALL, (),
-     (768, 240, 144, 96)),
+     (720, 240, 144, 96)),
     ("Depth", {"std.label": {"decimals": 1, "units": "m"}}, "/depth", "sensor_msgs/Range", Role.SUBSCRIBE,
-     ("range",), (304, 336, 144, 96)),
+     ("range",), (288, 336, 128, 96)),
 ]
 CAMERAS: list[Slot] = [
     ("Front camera", {"sensors.image": {"max_fps": 15.0}}, "/camera/front/image_raw",
-     "sensor_msgs/Image", Role.SUBSCRIBE, (), (16, 16, 432, 320)),
+     "sensor_msgs/Image", Role.SUBSCRIBE, (), (16, 16, 416, 312)),
     ("Rear camera", {"sensors.image": {"max_fps": 15.0}}, "/camera/rear/image_raw/compressed",
-     "sensor_msgs/CompressedImage", Role.SUBSCRIBE, (), (464, 16, 448, 320)),
+     "sensor_msgs/CompressedImage", Role.SUBSCRIBE, (), (448, 16, 416, 312)),
 ]
 SENSORS: list[Slot] = [
-    ("GPS", {"map.gps": {}}, "/gps/fix", "sensor_msgs/NavSatFix", Role.SUBSCRIBE, (), (16, 16, 432, 416)),
+    ("GPS", {"map.gps": {}}, "/gps/fix", "sensor_msgs/NavSatFix", Role.SUBSCRIBE, (), (16, 16, 416, 416)),
     ("Battery", {"std.label": {"decimals": 0, "units": "%", "scale": 100.0}}, "/battery",
-     "sensor_msgs/BatteryState", Role.SUBSCRIBE, ("percentage",), (464, 16, 208, 96)),
+     "sensor_msgs/BatteryState", Role.SUBSCRIBE, ("percentage",), (448, 16, 200, 96)),
     ("Depth", {"std.label": {"decimals": 1, "units": "m"}}, "/depth", "sensor_msgs/Range", Role.SUBSCRIBE,
-     ("range",), (688, 16, 224, 96)),
+     ("range",), (664, 16, 200, 96)),
     ("Yaw rate", {"std.label": {"decimals": 2, "units": "rad/s"}}, "/imu/data", "sensor_msgs/Imu",
-     Role.SUBSCRIBE, ("angular_velocity.z",), (464, 128, 448, 96)),
+     Role.SUBSCRIBE, ("angular_velocity.z",), (448, 128, 416, 96)),
     ("Log", {"std.textview": {"min_level": "info"}}, "/rosout", "rosgraph_msgs/Log", Role.SUBSCRIBE, (),
-     (464, 240, 448, 192)),
+     (448, 240, 416, 192)),
 ]
 
 
