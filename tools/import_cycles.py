@@ -1,14 +1,15 @@
 """Import cycles between the modules of some packages, lazy imports included.
 
-Usage: ``python tools/import_cycles.py [DIR ...]`` (default: ``rcon_core``); exit status 1 when a cycle is
-found.  Each DIR is a package directory (``rcon_core/bridge``, ``plugins/rcon_widgets_std/rcon_widgets_std``);
+Usage: ``python tools/import_cycles.py [--typing] [DIR ...]`` (default: ``rcon_core``); exit status 1 when
+a cycle is found.  Each DIR is a package directory (``rcon_core/bridge``, ``plugins/rcon_widgets_std/rcon_widgets_std``);
 its modules are named from the nearest directory above it without an ``__init__.py``.
 
 Every ``import``/``from ... import`` statement counts wherever it is -- at the top, inside a function (a lazy
 import), under ``try`` -- except under ``if TYPE_CHECKING:`` (those never run).  ``from pkg import name`` is an
 edge to ``pkg.name`` when that is a module, else to ``pkg`` (its ``__init__``).  Only edges between modules of
 the given directories are kept; a cycle is a strongly connected component of more than one module (or a
-module importing itself).
+module importing itself).  ``--typing`` counts the ``if TYPE_CHECKING:`` imports too: it shows the
+dependencies that annotations alone hide (a helper typed against the class that imports it).
 """
 
 from __future__ import annotations
@@ -34,15 +35,16 @@ def _is_type_checking(test: ast.expr) -> bool:
         isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING")
 
 
-def _imports(tree: ast.AST) -> Iterator[ast.Import | ast.ImportFrom]:
-    """Every import statement, skipping the bodies of ``if TYPE_CHECKING:`` (their ``else`` counts)."""
+def _imports(tree: ast.AST, typing: bool = False) -> Iterator[ast.Import | ast.ImportFrom]:
+    """Every import statement, skipping the bodies of ``if TYPE_CHECKING:`` (their ``else`` counts) unless
+    ``typing``."""
     stack: list[ast.AST] = [tree]
     while stack:
         node = stack.pop()
         if isinstance(node, ast.Import | ast.ImportFrom):
             yield node
             continue
-        if isinstance(node, ast.If) and _is_type_checking(node.test):
+        if isinstance(node, ast.If) and _is_type_checking(node.test) and not typing:
             stack.extend(node.orelse)
             continue
         stack.extend(ast.iter_child_nodes(node))
@@ -59,7 +61,7 @@ def _resolve(module: str, is_package: bool, node: ast.ImportFrom) -> str:
     return ".".join(base + ([node.module] if node.module else []))
 
 
-def graph(dirs: Iterable[str | Path]) -> dict[str, set[str]]:
+def graph(dirs: Iterable[str | Path], typing: bool = False) -> dict[str, set[str]]:
     """Module -> the modules (of the same directories) it imports."""
     files: dict[str, Path] = {}
     for d in dirs:
@@ -70,7 +72,7 @@ def graph(dirs: Iterable[str | Path]) -> dict[str, set[str]]:
     for module, path in files.items():
         tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
         is_package = path.name == "__init__.py"
-        for node in _imports(tree):
+        for node in _imports(tree, typing):
             targets: list[str] = []
             if isinstance(node, ast.Import):
                 targets = [a.name for a in node.names]
@@ -130,8 +132,9 @@ def cycles(edges: dict[str, set[str]]) -> list[list[str]]:
 
 
 def main(argv: list[str]) -> int:
-    dirs = argv or ["rcon_core"]
-    edges = graph(dirs)
+    typing = "--typing" in argv
+    dirs = [a for a in argv if a != "--typing"] or ["rcon_core"]
+    edges = graph(dirs, typing)
     found = cycles(edges)
     print(f"{len(edges)} modules, {sum(len(t) for t in edges.values())} imports, {len(found)} cycle(s)")
     for component in found:
