@@ -13,9 +13,11 @@ as ``{"secs", "nsecs"}`` on ROS 1), with real NaN/Inf.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 from rcon_core.msgs import TypeRegistry, UnknownTypeError, names
+from rcon_core.msgs.ros1_wire import Ros1Codec
 
 from .errors import ProtocolError
 
@@ -28,12 +30,16 @@ def has_fixed_arrays(type_name: str, typedefs: list[dict[str, Any]]) -> bool:
 class RawDecoder:
     """Decodes cbor-raw payloads of the types it learned: ``decode(type_name, data) -> dict``."""
 
-    __slots__ = ("registry", "ros2", "_known")
+    __slots__ = ("registry", "ros2", "_known", "_own", "_readers", "_codec")
 
     def __init__(self, ros2: bool = False, registry: Any = None) -> None:
         self.ros2 = ros2
         self.registry: Any = registry  # created on the first typedefs when not given
+        self._own = registry is None  # the registry is this decoder's: only it changes it
         self._known: set[str] = set()
+        #: per type name, ``read(data) -> dict`` compiled once (own ROS 1 registry only: it changes only here)
+        self._readers: dict[str, Callable[[Any], dict[str, Any]]] = {}
+        self._codec: Ros1Codec | None = None
 
     @classmethod
     def over(cls, registry: Any) -> RawDecoder:
@@ -51,17 +57,27 @@ class RawDecoder:
             learned = self.registry.add_typedefs(typedefs)
         except ValueError as exc:
             raise ProtocolError(f"typedefs the decoder cannot use: {exc}") from None
+        self._readers.clear()
+        self._codec = None
         self._known.update(names.pkg_type(n) for n in learned)
         self._known.update(names.pkg_type(td["type"]) for td in typedefs if isinstance(td.get("type"), str))
 
     def decode(self, type_name: str, data: bytes | bytearray | memoryview) -> dict[str, Any]:
-        reg = self.registry
-        if reg is None:
-            raise ProtocolError(f"cbor-raw {type_name}: no typedef for {type_name}")
         try:
+            read = self._readers.get(type_name)
+            if read is not None:
+                return read(data)
+            reg = self.registry
+            if reg is None:
+                raise UnknownTypeError(type_name)
             if self.ros2:
                 return reg.deserialize_cdr(type_name, data)
-            return reg.deserialize_ros1(type_name, data)
+            if not self._own:
+                return reg.deserialize_ros1(type_name, data)
+            if self._codec is None:
+                self._codec = Ros1Codec(reg)
+            read = self._readers[type_name] = self._codec.reader(reg.resolve(type_name))
+            return read(data)
         except UnknownTypeError:
             raise ProtocolError(f"cbor-raw {type_name}: no typedef for {type_name}") from None
         except (ValueError, RecursionError) as exc:

@@ -62,6 +62,10 @@ class Ros1Codec:
         """ROS 1 bytes -> wire-shape dict of the message ``name`` (canonical)."""
         return deserialize(self, name, data)
 
+    def reader(self, name: str) -> Callable[[bytes | bytearray | memoryview], dict[str, Any]]:
+        """A function that deserializes the message ``name`` (canonical); see :func:`reader`."""
+        return reader(self, name)
+
 
 # ------------------------------------------------------------------------------------------ decoding
 def _decoder(reg: Ros1Codec, name: str) -> Decoder:
@@ -85,11 +89,22 @@ def _compile_decoder(reg: Ros1Codec, name: str) -> Decoder:
         fnames = [n for n, _ in run]
         size = st.size
 
-        def step(buf: Any, off: int, out: dict[str, Any], st=st, fnames=fnames, size=size) -> int:
-            out.update(zip(fnames, st.unpack_from(buf, off), strict=True))
-            return off + size
+        unpack = st.unpack_from
+        if len(fnames) == 1:
+            fname = fnames[0]
 
-        steps.append(step)
+            def one(buf: Any, off: int, out: dict[str, Any]) -> int:
+                out[fname] = unpack(buf, off)[0]
+                return off + size
+
+            steps.append(one)
+        else:
+
+            def step(buf: Any, off: int, out: dict[str, Any]) -> int:
+                out.update(zip(fnames, unpack(buf, off), strict=False))  # same length by construction
+                return off + size
+
+            steps.append(step)
         run.clear()
 
     for f in reg.msgdef(name).fields:
@@ -140,15 +155,29 @@ def _element_reader(reg: Ros1Codec, f: FieldDef, ta: str, tb: str) -> Decoder:
 
         return read_prim
     base = f.base
+    nested: list[Decoder] = []  # compiled on first use (a type may refer to itself)
 
     def read_msg(buf: Any, off: int) -> tuple[Any, int]:
-        return _decoder(reg, base)(buf, off)
+        if not nested:
+            nested.append(_decoder(reg, base))
+        return nested[0](buf, off)
 
     return read_msg
 
 
 def _field_decoder(reg: Ros1Codec, f: FieldDef, ta: str, tb: str) -> Callable[[Any, int, dict[str, Any]], int]:
     fname = f.name
+    if f.array_len is None and f.base not in TIME_TYPES and primitive(f.base, reg.ros2) is None:
+        base = f.base
+        nested: list[Decoder] = []  # compiled on first use (a type may refer to itself)
+
+        def message(buf: Any, off: int, out: dict[str, Any]) -> int:
+            if not nested:
+                nested.append(_decoder(reg, base))
+            out[fname], off = nested[0](buf, off)
+            return off
+
+        return message
     elem = _element_reader(reg, f, ta, tb)
     if f.array_len is None:
 
@@ -181,6 +210,19 @@ def _field_decoder(reg: Ros1Codec, f: FieldDef, ta: str, tb: str) -> Callable[[A
         dtype = np.dtype(_DTYPES[p.code])
         is_bool = p.kind == "bool"
 
+        if fixed and not is_bool:
+            nbytes = fixed * dtype.itemsize
+            frombuffer = np.frombuffer
+
+            def fixed_numeric(buf: Any, off: int, out: dict[str, Any]) -> int:
+                end = off + nbytes
+                if end > len(buf):
+                    raise WireError(f"{fname}: {fixed} items run past the end of the data")
+                out[fname] = frombuffer(buf, dtype, fixed, off).tolist()
+                return end
+
+            return fixed_numeric
+
         def numeric(buf: Any, off: int, out: dict[str, Any]) -> int:
             n, off = count(buf, off)
             end = off + n * dtype.itemsize
@@ -206,18 +248,31 @@ def _field_decoder(reg: Ros1Codec, f: FieldDef, ta: str, tb: str) -> Callable[[A
     return array
 
 
+def reader(reg: Ros1Codec, name: str) -> Callable[[bytes | bytearray | memoryview], dict[str, Any]]:
+    """``read(data) -> dict`` for the message ``name`` (canonical): :func:`deserialize` with the per-type
+    work done once."""
+    decode = _decoder(reg, name)
+    wire = reg.wire_name(name)
+
+    def read(data: bytes | bytearray | memoryview) -> dict[str, Any]:
+        buf = data if data.__class__ is bytes else bytes(data)
+        try:
+            out, end = decode(buf, 0)
+        except struct.error:
+            raise WireError(f"the data ({len(buf)} bytes) ends before a whole {wire}") from None
+        if end != len(buf):
+            raise WireError(f"{len(buf) - end} bytes left over after a {wire} ({end} bytes): wrong type?")
+        return out
+
+    return read
+
+
 def deserialize(reg: Ros1Codec, name: str, data: bytes | bytearray | memoryview) -> dict[str, Any]:
     """ROS 1 bytes (no length prefix) -> wire-shape dict of the message ``name`` (canonical)."""
-    buf = bytes(data) if not isinstance(data, bytes) else data
-    try:
-        out, end = _decoder(reg, name)(buf, 0)
-    except struct.error:
-        raise WireError(f"the data ({len(buf)} bytes) ends before a whole {reg.wire_name(name)}") from None
-    if end != len(buf):
-        raise WireError(
-            f"{len(buf) - end} bytes left over after a {reg.wire_name(name)} ({end} bytes): wrong type?"
-        )
-    return out
+    read = reg.cache.get(("ros1_read", name))
+    if read is None:
+        read = reg.cache[("ros1_read", name)] = reader(reg, name)
+    return read(data)
 
 
 # ------------------------------------------------------------------------------------------ encoding
