@@ -29,7 +29,7 @@ import asyncio
 import socket as _socket
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 from websockets.asyncio.client import ClientConnection
@@ -69,10 +69,12 @@ def direct_writer(ws: ClientConnection) -> Callable[[bytes], bool] | None:
 class Link:
     """One open connection: frames out (now or queued, in order), the writer task, the stall watch."""
 
-    __slots__ = ("ws", "queue", "event", "write_now", "watch", "degraded", "on_stale")
+    __slots__ = ("ws", "recv", "queue", "event", "write_now", "watch", "degraded", "on_stale")
 
     def __init__(self, ws: ClientConnection, on_stale: Callable[[Any], None]) -> None:
         self.ws = ws
+        #: ``await recv()``: the next frame (websockets' own method: no wrapper on the read path)
+        self.recv: Callable[[], Awaitable[str | bytes]] = ws.recv
         self.queue: deque[bytes | TimedFrame] = deque()
         self.event = asyncio.Event()
         self.write_now = direct_writer(ws)
@@ -138,9 +140,6 @@ class Link:
         return n
 
     # -- reading and the connection ----------------------------------------------------------------
-
-    async def recv(self) -> str | bytes:
-        return await self.ws.recv()
 
     def abort(self) -> None:
         """Drop the connection at once (no close handshake)."""
