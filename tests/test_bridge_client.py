@@ -388,6 +388,32 @@ async def test_set_level_status_and_auth():
         await c.close()
     with pytest.raises(ValueError, match="missing rosauth field"):
         BridgeClient("ws://127.0.0.1:1", auth={"mac": "m"})
+
+
+async def test_an_auth_that_takes_time_goes_first_and_calls_wait_for_it():
+    """The socket is open while an awaitable auth is being made: nothing may go out before the auth op,
+    and a call made meanwhile waits for the restored link (not for its timeout)."""
+    auth = {"mac": "m", "client": "127.0.0.1", "dest": "127.0.0.1", "rand": "r", "t": 1, "level": "admin", "end": 2}
+    gate = asyncio.Event()
+
+    async def slow_auth():
+        await gate.wait()
+        return auth
+
+    async with ScriptedServer() as server:
+        server.services["/ok"] = lambda f: {"op": "service_response", "id": f["id"], "service": f["service"],
+                                            "values": {"v": 1}, "result": True}
+        c = BridgeClient(server.url, auth=slow_auth)
+        connecting = asyncio.ensure_future(c.connect(timeout=5))
+        await until(lambda: c.connected)  # the socket is open; the auth is not made yet
+        call = asyncio.ensure_future(c.call_service("/ok", {}, timeout=5))
+        await asyncio.sleep(0.2)
+        assert not call.done() and server.received == []
+        gate.set()
+        assert await asyncio.wait_for(call, 3) == {"v": 1}
+        await connecting
+        assert [f["op"] for f in server.received] == ["auth", "call_service"]
+        await c.close()
     with pytest.raises(ValueError, match="ws:// or wss://"):
         BridgeClient("http://x")
 

@@ -259,8 +259,9 @@ class BridgeClient:
         self.session.set_level(level)
 
     async def wait_connected(self) -> None:
-        """Return once a link is open; raises NotConnectedError when the client is not trying to connect."""
-        if self.link is not None:
+        """Return once a link is open and restored (after ``auth``); raises NotConnectedError when the client
+        is not trying to connect."""
+        if self._connected.is_set():
             return
         if self._task is None or self._task.done():
             raise NotConnectedError(f"not connected to {self.url}")
