@@ -335,7 +335,7 @@ class BridgeClient:
         task, self._task = self._task, None
         link = self.link
         if link is not None:
-            await link.ws.close()
+            await link.close()
         if task is not None and not task.done():
             task.cancel()
         if task is not None:
@@ -414,15 +414,14 @@ class BridgeClient:
     async def _pinger(self, link: Link) -> None:
         """Without stall detection (``stall_timeout=None``): a ping every ``latency_interval``; a pong
         missing for ``pong_timeout`` drops the link.  With it, ``freshness.watch_link``."""
-        ws = link.ws
         if self.stall_timeout is not None:
             probe_interval = min(self.latency_interval, self.stall_timeout / 4)
             link.watch = LinkWatch(self.stall_timeout, probe_interval, _monotonic())
-            await watch_link(ws, link.watch, self.pong_timeout, self._link_event)
+            await watch_link(link, link.watch, self.pong_timeout, self._link_event)
             return
         try:
             while True:
-                waiter = await ws.ping()
+                waiter = await link.ping()
                 try:
                     self.latency = await asyncio.wait_for(waiter, self.pong_timeout)
                 except TimeoutError:

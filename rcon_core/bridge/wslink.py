@@ -19,6 +19,10 @@ Decision: commands and their freshness limit (see ``freshness.py``)
     carries its deadline (:class:`~rcon_core.bridge.freshness.TimedFrame`) and the writer drops it once
     the deadline passed (``on_stale(pub)`` counts it).
 
+Everything else the bridge does with the connection goes through :class:`Link` too (``ping``, ``close``,
+``abort``, ``cut``, the write buffer size for the stall watch), so no other module touches ``ws`` or its
+transport.
+
 Test hooks (public, documented): ``link.queued`` (frames waiting for the writer), ``link.buffered()`` (bytes
 in the transport's write buffer), ``link.socket`` (the TCP socket).
 """
@@ -36,7 +40,7 @@ from websockets.asyncio.client import ClientConnection
 from websockets.exceptions import ConnectionClosed
 from websockets.protocol import State
 
-from .freshness import LinkWatch, TimedFrame
+from .freshness import LinkWatch, TimedFrame, cut
 
 _OPEN = State.OPEN
 _monotonic = time.monotonic
@@ -141,9 +145,20 @@ class Link:
 
     # -- reading and the connection ----------------------------------------------------------------
 
+    async def ping(self) -> Awaitable[float]:
+        """Send a WebSocket ping; the result is a waiter that gives the round trip in seconds."""
+        return await self.ws.ping()
+
+    async def close(self) -> None:
+        await self.ws.close()
+
     def abort(self) -> None:
         """Drop the connection at once (no close handshake)."""
         self.ws.transport.abort()
+
+    def cut(self) -> None:
+        """Drop the connection with a TCP reset, so the kernel discards what it has not sent yet."""
+        cut(self.ws.transport)
 
     # -- test hooks ----------------------------------------------------------------------------------
 
