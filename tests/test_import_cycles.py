@@ -28,9 +28,11 @@ def test_the_cleaned_packages_have_no_import_cycle() -> None:
     assert finder.cycles(edges) == []
 
 
-def test_msgs_helpers_do_not_import_the_registry_even_for_annotations() -> None:
+def test_no_cycle_even_for_annotations() -> None:
+    """The msgs helpers take a lookup protocol, the bridge's parts take the client's protocols (host.py):
+    neither is typed against the class that imports it."""
     finder = _finder()
-    assert finder.cycles(finder.graph([ROOT / "rcon_core/msgs"], typing=True)) == []
+    assert finder.cycles(finder.graph([ROOT / d for d in CLEAN], typing=True)) == []
 
 
 @pytest.mark.parametrize("lazy", [False, True])

@@ -18,7 +18,7 @@ from .freshness import AUTO, resolve_max_age
 from .protocol import COMPRESSIONS
 
 if TYPE_CHECKING:
-    from .client import BridgeClient
+    from .host import NodeClient
 
 log = logging.getLogger(__name__)
 
@@ -229,7 +229,7 @@ class ActionGoal:
 class Node:
     """A consumer of the bridge.  Create with ``client.node(label)``."""
 
-    def __init__(self, client: BridgeClient, node_id: str) -> None:
+    def __init__(self, client: NodeClient, node_id: str) -> None:
         self.client = client
         self.session = client.session
         self.id = node_id
