@@ -172,7 +172,7 @@ async def test_nodes_share_one_subscription_and_tightest_options_win(server, cli
     sa.unsubscribe()
     unsubs = await server.wait_for("unsubscribe", count=3, topic="/rec/f64")
     assert unsubs[-1]["id"] == subs[2]["id"]
-    assert "/rec/f64" not in client._topics
+    assert "/rec/f64" not in client.session.topics
 
 
 async def test_a_raising_callback_does_not_affect_others(server, client, caplog):
@@ -263,7 +263,7 @@ async def test_call_service_always_has_a_client_side_timeout(server, client):
     client.call_timeout = 0.2
     with pytest.raises(ServiceTimeoutError):
         await client.call_service("/hung")
-    assert not client._pending
+    assert not client.session.pending
 
 
 async def test_status_error_fails_the_matching_call(server, client):
@@ -388,6 +388,32 @@ async def test_set_level_status_and_auth():
         await c.close()
     with pytest.raises(ValueError, match="missing rosauth field"):
         BridgeClient("ws://127.0.0.1:1", auth={"mac": "m"})
+
+
+async def test_an_auth_that_takes_time_goes_first_and_calls_wait_for_it():
+    """The socket is open while an awaitable auth is being made: nothing may go out before the auth op,
+    and a call made meanwhile waits for the restored link (not for its timeout)."""
+    auth = {"mac": "m", "client": "127.0.0.1", "dest": "127.0.0.1", "rand": "r", "t": 1, "level": "admin", "end": 2}
+    gate = asyncio.Event()
+
+    async def slow_auth():
+        await gate.wait()
+        return auth
+
+    async with ScriptedServer() as server:
+        server.services["/ok"] = lambda f: {"op": "service_response", "id": f["id"], "service": f["service"],
+                                            "values": {"v": 1}, "result": True}
+        c = BridgeClient(server.url, auth=slow_auth)
+        connecting = asyncio.ensure_future(c.connect(timeout=5))
+        await until(lambda: c.connected)  # the socket is open; the auth is not made yet
+        call = asyncio.ensure_future(c.call_service("/ok", {}, timeout=5))
+        await asyncio.sleep(0.2)
+        assert not call.done() and server.received == []
+        gate.set()
+        assert await asyncio.wait_for(call, 3) == {"v": 1}
+        await connecting
+        assert [f["op"] for f in server.received] == ["auth", "call_service"]
+        await c.close()
     with pytest.raises(ValueError, match="ws:// or wss://"):
         BridgeClient("http://x")
 
@@ -516,7 +542,7 @@ async def test_bad_frames_are_logged_and_never_kill_anything(server, caplog):
     assert client.connected and client.stats["connects"] == 1
     assert client.stats["bad_frames"] >= len(BAD_FRAMES) - 2  # all but the two ignored service_responses
     assert client.stats["oversize_frames"] == 1
-    assert len(client._fragments) <= 1
+    assert len(client.inbound.fragments) <= 1
     for text in ("not valid JSON", "unknown op 'frobnicate'", "without 'op'", "not an object",
                  "malformed 'publish' frame", "num 0 missing", "not a PNG", "neither CBOR nor JSON",
                  "exceeds max_message_size", "empty binary frame", "logged every 1000th"):
@@ -644,8 +670,9 @@ async def test_cbor_raw_uses_the_registry_when_given(server):
     c.node("n").subscribe("/rec/imu", a.append, type="sensor_msgs/Imu", compression="cbor")
     plain.node("n").subscribe("/rec/imu", b.append, type="sensor_msgs/Imu", compression="cbor")
     await until(lambda: len(a) == 2 and len(b) == 2)
-    assert type(c._topics["/rec/imu"].decoder).__name__ == "_RegistryDecoder"
-    assert type(plain._topics["/rec/imu"].decoder).__name__ == "RawDecoder"
+    assert c.session.topics["/rec/imu"].decoder.registry is reg
+    learned = plain.session.topics["/rec/imu"].decoder.registry  # learned from the server's typedefs
+    assert learned is not reg and learned.names() and not learned.has("std_srvs/SetBool")
     assert a == b
     await c.close()
     await plain.close()

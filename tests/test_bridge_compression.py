@@ -128,7 +128,7 @@ async def test_every_compression_equals_none_on_every_topic(sim: SimServer, comp
                 expected = {"cbor-raw"}
             assert used == {"none"} | expected, f"{topic}: the sim sent {used}"
         if fragment_size:
-            assert tested._fragments.completed > 0  # the frames really came in pieces
+            assert tested.inbound.fragments.completed > 0  # the frames really came in pieces
     finally:
         await tested.close()
         await reference.close()

@@ -29,17 +29,17 @@ async def client(sim):
 
 
 async def test_nagle_is_off_on_the_client_socket(client):
-    sock = client._ws.transport.get_extra_info("socket")
+    sock = client.link.socket
     assert sock.getsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY) != 0
 
 
 async def test_a_publish_is_handed_to_the_transport_before_publish_returns(sim, client):
     pub = client.node("teleop").advertise("/rcon_test/now", "std_msgs/String")
     await asyncio.sleep(0.1)
-    sent_before = client._ws.transport.get_write_buffer_size(), len(client._out)
+    sent_before = client.link.buffered(), client.link.queued
     assert sent_before == (0, 0)
     pub.publish({"data": "at once"})
-    assert len(client._out) == 0  # not queued for the writer task: already written
+    assert client.link.queued == 0  # not queued for the writer task: already written
     msg = await sim.wait_for_published("/rcon_test/now", lambda m: m["data"] == "at once", timeout=5)
     assert msg == {"data": "at once"}
     assert pub.sent == 1
@@ -51,7 +51,7 @@ async def test_publishes_keep_their_order_when_the_transport_backs_up(sim, clien
     n, pad = 200, "x" * (64 << 10)
     for i in range(n):  # ~13 MB without yielding: the transport fills up, the rest waits in the queue
         pub.publish({"data": f"{i:06d}{pad}"})
-    assert len(client._out) > 0, "the transport never backed up; the queued path was not exercised"
+    assert client.link.queued > 0, "the transport never backed up; the queued path was not exercised"
     await sim.wait_for_published("/rcon_test/bulk", lambda m: m["data"].startswith(f"{n - 1:06d}"), timeout=20)
     got = [int(m["data"][:6]) for m in sim.published("/rcon_test/bulk")]
     assert got == list(range(n))

@@ -233,6 +233,14 @@ def test_cbor_raw_errors():
     with pytest.raises(ProtocolError, match="no typedef"):
         dec.decode("std_msgs/Nope", b"")
     assert dec.decode("std_msgs/msg/String", b"\x02\x00\x00\x00hi") == {"data": "hi"}
+    # a server whose typedefs describe a type inside itself: a clear error, not a crash
+    loop = {"type": "a/Loop", "fieldnames": ["x", "next"], "fieldtypes": ["int32", "a/Loop"],
+            "fieldarraylen": [-1, -1], "examples": [], "constnames": [], "constvalues": []}
+    dec.add_typedefs([loop])
+    with pytest.raises(ProtocolError, match="cannot deserialize"):
+        dec.decode("a/Loop", b"\x01\x00\x00\x00" * 10)
+    with pytest.raises(ProtocolError, match="cannot use"):
+        dec.add_typedefs([{"type": "a/Bad", "fieldnames": ["x"], "fieldtypes": ["int32", "int8"], "fieldarraylen": [-1]}])
 
 
 def test_fixed_array_detection_matches_the_cbor_bug_list():

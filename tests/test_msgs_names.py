@@ -69,3 +69,13 @@ def test_parts():
     assert names.part_name("rcon_sim/action/NavigateToFix", "feedback") == "rcon_sim/action/NavigateToFix_Feedback"
     with pytest.raises(ValueError, match="no part"):
         names.part_name("std_srvs/srv/SetBool", "goal")
+
+
+def test_pkg_type_is_the_one_lookup_key_of_both_spellings() -> None:
+    from rcon_core.msgs.names import pkg_type
+
+    assert pkg_type("geometry_msgs/msg/Twist") == pkg_type("geometry_msgs/Twist") == "geometry_msgs/Twist"
+    assert pkg_type("std_srvs/srv/SetBool") == "std_srvs/SetBool"
+    assert pkg_type("/rcon_sim/action/NavigateToFix/") == "rcon_sim/NavigateToFix"
+    assert pkg_type("std_srvs/srv/SetBool_Request") == "std_srvs/SetBool_Request"  # suffixes are left alone
+    assert pkg_type("not a name") == "not a name" and pkg_type("") == ""  # never raises

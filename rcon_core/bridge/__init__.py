@@ -1,4 +1,5 @@
-"""RCON's rosbridge v2 client (asyncio + websockets).  No Qt.  See ``client.py`` for behaviour decisions."""
+"""RCON's rosbridge v2 client (asyncio + websockets).  No Qt.  ``client.py`` says where each behaviour is decided
+(the connection there, the protocol state in ``session.py``, the websockets adapter in ``wslink.py``...)."""
 
 from .action_server import ActionServer, ServedGoal
 from .client import BridgeClient, ConnectionState

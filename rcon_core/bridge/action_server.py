@@ -100,7 +100,7 @@ class ActionServer:
         if self.active:
             self.active = False
             self.node.action_servers.discard(self)
-            self.node.client.provided_actions.remove(self)
+            self.node.session.provided_actions.remove(self)
 
     def abandon(self) -> None:
         """Drop every goal in flight without answering (link lost, unadvertised): status UNKNOWN."""

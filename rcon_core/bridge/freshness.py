@@ -156,22 +156,22 @@ def cut(transport: Any) -> None:
 Report = Callable[[str, Any], bool]
 
 
-async def watch_link(ws: Any, watch: LinkWatch, pong_timeout: float, report: Report) -> None:
-    """Probe one connection until it closes: pings, stall and recovery reports, the cut and the timeout."""
-    transport = ws.transport
+async def watch_link(link: Any, watch: LinkWatch, pong_timeout: float, report: Report) -> None:
+    """Probe one connection (a ``wslink.Link``) until it closes: pings, stall and recovery reports, the cut
+    and the timeout."""
     probes: set[asyncio.Future[None]] = set()
     try:
         while True:
             now = time.monotonic()
-            watch.buffer(transport.get_write_buffer_size(), now)
+            watch.buffer(link.buffered(), now)
             if watch.probe_due(now):
                 watch.sent(now)
-                task = asyncio.ensure_future(_probe(ws, watch, now, report))
+                task = asyncio.ensure_future(_probe(link, watch, now, report))
                 probes.add(task)
                 task.add_done_callback(probes.discard)
             if watch.overdue(now) >= pong_timeout:
                 report("timeout", f"no pong within {pong_timeout:g} s")
-                transport.abort()
+                link.abort()
                 return
             why = watch.stalled(now)
             if why is not None and not watch.degraded:
@@ -179,7 +179,7 @@ async def watch_link(ws: Any, watch: LinkWatch, pong_timeout: float, report: Rep
                     watch.degraded = True
                     if watch.at_risk():
                         report("cut", why)
-                        cut(transport)
+                        link.cut()
                         return
             elif why is None and watch.degraded:
                 watch.degraded = False
@@ -190,11 +190,11 @@ async def watch_link(ws: Any, watch: LinkWatch, pong_timeout: float, report: Rep
             task.cancel()
 
 
-async def _probe(ws: Any, watch: LinkWatch, sent: float, report: Report) -> None:
+async def _probe(link: Any, watch: LinkWatch, sent: float, report: Report) -> None:
     from websockets.exceptions import ConnectionClosed
 
     try:
-        waiter = await ws.ping()
+        waiter = await link.ping()
         latency = await waiter
     except ConnectionClosed:
         return

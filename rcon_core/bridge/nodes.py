@@ -18,7 +18,7 @@ from .freshness import AUTO, resolve_max_age
 from .protocol import COMPRESSIONS
 
 if TYPE_CHECKING:
-    from .client import BridgeClient
+    from .host import NodeClient
 
 log = logging.getLogger(__name__)
 
@@ -47,8 +47,8 @@ class Subscription:
     def unsubscribe(self) -> None:
         if self.active:
             self.active = False
-            self.node._subs.discard(self)
-            self.node.client._remove_subscription(self)
+            self.node.subscriptions.discard(self)
+            self.node.session.remove_subscription(self)
 
     def __repr__(self) -> str:
         return f"<Subscription {self.topic} node={self.node.id} active={self.active}>"
@@ -64,11 +64,12 @@ class Publisher:
     and counted in ``dropped`` too (see ``freshness.py``).
     """
 
-    __slots__ = ("node", "topic", "type", "latch", "queue_size", "max_age", "active", "sent", "dropped")
+    __slots__ = ("node", "topic", "type", "latch", "queue_size", "max_age", "active", "sent", "dropped", "_session")
 
     def __init__(self, node: Node, topic: str, type: str, latch: bool, queue_size: int,
                  max_age: float | None = None) -> None:
         self.node = node
+        self._session = node.session
         self.topic = topic
         self.type = type
         self.latch = latch
@@ -84,13 +85,13 @@ class Publisher:
             raise BridgeError(f"publish on {self.topic} after unadvertise")
         if not isinstance(msg, dict):
             raise TypeError(f"publish on {self.topic}: msg must be a dict, got {type(msg).__name__}")
-        return self.node.client._publish(self, msg)
+        return self._session.publish(self, msg)
 
     def unadvertise(self) -> None:
         if self.active:
             self.active = False
-            self.node._pubs.discard(self)
-            self.node.client._remove_publisher(self)
+            self.node.publishers.discard(self)
+            self._session.remove_publisher(self)
 
     def __repr__(self) -> str:
         return f"<Publisher {self.topic} [{self.type}] node={self.node.id} active={self.active}>"
@@ -118,8 +119,8 @@ class ServiceServer:
     def unadvertise(self) -> None:
         if self.active:
             self.active = False
-            self.node._services.discard(self)
-            self.node.client._remove_service(self)
+            self.node.services.discard(self)
+            self.node.session.services.remove(self)
 
 
 class GoalStatus(enum.IntEnum):
@@ -159,7 +160,6 @@ class ActionGoal:
         self.last_feedback: dict[str, Any] | None = None
         self.status: int | None = None
         self.cancel_requested = False
-        self._timer: asyncio.TimerHandle | None = None
         self._future: asyncio.Future[dict[str, Any]] = asyncio.get_running_loop().create_future()
 
     @property
@@ -204,15 +204,17 @@ class ActionGoal:
         """Ask the server to cancel the goal (the result arrives as usual, with status CANCELED)."""
         if not self._future.done():
             self.cancel_requested = True
-            self.node.client._send({"op": "cancel_action_goal", "id": self.id, "action": self.action})
+            self.node.session.goals.cancel(self)
 
-    def _settle(self, result: dict[str, Any] | None = None, error: BaseException | None = None) -> bool:
-        """Finish the goal once; False when it was already finished."""
+    def add_done_callback(self, fn: Callable[[ActionGoal], None]) -> None:
+        """Call ``fn(goal)`` once the goal ended, however it ended."""
+        self._future.add_done_callback(lambda _f: fn(self))
+
+    def settle(self, result: dict[str, Any] | None = None, error: BaseException | None = None) -> bool:
+        """Finish the goal once (the session calls this when the answer, an error or the timeout comes);
+        False when it was already finished."""
         if self._future.done():
             return False
-        if self._timer is not None:
-            self._timer.cancel()
-            self._timer = None
         if error is not None:
             self._future.set_exception(error)
             self._future.exception()  # retrieved: a caller that never awaits gets no "never retrieved" noise
@@ -227,13 +229,15 @@ class ActionGoal:
 class Node:
     """A consumer of the bridge.  Create with ``client.node(label)``."""
 
-    def __init__(self, client: BridgeClient, node_id: str) -> None:
+    def __init__(self, client: NodeClient, node_id: str) -> None:
         self.client = client
+        self.session = client.session
         self.id = node_id
-        self._subs: set[Subscription] = set()
-        self._pubs: set[Publisher] = set()
-        self._services: set[ServiceServer] = set()
-        self._goals: set[ActionGoal] = set()
+        #: what the node owns; each item removes itself when it ends
+        self.subscriptions: set[Subscription] = set()
+        self.publishers: set[Publisher] = set()
+        self.services: set[ServiceServer] = set()
+        self.goals: set[ActionGoal] = set()
         self.action_servers: set[Any] = set()  # provided actions (action_server.ActionServer)
         self.closed = False
 
@@ -265,8 +269,8 @@ class Node:
         if fragment_size is not None and (not isinstance(fragment_size, int) or fragment_size <= 0):
             raise ValueError(f"fragment_size must be a positive integer, got {fragment_size!r}")
         sub = Subscription(self, topic, callback, type, throttle_rate, queue_length, compression, fragment_size)
-        self._subs.add(sub)
-        self.client._add_subscription(sub)
+        self.subscriptions.add(sub)
+        self.session.add_subscription(sub)
         return sub
 
     def advertise(self, topic: str, type: str, latch: bool = False, queue_size: int = 100,
@@ -279,8 +283,8 @@ class Node:
         if not isinstance(type, str) or "/" not in type:
             raise ValueError(f"type must be a message type name like 'std_msgs/String', got {type!r}")
         pub = Publisher(self, topic, type, bool(latch), int(queue_size), resolve_max_age(max_age, bool(latch)))
-        self.client._add_publisher(pub)  # may raise on a type conflict
-        self._pubs.add(pub)
+        self.session.add_publisher(pub)  # may raise on a type conflict
+        self.publishers.add(pub)
         return pub
 
     async def call_service(self, name: str, args: dict[str, Any] | list | None = None,
@@ -293,8 +297,8 @@ class Node:
         if not callable(handler):
             raise TypeError("handler must be callable")
         srv = ServiceServer(self, name, type, handler)
-        self.client._add_service(srv)
-        self._services.add(srv)
+        self.session.services.add(srv)
+        self.services.add(srv)
         return srv
 
     def send_action_goal(self, action: str, action_type: str, args: dict[str, Any] | list | None = None,
@@ -321,9 +325,9 @@ class Node:
         if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, int | float)
                                     or not timeout > 0):
             raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
-        goal = self.client._send_goal(self, action, action_type, args, feedback, timeout, check)
-        self._goals.add(goal)
-        goal._future.add_done_callback(lambda _f: self._goals.discard(goal))
+        goal = self.session.goals.send(self, action, action_type, args, feedback, timeout, check)
+        self.goals.add(goal)
+        goal.add_done_callback(self.goals.discard)
         return goal
 
     def advertise_action(self, action: str, type: str, handler: Callable[[Any], Any]) -> Any:
@@ -331,7 +335,7 @@ class Node:
         parties send and returns the result message.  Returns an ``action_server.ActionServer``; see that
         module for feedback, cancel and failure handling."""
         self._check()
-        srv = self.client.provided_actions.create(self, action, type, handler)
+        srv = self.session.provided_actions.create(self, action, type, handler)
         self.action_servers.add(srv)
         return srv
 
@@ -339,15 +343,15 @@ class Node:
         """End every subscription, advertisement, service, provided action and goal of this node."""
         if self.closed:
             return
-        for s in list(self._subs):
+        for s in list(self.subscriptions):
             s.unsubscribe()
-        for p in list(self._pubs):
+        for p in list(self.publishers):
             p.unadvertise()
-        for srv in list(self._services):
+        for srv in list(self.services):
             srv.unadvertise()
         for action in list(self.action_servers):
             action.unadvertise()
-        for g in list(self._goals):
+        for g in list(self.goals):
             g.cancel()
         self.closed = True
-        self.client._nodes.pop(self.id, None)
+        self.session.node_closed(self)

@@ -27,7 +27,7 @@ import yaml
 from .errors import BridgeError, ServiceError
 
 if TYPE_CHECKING:
-    from .client import BridgeClient
+    from .host import RosClient
 
 MISSING: Any = object()
 
@@ -109,7 +109,7 @@ def parse_like(text: str, current: Any) -> Any:
 class Params:
     """Parameter access for one client; every method is a coroutine on the client's loop."""
 
-    def __init__(self, client: BridgeClient) -> None:
+    def __init__(self, client: RosClient) -> None:
         self._client = client
 
     async def ros2(self) -> bool:

@@ -1,49 +1,25 @@
-"""ROS 1 binary deserialization for ``compression: "cbor-raw"`` frames, driven by rosapi typedefs.
+"""``cbor-raw`` payloads: the message serialized by the server's ROS, decoded by the one type system.
 
-A cbor-raw frame's ``msg`` is ``{secs, nsecs, bytes}``: ``bytes`` is the ROS 1 serialized message
-(little-endian, no 4-byte length prefix).  The server's own ``/rosapi/message_details`` typedefs describe
-exactly what it serialized, so the decoder is compiled from them (one closure per type, cached); it works
-for any type the server knows, including types no local registry has.  Output is the same dict shape as
-the JSON path (``uint8[]``/``char[]`` as ``bytes``, times as ``{"secs", "nsecs"}``), with real NaN/Inf.
+A cbor-raw frame's ``msg`` is ``{secs, nsecs, bytes}``: ``bytes`` is the serialized message -- ROS 1
+serialization (little-endian, no 4-byte length prefix) from a ROS 1 server, CDR from a ROS 2 one
+(``cdrdecode.py`` says which).  The server's own ``/rosapi/message_details`` typedefs describe exactly what
+it serialized, so a :class:`RawDecoder` learns them into a :class:`~rcon_core.msgs.TypeRegistry` of its own
+(it works for any type the server knows, including types no local registry has) and decodes with the
+registry's ``deserialize_ros1`` / ``deserialize_cdr`` (``msgs/ros1_wire.py``, ``msgs/cdr.py``; the bridge
+has no decoder of its own).  Given the application's registry (``RawDecoder.over(registry)``) it decodes
+with that one.  Output is the same dict shape as the JSON path (``uint8[]``/``char[]`` as ``bytes``, times
+as ``{"secs", "nsecs"}`` on ROS 1), with real NaN/Inf.
 """
 
 from __future__ import annotations
 
-import struct
 from collections.abc import Callable
 from typing import Any
 
-import numpy as np
+from rcon_core.msgs import TypeRegistry, UnknownTypeError, names
+from rcon_core.msgs.ros1_wire import Ros1Codec
 
 from .errors import ProtocolError
-
-_SCALARS: dict[str, str] = {
-    "bool": "?", "int8": "b", "byte": "b", "uint8": "B", "char": "B",
-    "int16": "h", "uint16": "H", "int32": "i", "uint32": "I", "int64": "q", "uint64": "Q",
-    "float32": "f", "float64": "d",
-}
-_U32 = struct.Struct("<I")
-_TIME = struct.Struct("<II")
-_DURATION = struct.Struct("<ii")
-
-Decoder = Callable[[memoryview, int], tuple[Any, int]]
-
-
-def _short(name: str) -> str:
-    """``pkg/msg/Type`` -> ``pkg/Type`` so both spellings find the same typedef."""
-    parts = name.split("/")
-    return f"{parts[0]}/{parts[-1]}" if len(parts) == 3 else name
-
-
-def typedef_index(typedefs: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
-    """Index rosapi typedefs by type name (both spellings)."""
-    index: dict[str, dict[str, Any]] = {}
-    for td in typedefs:
-        name = td.get("type")
-        if isinstance(name, str):
-            index[name] = td
-            index[_short(name)] = td
-    return index
 
 
 def has_fixed_arrays(type_name: str, typedefs: list[dict[str, Any]]) -> bool:
@@ -52,147 +28,57 @@ def has_fixed_arrays(type_name: str, typedefs: list[dict[str, Any]]) -> bool:
 
 
 class RawDecoder:
-    """Compiles ROS 1 deserializers from typedefs; ``decode(type_name, data) -> dict``."""
+    """Decodes cbor-raw payloads of the types it learned: ``decode(type_name, data) -> dict``."""
 
-    def __init__(self) -> None:
-        self._typedefs: dict[str, dict[str, Any]] = {}
-        self._compiled: dict[str, Decoder] = {}
+    __slots__ = ("registry", "ros2", "_known", "_own", "_readers", "_codec")
+
+    def __init__(self, ros2: bool = False, registry: Any = None) -> None:
+        self.ros2 = ros2
+        self.registry: Any = registry  # created on the first typedefs when not given
+        self._own = registry is None  # the registry is this decoder's: only it changes it
+        self._known: set[str] = set()
+        #: per type name, ``read(data) -> dict`` compiled once (own ROS 1 registry only: it changes only here)
+        self._readers: dict[str, Callable[[Any], dict[str, Any]]] = {}
+        self._codec: Ros1Codec | None = None
+
+    @classmethod
+    def over(cls, registry: Any) -> RawDecoder:
+        """A decoder that uses ``registry`` (which knows its types already) as it is."""
+        return cls(bool(getattr(registry, "ros2", False)), registry)
 
     def knows(self, type_name: str) -> bool:
-        return _short(type_name) in self._typedefs
+        return names.pkg_type(type_name) in self._known
 
     def add_typedefs(self, typedefs: list[dict[str, Any]]) -> None:
-        self._typedefs.update(typedef_index(typedefs))
+        """Learn rosapi typedefs (raises ProtocolError when they describe no message)."""
+        if self.registry is None:
+            self.registry = TypeRegistry.empty(ros2=self.ros2)
+        try:
+            learned = self.registry.add_typedefs(typedefs)
+        except ValueError as exc:
+            raise ProtocolError(f"typedefs the decoder cannot use: {exc}") from None
+        self._readers.clear()
+        self._codec = None
+        self._known.update(names.pkg_type(n) for n in learned)
+        self._known.update(names.pkg_type(td["type"]) for td in typedefs if isinstance(td.get("type"), str))
 
     def decode(self, type_name: str, data: bytes | bytearray | memoryview) -> dict[str, Any]:
-        fn = self._compiled.get(type_name)
-        if fn is None:
-            fn = self._compiled[type_name] = self._compile(_short(type_name), ())
-        view = memoryview(data)
         try:
-            value, end = fn(view, 0)
-        except (struct.error, IndexError, ValueError, UnicodeDecodeError) as exc:
-            raise ProtocolError(f"cbor-raw {type_name}: cannot deserialize {len(view)} bytes ({exc})") from None
-        if end != len(view):
-            raise ProtocolError(f"cbor-raw {type_name}: {len(view) - end} bytes left over after the message")
-        return value
-
-    # ------------------------------------------------------------------ compilation
-
-    def _compile(self, name: str, stack: tuple[str, ...]) -> Decoder:
-        if name in stack:
-            raise ProtocolError(f"recursive type definition: {' -> '.join(stack + (name,))}")
-        td = self._typedefs.get(name)
-        if td is None:
-            raise ProtocolError(f"no typedef for {name}")
-        names = td.get("fieldnames", [])
-        types = td.get("fieldtypes", [])
-        lens = td.get("fieldarraylen", [])
-        fields = [(fname, self._field(ftype, alen, stack + (name,)))
-                  for fname, ftype, alen in zip(names, types, lens, strict=True)]
-
-        def decode_msg(buf: memoryview, pos: int) -> tuple[Any, int]:
-            out = {}
-            for fname, fdec in fields:
-                out[fname], pos = fdec(buf, pos)
-            return out, pos
-
-        return decode_msg
-
-    def _field(self, ftype: str, alen: int, stack: tuple[str, ...]) -> Decoder:
-        elem = self._element(ftype, stack)
-        if alen is None or alen < 0:
-            return elem
-        if ftype in ("uint8", "char"):
-            return _bytes_array(alen)
-        code = _SCALARS.get(ftype)
-        if code is not None and code != "?":
-            return _numeric_array(np.dtype("<" + code), alen)
-        return _generic_array(elem, alen)
-
-    def _element(self, ftype: str, stack: tuple[str, ...]) -> Decoder:
-        code = _SCALARS.get(ftype)
-        if code is not None:
-            st = struct.Struct("<" + code)
-            size = st.size
-            unpack = st.unpack_from
-
-            def scalar(buf: memoryview, pos: int) -> tuple[Any, int]:
-                return unpack(buf, pos)[0], pos + size
-
-            return scalar
-        if ftype == "string":
-            return _string
-        if ftype == "time":
-            return _time
-        if ftype == "duration":
-            return _duration
-        nested: list[Decoder] = []
-
-        def lazy(buf: memoryview, pos: int) -> tuple[Any, int]:
-            if not nested:
-                nested.append(self._compile(_short(ftype), stack))
-            return nested[0](buf, pos)
-
-        return lazy
-
-
-def _string(buf: memoryview, pos: int) -> tuple[str, int]:
-    (n,) = _U32.unpack_from(buf, pos)
-    pos += 4
-    if pos + n > len(buf):
-        raise ValueError("string runs past the end")
-    return str(buf[pos:pos + n], "utf-8"), pos + n
-
-
-def _time(buf: memoryview, pos: int) -> tuple[dict[str, int], int]:
-    s, ns = _TIME.unpack_from(buf, pos)
-    return {"secs": s, "nsecs": ns}, pos + 8
-
-
-def _duration(buf: memoryview, pos: int) -> tuple[dict[str, int], int]:
-    s, ns = _DURATION.unpack_from(buf, pos)
-    return {"secs": s, "nsecs": ns}, pos + 8
-
-
-def _length(buf: memoryview, pos: int, fixed: int) -> tuple[int, int]:
-    if fixed > 0:
-        return fixed, pos
-    return _U32.unpack_from(buf, pos)[0], pos + 4
-
-
-def _bytes_array(fixed: int) -> Decoder:
-    def dec(buf: memoryview, pos: int) -> tuple[bytes, int]:
-        n, pos = _length(buf, pos, fixed)
-        if pos + n > len(buf):
-            raise ValueError("byte array runs past the end")
-        return bytes(buf[pos:pos + n]), pos + n
-
-    return dec
-
-
-def _numeric_array(dtype: np.dtype, fixed: int) -> Decoder:
-    size = dtype.itemsize
-
-    def dec(buf: memoryview, pos: int) -> tuple[list, int]:
-        n, pos = _length(buf, pos, fixed)
-        end = pos + n * size
-        if end > len(buf):
-            raise ValueError("array runs past the end")
-        return np.frombuffer(buf[pos:end], dtype=dtype).tolist(), end
-
-    return dec
-
-
-def _generic_array(elem: Decoder, fixed: int) -> Decoder:
-    def dec(buf: memoryview, pos: int) -> tuple[list, int]:
-        n, pos = _length(buf, pos, fixed)
-        if n > len(buf):
-            raise ValueError("array length larger than the message")
-        out = []
-        for _ in range(n):
-            v, pos = elem(buf, pos)
-            out.append(v)
-        return out, pos
-
-    return dec
+            read = self._readers.get(type_name)
+            if read is not None:
+                return read(data)
+            reg = self.registry
+            if reg is None:
+                raise UnknownTypeError(type_name)
+            if self.ros2:
+                return reg.deserialize_cdr(type_name, data)
+            if not self._own:
+                return reg.deserialize_ros1(type_name, data)
+            if self._codec is None:
+                self._codec = Ros1Codec(reg)
+            read = self._readers[type_name] = self._codec.reader(reg.resolve(type_name))
+            return read(data)
+        except UnknownTypeError:
+            raise ProtocolError(f"cbor-raw {type_name}: no typedef for {type_name}") from None
+        except (ValueError, RecursionError) as exc:
+            raise ProtocolError(f"cbor-raw {type_name}: cannot deserialize {len(data)} bytes ({exc})") from None

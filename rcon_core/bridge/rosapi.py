@@ -14,11 +14,11 @@ from typing import TYPE_CHECKING, Any
 from .errors import ServiceError
 
 if TYPE_CHECKING:
-    from .client import BridgeClient
+    from .host import ServiceCaller
 
 
 class Rosapi:
-    def __init__(self, client: BridgeClient) -> None:
+    def __init__(self, client: ServiceCaller) -> None:
         self._client = client
 
     async def _call(self, name: str, args: dict[str, Any] | None = None, timeout: float | None = None) -> Any:

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING
 from .errors import BridgeError
 
 if TYPE_CHECKING:
-    from .client import BridgeClient
+    from .host import ServiceCaller
 
 log = logging.getLogger(__name__)
 
@@ -59,7 +59,7 @@ class RosInfo:
         return out
 
 
-async def _ask(client: BridgeClient, service: str, args: dict | None, timeout: float) -> dict | None:
+async def _ask(client: ServiceCaller, service: str, args: dict | None, timeout: float) -> dict | None:
     try:
         values = await client.call_service(service, args or {}, timeout=timeout)
     except (TimeoutError, BridgeError) as exc:
@@ -79,7 +79,7 @@ def _json_text(value: object) -> str:
     return str(decoded).strip() if decoded is not None else ""
 
 
-async def detect(client: BridgeClient, timeout: float | None = None) -> RosInfo:
+async def detect(client: ServiceCaller, timeout: float | None = None) -> RosInfo:
     """Ask the server which ROS it runs (see the module docstring)."""
     budget = min(client.call_timeout, 3.0) if timeout is None else timeout
     listing = await _ask(client, "/rosapi/services", None, budget)

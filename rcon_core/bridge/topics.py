@@ -36,10 +36,10 @@ class TopicEntry:
     """The client's one subscription to a topic, fanned out to every node's callback."""
 
     __slots__ = ("topic", "subs", "deliver", "fast", "sid", "sent_options", "raw_type", "decoder", "received",
-                 "_client")
+                 "report")
 
-    def __init__(self, client: Any, topic: str) -> None:
-        self._client = client
+    def __init__(self, topic: str, report: Callable[[str, str], None]) -> None:
+        self.report = report  # ``report(kind, message)``: a payload that cannot be decoded (a bad frame)
         self.topic = topic
         self.subs: list[Subscription] = []
         self.sid: str | None = None  # id of the rosbridge subscription currently active on the server
@@ -123,7 +123,7 @@ class TopicEntry:
             data = msg["bytes"]
             decoded = self.decoder.decode(self.raw_type, data)
         except Exception as exc:
-            self._client._bad_frame("cbor-raw", f"{self.topic}: cannot decode cbor-raw message ({exc})")
+            self.report("cbor-raw", f"{self.topic}: cannot decode cbor-raw message ({exc})")
             return
         self._fan_out(decoded)
 
@@ -131,12 +131,13 @@ class TopicEntry:
 class AdvertEntry:
     """The client's one advertisement of a topic, shared by every node's Publisher."""
 
-    __slots__ = ("topic", "pubs", "type", "latch", "queue_size", "active", "pending", "dropped", "head")
+    __slots__ = ("topic", "pubs", "type", "latch", "queue_size", "active", "pending", "dropped", "head", "tail")
 
     def __init__(self, topic: str, type: str) -> None:
         self.topic = topic
         #: the start of every publish frame of this topic, up to the message (encoded once)
         self.head = b'{"op":"publish","topic":' + orjson.dumps(topic) + b',"msg":'
+        self.tail = b"}"  # the end of every publish frame: ``,"latch":true}`` when latched (README point 25)
         self.type = type
         self.pubs: list[Publisher] = []
         self.latch = False
@@ -151,6 +152,7 @@ class AdvertEntry:
         queue_size = max((p.queue_size for p in self.pubs), default=100)
         changed = (latch, queue_size) != (self.latch, self.queue_size)
         self.latch, self.queue_size = latch, queue_size
+        self.tail = b',"latch":true}' if latch else b"}"
         return changed
 
     def advertise_op(self) -> dict[str, Any]:

@@ -179,6 +179,7 @@ def typedefs_text(typedefs: list[dict[str, Any]]) -> str:
 async def _server_definition(url: str, name: str, timeout: float = 5.0) -> tuple[Any, str] | None:
     """(typedefs, text) from the server, or None when it is unreachable or does not know the type."""
     from rcon_core.bridge import BridgeClient, BridgeError
+    from rcon_core.msgs.names import pkg_type
 
     client = BridgeClient(url, reconnect=False, call_timeout=timeout)
     try:
@@ -186,7 +187,7 @@ async def _server_definition(url: str, name: str, timeout: float = 5.0) -> tuple
     except Exception:
         return None
     try:
-        short = "/".join(name.split("/")[::2]) if name.count("/") == 2 else name
+        short = pkg_type(name)
         if "/srv/" in name or await _is_service_type(client, short):
             req = await client.rosapi.service_request_details(short)
             resp = await client.rosapi.service_response_details(short)

@@ -14,7 +14,7 @@ Rules of the body (offsets count from the end of the header):
 
 A big-endian header (``00 00``) is read too.  A few zero bytes of padding after the message (some
 middlewares round the size up to 4) are accepted.  Per type a decoder is compiled once (cached in the
-registry); consecutive fixed-size scalars are read with one ``struct`` call (a layout per start alignment
+:class:`CdrCodec`); consecutive fixed-size scalars are read with one ``struct`` call (a layout per start alignment
 modulo 8), numeric arrays with ``numpy.frombuffer``.  Deserialized dicts have the ROS 2 wire shape with
 ``uint8[]``/``char[]``/``byte[]`` as ``bytes`` and NaN/inf as floats, like ``ros1_wire``.
 """
@@ -32,9 +32,9 @@ from .model import TIME_TYPES, FieldDef, is_binary, primitive
 from .values import as_bytes
 
 if TYPE_CHECKING:
-    from .registry import TypeRegistry
+    from .lookup import TypeLookup
 
-__all__ = ["serialize", "deserialize", "CdrError", "HEADER_LE"]
+__all__ = ["CdrCodec", "serialize", "deserialize", "CdrError", "HEADER_LE"]
 
 HEADER_LE = b"\x00\x01\x00\x00"
 _HEADER_BE = b"\x00\x00\x00\x00"
@@ -49,15 +49,37 @@ Reader = Callable[[Any, int], tuple[Any, int]]
 Writer = Callable[[Any, bytearray], None]
 
 
+class CdrCodec:
+    """CDR of the types a :class:`~rcon_core.msgs.lookup.TypeLookup` knows; what it compiles per type is
+    cached here (make a new codec when the lookup learns new definitions)."""
+
+    def __init__(self, types: TypeLookup) -> None:
+        self.types = types
+        self.ros2 = types.ros2
+        self.time_fields = types.time_fields
+        self.msgdef = types.msgdef
+        self.default_value = types.default_value
+        self.wire_name = types.wire_name
+        self.cache: dict[Any, Any] = {}
+
+    def serialize(self, name: str, msg: dict[str, Any]) -> bytes:
+        """Wire-shape dict -> CDR bytes (with the header) of the message ``name`` (canonical)."""
+        return serialize(self, name, msg)
+
+    def deserialize(self, name: str, data: bytes | bytearray | memoryview) -> dict[str, Any]:
+        """CDR bytes (with the header) -> wire-shape dict of the message ``name`` (canonical)."""
+        return deserialize(self, name, data)
+
+
 def _pad(pos: int, size: int) -> int:
     return pos + (-pos % size)
 
 
 # ------------------------------------------------------------------------------------------ decoding
 class _Dec:
-    """Readers for one byte order, compiled per type and cached in the registry."""
+    """Readers for one byte order, compiled per type and cached in the codec."""
 
-    def __init__(self, reg: TypeRegistry, little: bool) -> None:
+    def __init__(self, reg: CdrCodec, little: bool) -> None:
         self.reg = reg
         self.order = "<" if little else ">"
         self.u32 = struct.Struct(self.order + "I")
@@ -66,9 +88,9 @@ class _Dec:
 
     def message(self, name: str) -> Reader:
         key = ("cdr_dec", self.order, name)
-        fn = self.reg._cache.get(key)
+        fn = self.reg.cache.get(key)
         if fn is None:
-            fn = self.reg._cache[key] = self._compile(name)
+            fn = self.reg.cache[key] = self._compile(name)
         return fn
 
     def _compile(self, name: str) -> Reader:
@@ -234,14 +256,14 @@ class _Dec:
         return array
 
 
-def deserialize(reg: TypeRegistry, name: str, data: bytes | bytearray | memoryview) -> dict[str, Any]:
+def deserialize(reg: CdrCodec, name: str, data: bytes | bytearray | memoryview) -> dict[str, Any]:
     """CDR bytes (with the 4-byte header) -> wire-shape dict of the message ``name`` (canonical)."""
     raw = bytes(data) if not isinstance(data, bytes) else data
     if len(raw) < 4 or raw[0] != 0 or raw[1] not in (0, 1):
         raise CdrError(f"not CDR data: the header is {raw[:4].hex(' ') or 'missing'} (expected 00 01 00 00)")
-    dec = reg._cache.get(("cdr_decoder", raw[1]))
+    dec = reg.cache.get(("cdr_decoder", raw[1]))
     if dec is None:
-        dec = reg._cache[("cdr_decoder", raw[1])] = _Dec(reg, little=raw[1] == 1)
+        dec = reg.cache[("cdr_decoder", raw[1])] = _Dec(reg, little=raw[1] == 1)
     body = memoryview(raw)[4:]
     try:
         out, end = dec.message(name)(body, 0)
@@ -264,11 +286,11 @@ def _num(kind: str, v: Any) -> Any:
     return v
 
 
-def _writer(reg: TypeRegistry, name: str) -> Writer:
+def _writer(reg: CdrCodec, name: str) -> Writer:
     key = ("cdr_enc", name)
-    fn = reg._cache.get(key)
+    fn = reg.cache.get(key)
     if fn is None:
-        fn = reg._cache[key] = _compile_writer(reg, name)
+        fn = reg.cache[key] = _compile_writer(reg, name)
     return fn
 
 
@@ -278,7 +300,7 @@ def _align(out: bytearray, size: int) -> None:
         out += b"\x00" * pad
 
 
-def _compile_writer(reg: TypeRegistry, name: str) -> Writer:
+def _compile_writer(reg: CdrCodec, name: str) -> Writer:
     fields = reg.msgdef(name).fields
     if not fields:
         def empty(msg: Any, out: bytearray) -> None:
@@ -303,7 +325,7 @@ def _compile_writer(reg: TypeRegistry, name: str) -> Writer:
     return encode
 
 
-def _element_writer(reg: TypeRegistry, f: FieldDef) -> Writer:
+def _element_writer(reg: CdrCodec, f: FieldDef) -> Writer:
     if f.base in TIME_TYPES:
         st = struct.Struct("<iI")
 
@@ -340,7 +362,7 @@ def _element_writer(reg: TypeRegistry, f: FieldDef) -> Writer:
     return write_msg
 
 
-def _field_writer(reg: TypeRegistry, f: FieldDef) -> Writer:
+def _field_writer(reg: CdrCodec, f: FieldDef) -> Writer:
     elem = _element_writer(reg, f)
     if f.array_len is None:
         return elem
@@ -384,7 +406,7 @@ def _field_writer(reg: TypeRegistry, f: FieldDef) -> Writer:
     return array
 
 
-def serialize(reg: TypeRegistry, name: str, msg: dict[str, Any]) -> bytes:
+def serialize(reg: CdrCodec, name: str, msg: dict[str, Any]) -> bytes:
     """A wire-shape dict of the message ``name`` (canonical) -> CDR bytes with the little-endian header."""
     out = bytearray(HEADER_LE)
     _writer(reg, name)(msg, out)

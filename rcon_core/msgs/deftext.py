@@ -8,14 +8,14 @@ from . import names
 from .model import MsgDef
 
 if TYPE_CHECKING:
-    from .registry import TypeRegistry
+    from .lookup import TypeLookup
 
 __all__ = ["definition_text", "msgdef_text"]
 
 SEPARATOR = "=" * 80
 
 
-def _type_text(reg: TypeRegistry, base: str) -> str:
+def _type_text(reg: TypeLookup, base: str) -> str:
     if base in ("time", "duration"):
         if reg.ros2:
             return f"builtin_interfaces/{'Time' if base == 'time' else 'Duration'}"
@@ -25,7 +25,7 @@ def _type_text(reg: TypeRegistry, base: str) -> str:
     return base
 
 
-def msgdef_text(reg: TypeRegistry, md: MsgDef) -> str:
+def msgdef_text(reg: TypeLookup, md: MsgDef) -> str:
     """The text of one definition: constants first, then fields."""
     lines = []
     for c in md.constants:
@@ -39,7 +39,7 @@ def msgdef_text(reg: TypeRegistry, md: MsgDef) -> str:
     return "\n".join(lines) + ("\n" if lines else "")
 
 
-def definition_text(reg: TypeRegistry, name: str, dependencies: bool = False) -> str:
+def definition_text(reg: TypeLookup, name: str, dependencies: bool = False) -> str:
     """Text of ``name`` (a message, or a whole service/action with ``---`` between parts) and its types."""
     try:
         roots = [reg.resolve(name)]

@@ -30,6 +30,7 @@ __all__ = [
     "part_name",
     "package",
     "short",
+    "pkg_type",
 ]
 
 KINDS = ("msg", "srv", "action")
@@ -111,6 +112,16 @@ def package(name: str) -> str:
 def short(name: str) -> str:
     """The bare type name (``Twist`` for ``geometry_msgs/msg/Twist``)."""
     return split(name)[2]
+
+
+def pkg_type(name: str) -> str:
+    """``pkg/msg/Type`` (or ``pkg/srv/...``, ``pkg/action/...``) -> ``pkg/Type``; other text is returned
+    without its outer slashes.  Never raises: a lookup key under which both spellings of a name from a
+    server, a file or a person meet (unlike :func:`to_ros1`, it does not check the name nor rewrite the
+    ``_Request``/``_Goal`` part suffixes)."""
+    text = name.strip("/")
+    parts = text.split("/")
+    return f"{parts[0]}/{parts[2]}" if len(parts) == 3 else text
 
 
 def service_part(name: str) -> tuple[str, str] | None:

@@ -11,10 +11,15 @@ import base64
 from typing import Any
 
 from . import names
+from . import text as msg_text
 from .actions import actionlib_wrappers
+from .cdr import CdrCodec
+from .deftext import definition_text
 from .model import TIME_TYPES, Constant, FieldDef, MsgDef, is_binary, primitive
 from .parse import parse_interface
+from .ros1_wire import Ros1Codec
 from .sources import standard_defs, standard_interfaces
+from .typed import TypedFactory
 from .typedefs import build_typedefs, parse_typedefs
 
 __all__ = ["TypeRegistry", "UnknownTypeError"]
@@ -34,8 +39,9 @@ class TypeRegistry:
         self.ros2 = ros2
         self._defs: dict[str, MsgDef] = {} if empty else dict(standard_defs(ros2))
         self._interfaces: set[str] = set() if empty else set(standard_interfaces(ros2))
-        self._cache: dict[Any, Any] = {}
+        self._cache: dict[Any, Any] = {}  # resolve() answers
         self._typed: Any = None
+        self._codecs: dict[str, Any] = {}  # "ros1" / "cdr" -> a codec with its own per-type cache
 
     # ------------------------------------------------------------------ construction
     @classmethod
@@ -56,6 +62,19 @@ class TypeRegistry:
     def _changed(self) -> None:
         self._cache.clear()
         self._typed = None
+        self._codecs.clear()
+
+    def _ros1(self) -> Ros1Codec:
+        codec = self._codecs.get("ros1")
+        if codec is None:
+            codec = self._codecs["ros1"] = Ros1Codec(self)
+        return codec
+
+    def _cdr(self) -> CdrCodec:
+        codec = self._codecs.get("cdr")
+        if codec is None:
+            codec = self._codecs["cdr"] = CdrCodec(self)
+        return codec
 
     def add(self, md: MsgDef) -> None:
         """Add (or replace) one message definition."""
@@ -252,15 +271,11 @@ class TypeRegistry:
         With ``dependencies=True`` every type it uses follows, each once, after a ``====`` line and
         ``MSG: pkg/Type`` (like ``gendeps --cat`` and rosapi's ``typedefs_full_text``).
         """
-        from .deftext import definition_text
-
         return definition_text(self, name, dependencies)
 
     # ------------------------------------------------------------------ typed objects, text, wire
     def _typed_factory(self) -> Any:
         if self._typed is None:
-            from .typed import TypedFactory
-
             self._typed = TypedFactory(self)
         return self._typed
 
@@ -279,52 +294,36 @@ class TypeRegistry:
     def from_text(self, name: str, text: str, *, finite: bool = True) -> dict[str, Any]:
         """YAML or JSON typed by a person -> a complete wire-shape message; raises MessageTextError.
         NaN and infinity are refused unless ``finite=False``."""
-        from .text import from_text
-
-        return from_text(self, name, text, finite=finite)
+        return msg_text.from_text(self, name, text, finite=finite)
 
     def to_text(self, msg: dict[str, Any]) -> str:
         """A message as YAML for a person to edit; :meth:`from_text` reads it back unchanged."""
-        from .text import to_text
-
-        return to_text(msg)
+        return msg_text.to_text(msg)
 
     def complete(self, name: str, msg: Any, *, finite: bool = False) -> dict[str, Any]:
         """Check and fill a (partial) message dict; raises MessageTextError at the first problem.
         ``finite``: refuse NaN and infinity too."""
-        from .text import complete
-
-        return complete(self, name, msg, finite=finite)
+        return msg_text.complete(self, name, msg, finite=finite)
 
     def validate(self, name: str, msg: Any, *, finite: bool = False) -> list[Any]:
         """Every problem in a message dict, as :class:`~rcon_core.msgs.text.Problem` (empty when fine)."""
-        from .text import validate
-
-        return validate(self, name, msg, finite=finite)
+        return msg_text.validate(self, name, msg, finite=finite)
 
     def serialize_ros1(self, name: str, msg: dict[str, Any]) -> bytes:
         """ROS 1 binary serialization (no 4-byte length prefix)."""
-        from .ros1_wire import serialize
-
-        return serialize(self, self.resolve(name), msg)
+        return self._ros1().serialize(self.resolve(name), msg)
 
     def deserialize_ros1(self, name: str, data: bytes | bytearray | memoryview) -> dict[str, Any]:
         """ROS 1 binary -> wire-shape dict (``uint8[]`` as bytes, NaN stays NaN)."""
-        from .ros1_wire import deserialize
-
-        return deserialize(self, self.resolve(name), data)
+        return self._ros1().deserialize(self.resolve(name), data)
 
     def serialize_cdr(self, name: str, msg: dict[str, Any]) -> bytes:
         """ROS 2 CDR (with its 4-byte header), as rosbridge 2.x sends ``cbor-raw``; see ``cdr.py``."""
-        from .cdr import serialize
-
-        return serialize(self, self.resolve(name), msg)
+        return self._cdr().serialize(self.resolve(name), msg)
 
     def deserialize_cdr(self, name: str, data: bytes | bytearray | memoryview) -> dict[str, Any]:
         """ROS 2 CDR -> wire-shape dict (``uint8[]`` as bytes, NaN stays NaN)."""
-        from .cdr import deserialize
-
-        return deserialize(self, self.resolve(name), data)
+        return self._cdr().deserialize(self.resolve(name), data)
 
     def __contains__(self, name: object) -> bool:
         return isinstance(name, str) and self.has(name)

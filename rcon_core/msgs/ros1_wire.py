@@ -5,7 +5,8 @@ uint32 secs + uint32 nsecs, ``duration`` int32 + int32. The message is NOT prefi
 (rosbridge's ``cbor-raw`` sends it like that). Deserialized dicts use the wire shape with two
 differences from JSON: ``uint8[]``/``char[]`` are ``bytes``, and NaN/inf stay floats.
 
-Per type a decoder and an encoder are compiled once (cached in the registry): consecutive fixed-size
+Per type a decoder and an encoder are compiled once (cached in the :class:`Ros1Codec`, which the registry
+keeps until it learns new types): consecutive fixed-size
 scalars are read with one ``struct`` call, numeric arrays with ``numpy.frombuffer``.
 """
 
@@ -22,9 +23,9 @@ from .model import TIME_TYPES, FieldDef, is_binary, primitive
 from .values import as_bytes
 
 if TYPE_CHECKING:
-    from .registry import TypeRegistry
+    from .lookup import TypeLookup
 
-__all__ = ["serialize", "deserialize", "WireError"]
+__all__ = ["Ros1Codec", "serialize", "deserialize", "WireError"]
 
 
 class WireError(ValueError):
@@ -40,17 +41,43 @@ Decoder = Callable[[Any, int], tuple[Any, int]]
 Encoder = Callable[[Any, list[bytes]], None]
 
 
+class Ros1Codec:
+    """ROS 1 serialization of the types a :class:`~rcon_core.msgs.lookup.TypeLookup` knows; what it compiles
+    per type is cached here (make a new codec when the lookup learns new definitions)."""
+
+    def __init__(self, types: TypeLookup) -> None:
+        self.types = types
+        self.ros2 = types.ros2
+        self.time_fields = types.time_fields
+        self.msgdef = types.msgdef
+        self.default_value = types.default_value
+        self.wire_name = types.wire_name
+        self.cache: dict[tuple[str, str], Any] = {}
+
+    def serialize(self, name: str, msg: dict[str, Any]) -> bytes:
+        """Wire-shape dict -> ROS 1 bytes of the message ``name`` (canonical)."""
+        return serialize(self, name, msg)
+
+    def deserialize(self, name: str, data: bytes | bytearray | memoryview) -> dict[str, Any]:
+        """ROS 1 bytes -> wire-shape dict of the message ``name`` (canonical)."""
+        return deserialize(self, name, data)
+
+    def reader(self, name: str) -> Callable[[bytes | bytearray | memoryview], dict[str, Any]]:
+        """A function that deserializes the message ``name`` (canonical); see :func:`reader`."""
+        return reader(self, name)
+
+
 # ------------------------------------------------------------------------------------------ decoding
-def _decoder(reg: TypeRegistry, name: str) -> Decoder:
+def _decoder(reg: Ros1Codec, name: str) -> Decoder:
     key = ("ros1_dec", name)
-    dec = reg._cache.get(key)
+    dec = reg.cache.get(key)
     if dec is None:
         dec = _compile_decoder(reg, name)
-        reg._cache[key] = dec
+        reg.cache[key] = dec
     return dec
 
 
-def _compile_decoder(reg: TypeRegistry, name: str) -> Decoder:
+def _compile_decoder(reg: Ros1Codec, name: str) -> Decoder:
     steps: list[Callable[[Any, int, dict[str, Any]], int]] = []
     run: list[tuple[str, str]] = []  # (field name, struct code) of consecutive fixed-size scalars
     ta, tb = reg.time_fields
@@ -62,11 +89,22 @@ def _compile_decoder(reg: TypeRegistry, name: str) -> Decoder:
         fnames = [n for n, _ in run]
         size = st.size
 
-        def step(buf: Any, off: int, out: dict[str, Any], st=st, fnames=fnames, size=size) -> int:
-            out.update(zip(fnames, st.unpack_from(buf, off), strict=True))
-            return off + size
+        unpack = st.unpack_from
+        if len(fnames) == 1:
+            fname = fnames[0]
 
-        steps.append(step)
+            def one(buf: Any, off: int, out: dict[str, Any]) -> int:
+                out[fname] = unpack(buf, off)[0]
+                return off + size
+
+            steps.append(one)
+        else:
+
+            def step(buf: Any, off: int, out: dict[str, Any]) -> int:
+                out.update(zip(fnames, unpack(buf, off), strict=False))  # same length by construction
+                return off + size
+
+            steps.append(step)
         run.clear()
 
     for f in reg.msgdef(name).fields:
@@ -96,7 +134,7 @@ def _read_string(buf: Any, off: int) -> tuple[str, int]:
     return bytes(buf[off:end]).decode("utf-8", errors="replace"), end
 
 
-def _element_reader(reg: TypeRegistry, f: FieldDef, ta: str, tb: str) -> Decoder:
+def _element_reader(reg: Ros1Codec, f: FieldDef, ta: str, tb: str) -> Decoder:
     """Reads one element of the field's base type."""
     if f.base in TIME_TYPES:
         st = _TIME[f.base]
@@ -117,15 +155,29 @@ def _element_reader(reg: TypeRegistry, f: FieldDef, ta: str, tb: str) -> Decoder
 
         return read_prim
     base = f.base
+    nested: list[Decoder] = []  # compiled on first use (a type may refer to itself)
 
     def read_msg(buf: Any, off: int) -> tuple[Any, int]:
-        return _decoder(reg, base)(buf, off)
+        if not nested:
+            nested.append(_decoder(reg, base))
+        return nested[0](buf, off)
 
     return read_msg
 
 
-def _field_decoder(reg: TypeRegistry, f: FieldDef, ta: str, tb: str) -> Callable[[Any, int, dict[str, Any]], int]:
+def _field_decoder(reg: Ros1Codec, f: FieldDef, ta: str, tb: str) -> Callable[[Any, int, dict[str, Any]], int]:
     fname = f.name
+    if f.array_len is None and f.base not in TIME_TYPES and primitive(f.base, reg.ros2) is None:
+        base = f.base
+        nested: list[Decoder] = []  # compiled on first use (a type may refer to itself)
+
+        def message(buf: Any, off: int, out: dict[str, Any]) -> int:
+            if not nested:
+                nested.append(_decoder(reg, base))
+            out[fname], off = nested[0](buf, off)
+            return off
+
+        return message
     elem = _element_reader(reg, f, ta, tb)
     if f.array_len is None:
 
@@ -158,6 +210,19 @@ def _field_decoder(reg: TypeRegistry, f: FieldDef, ta: str, tb: str) -> Callable
         dtype = np.dtype(_DTYPES[p.code])
         is_bool = p.kind == "bool"
 
+        if fixed and not is_bool:
+            nbytes = fixed * dtype.itemsize
+            frombuffer = np.frombuffer
+
+            def fixed_numeric(buf: Any, off: int, out: dict[str, Any]) -> int:
+                end = off + nbytes
+                if end > len(buf):
+                    raise WireError(f"{fname}: {fixed} items run past the end of the data")
+                out[fname] = frombuffer(buf, dtype, fixed, off).tolist()
+                return end
+
+            return fixed_numeric
+
         def numeric(buf: Any, off: int, out: dict[str, Any]) -> int:
             n, off = count(buf, off)
             end = off + n * dtype.itemsize
@@ -183,27 +248,40 @@ def _field_decoder(reg: TypeRegistry, f: FieldDef, ta: str, tb: str) -> Callable
     return array
 
 
-def deserialize(reg: TypeRegistry, name: str, data: bytes | bytearray | memoryview) -> dict[str, Any]:
+def reader(reg: Ros1Codec, name: str) -> Callable[[bytes | bytearray | memoryview], dict[str, Any]]:
+    """``read(data) -> dict`` for the message ``name`` (canonical): :func:`deserialize` with the per-type
+    work done once."""
+    decode = _decoder(reg, name)
+    wire = reg.wire_name(name)
+
+    def read(data: bytes | bytearray | memoryview) -> dict[str, Any]:
+        buf = data if data.__class__ is bytes else bytes(data)
+        try:
+            out, end = decode(buf, 0)
+        except struct.error:
+            raise WireError(f"the data ({len(buf)} bytes) ends before a whole {wire}") from None
+        if end != len(buf):
+            raise WireError(f"{len(buf) - end} bytes left over after a {wire} ({end} bytes): wrong type?")
+        return out
+
+    return read
+
+
+def deserialize(reg: Ros1Codec, name: str, data: bytes | bytearray | memoryview) -> dict[str, Any]:
     """ROS 1 bytes (no length prefix) -> wire-shape dict of the message ``name`` (canonical)."""
-    buf = bytes(data) if not isinstance(data, bytes) else data
-    try:
-        out, end = _decoder(reg, name)(buf, 0)
-    except struct.error:
-        raise WireError(f"the data ({len(buf)} bytes) ends before a whole {reg.wire_name(name)}") from None
-    if end != len(buf):
-        raise WireError(
-            f"{len(buf) - end} bytes left over after a {reg.wire_name(name)} ({end} bytes): wrong type?"
-        )
-    return out
+    read = reg.cache.get(("ros1_read", name))
+    if read is None:
+        read = reg.cache[("ros1_read", name)] = reader(reg, name)
+    return read(data)
 
 
 # ------------------------------------------------------------------------------------------ encoding
-def _encoder(reg: TypeRegistry, name: str) -> Encoder:
+def _encoder(reg: Ros1Codec, name: str) -> Encoder:
     key = ("ros1_enc", name)
-    enc = reg._cache.get(key)
+    enc = reg.cache.get(key)
     if enc is None:
         enc = _compile_encoder(reg, name)
-        reg._cache[key] = enc
+        reg.cache[key] = enc
     return enc
 
 
@@ -217,7 +295,7 @@ def _num(p: Any, v: Any) -> Any:
     return v
 
 
-def _compile_encoder(reg: TypeRegistry, name: str) -> Encoder:
+def _compile_encoder(reg: Ros1Codec, name: str) -> Encoder:
     md = reg.msgdef(name)
     steps: list[Callable[[dict[str, Any], list[bytes]], None]] = []
     run: list[tuple[FieldDef, Any]] = []
@@ -265,7 +343,7 @@ def _string_bytes(v: Any) -> bytes:
     return _U32.pack(len(data)) + data
 
 
-def _element_writer(reg: TypeRegistry, f: FieldDef) -> Callable[[Any, list[bytes]], None]:
+def _element_writer(reg: Ros1Codec, f: FieldDef) -> Callable[[Any, list[bytes]], None]:
     if f.base in TIME_TYPES:
         st = _TIME[f.base]
 
@@ -298,7 +376,7 @@ def _element_writer(reg: TypeRegistry, f: FieldDef) -> Callable[[Any, list[bytes
     return write_msg
 
 
-def _field_encoder(reg: TypeRegistry, f: FieldDef) -> Callable[[dict[str, Any], list[bytes]], None]:
+def _field_encoder(reg: Ros1Codec, f: FieldDef) -> Callable[[dict[str, Any], list[bytes]], None]:
     fname = f.name
     fixed = f.array_len
     default = reg.default_value(f)
@@ -375,7 +453,7 @@ def _field_encoder(reg: TypeRegistry, f: FieldDef) -> Callable[[dict[str, Any], 
     return array
 
 
-def serialize(reg: TypeRegistry, name: str, msg: dict[str, Any]) -> bytes:
+def serialize(reg: Ros1Codec, name: str, msg: dict[str, Any]) -> bytes:
     """Wire-shape dict -> ROS 1 bytes (no length prefix). Missing fields are written as their default."""
     parts: list[bytes] = []
     _encoder(reg, name)(msg, parts)

@@ -30,7 +30,7 @@ import attrs
 from .model import TIME_TYPES, FieldDef, is_binary, primitive
 
 if TYPE_CHECKING:
-    from .registry import TypeRegistry
+    from .lookup import TypeLookup
 
 __all__ = ["MessageTextError", "Problem", "from_text", "to_text", "complete", "validate"]
 
@@ -71,7 +71,7 @@ NONFINITE = "is not a finite number (NaN and infinity are refused here: JSON wou
 
 
 class _Walker:
-    def __init__(self, reg: TypeRegistry, finite: bool = False) -> None:
+    def __init__(self, reg: TypeLookup, finite: bool = False) -> None:
         self.reg = reg
         self.finite = finite  #: refuse NaN and infinity in float fields
         self.problems: list[Problem] = []
@@ -242,7 +242,7 @@ class _Walker:
         return out
 
 
-def complete(reg: TypeRegistry, name: str, msg: Any, *, finite: bool = False) -> dict[str, Any]:
+def complete(reg: TypeLookup, name: str, msg: Any, *, finite: bool = False) -> dict[str, Any]:
     """Check ``msg`` against ``name`` and fill every missing field; raises :class:`MessageTextError`.
     ``finite``: refuse NaN and infinity in float fields."""
     w = _Walker(reg, finite)
@@ -253,7 +253,7 @@ def complete(reg: TypeRegistry, name: str, msg: Any, *, finite: bool = False) ->
     return out
 
 
-def validate(reg: TypeRegistry, name: str, msg: Any, *, finite: bool = False) -> list[Problem]:
+def validate(reg: TypeLookup, name: str, msg: Any, *, finite: bool = False) -> list[Problem]:
     """Every problem in ``msg`` as a message of type ``name``; an empty list when it is fine."""
     w = _Walker(reg, finite)
     w.message(reg.resolve(name), msg, "")
@@ -317,7 +317,7 @@ def parse_text(text: str) -> Any:
         raise MessageTextError("", f"not valid YAML or JSON{where}: {what}") from None
 
 
-def from_text(reg: TypeRegistry, name: str, text: str, *, finite: bool = True) -> dict[str, Any]:
+def from_text(reg: TypeLookup, name: str, text: str, *, finite: bool = True) -> dict[str, Any]:
     """Parse YAML/JSON text typed by a person into a complete message of type ``name``. NaN and infinity
     are refused unless ``finite=False``."""
     return complete(reg, name, parse_text(text), finite=finite)

@@ -25,7 +25,7 @@ from .time import read as read_time
 from .values import as_bytes, to_base64
 
 if TYPE_CHECKING:
-    from .registry import TypeRegistry
+    from .lookup import TypeLookup
 
 __all__ = ["TypedFactory"]
 
@@ -51,7 +51,7 @@ def _make_time_class(kind: str, ros2: bool) -> type:
 class TypedFactory:
     """Builds and caches the classes of one registry, and owns its converter."""
 
-    def __init__(self, reg: TypeRegistry) -> None:
+    def __init__(self, reg: TypeLookup) -> None:
         self.reg = reg
         self._classes: dict[str, type] = {}
         self._time = {k: _make_time_class(k, reg.ros2) for k in TIME_TYPES}

@@ -23,7 +23,7 @@ from . import names
 from .model import IDL_ALIASES, PRIMITIVES, TIME_TYPES, Constant, FieldDef, MsgDef
 
 if TYPE_CHECKING:
-    from .registry import TypeRegistry
+    from .lookup import TypeLookup
 
 __all__ = ["build_typedefs", "parse_typedefs", "TypedefError"]
 
@@ -104,7 +104,7 @@ def _entry(md: MsgDef, ros2: bool) -> dict[str, Any]:
     }
 
 
-def build_typedefs(reg: TypeRegistry, name: str) -> list[dict[str, Any]]:
+def build_typedefs(reg: TypeLookup, name: str) -> list[dict[str, Any]]:
     """The typedef list for the message ``name`` (canonical), in rosapi's order."""
     ros2 = reg.ros2
     out: list[dict[str, Any]] = []

@@ -36,7 +36,7 @@ from typing import Any, Protocol
 
 import attrs
 
-from rcon_core.msgs.names import to_ros1
+from rcon_core.msgs.names import pkg_type
 
 __all__ = [
     "Role",
@@ -250,18 +250,11 @@ class Accepts:
 
         Types are shown in one spelling (ROS 1's, the shorter) whichever spelling the plugin declared.
         """
-        out: list[str] = [_short_name(t) for t in self.types]
+        out: list[str] = [pkg_type(t) for t in self.types]
         out += [f"{p}/*" for p in self.packages]
         out += ["field:" + _pred_name(p) for p in self.fields]
         out += ["message:" + _pred_name(p) for p in self.messages]
         return out
-
-
-def _short_name(type_name: str) -> str:
-    try:
-        return to_ros1(type_name)
-    except ValueError:
-        return type_name
 
 
 def _pred_name(p: Any) -> str:

@@ -25,6 +25,8 @@ import time
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from rcon_core.msgs.names import pkg_type
+
 if TYPE_CHECKING:
     from .connection import Connection
     from .robot_node import RobotNode
@@ -48,12 +50,6 @@ class _Goal:
     feedback: bool
     task: asyncio.Task[None] | None = None
     status: int = 0
-
-
-def _short(type_name: str) -> str:
-    """``pkg/action/Type`` -> ``pkg/Type`` so either spelling of the action type matches."""
-    parts = type_name.split("/")
-    return f"{parts[0]}/{parts[-1]}" if len(parts) == 3 else type_name
 
 
 def _finite_number(value: Any) -> float | None:
@@ -86,7 +82,7 @@ class NavigateActionServer:
         action = _field(msg, "action", str)
         action_type = _field(msg, "action_type", str)
         goal_id = msg.get("id")
-        if _short(action_type) != _short(ACTION_TYPE):
+        if pkg_type(action_type) != pkg_type(ACTION_TYPE):  # either spelling matches
             self._fail(conn, goal_id, action, f"Unable to load the action type {action_type}")
             return
         if action != ACTION_NAME:  # rosbridge waits 1 s for the server (wait_for_server) before it gives up

@@ -24,6 +24,8 @@ from __future__ import annotations
 import re
 from typing import TYPE_CHECKING, Any
 
+from rcon_core.msgs.names import pkg_type
+
 from .graph import BRIDGE_NODE, ROSAPI_NODE, ROSOUT_NODE
 from .ros2_params import NodeParameters, get_param_value, set_param_value, split_name
 from .rosapi import SEPARATOR, Rosapi, _fail
@@ -35,11 +37,6 @@ _MSG_SPELLING = re.compile(r"\b([A-Za-z][A-Za-z0-9_]*)/msg/")
 _TIME_MSGS = {"time": "builtin_interfaces/Time", "duration": "builtin_interfaces/Duration"}
 _TIME_TEXT = {"builtin_interfaces/Time": "int32 sec\nuint32 nanosec\n",
               "builtin_interfaces/Duration": "int32 sec\nuint32 nanosec\n"}
-
-
-def _short(name: str) -> str:
-    parts = name.strip("/").split("/")
-    return f"{parts[0]}/{parts[-1]}" if len(parts) == 3 else name
 
 
 #: what ``get_ros_version`` reports as ``distro`` (the ROS_DISTRO of the machine running rosapi)
@@ -164,7 +161,7 @@ class Ros2Rosapi(Rosapi):
             while stack:
                 name = stack.pop()
                 if not first:
-                    out.append(f"\n{SEPARATOR}\nMSG: {_short(name)}\n")
+                    out.append(f"\n{SEPARATOR}\nMSG: {pkg_type(name)}\n")
                 first = False
                 if name in _TIME_TEXT:
                     out.append(_TIME_TEXT[name])
@@ -172,8 +169,8 @@ class Ros2Rosapi(Rosapi):
                 out.append(_MSG_SPELLING.sub(r"\1/", reg.definition_text(name)))
                 for f in reg.fields(name):
                     dep = _TIME_MSGS.get(f.base) or (f.base if not f.is_builtin else None)
-                    if dep is not None and _short(dep) not in seen:
-                        seen.add(_short(dep))
+                    if dep is not None and pkg_type(dep) not in seen:
+                        seen.add(pkg_type(dep))
                         stack.append(dep)
             return "".join(out)
         except Exception:  # noqa: BLE001 - a type without text still lists

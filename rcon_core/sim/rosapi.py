@@ -9,6 +9,8 @@ import json
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
+from rcon_core.msgs.names import pkg_type
+
 from .graph import BRIDGE_NODE, ROSAPI_NODE, ROSOUT_NODE, ServiceFailure
 from .params import ParamTree
 
@@ -21,11 +23,6 @@ _LOGGER_NAMES = ["rosgraph", "rospy", "rospy.core", "rospy.internal", "rospy.ser
 _LEVELS = {"debug": "DEBUG", "info": "INFO", "warn": "WARN", "warning": "WARN", "error": "ERROR",
            "fatal": "FATAL"}
 SEPARATOR = "=" * 80
-
-
-def _norm(type_name: str) -> str:
-    parts = type_name.strip("/").split("/")
-    return f"{parts[0]}/{parts[-1]}" if len(parts) >= 2 else type_name
 
 
 def _fail(text: str) -> ServiceFailure:
@@ -50,8 +47,8 @@ class Rosapi:
         return {"topics": [t.name for t in live], "types": [t.type for t in live]}
 
     def topics_for_type(self, args: dict[str, Any]) -> dict[str, Any]:
-        wanted = _norm(args.get("type", ""))
-        return {"topics": [t.name for t in self._live_topics() if _norm(t.type) == wanted]}
+        wanted = pkg_type(args.get("type", ""))
+        return {"topics": [t.name for t in self._live_topics() if pkg_type(t.type) == wanted]}
 
     def topics_and_raw_types(self, args: dict[str, Any]) -> dict[str, Any]:
         live = self._live_topics()
@@ -88,8 +85,8 @@ class Rosapi:
         return {"services": list(self.server.services)}
 
     def services_for_type(self, args: dict[str, Any]) -> dict[str, Any]:
-        wanted = _norm(args.get("type", ""))
-        return {"services": [s.name for s in self.server.services.values() if _norm(s.type) == wanted]}
+        wanted = pkg_type(args.get("type", ""))
+        return {"services": [s.name for s in self.server.services.values() if pkg_type(s.type) == wanted]}
 
     def service_type(self, args: dict[str, Any]) -> dict[str, Any]:
         svc = self.server.services.get(args.get("service", ""))
@@ -97,8 +94,8 @@ class Rosapi:
 
     def service_providers(self, args: dict[str, Any]) -> dict[str, Any]:
         # rosapi 0.11 matches the field named `service` against service TYPES
-        wanted = _norm(args.get("service", ""))
-        return {"providers": [s.node for s in self.server.services.values() if _norm(s.type) == wanted]}
+        wanted = pkg_type(args.get("service", ""))
+        return {"providers": [s.node for s in self.server.services.values() if pkg_type(s.type) == wanted]}
 
     def service_node(self, args: dict[str, Any]) -> dict[str, Any]:
         svc = self.server.services.get(args.get("service", ""))

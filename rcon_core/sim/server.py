@@ -23,6 +23,8 @@ from typing import Any
 from websockets.asyncio.server import Server, ServerConnection, serve
 from websockets.exceptions import ConnectionClosed
 
+from rcon_core.msgs.names import pkg_type
+
 from . import encoding, gate
 from .connection import Connection, SubOptions, TopicSubscription
 from .convert import ConversionError
@@ -470,7 +472,7 @@ class SimServer:
             raise _OpError(f"Unable to import msg class {type_name.rsplit('/', 1)[-1]} from package "
                            f"{type_name.split('/', 1)[0]}")
         topic = self.topics.get(name)
-        if topic is not None and topic.is_alive() and _norm(topic.type) != _norm(type_name):
+        if topic is not None and topic.is_alive() and pkg_type(topic.type) != pkg_type(type_name):
             raise _OpError(f"Tried to register topic {name} with type {type_name} but it is already "
                            f"established with type {topic.type}")
         latch = bool(msg.get("latch", False))
@@ -539,7 +541,7 @@ class SimServer:
                 raise _OpError(f"Unable to load the type {type_name}")
             topic = self.topics[name] = Topic(name, self.flavour.wire(type_name)) if topic is None \
                 else _retype(topic, self.flavour.wire(type_name))
-        elif type_name and _norm(type_name) != _norm(topic.type):
+        elif type_name and pkg_type(type_name) != pkg_type(topic.type):
             raise _OpError(f"Tried to register topic {name} with type {type_name} but it is already established "
                            f"with type {topic.type}")
         fragment_size = msg.get("fragment_size")
@@ -730,11 +732,6 @@ def _nonneg_int(value: Any) -> int:
     if isinstance(value, int | float) and not isinstance(value, bool) and value > 0:
         return int(value)
     return 0
-
-
-def _norm(type_name: str) -> str:
-    parts = type_name.strip("/").split("/")
-    return f"{parts[0]}/{parts[-1]}" if len(parts) >= 2 else type_name
 
 
 def _retype(topic: Topic, type_name: str) -> Topic:

@@ -1,0 +1,219 @@
+"""Frames in: the read loop (the hot path), frame decoding, fragments, ``png`` frames and bad-frame accounting.
+
+Decision: the read loop
+    Per message: one ``recv``, one ``orjson.loads`` (CBOR for binary frames), a few dict lookups and a
+    direct call of the topic's ``fast`` function -- for a topic with one consumer, its callback.
+    Everything unusual (other ops, unknown topics, malformed frames) takes the slow path
+    (:meth:`Inbound.other`), which unwraps ``fragment`` and ``png`` frames and hands every op to the
+    session (``session.handle``).  Frames above ``big_frame`` (1 MB) are decoded in a worker thread while
+    the read loop waits for them, so the event loop keeps serving and the order of delivery is kept
+    (``offload.py``).
+
+Decision: bad input from the server
+    No exception raised while handling one frame ends the read loop: the loop body and the slow path
+    catch everything at the frame boundary (``stats["frame_errors"]``).  Invalid JSON, unknown ops,
+    missing or mistyped fields, JSON nested too deep to format, broken fragments, ``png`` data that is no
+    image, PNGs whose header declares more pixel bytes than ``max_size`` (refused before decoding,
+    ``stats["png_refused"]``), publish frames whose ``msg`` is not an object
+    (``stats["non_object_msgs"]``) and frames above ``max_size`` are logged (rate limited by
+    :class:`BadFrames`, with a bounded repr from ``safety.py``: never ``str()`` of an untrusted value),
+    counted in ``client.stats`` and dropped; the connection, the process and other subscriptions carry on.
+    A callback that raises is logged and does not affect other callbacks (``topics.py``).
+
+Test hooks (public): ``inbound.fragments`` and ``inbound.png_fragments`` (the assemblers: ``len()`` is the
+number of messages in progress, ``completed`` counts the finished ones).
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Awaitable, Callable
+from typing import Any
+
+import orjson
+
+from .errors import ProtocolError
+from .offload import BigFrames, decode_big
+from .protocol import FragmentAssembler, RefusedFrame, decode_binary, decode_png
+from .safety import safe_text
+
+log = logging.getLogger(__name__)
+
+_loads = orjson.loads
+
+
+class BadFrames:
+    """Counts bad frames from the server and logs them: the first 20 of each kind, then every 1000th."""
+
+    def __init__(self, url: str, stats: dict[str, int]) -> None:
+        self.url = url
+        self.stats = stats
+        self.counts: dict[str, int] = {}
+
+    def report(self, kind: str, message: str) -> None:
+        self.stats["bad_frames"] += 1
+        n = self.counts[kind] = self.counts.get(kind, 0) + 1
+        if n <= 20 or n % 1000 == 0:
+            log.warning("bad frame from %s: %s", self.url, message)
+        elif n == 21:
+            log.warning("bad frame from %s: %s (more %s problems are counted in stats and logged every 1000th)",
+                        self.url, message, kind)
+
+    def failed(self, exc: BaseException) -> None:
+        """A frame whose handling raised: counted, logged with a bounded text, dropped; the loop goes on."""
+        self.stats["frame_errors"] += 1
+        self.report("error", f"handling a frame failed, dropped it ({safe_text(exc)})")
+
+
+class Inbound:
+    """Turns what the socket delivers into messages for the session's topics and ops for the session."""
+
+    def __init__(self, session: Any, bad: BadFrames, stats: dict[str, int], *, typed_arrays: str,
+                 max_size: int, big_frame: int, fragment_timeout: float) -> None:
+        self.session = session
+        self.bad = bad
+        self.stats = stats
+        self.typed_arrays = typed_arrays
+        self.max_size = max_size
+        self.big_frame = big_frame
+        self.big = BigFrames(typed_arrays, max_size)
+        warn = self._fragment_warning
+        self.fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_size, warn=warn)
+        self.png_fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_size, warn=warn)
+        #: a big message completed by fragments or a big png: the read loop awaits it (order is kept)
+        self.deferred: Callable[[], Awaitable[Any]] | None = None
+
+    async def read(self, recv: Callable[[], Awaitable[str | bytes]]) -> None:
+        """Read frames until ``recv`` raises (the connection closed)."""
+        loads = _loads
+        topics = self.session.topics
+        big = self.big_frame
+        other = self.other
+        failed = self.bad.failed
+        while True:
+            raw = await recv()
+            try:  # the frame boundary: nothing raised while handling one frame ends the loop
+                if len(raw) > big:
+                    m = await self.decode_big(raw)
+                    if m is None:
+                        continue
+                elif isinstance(raw, str):
+                    try:
+                        m = loads(raw)
+                    except orjson.JSONDecodeError as exc:
+                        self.bad.report("json", f"text frame is not valid JSON ({exc}): {raw[:80]!r}")
+                        continue
+                else:
+                    m = self.decode_binary(raw)
+                    if m is None:
+                        continue
+                try:
+                    entry = topics[m["topic"]] if m["op"] == "publish" else None
+                    msg = m["msg"]
+                except (KeyError, TypeError):  # not a publish of a subscribed topic, or malformed: slow path
+                    entry = None
+                if entry is not None and msg.__class__ is dict:
+                    try:
+                        entry.fast(msg)
+                    except Exception:
+                        entry.callback_failed()
+                    continue
+                other(m)
+                while self.deferred is not None:  # a big message completed by fragments: decoded off the loop
+                    job, self.deferred = self.deferred, None
+                    inner = await job()
+                    if inner is not None:
+                        other(inner)
+            except Exception as exc:
+                failed(exc)
+
+    def disconnected(self) -> None:
+        self.deferred = None  # a big message of the lost connection is not delivered on the next one
+
+    def close(self) -> None:
+        self.big.close()
+
+    # -- decoding -------------------------------------------------------------------------------------
+
+    async def decode_big(self, raw: str | bytes) -> Any:
+        """Decode a frame above ``big_frame`` in the worker thread (see ``offload.py``); None when dropped."""
+        if len(raw) > self.max_size:
+            self.stats["oversize_frames"] += 1
+            self.bad.report("size", f"frame of {len(raw)} bytes exceeds max_message_size={self.max_size}; dropped")
+            return None
+        return await self._offloaded(decode_big, raw, self.typed_arrays, self.max_size)
+
+    async def _offloaded(self, fn: Callable[..., Any], *args: Any) -> Any:
+        self.stats["big_frames"] += 1
+        try:
+            return await self.big.run(fn, *args)
+        except ProtocolError as exc:
+            if isinstance(exc, RefusedFrame):
+                self.stats["png_refused"] += 1
+            self.bad.report("big", f"big frame dropped: {exc}")
+            return None
+
+    def decode_binary(self, raw: bytes) -> Any:
+        try:
+            return decode_binary(raw, self.typed_arrays)
+        except Exception as exc:
+            self.bad.report("binary", f"binary frame of {len(raw)} bytes dropped: {exc}")
+            return None
+
+    def _fragment_warning(self, message: str) -> None:
+        self.bad.report("fragment", message)
+
+    # -- the slow path --------------------------------------------------------------------------------
+
+    def other(self, m: Any) -> None:
+        """The slow path (and what fragments and png frames carry); never raises."""
+        try:
+            op = m.get("op") if isinstance(m, dict) else None
+            if op == "fragment" or op == "png":
+                try:
+                    self._on_fragment(m) if op == "fragment" else self._on_png(m)
+                except (KeyError, TypeError, ValueError, AttributeError) as exc:
+                    self.bad.report("field", f"malformed {op!r} frame ignored ({safe_text(exc)})")
+            else:
+                self.session.handle(m)
+        except Exception as exc:
+            self.bad.failed(exc)
+
+    def _dispatch_text(self, text: str | bytes) -> None:
+        try:
+            m = _loads(text)
+        except orjson.JSONDecodeError as exc:
+            self.bad.report("json", f"reassembled frame is not valid JSON ({exc})")
+            return
+        self.other(m)
+
+    def _on_fragment(self, m: dict[str, Any]) -> None:
+        try:
+            text = self.fragments.add(m)
+        except ProtocolError as exc:
+            self.bad.report("fragment", str(exc))
+            return
+        if text is not None and len(text) > self.big_frame:
+            self.deferred = lambda: self.decode_big(text)
+        elif text is not None:
+            self._dispatch_text(text)
+
+    def _on_png(self, m: dict[str, Any]) -> None:
+        try:
+            data = m["data"]
+            if "num" in m and "total" in m:
+                data = self.png_fragments.add(m)
+                if data is None:
+                    return
+            if not isinstance(data, str):
+                raise ProtocolError(f"png frame: 'data' must be a string, got {type(data).__name__}")
+            if len(data) > self.big_frame:
+                self.deferred = lambda: self._offloaded(decode_png, data, self.max_size)
+                return
+            inner = decode_png(data, self.max_size)
+        except ProtocolError as exc:
+            if isinstance(exc, RefusedFrame):
+                self.stats["png_refused"] += 1
+            self.bad.report("png", str(exc))
+            return
+        self.other(inner)

@@ -1,0 +1,154 @@
+"""Server-side subscriptions and the payload decoders behind them (part of the session).
+
+Decisions:
+
+* A topic's shared subscription (``topics.py``) is made to match what its nodes want: when the merged
+  options change, the client subscribes with a new id, then unsubscribes the old one (no gap).
+* ``compression="cbor"`` on a type with fixed-size arrays is switched to ``"cbor-raw"``, because rosbridge's
+  cbor encoder sends nothing for those types (Imu, Odometry, NavSatFix, ...).  Either needs the type and its
+  typedefs first (``/rosapi/topic_type``, ``/rosapi/message_details``); when they cannot be had the topic is
+  subscribed without compression.
+* ``cbor-raw`` payloads are decoded by the one type system (``rawdecode.py``): CDR for types learned from a
+  ROS 2 server (sniffed per payload when the flavour is unknown, ``cdrdecode.py``); else the
+  application's registry (``BridgeClient(registry=...)``) when it knows the type -- it learns the server's
+  typedefs in :meth:`Subscriber.typedefs` -- else a registry of the client's own, learned from the server.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import TYPE_CHECKING, Any
+
+from rcon_core.msgs import names
+
+from .cdrdecode import CdrDecoder, SniffingDecoder, flavour_from_typedefs
+from .errors import BridgeError, NotConnectedError, ServiceError
+from .rawdecode import RawDecoder, has_fixed_arrays
+
+if TYPE_CHECKING:
+    from .topics import TopicEntry
+
+log = logging.getLogger(__name__)
+
+
+class Subscriber:
+    """Subscribes the session's topics on the server and picks each cbor-raw topic's decoder."""
+
+    def __init__(self, session: Any, host: Any) -> None:
+        self.session = session
+        self.host = host  # rosapi, registry, ros_version (see session.Host)
+        self.typedef_cache: dict[str, list[dict[str, Any]]] = {}
+        self.ros1 = RawDecoder()  # cbor-raw from ROS 1 servers, learned from their typedefs
+        self.cdr = CdrDecoder()  # cbor-raw from ROS 2 servers (CDR)
+        self._registry_decoder: RawDecoder | None = None
+
+    def sync(self, entry: TopicEntry) -> None:
+        """Make the server-side subscription match what the nodes want (resubscribe when it changed)."""
+        if self.session.link is None or not entry.subs:
+            return
+        wanted = entry.wanted()
+        if wanted == entry.sent_options:
+            return
+        entry.sent_options = wanted
+        if wanted["compression"] in ("cbor", "cbor-raw"):
+            self.session.spawn(self._resolve_and_subscribe(entry, wanted))
+        else:
+            self._subscribe_now(entry, wanted)
+
+    async def _resolve_and_subscribe(self, entry: TopicEntry, wanted: dict[str, Any]) -> None:
+        opts = dict(wanted)
+        try:
+            type_name = opts.get("type") or await self.host.rosapi.topic_type(entry.topic)
+            if not type_name:
+                raise BridgeError(f"the server does not know the type of {entry.topic}")
+            opts["type"] = type_name
+            typedefs = await self.typedefs(type_name)
+            if opts["compression"] == "cbor" and has_fixed_arrays(type_name, typedefs):
+                log.info("%s [%s] has fixed-size arrays, which rosbridge's cbor encoder cannot send; "
+                         "using cbor-raw instead", entry.topic, type_name)
+                opts["compression"] = "cbor-raw"
+            if opts["compression"] == "cbor-raw":
+                self._learn_raw_flavour(type_name, typedefs)
+        except Exception as exc:
+            log.warning("%s: cannot prepare %s compression (%s); subscribing without compression",
+                        entry.topic, opts["compression"], exc)
+            opts["compression"] = "none"
+        session = self.session
+        if session.topics.get(entry.topic) is not entry or entry.sent_options is not wanted or session.link is None:
+            return  # superseded while we were asking the server
+        self._subscribe_now(entry, opts)
+
+    def _subscribe_now(self, entry: TopicEntry, opts: dict[str, Any]) -> None:
+        sid = self.session.next_id("sub", entry.topic)
+        op = {"op": "subscribe", "id": sid, "topic": entry.topic, **opts}
+        entry.raw_type = opts["type"] if opts["compression"] == "cbor-raw" else None
+        if entry.raw_type is not None:
+            entry.decoder = self.raw_decoder(entry.raw_type)
+        old, entry.sid = entry.sid, sid
+        entry.rebuild()
+        self.session.send(op)
+        if old is not None:
+            self.session.send({"op": "unsubscribe", "id": old, "topic": entry.topic})
+
+    def _learn_raw_flavour(self, type_name: str, typedefs: list[dict[str, Any]]) -> None:
+        """cbor-raw is CDR from a ROS 2 server: hand the typedefs to the CDR decoder when the server is (or
+        its typedefs look) ROS 2; when neither tells, each payload is sniffed (``cdrdecode.py``)."""
+        version = self.host.ros_version or flavour_from_typedefs(typedefs)
+        if version != 1:
+            self.cdr.add_typedefs(typedefs)
+        key = names.pkg_type(type_name)
+        if version is None:
+            self.cdr.uncertain.add(key)
+        else:
+            self.cdr.uncertain.discard(key)
+
+    def raw_decoder(self, type_name: str) -> Any:
+        """The decoder of a cbor-raw topic of ``type_name`` (see the module docstring)."""
+        if self.cdr.knows(type_name):
+            if names.pkg_type(type_name) in self.cdr.uncertain:
+                return SniffingDecoder(self.cdr, self._ros1_decoder(type_name))
+            return self.cdr
+        return self._ros1_decoder(type_name)
+
+    def _ros1_decoder(self, type_name: str) -> RawDecoder:
+        reg = self.host.registry
+        if reg is not None and hasattr(reg, "deserialize_ros1"):
+            try:
+                known = reg.has(type_name)
+            except Exception:
+                known = False
+            if known:
+                if self._registry_decoder is None or self._registry_decoder.registry is not reg:
+                    self._registry_decoder = RawDecoder(ros2=False, registry=reg)
+                return self._registry_decoder
+        return self.ros1
+
+    async def typedefs(self, type_name: str) -> list[dict[str, Any]]:
+        """rosapi typedefs of a message type, from the server (cached), else from the local registry."""
+        key = names.pkg_type(type_name)
+        cached = self.typedef_cache.get(key)
+        if cached is not None:
+            return cached
+        registry = self.host.registry
+        try:
+            typedefs = await self.host.rosapi.message_details(key if "/msg/" not in type_name else type_name)
+        except (ServiceError, NotConnectedError) as exc:
+            if registry is None or not registry.has(type_name):
+                raise
+            log.info("rosapi message_details failed for %s (%s); using the local registry", type_name, exc)
+            typedefs = registry.typedefs(type_name)
+        if not typedefs and registry is not None and registry.has(type_name):
+            typedefs = registry.typedefs(type_name)  # rosapi 2.x answers [] for what it cannot load
+        if not typedefs:
+            raise BridgeError(f"the server has no definition for {type_name}")
+        self.typedef_cache[key] = typedefs
+        try:
+            self.ros1.add_typedefs(typedefs)
+        except BridgeError as exc:
+            log.debug("the ROS 1 decoder did not take typedefs of %s: %s", type_name, exc)
+        if registry is not None and hasattr(registry, "add_typedefs"):
+            try:
+                registry.add_typedefs(typedefs)
+            except Exception as exc:
+                log.debug("registry did not take typedefs of %s: %s", type_name, exc)
+        return typedefs

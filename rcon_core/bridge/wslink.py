@@ -1,0 +1,176 @@
+"""``Link``: the one adapter between the bridge and a ``websockets`` connection (it uses that library's
+internals, so they are used here and nowhere else).
+
+Decision: direct writes
+    There is no batching and no timer: a frame (a publish, a subscribe...) is written to the transport
+    before the call that made it returns, unless frames are already queued or the transport's buffer is
+    above its high-water mark; then it waits in a queue that the writer task (:meth:`Link.run_writer`)
+    drains with ``ws.send`` (which waits for the transport), so frames always leave in order.  asyncio
+    turns Nagle off on TCP sockets.
+
+    The direct write does what ``ws.send`` does minus the waiting: websockets' Sans-I/O protocol object
+    (``ws.protocol.send_text``) builds the frame and ``ws.send_data()`` hands it to the transport.  Those
+    two are internals of ``websockets.asyncio.connection.Connection`` (tested with websockets 13-15); when
+    a version lacks them, :func:`direct_writer` returns None and every frame goes through ``ws.send``.
+
+Decision: commands and their freshness limit (see ``freshness.py``)
+    A frame with a freshness limit (:meth:`Link.send_command`) is refused at once while the link is
+    DEGRADED or a ping has been unanswered for longer than the limit; when it has to wait in the queue it
+    carries its deadline (:class:`~rcon_core.bridge.freshness.TimedFrame`) and the writer drops it once
+    the deadline passed (``on_stale(pub)`` counts it).
+
+Everything else the bridge does with the connection goes through :class:`Link` too (``ping``, ``close``,
+``abort``, ``cut``, the write buffer size for the stall watch), so no other module touches ``ws`` or its
+transport.
+
+Test hooks (public, documented): ``link.queued`` (frames waiting for the writer), ``link.buffered()`` (bytes
+in the transport's write buffer), ``link.socket`` (the TCP socket).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import socket as _socket
+import time
+from collections import deque
+from collections.abc import Awaitable, Callable
+from typing import Any
+
+from websockets.asyncio.client import ClientConnection
+from websockets.exceptions import ConnectionClosed
+from websockets.protocol import State
+
+from .freshness import LinkWatch, TimedFrame, cut
+
+_OPEN = State.OPEN
+_monotonic = time.monotonic
+
+
+def direct_writer(ws: ClientConnection) -> Callable[[bytes], bool] | None:
+    """A function that writes one text frame to ``ws`` synchronously and returns True, or returns False
+    when it cannot right now (the connection is not open, or the transport is above its high-water mark:
+    then the caller queues the frame for ``ws.send``, which waits for the drain).  None when this
+    websockets version lacks the pieces (every frame then goes through ``ws.send``)."""
+    protocol = getattr(ws, "protocol", None)
+    flush = getattr(ws, "send_data", None)
+    transport = getattr(ws, "transport", None)
+    if protocol is None or flush is None or transport is None or not hasattr(protocol, "send_text"):
+        return None
+    buffered = transport.get_write_buffer_size
+    closing = transport.is_closing
+    high = transport.get_write_buffer_limits()[1]
+
+    def write_now(data: bytes) -> bool:
+        if protocol.state is not _OPEN or closing() or buffered() > high:
+            return False
+        protocol.send_text(data)
+        flush()
+        return True
+
+    return write_now
+
+
+class Link:
+    """One open connection: frames out (now or queued, in order), the writer task, the stall watch."""
+
+    __slots__ = ("ws", "recv", "queue", "event", "write_now", "watch", "degraded", "on_stale")
+
+    def __init__(self, ws: ClientConnection, on_stale: Callable[[Any], None]) -> None:
+        self.ws = ws
+        #: ``await recv()``: the next frame (websockets' own method: no wrapper on the read path)
+        self.recv: Callable[[], Awaitable[str | bytes]] = ws.recv
+        self.queue: deque[bytes | TimedFrame] = deque()
+        self.event = asyncio.Event()
+        self.write_now = direct_writer(ws)
+        self.watch: LinkWatch | None = None  # set by the client's pinger when stall detection is on
+        self.degraded = False  # the client's state is DEGRADED: commands are refused
+        self.on_stale = on_stale  # ``on_stale(pub)``: a queued command passed its deadline (already counted sent)
+
+    # -- writing -----------------------------------------------------------------------------------
+
+    def write(self, data: bytes) -> None:
+        """Hand one encoded frame to the connection: written at once when nothing is queued and the
+        transport's buffer is below its high-water mark, else queued for the writer task."""
+        if not self.queue:
+            write_now = self.write_now
+            if write_now is not None and write_now(data):
+                return
+        self.queue.append(data)
+        self.event.set()
+
+    def send_command(self, data: bytes, pub: Any, max_age: float) -> bool:
+        """Write a frame with a freshness limit (see the module docstring); False when it was refused
+        because the link cannot carry it in time."""
+        now = _monotonic()
+        watch = self.watch
+        if self.degraded or (watch is not None and watch.overdue(now) > max_age):
+            return False
+        write_now = self.write_now
+        if not self.queue and write_now is not None and write_now(data):
+            if watch is not None:
+                watch.command(now)
+        else:
+            self.queue.append(TimedFrame(data, now + max_age, pub))
+            self.event.set()
+        return True
+
+    async def run_writer(self) -> None:
+        """Drain the queue with ``ws.send`` (waits for the transport) until the connection closes."""
+        out = self.queue
+        event = self.event
+        ws = self.ws
+        try:
+            while True:
+                while out:
+                    item = out.popleft()
+                    if item.__class__ is TimedFrame:  # a command: never written after its freshness limit
+                        now = _monotonic()
+                        if now > item.deadline or self.degraded:  # type: ignore[union-attr]
+                            self.on_stale(item.pub)  # type: ignore[union-attr]
+                            continue
+                        if self.watch is not None:
+                            self.watch.command(now)
+                        item = item.data  # type: ignore[union-attr]
+                    await ws.send(item, text=True)
+                event.clear()
+                await event.wait()
+        except ConnectionClosed:
+            pass
+
+    def drop_queue(self) -> int:
+        """Forget every frame still queued (the link is gone); returns how many."""
+        n = len(self.queue)
+        self.queue.clear()
+        return n
+
+    # -- reading and the connection ----------------------------------------------------------------
+
+    async def ping(self) -> Awaitable[float]:
+        """Send a WebSocket ping; the result is a waiter that gives the round trip in seconds."""
+        return await self.ws.ping()
+
+    async def close(self) -> None:
+        await self.ws.close()
+
+    def abort(self) -> None:
+        """Drop the connection at once (no close handshake)."""
+        self.ws.transport.abort()
+
+    def cut(self) -> None:
+        """Drop the connection with a TCP reset, so the kernel discards what it has not sent yet."""
+        cut(self.ws.transport)
+
+    # -- test hooks ----------------------------------------------------------------------------------
+
+    @property
+    def queued(self) -> int:
+        """How many frames wait for the writer task."""
+        return len(self.queue)
+
+    def buffered(self) -> int:
+        """Bytes in the transport's write buffer."""
+        return self.ws.transport.get_write_buffer_size()
+
+    @property
+    def socket(self) -> _socket.socket | None:
+        return self.ws.transport.get_extra_info("socket")
