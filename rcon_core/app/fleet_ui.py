@@ -86,14 +86,29 @@ class FleetUi(QtCore.QObject):
         return "" if not robot_id or robot_id == self.first_id else robot_id
 
     def fleet(self) -> Fleet:
-        """The current clients, for the canvas runtime."""
-        return self.links.fleet(OFFLINE)
+        """The current clients, for the canvas runtime, with each robot's view-only mark: its own flag, or
+        its URL marked view-only in the app config (Canvas ▾ → robot view-only)."""
+        fleet = self.links.fleet(OFFLINE)
+        for robot in fleet.robots:
+            fleet.set_view_only(robot.id, self.config_view_only(robot.id))
+        return fleet
+
+    def robot_url(self, robot_id: str) -> str | None:
+        """Where the robot is: the first robot's is the connection bar's (connected, else the field)."""
+        if not robot_id or robot_id == self.first_id:
+            return self.window.robot_url() or None
+        return self.links.url_of(robot_id)
+
+    def config_view_only(self, robot_id: str) -> str | None:
+        url = self.robot_url(robot_id)
+        return f"robot {url} is view-only" if url and self.window.config.is_view_only(url) else None
 
     def side_fleet(self) -> Fleet:
         """The same, the side panel's robot first (a preview's binding names no robot or that one)."""
-        pairs = self.fleet().items()
+        fleet = self.fleet()
+        pairs = fleet.items()
         pairs.sort(key=lambda p: p[0].id != self.side_robot)
-        return Fleet(pairs)
+        return Fleet(pairs, {r.id: why for r, _c in pairs if (why := fleet.view_only_reason(r.id))})
 
     def first_url(self) -> str:
         return self.robots[0].url
@@ -158,7 +173,7 @@ class FleetUi(QtCore.QObject):
         elif client is None:
             live.set_client(robot_id, OFFLINE, keep=True)
         else:
-            live.set_client(robot_id, client)
+            live.set_client(robot_id, client, view_only=self.config_view_only(robot_id))
         if robot_id == self.side_robot:
             self.catalogs.pop(robot_id, None)
             self._catalog_dirty = True

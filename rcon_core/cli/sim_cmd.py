@@ -20,7 +20,9 @@ rcon sim: WARNING: add --auth SECRET (and --tls-cert/--tls-key), or listen on 12
 def configure(name: str, parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
     parser.add_argument("--port", type=int, default=9090, help="port to listen on (default 9090; 0 = any free)")
-    parser.add_argument("--ros2", action="store_true", help="ROS 2 shapes: pkg/msg/Type, sec/nanosec, actions")
+    parser.add_argument("--ros2", action="store_true",
+                        help="answer as rosbridge 2.x on ROS 2: pkg/msg/Type, sec/nanosec, rosapi_msgs, "
+                        "<node>:<param> parameters, actions, CDR cbor-raw")
     parser.add_argument("--rate-scale", type=float, default=1.0, metavar="X",
                         help="multiply every publish rate by X (default 1.0)")
     parser.add_argument("--auth", metavar="SECRET", help="require a rosauth 'auth' op signed with SECRET")
