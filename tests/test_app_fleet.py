@@ -183,6 +183,41 @@ def test_a_canvas_is_re_targeted_to_another_robot_in_one_undo_step(qtbot, tmp_pa
         win.shutdown()
 
 
+def test_robots_are_added_in_the_robots_dialog_and_connect(qtbot, tmp_path, two):
+    alpha, bravo = two
+    fleet_layout(tmp_path / "config", [Robot("r-1", "Alpha")],
+                 [("Battery", "std.label", Binding(*BATTERY), LABEL, (16, 16, 240, 112))])
+    win = open_window(qtbot, tmp_path / "config", entry_point_plugins(), url=alpha.url, wait_connected=True)
+    try:
+        ui = win.fleet_ui
+        assert not ui.chips.isVisible()
+        win.canvas_actions["robots"].trigger()  # Canvas ▾ → Robots…
+        dialog = ui.robots_dialog
+        assert dialog.isVisible() and dialog.table.rowCount() == 1
+        tap(dialog.findChild(QtWidgets.QPushButton, "addRobot"))
+        assert dialog.table.rowCount() == 2
+        dialog.set_row(1, name="Bravo", url="127.0.0.1:not-a-port")
+        ok = dialog.findChild(QtWidgets.QDialogButtonBox).button(QtWidgets.QDialogButtonBox.StandardButton.Ok)
+        tap(ok)  # a URL it cannot use: refused with the reason, nothing changed
+        assert dialog.isVisible() and "port" in dialog.problem.text()
+        assert len(win.controller.workspace.robots) == 1
+        dialog.set_row(1, url=bravo.url)
+        tap(ok)
+        robots = win.controller.workspace.robots
+        assert [(r.name, r.url) for r in robots] == [("Alpha", ""), ("Bravo", bravo.url)]
+        rid = robots[1].id
+        qtbot.waitUntil(lambda: ui.chips.isVisible() and rid in ui.chips.chips, timeout=TIMEOUT_MS)
+        qtbot.waitUntil(lambda: ui.chips.chips[rid].state == "connected", timeout=TIMEOUT_MS)
+        assert ui.links.link(rid).url == bravo.url and len(bravo.connections) == 1
+        tap(win.canvas_buttons["undo"])  # one step: Bravo is gone again, its link closed
+        assert [r.name for r in win.controller.workspace.robots] == ["Alpha"]
+        qtbot.waitUntil(lambda: not ui.chips.isVisible(), timeout=TIMEOUT_MS)
+        assert rid not in ui.links.ids
+        qtbot.waitUntil(lambda: len(bravo.connections) == 0, timeout=TIMEOUT_MS)  # the link was closed
+    finally:
+        win.shutdown()
+
+
 # a one-robot layout of format version 1 (as earlier builds wrote it)
 VERSION_1 = {"format": "rcon-workspace", "version": 1, "current": "c-old", "canvases": [
     {"id": "c-old", "name": "Deck", "locked": False, "widgets": [

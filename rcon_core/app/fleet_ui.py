@@ -253,7 +253,8 @@ class FleetUi(QtCore.QObject):
         self._fill_retarget_menu()
         robots = menu.addAction("Robots…")
         robots.setObjectName("canvas_robots")
-        robots.triggered.connect(self.open_robots_dialog)
+        robots.triggered.connect(lambda: self.window.operator_lock.guard("edit the robots",
+                                                                         self.open_robots_dialog))
         window.canvas_actions["robots"] = robots
 
     def _fill_retarget_menu(self) -> None:
