@@ -98,6 +98,8 @@ def test_chips_pick_the_side_robot_and_a_new_widget_is_bound_to_it(qtbot, tmp_pa
                         timeout=TIMEOUT_MS)  # each its own robot's battery
         shot(win, "mixed-canvas")
         shot(chips, "chips")
+        # the side panel's topic rates count the listed robot's widgets only
+        assert set(win.host.topic_counts("r-2")) == {"/battery"} and win.host.topic_counts("r-3") == {}
 
         # the side panel shows Alpha's topics; a tap on Bravo's chip shows Bravo's
         assert win.fleet_ui.side_robot == "r-1" and chips.chips["r-1"].isChecked()

@@ -27,6 +27,7 @@ from rcon_core.app.fleet_links import FleetLinks
 from rcon_core.app.link import EMPTY_CATALOG, OFFLINE, BadUrl, state_name
 from rcon_core.app.robot_chips import RobotChips, RobotPicker
 from rcon_core.app.robot_marks import apply_marks
+from rcon_core.app.widget_host import RateMeter
 from rcon_core.canvas import Change, EditError
 from rcon_core.canvas.fleet import Fleet
 from rcon_core.canvas.robots import robot_colour
@@ -192,6 +193,7 @@ class FleetUi(QtCore.QObject):
             self.chips.set_current(self.side_robot)
             return
         self.side_robot = robot_id
+        self.window.rates = RateMeter()  # the topic rates of the robot now listed start afresh
         self.chips.set_current(robot_id)
         for picker in self.pickers:
             picker.set_current(robot_id)

@@ -891,7 +891,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.services.set_entries(catalog["services"])
         if now - self._last_rate_sample >= 1.0:
             self._last_rate_sample = now
-            self.topics.set_rates(self.rates.sample(self.host.topic_counts(), now))
+            self.topics.set_rates(self.rates.sample(self.host.topic_counts(self.fleet_ui.side_robot), now))
         if self.first_paint_at is None:
             self.first_paint_at = time.perf_counter()
 

@@ -218,11 +218,14 @@ class WidgetHost:
         for hook in self.paint_hooks:
             hook(hosted, state)
 
-    def topic_counts(self) -> dict[str, int]:
-        """Values received per subscribed topic (the largest over its widgets), for the topic rates."""
+    def topic_counts(self, robot_id: str | None = None) -> dict[str, int]:
+        """Values received per subscribed topic (the largest over its widgets), for the topic rates; with
+        ``robot_id``, of that robot's widgets only (the side panel lists one robot's topics)."""
         out: dict[str, int] = {}
         for hosted in self.hosted.values():
             binding = hosted.widget.binding
+            if robot_id is not None and (binding.robot or self.first_robot) != robot_id:
+                continue
             if hosted.model is not None and binding.role.value == "subscribe" and binding.name:
                 out[binding.name] = max(out.get(binding.name, 0), hosted.model.state.count)
         return out
