@@ -66,6 +66,8 @@ class FleetUi(QtCore.QObject):
         self._catalog_dirty = True
         self._marks_dirty = True
         self._states: dict[str, str] = {}
+        #: robot id -> why its link is not up (words of rcon_core.bridge.reasons), for its chip
+        self.why: dict[str, str] = {}
         self._remove = window.doc.add_listener(self._doc_changed)
         self.links.on_client_changed(self._client_changed)
         self._sync_robots(connect=False)
@@ -222,21 +224,39 @@ class FleetUi(QtCore.QObject):
         for robot, link in self.links.items():
             if robot.id == first:
                 state = window.connection.state  # the connection bar takes the first link's mailboxes
+                failure = window.connection.failure
+                self.why[first] = failure.text() if failure is not None else ""
             else:
                 ok, taken = link.state_box.take()
                 state = taken if ok else self._states.get(robot.id, "closed")
-                link.failure_box.take()  # bounded: the chip's tooltip says the state, the log the reason
-                link.error_box.take()
+                self._take_failure(robot.id, link)
                 link.answered_box.take()
             state = state_name(state)
             if self._states.get(robot.id) != state:
                 self._states[robot.id] = state
                 window.host.set_link_up(state == "connected", robot.id)
             latency = link.latency if state in ("connected", "degraded") else None
-            self.chips.show_state(robot.id, state, latency)
+            self.chips.show_state(robot.id, state, latency,
+                                  None if state == "connected" else self.why.get(robot.id) or None)
         if self._marks_dirty:
             self._marks_dirty = False
             apply_marks(window.host, window.doc.workspace)
+
+    def _take_failure(self, robot_id: str, link: Any) -> None:
+        """Why a robot's link is not up, in words (its chip's tooltip); a failure that retrying cannot fix
+        (TLS, a refused secret) ends that robot's link, as the connection bar does for the first."""
+        ok, failure = link.failure_box.take()
+        if ok:
+            if failure is None:
+                self.why.pop(robot_id, None)
+            else:
+                self.why[robot_id] = failure.text()
+                if failure.fatal:
+                    link.disconnect()
+                    self._states[robot_id] = "closed"
+        ok, error = link.error_box.take()
+        if ok and error:
+            self.why[robot_id] = str(error)
 
     # ----------------------------------------------------------------------------------- canvas menu
     def _add_menu(self) -> None:
