@@ -21,7 +21,7 @@ from __future__ import annotations
 import logging
 from typing import Any
 
-from qtpy import QtCore, QtWidgets
+from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app.fleet_links import FleetLinks
 from rcon_core.app.link import EMPTY_CATALOG, OFFLINE, BadUrl, state_name
@@ -273,7 +273,11 @@ class FleetUi(QtCore.QObject):
         retarget.setObjectName("canvas_retarget")
         window.canvas_actions["retarget"] = retarget
         self._fill_retarget_menu()
-        robots = menu.addAction("Robots…")
+        robots = QtGui.QAction("Robots…", menu)
+        if before is not None:
+            menu.insertAction(before, robots)
+        else:
+            menu.addAction(robots)
         robots.setObjectName("canvas_robots")
         robots.triggered.connect(lambda: self.window.operator_lock.guard("edit the robots",
                                                                          self.open_robots_dialog))
