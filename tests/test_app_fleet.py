@@ -204,15 +204,29 @@ def test_robots_are_added_in_the_robots_dialog_and_connect(qtbot, tmp_path, two)
         tap(ok)  # a URL it cannot use: refused with the reason, nothing changed
         assert dialog.isVisible() and "port" in dialog.problem.text()
         assert len(win.controller.workspace.robots) == 1
-        dialog.set_row(1, url=bravo.url)
+        dialog.table.setCurrentCell(0, 0)
+        tap(dialog.findChild(QtWidgets.QPushButton, "removeRobot"))  # the first robot stays
+        assert dialog.table.rowCount() == 2 and "first robot" in dialog.problem.text()
+        dialog.set_row(1, url=alpha.url)  # a slip: Alpha's URL
         tap(ok)
         robots = win.controller.workspace.robots
-        assert [(r.name, r.url) for r in robots] == [("Alpha", ""), ("Bravo", bravo.url)]
+        assert [(r.name, r.url) for r in robots] == [("Alpha", ""), ("Bravo", alpha.url)]
         rid = robots[1].id
         qtbot.waitUntil(lambda: ui.chips.isVisible() and rid in ui.chips.chips, timeout=TIMEOUT_MS)
         qtbot.waitUntil(lambda: ui.chips.chips[rid].state == "connected", timeout=TIMEOUT_MS)
-        assert ui.links.link(rid).url == bravo.url and len(bravo.connections) == 1
-        tap(win.canvas_buttons["undo"])  # one step: Bravo is gone again, its link closed
+        assert ui.links.link(rid).url == alpha.url
+        win.canvas_actions["robots"].trigger()  # corrected: Bravo connects again, to its own URL
+        ui.robots_dialog.set_row(1, url=bravo.url)
+        ui.robots_dialog.accept()
+        qtbot.waitUntil(lambda: ui.links.link(rid).url == bravo.url, timeout=TIMEOUT_MS)
+        qtbot.waitUntil(lambda: ui.chips.chips[rid].state == "connected", timeout=TIMEOUT_MS)
+        qtbot.waitUntil(lambda: len(bravo.connections) == 1, timeout=TIMEOUT_MS)
+        tap(win.canvas_buttons["undo"])  # back to Alpha's URL
+        qtbot.waitUntil(lambda: len(bravo.connections) == 0, timeout=TIMEOUT_MS)
+        tap(win.canvas_buttons["redo"])
+        qtbot.waitUntil(lambda: len(bravo.connections) == 1, timeout=TIMEOUT_MS)
+        tap(win.canvas_buttons["undo"])
+        tap(win.canvas_buttons["undo"])  # one step more: Bravo is gone again, its link closed
         assert [r.name for r in win.controller.workspace.robots] == ["Alpha"]
         qtbot.waitUntil(lambda: not ui.chips.isVisible(), timeout=TIMEOUT_MS)
         assert rid not in ui.links.ids

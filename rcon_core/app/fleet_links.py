@@ -45,6 +45,11 @@ def robot_link_settings(robot: Robot, secret_for: Callable[[str], str | None] | 
                         client_key=robot.client_key or None, secret=secret)
 
 
+def _reach(robot: Robot) -> tuple[Any, ...]:
+    """What decides how a robot is reached: a change of it means connecting again."""
+    return (robot.url, robot.ca_file, robot.client_cert, robot.client_key, robot.auth)
+
+
 class FleetLinks:
     """The links of the workspace's robots, by robot id, in the workspace's order."""
 
@@ -104,8 +109,10 @@ class FleetLinks:
 
     def sync(self, robots: list[Robot]) -> list[str]:
         """Make a link for each robot not yet linked, close the links of robots that are gone. The first
-        robot always has the window's link. Returns the ids of the robots that are new."""
+        robot always has the window's link. Returns the ids of the robots that are new, or whose URL or
+        connection settings changed (to be connected again)."""
         old_first = self.robots[0].id if self.robots else None
+        before = {r.id: _reach(r) for r in self.robots}
         self.robots = list(robots)
         wanted = {r.id for r in robots[1:]}
         for rid in [rid for rid in self._links if rid not in wanted]:
@@ -123,6 +130,7 @@ class FleetLinks:
             self._wired_first = True
         if robots and robots[0].id != old_first:
             new.insert(0, robots[0].id)
+        new += [r.id for r in robots if r.id in before and before[r.id] != _reach(r) and r.id not in new]
         return new
 
     _wired_first = False

@@ -70,7 +70,7 @@ class FleetUi(QtCore.QObject):
         self.why: dict[str, str] = {}
         self._remove = window.doc.add_listener(self._doc_changed)
         self.links.on_client_changed(self._client_changed)
-        self._sync_robots(connect=False)
+        self._sync_robots()
         self._add_menu()
         # the other robots connect once the window is built (the first one: the connection bar)
         QtCore.QTimer.singleShot(0, self.connect_saved)
@@ -119,12 +119,15 @@ class FleetUi(QtCore.QObject):
     # ------------------------------------------------------------------------------------ robots
     def _doc_changed(self, change: Change) -> None:
         if change.what in ("robots-changed", "workspace-replaced"):
-            self._sync_robots(connect=True)
+            new = self._sync_robots()
             if change.what == "robots-changed":  # the controller restarts on workspace-replaced itself
                 self.window.controller.run_current()
+            # once the runtime runs on the new robots (the controller hears this change after us)
+            QtCore.QTimer.singleShot(0, lambda: self._connect(new))
         self._marks_dirty = True
 
-    def _sync_robots(self, *, connect: bool) -> None:
+    def _sync_robots(self) -> list[str]:
+        """Links, chips, pickers and menus for the workspace's robots; returns the robots to connect."""
         robots = self.robots
         new = self.links.sync(robots)
         self.window.host.first_robot = robots[0].id
@@ -143,13 +146,21 @@ class FleetUi(QtCore.QObject):
         for rid in list(self.catalogs):
             if rid not in {r.id for r in robots}:
                 del self.catalogs[rid]
-        if connect:
-            for rid in new:
-                if rid != robots[0].id:
-                    try:
-                        self.links.connect_robot(rid)
-                    except (BadUrl, KeyError) as exc:
-                        log.warning("robot %s: %s", rid, exc)
+        return new
+
+    def _connect(self, robot_ids: list[str]) -> None:
+        """Connect robots that are new or reached differently now (a bad URL is logged, the others go on)."""
+        first = self.first_id
+        for rid in robot_ids:
+            if rid not in self.links.ids:  # gone again before this ran (an undo)
+                continue
+            try:
+                if rid != first:
+                    self.links.connect_robot(rid)
+                elif self.first_url():  # the first robot's URL was set: the connection bar goes there
+                    self.window.connect_to(self.first_url())
+            except (BadUrl, KeyError) as exc:
+                log.warning("robot %s: %s", rid, exc)
 
     def connect_saved(self) -> None:
         """Connect every robot but the first to its URL (the window connects the first one)."""

@@ -161,7 +161,7 @@ class LiveCanvas:
             self._rt.client = client
 
     def _loop_set_client(self, robot_id: str, client: Any, keep: bool, view_only: str | None | bool) -> None:
-        if self._rt is None:
+        if self._rt is None or robot_id not in self._rt.fleet:  # a robot the next start brings in
             return
         before = self._running_ids()
         self._rt.set_client(robot_id, client, restart=not keep, view_only=view_only)

@@ -1,7 +1,9 @@
 """Canvas ▾ → Robots…: the workspace's robots, one row each (name, URL, CA file, rosauth, view only).
 
 OK replaces the robots in one undo step (``Document.set_robots``). The first robot's URL may stay empty:
-it then follows the connection bar's URL field. A robot removed here leaves its widgets in place; they
+it then follows the connection bar's URL field; the first robot cannot be removed (it is the connection
+bar's, and the robot of every binding that names none). A robot whose URL or connection settings changed
+connects again. A robot removed here leaves its widgets in place; they
 say that their robot is not in the workspace until it is added back (or ↶). A URL the app cannot use is
 refused with its reason before anything changes.
 """
@@ -76,8 +78,8 @@ class RobotsDialog(QtWidgets.QDialog):
 
     def _remove_row(self) -> None:
         r = self.table.currentRow()
-        if r < 0 or self.table.rowCount() <= 1:
-            self.problem.setText("a workspace keeps at least one robot")
+        if r <= 0:  # none picked, or the first: the connection bar's robot, the default of every binding
+            self.problem.setText("pick a robot to remove; the first robot (the connection bar's) stays")
             return
         self.table.removeRow(r)
         del self._robots[r]
