@@ -251,6 +251,11 @@ def test_re_targeting_a_canvas_is_one_undo_step():
     assert [w.binding.robot for w in back.canvases[1].widgets] == ["r-2", "r-2", "r-3"]
 
 
+def test_a_workspace_without_robots_gets_the_default_one():
+    doc = Document(Workspace([], robots=[]))
+    assert [(r.id, r.name) for r in doc.workspace.robots] == [("r-1", "Robot")]
+
+
 def test_robots_are_edited_in_one_undo_step_and_refused_when_ambiguous():
     doc = Document(Workspace.new())
     changes = []

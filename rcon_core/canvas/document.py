@@ -28,7 +28,7 @@ import attrs
 from rcon_core.plugins.model import Binding
 
 from .model import Canvas, Geometry, WidgetInstance, Workspace, new_id
-from .robots import Robot, UnknownRobot, resolve_robot
+from .robots import Robot, UnknownRobot, default_robot, resolve_robot
 
 __all__ = ["Document", "Change", "Command", "CanvasLocked", "EditError"]
 
@@ -69,6 +69,8 @@ class Document:
         if not self.workspace.canvases:
             c = Canvas(new_id("c"), "Main")
             self.workspace.canvases.append(c)
+        if not self.workspace.robots:  # every binding needs a robot to talk to (the first, by default)
+            self.workspace.robots.append(default_robot())
         if self.workspace.current_canvas is not None:
             self.workspace.current = self.workspace.current_canvas.id
         self._undo: list[Command] = []
