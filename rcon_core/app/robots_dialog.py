@@ -14,7 +14,7 @@ import copy
 from typing import Any
 
 import attrs
-from qtpy import QtWidgets
+from qtpy import QtCore, QtWidgets
 
 from rcon_core.app.connection_bar import normalize_url
 from rcon_core.app.link import BadUrl, check_url
@@ -37,6 +37,8 @@ class RobotsDialog(QtWidgets.QDialog):
         self.table.setHorizontalHeaderLabels(list(COLUMNS))
         header = self.table.horizontalHeader()
         header.setSectionResizeMode(1, QtWidgets.QHeaderView.ResizeMode.Stretch)
+        # rows as tall as the theme's touch-sized check boxes, with room around them
+        self.table.verticalHeader().setDefaultSectionSize(QtWidgets.QCheckBox().sizeHint().height() + 16)
         for robot in self._robots:
             self._add_row(robot)
         add = QtWidgets.QPushButton("Add robot")
@@ -70,11 +72,19 @@ class RobotsDialog(QtWidgets.QDialog):
         r = self.table.rowCount()
         self.table.insertRow(r)
         for c, text in enumerate((robot.name, robot.url, robot.ca_file)):
-            self.table.setItem(r, c, QtWidgets.QTableWidgetItem(text))
+            item = QtWidgets.QTableWidgetItem(text)
+            if c == 1 and r == 0:
+                item.setToolTip("empty: the URL of the connection bar")
+            self.table.setItem(r, c, item)
         for c, flag in ((3, robot.auth), (4, robot.view_only)):
             box = QtWidgets.QCheckBox()
+            box.setObjectName(("robotAuth", "robotViewOnly")[c - 3])
             box.setChecked(flag)
-            self.table.setCellWidget(r, c, box)
+            cell = QtWidgets.QWidget()
+            row = QtWidgets.QHBoxLayout(cell)
+            row.setContentsMargins(0, 0, 0, 0)
+            row.addWidget(box, 0, QtCore.Qt.AlignmentFlag.AlignCenter)
+            self.table.setCellWidget(r, c, cell)
 
     def _remove_row(self) -> None:
         r = self.table.currentRow()
@@ -88,9 +98,13 @@ class RobotsDialog(QtWidgets.QDialog):
         item = self.table.item(r, c)
         return item.text().strip() if item is not None else ""
 
+    def _box(self, r: int, c: int) -> QtWidgets.QCheckBox | None:
+        cell = self.table.cellWidget(r, c)
+        return cell.findChild(QtWidgets.QCheckBox) if cell is not None else None
+
     def _checked(self, r: int, c: int) -> bool:
-        box = self.table.cellWidget(r, c)
-        return isinstance(box, QtWidgets.QCheckBox) and box.isChecked()
+        box = self._box(r, c)
+        return box is not None and box.isChecked()
 
     def robots(self) -> list[Robot]:
         """The robots as edited (raises BadUrl for a URL the app cannot use)."""
@@ -118,6 +132,6 @@ class RobotsDialog(QtWidgets.QDialog):
                 self.table.setItem(r, c, QtWidgets.QTableWidgetItem(values[key]))
         for c, key in ((3, "auth"), (4, "view_only")):
             if key in values:
-                box = self.table.cellWidget(r, c)
-                if isinstance(box, QtWidgets.QCheckBox):
+                box = self._box(r, c)
+                if box is not None:
                     box.setChecked(bool(values[key]))
