@@ -214,7 +214,14 @@ def test_robots_are_added_in_the_robots_dialog_and_connect(qtbot, tmp_path, two)
         rid = robots[1].id
         qtbot.waitUntil(lambda: ui.chips.isVisible() and rid in ui.chips.chips, timeout=TIMEOUT_MS)
         qtbot.waitUntil(lambda: ui.chips.chips[rid].state == "connected", timeout=TIMEOUT_MS)
-        assert ui.links.link(rid).url == alpha.url
+        assert ui.links.link(rid).url == alpha.url and "view only" not in ui.chips.chips[rid].text()
+        win.canvas_actions["robots"].trigger()  # Bravo is only watched: its chip says so
+        ui.robots_dialog.set_row(1, view_only=True)
+        ui.robots_dialog.accept()
+        qtbot.waitUntil(lambda: ui.chips.chips[rid].text().startswith("Bravo · view only"), timeout=TIMEOUT_MS)
+        assert win.controller.workspace.robots[1].view_only
+        tap(win.canvas_buttons["undo"])
+        qtbot.waitUntil(lambda: "view only" not in ui.chips.chips[rid].text(), timeout=TIMEOUT_MS)
         win.canvas_actions["robots"].trigger()  # corrected: Bravo connects again, to its own URL
         ui.robots_dialog.set_row(1, url=bravo.url)
         ui.robots_dialog.accept()

@@ -247,8 +247,10 @@ class FleetUi(QtCore.QObject):
                 self._states[robot.id] = state
                 window.host.set_link_up(state == "connected", robot.id)
             latency = link.latency if state in ("connected", "degraded") else None
+            view_only = self.config_view_only(robot.id) or (f"robot “{robot.label}” is view-only"
+                                                            if robot.view_only else None)
             self.chips.show_state(robot.id, state, latency,
-                                  None if state == "connected" else self.why.get(robot.id) or None)
+                                  None if state == "connected" else self.why.get(robot.id) or None, view_only)
         if self._marks_dirty:
             self._marks_dirty = False
             apply_marks(window.host, window.doc.workspace)

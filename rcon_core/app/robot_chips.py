@@ -41,6 +41,8 @@ class RobotChip(QtWidgets.QPushButton):
         self.setAccessibleName(f"robot {name}")
         self.name, self.colour = name, colour
         self.state, self.latency, self.why = "closed", None, None
+        #: why the operator may only watch this robot (None: it takes commands); shown on the chip
+        self.view_only: str | None = None
         self._shown: tuple[str, str, bool, str | None] | None = None
         self.show_state("closed", None)
 
@@ -48,14 +50,17 @@ class RobotChip(QtWidgets.QPushButton):
         """The link's state, its round trip (while connected) and why it is not up (the tooltip)."""
         self.state, self.latency, self.why = state, latency, why
         lat = latency_text(latency) if state in ("connected", "degraded") else ""
-        text = f"{self.name}  {STATE_TEXT.get(state, state.upper())}" + (f"  {lat}" if lat else "")
+        name = f"{self.name} · view only" if self.view_only else self.name
+        text = f"{name}  {STATE_TEXT.get(state, state.upper())}" + (f"  {lat}" if lat else "")
         key = (text, state, self.isChecked(), why)
         if key == self._shown:
             return
         self._shown = key
         self.setText(text)
         self.setToolTip(f"{self.name}: {STATE_TEXT.get(state, state)}" + (f", round trip {lat}" if lat else "")
-                        + (f" ({why})" if why else "") + ". Tap to show its topics and services.")
+                        + (f" ({why})" if why else "")
+                        + (f"; {self.view_only}: nothing is sent to it" if self.view_only else "")
+                        + ". Tap to show its topics and services.")
         fg, bg = STATE_STYLE.get(state, ("#000000", "#d8d8d8"))
         edge = "#000000" if self.isChecked() else "#707070"
         weight = 4 if self.isChecked() else 2
@@ -106,9 +111,11 @@ class RobotChips(QtWidgets.QFrame):
             chip.setChecked(rid == robot_id)
             chip.show_state(chip.state, chip.latency, chip.why)
 
-    def show_state(self, robot_id: str, state: str, latency: float | None, why: str | None = None) -> None:
+    def show_state(self, robot_id: str, state: str, latency: float | None, why: str | None = None,
+                   view_only: str | None = None) -> None:
         chip = self.chips.get(robot_id)
         if chip is not None:
+            chip.view_only = view_only
             chip.show_state(state, latency, why)
 
 
