@@ -263,6 +263,7 @@ def test_a_one_robot_layout_of_version_1_opens_as_the_first_robot(qtbot, tmp_pat
         ws = win.controller.workspace
         assert [(r.id, r.name, r.url) for r in ws.robots] == [("r-1", "Robot", "")]
         assert not win.fleet_ui.chips.isVisible() and not win.fleet_ui.pickers[0].isVisible()
+        assert not win.fleet_ui.retarget_menu.isEnabled()  # one robot: nothing to re-target to
         qtbot.waitUntil(lambda: shown(win, "w-batt") not in ("", "–"), timeout=TIMEOUT_MS)
         assert frame_of(win, "w-batt").title.full_title == "Battery"  # one robot: no mark
         win.controller.saver.flush()

@@ -298,6 +298,7 @@ class FleetUi(QtCore.QObject):
 
     def _fill_retarget_menu(self) -> None:
         self.retarget_menu.clear()
+        self.retarget_menu.setEnabled(len(self.robots) > 1)  # with one robot it would be a plain duplicate
         for robot in self.robots:
             action = self.retarget_menu.addAction(robot.label)
             action.setObjectName(f"retarget-{robot.id}")
