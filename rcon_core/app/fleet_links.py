@@ -33,16 +33,22 @@ log = logging.getLogger(__name__)
 __all__ = ["FleetLinks", "robot_link_settings"]
 
 
-def robot_link_settings(robot: Robot, secret_for: Callable[[str], str | None] | None = None) -> LinkSettings:
-    """The :class:`LinkSettings` of a robot: its TLS files, and its secret when it uses rosauth."""
-    secret = None
-    if robot.auth and robot.url and secret_for is not None:
+def robot_link_settings(robot: Robot, secret_for: Callable[[str], str | None] | None = None,
+                        url: str | None = None, overrides: LinkSettings | None = None) -> LinkSettings:
+    """The :class:`LinkSettings` of a robot at ``url`` (default: its own): its TLS files, and its secret
+    when it uses rosauth. ``overrides``: the command line's (``--ca-file``..., the secret from
+    ``RCON_AUTH_SECRET``), which apply to every robot of the run, before the robot's own."""
+    cli = overrides or LinkSettings()
+    url = url or robot.url
+    secret = cli.secret if robot.auth else None
+    if robot.auth and not secret and url and secret_for is not None:
         try:
-            secret = secret_for(robot.url)
+            secret = secret_for(url)
         except Exception as exc:  # a credential store that fails must not keep the other robots away
-            log.warning("no secret for %s: %s", robot.url, exc)
-    return LinkSettings(ca_file=robot.ca_file or None, client_cert=robot.client_cert or None,
-                        client_key=robot.client_key or None, secret=secret)
+            log.warning("no secret for %s: %s", url, exc)
+    return LinkSettings(ca_file=cli.ca_file or robot.ca_file or None,
+                        client_cert=cli.client_cert or robot.client_cert or None,
+                        client_key=cli.client_key or robot.client_key or None, secret=secret)
 
 
 def _reach(robot: Robot) -> tuple[Any, ...]:
@@ -53,10 +59,13 @@ def _reach(robot: Robot) -> tuple[Any, ...]:
 class FleetLinks:
     """The links of the workspace's robots, by robot id, in the workspace's order."""
 
-    def __init__(self, first: Link, *, secret_for: Callable[[str], str | None] | None = None) -> None:
+    def __init__(self, first: Link, *, secret_for: Callable[[str], str | None] | None = None,
+                 overrides: Callable[[], LinkSettings] | None = None) -> None:
         self.first = first
         self.thread = first.thread
         self.secret_for = secret_for
+        #: the command line's link settings (they apply to every robot of the run), read when connecting
+        self.overrides = overrides or LinkSettings
         self.robots: list[Robot] = []
         self._links: dict[str, Link] = {}
         self._listeners: list[Callable[[str, Any], None]] = []
@@ -144,7 +153,8 @@ class FleetLinks:
         target = url or self.run_urls.get(robot.id) or robot.url
         if not target:
             return
-        self.link(robot.id).connect_to(target, settings or robot_link_settings(robot, self.secret_for))
+        self.link(robot.id).connect_to(
+            target, settings or robot_link_settings(robot, self.secret_for, target, self.overrides()))
 
     def disconnect_robot(self, robot_id: str) -> None:
         self.link(robot_id).disconnect()

@@ -45,7 +45,8 @@ class FleetUi(QtCore.QObject):
     def __init__(self, window: Any) -> None:
         super().__init__(window)
         self.window = window
-        self.links = FleetLinks(window.link, secret_for=window.connection.secrets.get)
+        self.links = FleetLinks(window.link, secret_for=window.connection.secrets.get,
+                                overrides=lambda: window.connection.overrides)
         self.chips = RobotChips()
         self.chips.picked.connect(self.pick_side_robot)
         root = window.centralWidget()
