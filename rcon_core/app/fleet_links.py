@@ -71,6 +71,7 @@ class FleetLinks:
         self._listeners: list[Callable[[str, Any], None]] = []
         #: URLs given at run time (``connect_robot(rid, url)``: the demo's sims), not saved in the layout
         self.run_urls: dict[str, str] = {}
+        first.on_client_changed(lambda client: self._changed(first, client))
 
     # ------------------------------------------------------------------------------------- reading
     @property
@@ -134,15 +135,10 @@ class FleetLinks:
                 link.on_client_changed(lambda client, link=link: self._changed(link, client))
                 self._links[r.id] = link
                 new.append(r.id)
-        if not self._wired_first:
-            self.first.on_client_changed(lambda client: self._changed(self.first, client))
-            self._wired_first = True
         if robots and robots[0].id != old_first:
             new.insert(0, robots[0].id)
         new += [r.id for r in robots if r.id in before and before[r.id] != _reach(r) and r.id not in new]
         return new
-
-    _wired_first = False
 
     def connect_robot(self, robot_id: str, url: str | None = None, settings: LinkSettings | None = None) -> None:
         """Connect ``robot_id`` to ``url`` (kept for this run only) or to its saved URL. Raises
