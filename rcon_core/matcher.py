@@ -17,7 +17,9 @@ Within a rank, higher ``WidgetSpec.priority`` first,
 then title. Structural matching needs the definition: the registry must know the type (standard types,
 plugin contributions, or ``types.add_typedefs(...)`` from a server). An unknown type still gets exact,
 package and generic matches. Services (roles CALL and SERVE) match on the request/response definitions;
-their paths start with ``request``/``response``.
+their paths start with ``request``/``response``. Actions (role ACTION, type ``pkg/action/X``) match on
+the goal, feedback and result definitions (``Accepts.action_parts``); their paths start with
+``goal``/``feedback``/``result``.
 """
 
 from __future__ import annotations
@@ -30,8 +32,10 @@ import attrs
 
 from rcon_core.msgs import names
 from rcon_core.plugins.spec import (
+    ACTION_PARTS,
     FIELD_PREDICATES,
     MESSAGE_PREDICATES,
+    Accepts,
     FieldLike,
     FieldPredicate,
     MessagePredicate,
@@ -113,12 +117,15 @@ def _walk(types: Any, type_name: str, prefix: str, depth: int = 0) -> Iterator[t
                 yield kind, node
 
 
-def _roots(types: Any, type_name: str, role: Role, parts: tuple[str, ...]) -> list[tuple[str, str]]:
-    """(path prefix, message type) to search: the message itself, or the service parts in role order."""
+def _roots(types: Any, type_name: str, role: Role, acc: Accepts) -> list[tuple[str, str]]:
+    """(path prefix, message type) to search: the message itself, the service parts in role order, or
+    the action's parts (goal, feedback, result)."""
+    if role.is_action:
+        return [(p, types.action_part_name(type_name, p)) for p in ACTION_PARTS if p in acc.action_parts]
     if not role.is_service:
         return [("", types.resolve(type_name))]
     order = ("request", "response") if role is Role.CALL else ("response", "request")
-    return [(p, types.service_part_name(type_name, p)) for p in order if p in parts]
+    return [(p, types.service_part_name(type_name, p)) for p in order if p in acc.service_parts]
 
 
 def _field_fits(pred: str | FieldPredicate, field: FieldLike) -> bool:
@@ -151,7 +158,7 @@ def candidate_paths(spec: WidgetSpec, role: Role | str, type_name: str, types: A
     found: list[str] = []
     if not field_preds and not msg_preds:
         return found
-    for prefix, root in _roots(types, type_name, role, acc.service_parts):
+    for prefix, root in _roots(types, type_name, role, acc):
         for kind, node in _walk(types, root, prefix):
             if kind == "leaf" and any(_field_fits(p, node.field) for p in field_preds):
                 found.append(node.path)
@@ -175,7 +182,7 @@ def _canonical_names(type_name: str, role: Role) -> set[str]:
         pkg, _kind, typ = names.split(type_name)
     except ValueError:
         return {type_name}
-    kind = "srv" if role.is_service else "msg"
+    kind = "action" if role.is_action else "srv" if role.is_service else "msg"
     return {f"{pkg}/{kind}/{typ}", names.normalize(type_name)}
 
 

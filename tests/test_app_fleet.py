@@ -300,3 +300,37 @@ def test_three_robots_one_map_shows_every_fix(qtbot, tmp_path, sim_fleet_threads
         shot(win, "fleet-map")
     finally:
         win.shutdown()
+
+
+def test_the_side_robot_decides_the_actions_and_parameters_listed(qtbot, tmp_path):
+    """A ROS 1 boat and a ROS 2 boat: the Actions list and the Parameters tab follow the picked chip."""
+    pytest.importorskip("rcon_widgets_std")
+    from rcon_core.sim import SimServer
+    from rcon_core.testing import TEST_RATE_SCALE
+
+    with SimServer.in_thread(port=0, rate_scale=TEST_RATE_SCALE) as alpha, \
+            SimServer.in_thread(port=0, rate_scale=TEST_RATE_SCALE, ros2=True) as bravo:
+        robots = [Robot("r-1", "Alpha"), Robot("r-2", "Bravo", url=bravo.url)]
+        fleet_layout(tmp_path / "config", robots, [])
+        win = open_window(qtbot, tmp_path / "config", entry_point_plugins(), url=alpha.url, wait_connected=True)
+        try:
+            ui = win.fleet_ui
+            qtbot.waitUntil(lambda: ui.chips.chips["r-2"].state == "connected", timeout=TIMEOUT_MS)
+            qtbot.waitUntil(lambda: win.topics.item("/battery") is not None, timeout=TIMEOUT_MS)
+            assert win.actions.item("/fibonacci") is None  # Alpha (ROS 1) has no actions
+            assert win.params_panel.link is win.link
+            tap(ui.chips.chips["r-2"])
+            qtbot.waitUntil(lambda: win.actions.item("/fibonacci") is not None, timeout=TIMEOUT_MS)
+            assert ui.pickers[2].combo.currentText() == "Bravo"  # the Actions list's picker too
+            panel = win.params_panel
+            assert panel.link is ui.links.link("r-2")
+            win.side.setCurrentWidget(panel)  # shown: Bravo's parameters are fetched, by node (ROS 2)
+            qtbot.waitUntil(lambda: panel.item("/kingfisher:max_speed") is not None and not panel.busy,
+                            timeout=TIMEOUT_MS)
+            tap(ui.chips.chips["r-1"])
+            qtbot.waitUntil(lambda: win.actions.item("/fibonacci") is None, timeout=TIMEOUT_MS)
+            assert panel.link is win.link
+            qtbot.waitUntil(lambda: panel.item("/kingfisher/max_speed") is not None and not panel.busy,
+                            timeout=TIMEOUT_MS)  # Alpha's, by namespace (ROS 1)
+        finally:
+            win.shutdown()

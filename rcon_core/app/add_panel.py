@@ -3,6 +3,7 @@
 1. topic  -> subscribe or publish -> ranked compatible widgets -> settings -> drop
 2. service -> call or serve       -> ranked compatible widgets -> settings -> drop
 3. widget -> settings (its topic or service picked from compatible ones only) -> drop
+4. action (ROS 2) -> send goals   -> ranked compatible widgets -> settings -> drop
 
 The settings page shows a live preview of the widget.  While the draft has problems the preview carries
 a warning overlay listing them; once valid it can be dragged onto the canvas or placed with "Place".
@@ -28,6 +29,7 @@ from typing import Any
 import attrs
 from qtpy import QtCore, QtGui, QtWidgets
 
+from rcon_core.app.action_type import ActionTypeBox
 from rcon_core.app.canvas_surface import DRAFT_MIME
 from rcon_core.app.catalog_panel import short_type
 from rcon_core.app.children_editor import ChildContext
@@ -43,12 +45,13 @@ ROLE_TEXT = {
     Role.PUBLISH: ("Send on it", "publish: a widget sends messages"),
     Role.CALL: ("Call it", "call: a widget sends requests and shows the answer"),
     Role.SERVE: ("Answer it", "serve: a widget answers requests from the robot"),
+    Role.ACTION: ("Send goals", "action: a widget sends goals, shows feedback and the result, and can cancel"),
 }
 
 #: categories whose widgets are for sending: they prefer publish/call over subscribe
 SENDING_CATEGORIES = frozenset({"controls", "input"})
-SENDING_FIRST = (Role.PUBLISH, Role.CALL, Role.SERVE, Role.SUBSCRIBE)
-SHOWING_FIRST = (Role.SUBSCRIBE, Role.PUBLISH, Role.CALL, Role.SERVE)
+SENDING_FIRST = (Role.PUBLISH, Role.CALL, Role.ACTION, Role.SERVE, Role.SUBSCRIBE)
+SHOWING_FIRST = (Role.SUBSCRIBE, Role.PUBLISH, Role.CALL, Role.SERVE, Role.ACTION)
 #: item data role of the target chooser holding the role a target is compatible with
 TARGET_ROLE = QtCore.Qt.ItemDataRole.UserRole + 1
 
@@ -304,6 +307,9 @@ class AddPanel(QtWidgets.QWidget):
         self.role_type.setProperty("role", "hint")
         col.addWidget(self.role_title)
         col.addWidget(self.role_type)
+        self.action_type_box = ActionTypeBox()  # an action listed without its type: the operator picks it
+        self.action_type_box.chosen.connect(self._action_type_chosen)
+        col.addWidget(self.action_type_box)
         col.addWidget(QtWidgets.QLabel("What should the widget do?"))
         self.role_buttons: dict[Role, QtWidgets.QPushButton] = {}
         for role in Role:
@@ -417,13 +423,28 @@ class AddPanel(QtWidgets.QWidget):
         """Pathway 2: a service was picked."""
         self._start_target(Target(name, type_name), service=True)
 
-    def _start_target(self, target: Target, service: bool) -> None:
+    def start_from_action(self, name: str, type_name: str) -> None:
+        """Pathway 4: a (ROS 2) action was picked."""
+        self._start_target(Target(name, type_name), service=False, action=True)
+        if not type_name and self._child_context is not None:
+            self.action_type_box.open_for(self._child_context(lambda: None).types)
+            self.role_buttons[Role.ACTION].setEnabled(False)
+
+    def _action_type_chosen(self, type_name: str) -> None:
+        if self._picked is not None:
+            self._picked = Target(self._picked.name, type_name)
+            self.role_type.setText(type_name)
+            self.role_buttons[Role.ACTION].setEnabled(True)
+
+    def _start_target(self, target: Target, service: bool, action: bool = False) -> None:
         self._reset()
         self._picked, self._is_service = target, service
         self.role_title.set_name(target.name)
         self.role_type.setText(target.type or "type unknown")
         for role, button in self.role_buttons.items():
-            button.setVisible(role.is_service == service)
+            button.setVisible(role.is_action == action and role.is_service == service)
+            button.setEnabled(True)
+        self.action_type_box.hide()
         self.stack.setCurrentWidget(self.role_page)
         self.show()
 
@@ -523,7 +544,7 @@ class AddPanel(QtWidgets.QWidget):
         (choosing one of those switches the role). Keeps the chosen target when it is still offered."""
         assert self.draft is not None
         draft = self.draft
-        self.target_label.setText("Service" if draft.role.is_service else "Topic")
+        self.target_label.setText(draft.role.noun.capitalize())
         combo = self.target_combo
         combo.blockSignals(True)
         combo.clear()
@@ -547,7 +568,7 @@ class AddPanel(QtWidgets.QWidget):
                     combo.setItemData(i, f"Choosing this makes the widget {role.value} instead of {draft.role.value}",
                                       QtCore.Qt.ItemDataRole.ToolTipRole)
             new_index = None  # a widget on a topic may also make a new one (needs the type registry)
-            if not draft.role.is_service and self._child_context is not None:
+            if not draft.role.is_service and not draft.role.is_action and self._child_context is not None:
                 new_index = add_new_topic_entry(combo)
             combo.setEnabled(True)
             keep = draft.target

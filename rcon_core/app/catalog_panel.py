@@ -1,4 +1,4 @@
-"""Side panel listing the robot's topics and services (name, type, live rate), with a filter.
+"""Side panel listing the robot's topics, services and actions (name, type, live rate), with a filter.
 
 Each row is the name over its type. A narrow column cuts each line on its own (:class:`NameTypeDelegate`):
 the name in the middle (both ends of a topic name tell), the type by its package first
@@ -10,15 +10,18 @@ from __future__ import annotations
 from qtpy import QtCore, QtGui, QtWidgets
 
 NAME_ROLE = QtCore.Qt.ItemDataRole.UserRole
+#: the second line of an entry whose type the robot did not tell
+UNKNOWN = "type unknown"
 TYPE_ROLE = QtCore.Qt.ItemDataRole.UserRole + 1
 
 
 class CatalogList(QtWidgets.QWidget):
-    """One filterable list (topics or services). ``picked(name, type)`` fires on tap."""
+    """One filterable list (topics, services or actions). ``picked(name, type)`` fires on tap."""
 
     picked = QtCore.Signal(str, str)
 
-    def __init__(self, what: str, with_rate: bool, parent: QtWidgets.QWidget | None = None) -> None:
+    def __init__(self, what: str, with_rate: bool, parent: QtWidgets.QWidget | None = None, *,
+                 empty: str = "") -> None:
         super().__init__(parent)
         self.what = what
         self.filter = QtWidgets.QLineEdit()
@@ -31,7 +34,7 @@ class CatalogList(QtWidgets.QWidget):
         self.tree.setRootIsDecorated(False)
         self.tree.setUniformRowHeights(True)
         # the name with its type on a second line: the panel is narrow, names are long
-        label = "Topic" if what == "topics" else "Service"
+        label = what[:-1].capitalize()  # "topics" -> "Topic"
         self.tree.setHeaderLabels([f"{label} / type", "Rate"] if with_rate else [f"{label} / type"])
         header = self.tree.header()
         header.setSectionResizeMode(0, QtWidgets.QHeaderView.ResizeMode.Stretch)
@@ -48,7 +51,7 @@ class CatalogList(QtWidgets.QWidget):
         QtWidgets.QScroller.grabGesture(
             self.tree.viewport(), QtWidgets.QScroller.ScrollerGestureType.LeftMouseButtonGesture
         )
-        self.empty = QtWidgets.QLabel(f"No {what} yet: connect to a robot.")
+        self.empty = QtWidgets.QLabel(empty or f"No {what} yet: connect to a robot.")
         self.empty.setProperty("role", "hint")
         self.empty.setWordWrap(True)
         col = QtWidgets.QVBoxLayout(self)
@@ -68,7 +71,7 @@ class CatalogList(QtWidgets.QWidget):
         self.tree.clear()
         self._items = {}
         for name, type_name in entries:
-            item = QtWidgets.QTreeWidgetItem([f"{name}\n{short_type(type_name)}"])
+            item = QtWidgets.QTreeWidgetItem([f"{name}\n{short_type(type_name) or UNKNOWN}"])
             item.setData(0, NAME_ROLE, name)
             item.setData(0, TYPE_ROLE, type_name)
             item.setToolTip(0, f"{name}\n{type_name}")
@@ -137,7 +140,8 @@ class NameTypeDelegate(QtWidgets.QStyledItemDelegate):
         width = max(0, text_rect.width() - 8)  # the style's own text margins
         fm = opt.fontMetrics
         line_break = "\u2028"  # what the item delegate makes of "\\n": the style breaks lines only there
-        return f"{fm.elidedText(name, QtCore.Qt.TextElideMode.ElideMiddle, width)}{line_break}{elide_type(fm, type_name, width)}"
+        shown = elide_type(fm, type_name, width) if type_name else UNKNOWN
+        return f"{fm.elidedText(name, QtCore.Qt.TextElideMode.ElideMiddle, width)}{line_break}{shown}"
 
     def paint(self, painter: QtGui.QPainter, option: QtWidgets.QStyleOptionViewItem,
               index: QtCore.QModelIndex) -> None:

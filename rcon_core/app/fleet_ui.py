@@ -10,8 +10,8 @@ before the canvas controller does) and polled once per frame. It
   a client change of one robot restarts only that robot's widgets;
 - shows each robot's link on its chip (:mod:`rcon_core.app.robot_chips`) and on its own widgets (LINK
   DOWN on that robot's frames only);
-- keeps the side panel's robot (:attr:`side_robot`): its topics and services fill the lists, new widgets
-  are bound to it, the add panel's preview runs on it;
+- keeps the side panel's robot (:attr:`side_robot`): its topics, services and actions fill the lists, the
+  Parameters tab shows its parameters, new widgets are bound to it, the add panel's preview runs on it;
 - marks the widgets of a canvas that mixes robots (:mod:`rcon_core.app.robot_marks`);
 - adds "Robots…" and "Duplicate for robot ▸" to the Canvas menu.
 """
@@ -54,7 +54,7 @@ class FleetUi(QtCore.QObject):
         if isinstance(layout, QtWidgets.QBoxLayout):
             layout.insertWidget(1, self.chips)  # right under the connection bar
         self.pickers = []
-        for lst in (window.topics, window.services):
+        for lst in (window.topics, window.services, window.actions):
             picker = RobotPicker(lst.what)
             picker.picked.connect(self.pick_side_robot)
             col = lst.layout()
@@ -138,6 +138,7 @@ class FleetUi(QtCore.QObject):
         if self.side_robot not in [r.id for r in robots]:
             self.side_robot = robots[0].id
             self._catalog_dirty = True
+            self._params_follow()
         shown = [(r.id, r.label, robot_colour(robots, r.id)) for r in robots]
         self.chips.set_robots(shown, self.side_robot)
         for picker in self.pickers:
@@ -192,6 +193,7 @@ class FleetUi(QtCore.QObject):
         if robot_id == self.side_robot:
             self.catalogs.pop(robot_id, None)
             self._catalog_dirty = True
+            window.params_panel.client_changed(client)
         window.preview.restart()
 
     # ---------------------------------------------------------------------------------- side panel
@@ -212,8 +214,19 @@ class FleetUi(QtCore.QObject):
         for picker in self.pickers:
             picker.set_current(robot_id)
         self._catalog_dirty = True
+        self._params_follow()
         self.window.preview.restart()
         self.side_robot_changed.emit(robot_id)
+
+    def _params_follow(self) -> None:
+        """The Parameters tab shows the side panel's robot's parameters."""
+        panel = getattr(self.window, "params_panel", None)
+        if panel is None:
+            return
+        link = self.links.link(self.side_robot)
+        if panel.link is not link:
+            panel.link = link
+            panel.client_changed(link.client)
 
     def take_catalog(self) -> dict[str, list[tuple[str, str]]] | None:
         """Every robot's new catalogue is kept; the side robot's is returned when it changed (else None)."""

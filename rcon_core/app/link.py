@@ -234,12 +234,28 @@ class Link:
 
 
 async def fetch_catalog(client: BridgeClient) -> dict[str, list[tuple[str, str]]]:
-    """``{"topics": [(name, type)], "services": [(name, type)]}`` from rosapi."""
+    """``{"topics": [(name, type)], "services": [(name, type)], "actions": [(name, type)]}`` from rosapi
+    (actions only from a ROS 2 robot: ``/rosapi/action_servers``)."""
     api = client.rosapi
     topics = _pairs(await api.topics())
     with_types = getattr(api, "services_with_types", None)
     services = _pairs(await (with_types() if with_types is not None else api.services()))
-    return {"topics": sorted(topics), "services": sorted(services)}
+    return {"topics": sorted(topics), "services": sorted(services), "actions": sorted(await _actions(client))}
+
+
+async def _actions(client: BridgeClient) -> list[tuple[str, str]]:
+    """The robot's ROS 2 action servers with their types; none from a ROS 1 robot or an old rosapi."""
+    detect = getattr(client, "detect_ros", None)
+    listing = getattr(client.rosapi, "action_servers_with_types", None)
+    if detect is None or listing is None:
+        return []
+    try:
+        if (await detect()).version != 2:
+            return []
+        return _pairs(await listing())
+    except Exception as exc:  # a rosapi without action_servers: no actions, said in the log
+        log.debug("action servers not listed: %s", exc)
+        return []
 
 
 def _pairs(answer: Any) -> list[tuple[str, str]]:
@@ -289,6 +305,9 @@ class OfflinePort:
         return _Dropped()
 
     async def call_service(self, *_a: Any, **_k: Any) -> Any:
+        raise RuntimeError("not connected to a robot")
+
+    def send_action_goal(self, *_a: Any, **_k: Any) -> Any:
         raise RuntimeError("not connected to a robot")
 
     def close(self) -> None:

@@ -29,6 +29,7 @@ from rcon_core.app.lock_controls import install as install_lock_controls
 from rcon_core.app.notice_bar import NoticeBar
 from rcon_core.app.operator_lock import OperatorLock
 from rcon_core.app.palette_panel import PalettePanel
+from rcon_core.app.params_panel import ParamsPanel
 from rcon_core.app.preview import PreviewHost
 from rcon_core.app.settings_form import SettingsForm, form_label, tune_form
 from rcon_core.app.template_menu import add_template_menu
@@ -39,8 +40,9 @@ from rcon_core.plugins import Binding, PluginManager, Role, WidgetSpec
 log = logging.getLogger(__name__)
 
 #: narrowest side panel (topics, services, widgets) and add panel
-SIDE_MIN = 330
+SIDE_MIN = 372  # with the tab column down its left edge (about 42 px)
 PANEL_MIN = 310
+ACTIONS_EMPTY = "No actions: a ROS 2 robot's action servers are listed here once connected."
 #: a window narrower than this is a small screen: in Operate mode the side panel hides itself
 SMALL_WINDOW = 1100
 
@@ -84,7 +86,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.focus_losses = 0
         self.rates = RateMeter()
         self._last_rate_sample = 0.0
-        self.catalog: dict[str, list[tuple[str, str]]] = {"topics": [], "services": []}
+        self.catalog: dict[str, list[tuple[str, str]]] = {"topics": [], "services": [], "actions": []}
         self.first_paint_at: float | None = None
         #: where the export/import file dialogs open (the folder used last in this session)
         self.share_dir = Path.home()
@@ -93,13 +95,18 @@ class MainWindow(QtWidgets.QMainWindow):
         self.connection = ConnectionBar(self.link, config)
         self.topics = CatalogList("topics", with_rate=True)
         self.services = CatalogList("services", with_rate=False)
+        self.actions = CatalogList("actions", with_rate=False, empty=ACTIONS_EMPTY)
         self.palette_panel = PalettePanel()
         self.palette_panel.set_specs(plugins.widgets())
         self.side = QtWidgets.QTabWidget()
         self.side.setObjectName("sidePanel")
         self.side.addTab(self.topics, "Topics")
         self.side.addTab(self.services, "Services")
+        self.side.addTab(self.actions, "Actions")
+        self.params_panel = ParamsPanel(self.link, self.confirm)
+        self.side.addTab(self.params_panel, "Params")
         self.side.addTab(self.palette_panel, "Widgets")
+        self.side.setTabPosition(QtWidgets.QTabWidget.TabPosition.West)  # five tabs: all in sight
         self.side.setMinimumWidth(SIDE_MIN)
         #: the operator's own show/hide of the side panel (the toggle), kept until the automatic choice
         #: (small window in Operate mode, or the add panel needing the room) changes
@@ -185,7 +192,7 @@ class MainWindow(QtWidgets.QMainWindow):
         split.addWidget(center)
         split.addWidget(self.add_panel)
         split.setStretchFactor(1, 1)
-        split.setSizes([320, 900, 380])
+        split.setSizes([SIDE_MIN, 900, 380])
         split.setChildrenCollapsible(False)
         self.split = split
         self.center = center
@@ -238,6 +245,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.topics.picked.connect(lambda n, t: self._start_adding(lambda: self.add_panel.start_from_topic(n, t)))
         self.services.picked.connect(
             lambda n, t: self._start_adding(lambda: self.add_panel.start_from_service(n, t)))
+        self.actions.picked.connect(lambda n, t: self._start_adding(lambda: self.add_panel.start_from_action(n, t)))
         self.palette_panel.picked.connect(self._palette_picked)
         self.connection.state_changed.connect(self._link_state)
         QtGui.QShortcut(QtGui.QKeySequence.StandardKey.Undo, self, self.undo)
@@ -679,7 +687,11 @@ class MainWindow(QtWidgets.QMainWindow):
         from rcon_core.matcher import match
 
         out = []
-        for m in match(type_name, role, self.types, self.plugins):
+        try:
+            found = match(type_name, role, self.types, self.plugins)
+        except ValueError:  # no type known (an action whose type the robot did not tell): nothing fits
+            return []
+        for m in found:
             paths = (m.field_path,) if m.field_path else ()
             out.append(Candidate(m.spec, paths, float(int(m.rank)), m.reason, tuple(m.field_paths)))
         return out
@@ -687,7 +699,7 @@ class MainWindow(QtWidgets.QMainWindow):
     def targets_for(self, spec: WidgetSpec, role: Role) -> list[Target]:
         from rcon_core.matcher import match
 
-        entries = self.catalog["services" if role.is_service else "topics"]
+        entries = self.catalog.get(f"{role.noun}s", [])
         out = []
         for name, type_name in entries:
             for m in match(type_name, role, self.types, self.plugins):
@@ -889,6 +901,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.catalog = catalog
             self.topics.set_entries(catalog["topics"])
             self.services.set_entries(catalog["services"])
+            self.actions.set_entries(catalog.get("actions", []))
         if now - self._last_rate_sample >= 1.0:
             self._last_rate_sample = now
             self.topics.set_rates(self.rates.sample(self.host.topic_counts(self.fleet_ui.side_robot), now))

@@ -77,6 +77,22 @@ class Rosapi:
     async def action_servers(self) -> list[str]:
         return list((await self._call("action_servers")).get("action_servers", []))
 
+    async def action_type(self, action: str) -> str | None:
+        """``pkg/action/X`` of a ROS 2 action from rosapi's ``action_type`` (added after rosapi 2.1.0); None
+        when the action has no server or the rosapi is older (2.1.0 cannot tell an action's type at all:
+        ``topic_type`` ignores the hidden ``<action>/_action/*`` topics)."""
+        try:
+            answer = await self._call("action_type", {"action": action})
+        except ServiceError:
+            return None
+        return str(answer.get("type") or "") or None
+
+    async def action_servers_with_types(self) -> dict[str, str]:
+        """``{action: type}`` of every action server (``""`` where the type cannot be found)."""
+        names = await self.action_servers()
+        types = await asyncio.gather(*(self.action_type(n) for n in names), return_exceptions=True)
+        return {n: (t if isinstance(t, str) else "") for n, t in zip(names, types, strict=True)}
+
     async def get_time(self) -> dict[str, int]:
         """The server's ROS time: ``{"secs", "nsecs"}`` (ROS 1) or ``{"sec", "nanosec"}`` (ROS 2)."""
         return dict((await self._call("get_time")).get("time", {}))

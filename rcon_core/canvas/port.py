@@ -109,10 +109,11 @@ class GuardedPort:
     repaints at once). ``view_only``: None, or the sentence saying why nothing may be sent.
     ``on_refused(sentence)``: told about each refusal. ``link``: an opaque, hashable key naming the
     connection (the same for every widget on one robot), so models can share per-robot resources (the
-    teleop pads of one robot merge their axes) without a way to the connection itself.
+    teleop pads of one robot merge their axes) without a way to the connection itself. ``widget_id``: the
+    widget instance's id, the same across rebuilds of its model (a model may leave word for its successor).
     """
 
-    __slots__ = ("_ops", "view_only", "refused", "link")
+    __slots__ = ("_ops", "view_only", "refused", "link", "widget_id")
 
     def __init__(
         self,
@@ -122,8 +123,10 @@ class GuardedPort:
         view_only: str | None = None,
         on_refused: Callable[[str], None] | None = None,
         link: Any = None,
+        widget_id: str | None = None,
     ) -> None:
         self.link = link
+        self.widget_id = widget_id
         self.view_only = view_only
         self.refused = 0
         self._ops = _operations(self, node, notify, view_only, on_refused)
@@ -224,7 +227,15 @@ def _operations(port: GuardedPort, node: Any, notify: Callable[[], None] | None,
     def send_action_goal(action: str, action_type: str, args: Any, feedback: Any, **options: Any) -> _Goal:
         if view_only is not None:
             raise ViewOnlyError(refuse(f"the goal to {action}"))
-        return _Goal(node.send_action_goal(action, action_type, args, feedback, **options))
+        watched = None
+        if feedback is not None:
+            def watched(values: Any) -> Any:  # each feedback repaints at once, like a message
+                try:
+                    return feedback(values)
+                finally:
+                    ping()
+
+        return _Goal(node.send_action_goal(action, action_type, args, feedback=watched, **options))
 
     return {
         "subscribe": subscribe,

@@ -309,7 +309,7 @@ class CanvasRuntime:
                 m.set_error(text)
 
         return GuardedPort(node, notify=notify, view_only=self.view_only_reason(robot_id=robot_id),
-                           on_refused=refused, link=id(self.fleet.client(robot_id)))
+                           on_refused=refused, link=id(self.fleet.client(robot_id)), widget_id=widget_id)
 
     def _start_widget(self, inst: WidgetInstance) -> WidgetModel:
         try:

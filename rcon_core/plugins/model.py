@@ -76,11 +76,12 @@ def _role(value: str | Role) -> Role:
 class Binding:
     """What a widget instance is bound to.
 
-    ``name``: the topic or service name (``""`` = not bound yet). ``type``: its type, either spelling.
-    ``role``: how the widget uses it. ``field_paths``: the field(s) the widget shows or sets, e.g.
-    ``("percentage",)``; empty means the whole message. On a service, paths begin with ``request`` or
-    ``response`` (``"request.data"``). ``robot``: the id of the workspace's robot it talks to (``""`` =
-    the first robot, so one-robot layouts and plugins never set it; see ``rcon_core.canvas.robots``).
+    ``name``: the topic, service or action name (``""`` = not bound yet). ``type``: its type, either
+    spelling. ``role``: how the widget uses it. ``field_paths``: the field(s) the widget shows or sets,
+    e.g. ``("percentage",)``; empty means the whole message. On a service, paths begin with ``request``
+    or ``response`` (``"request.data"``); on an action with ``goal``, ``feedback`` or ``result``.
+    ``robot``: the id of the workspace's robot it talks to (``""`` = the first robot, so one-robot
+    layouts and plugins never set it; see ``rcon_core.canvas.robots``).
     """
 
     name: str = ""
@@ -108,7 +109,7 @@ class Binding:
     def problems(self) -> list[str]:
         """What is missing before this binding can work; ``[]`` when complete."""
         out = []
-        what = "service" if self.role.is_service else "topic"
+        what = self.role.noun
         if not self.name:
             out.append(f"no {what} chosen")
         elif not self.name.startswith("/") and not self.name[0].isalpha():
@@ -133,7 +134,12 @@ class ServiceServer(Protocol):
 
 class BridgePort(Protocol):
     """The slice of a bridge client node (``client.node(id)``) a model may use. Tests may pass a fake or a
-    node; in the app it is a ``rcon_core.canvas.port.GuardedPort`` (sealed; refuses to send when view-only)."""
+    node; in the app it is a ``rcon_core.canvas.port.GuardedPort`` (sealed; refuses to send when view-only).
+
+    Besides these methods the app's port carries three plain attributes a model may read with
+    ``getattr(port, name, None)`` (a fake may lack them): ``view_only`` (None or why nothing may be sent),
+    ``link`` (an opaque key, the same for every widget on one robot: share per-robot resources by it) and
+    ``widget_id`` (the widget instance's id, the same across rebuilds of its model)."""
 
     def subscribe(
         self, topic: str, callback: Callable[[dict[str, Any]], Any], **options: Any
@@ -264,7 +270,8 @@ class WidgetModel:
         return self._running
 
     def start(self) -> None:
-        """Open what the role needs: subscribe, advertise a topic, or advertise a service. Idempotent.
+        """Open what the role needs: subscribe, advertise a topic, or advertise a service (role ACTION
+        opens nothing: the model sends goals when asked). Idempotent.
 
         Does nothing but mark the model running when the binding is incomplete (``problems()``), so
         an unconfigured widget shows its warning instead of failing.

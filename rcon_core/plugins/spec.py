@@ -20,6 +20,9 @@ Accepted types are declared with :class:`Accepts`:
   ``("percentage", "data")`` so a Slider on ``sensor_msgs/BatteryState`` binds ``percentage``.
 * ``service_parts``: for service types, which side(s) the predicates look at. Paths on a service are
   prefixed with the part: ``"request.data"``, ``"response.success"``; the whole request is ``"request"``.
+* ``action_parts``: for action types (role ``ACTION``), which parts the predicates look at, of
+  ``"goal"``, ``"feedback"``, ``"result"``. Paths on an action are prefixed with the part:
+  ``"goal.target"``, ``"feedback.distance_remaining"``; the whole goal is ``"goal"``.
 
 ``"any"`` is a *generic fallback* (ranked last by the matcher); every other predicate is *structural*.
 """
@@ -46,6 +49,7 @@ __all__ = [
     "SettingsError",
     "resolve",
     "NUMERIC_BASES",
+    "ACTION_PARTS",
     "INTEGER_BASES",
     "FLOAT_BASES",
 ]
@@ -74,10 +78,20 @@ class Role(enum.StrEnum):
     PUBLISH = "publish"  #: publishes messages on a topic
     CALL = "call"  #: calls a service (a client)
     SERVE = "serve"  #: answers a service (advertises it)
+    ACTION = "action"  #: sends goals to a ROS 2 action server (shows feedback and result, can cancel)
 
     @property
     def is_service(self) -> bool:
         return self in (Role.CALL, Role.SERVE)
+
+    @property
+    def is_action(self) -> bool:
+        return self is Role.ACTION
+
+    @property
+    def noun(self) -> str:
+        """What a binding of this role names: ``"topic"``, ``"service"`` or ``"action"``."""
+        return "action" if self is Role.ACTION else "service" if self.is_service else "topic"
 
     @classmethod
     def parse(cls, value: str | Role) -> Role:
@@ -108,6 +122,10 @@ FLOAT_BASES = frozenset({"float32", "float64"})
 NUMERIC_BASES = INTEGER_BASES | FLOAT_BASES
 STRING_BASES = frozenset({"string", "wstring"})
 TIME_BASES = frozenset({"time", "duration", "builtin_interfaces/msg/Time", "builtin_interfaces/msg/Duration"})
+
+
+#: the parts of an action type, in the order the matcher searches them
+ACTION_PARTS = ("goal", "feedback", "result")
 
 
 def _scalar(f: FieldLike) -> bool:
@@ -208,6 +226,13 @@ class Accepts:
     )
     prefer: tuple[str, ...] = attrs.field(default=(), converter=_tuple)
     service_parts: tuple[str, ...] = attrs.field(default=("request", "response"), converter=_tuple)
+    action_parts: tuple[str, ...] = attrs.field(default=("goal", "feedback", "result"), converter=_tuple)
+
+    @action_parts.validator
+    def _check_action_parts(self, _attr: Any, value: tuple[str, ...]) -> None:
+        bad = [p for p in value if p not in ACTION_PARTS]
+        if bad:
+            raise SpecError(f"action_parts may hold 'goal', 'feedback' and 'result' only, got {bad}")
 
     @service_parts.validator
     def _check_parts(self, _attr: Any, value: tuple[str, ...]) -> None:

@@ -10,7 +10,11 @@ Differences from the ROS 1 rosapi (``rosapi.py``), as the ros2 branch's ``rosapi
   that includes an action's parts (``pkg/action/<Name>_Goal``, ``_Result``, ``_Feedback``): rosapi looks
   for them as attributes of the package's ``action`` module, which exports only ``<Name>``;
 * ``action_servers`` lists every action with a server: the sim's own and those clients advertised
-  (rosapi finds them from the hidden ``<action>/_action/{feedback,status}`` topics);
+  (rosapi finds them from the hidden ``<action>/_action/{feedback,status}`` topics, which ``topic_type``
+  ignores);
+* like rosapi after 2.1.0 (its ros2 branch now), ``action_type`` (``action`` -> ``type``) and
+  ``action_{goal,result,feedback}_details`` (``type`` -> ``typedefs``) tell an action's type and layout;
+  a 2.1.0 server has neither, and a client falls back (``Rosapi.action_type`` answers None);
 * no ``get_loggers``/``set_logger_level`` services (those are ROS 1 node services); every node has its
   ROS 2 parameter services instead (``ros2_param_services.py``).
 """
@@ -51,6 +55,9 @@ _SERVICES: list[tuple[str, str]] = [
     ("service_response_details", "ServiceResponseDetails"), ("set_param", "SetParam"),
     ("get_param", "GetParam"), ("has_param", "HasParam"), ("delete_param", "DeleteParam"),
     ("get_param_names", "GetParamNames"), ("get_time", "GetTime"), ("get_ros_version", "GetROSVersion"),
+    # added to rosapi after 2.1.0 (its ros2 branch now): how a client learns an action's type and layout
+    ("action_type", "ActionType"), ("action_goal_details", "ActionGoalDetails"),
+    ("action_result_details", "ActionResultDetails"), ("action_feedback_details", "ActionFeedbackDetails"),
 ]
 
 
@@ -113,9 +120,35 @@ class Ros2Rosapi(Rosapi):
             return {"typedefs": []}  # rosapi looks for <Name>_Goal where the package does not export it
         return {"typedefs": self.server.types.typedefs(type_name) or []}
 
+    def _action_part_details(self, args: dict[str, Any], part: str) -> dict[str, Any]:
+        """rosapi 2.x's ``action_{goal,result,feedback}_details``: the typedefs of one part of the action
+        type ``type`` (``pkg/action/X``), empty for a type it cannot load."""
+        parts = str(args.get("type", "")).strip("/").split("/")
+        if len(parts) not in (2, 3) or not all(parts):
+            return {"typedefs": []}
+        return {"typedefs": self.server.types.typedefs(f"{parts[0]}/action/{parts[-1]}_{part}") or []}
+
+    def action_goal_details(self, args: dict[str, Any]) -> dict[str, Any]:
+        return self._action_part_details(args, "Goal")
+
+    def action_result_details(self, args: dict[str, Any]) -> dict[str, Any]:
+        return self._action_part_details(args, "Result")
+
+    def action_feedback_details(self, args: dict[str, Any]) -> dict[str, Any]:
+        return self._action_part_details(args, "Feedback")
+
     def action_servers(self, args: dict[str, Any]) -> dict[str, Any]:
         hub = self.server.action_hub
         return {"action_servers": hub.names() if hub is not None else []}
+
+    def action_type(self, args: dict[str, Any]) -> dict[str, Any]:
+        """rosapi's ``action_type`` (after 2.1.0): the type of the action named ``action``, ``""`` when none."""
+        hub = self.server.action_hub
+        provider = hub.providers.get(str(args.get("action", ""))) if hub is not None else None
+        if provider is None:
+            return {"type": ""}
+        parts = str(provider.type).strip("/").split("/")
+        return {"type": f"{parts[0]}/action/{parts[-1]}"}
 
     def _full_text(self, type_name: str) -> str:
         """rosapi 2.x's ``typedefs_full_text``: the root's definition, then each message type it uses once,

@@ -3,7 +3,8 @@
 The bound topic (role SUBSCRIBE) is the main track; ``extra_topics`` add more tracks, each subscribed
 through the same port and ended in :meth:`MapModel.stop`. ``heading_topic`` optionally gives the main
 track's heading; otherwise it is the course between fixes. A goal tapped on the map is published as a
-``sensor_msgs/NavSatFix`` on ``goal_topic`` (role SUBSCRIBE) or on the bound topic (role PUBLISH).
+``sensor_msgs/NavSatFix`` on ``goal_topic`` (role SUBSCRIBE) or on the bound topic (role PUBLISH). A long
+press proposes "Navigate here": a goal to the ROS 2 action ``navigate_action`` (:mod:`.navigate`).
 
 With ``every_robot`` (several robots in one workspace) the map shows the bound topic's fix of every
 robot: the canvas runtime calls :meth:`MapModel.on_fleet` before ``start`` with a port per robot; the own
@@ -30,6 +31,7 @@ from rcon_core.plugins.paths import PathError, get_path, set_path
 
 from . import mercator
 from .geo import Fix, GeoError, fix_from_message, heading_from_message
+from .navigate import Navigation, Navigator
 from .settings import MapSettings, parse_extra_topics
 
 NAVSATFIX = "sensor_msgs/NavSatFix"
@@ -78,6 +80,7 @@ class MapValue:
     tracks: tuple[Track, ...] = ()
     goal: Goal | None = None
     goals_sent: int = 0
+    nav: Navigation | None = None  #: the "Navigate here" goal, while it runs and how it ended
 
     def track(self, key: str) -> Track | None:
         return next((t for t in self.tracks if t.key == key), None)
@@ -115,6 +118,7 @@ class MapModel(WidgetModel):
         self._robot_ports: list[tuple[str, Any]] = []  # (track key, port) of the other robots
         self._goal: Goal | None = None
         self._goals_sent = 0
+        self.navigator = Navigator(settings, port, self.types, self._dispatch, self._replace_value, self.set_error)
         if binding.role is Role.SUBSCRIBE:
             self._tracks[""] = _TrackState("", binding.name or "robot", PALETTE[0], settings.trail_length)
         try:
@@ -166,6 +170,7 @@ class MapModel(WidgetModel):
             self.set_error(f"map: {exc}")
 
     def on_stop(self) -> None:
+        self.navigator.stop()
         handles = [(sub, "unsubscribe") for sub in self._extra_subs]
         if self._goal_pub is not None:
             handles.append((self._goal_pub, "unadvertise"))
@@ -276,7 +281,8 @@ class MapModel(WidgetModel):
                     accuracy_m=fix.accuracy_m if fix and fix.has_fix else None,
                     heading_deg=heading, heading_source=source, stamp=t.stamp, count=t.count,
                 ))
-            return MapValue(tracks=tuple(tracks), goal=self._goal, goals_sent=self._goals_sent)
+            return MapValue(tracks=tuple(tracks), goal=self._goal, goals_sent=self._goals_sent,
+                            nav=self.navigator.state)
 
     @property
     def stale_after_s(self) -> float:
@@ -357,6 +363,13 @@ class MapModel(WidgetModel):
             self._goals_sent += 1
         self._replace_value()
         return True
+
+    def navigate(self, lat: float, lon: float) -> bool:
+        """Send a goal to ``settings.navigate_action`` to go to ``lat``/``lon`` (after the operator confirmed)."""
+        return self.navigator.start(lat, lon)
+
+    def cancel_navigation(self) -> None:
+        self.navigator.cancel()
 
     def clear_trails(self) -> None:
         """Forget the trails (keeps the last positions)."""

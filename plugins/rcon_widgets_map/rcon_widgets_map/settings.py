@@ -60,6 +60,18 @@ class MapSettings:
         metadata={"label": "Goal topic",
                   "help": "Tap the map, confirm, and a sensor_msgs/NavSatFix is published here. Empty: no goals."},
     )
+    navigate_action: str = attrs.field(
+        default="", validator=attrs.validators.instance_of(str),
+        metadata={"label": "Navigate action",
+                  "help": "A ROS 2 action (e.g. /navigate_to_fix): long-press the map, tap 'Navigate here', and "
+                          "a goal to that point is sent; Stop cancels it. Empty: no navigation"},
+    )
+    navigate_type: str = attrs.field(
+        default="rcon_sim/action/NavigateToFix", validator=attrs.validators.instance_of(str),
+        metadata={"label": "Its action type",
+                  "help": "The action's type; the point goes into the first message of its goal with a "
+                          "latitude and a longitude"},
+    )
     extra_topics: str = attrs.field(
         default="", validator=attrs.validators.instance_of(str),
         metadata={"label": "More fixes",
@@ -121,6 +133,13 @@ class MapSettings:
             p = topic_problem(self.goal_topic.strip(), "goal topic")
             if p:
                 out.append(p)
+        action = self.navigate_action.strip()
+        if action:
+            p = topic_problem(action, "navigate action")
+            if p:
+                out.append(p)
+            if "/" not in self.navigate_type.strip():
+                out.append("the navigate action needs its type, like rcon_sim/action/NavigateToFix")
         try:
             parse_extra_topics(self.extra_topics)
         except ValueError as exc:

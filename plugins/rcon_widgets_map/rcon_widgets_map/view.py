@@ -5,7 +5,8 @@ Paints only the model's prepared :class:`~rcon_widgets_map.model.MapValue`. Tile
 asks for the visible ones while painting and repaints when one arrives.
 
 Gestures: drag pans (and turns *follow* off), the wheel or a pinch zooms, a tap opens a confirm bubble
-for a goal at that point: nothing is sent until *Send* is pressed.
+for a goal at that point: nothing is sent until *Send* is pressed. With a navigation action set, a long
+press offers *Navigate here* in the same bubble (:mod:`.nav_view`).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from . import mercator, scale
 from .http_tiles import HttpTileSource
 from .loader import TileLoader
 from .model import MapValue, Track
+from .nav_view import NavigateControls
 from .settings import MapPluginSettings
 from .viewport import Viewport
 
@@ -110,7 +112,8 @@ class MapView(QtWidgets.QWidget):
         self.zoom_out.setText("\u2212")
         self.zoom_out.clicked.connect(lambda: self.zoom_by(-1.0))
         self.bubble = _Bubble(self)
-        self.bubble.send.clicked.connect(self.confirm_goal)
+        self.nav = NavigateControls(self)
+        self.bubble.send.clicked.connect(lambda: self.nav.confirm() if self.nav.pending else self.confirm_goal())
         self.bubble.cancel.clicked.connect(self.cancel_goal)
 
         self.tilesArrived.connect(self._tiles_arrived, Qt.ConnectionType.QueuedConnection)
@@ -160,6 +163,7 @@ class MapView(QtWidgets.QWidget):
         self.state = state
         value = state.value if isinstance(state.value, MapValue) else None
         self.value = value
+        self.nav.sync(value)
         target = self._follow_target()
         if target is not None and (self.follow_button.isChecked() or not self._centred_once):
             self.viewport.centre_on(target.lat, target.lon)  # type: ignore[arg-type]
@@ -225,12 +229,14 @@ class MapView(QtWidgets.QWidget):
             x -= b.width()
             b.move(x, m)
             x -= 6
+        self.nav.place()
 
     # -- goals ----------------------------------------------------------------------------------------
     def tap(self, pos: QtCore.QPointF) -> None:
         """A tap on the map: propose a goal there (nothing is sent until confirmed)."""
         if not self.model.goal_topic:
             return
+        self.nav.close()  # a navigation proposal gives way to this one
         self.pending = self.viewport.to_latlon(pos.x(), pos.y())
         lat, lon = self.pending
         self.bubble.label.setText(f"Goal {lat:.6f}, {lon:.6f}\non {self.model.goal_topic}")
@@ -252,14 +258,17 @@ class MapView(QtWidgets.QWidget):
 
     def cancel_goal(self) -> None:
         self.pending = None
-        self.bubble.hide()
-        self.update()
+        self.nav.close()
+
+    def place_bubble(self) -> None:
+        self._place_bubble()
 
     def _place_bubble(self) -> None:
         """Beside the proposed goal (right of it, or left when there is no room), below the map's buttons."""
-        if self.pending is None or not self.bubble.isVisible():
+        point = self.pending or self.nav.pending
+        if point is None or not self.bubble.isVisible():
             return
-        sx, sy = self.viewport.to_screen(*self.pending)
+        sx, sy = self.viewport.to_screen(*point)
         w, h = self.bubble.width(), self.bubble.height()
         top = self.follow_button.geometry().bottom() + 6
         if sx + 24 + w <= self.width() - 4:
@@ -278,6 +287,7 @@ class MapView(QtWidgets.QWidget):
         if event.button() == Qt.MouseButton.LeftButton:
             self._press = self._last_drag = event.position()
             self._dragging = False
+            self.nav.pressed(event.position())
         super().mousePressEvent(event)
 
     def mouseMoveEvent(self, event: QtGui.QMouseEvent) -> None:  # noqa: N802
@@ -286,6 +296,7 @@ class MapView(QtWidgets.QWidget):
         pos = event.position()
         if not self._dragging and (pos - self._press).manhattanLength() > TAP_SLOP_PX:
             self._dragging = True
+            self.nav.moved()
         if self._dragging:
             delta = pos - self._last_drag
             self._last_drag = pos
@@ -293,7 +304,7 @@ class MapView(QtWidgets.QWidget):
 
     def mouseReleaseEvent(self, event: QtGui.QMouseEvent) -> None:  # noqa: N802
         if event.button() == Qt.MouseButton.LeftButton and self._press is not None:
-            if not self._dragging:
+            if not self.nav.released() and not self._dragging:
                 self.tap(event.position())
             self._press = self._last_drag = None
             self._dragging = False
@@ -344,6 +355,7 @@ class MapView(QtWidgets.QWidget):
                 self._paint_marker(p, track, labelled=len(self.value.tracks) > 1)
         if self.pending is not None:
             self._paint_goal(p, *self.pending, sent=False)
+        self.nav.paint(p, self.value, _chip)
         self._paint_status(p)
         self._paint_scale(p)
         p.end()

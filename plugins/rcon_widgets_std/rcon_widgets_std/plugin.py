@@ -88,6 +88,14 @@ def specs() -> list[WidgetSpec]:
             accepts=Accepts(messages=["any"]),
             default_size=(320, 360), priority=0, **_refs("compound", "Compound"),
         ),
+        WidgetSpec(
+            kind="std.action", title="Action", icon="action", category="Controls",
+            description="Sends a goal to a ROS 2 action server (a form from the goal type), shows its live "
+                        "feedback and progress, the result and how it ended; Cancel",
+            roles={Role.ACTION},
+            accepts=Accepts(messages=["any"]),
+            default_size=(352, 432), priority=10, **_refs("action", "Action"),
+        ),
     ]
 
 

@@ -95,7 +95,7 @@ def test_every_std_widget_is_registered_with_its_package(pm):
     std = [s for s in pm.widgets() if s.kind.startswith("std.")]
     assert {s.package for s in std} == {"rcon-widgets-std"}
     assert {s.kind for s in std} == {"std.label", "std.slider", "std.switch", "std.button", "std.textfield",
-                                     "std.stepper", "std.textview", "std.compound"}
+                                     "std.stepper", "std.textview", "std.compound", "std.action"}
     for s in std:
         assert s.load_model() and s.load_settings_class()
         expected = ["add at least one child widget"] if s.kind == "std.compound" else []
