@@ -334,3 +334,30 @@ def test_the_side_robot_decides_the_actions_and_parameters_listed(qtbot, tmp_pat
                             timeout=TIMEOUT_MS)  # Alpha's, by namespace (ROS 1)
         finally:
             win.shutdown()
+
+
+def test_rcon_layout_opens_a_link_to_every_robot_at_its_url(qtbot, tmp_path, sim_fleet_threads, monkeypatch):
+    """`rcon --layout FILE` with two robots that have URLs: the first connects through the connection bar
+    (its URL, not the history's), the second on its own link; neither URL needs typing."""
+    import contextlib
+
+    from rcon_core.app.main import open_app
+    from rcon_core.cli.main import build_parser
+
+    alpha, bravo = sim_fleet_threads(2)
+    monkeypatch.setenv("RCON_CONFIG_DIR", str(tmp_path / "config"))
+    layout = tmp_path / "boats.json"
+    ws = Workspace.new("Boats")
+    ws.robots = [Robot("r-1", "Alpha", url=alpha.url), Robot("r-2", "Bravo", url=bravo.url)]
+    WorkspaceStore(layout).save(ws)
+    with contextlib.ExitStack() as stack:
+        window = open_app(build_parser().parse_args(["--layout", str(layout)]), stack)
+        qtbot.addWidget(window)
+        try:
+            chips = window.fleet_ui.chips.chips
+            qtbot.waitUntil(lambda: all(c.state == "connected" for c in chips.values()), timeout=TIMEOUT_MS)
+            assert window.link.url == alpha.url and window.connection.url.currentText() == alpha.url
+            assert window.fleet_ui.links.link("r-2").url == bravo.url
+            assert len(alpha.connections) == 1 and len(bravo.connections) == 1
+        finally:
+            window.shutdown()
