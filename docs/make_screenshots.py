@@ -10,6 +10,11 @@ and drives the window the way a person does (taps, as the app tests do), saving 
 4. settings not configured (the Label's scale cleared to 0: the preview's warning);
 5. settings valid, the Field chooser on ``voltage``; 6. the widget placed on the canvas, live;
 7. operator mode; 8. a Compound on /cmd_vel with two children in its children editor.
+
+Then the sensor widgets' pictures of ``plugins/rcon_widgets_sensors/README.md`` into ``OUT/sensors``: each
+view built on its model as the app builds it, with no robot (fed frames, the test signal, touches on two
+pads whose commands go nowhere). ``--only app`` or ``--only sensors`` makes one of the two sets.
+(The tests do not write pictures: a picture generator is not a test.)
 """
 
 from __future__ import annotations
@@ -235,12 +240,154 @@ def run(out: Path) -> list[Path]:
     return shoot.saved
 
 
+def save_view(widget: QtWidgets.QWidget, path: Path) -> Path:
+    """Grab ``widget`` as it is now into ``path`` (PNG, under :data:`MAX_BYTES`)."""
+    settle(150)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if not widget.grab().save(str(path), "PNG", 0):
+        raise SystemExit(f"make_screenshots: could not write {path}")
+    size = path.stat().st_size
+    if size >= MAX_BYTES:
+        raise SystemExit(f"make_screenshots: {path} is {size} bytes, over {MAX_BYTES}")
+    print(f"{path}  {size // 1024} KB")
+    return path
+
+
+def sensors(out: Path) -> list[Path]:
+    """The sensor widgets' views, each on its own model with no robot, saved in ``out``."""
+    import math
+
+    import numpy as np
+    from rcon_widgets_sensors.camera import CameraModel, CameraSettings, TestPattern
+    from rcon_widgets_sensors.camera_view import CameraView
+    from rcon_widgets_sensors.image import Frame, ImageModel, ImageSettings
+    from rcon_widgets_sensors.image_view import ImageView
+    from rcon_widgets_sensors.motion_sensors import AccelerometerModel, MagnetometerModel, MotionSettings
+    from rcon_widgets_sensors.motion_view import MotionSensorView
+    from rcon_widgets_sensors.teleop import TeleopModel, TeleopSettings
+    from rcon_widgets_sensors.teleop_view import TeleopView
+
+    from rcon_core.msgs import TypeRegistry
+    from rcon_core.plugins import Binding
+    from rcon_core.sim import world
+    from rcon_core.sim.camera import CameraRenderer, encode_jpeg
+    from rcon_core.sim.vessel import Vessel
+    from rcon_core.testing import ManualClock, RecordingPort
+
+    QtWidgets.QApplication.instance() or QtWidgets.QApplication(sys.argv[:1])  # Qt's own look, as in the READMEs
+    types = TypeRegistry.standard()
+    saved: list[Path] = []
+    keep: list[QtWidgets.QWidget] = []
+
+    def shown(widget: QtWidgets.QWidget, w: int, h: int) -> QtWidgets.QWidget:
+        widget.resize(w, h)
+        widget.show()
+        QTest.qWaitForWindowExposed(widget)
+        keep.append(widget)
+        return widget
+
+    def fed(model: ImageModel, msg: dict) -> Frame:
+        before = model.state.value.index if isinstance(model.state.value, Frame) else 0
+        model.on_message(msg)
+        return model.wait_frame(before, 10.0)
+
+    # the phone's camera: the test pattern as the capture thread shows it
+    cam = CameraModel(CameraSettings(source="test pattern"),
+                      Binding("/phone/camera/compressed", "sensor_msgs/CompressedImage", "publish"), None)
+    now = time.time()
+    cam.set_value(Frame(rgb=TestPattern(640, 480).read(), kind="camera", stamp=now, received=now, decoded=now,
+                        info="640×480 jpeg q80, 38 KiB → /phone/camera/compressed", index=1, fps=10.0))
+    view = shown(CameraView(cam), 360, 280)
+    view.refresh(cam.state)
+    saved.append(save_view(view, out / "camera.png"))
+
+    # an image topic: the sim's front camera, then zoomed in; a laser scan
+    image = ImageModel(ImageSettings(), Binding("/camera/front/image_raw/compressed",
+                                                "sensor_msgs/CompressedImage", "subscribe"), None)
+    stamp = time.time()
+    fed(image, {"header": {"stamp": {"secs": int(stamp), "nsecs": int(stamp % 1 * 1e9)}, "frame_id": "cam"},
+                "format": "jpeg", "data": encode_jpeg(CameraRenderer("front").frame(Vessel(), stamp))})
+    iview = shown(ImageView(image), 480, 320)
+    iview.refresh(image.state)
+    saved.append(save_view(iview, out / "image-camera.png"))
+    iview.viewport.zoom_at(3.0, 240, 160)
+    iview.viewport.pan_by(30, 20)
+    iview.update()
+    saved.append(save_view(iview, out / "image-zoomed.png"))
+    image.on_stop()
+    scan = ImageModel(None, Binding("/scan", "sensor_msgs/LaserScan", "subscribe"), None)
+    lidar = world.Lidar()
+    ranges = lidar.scan(0.0, 0.0, math.radians(30)).astype(np.float64)
+    fed(scan, {"header": {"stamp": {"secs": int(time.time()), "nsecs": 0}}, "angle_min": lidar.angle_min,
+               "angle_max": lidar.angle_max, "angle_increment": lidar.angle_increment,
+               "range_min": lidar.range_min, "range_max": lidar.range_max,
+               "ranges": [float(r) if np.isfinite(r) else None for r in ranges]})
+    sview = shown(ImageView(scan), 360, 360)
+    sview.refresh(scan.state)
+    saved.append(save_view(sview, out / "image-scan.png"))
+    scan.on_stop()
+
+    # motion sensors: the manual source, and a device without the sensor
+    for cls, source, type_name, name, values in (
+        (AccelerometerModel, "manual", "sensor_msgs/Imu", "accelerometer", (3.2, -1.1, 9.81)),
+        (MagnetometerModel, "manual", "sensor_msgs/MagneticField", "magnetometer", (1.8e-5, -0.4e-5, -5e-5)),
+        (AccelerometerModel, "device", "sensor_msgs/Imu", "accelerometer-no-sensor", (0.0, 0.0, 0.0)),
+    ):
+        x, y, z = values
+        model = cls(MotionSettings(source=source, manual_x=x, manual_y=y, manual_z=z),
+                    Binding("/phone/imu", type_name, "publish"), None, types=types)
+        mview = shown(MotionSensorView(model), 280, 150)
+        mview.refresh(model.state)
+        saved.append(save_view(mview, out / f"{name}.png"))
+
+    # teleop: an idle pad; two thumbs on two pads at once (their commands go to a recording port, their
+    # rate ticker on a clock that stands still)
+    port, still = RecordingPort(), ManualClock()
+    pads = []
+    for settings in (TeleopSettings(), TeleopSettings(horizontal="", vertical="linear.x", dead_zone=0),
+                     TeleopSettings(horizontal="-angular.z", vertical="", dead_zone=0)):
+        model = TeleopModel(settings, Binding("/cmd_vel", "geometry_msgs/Twist", "publish"), port, types=types,
+                            ticker_clock=still)
+        model.start()
+        pads.append((model, TeleopView(model)))
+    idle = shown(pads[0][1], 300, 300)
+    idle.refresh(pads[0][0].state)
+    saved.append(save_view(idle, out / "teleop-idle.png"))
+    win = QtWidgets.QWidget()
+    row = QtWidgets.QHBoxLayout(win)
+    (left_m, left), (right_m, right) = pads[1], pads[2]
+    row.addWidget(left)
+    row.addWidget(right)
+    shown(win, 640, 300)
+    dev = QTest.createTouchDevice()
+    (lc, lr), (rc, rr) = left.pad(), right.pad()
+    lc, rc = lc.toPoint(), rc.toPoint()
+    up, side = lc - QtCore.QPoint(0, int(lr * 0.8)), rc + QtCore.QPoint(int(rr * 0.5), 0)
+    QTest.touchEvent(win, dev).press(0, left.mapTo(win, lc), win).press(1, right.mapTo(win, rc), win).commit()
+    QTest.touchEvent(win, dev).move(0, left.mapTo(win, up), win).move(1, right.mapTo(win, side), win).commit()
+    wait_until(lambda: left_m.active and right_m.active, "both pads driving")
+    left.refresh(left_m.state)
+    right.refresh(right_m.state)
+    saved.append(save_view(win, out / "teleop-two-pads.png"))
+    QTest.touchEvent(win, dev).release(0, left.mapTo(win, up), win).release(1, right.mapTo(win, side), win).commit()
+    for model, _view in pads:
+        model.stop()
+    for widget in keep:
+        widget.close()
+    return saved
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description="Make the screenshots of docs/using-the-app.md.")
+    parser = argparse.ArgumentParser(description="Make the screenshots of docs/using-the-app.md and of the "
+                                                 "sensor widgets.")
     parser.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "screenshots",
                         help="where to write the PNGs (default: docs/screenshots)")
+    parser.add_argument("--only", choices=("app", "sensors"), help="make only one of the two sets")
     args = parser.parse_args(argv)
-    run(args.out)
+    if args.only in (None, "sensors"):  # first: the app's theme, once applied, stays on the application
+        sensors(args.out / "sensors")
+    if args.only in (None, "app"):
+        run(args.out)
     return 0
 
 

@@ -1,7 +1,10 @@
 """pytest fixtures for the embedded simulated robot (loaded by the root conftest; usable by plugins).
 
 - ``sim``: an async fixture giving a started :class:`~rcon_core.sim.SimServer` on a free loopback port,
-  stopped cleanly afterwards.
+  stopped cleanly afterwards; ``sim_ros2``: the same in ROS 2 flavour.
+- ``client``: a ``BridgeClient`` connected to ``sim`` (no reconnect); :func:`connected` for other options.
+- ``plugins``: the installed widget plugins (entry points), one manager per test module.
+- ``threaded_client``: a client on its own loop thread, connected to ``sim_thread`` (for Qt tests).
 - ``sim_thread``: a SimServer running on its own loop in a daemon thread, for sync code (roslibpy, Qt).
 - ``sim_url``: the ``ws://`` URL of a threaded sim (usable from sync and async tests alike).
 - ``sim_fleet``: several robots (one workspace, several links): ``sims = await sim_fleet(3)`` gives
@@ -13,7 +16,8 @@ service types every installed widget plugin contributes (``rcon_register_types``
 is tested on its own type with no extra step.
 
 A package loads these fixtures with ``pytest_plugins = ["rcon_core.testing"]`` in its ``conftest.py``.
-:func:`until` waits for a condition without sleeping a fixed time.
+:func:`until` waits for a condition without sleeping a fixed time; :class:`ManualClock` is a clock (and a
+timer loop) that moves only when the test advances it, so rates are tested without the wall clock.
 
 View tests: :class:`RecordingPort` (a port that reaches no robot and records publishes), :func:`widget_state`
 (a state as a running model gives it), :func:`build_view` and :func:`grab_view` (``View(model)`` refreshed
@@ -25,29 +29,136 @@ from __future__ import annotations
 import asyncio
 import time
 from collections.abc import AsyncIterator, Callable, Iterator
+from contextlib import asynccontextmanager
 from typing import Any
 
 import pytest
 import pytest_asyncio
 
+from rcon_core.bridge import BridgeClient
 from rcon_core.sim import SimServer
 
 TEST_RATE_SCALE = 2.0
 
 
-async def until(predicate: Callable[[], Any], timeout: float = 10.0, what: str = "condition") -> None:
-    """Wait (polling every 10 ms) until ``predicate()`` is true; fail the test after ``timeout`` s."""
+async def until(predicate: Callable[[], Any], timeout: float = 10.0, what: str = "condition") -> Any:
+    """Wait (polling every 10 ms on the running loop) until ``predicate()`` is truthy and return its value;
+    fail the test with an ``AssertionError`` naming ``what`` after ``timeout`` s. The one copy every test
+    uses (core and plugins alike): a test waits for a condition, never a fixed time."""
     deadline = time.monotonic() + timeout
-    while not predicate():
+    while True:
+        got = predicate()
+        if got:
+            return got
         if time.monotonic() > deadline:
             raise AssertionError(f"timed out after {timeout} s waiting for {what}")
         await asyncio.sleep(0.01)
 
 
+
+class ManualClock:
+    """A clock that moves only when the test says so, for deterministic rate tests.
+
+    Call it for the time (``clock()``: as ``time.monotonic``, for a model's or limiter's ``clock=``); it also
+    has the part of an asyncio loop a periodic timer uses (``time()``, ``call_at``, ``call_later``, each
+    returning a handle with ``cancel()``), so a ``LoopTicker`` or a ``RateLimiter``'s ``schedule`` can run on
+    it. :meth:`advance` moves the time forward and runs every call that falls due, in time order, each seeing
+    its own due time as now.
+    """
+
+    def __init__(self, now: float = 100.0) -> None:
+        self.now = now
+        self._calls: list[_ManualCall] = []
+
+    def __call__(self) -> float:
+        return self.now
+
+    def time(self) -> float:
+        return self.now
+
+    def call_at(self, when: float, fn: Callable[..., Any], *args: Any) -> _ManualCall:
+        call = _ManualCall(when, fn, args)
+        self._calls.append(call)
+        return call
+
+    def call_later(self, delay: float, fn: Callable[..., Any], *args: Any) -> _ManualCall:
+        return self.call_at(self.now + max(0.0, delay), fn, *args)
+
+    @property
+    def pending(self) -> int:
+        """How many scheduled calls are still waiting."""
+        return sum(1 for c in self._calls if not c.cancelled)
+
+    def advance(self, seconds: float) -> None:
+        """Move the time ``seconds`` forward, running the calls due on the way (and those they schedule)."""
+        end = self.now + seconds
+        while True:
+            self._calls = [c for c in self._calls if not c.cancelled]
+            due = [c for c in self._calls if c.when <= end]
+            if not due:
+                break
+            call = min(due, key=lambda c: c.when)
+            self._calls.remove(call)
+            self.now = max(self.now, call.when)
+            call.fn(*call.args)
+        self.now = end
+
+
+class _ManualCall:
+    def __init__(self, when: float, fn: Callable[..., Any], args: tuple[Any, ...]) -> None:
+        self.when, self.fn, self.args = when, fn, args
+        self.cancelled = False
+
+    def cancel(self) -> None:
+        self.cancelled = True
+
 @pytest_asyncio.fixture
 async def sim() -> AsyncIterator[SimServer]:
     """A started SimServer on a free loopback port (the test's event loop)."""
     server = SimServer(host="127.0.0.1", port=0, rate_scale=TEST_RATE_SCALE, plugin_types=True)
+    await server.start()
+    try:
+        yield server
+    finally:
+        await server.stop()
+
+
+@pytest.fixture(scope="module")
+def plugins() -> Any:
+    """A ``PluginManager`` holding every widget plugin installed through the entry points, as the app loads
+    them (a module that needs other plugins defines its own ``plugins``)."""
+    from rcon_core.plugins import PluginManager
+
+    pm = PluginManager(environ={})
+    pm.load_entry_points()
+    return pm
+
+
+@asynccontextmanager
+async def connected(url: str, *, timeout: float = 10.0, **options: Any) -> AsyncIterator[BridgeClient]:
+    """``async with connected(sim.url, call_timeout=5) as client:`` a :class:`BridgeClient` on ``url``
+    (``options`` as it takes them), connected within ``timeout`` s, and closed afterwards."""
+    client = BridgeClient(url, **options)
+    await client.connect(timeout=timeout)
+    try:
+        yield client
+    finally:
+        await client.close()
+
+
+@pytest_asyncio.fixture
+async def client(sim: SimServer) -> AsyncIterator[BridgeClient]:
+    """A :class:`BridgeClient` connected to ``sim``, without reconnecting (a module that needs other options
+    defines its own ``client``, usually with :func:`connected`)."""
+    async with connected(sim.url, reconnect=False) as c:
+        yield c
+
+
+@pytest_asyncio.fixture
+async def sim_ros2() -> AsyncIterator[SimServer]:
+    """A started SimServer in ROS 2 flavour (rosbridge 2.x: actions, parameters, CDR) on a free loopback
+    port, its streams four times the real rates."""
+    server = SimServer(host="127.0.0.1", port=0, ros2=True, rate_scale=4.0)
     await server.start()
     try:
         yield server
@@ -102,6 +213,22 @@ def sim_thread() -> Iterator[SimServer]:
 def sim_url(sim_thread: SimServer) -> str:
     """The WebSocket URL of ``sim_thread``."""
     return sim_thread.url
+
+
+@pytest.fixture
+def threaded_client(sim_thread: SimServer) -> Iterator[tuple[Any, BridgeClient]]:
+    """``(bridge_thread, client)``: a ``BridgeThread`` running a client connected to ``sim_thread``, as the
+    app runs its link (models get ``dispatch=bridge_thread.call``); closed and stopped afterwards."""
+    from rcon_core.bridge.threaded import BridgeThread
+
+    bt = BridgeThread().start()
+    c = BridgeClient(sim_thread.url, reconnect=False)
+    try:
+        bt.run(c.connect()).result(10)
+        yield bt, c
+        bt.run(c.close()).result(10)
+    finally:
+        bt.stop()
 
 
 # ------------------------------------------------------------------------------------- view harness

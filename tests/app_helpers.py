@@ -2,6 +2,8 @@
 
 Plain helpers, imported explicitly by the ``test_app_*`` modules; each module keeps its own small
 fixtures that call these with what genuinely differs (window size, type registry, what to wait for).
+The one fixture every app module shares, ``plugins`` (the installed widget plugins), comes with the sim
+fixtures from ``rcon_core.testing``; a module that needs other plugins defines its own.
 """
 
 from __future__ import annotations
@@ -26,7 +28,8 @@ TIMEOUT_MS = 10_000
 
 
 def entry_point_plugins() -> PluginManager:
-    """A plugin manager holding every widget plugin installed through the entry points."""
+    """A plugin manager holding every widget plugin installed through the entry points (as the shared
+    ``plugins`` fixture, for a module that registers more on its own copy)."""
     pm = PluginManager(environ={})
     pm.load_entry_points()
     return pm
@@ -41,14 +44,16 @@ def open_window(
     size: tuple[int, int] | None = (1280, 800),
     types: Any = None,
     demo: Callable[[], Workspace] | None = None,
+    layout: Path | None = None,
     activate: bool = False,
     wait_connected: bool = False,
     topics: tuple[str, ...] = (),
     services: tuple[str, ...] = (),
 ) -> MainWindow:
-    """Show a main window (1280x800 unless told) and, given ``url``, connect it and wait for
-    the connection (if ``wait_connected``) and then for each of ``topics`` and ``services`` to be listed."""
-    win = MainWindow(AppConfig(config_dir), plugins, types=types, demo=demo)
+    """Show a main window (1280x800 unless told; ``size=None``: the screen's) on ``layout`` (a workspace file)
+    if given and, given ``url``, connect it and wait for the connection (if ``wait_connected``) and then for
+    each of ``topics`` and ``services`` to be listed."""
+    win = MainWindow(AppConfig(config_dir), plugins, types=types, demo=demo, layout_path=layout)
     qtbot.addWidget(win)
     if size is not None:
         win.resize(*size)
@@ -73,6 +78,57 @@ def window_session(qtbot, config_dir: Path, plugins: PluginManager, **options: A
     win = open_window(qtbot, config_dir, plugins, **options)
     yield win
     win.shutdown()
+
+
+def window_maker(qtbot, config_root: Path, plugins: PluginManager, *, demo: bool = False,
+                 **options: Any) -> Iterator[Callable[..., MainWindow]]:
+    """For a fixture's ``yield from``: ``make(size, demo=...)`` opens one more window (:func:`open_window`
+    with ``options``, its own config folder; ``demo``: on the demo layout), each shut down after the test."""
+    made: list[MainWindow] = []
+
+    def make(size: tuple[int, int] | None, demo: bool = demo) -> MainWindow:
+        from rcon_core.app.demo import demo_workspace
+
+        win = open_window(qtbot, config_root / f"config{len(made)}", plugins, size=size,
+                          demo=(lambda: demo_workspace(plugins)) if demo else None, **options)
+        made.append(win)
+        return win
+
+    yield make
+    for win in made:
+        win.shutdown()
+
+
+def settle(ms: int = 30) -> None:
+    """Let layouts and repaints catch up (events processed three times over ``ms``)."""
+    for _ in range(3):
+        QtWidgets.QApplication.processEvents()
+        QTest.qWait(ms // 3 or 1)
+
+
+def compound_in_operate(qtbot, window: MainWindow, widget_id: str, children: int) -> tuple[Any, Any]:
+    """Operate mode (the widgets take touches), then wait until the placed Compound ``widget_id`` shows its
+    ``children`` child views: (its hosted widget, its view)."""
+    if not window.controller.canvas.locked:
+        window.lock_button.click()
+    hosted = window.host.hosted[widget_id]
+    qtbot.waitUntil(lambda: hosted.view is not None and len(getattr(hosted.view, "child_views", [])) == children,
+                    timeout=TIMEOUT_MS)
+    return hosted, hosted.view
+
+
+class Pinch:
+    """A two-finger pinch as ``WidgetFrame.pinch_gesture`` reads it from a ``QPinchGesture`` (its state and
+    total scale factor), for resizing a frame as a person's fingers would."""
+
+    def __init__(self, state: Any, total: float) -> None:
+        self._state, self._total = state, total
+
+    def state(self) -> Any:
+        return self._state
+
+    def totalScaleFactor(self) -> float:  # noqa: N802 - Qt's name
+        return self._total
 
 
 def all_sent(qtbot, window: MainWindow, sim: Any) -> None:

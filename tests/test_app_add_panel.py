@@ -11,7 +11,7 @@ import os
 from pathlib import Path
 
 import pytest
-from app_helpers import choose_kind, entry_point_plugins, tap, tap_item, window_session
+from app_helpers import choose_kind, tap, tap_item, window_session
 from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
@@ -20,17 +20,12 @@ from rcon_core.app.add_panel import AddPanel
 from rcon_core.app.main_window import MainWindow
 from rcon_core.app.theme import touch_px
 from rcon_core.msgs import TypeRegistry
-from rcon_core.plugins import PluginManager, Role
+from rcon_core.plugins import Role
 
 pytest.importorskip("rcon_widgets_std")
 pytest.importorskip("rcon_widgets_sensors")
 
 pytestmark = pytest.mark.usefixtures("qapp")
-
-
-@pytest.fixture(scope="module")
-def plugins() -> PluginManager:
-    return entry_point_plugins()
 
 
 @pytest.fixture

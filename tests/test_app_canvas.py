@@ -5,11 +5,12 @@ from __future__ import annotations
 import time
 
 import pytest
+from app_helpers import Pinch
+from app_helpers import open_window as open_app_window
 from qtpy import QtCore, QtGui, QtWidgets
 from qtpy.QtTest import QTest
 from test_app_window import make_plugins, robot  # noqa: F401 - fixture re-used
 
-from rcon_core.app.config import AppConfig
 from rcon_core.app.draft import Draft, Target
 from rcon_core.app.geometry import snap
 from rcon_core.app.main_window import MainWindow
@@ -18,28 +19,9 @@ from rcon_core.plugins import Role
 pytestmark = pytest.mark.usefixtures("qapp")
 
 
-class FakePinch:
-    """What WidgetFrame.pinch_gesture reads from a QPinchGesture."""
-
-    def __init__(self, state, total: float) -> None:
-        self._state, self._total = state, total
-
-    def state(self):
-        return self._state
-
-    def totalScaleFactor(self) -> float:  # noqa: N802 - Qt's name
-        return self._total
-
-
 def open_window(qtbot, config_dir, url: str | None) -> MainWindow:
-    window = MainWindow(AppConfig(config_dir), make_plugins())
-    qtbot.addWidget(window)
-    window.show()
-    QTest.qWaitForWindowExposed(window)
-    if url:
-        window.connect_to(url)
-        qtbot.waitUntil(lambda: window.connection.state == "connected", timeout=10_000)
-    return window
+    """The probe plugin's window at the offscreen screen's size, connected to ``url`` if given."""
+    return open_app_window(qtbot, config_dir, make_plugins(), url=url, size=None, wait_connected=True)
 
 
 def rect_of(window: MainWindow, widget_id: str) -> tuple[int, int, int, int]:
@@ -105,7 +87,7 @@ def test_move_pinch_and_lock(qtbot, tmp_path, robot):  # noqa: F811
         for state, scale in ((QtCore.Qt.GestureState.GestureStarted, 1.0),
                              (QtCore.Qt.GestureState.GestureUpdated, 1.5),
                              (QtCore.Qt.GestureState.GestureFinished, 2.0)):
-            frame.pinch_gesture(FakePinch(state, scale))
+            frame.pinch_gesture(Pinch(state, scale))
         after = rect_of(window, inst.id)
         assert after[2] > before.width() * 1.5 and after[3] > before.height() * 1.5
         # pinching far out never puts the widget where it cannot be reached

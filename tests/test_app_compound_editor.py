@@ -6,28 +6,21 @@ registry, so the bound type's fields come from the robot's rosapi typedefs.
 
 from __future__ import annotations
 
-import os
-
 import pytest
-from app_helpers import entry_point_plugins, tap, tap_item, window_session
-from qtpy import QtCore, QtWidgets
+from app_helpers import choose_kind, compound_in_operate, tap, tap_item, tap_topic, window_session
+from qtpy import QtWidgets
 from qtpy.QtTest import QTest
 
 from rcon_core.app.children_editor import ChildCatalog, ChildrenEditor, child_role, children_item_class
 from rcon_core.app.main_window import MainWindow
 from rcon_core.app.settings_form import SettingsForm
 from rcon_core.msgs import TypeRegistry
-from rcon_core.plugins import Binding, PluginManager, Role
+from rcon_core.plugins import Binding, Role
 
 pytest.importorskip("rcon_widgets_std")
 from rcon_widgets_std.compound import ChildSpec, CompoundSettings  # noqa: E402
 
 pytestmark = pytest.mark.usefixtures("qapp")
-
-
-@pytest.fixture(scope="module")
-def plugins() -> PluginManager:
-    return entry_point_plugins()
 
 
 @pytest.fixture
@@ -72,12 +65,8 @@ def add_child(qtbot, editor: ChildrenEditor, path: str, kind: str, offered_not: 
 
 
 def open_compound_on_cmd_vel(window: MainWindow):
-    tap_item(window.topics.tree, window.topics.tree.indexFromItem(window.topics.item("/cmd_vel")))
-    panel = window.add_panel
-    tap(panel.role_buttons[Role.PUBLISH])
-    kinds = [panel.candidates.item(i).data(QtCore.Qt.ItemDataRole.UserRole).spec.kind
-             for i in range(panel.candidates.count())]
-    tap_item(panel.candidates, panel.candidates.model().index(kinds.index("std.compound"), 0))
+    tap_topic(window, "/cmd_vel")
+    panel = choose_kind(window, Role.PUBLISH, "std.compound")
     assert panel.stack.currentWidget() is panel.settings_page
     return panel, panel.form.children_editors["children"]
 
@@ -124,8 +113,6 @@ def test_build_a_compound_on_the_device_and_publish_what_its_children_compose(wi
         ("std.slider", "linear.x", ""), ("std.stepper", "angular.z", "Turn")]
     assert children[0].settings["maximum"] == 2.0 and children[1].settings["step"] == 0.25
     assert panel.problems() == [] and panel.place_button.isEnabled()
-    if os.environ.get("RCON_SCREENSHOTS") == "1":
-        _screenshot(window, editor)
 
     # place it, operate the children, publish: the robot gets one Twist with both values
     tap(panel.place_button)
@@ -136,14 +123,10 @@ def test_build_a_compound_on_the_device_and_publish_what_its_children_compose(wi
     assert inst.geometry.w >= pw and inst.geometry.h >= ph
     assert inst.settings["children"][1] == {"kind": "std.stepper", "field_path": "angular.z", "title": "Turn",
                                             "settings": children[1].settings}
-    window.lock_button.click()  # operator mode: the widgets take touches
-    hosted = window.host.hosted[inst.id]
-    qtbot.waitUntil(lambda: hosted.view is not None and len(getattr(hosted.view, "child_views", [])) == 2,
-                    timeout=10_000)
-    view = hosted.view
+    hosted, view = compound_in_operate(qtbot, window, inst.id, 2)
     (_c1, slider), (_c2, stepper) = view.child_views
     qtbot.waitUntil(lambda: stepper.plus.isVisible() and slider.slider.isVisible(), timeout=5_000)
-    slider.slider.setValue(slider._position(1.5))
+    slider.slider.setValue(slider.position_of(1.5))
     tap(stepper.plus)
     tap(stepper.plus)
     qtbot.waitUntil(lambda: hosted.model.composed()["angular"]["z"] == 0.5, timeout=5_000)
@@ -176,20 +159,6 @@ def test_configure_a_placed_compound_edits_its_children_in_the_dialog(window, qt
     _c, saved = window.controller.workspace.find_widget(inst.id)
     assert [(c["field_path"], c["settings"]["maximum"]) for c in saved.settings["children"]] == [
         ("linear.x", 4.0), ("angular.z", 1.0)]
-
-
-def _screenshot(window: MainWindow, editor: ChildrenEditor) -> None:
-    """docs/screenshots/8-compound-children.png: the add panel with the children list (RCON_SCREENSHOTS=1)."""
-    from pathlib import Path
-
-    window.resize(1280, 800)
-    QtWidgets.QApplication.processEvents()
-    scroll = window.add_panel.settings_page.findChild(QtWidgets.QScrollArea)
-    scroll.ensureWidgetVisible(editor.add_button)
-    QtWidgets.QApplication.processEvents()
-    out = Path(__file__).resolve().parent.parent / "docs" / "screenshots" / "8-compound-children.png"
-    window.grab().scaled(1024, 640, QtCore.Qt.AspectRatioMode.KeepAspectRatio,
-                         QtCore.Qt.TransformationMode.SmoothTransformation).save(str(out), "PNG")
 
 
 # ------------------------------------------------------------------------------------- the catalog

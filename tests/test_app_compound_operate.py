@@ -8,22 +8,17 @@ mode, against the embedded robot: the operator types in the text child and taps 
 from __future__ import annotations
 
 import pytest
-from app_helpers import entry_point_plugins, snap, tap, window_session
+from app_helpers import compound_in_operate, snap, tap, window_session
 from qtpy import QtWidgets
 from qtpy.QtTest import QTest
 
 from rcon_core.canvas import Geometry
-from rcon_core.plugins import Binding, PluginManager, Role
+from rcon_core.plugins import Binding, Role
 
 pytest.importorskip("rcon_widgets_std")
 from rcon_widgets_std.compound import ChildSpec, CompoundSettings  # noqa: E402
 
 pytestmark = pytest.mark.usefixtures("qapp")
-
-
-@pytest.fixture(scope="module")
-def plugins() -> PluginManager:
-    return entry_point_plugins()
 
 
 @pytest.fixture
@@ -40,12 +35,7 @@ def place_compound(window, qtbot, plugins):
                                  Binding("/cmd_vel", "geometry_msgs/Twist", Role.PUBLISH),
                                  Geometry(16, 16, *settings.preferred_size()),
                                  plugins.widget("std.compound").settings_to_dict(settings), "Drive")
-    if not window.controller.canvas.locked:
-        window.lock_button.click()  # Operate mode: the widgets take touches
-    hosted = window.host.hosted[inst.id]
-    qtbot.waitUntil(lambda: hosted.view is not None and len(getattr(hosted.view, "child_views", [])) == 2,
-                    timeout=10_000)
-    view = hosted.view
+    hosted, view = compound_in_operate(qtbot, window, inst.id, 2)
     (_c1, slider), (_c2, text) = view.child_views
     qtbot.waitUntil(lambda: text.edit.isVisible() and slider.slider.isVisible(), timeout=5_000)
     return hosted, view, slider, text
@@ -61,7 +51,7 @@ def test_publish_sends_the_text_child_as_typed_not_a_default(window, sim_thread,
     hosted, view, slider, text = place_compound(window, qtbot, plugins)
     # inside a Compound the text child has no Send of its own and never says "sent"
     assert not getattr(text, "button", None) or not text.button.isVisible()
-    slider.slider.setValue(slider._position(1.5))
+    slider.slider.setValue(slider.position_of(1.5))
     type_into(text.edit, "{z: 0.3}")
     qtbot.waitUntil(lambda: "will send" in text.status.text(), timeout=5_000)
     assert "sent:" not in text.status.text()

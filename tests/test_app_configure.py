@@ -8,7 +8,7 @@ from __future__ import annotations
 import re
 
 import pytest
-from app_helpers import entry_point_plugins, window_session
+from app_helpers import Pinch, window_session
 from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
@@ -17,17 +17,12 @@ from rcon_core.app.draft import Draft, Target
 from rcon_core.app.main_window import MainWindow
 from rcon_core.app.settings_form import TEXT_INSET
 from rcon_core.msgs import TypeRegistry
-from rcon_core.plugins import PluginManager, Role
+from rcon_core.plugins import Role
 
 pytest.importorskip("rcon_widgets_std")
 
 pytestmark = pytest.mark.usefixtures("qapp")
 NUMBER = re.compile(r"-?\d+(?:\.\d+)?")
-
-
-@pytest.fixture(scope="module")
-def plugins() -> PluginManager:
-    return entry_point_plugins()
 
 
 @pytest.fixture
@@ -156,19 +151,6 @@ def test_configure_labels_are_centred_on_their_fields_and_numbers_are_padded(win
 
 
 # ------------------------------------------------------------------------------------- resize limits
-class Pinch:
-    """What WidgetFrame.pinch_gesture reads from a QPinchGesture."""
-
-    def __init__(self, state, total: float) -> None:
-        self._state, self._total = state, total
-
-    def state(self):
-        return self._state
-
-    def totalScaleFactor(self) -> float:  # noqa: N802 - Qt's name
-        return self._total
-
-
 def placed_frame(window: MainWindow):
     spec = window.plugins.widget("std.label")
     draft = Draft(spec, Role.SUBSCRIBE, Target("/battery", "sensor_msgs/BatteryState", ("percentage",)),

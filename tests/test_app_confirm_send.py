@@ -7,7 +7,14 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from app_helpers import LEFT, NO_MOD, TIMEOUT_MS, all_sent, entry_point_plugins, open_window, tap
+from app_helpers import (
+    LEFT,
+    NO_MOD,
+    TIMEOUT_MS,
+    all_sent,
+    tap,
+    window_session,
+)
 from qtpy import QtCore, QtGui, QtWidgets
 from qtpy.QtTest import QTest
 
@@ -19,10 +26,8 @@ CALLS = ("call_service", "/lights/set")
 
 
 @pytest.fixture
-def window(qtbot, tmp_path, sim_url):
-    win = open_window(qtbot, tmp_path, entry_point_plugins(), url=sim_url, wait_connected=True)
-    yield win
-    win.shutdown()
+def window(qtbot, tmp_path, sim_url, plugins):
+    yield from window_session(qtbot, tmp_path, plugins, url=sim_url, wait_connected=True)
 
 
 def place(window, qtbot, kind, binding, x, title, settings):

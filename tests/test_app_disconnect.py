@@ -4,8 +4,8 @@ does; Connect again brings live values back. Driven with taps against the sim.""
 from __future__ import annotations
 
 import pytest
-from app_helpers import entry_point_plugins, tap, window_session
-from qtpy import QtCore, QtWidgets
+from app_helpers import choose_kind, entry_point_plugins, tap, tap_topic, window_session
+from qtpy import QtWidgets
 
 from rcon_core.app.main_window import MainWindow
 from rcon_core.plugins import Role
@@ -21,16 +21,8 @@ def window(qtbot, tmp_path, sim_thread):
 
 
 def place_battery_label(window: MainWindow) -> str:
-    tree = window.topics.tree
-    index = tree.indexFromItem(window.topics.item("/battery"))
-    tap(tree.viewport(), tree.visualRect(index).center())
-    panel = window.add_panel
-    tap(panel.role_buttons[Role.SUBSCRIBE])
-    kinds = [panel.candidates.item(i).data(QtCore.Qt.ItemDataRole.UserRole).spec.kind
-             for i in range(panel.candidates.count())]
-    cand = panel.candidates.model().index(kinds.index("std.label"), 0)
-    tap(panel.candidates.viewport(), panel.candidates.visualRect(cand).center())
-    tap(panel.place_button)
+    tap_topic(window, "/battery")
+    tap(choose_kind(window, Role.SUBSCRIBE, "std.label").place_button)
     return window.controller.canvas.widgets[-1].id
 
 

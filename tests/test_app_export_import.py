@@ -11,12 +11,12 @@ import json
 from pathlib import Path
 
 import pytest
+from app_helpers import open_window as open_app_window
+from app_helpers import tap
 from qtpy import QtWidgets
-from qtpy.QtTest import QTest
-from test_app_window import make_plugins, running, tap
+from test_app_window import make_plugins, running
 
 from rcon_core.app.canvas_controller import file_name_for, name_from_file
-from rcon_core.app.config import AppConfig
 from rcon_core.app.main_window import MainWindow
 from rcon_core.canvas import Binding, Geometry, WorkspaceStore
 
@@ -28,15 +28,18 @@ MISSING_SETTINGS = {"opening": 0.25, "limits": [0, 1], "nested": {"é": "ü", "n
 
 
 def open_window(qtbot, config_dir: Path, url: str | None = None) -> MainWindow:
-    window = MainWindow(AppConfig(config_dir), make_plugins())
-    qtbot.addWidget(window)
-    window.show()
-    QTest.qWaitForWindowExposed(window)
+    """The probe plugin's window at the offscreen screen's size, connected to ``url`` if given."""
+    window = open_app_window(qtbot, config_dir, make_plugins(), url=url, size=None, wait_connected=True)
     window.share_dir = config_dir.parent  # never the real home folder
-    if url:
-        window.connect_to(url)
-        qtbot.waitUntil(lambda: window.connection.state == "connected", timeout=10_000)
     return window
+
+
+def tap_notice(qtbot, window: MainWindow, label: str) -> None:
+    """Tap the notice bar's button ``label`` once it shows (a button added to a shown bar appears on the
+    next turn of the event loop)."""
+    button = window.notice.buttons[label]
+    qtbot.waitUntil(button.isVisible, timeout=5_000)
+    tap(button)
 
 
 def build_docking(window: MainWindow) -> None:
@@ -203,14 +206,14 @@ def test_import_needs_edit_mode_export_does_not(qtbot, tmp_path):
         assert "Switch to Edit mode to import a canvas" in window.banner.text()
         assert window.import_canvas_from(path) is None  # the same refusal when called directly
         assert len(window.doc.workspace.canvases) == 2
-        tap(window.notice.buttons["Switch to Edit mode"])  # unlocks, then imports what was picked
+        tap_notice(qtbot, window, "Switch to Edit mode")  # unlocks, then imports what was picked
         assert not window.doc.workspace.canvas_named("Docking").locked
         assert [c.name for c in window.doc.workspace.canvases] == ["Main", "Docking", "Docking (2)"]
         # the menu's own path: switching to Edit mode opens the dialog
         window.controller.set_locked(True)
         window.canvas_actions["import"].trigger()
         assert window.share_dialog is None
-        tap(window.notice.buttons["Switch to Edit mode"])
+        tap_notice(qtbot, window, "Switch to Edit mode")
         dialog = window.share_dialog
         assert dialog is not None and dialog.objectName() == "importDialog" and dialog.isVisible()
         dialog.reject()

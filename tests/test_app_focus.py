@@ -4,19 +4,14 @@ the window after a confirm dialog (Ctrl+Q, Ctrl+Z work at once). Driven with tap
 from __future__ import annotations
 
 import pytest
-from app_helpers import entry_point_plugins, tap, tap_topic, window_session
+from app_helpers import choose_kind, tap, tap_topic, window_session
 from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
 from rcon_core.app.main_window import MainWindow
-from rcon_core.plugins import PluginManager, Role
+from rcon_core.plugins import Role
 
 pytestmark = pytest.mark.usefixtures("qapp")
-
-
-@pytest.fixture(scope="module")
-def plugins() -> PluginManager:
-    return entry_point_plugins()
 
 
 @pytest.fixture
@@ -54,12 +49,7 @@ def test_switch_to_edit_mode_on_the_notice_keeps_the_keyboard_off_the_url(window
 
 def test_add_child_keeps_the_keyboard_in_the_children_editor(window, qtbot):
     tap_topic(window, "/cmd_vel")
-    panel = window.add_panel
-    tap(panel.role_buttons[Role.PUBLISH])
-    kinds = [panel.candidates.item(i).data(QtCore.Qt.ItemDataRole.UserRole).spec.kind
-             for i in range(panel.candidates.count())]
-    index = panel.candidates.model().index(kinds.index("std.compound"), 0)
-    tap(panel.candidates.viewport(), panel.candidates.visualRect(index).center())
+    panel = choose_kind(window, Role.PUBLISH, "std.compound")
     editor = panel.form.children_editors["children"]
     panel.settings_scroll.ensureWidgetVisible(editor.add_button)
     tap(editor.add_button)

@@ -13,9 +13,11 @@ import sys
 import time
 
 import pytest
+from app_helpers import open_window as open_app_window
+from app_helpers import tap, tap_item
 from qtpy import QtCore
 from qtpy.QtTest import QTest
-from test_app_window import make_plugins, tap, tap_item
+from test_app_window import make_plugins
 
 from rcon_core.app.config import AppConfig
 from rcon_core.app.main_window import MainWindow
@@ -39,12 +41,8 @@ def demo_layout() -> Workspace:
 
 
 def open_window(qtbot, config_dir, layout=None, demo=None) -> MainWindow:
-    window = MainWindow(AppConfig(config_dir), make_plugins(), layout_path=layout, demo=demo)
-    qtbot.addWidget(window)
-    window.resize(1280, 800)  # a 1280x800 tablet (the offscreen test screen is 800x800)
-    window.show()
-    QTest.qWaitForWindowExposed(window)
-    return window
+    """The probe plugin's window, 1280x800 (a tablet; the offscreen screen is 800x800), on ``layout``."""
+    return open_app_window(qtbot, config_dir, make_plugins(), layout=layout, demo=demo)
 
 
 def menu_action(window: MainWindow, name: str) -> None:
@@ -276,7 +274,7 @@ def test_a_url_without_scheme_is_ws_and_a_rejected_one_never_hides_the_active_ur
 def test_the_palette_groups_by_category_and_searches_what_a_widget_does(qtbot):
     pytest.importorskip("rcon_widgets_sensors", reason="needs the widget packages")
     from rcon_core.app.main import load_plugins
-    from rcon_core.app.palette_panel import PalettePanel
+    from rcon_core.app.palette_panel import KIND_ROLE, PalettePanel
 
     plugins = load_plugins()
     panel = PalettePanel()
@@ -289,14 +287,14 @@ def test_the_palette_groups_by_category_and_searches_what_a_widget_does(qtbot):
     assert teleop.parent().text(0) == plugins.widget("sensors.teleop").category
     assert "rcon-widgets-sensors" in teleop.toolTip(0) and "rcon-widgets-sensors" in teleop.text(0)
 
-    def shown() -> set[str]:
-        return {kind for kind, item in panel._items.items()  # noqa: SLF001
-                if not item.isHidden() and not item.parent().isHidden()}
+    def shown() -> set[str]:  # the kinds a user sees in the tree (the groups' visible children)
+        return {item.data(0, KIND_ROLE) for group in panel.groups.values() if not group.isHidden()
+                for item in (group.child(i) for i in range(group.childCount())) if not item.isHidden()}
 
     QTest.keyClicks(panel.filter, "drive")  # in the teleop's description, not in its title
     assert "sensors.teleop" in shown()
     hidden_groups = [g for g, item in panel.groups.items() if item.isHidden()]
-    assert hidden_groups and all(not any(panel._items[k].parent() is panel.groups[g] for k in shown())  # noqa: SLF001
+    assert hidden_groups and all(not any(panel.item(k).parent() is panel.groups[g] for k in shown())
                                  for g in hidden_groups)
     panel.filter.clear()
     QTest.keyClicks(panel.filter, "NavSatFix")  # an accepted type

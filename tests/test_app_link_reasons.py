@@ -8,7 +8,7 @@ and 3).
 from __future__ import annotations
 
 import pytest
-from app_helpers import open_window, snap
+from app_helpers import snap, window_session
 from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
@@ -38,9 +38,7 @@ def robot():
 
 @pytest.fixture
 def window(qtbot, tmp_path):
-    win = open_window(qtbot, tmp_path, PluginManager(environ={}), size=(1280, 800))
-    yield win
-    win.shutdown()
+    yield from window_session(qtbot, tmp_path, PluginManager(environ={}), size=(1280, 800))
 
 
 def test_unreachable_robot_is_said_with_a_countdown_and_its_lists_are_cleared(qtbot, window, robot, tmp_path):

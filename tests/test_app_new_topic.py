@@ -5,21 +5,16 @@ robot, which receives the messages on the new topic."""
 from __future__ import annotations
 
 import pytest
-from app_helpers import entry_point_plugins, snap, tap, tap_item, window_session
+from app_helpers import snap, tap, tap_item, window_session
 from qtpy import QtCore
 from qtpy.QtTest import QTest
 
 from rcon_core.app.new_topic import compatible_types, topic_name_problem, type_label
 from rcon_core.msgs import TypeRegistry
-from rcon_core.plugins import PluginManager, Role
+from rcon_core.plugins import Role
 
 pytest.importorskip("rcon_widgets_std")
 pytestmark = pytest.mark.usefixtures("qapp")
-
-
-@pytest.fixture(scope="module")
-def plugins() -> PluginManager:
-    return entry_point_plugins()
 
 
 @pytest.fixture

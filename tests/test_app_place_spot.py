@@ -4,7 +4,7 @@ part the open panel left visible. Driven with taps against the sim."""
 from __future__ import annotations
 
 import pytest
-from app_helpers import entry_point_plugins, tap, window_session
+from app_helpers import choose_kind, entry_point_plugins, tap, tap_topic, window_session
 from qtpy import QtCore, QtWidgets
 
 from rcon_core.app.main_window import MainWindow
@@ -22,15 +22,8 @@ def window(qtbot, tmp_path, sim_thread):
 
 
 def place_label(window: MainWindow) -> QtCore.QRect:
-    tree = window.topics.tree
-    index = tree.indexFromItem(window.topics.item("/battery"))
-    tap(tree.viewport(), tree.visualRect(index).center())
-    panel = window.add_panel
-    tap(panel.role_buttons[Role.SUBSCRIBE])
-    kinds = [panel.candidates.item(i).data(QtCore.Qt.ItemDataRole.UserRole).spec.kind
-             for i in range(panel.candidates.count())]
-    cand = panel.candidates.model().index(kinds.index("std.label"), 0)
-    tap(panel.candidates.viewport(), panel.candidates.visualRect(cand).center())
+    tap_topic(window, "/battery")
+    panel = choose_kind(window, Role.SUBSCRIBE, "std.label")
     QtWidgets.QApplication.processEvents()
     open_view = window.controller.surface.scroll_area.viewport().width()
     tap(panel.place_button)

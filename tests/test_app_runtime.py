@@ -6,11 +6,10 @@ from __future__ import annotations
 import json
 
 import pytest
+from app_helpers import open_window as open_app_window
 from qtpy import QtCore, QtWidgets
-from qtpy.QtTest import QTest
 from test_app_window import ProbePlugin, ProbeSettings, ProbeView, robot  # noqa: F401 - fixture re-used
 
-from rcon_core.app.config import AppConfig
 from rcon_core.app.draft import Draft, Target
 from rcon_core.app.main_window import MainWindow
 from rcon_core.app.widget_host import FRAME_INTERVAL, WidgetHost
@@ -53,14 +52,9 @@ def plugins() -> PluginManager:
 
 
 def open_window(qtbot, tmp_path, url=None, layout=None) -> MainWindow:
-    window = MainWindow(AppConfig(tmp_path / "cfg"), plugins(), layout_path=layout)
-    qtbot.addWidget(window)
-    window.show()
-    QTest.qWaitForWindowExposed(window)
-    if url:
-        window.connect_to(url)
-        qtbot.waitUntil(lambda: window.connection.state == "connected", timeout=10_000)
-    return window
+    """This module's plugins' window at the offscreen screen's size, on ``layout``, connected to ``url``."""
+    return open_app_window(qtbot, tmp_path / "cfg", plugins(), url=url, size=None, layout=layout,
+                           wait_connected=True)
 
 
 def probe(widget_id: str, topic="/battery", type_name="sensor_msgs/BatteryState", path="percentage",

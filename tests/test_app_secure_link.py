@@ -10,7 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from app_helpers import open_window, snap, tap
+from app_helpers import open_window, snap, tap, window_session
 from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
@@ -80,9 +80,7 @@ def robot(pki):
 
 @pytest.fixture
 def window(qtbot, tmp_path):
-    win = open_window(qtbot, tmp_path, PluginManager(environ={}), size=(1280, 800))
-    yield win
-    win.shutdown()
+    yield from window_session(qtbot, tmp_path, PluginManager(environ={}), size=(1280, 800))
 
 
 def type_into(line: QtWidgets.QLineEdit, text: str) -> None:

@@ -5,43 +5,20 @@ Driven with taps against the sim, on the demo layout."""
 from __future__ import annotations
 
 import pytest
-from app_helpers import entry_point_plugins, open_window, tap, tap_topic
+from app_helpers import settle, tap, tap_topic, window_maker
 from qtpy import QtCore, QtGui, QtWidgets
 from qtpy.QtTest import QTest
 
 from rcon_core.app.main_window import MainWindow
-from rcon_core.plugins import PluginManager, Role
+from rcon_core.plugins import Role
 
 pytestmark = pytest.mark.usefixtures("qapp")
-
-
-@pytest.fixture(scope="module")
-def plugins() -> PluginManager:
-    return entry_point_plugins()
 
 
 @pytest.fixture
 def make_window(qtbot, tmp_path, sim_thread, plugins):
     pytest.importorskip("rcon_widgets_std")
-    from rcon_core.app.demo import demo_workspace
-
-    made: list[MainWindow] = []
-
-    def make(size: tuple[int, int] | None) -> MainWindow:
-        win = open_window(qtbot, tmp_path / f"config{len(made)}", plugins, url=sim_thread.url, size=size,
-                          demo=lambda: demo_workspace(plugins), topics=("/cmd_vel",))
-        made.append(win)
-        return win
-
-    yield make
-    for win in made:
-        win.shutdown()
-
-
-def settle() -> None:
-    for _ in range(3):
-        QtWidgets.QApplication.processEvents()
-        QTest.qWait(10)
+    yield from window_maker(qtbot, tmp_path, plugins, demo=True, url=sim_thread.url, topics=("/cmd_vel",))
 
 
 def inside_window(window: MainWindow, widget: QtWidgets.QWidget) -> bool:

@@ -8,46 +8,31 @@ panel is open stays where it was dropped when the panel closes.
 from __future__ import annotations
 
 import pytest
-from app_helpers import LEFT, NO_MOD, choose_kind, entry_point_plugins, open_window, snap, tap, tap_topic
+from app_helpers import (
+    LEFT,
+    NO_MOD,
+    choose_kind,
+    settle,
+    snap,
+    tap,
+    tap_topic,
+    window_maker,
+)
 from qtpy import QtCore, QtGui, QtWidgets
 from qtpy.QtTest import QTest
 
 from rcon_core.app.canvas_surface import DRAFT_MIME
-from rcon_core.app.main_window import MainWindow
-from rcon_core.plugins import PluginManager, Role
+from rcon_core.plugins import Role
 
 pytestmark = pytest.mark.usefixtures("qapp")
-
-
-@pytest.fixture(scope="module")
-def plugins() -> PluginManager:
-    pytest.importorskip("rcon_widgets_std")
-    pytest.importorskip("rcon_widgets_sensors")
-    return entry_point_plugins()
+pytest.importorskip("rcon_widgets_std")
+pytest.importorskip("rcon_widgets_sensors")
 
 
 @pytest.fixture
 def make_window(qtbot, tmp_path, sim_thread, plugins):
-    made: list[MainWindow] = []
-
-    def make(size: tuple[int, int], demo: bool = True) -> MainWindow:
-        from rcon_core.app.demo import demo_workspace
-
-        win = open_window(qtbot, tmp_path / f"config{len(made)}", plugins, url=sim_thread.url, size=size,
-                          demo=(lambda: demo_workspace(plugins)) if demo else None, wait_connected=True,
-                          topics=("/battery",))
-        made.append(win)
-        return win
-
-    yield make
-    for win in made:
-        win.shutdown()
-
-
-def settle() -> None:
-    for _ in range(3):
-        QtWidgets.QApplication.processEvents()
-        QTest.qWait(10)
+    yield from window_maker(qtbot, tmp_path, plugins, demo=True, url=sim_thread.url, wait_connected=True,
+                            topics=("/battery",))
 
 
 def where(window: QtWidgets.QWidget, widget: QtWidgets.QWidget) -> QtCore.QRect:

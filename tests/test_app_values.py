@@ -5,21 +5,16 @@ speed-limit slider does not show a limit nobody set."""
 from __future__ import annotations
 
 import pytest
-from app_helpers import choose_kind, entry_point_plugins, open_window, snap, tap, tap_topic, window_session
+from app_helpers import choose_kind, open_window, snap, tap, tap_topic, window_session
 from qtpy import QtWidgets
 from qtpy.QtCore import Qt
 from qtpy.QtTest import QTest
 
 from rcon_core.msgs import TypeRegistry
-from rcon_core.plugins import PluginManager, Role
+from rcon_core.plugins import Role
 
 pytestmark = pytest.mark.usefixtures("qapp")
-
-
-@pytest.fixture(scope="module")
-def plugins() -> PluginManager:
-    pytest.importorskip("rcon_widgets_std")
-    return entry_point_plugins()
+pytest.importorskip("rcon_widgets_std")
 
 
 @pytest.fixture(params=[(1280, 800), (1024, 600)], ids=["1280x800", "1024x600"])

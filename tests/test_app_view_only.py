@@ -7,7 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from app_helpers import all_sent, entry_point_plugins, open_window
+from app_helpers import all_sent, entry_point_plugins, window_session
 from rogue_widget import CMD, RoguePlugin
 
 from rcon_core.canvas import Binding, Geometry
@@ -22,9 +22,7 @@ SENDS = [("advertise", "/cmd_vel"), ("publish", "/cmd_vel"), ("call_service", "/
 def window(qtbot, tmp_path, sim_url):
     plugins = entry_point_plugins()
     plugins.register(RoguePlugin(view="rogue_widget_view:RogueView"), "rogue")
-    win = open_window(qtbot, tmp_path, plugins, url=sim_url, wait_connected=True)
-    yield win
-    win.shutdown()
+    yield from window_session(qtbot, tmp_path, plugins, url=sim_url, wait_connected=True)
 
 
 def place(window, kind, binding, x, title, settings=None):

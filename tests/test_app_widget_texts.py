@@ -4,21 +4,16 @@ painted over anything else, nothing clipped, type names never cut mid-word, and 
 from __future__ import annotations
 
 import pytest
-from app_helpers import entry_point_plugins, snap, tap, window_session
+from app_helpers import snap, tap, window_session
 from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
 from rcon_core.app.catalog_panel import TYPE_ROLE
 from rcon_core.canvas import Geometry
-from rcon_core.plugins import Binding, PluginManager, Role
+from rcon_core.plugins import Binding, Role
 
 pytest.importorskip("rcon_widgets_std")
 pytestmark = pytest.mark.usefixtures("qapp")
-
-
-@pytest.fixture(scope="module")
-def plugins() -> PluginManager:
-    return entry_point_plugins()
 
 
 @pytest.fixture

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import attrs
 import pytest
+from app_helpers import open_window, tap, tap_item
 from qtpy import QtCore, QtGui, QtWidgets
 from qtpy.QtTest import QTest
 
@@ -81,32 +82,15 @@ def robot():
 def make_window(qtbot, tmp_path, robot):
     made: list[MainWindow] = []
 
-    def make(connect: bool = True) -> MainWindow:
-        window = MainWindow(AppConfig(tmp_path / "config"), make_plugins())
-        qtbot.addWidget(window)
-        window.resize(1280, 800)  # a 1280x800 tablet (the offscreen test screen is 800x800)
-        window.show()
-        QTest.qWaitForWindowExposed(window)
-        if connect:
-            window.connect_to(robot.url)
-            qtbot.waitUntil(lambda: window.connection.state == "connected", timeout=10_000)
-            qtbot.waitUntil(lambda: window.topics.item("/battery") is not None, timeout=10_000)
+    def make(connect: bool = True) -> MainWindow:  # a 1280x800 tablet (the offscreen screen is 800x800)
+        window = open_window(qtbot, tmp_path / "config", make_plugins(), url=robot.url if connect else None,
+                             wait_connected=True, topics=("/battery",))
         made.append(window)
         return window
 
     yield make
     for window in made:
         window.shutdown()
-
-
-def tap(widget: QtWidgets.QWidget, pos: QtCore.QPoint | None = None) -> None:
-    QTest.mouseClick(widget, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier,
-                     pos if pos is not None else widget.rect().center())
-
-
-def tap_item(tree: QtWidgets.QAbstractItemView, index: QtCore.QModelIndex) -> None:
-    tree.scrollTo(index)
-    tap(tree.viewport(), tree.visualRect(index).center())
 
 
 def running(window: MainWindow, qtbot, widget_id: str):

@@ -3,7 +3,6 @@ the client drops and counts it and the link carries on -- no frame ends the read
 
 from __future__ import annotations
 
-import asyncio
 import os
 import threading
 
@@ -15,16 +14,9 @@ from rcon_core.bridge import BridgeClient, ConnectionState
 from rcon_core.bridge.safety import bounded_repr, png_decoded_size, safe_text
 from rcon_core.loopback import HostileServer, png_data
 from rcon_core.sim.encoding import fragments, png_frame
+from rcon_core.testing import connected, until
 
 DEEP = "[" * 1000 + "]" * 1000  # orjson accepts it (its limit is 1024 levels); repr() of it recurses too deep
-
-
-async def until(pred, timeout: float = 5.0) -> None:
-    async def poll():
-        while not pred():
-            await asyncio.sleep(0.01)
-
-    await asyncio.wait_for(poll(), timeout)
 
 
 @pytest.fixture
@@ -35,10 +27,8 @@ async def hostile():
 
 @pytest.fixture
 async def client(hostile):
-    c = BridgeClient(hostile.url, backoff_min=0.05, backoff_max=0.2, call_timeout=5)
-    await c.connect(timeout=5)
-    yield c
-    await c.close()
+    async with connected(hostile.url, backoff_min=0.05, backoff_max=0.2, call_timeout=5) as c:
+        yield c
 
 
 async def subscribe(srv: HostileServer, client: BridgeClient, topic: str = "/t") -> list:

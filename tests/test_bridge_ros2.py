@@ -12,27 +12,16 @@ import pytest_asyncio
 
 from rcon_core.bridge import ActionError, BridgeClient, GoalStatus
 from rcon_core.sim import SimServer
+from rcon_core.testing import connected
 
 ACTION = "/navigate_to_fix"
 ACTION_TYPE = "rcon_sim/action/NavigateToFix"
 
 
 @pytest_asyncio.fixture
-async def sim2() -> AsyncIterator[SimServer]:
-    server = SimServer(ros2=True, rate_scale=4.0)
-    await server.start()
-    try:
-        yield server
-    finally:
-        await server.stop()
-
-
-@pytest_asyncio.fixture
-async def client(sim2: SimServer) -> AsyncIterator[BridgeClient]:
-    c = BridgeClient(sim2.url, call_timeout=3)
-    await c.connect(timeout=5)
-    yield c
-    await c.close()
+async def client(sim_ros2: SimServer) -> AsyncIterator[BridgeClient]:
+    async with connected(sim_ros2.url, call_timeout=3) as c:
+        yield c
 
 
 def target_ahead(sim: SimServer, metres: float) -> dict[str, float]:
@@ -45,9 +34,9 @@ def target_ahead(sim: SimServer, metres: float) -> dict[str, float]:
     return {"latitude": lat, "longitude": lon}
 
 
-async def test_goal_feedback_and_result(sim2: SimServer, client: BridgeClient) -> None:
+async def test_goal_feedback_and_result(sim_ros2: SimServer, client: BridgeClient) -> None:
     feedback: list[dict] = []
-    goal = client.node("nav").send_action_goal(ACTION, ACTION_TYPE, {"target": target_ahead(sim2, 3.0)},
+    goal = client.node("nav").send_action_goal(ACTION, ACTION_TYPE, {"target": target_ahead(sim_ros2, 3.0)},
                                                feedback.append, timeout=30)
     result = await goal.result(timeout=30)
     assert goal.status == GoalStatus.SUCCEEDED and goal.succeeded
@@ -57,12 +46,12 @@ async def test_goal_feedback_and_result(sim2: SimServer, client: BridgeClient) -
     assert set(feedback[0]["current"]) >= {"latitude", "longitude", "header", "status"}
     # the distance shrinks while the vessel drives toward the goal
     assert feedback[-1]["distance_remaining"] < feedback[0]["distance_remaining"]
-    assert sim2.robot.cmd_surge == 0.0
+    assert sim_ros2.robot.cmd_surge == 0.0
 
 
-async def test_cancel_mid_way(sim2: SimServer, client: BridgeClient) -> None:
+async def test_cancel_mid_way(sim_ros2: SimServer, client: BridgeClient) -> None:
     feedback: list[dict] = []
-    goal = client.node("nav").send_action_goal(ACTION, ACTION_TYPE, {"target": target_ahead(sim2, 500.0)},
+    goal = client.node("nav").send_action_goal(ACTION, ACTION_TYPE, {"target": target_ahead(sim_ros2, 500.0)},
                                                feedback.append)
 
     async def first_feedback() -> None:
@@ -74,11 +63,11 @@ async def test_cancel_mid_way(sim2: SimServer, client: BridgeClient) -> None:
     result = await goal.result(timeout=10)
     assert goal.status == GoalStatus.CANCELED and not goal.succeeded
     assert result["success"] is False and result["message"] == "canceled" and result["distance"] > 400
-    assert sim2.robot.cmd_surge == 0.0
+    assert sim_ros2.robot.cmd_surge == 0.0
 
 
-async def test_goal_without_feedback_callback_gets_no_feedback(sim2: SimServer, client: BridgeClient) -> None:
-    goal = client.node("nav").send_action_goal(ACTION, ACTION_TYPE, {"target": target_ahead(sim2, 500.0)})
+async def test_goal_without_feedback_callback_gets_no_feedback(sim_ros2: SimServer, client: BridgeClient) -> None:
+    goal = client.node("nav").send_action_goal(ACTION, ACTION_TYPE, {"target": target_ahead(sim_ros2, 500.0)})
     await asyncio.sleep(0.5)
     goal.cancel()
     await goal.result(timeout=10)
@@ -86,7 +75,7 @@ async def test_goal_without_feedback_callback_gets_no_feedback(sim2: SimServer, 
 
 
 @pytest.mark.parametrize("check", [True, False])
-async def test_unknown_action_fails_clearly_within_the_client_timeout(sim2: SimServer, client: BridgeClient,
+async def test_unknown_action_fails_clearly_within_the_client_timeout(sim_ros2: SimServer, client: BridgeClient,
                                                                       check: bool) -> None:
     """check=True: the client's rosapi check names the action servers; check=False: the server's own
     ``result: false`` answer.  Either way a clear ActionError well inside call_timeout."""
@@ -103,22 +92,22 @@ async def test_unknown_action_fails_clearly_within_the_client_timeout(sim2: SimS
         assert "No action server available" in text and info.value.status == GoalStatus.UNKNOWN
 
 
-async def test_bad_goal_args_fail_with_the_servers_reason(sim2: SimServer, client: BridgeClient) -> None:
+async def test_bad_goal_args_fail_with_the_servers_reason(sim_ros2: SimServer, client: BridgeClient) -> None:
     goal = client.node("nav").send_action_goal(ACTION, ACTION_TYPE, {"target": {"latitude": "north"}})
     with pytest.raises(ActionError, match="latitude and longitude must be numbers"):
         await goal.result(timeout=10)
-    assert sim2.robot.cmd_surge == 0.0
+    assert sim_ros2.robot.cmd_surge == 0.0
 
 
-async def test_failing_handler_on_ros2_answers_with_the_response_default(sim2: SimServer,
+async def test_failing_handler_on_ros2_answers_with_the_response_default(sim_ros2: SimServer,
                                                                           client: BridgeClient) -> None:
     """ROS 2 spelling and IDL typedefs: the Trigger response default with the error in ``message``."""
     srv = client.node("provider").advertise_service("/rcon/dock", "std_srvs/srv/Trigger", lambda req: {}["nope"])
-    other = BridgeClient(sim2.url, call_timeout=5)
+    other = BridgeClient(sim_ros2.url, call_timeout=5)
     await other.connect(timeout=5)
     try:
         async def advertised() -> None:
-            while "/rcon/dock" not in sim2.services:
+            while "/rcon/dock" not in sim_ros2.services:
                 await asyncio.sleep(0.01)
 
         await asyncio.wait_for(advertised(), 5)

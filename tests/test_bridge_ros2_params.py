@@ -10,32 +10,19 @@ import pytest_asyncio
 from rcon_core.bridge import BridgeClient, ParamNotFoundError, ParamRejectedError
 from rcon_core.bridge.params import parse_like, split
 from rcon_core.sim import SimServer
+from rcon_core.testing import connected
 
 
 @pytest_asyncio.fixture
-async def sim2() -> AsyncIterator[SimServer]:
-    server = SimServer(ros2=True, rate_scale=4.0)
-    await server.start()
-    try:
-        yield server
-    finally:
-        await server.stop()
-
-
-@pytest_asyncio.fixture
-async def client2(sim2: SimServer) -> AsyncIterator[BridgeClient]:
-    c = BridgeClient(sim2.url, call_timeout=3)
-    await c.connect(timeout=5)
-    yield c
-    await c.close()
+async def client2(sim_ros2: SimServer) -> AsyncIterator[BridgeClient]:
+    async with connected(sim_ros2.url, call_timeout=3) as c:
+        yield c
 
 
 @pytest_asyncio.fixture
 async def client1(sim: SimServer) -> AsyncIterator[BridgeClient]:
-    c = BridgeClient(sim.url, call_timeout=3)
-    await c.connect(timeout=5)
-    yield c
-    await c.close()
+    async with connected(sim.url, call_timeout=3) as c:
+        yield c
 
 
 async def test_detects_ros2_and_its_distro(client2: BridgeClient) -> None:
@@ -53,12 +40,12 @@ async def test_detects_ros1_from_what_the_answers_look_like(client1: BridgeClien
     assert "rosapi/search_param" in info.capabilities and "cbor-raw as ROS 1 serialization" in info.capabilities
 
 
-async def test_ros2_parameters_by_node(sim2: SimServer, client2: BridgeClient) -> None:
+async def test_ros2_parameters_by_node(sim_ros2: SimServer, client2: BridgeClient) -> None:
     params = client2.params
     groups = await params.by_owner()
     assert "/kingfisher:max_speed" in groups["/kingfisher"] and "/rosbridge_websocket" in groups
     assert await params.get("/kingfisher:max_speed") == 2.0
-    assert await params.get("/kingfisher:gps.origin_lat") == sim2.robot.origin_lat
+    assert await params.get("/kingfisher:gps.origin_lat") == sim_ros2.robot.origin_lat
     await params.set("/kingfisher:max_speed", 3.25)
     assert await params.get("/kingfisher:max_speed") == 3.25
     with pytest.raises(ParamRejectedError, match="holds float 3.25, so the node refused a int"):

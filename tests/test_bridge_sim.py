@@ -9,22 +9,13 @@ import time
 import pytest
 
 from rcon_core.bridge import BridgeClient, ServiceError
-
-
-async def until(pred, timeout: float = 10.0) -> None:
-    async def poll():
-        while not pred():
-            await asyncio.sleep(0.02)
-
-    await asyncio.wait_for(poll(), timeout)
+from rcon_core.testing import connected, until
 
 
 @pytest.fixture
 async def client(sim):
-    c = BridgeClient(sim.url, call_timeout=5)
-    await c.connect(timeout=5)
-    yield c
-    await c.close()
+    async with connected(sim.url, call_timeout=5) as c:
+        yield c
 
 
 async def test_subscribe_every_compression_on_the_sim(sim, client):

@@ -14,18 +14,11 @@ import pytest
 from rcon_core.bridge import BridgeClient, ConnectionState
 from rcon_core.bridge.freshness import DEFAULT_MAX_AGE, LinkWatch, resolve_max_age
 from rcon_core.loopback import StallProxy
+from rcon_core.testing import until
 
 #: arrival later than the freshness limit plus this is "stale" (room for a loaded test machine; a command
 #: held through the stall arrives seconds late)
 SLACK = 0.5
-
-
-async def until(pred, timeout: float = 5.0) -> None:
-    async def poll():
-        while not pred():
-            await asyncio.sleep(0.01)
-
-    await asyncio.wait_for(poll(), timeout)
 
 
 @pytest.fixture

@@ -1,8 +1,5 @@
 """CanvasRuntime against the real embedded sim over a loopback WebSocket: start, switch, stop."""
 
-import asyncio
-import time
-
 import pytest
 
 from rcon_core.bridge import BridgeClient
@@ -10,6 +7,7 @@ from rcon_core.canvas import Binding, Document, Geometry, Workspace
 from rcon_core.canvas.runtime import BrokenWidgetModel, CanvasRuntime, MissingWidgetModel
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Accepts, PluginManager, WidgetModel, WidgetSpec, hookimpl
+from rcon_core.testing import until
 
 BRIDGE = "/rosbridge_websocket"
 
@@ -30,14 +28,6 @@ class P:
                                 accepts=Accepts(fields=["numeric"])))
         registry.add(WidgetSpec(kind="rt.responder", title="Responder", model=Responder, roles=["serve"]))
         registry.add(WidgetSpec(kind="rt.broken", title="Broken", model="rcon_no_such_module:Model"))
-
-
-async def until(predicate, timeout=10.0, what="condition"):
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        await asyncio.sleep(0.02)
 
 
 @pytest.fixture
@@ -96,7 +86,7 @@ async def test_switching_canvases_starts_and_stops_on_the_server(sim, pm):
         broken = models[w["broken"].id]
         assert isinstance(broken, BrokenWidgetModel) and "rcon_no_such_module" in broken.state.error
 
-        rt.switch(nav)
+        rt.start(nav)
         await until(lambda: sim.topic_subscriber_count("/battery") == 0, what="battery unsubscribed")
         await until(lambda: BRIDGE not in sim.topics["/speed_limit"].publishers, what="unadvertised")
         await until(lambda: "/rcon_test/ask" not in sim.services, what="service unadvertised")
@@ -106,7 +96,7 @@ async def test_switching_canvases_starts_and_stops_on_the_server(sim, pm):
         await until(lambda: odom.state.count > 0, what="an odom message")
         assert isinstance(odom.state.value, float)
 
-        rt.switch(ops)
+        rt.start(ops)
         await until(lambda: sim.topic_subscriber_count("/battery") == 1, what="battery again")
         await until(lambda: sim.topic_subscriber_count("/odom") == 0, what="odom unsubscribed")
         rt.stop()

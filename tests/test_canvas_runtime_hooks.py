@@ -1,7 +1,6 @@
 """CanvasRuntime hooks a front end relies on: activity notices (prompt repaint) and focus loss (teleop)."""
 
 import asyncio
-import time
 
 import pytest
 
@@ -10,6 +9,7 @@ from rcon_core.canvas import Binding, Document, Workspace
 from rcon_core.canvas.runtime import CanvasRuntime
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Accepts, PluginManager, WidgetModel, WidgetSpec, hookimpl
+from rcon_core.testing import until
 
 
 class Answerer(WidgetModel):
@@ -43,14 +43,6 @@ class P:
         registry.add(WidgetSpec(kind="hk.answer", title="Answer", model=Answerer, roles=["serve"]))
         registry.add(WidgetSpec(kind="hk.drive", title="Drive", model=Driver, roles=["publish"]))
         registry.add(WidgetSpec(kind="hk.clumsy", title="Clumsy", model=Clumsy, roles=["publish"]))
-
-
-async def until(predicate, timeout=10.0, what="condition"):
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        await asyncio.sleep(0.02)
 
 
 @pytest.fixture
@@ -111,7 +103,7 @@ async def test_focus_loss_reaches_models_that_want_it_and_stop_implies_it(sim, p
         assert model.focus_losses == 1
         assert "clumsy" in caplog.text  # logged, and the other models were still told
         other = doc.create_canvas("Other")
-        rt.switch(other)  # leaving the canvas is a focus loss too, before the model stops
+        rt.start(other)  # leaving the canvas is a focus loss too, before the model stops
         assert model.focus_losses == 2 and not model.running
     finally:
         await client.close()

@@ -72,31 +72,38 @@ def test_rcon_match_knows_the_contributed_type(lab_path):
     assert text.splitlines()[0].split()[:2] == ["exact", "lab.gripper"]
 
 
-def test_on_a_canvas_against_the_sim(lab_path, sim_url):
-    out = run(lab_path, code=f"""
-        import asyncio, json, time
+def test_on_a_canvas_against_the_sim(lab_path):
+    # the sim runs where the plugin is installed, so it knows lab_msgs/Gripper and plays the robot's side
+    out = run(lab_path, code="""
+        import asyncio, json
         from rcon_core.bridge import BridgeClient
-        from rcon_core.canvas import Binding, Document, WorkspaceStore, Workspace
+        from rcon_core.canvas import Binding, Document, Workspace
         from rcon_core.canvas.runtime import CanvasRuntime
         from rcon_core.msgs import TypeRegistry
         from rcon_core.plugins import PluginManager
+        from rcon_core.sim import SimServer
+        from rcon_core.testing import until
 
         async def main():
+            sim = SimServer(host="127.0.0.1", port=0, plugin_types=True)
+            await sim.start()
+            sim.advertise_internal("/gripper", "lab_msgs/Gripper", "/lab_gripper")
             pm = PluginManager(); pm.load_entry_points()
             types = TypeRegistry.standard(); pm.apply_types(types)
             doc = Document(Workspace.new("Lab"))
             w = doc.add_widget(doc.current.id, "lab.gripper",
-                               Binding("/gripper", "lab_msgs/Gripper", "subscribe"), settings={{"max_opening": 0.1}})
-            client = BridgeClient({sim_url!r}, reconnect=False)
+                               Binding("/gripper", "lab_msgs/Gripper", "subscribe"), settings={"max_opening": 0.1})
+            client = BridgeClient(sim.url, reconnect=False)
             await client.connect()
             rt = CanvasRuntime(pm, client, types=types)
             rt.start(doc.current)
             model = rt.models[w.id]
-            # the sim only knows standard types, so the robot side of lab_msgs/Gripper is played here
-            # through the same callback the bridge subscription calls
-            model._receive({{"opening": 0.05, "force": 2.0, "grasping": True, "tool_id": "t1"}})
+            await until(lambda: sim.topic_subscriber_count("/gripper") == 1, 10, "the gripper subscription")
+            sim.publish("/gripper", {"opening": 0.05, "force": 2.0, "grasping": True, "tool_id": "t1"},
+                        "/lab_gripper")
+            await until(lambda: model.state.count > 0, 10, "the gripper message")
             st = model.state
-            rt.stop(); await client.close()
+            rt.stop(); await client.close(); await sim.stop()
             print(json.dumps([type(model).__name__, st.value, model.problems(),
                               types.default("lab_msgs/Gripper")]))
         asyncio.run(main())

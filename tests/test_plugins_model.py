@@ -8,14 +8,7 @@ import pytest
 from rcon_core.bridge import BridgeClient
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding, Role, WidgetModel
-
-
-class Clock:
-    def __init__(self):
-        self.now = 100.0
-
-    def __call__(self):
-        return self.now
+from rcon_core.testing import ManualClock
 
 
 def test_binding_problems_and_roles():
@@ -29,7 +22,7 @@ def test_binding_problems_and_roles():
 
 
 def test_value_age_stale_and_errors():
-    clock = Clock()
+    clock = ManualClock()
     m = WidgetModel(None, Binding("", "sensor_msgs/BatteryState", "subscribe", "percentage"), None, clock=clock)
     m.start()  # incomplete binding: no port use, but running (and will show its problems)
     assert m.running and m.problems() == ["no topic chosen"]
@@ -53,7 +46,7 @@ def test_value_age_stale_and_errors():
 
 
 def test_replace_value_repaints_without_counting_as_robot_data():
-    clock = Clock()
+    clock = ManualClock()
     m = WidgetModel(None, Binding("/log", "std_msgs/String", "subscribe", "data"), None, clock=clock)
     m.on_message({"data": "hello"})
     before = m.state
@@ -71,7 +64,7 @@ def test_settings_stale_after_and_problems():
         def problems(self):
             return ["pick a colour"]
 
-    clock = Clock()
+    clock = ManualClock()
     m = WidgetModel(S(), Binding("/a", "std_msgs/Float64", "subscribe", "data"), None, clock=clock)
     assert m.stale_after == 1.0 and m.problems() == ["pick a colour"]
 
@@ -148,7 +141,7 @@ class Port:
 
 
 def test_a_latched_topic_that_delivered_is_never_stale_but_a_stream_that_stops_is():
-    clock = Clock()
+    clock = ManualClock()
 
     def started(settings=None):
         port = Port()
@@ -195,7 +188,7 @@ def test_a_latched_topic_that_delivered_is_never_stale_but_a_stream_that_stops_i
 
 
 def test_stale_after_zero_in_the_settings_means_a_static_topic():
-    clock = Clock()
+    clock = ManualClock()
 
     class Static:
         stale_after = 0.0

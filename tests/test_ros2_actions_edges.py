@@ -4,10 +4,8 @@ from __future__ import annotations
 
 import asyncio
 import json
-from collections.abc import AsyncIterator
 from typing import Any
 
-import pytest_asyncio
 import websockets
 
 from rcon_core.bridge import BridgeClient, GoalStatus
@@ -15,16 +13,6 @@ from rcon_core.sim import SimServer
 
 ACTION = "/edge_action"
 TYPE = "example_interfaces/action/Fibonacci"
-
-
-@pytest_asyncio.fixture
-async def sim2() -> AsyncIterator[SimServer]:
-    server = SimServer(ros2=True, rate_scale=4.0)
-    await server.start()
-    try:
-        yield server
-    finally:
-        await server.stop()
 
 
 async def call(ws: Any, service: str, cid: str) -> dict[str, Any]:
@@ -35,7 +23,7 @@ async def call(ws: Any, service: str, cid: str) -> dict[str, Any]:
             return frame
 
 
-async def test_bad_action_frames_are_dropped_and_the_link_lives(sim2: SimServer) -> None:
+async def test_bad_action_frames_are_dropped_and_the_link_lives(sim_ros2: SimServer) -> None:
     bad = [
         {"op": "advertise_action", "action": ACTION},  # no type
         {"op": "advertise_action", "action": 5, "type": TYPE},
@@ -47,7 +35,7 @@ async def test_bad_action_frames_are_dropped_and_the_link_lives(sim2: SimServer)
         {"op": "cancel_action_goal", "action": "/fibonacci", "id": "nothing-running"},
         {"op": "send_action_goal", "action": "/fibonacci"},  # no action_type
     ]
-    async with websockets.connect(sim2.url) as ws:
+    async with websockets.connect(sim_ros2.url) as ws:
         for frame in bad:
             await ws.send(json.dumps(frame))
         servers = await call(ws, "/rosapi/action_servers", "after")
@@ -60,8 +48,8 @@ async def test_bad_action_frames_are_dropped_and_the_link_lives(sim2: SimServer)
                       "result": True, "id": "ok"}
 
 
-async def test_goal_args_that_do_not_fit_the_goal_type_fail_with_a_reason(sim2: SimServer) -> None:
-    async with websockets.connect(sim2.url) as ws:
+async def test_goal_args_that_do_not_fit_the_goal_type_fail_with_a_reason(sim_ros2: SimServer) -> None:
+    async with websockets.connect(sim_ros2.url) as ws:
         await ws.send(json.dumps({"op": "send_action_goal", "id": "g", "action": "/fibonacci",
                                   "action_type": "action_tutorials_interfaces/Fibonacci",
                                   "args": {"order": "many"}}))
@@ -119,13 +107,13 @@ async def test_a_provided_action_survives_a_reconnect() -> None:
     assert hanging.outcome == "unknown (link lost)" and not hanging.succeeded
 
 
-async def test_action_part_layouts_come_from_the_local_registry(sim2: SimServer) -> None:
+async def test_action_part_layouts_come_from_the_local_registry(sim_ros2: SimServer) -> None:
     """rosapi 2.1.0 answers [] for an action's parts; the client falls back to its registry."""
     from rcon_core.bridge import BridgeError
     from rcon_core.msgs import TypeRegistry
 
-    with_registry = BridgeClient(sim2.url, call_timeout=3, registry=TypeRegistry.standard(ros2=True))
-    bare = BridgeClient(sim2.url, call_timeout=3)
+    with_registry = BridgeClient(sim_ros2.url, call_timeout=3, registry=TypeRegistry.standard(ros2=True))
+    bare = BridgeClient(sim_ros2.url, call_timeout=3)
     await with_registry.connect(timeout=5)
     await bare.connect(timeout=5)
     try:
@@ -142,8 +130,8 @@ async def test_action_part_layouts_come_from_the_local_registry(sim2: SimServer)
         await bare.close()
 
 
-async def test_an_advertisers_bad_feedback_or_result_is_refused_and_the_goal_stays_open(sim2: SimServer) -> None:
-    async with websockets.connect(sim2.url) as a, websockets.connect(sim2.url) as b:
+async def test_an_advertisers_bad_feedback_or_result_is_refused_and_the_goal_stays_open(sim_ros2: SimServer) -> None:
+    async with websockets.connect(sim_ros2.url) as a, websockets.connect(sim_ros2.url) as b:
         await a.send(json.dumps({"op": "advertise_action", "action": ACTION, "type": TYPE}))
         await call(a, "/rosapi/action_servers", "sync")
         await b.send(json.dumps({"op": "send_action_goal", "id": "g", "action": ACTION, "action_type": TYPE,

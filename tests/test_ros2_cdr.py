@@ -5,12 +5,10 @@ from __future__ import annotations
 import asyncio
 import json
 import math
-from collections.abc import AsyncIterator
 from typing import Any
 
 import cbor2
 import pytest
-import pytest_asyncio
 import websockets
 from rosbags.typesys import Stores, get_typestore
 
@@ -22,16 +20,6 @@ from rcon_core.sim import SimServer
 
 STORE = get_typestore(Stores.ROS2_HUMBLE)
 REG = TypeRegistry.standard(ros2=True)
-
-
-@pytest_asyncio.fixture
-async def sim2() -> AsyncIterator[SimServer]:
-    server = SimServer(ros2=True, rate_scale=4.0)
-    await server.start()
-    try:
-        yield server
-    finally:
-        await server.stop()
 
 
 def close(a: Any, b: Any, path: str = "") -> list[str]:
@@ -53,8 +41,8 @@ def close(a: Any, b: Any, path: str = "") -> list[str]:
     return [] if a == b else [f"{path}: {a!r} != {b!r}"]
 
 
-async def test_sim_sends_cdr_that_rosbags_reads(sim2: SimServer) -> None:
-    async with websockets.connect(sim2.url, max_size=None) as ws:
+async def test_sim_sends_cdr_that_rosbags_reads(sim_ros2: SimServer) -> None:
+    async with websockets.connect(sim_ros2.url, max_size=None) as ws:
         for topic in ("/imu/data", "/gps/fix", "/battery"):
             await ws.send(json.dumps({"op": "subscribe", "topic": topic, "compression": "cbor-raw"}))
         frames: dict[str, dict[str, Any]] = {}
@@ -67,17 +55,17 @@ async def test_sim_sends_cdr_that_rosbags_reads(sim2: SimServer) -> None:
         assert frame["op"] == "publish" and set(frame["msg"]) == {"secs", "nsecs", "bytes"}
         data = frame["msg"]["bytes"]
         assert data[:4] == b"\x00\x01\x00\x00"  # CDR little endian, not ROS 1
-        type_name = sim2.topics[topic].type
+        type_name = sim_ros2.topics[topic].type
         obj = STORE.deserialize_cdr(data, type_name)  # rosbags reads it
         assert bytes(STORE.serialize_cdr(obj, type_name)) == data  # and writes the same bytes
         assert REG.deserialize_cdr(type_name, data)["header"]["frame_id"] == obj.header.frame_id
 
 
-async def test_multiple_cbor_raw_subscribers_get_the_cdr_string(sim2: SimServer) -> None:
+async def test_multiple_cbor_raw_subscribers_get_the_cdr_string(sim_ros2: SimServer) -> None:
     """The upstream multiple_subscribers_raw conversation: two cbor-raw subscribers, one publish."""
     sub = {"op": "subscribe", "topic": "/a_topic", "type": "std_msgs/String", "compression": "cbor-raw"}
-    async with websockets.connect(sim2.url) as a, websockets.connect(sim2.url) as b, \
-            websockets.connect(sim2.url) as c:
+    async with websockets.connect(sim_ros2.url) as a, websockets.connect(sim_ros2.url) as b, \
+            websockets.connect(sim_ros2.url) as c:
         for ws in (a, b):
             await ws.send(json.dumps(sub))
             await ws.send(json.dumps({"op": "call_service", "id": "sync", "service": "/rosapi/nodes"}))
@@ -91,14 +79,14 @@ async def test_multiple_cbor_raw_subscribers_get_the_cdr_string(sim2: SimServer)
 
 
 @pytest.mark.parametrize("topic", ["/imu/data", "/odom", "/gps/fix", "/scan", "/camera/rear/image_raw/compressed"])
-async def test_client_decodes_cdr_like_json(sim2: SimServer, topic: str) -> None:
-    client = BridgeClient(sim2.url, call_timeout=5)
+async def test_client_decodes_cdr_like_json(sim_ros2: SimServer, topic: str) -> None:
+    client = BridgeClient(sim_ros2.url, call_timeout=5)
     await client.connect(timeout=5)
     try:
         raw: list[dict[str, Any]] = []
         plain: list[dict[str, Any]] = []
         client.node("raw").subscribe(topic, raw.append, compression="cbor-raw")
-        other = BridgeClient(sim2.url, call_timeout=5)
+        other = BridgeClient(sim_ros2.url, call_timeout=5)
         await other.connect(timeout=5)
         try:
             other.node("json").subscribe(topic, plain.append)
@@ -144,10 +132,10 @@ def test_flavour_from_typedefs() -> None:
     assert flavour_from_typedefs([{"type": "std_msgs/String", "fieldtypes": ["string"]}]) is None
 
 
-async def test_client_reads_cdr_of_a_type_that_does_not_tell_its_ros(sim2: SimServer) -> None:
+async def test_client_reads_cdr_of_a_type_that_does_not_tell_its_ros(sim_ros2: SimServer) -> None:
     """std_msgs/String's typedefs look the same on ROS 1 and 2: the client sniffs the CDR header rather than
     asking the server, and gets the string (the upstream multiple_subscribers_raw case, with our client)."""
-    a, b = BridgeClient(sim2.url, call_timeout=5), BridgeClient(sim2.url, call_timeout=5)
+    a, b = BridgeClient(sim_ros2.url, call_timeout=5), BridgeClient(sim_ros2.url, call_timeout=5)
     await a.connect(timeout=5)
     await b.connect(timeout=5)
     try:
@@ -156,7 +144,7 @@ async def test_client_reads_cdr_of_a_type_that_does_not_tell_its_ros(sim2: SimSe
         a.node("s").subscribe("/a_topic", got_a.append, type="std_msgs/String", compression="cbor-raw")
         b.node("s").subscribe("/a_topic", got_b.append, type="std_msgs/msg/String", compression="cbor-raw")
         for _ in range(200):
-            if sim2.topic_subscriber_count("/a_topic") == 2:
+            if sim_ros2.topic_subscriber_count("/a_topic") == 2:
                 break
             await asyncio.sleep(0.02)
         await asyncio.sleep(0.1)

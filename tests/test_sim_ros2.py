@@ -4,24 +4,12 @@ from __future__ import annotations
 
 import asyncio
 import json
-from collections.abc import AsyncIterator
 from typing import Any
 
-import pytest_asyncio
 import websockets
 
 from rcon_core.msgs import TypeRegistry
 from rcon_core.sim import SimServer
-
-
-@pytest_asyncio.fixture
-async def sim2() -> AsyncIterator[SimServer]:
-    server = SimServer(ros2=True, rate_scale=4.0)
-    await server.start()
-    try:
-        yield server
-    finally:
-        await server.stop()
 
 
 async def recv_until(ws: Any, pred: Any, timeout: float = 5.0) -> dict[str, Any]:
@@ -34,9 +22,9 @@ async def recv_until(ws: Any, pred: Any, timeout: float = 5.0) -> dict[str, Any]
     return await asyncio.wait_for(loop(), timeout)
 
 
-async def test_ros2_types_and_times(sim2: SimServer) -> None:
+async def test_ros2_types_and_times(sim_ros2: SimServer) -> None:
     reg = TypeRegistry.standard(ros2=True)
-    async with websockets.connect(sim2.url, max_size=None, max_queue=None) as ws:
+    async with websockets.connect(sim_ros2.url, max_size=None, max_queue=None) as ws:
         await ws.send(json.dumps({"op": "call_service", "id": "t", "service": "/rosapi/topics", "args": {}}))
         topics = await recv_until(ws, lambda m: m.get("id") == "t")
         types = dict(zip(topics["values"]["topics"], topics["values"]["types"], strict=True))
@@ -57,16 +45,16 @@ async def test_ros2_types_and_times(sim2: SimServer) -> None:
     assert reply["values"] == {"success": True, "message": "lights on"}
 
 
-async def test_navigate_to_fix_action(sim2: SimServer) -> None:
-    lat, lon = sim2.robot.lat_lon()
+async def test_navigate_to_fix_action(sim_ros2: SimServer) -> None:
+    lat, lon = sim_ros2.robot.lat_lon()
     # a target 4 m ahead of the vessel's heading
     import math
 
-    x = sim2.robot.x + 4.0 * math.cos(sim2.robot.yaw)
-    y = sim2.robot.y + 4.0 * math.sin(sim2.robot.yaw)
-    lat = sim2.robot.origin_lat + math.degrees(y / 6_378_137.0)
-    lon = sim2.robot.origin_lon + math.degrees(x / (6_378_137.0 * math.cos(math.radians(sim2.robot.origin_lat))))
-    async with websockets.connect(sim2.url, max_size=None, max_queue=None) as ws:
+    x = sim_ros2.robot.x + 4.0 * math.cos(sim_ros2.robot.yaw)
+    y = sim_ros2.robot.y + 4.0 * math.sin(sim_ros2.robot.yaw)
+    lat = sim_ros2.robot.origin_lat + math.degrees(y / 6_378_137.0)
+    lon = sim_ros2.robot.origin_lon + math.degrees(x / (6_378_137.0 * math.cos(math.radians(sim_ros2.robot.origin_lat))))
+    async with websockets.connect(sim_ros2.url, max_size=None, max_queue=None) as ws:
         await ws.send(json.dumps({"op": "call_service", "id": "a", "service": "/rosapi/action_servers", "args": {}}))
         servers = await recv_until(ws, lambda m: m.get("id") == "a")
         assert servers["values"] == {"action_servers": ["/fibonacci", "/navigate_to_fix"]}
@@ -82,8 +70,8 @@ async def test_navigate_to_fix_action(sim2: SimServer) -> None:
     assert result["values"]["success"] is True and result["values"]["distance"] <= 2.0
 
 
-async def test_cancel_action_goal(sim2: SimServer) -> None:
-    async with websockets.connect(sim2.url, max_size=None, max_queue=None) as ws:
+async def test_cancel_action_goal(sim_ros2: SimServer) -> None:
+    async with websockets.connect(sim_ros2.url, max_size=None, max_queue=None) as ws:
         await ws.send(json.dumps({"op": "send_action_goal", "id": "far", "action": "/navigate_to_fix",
                                   "action_type": "rcon_sim/action/NavigateToFix", "feedback": True,
                                   "args": {"target": {"latitude": 43.70, "longitude": -79.30}}}))
@@ -93,12 +81,12 @@ async def test_cancel_action_goal(sim2: SimServer) -> None:
     # rosbridge's ROS 2 capability: a goal that ended (cancelled too) is result true with its GoalStatus
     assert result["status"] == 5 and result["result"] is True
     assert result["values"]["success"] is False and result["values"]["message"] == "canceled"
-    assert sim2.robot.cmd_surge == 0.0
+    assert sim_ros2.robot.cmd_surge == 0.0
 
 
-async def test_feedback_only_when_asked(sim2: SimServer) -> None:
+async def test_feedback_only_when_asked(sim_ros2: SimServer) -> None:
     """ROSBRIDGE_PROTOCOL.md: ``feedback`` defaults to false, so a goal without it gets no feedback frames."""
-    async with websockets.connect(sim2.url, max_size=None, max_queue=None) as ws:
+    async with websockets.connect(sim_ros2.url, max_size=None, max_queue=None) as ws:
         await ws.send(json.dumps({"op": "send_action_goal", "id": "quiet", "action": "/navigate_to_fix",
                                   "action_type": "rcon_sim/action/NavigateToFix",
                                   "args": {"target": {"latitude": 43.70, "longitude": -79.30}}}))
@@ -110,7 +98,7 @@ async def test_feedback_only_when_asked(sim2: SimServer) -> None:
     assert [m for m in seen if m.get("op") == "action_feedback"] == []
 
 
-async def test_goals_that_cannot_be_sent_fail_like_rosbridge(sim2: SimServer) -> None:
+async def test_goals_that_cannot_be_sent_fail_like_rosbridge(sim_ros2: SimServer) -> None:
     """Unknown action, unknown type, unusable args: ``result: false``, status 0, the error as a string."""
     goals = [
         ({"action": "/no_such_action", "action_type": "rcon_sim/action/NavigateToFix"}, "No action server available"),
@@ -120,11 +108,11 @@ async def test_goals_that_cannot_be_sent_fail_like_rosbridge(sim2: SimServer) ->
         ({"action": "/navigate_to_fix", "action_type": "rcon_sim/action/NavigateToFix",
           "args": {"target": {"latitude": "north", "longitude": 1}}}, "must be numbers"),
     ]
-    async with websockets.connect(sim2.url, max_size=None, max_queue=None) as ws:
+    async with websockets.connect(sim_ros2.url, max_size=None, max_queue=None) as ws:
         for n, (frame, text) in enumerate(goals):
             await ws.send(json.dumps({"op": "send_action_goal", "id": f"g{n}", **frame}))
             result = await recv_until(ws, lambda m, n=n: m.get("op") == "action_result" and m.get("id") == f"g{n}")
             assert result["result"] is False and result["status"] == 0
             assert isinstance(result["values"], str) and text in result["values"]
             assert result["action"] == frame["action"]
-    assert sim2.robot.cmd_surge == 0.0
+    assert sim_ros2.robot.cmd_surge == 0.0

@@ -22,16 +22,6 @@ FILES = sorted(p.name for p in CONVERSATIONS.glob("*.jsonl"))
 ACTION = "/test_fibonacci_action"
 
 
-@pytest_asyncio.fixture
-async def sim2() -> AsyncIterator[SimServer]:
-    server = SimServer(ros2=True, rate_scale=4.0)
-    await server.start()
-    try:
-        yield server
-    finally:
-        await server.stop()
-
-
 def substitute(value: Any, seen: dict[str, Any]) -> Any:
     if isinstance(value, dict):
         if set(value) == {"$ref"}:
@@ -99,10 +89,10 @@ async def replay(url: str, steps: list[dict[str, Any]]) -> None:
 
 
 @pytest.mark.parametrize("name", FILES)
-async def test_conversation_in_raw_frames(sim2: SimServer, name: str) -> None:
+async def test_conversation_in_raw_frames(sim_ros2: SimServer, name: str) -> None:
     steps = [json.loads(line) for line in (CONVERSATIONS / name).read_text(encoding="utf-8").splitlines()
              if line.strip()]
-    await replay(sim2.url, steps)
+    await replay(sim_ros2.url, steps)
 
 
 def test_the_conversations_are_there() -> None:
@@ -114,8 +104,8 @@ def test_the_conversations_are_there() -> None:
 # ---------------------------------------------------------------------------------- with our client
 
 @pytest_asyncio.fixture
-async def pair(sim2: SimServer) -> AsyncIterator[tuple[BridgeClient, BridgeClient]]:
-    a, b = BridgeClient(sim2.url, call_timeout=5), BridgeClient(sim2.url, call_timeout=5)
+async def pair(sim_ros2: SimServer) -> AsyncIterator[tuple[BridgeClient, BridgeClient]]:
+    a, b = BridgeClient(sim_ros2.url, call_timeout=5), BridgeClient(sim_ros2.url, call_timeout=5)
     await a.connect(timeout=5)
     await b.connect(timeout=5)
     try:
@@ -217,7 +207,7 @@ async def test_unadvertise_aborts_goals_and_unlists(pair: tuple[BridgeClient, Br
     assert ACTION not in await caller.rosapi.action_servers()
 
 
-async def test_our_provider_speaks_the_upstream_frames(sim2: SimServer, pair: tuple[BridgeClient, BridgeClient]) -> None:
+async def test_our_provider_speaks_the_upstream_frames(sim_ros2: SimServer, pair: tuple[BridgeClient, BridgeClient]) -> None:
     """Our client as the action server, a raw caller: the frames the caller sees are the upstream ones."""
     provider, _ = pair
 
@@ -238,13 +228,13 @@ async def test_our_provider_speaks_the_upstream_frames(sim2: SimServer, pair: tu
         {"client": "B", "expect": {"op": "action_result", "action": ACTION, "values": {"sequence": [0, 1, 1, 2, 3, 5]},
                                    "status": 4, "result": True}},
     ]
-    await replay(sim2.url, steps)
+    await replay(sim_ros2.url, steps)
 
 
-async def test_our_caller_against_a_raw_provider(sim2: SimServer, pair: tuple[BridgeClient, BridgeClient]) -> None:
+async def test_our_caller_against_a_raw_provider(sim_ros2: SimServer, pair: tuple[BridgeClient, BridgeClient]) -> None:
     """A raw advertiser (the upstream frames), our client as the caller."""
     _, caller = pair
-    async with websockets.connect(sim2.url) as ws:
+    async with websockets.connect(sim_ros2.url) as ws:
         await ws.send(json.dumps({"op": "advertise_action", "action": ACTION, "type": "example_interfaces/Fibonacci"}))
         await until_listed(caller, ACTION)
         feedback: list[dict[str, Any]] = []
@@ -279,13 +269,13 @@ async def test_wrong_action_type_fails_clearly(pair: tuple[BridgeClient, BridgeC
     assert goal.outcome == "failed"
 
 
-async def test_services_and_subscribers_with_our_client(sim2: SimServer, pair: tuple[BridgeClient, BridgeClient]) -> None:
+async def test_services_and_subscribers_with_our_client(sim_ros2: SimServer, pair: tuple[BridgeClient, BridgeClient]) -> None:
     """advertise_service with two concurrent calls, two subscribers, a latched (transient local) topic."""
     a, b = pair
     a.node("srv").advertise_service("/test_service", "std_srvs/srv/SetBool",
                                     lambda req: {"success": True, "message": f"Hello {req['data']}"})
     for _ in range(100):
-        if "/test_service" in sim2.services:
+        if "/test_service" in sim_ros2.services:
             break
         await asyncio.sleep(0.02)
     r1, r2 = await asyncio.gather(b.call_service("/test_service", {"data": True}),
@@ -297,7 +287,7 @@ async def test_services_and_subscribers_with_our_client(sim2: SimServer, pair: t
     a.node("sub").subscribe("/a_topic", got_a.append, type="std_msgs/msg/String")
     b.node("sub").subscribe("/a_topic", got_b.append, type="std_msgs/msg/String")
     for _ in range(100):
-        if sim2.topic_subscriber_count("/a_topic") == 2:
+        if sim_ros2.topic_subscriber_count("/a_topic") == 2:
             break
         await asyncio.sleep(0.02)
     pub = a.node("pub").advertise("/a_topic", "std_msgs/msg/String", latch=True)
@@ -307,7 +297,7 @@ async def test_services_and_subscribers_with_our_client(sim2: SimServer, pair: t
             break
         await asyncio.sleep(0.02)
     assert got_a == got_b == [{"data": "hello"}]
-    late = BridgeClient(sim2.url, call_timeout=5)
+    late = BridgeClient(sim_ros2.url, call_timeout=5)
     await late.connect(timeout=5)
     try:
         box: list[dict[str, Any]] = []

@@ -4,23 +4,11 @@ from __future__ import annotations
 
 import base64
 import json
-from collections.abc import AsyncIterator
 from typing import Any
 
-import pytest_asyncio
 import websockets
 
 from rcon_core.sim import SimServer
-
-
-@pytest_asyncio.fixture
-async def sim2() -> AsyncIterator[SimServer]:
-    server = SimServer(ros2=True, rate_scale=4.0)
-    await server.start()
-    try:
-        yield server
-    finally:
-        await server.stop()
 
 
 class Raw:
@@ -40,8 +28,8 @@ class Raw:
                 return frame
 
 
-async def test_rosapi_2x_service_set_and_types(sim2: SimServer) -> None:
-    async with websockets.connect(sim2.url) as ws:
+async def test_rosapi_2x_service_set_and_types(sim_ros2: SimServer) -> None:
+    async with websockets.connect(sim_ros2.url) as ws:
         raw = Raw(ws)
         services = (await raw.call("/rosapi/services"))["values"]["services"]
         rosapi = sorted(s for s in services if s.startswith("/rosapi/"))
@@ -75,8 +63,8 @@ async def test_ros1_mode_keeps_rosapi_1(sim: SimServer) -> None:
     assert json.loads(param["values"]["value"]) == 2.0
 
 
-async def test_topics_and_raw_types_and_message_details(sim2: SimServer) -> None:
-    async with websockets.connect(sim2.url) as ws:
+async def test_topics_and_raw_types_and_message_details(sim_ros2: SimServer) -> None:
+    async with websockets.connect(sim_ros2.url) as ws:
         raw = Raw(ws)
         listing = (await raw.call("/rosapi/topics_and_raw_types"))["values"]
         unknown = await raw.call("/rosapi/message_details", {"type": "no_pkg/msg/Nothing"})
@@ -96,8 +84,8 @@ async def test_topics_and_raw_types_and_message_details(sim2: SimServer) -> None
     assert goal["result"] is True and goal["values"] == {"typedefs": []}
 
 
-async def test_parameters_per_node(sim2: SimServer) -> None:
-    async with websockets.connect(sim2.url) as ws:
+async def test_parameters_per_node(sim_ros2: SimServer) -> None:
+    async with websockets.connect(sim_ros2.url) as ws:
         raw = Raw(ws)
         names = (await raw.call("/rosapi/get_param_names"))["values"]["names"]
         got = (await raw.call("/rosapi/get_param", {"name": "/kingfisher:max_speed"}))["values"]
@@ -125,8 +113,8 @@ async def test_parameters_per_node(sim2: SimServer) -> None:
     assert "/kingfisher:gps.origin_lat" in names and "/rosbridge_websocket:actual_port" in names
     assert not [n for n in names if n.startswith(("/rosapi:", "/rosout:"))]  # rosapi does not list itself
     assert all(n.count(":") == 1 for n in names)
-    assert got == {"value": "2.0"} and json.loads(nested["value"]) == sim2.robot.origin_lat
-    assert json.loads(port["value"]) == sim2.port
+    assert got == {"value": "2.0"} and json.loads(nested["value"]) == sim_ros2.robot.origin_lat
+    assert json.loads(port["value"]) == sim_ros2.port
     assert set_ok["result"] is True and set_ok["values"] == {} and after == {"value": "3.5"}
     assert refused["result"] is True and unchanged == {"value": "3.5"}
     assert frame_id == {"value": '"hull"'}
@@ -138,9 +126,9 @@ async def test_parameters_per_node(sim2: SimServer) -> None:
     assert deleted["result"] is True and gone == {"exists": False}
 
 
-async def test_each_node_serves_its_parameters(sim2: SimServer) -> None:
+async def test_each_node_serves_its_parameters(sim_ros2: SimServer) -> None:
     """The ROS 2 node parameter services, as rosbridge's own tests use them to read ``actual_port``."""
-    async with websockets.connect(sim2.url) as ws:
+    async with websockets.connect(sim_ros2.url) as ws:
         raw = Raw(ws)
         services = (await raw.call("/rosapi/services"))["values"]["services"]
         kind = (await raw.call("/rosapi/service_type", {"service": "/kingfisher/set_parameters"}))["values"]
@@ -155,7 +143,7 @@ async def test_each_node_serves_its_parameters(sim2: SimServer) -> None:
         assert {f"{node}/get_parameters", f"{node}/set_parameters", f"{node}/list_parameters"} <= set(services)
     assert kind == {"type": "rcl_interfaces/srv/SetParameters"}
     values = port["values"]["values"]
-    assert values[0]["type"] == 2 and values[0]["integer_value"] == sim2.port
+    assert values[0]["type"] == 2 and values[0]["integer_value"] == sim_ros2.port
     assert values[1]["type"] == 0
     assert listed == {"result": {"names": ["gps.origin_lat", "gps.origin_lon"], "prefixes": ["gps"]}}
     assert refused["results"][0]["successful"] is False and "double" in refused["results"][0]["reason"]
@@ -164,17 +152,17 @@ async def test_each_node_serves_its_parameters(sim2: SimServer) -> None:
     assert base64.b64decode(types["types"]) == bytes([4, 1])  # uint8[] travels as base64
 
 
-async def test_time_fields_take_either_spelling_and_now(sim2: SimServer) -> None:
+async def test_time_fields_take_either_spelling_and_now(sim_ros2: SimServer) -> None:
     """rosbridge 2.x fills builtin_interfaces/Time from sec/nanosec or secs/nsecs, and from "now"."""
     frames = [{"header": {"stamp": {"secs": 5, "nsecs": 6}, "frame_id": "a"}, "point": {"x": 1.0}},
               {"header": {"stamp": {"sec": 7}, "frame_id": "b"}},
               {"header": {"stamp": "now", "frame_id": "c"}}]
-    async with websockets.connect(sim2.url) as ws:
+    async with websockets.connect(sim_ros2.url) as ws:
         await ws.send(json.dumps({"op": "advertise", "topic": "/clicked", "type": "geometry_msgs/PointStamped"}))
         for msg in frames:
             await ws.send(json.dumps({"op": "publish", "topic": "/clicked", "msg": msg}))
-        await sim2.wait_for_published("/clicked", lambda m: m["header"]["frame_id"] == "c")
-    a, b, c = sim2.published("/clicked")
+        await sim_ros2.wait_for_published("/clicked", lambda m: m["header"]["frame_id"] == "c")
+    a, b, c = sim_ros2.published("/clicked")
     assert a["header"]["stamp"] == {"sec": 5, "nanosec": 6} and a["point"] == {"x": 1.0, "y": 0.0, "z": 0.0}
     assert b["header"]["stamp"] == {"sec": 7, "nanosec": 0}
     assert c["header"]["stamp"]["sec"] > 1_600_000_000

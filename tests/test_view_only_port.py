@@ -1,9 +1,6 @@
 """View-only is enforced in the port every widget talks through, below any UI: a widget that tries to
 publish, call and serve anyway sends nothing to the real sim, and its port leads to no raw client."""
 
-import asyncio
-import time
-
 import pytest
 from rogue_widget import RoguePlugin, find_raw
 
@@ -13,17 +10,10 @@ from rcon_core.canvas.port import GuardedPort, ViewOnlyError
 from rcon_core.canvas.runtime import CanvasRuntime
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import PluginManager
+from rcon_core.testing import until
 
 SENDS = [("advertise", "/cmd_vel"), ("publish", "/cmd_vel"), ("call_service", "/lights/set"),
          ("advertise_service", "/rogue/serve")]
-
-
-async def until(predicate, timeout=10.0, what="condition"):
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        await asyncio.sleep(0.02)
 
 
 @pytest.fixture

@@ -137,7 +137,7 @@ class LiveCanvas:
         if self._rt is None:
             return
         before = self._running_ids()
-        self._rt.switch(canvas)
+        self._rt.start(canvas)
         self._post_reset(before)
 
     def _loop_add(self, widget: WidgetInstance, restart: bool) -> None:

@@ -6,7 +6,7 @@
     rt = CanvasRuntime(plugin_manager, Fleet([(robot_a, client_a), (robot_b, client_b)]), ...)
     rt.start(canvas)            # builds and starts every widget's model
     rt.models[widget_id].state  # what the view paints
-    rt.switch(other_canvas)     # stops every widget of the old canvas (their subscriptions and
+    rt.start(other_canvas)      # stops every widget of the old canvas (their subscriptions and
                                 #   advertisements end on the server), starts the new one's
     rt.restart_widget(inst)     # after a reconfigure
     rt.focus_lost()             # the operator looked away: models' optional on_focus_lost() (teleop stops)
@@ -29,7 +29,7 @@ Every model gets a :class:`rcon_core.canvas.port.GuardedPort` onto its node, nev
 view-only in the fleet (``Fleet.view_only_reason(robot_id)``) or a canvas with ``view_only`` set makes
 those ports refuse to publish, call or serve (``rt.view_only_reason(canvas, robot_id)``).
 
-Call these on the bridge loop thread (from the GUI: ``bridge_thread.call(rt.switch, canvas)``); pass
+Call these on the bridge loop thread (from the GUI: ``bridge_thread.call(rt.start, canvas)``); pass
 ``dispatch=bridge_thread.call`` so the models' GUI-side actions reach the loop thread too.
 
 The robot may not know a widget's type (a lab's own message whose package is not installed there), and
@@ -196,10 +196,6 @@ class CanvasRuntime:
             task.cancel()
         for robot_id in list(self._remove):
             self._unlisten(robot_id)
-
-    def switch(self, canvas: Canvas) -> None:
-        """Stop the current canvas's widgets and start ``canvas``'s."""
-        self.start(canvas)
 
     def restart_widget(self, inst: WidgetInstance) -> WidgetModel:
         """Rebuild one widget's model (after its settings or binding changed)."""

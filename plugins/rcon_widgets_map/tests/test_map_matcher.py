@@ -6,14 +6,6 @@ import pytest
 
 from rcon_core.matcher import Rank, match
 from rcon_core.msgs import TypeRegistry
-from rcon_core.plugins import PluginManager
-
-
-@pytest.fixture(scope="module")
-def pm():
-    pm = PluginManager(environ={})
-    pm.load_entry_points()
-    return pm
 
 
 @pytest.fixture(scope="module")
@@ -47,8 +39,8 @@ TABLE = [
 
 
 @pytest.mark.parametrize(("type_name", "role", "expected"), TABLE)
-def test_map_offered_where_it_fits(pm, types, type_name, role, expected):
-    found = {m.kind: m for m in match(type_name, role, types, pm)}
+def test_map_offered_where_it_fits(plugins, types, type_name, role, expected):
+    found = {m.kind: m for m in match(type_name, role, types, plugins)}
     if expected is None:
         assert "map.gps" not in found
         return
@@ -56,6 +48,6 @@ def test_map_offered_where_it_fits(pm, types, type_name, role, expected):
     assert (m.rank, m.field_path) == expected
 
 
-def test_map_is_first_for_navsatfix(pm, types):
+def test_map_is_first_for_navsatfix(plugins, types):
     for role in ("subscribe", "publish"):
-        assert match("sensor_msgs/NavSatFix", role, types, pm)[0].kind == "map.gps"
+        assert match("sensor_msgs/NavSatFix", role, types, plugins)[0].kind == "map.gps"

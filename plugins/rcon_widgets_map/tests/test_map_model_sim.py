@@ -10,29 +10,11 @@ from rcon_widgets_map import mercator
 from rcon_widgets_map.model import MapModel, MapValue
 from rcon_widgets_map.settings import MapSettings
 
-from rcon_core.bridge import BridgeClient
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding
+from rcon_core.testing import until
 
 FIX = "sensor_msgs/NavSatFix"
-
-
-async def until(cond, timeout=10.0, what="condition"):
-    deadline = asyncio.get_running_loop().time() + timeout
-    while not cond():
-        if asyncio.get_running_loop().time() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        await asyncio.sleep(0.02)
-
-
-@pytest.fixture
-async def client(sim):
-    c = BridgeClient(sim.url, reconnect=False)
-    await c.connect()
-    try:
-        yield c
-    finally:
-        await c.close()
 
 
 def gps_model(client, **settings):

@@ -11,16 +11,9 @@ from rcon_widgets_map.settings import MapPluginSettings, MapSettings, parse_extr
 
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding, PluginManager
+from rcon_core.testing import ManualClock
 
 TYPES = TypeRegistry.standard()
-
-
-class Clock:
-    def __init__(self):
-        self.t = 1000.0
-
-    def __call__(self):
-        return self.t
 
 
 def fix(lat, lon, status=0, cov=(0.25, 0, 0, 0, 0.25, 0, 0, 0, 1), cov_type=2):
@@ -33,7 +26,7 @@ def fix(lat, lon, status=0, cov=(0.25, 0, 0, 0, 0.25, 0, 0, 0, 1), cov_type=2):
 def model(clock=None, **settings):
     """A started model whose messages the test hands in directly (no port is used: nothing to start)."""
     m = MapModel(MapSettings(**settings), Binding("", "sensor_msgs/NavSatFix", "subscribe"), port=None,
-                 types=TYPES, clock=clock or Clock())
+                 types=TYPES, clock=clock or ManualClock(1000.0))
     m.start()  # incomplete binding: marks it running without touching the port
     return m
 
@@ -53,12 +46,12 @@ def test_no_fix_is_marked_and_keeps_the_last_position():
 
 
 def test_stale_after_the_configured_time():
-    clock = Clock()
+    clock = ManualClock(1000.0)
     m = model(clock, stale_after=3.0)
     m.on_message(fix(43.0, -79.0))
     main = m.state.value.main
     assert not m.is_stale(main) and not m.state.stale
-    clock.t += 3.5
+    clock.now += 3.5
     assert m.is_stale(main) and m.state.stale and m.age(main) == pytest.approx(3.5)
 
 
@@ -79,7 +72,7 @@ def test_trail_is_bounded_and_spaced():
 
 def test_bad_messages_give_an_error_not_a_crash():
     m = model()
-    m._receive({"data": 1.0})
+    m.on_message({"data": 1.0})
     assert "no latitude/longitude" in m.state.error
     m2 = MapModel(MapSettings(), Binding("/x", "lab/Boat", "subscribe", ("position",)), port=None, types=TYPES)
     m2.on_message({"other": 1})

@@ -12,8 +12,6 @@ from rcon_widgets_map.model import MapModel
 from rcon_widgets_map.settings import MapPluginSettings, MapSettings
 from rcon_widgets_map.view import MapView
 
-from rcon_core.bridge import BridgeClient
-from rcon_core.bridge.threaded import BridgeThread
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding
 from rcon_core.sim import Vessel
@@ -191,18 +189,8 @@ def test_escape_and_cancel_send_nothing(qtbot):
     assert view.pending is None and model.state.value.goals_sent == 0
 
 
-@pytest.fixture
-def bridge(sim_thread):
-    bt = BridgeThread().start()
-    client = BridgeClient(sim_thread.url, reconnect=False)
-    bt.run(client.connect()).result(10)
-    yield bt, client
-    bt.run(client.close()).result(10)
-    bt.stop()
-
-
-def test_tap_confirm_publishes_to_the_robot(qtbot, sim_thread, bridge):
-    bt, client = bridge
+def test_tap_confirm_publishes_to_the_robot(qtbot, sim_thread, threaded_client):
+    bt, client = threaded_client
     model = MapModel(MapSettings(zoom=18), Binding("/gps/fix", "sensor_msgs/NavSatFix", "subscribe"),
                      client.node("map-view"), types=TYPES, dispatch=bt.call)
     bt.call(model.start).result(5)

@@ -128,6 +128,16 @@ def open_source(settings: CameraSettings) -> FrameSource:
     return OpenCVCamera(settings.device_index, settings.width, settings.height)
 
 
+def pace(due: float, period: float, now: float) -> tuple[float, float]:
+    """After a frame due at ``due``: (when the next one is due, how long to wait for it). Steady at
+    ``period``; a capture that fell behind starts again from ``now`` (frames are skipped, never burst)."""
+    due += period
+    wait = due - now
+    if wait < 0:
+        return now, 0.0
+    return due, wait
+
+
 class CameraModel(WidgetModel):
     """Captures, encodes and publishes on its own thread; the preview is a :class:`Frame`."""
 
@@ -139,6 +149,12 @@ class CameraModel(WidgetModel):
         self._thread: threading.Thread | None = None
         self.sent = 0
         self.source_factory = open_source  # tests may replace it
+
+    @property
+    def capturing(self) -> bool:
+        """True while the capture thread runs (from start until stop)."""
+        thread = self._thread
+        return thread is not None and thread.is_alive()
 
     @property
     def raw(self) -> bool:
@@ -215,11 +231,7 @@ class CameraModel(WidgetModel):
                 info = f"{rgb.shape[1]}×{rgb.shape[0]} {kind} → {self.binding.name} · {self.sent} sent"
                 self.set_value(Frame(rgb=rgb, kind="camera", info=info, stamp=stamp, received=stamp,
                                      decoded=time.time(), index=index, fps=fps))
-                due += period
-                wait = due - time.monotonic()
-                if wait < 0:  # fell behind: skip, never burst
-                    due = time.monotonic()
-                    wait = 0
+                due, wait = pace(due, period, time.monotonic())
                 self._stop.wait(wait)
         finally:
             source.close()

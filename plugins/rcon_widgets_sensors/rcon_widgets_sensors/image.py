@@ -161,6 +161,11 @@ class ImageModel(WidgetModel):
         self._ensure_worker().submit((msg, time.time()))
 
     @property
+    def worker(self) -> SlotWorker | None:
+        """The decoding thread's worker while the model runs (None once stopped)."""
+        return self._worker
+
+    @property
     def dropped(self) -> int:
         w = self._worker
         return w.slot.dropped if w is not None else 0

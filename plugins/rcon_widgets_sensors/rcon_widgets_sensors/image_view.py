@@ -58,7 +58,7 @@ class ImageView(QtWidgets.QWidget):
         # down nothing would repaint and the age would freeze. A cheap ticker ages a stale overlay.
         self._ticker = QtCore.QTimer(self)
         self._ticker.setInterval(OVERLAY_TICK_MS)
-        self._ticker.timeout.connect(self._tick)
+        self._ticker.timeout.connect(self.age_overlay)
         self._ticker.start()
 
     # -- state ------------------------------------------------------------------------------------------
@@ -74,8 +74,9 @@ class ImageView(QtWidgets.QWidget):
             self.viewport.set_image(value.width, value.height)
         self.update()
 
-    def _tick(self) -> None:
-        """Repaint only the overlay while the shown frame is older than :data:`STALE_AFTER_S`."""
+    def age_overlay(self) -> None:
+        """Repaint only the overlay while the shown frame is older than :data:`STALE_AFTER_S` (the overlay
+        ticker calls it; nothing is scheduled for a fresh frame)."""
         frame = self.frame
         if frame is None or not self.isVisible() or self.stale_for() is None:
             return

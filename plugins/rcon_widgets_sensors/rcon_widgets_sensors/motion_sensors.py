@@ -130,8 +130,13 @@ class MotionSensorModel(WidgetModel):
     unit = ""
     stale_after = 5.0
 
-    def __init__(self, settings: Any, binding: Any, port: Any, **kwargs: Any) -> None:
+    def __init__(self, settings: Any, binding: Any, port: Any, *, ticker_clock: Any = None,
+                 **kwargs: Any) -> None:
+        """``ticker_clock``: what the publish rate is timed on instead of the bridge loop (see
+        :class:`~rcon_widgets_sensors.slots.LoopTicker`); tests pass ``rcon_core.testing.ManualClock``, as
+        ``clock`` too, so the test signal follows it."""
         super().__init__(settings if settings is not None else MotionSettings(), binding, port, **kwargs)
+        self._ticker_clock = ticker_clock
         self._feed_lock = threading.Lock()
         self._reading: tuple[float, float, float] | None = None
         self._reading_at: float | None = None
@@ -139,7 +144,7 @@ class MotionSensorModel(WidgetModel):
         self._backend: SensorBackend | None = None
         self._ticker: LoopTicker | None = None
         self._sent = 0
-        self._t0 = time.monotonic()
+        self._t0 = self._clock()
         self.sent_messages: list[dict[str, Any]] = []  # the last few (tests, diagnostics)
         if self.settings.source == "manual":
             s = self.settings
@@ -256,8 +261,8 @@ class MotionSensorModel(WidgetModel):
     # -- publishing (bridge loop) ---------------------------------------------------------------------
     def on_start(self) -> None:
         if self.binding.role is Role.PUBLISH and self._pub is not None:
-            self._t0 = time.monotonic()
-            self._ticker = LoopTicker(1.0 / self.settings.rate_hz, self._tick)
+            self._t0 = self._clock()
+            self._ticker = LoopTicker(1.0 / self.settings.rate_hz, self._tick, clock=self._ticker_clock)
             self._ticker.start(first_delay=0.0)
         self._show()
 
@@ -275,7 +280,7 @@ class MotionSensorModel(WidgetModel):
     def _tick(self) -> None:
         if self.settings.source == "test signal":
             with self._feed_lock:
-                self._reading = synthetic_reading(self.sensor, time.monotonic() - self._t0)
+                self._reading = synthetic_reading(self.sensor, self._clock() - self._t0)
         vec = self.reading()
         if vec is None or self._unavailable or self._pub is None:
             self._show()

@@ -104,16 +104,19 @@ class SlotWorker:
 class LoopTicker:
     """Calls ``fn()`` every ``period`` seconds on the running asyncio loop, steadily (no catch-up bursts).
 
-    ``start`` and ``stop`` must be called on the loop thread.
+    ``start`` and ``stop`` must be called on the loop thread. ``clock``: what the ticks are timed and
+    scheduled on instead of the running loop, anything with a loop's ``time()`` and ``call_at(when, fn)``
+    (tests pass ``rcon_core.testing.ManualClock`` so a rate is checked without the wall clock).
     """
 
-    def __init__(self, period: float, fn: Callable[[], None]) -> None:
+    def __init__(self, period: float, fn: Callable[[], None], *, clock: Any = None) -> None:
         if not period > 0:
             raise ValueError(f"period must be positive, got {period}")
         self.period = period
         self._fn = fn
-        self._loop: asyncio.AbstractEventLoop | None = None
-        self._handle: asyncio.TimerHandle | None = None
+        self._clock = clock
+        self._loop: Any = None  # the running asyncio loop, or the injected clock
+        self._handle: Any = None  # the pending call's handle (has cancel())
         self._due = 0.0
 
     @property
@@ -124,7 +127,7 @@ class LoopTicker:
         if self._handle is not None:
             return
         try:
-            self._loop = asyncio.get_running_loop()
+            self._loop = self._clock if self._clock is not None else asyncio.get_running_loop()
         except RuntimeError:
             raise RuntimeError("a periodic publisher needs the bridge loop: call it there "
                                "(pass dispatch=BridgeThread.call to the model)") from None

@@ -150,9 +150,14 @@ class TeleopModel(WidgetModel):
 
     stale_after = None
 
-    def __init__(self, settings: Any, binding: Any, port: Any, **kwargs: Any) -> None:
+    def __init__(self, settings: Any, binding: Any, port: Any, *, ticker_clock: Any = None,
+                 **kwargs: Any) -> None:
+        """``ticker_clock``: what the publish rate is timed on instead of the bridge loop (see
+        :class:`~rcon_widgets_sensors.slots.LoopTicker`); tests pass ``rcon_core.testing.ManualClock``, as
+        ``clock`` too, so ``send_times`` follow it."""
         super().__init__(settings if settings is not None else TeleopSettings(), binding, port, **kwargs)
         self._id = next(_ids)
+        self._ticker_clock = ticker_clock
         self._ticker: LoopTicker | None = None
         self._active = False
         self._locked = False
@@ -163,8 +168,8 @@ class TeleopModel(WidgetModel):
         # pads of one robot on one topic share a group: the port's ``link`` names the robot
         link = getattr(port, "link", None)  # a GuardedPort from the runtime; a bare node has its client
         self._group_key = (link if link is not None else id(getattr(port, "client", port)), binding.name)
-        self.send_times: list[float] = []  # monotonic time of each publish (tests, diagnostics)
-        self._publish_value()
+        self.send_times: list[float] = []  # the model's clock at each publish (tests, diagnostics)
+        self._show_value()
 
     # -- what the message looks like --------------------------------------------------------------------
     @property
@@ -300,13 +305,13 @@ class TeleopModel(WidgetModel):
             self.set_error(f"publishing failed: {exc}")
             return
         self._sent += 1
-        self.send_times.append(time.monotonic())
+        self.send_times.append(self._clock())
         del self.send_times[:-2000]
 
     def _on_axes(self, x: float, y: float) -> None:
         if not self.running or self._pub is None or self._locked or self.state.link_down:
             self._x, self._y = x, y
-            self._publish_value()
+            self._show_value()
             return
         self._x, self._y = x, y
         g = self._group()
@@ -315,16 +320,16 @@ class TeleopModel(WidgetModel):
             self._active = True
             self._reason = ""
             g.members.append(self)
-            self._ticker = LoopTicker(1.0 / self.settings.rate_hz, self._tick)
+            self._ticker = LoopTicker(1.0 / self.settings.rate_hz, self._tick, clock=self._ticker_clock)
             self._send()  # the first command goes out at once
             self._ticker.start()
-        self._publish_value()
+        self._show_value()
 
     def _tick(self) -> None:
         g = self._group()
         if self._active and g.members and g.members[0] is self:
             self._send()
-            self._publish_value()
+            self._show_value()
 
     def _on_release(self, reason: str, unlock: bool) -> bool:
         """End this pad's command: drop its axes, send the (merged) zero once. True if it was active."""
@@ -343,14 +348,14 @@ class TeleopModel(WidgetModel):
             self._send()  # own axes now zero (others' still held if any)
             if self in g.members:
                 g.members.remove(self)
-        self._publish_value()
+        self._show_value()
         return was
 
     def _force_release(self, reason: str) -> bool:
         was = self._on_release(reason, unlock=False)
         if was:
             self._locked = True  # until the finger lifts
-            self._publish_value()
+            self._show_value()
         return was
 
     # -- lifecycle ------------------------------------------------------------------------------------
@@ -381,7 +386,8 @@ class TeleopModel(WidgetModel):
             if not g.members:
                 self._send()
 
-    def _publish_value(self) -> None:
+    def _show_value(self) -> None:
+        """Set the value the pad's view shows (finger, command, lock); sends nothing (:meth:`_send` does)."""
         active = self._active
         cmd = self.command_for(self._x, self._y) if active else {}
         sx, sy = shape_axes(self._x, self._y, self.settings.dead_zone) if active else (0.0, 0.0)

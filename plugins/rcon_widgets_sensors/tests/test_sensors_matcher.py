@@ -4,14 +4,6 @@ import pytest
 
 from rcon_core.matcher import match
 from rcon_core.msgs import TypeRegistry
-from rcon_core.plugins import PluginManager
-
-
-@pytest.fixture(scope="module")
-def pm():
-    pm = PluginManager(environ={})
-    pm.load_entry_points()
-    return pm
 
 
 @pytest.fixture(scope="module")
@@ -59,22 +51,22 @@ TABLE = [
 
 
 @pytest.mark.parametrize("type_name,role,expected", TABLE)
-def test_table(pm, types, type_name, role, expected):
-    found = ours(match(type_name, role, types, pm))
-    registered = {s.kind for s in pm.widgets() if s.kind.startswith("sensors.")}
+def test_table(plugins, types, type_name, role, expected):
+    found = ours(match(type_name, role, types, plugins))
+    registered = {s.kind for s in plugins.widgets() if s.kind.startswith("sensors.")}
     expected = {k: v for k, v in expected.items() if k in registered}
     assert set(found) == set(expected), (type_name, role, sorted(found))
     for kind, path in expected.items():
         assert found[kind].field_path == path, (kind, found[kind].field_path)
 
 
-def test_image_and_teleop_rank_first_for_the_demo_topics(pm, types):
-    assert match("sensor_msgs/Image", "subscribe", types, pm)[0].kind == "sensors.image"
-    assert match("sensor_msgs/CompressedImage", "subscribe", types, pm)[0].kind == "sensors.image"
-    assert match("geometry_msgs/Twist", "publish", types, pm)[0].kind == "sensors.teleop"
+def test_image_and_teleop_rank_first_for_the_demo_topics(plugins, types):
+    assert match("sensor_msgs/Image", "subscribe", types, plugins)[0].kind == "sensors.image"
+    assert match("sensor_msgs/CompressedImage", "subscribe", types, plugins)[0].kind == "sensors.image"
+    assert match("geometry_msgs/Twist", "publish", types, plugins)[0].kind == "sensors.teleop"
 
 
-def test_all_kinds_registered(pm):
-    kinds = {s.kind for s in pm.widgets() if s.package == "rcon-widgets-sensors" or s.kind.startswith("sensors.")}
+def test_all_kinds_registered(plugins):
+    kinds = {s.kind for s in plugins.widgets() if s.package == "rcon-widgets-sensors" or s.kind.startswith("sensors.")}
     assert {"sensors.image", "sensors.teleop", "sensors.accelerometer", "sensors.gyroscope",
             "sensors.magnetometer"} <= kinds

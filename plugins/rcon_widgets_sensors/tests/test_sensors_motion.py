@@ -15,19 +15,10 @@ from rcon_widgets_sensors.motion_sensors import (
     SensorValue,
     synthetic_reading,
 )
-from sensors_helpers import until
 
-from rcon_core.bridge import BridgeClient
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding
-
-
-@pytest.fixture
-async def client(sim):
-    c = BridgeClient(sim.url, reconnect=False)
-    await c.connect()
-    yield c
-    await c.close()
+from rcon_core.testing import ManualClock, RecordingPort, until
 
 
 def make(cls, client, topic, type_name, role="publish", path=(), types=True, **settings):
@@ -36,7 +27,24 @@ def make(cls, client, topic, type_name, role="publish", path=(), types=True, **s
                types=TypeRegistry.standard() if types else None)
 
 
-async def test_test_signal_publishes_imu_at_the_set_rate(sim, client):
+def test_test_signal_publishes_at_the_set_rate_on_its_clock():
+    clock, port = ManualClock(), RecordingPort()
+    m = AccelerometerModel(MotionSettings(source="test signal", rate_hz=20), Binding("/imu", "sensor_msgs/Imu",
+                           "publish"), port, types=TypeRegistry.standard(), clock=clock, ticker_clock=clock)
+    m.start()
+    try:
+        clock.advance(1.025)
+        assert len(port.published) == 21  # at once, then every 50 ms: 0.00 .. 1.00 s
+        assert m.state.value.sent == 21
+        z = [msg["linear_acceleration"]["z"] for _topic, msg in port.published]
+        assert len(set(z)) > 1  # the signal follows the clock: a sway, not one value repeated
+    finally:
+        m.stop()
+    clock.advance(1.0)
+    assert len(port.published) == 21 and clock.pending == 0  # stopped: silent, no timer left
+
+
+async def test_test_signal_publishes_imu_on_the_sim(sim, client):
     got = []
     sim.subscribe_internal("/phone/imu", "sensor_msgs/Imu", "/rcon_test_rx", lambda m: got.append(time.monotonic()))
     m = make(AccelerometerModel, client, "/phone/imu", "sensor_msgs/Imu", source="test signal", rate_hz=20,
@@ -44,11 +52,8 @@ async def test_test_signal_publishes_imu_at_the_set_rate(sim, client):
     assert m.problems() == []
     m.start()
     try:
-        await until(lambda: got, 3.0, "the first message")
-        t0 = time.monotonic()
-        await asyncio.sleep(1.0)
-        n = sum(1 for t in got if t >= t0)
-        assert 14 <= n <= 26, n  # 20 Hz, generous
+        await until(lambda: len(got) >= 5, 5.0, "a stream of messages")  # the rate is tested on a ManualClock
+        n = len(got)
         msg = sim.published("/phone/imu")[-1]
         acc = msg["linear_acceleration"]
         assert 9.0 < acc["z"] < 10.5 and abs(acc["x"]) <= 0.6  # gravity plus a gentle sway

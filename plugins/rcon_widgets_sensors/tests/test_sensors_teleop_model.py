@@ -1,16 +1,19 @@
-"""Teleop model against the embedded sim: steady rate while held, one zero on every way of letting go
-(release, stop, link drop), then silence; two pads merge; the vessel moves."""
+"""Teleop model against the embedded sim: a stream while held, one zero on every way of letting go
+(release, stop, link drop), then silence; two pads merge; the vessel moves.
+
+Exact rates and "the zero goes out at once" are checked on a manual clock in ``test_sensors_teleop_rate.py``;
+here the robot's side only checks what arrives, with no timing window a loaded machine could miss."""
 
 import asyncio
 import time
 
 import pytest
 from rcon_widgets_sensors.teleop import TeleopModel, TeleopSettings, TeleopValue, shape_axes
-from sensors_helpers import until
 
 from rcon_core.bridge import BridgeClient, ConnectionState
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding
+from rcon_core.testing import until
 
 TWIST = "geometry_msgs/Twist"
 
@@ -27,9 +30,6 @@ class Receiver:
 
     def since(self, t):
         return [m for when, m in self.got if when >= t]
-
-    def times_since(self, t):
-        return [when for when, _m in self.got if when >= t]
 
     def first_zero_since(self, t):
         """(receipt time, messages received after it) of the first zero command at or after ``t``."""
@@ -61,7 +61,7 @@ def pad(client, settings=None, name="/cmd_vel", type_name=TWIST, node="pad", gua
                        types=TypeRegistry.standard())
 
 
-async def test_rate_while_held_zero_on_release_then_silence(sim, client):
+async def test_stream_while_held_zero_on_release_then_silence(sim, client):
     rx = Receiver(sim)
     model = pad(client, TeleopSettings(rate_hz=20, max_linear=2.0))
     model.start()
@@ -70,19 +70,14 @@ async def test_rate_while_held_zero_on_release_then_silence(sim, client):
         assert rx.got == []  # idle: nothing at all, not even zeros
         t0 = time.monotonic()
         model.set_axes(0.0, 0.5)  # half way up: linear.x = 2.0 * (0.5 - 0.1) / 0.9
-        await asyncio.sleep(1.0)
+        await until(lambda: len(rx.since(t0)) >= 5, 5.0, "a stream of commands")  # the rate is not timed here
         held = rx.since(t0)
-        # 20 Hz for 1 s: about 21 (the first goes out at once); generous bounds
-        assert 14 <= len(held) <= 26, len(held)
-        assert held[0]["linear"]["x"] == pytest.approx(2.0 * 0.4 / 0.9)
-        assert held[0]["angular"]["z"] == 0.0
-        gaps = [b - a for a, b in zip(rx.times_since(t0), rx.times_since(t0)[1:], strict=False)]
-        assert max(gaps) < 0.2  # steady: no long holes
+        assert all(m["linear"]["x"] == pytest.approx(2.0 * 0.4 / 0.9) and m["angular"]["z"] == 0.0
+                   for m in held)
         assert model.state.value.active
         t_rel = time.monotonic()
         model.release()
         await until(lambda: rx.first_zero_since(t_rel)[0], 2.0, "the zero")
-        assert rx.first_zero_since(t_rel)[0] - t_rel < 0.1  # zero within 100 ms of the lift
         await asyncio.sleep(0.5)
         assert rx.first_zero_since(t_rel)[1] == []  # one zero, then silence
         model.release()  # releasing an idle pad sends nothing
@@ -103,7 +98,6 @@ async def test_runtime_focus_lost_sends_one_zero_then_silence(sim, client):
         t = time.monotonic()
         model.on_focus_lost()
         await until(lambda: rx.first_zero_since(t)[0], 2.0, "the zero on focus loss")
-        assert rx.first_zero_since(t)[0] - t < 0.1
         await asyncio.sleep(0.4)
         assert rx.first_zero_since(t)[1] == []
     finally:
@@ -119,7 +113,6 @@ async def test_stop_sends_zero_and_locks_until_lift(sim, client):
     t = time.monotonic()
     model.stop()  # the canvas is switched away
     await until(lambda: rx.first_zero_since(t)[0], 2.0, "the zero on stop")
-    assert rx.first_zero_since(t)[0] - t < 0.1
     await asyncio.sleep(0.4)
     assert rx.first_zero_since(t)[1] == []
     # back on the canvas: a fresh view sends a fresh touch; the lock ended with the stop
@@ -177,22 +170,26 @@ async def test_two_pads_merge_into_one_stream(sim, client, guarded):
                  guarded=guarded)
     angular = pad(client, TeleopSettings(horizontal="-angular.z", vertical="", rate_hz=10, dead_zone=0),
                   node="right", guarded=guarded)
+
+    def both(m):
+        return m["linear"]["x"] == pytest.approx(1.0) and m["angular"]["z"] == pytest.approx(-0.5)
+
     linear.start()
     angular.start()
     try:
         t = time.monotonic()
         linear.set_axes(0.0, 1.0)
         angular.set_axes(0.5, 0.0)  # right: turn right (negative yaw rate)
-        await asyncio.sleep(1.0)
-        msgs = rx.since(t)
-        assert 7 <= len(msgs) <= 15, len(msgs)  # one stream at 10 Hz, not two
-        last = msgs[-1]
-        assert last["linear"]["x"] == pytest.approx(1.0) and last["angular"]["z"] == pytest.approx(-0.5)
+        # one message carries both pads' axes: merged (two streams would each carry one axis)
+        await until(lambda: sum(1 for m in rx.since(t) if both(m)) >= 3, 5.0, "the merged stream")
         t2 = time.monotonic()
         linear.release()  # only its own axis drops to zero; the other pad keeps driving
-        await asyncio.sleep(0.5)
-        later = [m for m in rx.since(t2) if m["linear"]["x"] == 0]
-        assert len(later) >= 3 and all(m["angular"]["z"] == pytest.approx(-0.5) for m in later)
+
+        def later():  # (one sent before the release may still arrive after t2)
+            return [m for m in rx.since(t2) if m["linear"]["x"] == 0]
+
+        await until(lambda: len(later()) >= 3, 5.0, "the other pad still driving")
+        assert all(m["angular"]["z"] == pytest.approx(-0.5) for m in later())
         assert rx.since(t2)[-1]["linear"]["x"] == 0
         t3 = time.monotonic()
         angular.release()

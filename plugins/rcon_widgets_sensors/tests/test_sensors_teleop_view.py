@@ -1,10 +1,7 @@
 """Teleop pads offscreen with a real bridge thread and the sim: two fingers on two pads at once, zero on
-lift, on focus loss and when hidden; screenshot."""
+lift, on focus loss and when hidden. (The README's pictures: docs/make_screenshots.py.)"""
 
-import os
-import tempfile
 import time
-from pathlib import Path
 
 import pytest
 from qtpy import QtCore, QtGui, QtWidgets
@@ -12,14 +9,8 @@ from qtpy.QtTest import QTest
 from rcon_widgets_sensors.teleop import TeleopModel, TeleopSettings
 from rcon_widgets_sensors.teleop_view import TeleopView
 
-from rcon_core.bridge import BridgeClient
-from rcon_core.bridge.threaded import BridgeThread
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding
-
-#: set RCON_SCREENSHOTS=1 to refresh the PNGs in docs/screenshots/sensors (otherwise they go to a temp dir)
-SHOTS = (Path(__file__).resolve().parents[3] / "docs" / "screenshots" / "sensors" if os.environ.get("RCON_SCREENSHOTS")
-         else Path(tempfile.mkdtemp(prefix="rcon-shots-")))
 
 
 class Robot:
@@ -38,18 +29,8 @@ def zero(m):
     return not any(m["linear"].values()) and not any(m["angular"].values())
 
 
-@pytest.fixture
-def bridge(sim_thread):
-    bt = BridgeThread().start()
-    client = BridgeClient(sim_thread.url, reconnect=False)
-    bt.run(client.connect()).result(10)
-    yield bt, client
-    bt.run(client.close()).result(10)
-    bt.stop()
-
-
-def make_pad(bridge, settings, node):
-    bt, client = bridge
+def make_pad(threaded_client, settings, node):
+    bt, client = threaded_client
     model = TeleopModel(settings, Binding("/cmd_vel", "geometry_msgs/Twist", "publish"), client.node(node),
                         types=TypeRegistry.standard(), dispatch=bt.call)
     bt.call(model.start).result(5)
@@ -62,9 +43,9 @@ def wait(qtbot, pred, timeout=3000):
 
 
 @pytest.fixture
-def two_pads(qtbot, bridge):
-    left_m, left = make_pad(bridge, TeleopSettings(horizontal="", vertical="linear.x", dead_zone=0), "left")
-    right_m, right = make_pad(bridge, TeleopSettings(horizontal="-angular.z", vertical="", dead_zone=0), "right")
+def two_pads(qtbot, threaded_client):
+    left_m, left = make_pad(threaded_client, TeleopSettings(horizontal="", vertical="linear.x", dead_zone=0), "left")
+    right_m, right = make_pad(threaded_client, TeleopSettings(horizontal="-angular.z", vertical="", dead_zone=0), "right")
     win = QtWidgets.QWidget()
     lay = QtWidgets.QHBoxLayout(win)
     lay.addWidget(left)
@@ -74,7 +55,7 @@ def two_pads(qtbot, bridge):
     win.show()
     qtbot.waitExposed(win)
     yield win, left, right
-    bt = bridge[0]
+    bt = threaded_client[0]
     for m in (left_m, right_m):
         bt.call(m.stop).result(5)
 
@@ -98,8 +79,6 @@ def test_two_fingers_drive_two_pads_at_once(qtbot, sim_thread, two_pads):
     assert left.model.active and right.model.active
     left.refresh(left.model.state)
     right.refresh(right.model.state)
-    SHOTS.mkdir(parents=True, exist_ok=True)
-    win.grab().save(str(SHOTS / "teleop-two-pads.png"))
     t = time.monotonic()
     QTest.touchEvent(win, dev).release(0, left.mapTo(win, up), win).stationary(1).commit()
     wait(qtbot, lambda: any(m["linear"]["x"] == 0 and m["angular"]["z"] < -0.4 for m in robot.since(t)))
@@ -141,16 +120,6 @@ def test_focus_loss_and_hiding_send_the_zero(qtbot, sim_thread, two_pads):
     assert zero(robot.since(t3)[-1]) and not left.model.active
 
 
-def test_idle_pad_screenshot(qtbot, bridge):
-    model, view = make_pad(bridge, TeleopSettings(), "idle")
-    qtbot.addWidget(view)
-    view.resize(300, 300)
-    view.show()
-    view.refresh(model.state)
-    view.grab().save(str(SHOTS / "teleop-idle.png"))
-    bridge[0].call(model.stop).result(5)
-
-
 def offline_pad(dry_run: bool | None):
     """A pad run as the app runs an unconnected widget or a control's preview: on the offline client,
     link down; ``dry_run`` as the app would set it for the add panel's preview (None: not set at all)."""
@@ -177,7 +146,6 @@ def test_preview_pad_says_it_is_a_preview_not_link_down(qtbot):
     view.refresh(model.state)
     assert view.status_text() == "preview: not driving the robot" and not model.active
     QTest.mouseRelease(view, QtCore.Qt.MouseButton.LeftButton, QtCore.Qt.KeyboardModifier.NoModifier, c)
-    view.grab().save(str(SHOTS / "teleop-preview.png"))
     model.stop()
 
 

@@ -293,7 +293,7 @@ class CompoundModel(StdModel):
                 child.model.start()
             except Exception as exc:
                 self._build_problems.append(f"child {child.index + 1} ({child.cfg.kind}): {exc}")
-        self._publish_state()
+        self._show_state()
 
     def build_children(self) -> None:
         """Build every child's model (loop thread, once the type is known)."""
@@ -377,7 +377,7 @@ class CompoundModel(StdModel):
         except PathError as exc:
             self.set_error(f"child {index + 1}: {exc}")
             return
-        self._publish_state()
+        self._show_state()
         if self.settings.auto_send and self.binding.role is not Role.SERVE:
             self._limiter.offer(None)
 
@@ -386,7 +386,8 @@ class CompoundModel(StdModel):
         with self._lock:
             return copy.deepcopy(self._composed)
 
-    def _publish_state(self) -> None:
+    def _show_state(self) -> None:
+        """Set the value the views show (composed message, status); sends nothing (:meth:`send` does)."""
         self.set_value(CompoundValue(self.composed(), self._status, self._served), message=self.composed())
 
     # -- sending -------------------------------------------------------------------------------------
@@ -441,10 +442,10 @@ class CompoundModel(StdModel):
         if role is Role.PUBLISH:
             if self.publish(self.composed()):
                 self._status = CallStatus("ok", self.binding.name, "published", time.time(), 0.0)
-                self._publish_state()
+                self._show_state()
         elif role is Role.CALL:
             self._status = CallStatus("busy", self.binding.name, "", time.time())
-            self._publish_state()
+            self._show_state()
             self.spawn(self._call(self.composed()["request"]))
         else:
             self.set_error("a serving compound answers requests; it does not send")
@@ -456,7 +457,7 @@ class CompoundModel(StdModel):
             response = await self.port.call_service(self.binding.name, request, timeout=self.call_timeout)
         except Exception as exc:
             self._status = CallStatus("failed", self.binding.name, str(exc), started, self._clock() - t0)
-            self._publish_state()
+            self._show_state()
             self.set_error(f"{self.binding.name}: {exc}")
             return
         ok = not (isinstance(response, dict) and response.get("success") is False)
@@ -465,7 +466,7 @@ class CompoundModel(StdModel):
         with self._lock:
             self._composed["response"] = copy.deepcopy(response)
         self._feed_display("response", response)
-        self._publish_state()
+        self._show_state()
         if not ok:
             self.set_error(f"{self.binding.name}: {text}")
 
@@ -483,7 +484,7 @@ class CompoundModel(StdModel):
         if blocked:  # the caller gets a failed call, never a default in a child's place
             problem = "; ".join(blocked)
             self._status = CallStatus("failed", self.binding.name, f"not answered: {problem}", time.time(), 0.0)
-            self._publish_state()
+            self._show_state()
             self.set_error(f"not answered: {problem}")
             raise ValueError(problem)
         with self._lock:
@@ -495,5 +496,5 @@ class CompoundModel(StdModel):
         except MessageTextError as exc:
             self.set_error(f"response: {exc}")
         self._status = CallStatus("ok", self.binding.name, f"answered request {self._served}", time.time(), 0.0)
-        self._publish_state()
+        self._show_state()
         return response

@@ -47,7 +47,7 @@ class CompoundView(QtWidgets.QWidget):
         self.status.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
         layout.addWidget(self.status)
         self.child_views: list[tuple[Any, QtWidgets.QWidget]] = []
-        self._boxes: list[QtWidgets.QGroupBox] = []
+        self.child_boxes: list[QtWidgets.QGroupBox] = []
         self._version = -1
         self._painted: dict[int, int] = {}
         self._timer = QtCore.QTimer(self)  # children's own changes (a display child ageing, ...)
@@ -60,11 +60,11 @@ class CompoundView(QtWidgets.QWidget):
         if self._version == self.model.children_version:
             return
         self._version = self.model.children_version
-        for box in self._boxes:
+        for box in self.child_boxes:
             self.grid.removeWidget(box)
             box.deleteLater()
         self.child_views = []
-        self._boxes = []
+        self.child_boxes = []
         self._painted = {}
         cols = max(1, int(self.model.settings.columns))
         for c in range(cols):
@@ -78,7 +78,7 @@ class CompoundView(QtWidgets.QWidget):
                 view = QtWidgets.QLabel(f"{child.cfg.kind}: {exc}")
             inner.addWidget(view)
             self.grid.addWidget(box, i // cols, i % cols)
-            self._boxes.append(box)
+            self.child_boxes.append(box)
             self.child_views.append((child, view))
 
         rows = -(-len(self.model.children) // cols)
@@ -106,7 +106,7 @@ class CompoundView(QtWidgets.QWidget):
     def minimumSizeHint(self) -> QtCore.QSize:  # noqa: N802 - Qt override
         """The smallest child and the button: anything more scrolls."""
         chrome = self._chrome()
-        low = [b.minimumSizeHint() for b in self._boxes] or [QtCore.QSize(120, 40)]
+        low = [b.minimumSizeHint() for b in self.child_boxes] or [QtCore.QSize(120, 40)]
         w = max(q.width() for q in low) + self.scroll.verticalScrollBar().sizeHint().width()
         return QtCore.QSize(w + chrome.width(), min(q.height() for q in low) + chrome.height())
 

@@ -78,7 +78,7 @@ class SliderView(QtWidgets.QWidget):
         # nothing sent or received yet: the handle rests at the start value, the value says "not set"
         resting = getattr(model, "resting", None) if self.publishing else None
         self.slider.blockSignals(True)
-        self.slider.setValue(self._position(resting if resting is not None else self._range.coerce(0)))
+        self.slider.setValue(self.position_of(resting if resting is not None else self._range.coerce(0)))
         self.slider.blockSignals(False)
         if self.publishing:
             self._show_unset()
@@ -108,7 +108,8 @@ class SliderView(QtWidgets.QWidget):
         pos = self.slider.value() if pos is None else pos
         return r.minimum + (r.maximum - r.minimum) * pos / max(1, self.slider.maximum())
 
-    def _position(self, value: float) -> int:
+    def position_of(self, value: float) -> int:
+        """The slider position (0..slider.maximum()) that shows ``value``."""
         r = self._range
         span = (r.maximum - r.minimum) or 1
         return round((float(value) - r.minimum) / span * self.slider.maximum())
@@ -146,7 +147,7 @@ class SliderView(QtWidgets.QWidget):
         if isinstance(v, (int, float)) and not isinstance(v, bool):
             if not self.slider.isSliderDown():
                 self.slider.blockSignals(True)
-                self.slider.setValue(self._position(min(self._range.maximum, max(self._range.minimum, v))))
+                self.slider.setValue(self.position_of(min(self._range.maximum, max(self._range.minimum, v))))
                 self.slider.blockSignals(False)
             self._show(v)
         elif v is None and self.publishing and not self.slider.isSliderDown():

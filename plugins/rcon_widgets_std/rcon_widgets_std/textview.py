@@ -45,7 +45,9 @@ def level_name(level: Any) -> str:
 @attrs.define
 class TextViewSettings:
     max_lines: int = attrs.field(default=1000, metadata={"label": "Lines kept", "min": 10, "max": MAX_LINES_LIMIT})
-    min_level: str = attrs.field(default="debug", metadata={"label": "Lowest level shown", "choices": list(LEVELS)})
+    min_level: str = attrs.field(default="debug", metadata={
+        "label": "Log: lowest level", "choices": list(LEVELS),
+        "help": "log topics (rosgraph_msgs/Log, rcl_interfaces/Log) only; text topics have no levels"})
     filter_text: str = attrs.field(default="", metadata={"label": "Only lines containing"})
     show_node: bool = attrs.field(default=True, metadata={"label": "Show the node name"})
     show_time: bool = attrs.field(default=True, metadata={"label": "Show the time"})

@@ -2,51 +2,22 @@
 
 from __future__ import annotations
 
-import asyncio
-import time
-from contextlib import asynccontextmanager
-
-from rcon_core.bridge import BridgeClient
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding
+from rcon_core.testing import connected
 
 
-class Clock:
-    """A fake monotonic clock."""
-
-    def __init__(self, now: float = 100.0) -> None:
-        self.now = now
-
-    def __call__(self) -> float:
-        return self.now
+def bridge(sim):
+    """``async with bridge(sim) as client:`` a client connected to ``sim``, closed afterwards."""
+    return connected(sim.url, reconnect=False)
 
 
-async def until(predicate, timeout: float = 10.0, what: str = "condition"):
-    """Wait (generously) for ``predicate()`` to become truthy; returns its value."""
-    deadline = time.monotonic() + timeout
-    while True:
-        got = predicate()
-        if got:
-            return got
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        await asyncio.sleep(0.02)
-
-
-@asynccontextmanager
-async def bridge(sim):
-    client = BridgeClient(sim.url, reconnect=False)
-    await client.connect()
-    try:
-        yield client
-    finally:
-        await client.close()
-
-
-def build(model_cls, settings, name, type_, role, paths=(), *, client=None, types=None, node="w", clock=None):
-    """A model bound as given, on its own node of ``client`` (or no port)."""
+def build(model_cls, settings, name, type_, role, paths=(), *, client=None, types=None, node="w", clock=None,
+          port=None):
+    """A model bound as given, on its own node of ``client``, on ``port`` (e.g. a ``RecordingPort``) or on
+    no port."""
     kwargs = {"types": types if types is not None else TypeRegistry.standard()}
     if clock is not None:
         kwargs["clock"] = clock
-    port = client.node(node) if client is not None else None
+    port = client.node(node) if client is not None else port
     return model_cls(settings, Binding(name, type_, role, paths), port, **kwargs)

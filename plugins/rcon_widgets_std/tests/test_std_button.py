@@ -4,9 +4,10 @@ request text checked against the definition, and the PUBLISH role."""
 import asyncio
 
 from rcon_widgets_std.button import ButtonModel, ButtonSettings
-from std_testkit import bridge, build, until
+from std_testkit import bridge, build
 
 from rcon_core.msgs import TypeRegistry
+from rcon_core.testing import until
 
 
 def status(m):

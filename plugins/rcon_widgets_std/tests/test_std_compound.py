@@ -6,10 +6,11 @@ import asyncio
 import pytest
 from rcon_widgets_std import compound as compound_mod
 from rcon_widgets_std.compound import ChildSpec, CompoundModel, CompoundSettings
-from std_testkit import bridge, build, until
+from std_testkit import bridge, build
 
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Accepts, PluginManager, Role, WidgetModel, WidgetSpec, hookimpl
+from rcon_core.testing import until
 
 
 def child(kind, path, **settings):

@@ -3,12 +3,13 @@ and runs against the embedded robot through the canvas runtime."""
 
 from pathlib import Path
 
-from std_testkit import bridge, until
+from std_testkit import bridge
 
 from rcon_core.canvas.runtime import CanvasRuntime, MissingWidgetModel
 from rcon_core.canvas.store import WorkspaceStore, dumps_workspace
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import PluginManager
+from rcon_core.testing import until
 
 LAYOUT = Path(__file__).resolve().parents[1] / "examples" / "std_widgets_layout.json"
 KINDS = {"std.label", "std.slider", "std.switch", "std.button", "std.textfield", "std.stepper", "std.textview",

@@ -4,9 +4,10 @@ import math
 
 from rcon_widgets_std.common import format_value
 from rcon_widgets_std.label import LabelModel, LabelSettings
-from std_testkit import Clock, bridge, build, until
+from std_testkit import bridge, build
 
 from rcon_core.msgs import TypeRegistry
+from rcon_core.testing import ManualClock, until
 
 
 def test_number_formatting_with_decimals_units_and_scale():
@@ -67,7 +68,7 @@ class FakePort:
 
 
 def test_age_and_stale_after_setting():
-    clock = Clock()
+    clock = ManualClock()
     m = build(LabelModel, LabelSettings(stale_after=2.0), "/x", "std_msgs/Float64", "subscribe", "data",
               clock=clock)
     m.port = FakePort()

@@ -5,7 +5,6 @@ import pytest
 
 from rcon_core.matcher import match
 from rcon_core.msgs import TypeRegistry
-from rcon_core.plugins import PluginManager
 
 # (type, role, {kind: expected field path}, kinds that must NOT be offered)
 TABLE = [
@@ -49,50 +48,43 @@ TABLE = [
 
 
 @pytest.fixture(scope="module")
-def pm():
-    pm = PluginManager(environ={})
-    pm.load_entry_points()
-    return pm
-
-
-@pytest.fixture(scope="module")
-def types(pm):
+def types(plugins):
     types = TypeRegistry.standard()
-    pm.apply_types(types)
+    plugins.apply_types(types)
     return types
 
 
 @pytest.mark.parametrize("type_,role,expected,absent", TABLE, ids=[f"{t}-{r}" for t, r, *_ in TABLE])
-def test_matcher_table(pm, types, type_, role, expected, absent):
-    found = {m.kind: m for m in match(type_, role, types, pm) if m.kind.startswith("std.")}
+def test_matcher_table(plugins, types, type_, role, expected, absent):
+    found = {m.kind: m for m in match(type_, role, types, plugins) if m.kind.startswith("std.")}
     for kind, path in expected.items():
         assert kind in found, f"{kind} not offered for {type_} ({role})"
         assert found[kind].field_path == path, (kind, found[kind].field_path)
     assert not (absent & set(found)), f"offered but should not be: {absent & set(found)}"
 
 
-def test_exact_types_rank_first_and_label_leads_for_subscribers(pm, types):
-    kinds = [m.kind for m in match("std_msgs/Float64", "subscribe", types, pm)]
+def test_exact_types_rank_first_and_label_leads_for_subscribers(plugins, types):
+    kinds = [m.kind for m in match("std_msgs/Float64", "subscribe", types, plugins)]
     assert kinds.index("std.label") < kinds.index("std.slider")
-    assert [m.kind for m in match("std_msgs/Bool", "subscribe", types, pm)][0] == "std.switch"
-    assert [m.kind for m in match("std_srvs/SetBool", "call", types, pm)][0] == "std.switch"
-    assert [m.kind for m in match("std_msgs/Float64", "publish", types, pm)][0] == "std.slider"
+    assert [m.kind for m in match("std_msgs/Bool", "subscribe", types, plugins)][0] == "std.switch"
+    assert [m.kind for m in match("std_srvs/SetBool", "call", types, plugins)][0] == "std.switch"
+    assert [m.kind for m in match("std_msgs/Float64", "publish", types, plugins)][0] == "std.slider"
 
 
-def test_a_type_learned_from_typedefs_matches_structurally(pm):
+def test_a_type_learned_from_typedefs_matches_structurally(plugins):
     """A lab's type the app never shipped: known only through the server's typedefs."""
     types = TypeRegistry.standard()
     lab = TypeRegistry.empty()
     lab.add_msg_text("lab_msgs/Winch", "float32 rope_out\nbool brake\nstring mode\n")
     types.add_typedefs(lab.typedefs("lab_msgs/Winch"))
-    found = {m.kind: m.field_path for m in match("lab_msgs/Winch", "publish", types, pm)}
+    found = {m.kind: m.field_path for m in match("lab_msgs/Winch", "publish", types, plugins)}
     assert found["std.slider"] == "rope_out" and found["std.switch"] == "brake"
-    found = {m.kind: m.field_path for m in match("lab_msgs/Winch", "subscribe", types, pm)}
+    found = {m.kind: m.field_path for m in match("lab_msgs/Winch", "subscribe", types, plugins)}
     assert found["std.label"] == "rope_out"
 
 
-def test_every_std_widget_is_registered_with_its_package(pm):
-    std = [s for s in pm.widgets() if s.kind.startswith("std.")]
+def test_every_std_widget_is_registered_with_its_package(plugins):
+    std = [s for s in plugins.widgets() if s.kind.startswith("std.")]
     assert {s.package for s in std} == {"rcon-widgets-std"}
     assert {s.kind for s in std} == {"std.label", "std.slider", "std.switch", "std.button", "std.textfield",
                                      "std.stepper", "std.textview", "std.compound", "std.action"}
@@ -100,6 +92,6 @@ def test_every_std_widget_is_registered_with_its_package(pm):
         assert s.load_model() and s.load_settings_class()
         expected = ["add at least one child widget"] if s.kind == "std.compound" else []
         assert s.settings_problems({}) == expected, s.kind
-    slider = pm.widget("std.slider")
+    slider = plugins.widget("std.slider")
     (problem,) = slider.settings_problems({"minimum": "low"})
     assert "invalid settings" in problem and "minimum" in problem

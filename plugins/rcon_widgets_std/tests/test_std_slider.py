@@ -12,9 +12,10 @@ from rcon_widgets_std.slider import (
     SliderSettings,
     number_range,
 )
-from std_testkit import Clock, bridge, build, until
+from std_testkit import bridge, build
 
 from rcon_core.msgs import TypeRegistry
+from rcon_core.testing import ManualClock, until
 
 
 @pytest.mark.parametrize(
@@ -64,7 +65,7 @@ def test_problems_name_what_is_wrong():
 
 
 def test_rate_limiter_keeps_the_latest_and_never_loses_it():
-    clock, sent, timers = Clock(), [], []
+    clock, sent, timers = ManualClock(), [], []
     lim = RateLimiter(sent.append, 10.0, schedule=lambda d, fn: timers.append((d, fn)), clock=clock)
     lim.offer(1)
     assert sent == [1]

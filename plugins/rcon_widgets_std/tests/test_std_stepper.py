@@ -1,15 +1,16 @@
 """Stepper: publish only, steps within min/max, rate-limited, values arrive on the robot."""
 
 from rcon_widgets_std.stepper import StepperModel, StepperSettings
-from std_testkit import Clock, bridge, build, until
+from std_testkit import bridge, build
 
 from rcon_core.plugins import Role
+from rcon_core.testing import ManualClock, until
 
 
 def test_steps_stay_within_the_range_and_snap():
     sent = []
     m = build(StepperModel, StepperSettings(minimum=0, maximum=1, step=0.25, initial=0.5, rate_hz=100),
-              "/n", "std_msgs/Float64", "publish", "data", clock=Clock())
+              "/n", "std_msgs/Float64", "publish", "data", clock=ManualClock())
     m.publish_value = lambda v: sent.append(v) or True
     assert m.current == 0.5 and m.state.value is None
     assert [m.up(), m.up(), m.up(), m.down()] == [0.75, 1.0, 1.0, 0.75]
@@ -27,7 +28,7 @@ def test_integer_field_and_problems():
 
 
 def test_rate_limit_with_a_fake_clock():
-    clock, sent, timers = Clock(), [], []
+    clock, sent, timers = ManualClock(), [], []
     m = build(StepperModel, StepperSettings(rate_hz=2), "/n", "std_msgs/Int32", "publish", "data", clock=clock)
     m.publish_value = lambda v: sent.append(v) or True
     m._limiter._schedule = lambda delay, fn: timers.append(fn)

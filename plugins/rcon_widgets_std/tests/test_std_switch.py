@@ -3,9 +3,10 @@
 import asyncio
 
 from rcon_widgets_std.switch import SwitchModel, SwitchSettings, SwitchValue
-from std_testkit import bridge, build, until
+from std_testkit import bridge, build
 
 from rcon_core.msgs import TypeRegistry
+from rcon_core.testing import until
 
 
 async def test_call_lights_set_and_follow_lights_state(sim):

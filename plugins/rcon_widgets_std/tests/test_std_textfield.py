@@ -5,9 +5,10 @@ import asyncio
 
 import pytest
 from rcon_widgets_std.textfield import TextFieldModel, TextFieldSettings
-from std_testkit import bridge, build, until
+from std_testkit import bridge, build
 
 from rcon_core.msgs import MessageTextError, TypeRegistry
+from rcon_core.testing import until
 
 
 @pytest.mark.parametrize(

@@ -5,7 +5,9 @@ import asyncio
 
 import pytest
 from rcon_widgets_std.textview import TextViewModel, TextViewSettings, level_name
-from std_testkit import bridge, build, until
+from std_testkit import bridge, build
+
+from rcon_core.testing import until
 
 
 def log(level, text, name="/robot", ros2=False):

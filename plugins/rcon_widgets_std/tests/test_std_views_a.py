@@ -12,10 +12,11 @@ from rcon_widgets_std.slider_view import SliderView
 from rcon_widgets_std.switch import SwitchModel, SwitchSettings, SwitchValue
 from rcon_widgets_std.switch_view import SwitchView
 from std_qtkit import LiveBridge, shoot, wait_until
-from std_testkit import Clock, build
+from std_testkit import build
 
 from rcon_core.app.theme import stylesheet
 from rcon_core.msgs import TypeRegistry
+from rcon_core.testing import ManualClock, RecordingPort
 
 
 @pytest.fixture
@@ -26,16 +27,16 @@ def live(sim_url):
 
 
 def test_label_view_value_age_and_stale(qtbot, tmp_path):
-    clock = Clock()
+    clock = ManualClock()
     m = build(LabelModel, LabelSettings(decimals=1, units="%", scale=100, stale_after=3), "/battery",
-              "sensor_msgs/BatteryState", "subscribe", "percentage", clock=clock)
+              "sensor_msgs/BatteryState", "subscribe", "percentage", clock=clock, port=RecordingPort())
+    m.start()  # staleness only counts while running
     view = LabelView(m)
     m.on_message({"percentage": 0.873})
     clock.now += 1.2
     view.refresh(m.state)
     assert view.value.text() == "87.3 %" and view.age.text() == "1.2 s ago"
     shoot(qtbot, view, "Battery", (200, 130), "label", tmp_path)
-    m._running = True  # as if started: staleness only counts while running
     clock.now += 5
     view.refresh(m.state)
     assert view.age.text().startswith("STALE")
@@ -56,9 +57,10 @@ def test_label_view_value_is_not_selectable_and_copies_through_its_menu(qtbot):
 
 @pytest.mark.parametrize("width", [240, 150, 110, 80])
 def test_label_view_shrinks_a_long_value_to_fit_and_never_clips(qtbot, width):
-    clock = Clock()
+    clock = ManualClock()
     m = build(LabelModel, LabelSettings(decimals=-1, stale_after=3), "/x", "std_msgs/Float64", "subscribe", "data",
-              clock=clock)
+              clock=clock, port=RecordingPort())
+    m.start()
     host = QtWidgets.QWidget()
     host.setStyleSheet(stylesheet(touch=48))
     qtbot.addWidget(host)
@@ -66,7 +68,6 @@ def test_label_view_shrinks_a_long_value_to_fit_and_never_clips(qtbot, width):
     view.setGeometry(0, 0, width, 90)
     host.show()
     m.on_message({"data": 0.846331})
-    m._running = True
     clock.now += 12.5
     view.refresh(m.state)
     QtWidgets.QApplication.processEvents()

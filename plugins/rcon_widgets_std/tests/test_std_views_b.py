@@ -135,7 +135,7 @@ def test_compound_view_composes_and_publishes_an_imu(qtbot, live, sim_thread, tm
     view = CompoundView(m)
     assert len(view.child_views) == 3
     accel = view.child_views[0][1]
-    accel.slider.setValue(accel._position(9.8))
+    accel.slider.setValue(accel.position_of(9.8))
     view.child_views[2][1].edit.setText("{w: 1.0}")
     view.child_views[2][1].send()
     wait_until(qtbot, lambda: m.state.value is not None and m.state.value.message["orientation"]["w"] == 1.0,

@@ -253,7 +253,7 @@ THREE = [*TWO, ChildSpec("std.textfield", "linear.y"), ChildSpec("std.slider", "
 def _fits_without_scrolling(view: CompoundView, what: str) -> None:
     """Every child at least its minimum and all of them inside the scroll area's viewport."""
     port = view.scroll.viewport()
-    for box in view._boxes:
+    for box in view.child_boxes:
         corner = box.mapTo(port, QtCore.QPoint(box.width(), box.height()))
         assert corner.x() <= port.width() and corner.y() <= port.height(), f"{what}: a child needs scrolling"
         need = box.minimumSizeHint()
@@ -263,14 +263,14 @@ def _fits_without_scrolling(view: CompoundView, what: str) -> None:
 def test_compound_in_a_small_frame_keeps_children_at_their_minimum_and_scrolls(qtbot):
     view = CompoundView(_compound(TWO))
     frame = placed(qtbot, "std.compound", view, "Compound", size=(300, 250))  # the tester's frame
-    for box in view._boxes:
+    for box in view.child_boxes:
         need = box.minimumSizeHint()
         assert box.height() >= need.height() and box.width() >= need.width(), "a child squeezed below its minimum"
     bar = view.scroll.verticalScrollBar()
     assert bar.maximum() > 0, "what does not fit scrolls"
     bar.setValue(bar.maximum())
     QtWidgets.QApplication.processEvents()
-    last = view._boxes[-1]
+    last = view.child_boxes[-1]
     bottom = last.mapTo(view.scroll.viewport(), QtCore.QPoint(0, last.height()))
     assert bottom.y() <= view.scroll.viewport().height(), "the last child can be scrolled into view"
     assert view.button.isVisible() and frame.isVisible()

@@ -1,6 +1,6 @@
-"""Renders the README screenshots offscreen against the embedded sim (not a test; run it by hand):
+"""Renders the map widget's README screenshots offscreen against the embedded sim (run it by hand):
 
-    QT_QPA_PLATFORM=offscreen python plugins/rcon_widgets_map/tests/map_screenshots.py docs/screenshots/map
+    QT_QPA_PLATFORM=offscreen python docs/make_map_screenshots.py docs/screenshots/map
 
 Drives the vessel in an arc through /cmd_vel, adds a second fix topic (the operator), then saves the map
 on the plain grid (no tiles) and on a generated offline MBTiles file, with a goal waiting for confirmation.
@@ -13,7 +13,8 @@ import tempfile
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).parent))
+# the map tests' generated tiles (their conftest), so the pictures show the tiles the tests use
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "plugins" / "rcon_widgets_map" / "tests"))
 
 from qtpy import QtCore, QtWidgets  # noqa: E402
 from rcon_widgets_map import mercator  # noqa: E402
