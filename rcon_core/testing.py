@@ -168,14 +168,15 @@ async def sim_ros2() -> AsyncIterator[SimServer]:
 
 @pytest_asyncio.fixture
 async def sim_fleet() -> AsyncIterator[Callable[[int], Any]]:
-    """``await sim_fleet(n)``: n started SimServers on free loopback ports (the test's loop), stopped after
-    the test (one already stopped by the test, to drop its link, is fine)."""
+    """``await sim_fleet(n, **options)``: n started SimServers on free loopback ports (the test's loop;
+    ``options`` as SimServer takes them, e.g. ``auth_secret``), stopped after the test (one already stopped
+    by the test, to drop its link, is fine)."""
     started: list[SimServer] = []
 
-    async def make(n: int) -> list[SimServer]:
+    async def make(n: int, **options: Any) -> list[SimServer]:
         out = []
         for _ in range(n):
-            server = SimServer(host="127.0.0.1", port=0, rate_scale=TEST_RATE_SCALE, plugin_types=True)
+            server = SimServer(host="127.0.0.1", port=0, rate_scale=TEST_RATE_SCALE, plugin_types=True, **options)
             await server.start()
             started.append(server)
             out.append(server)

@@ -4,22 +4,14 @@ removed from the workspace has its link closed. Real sims on free ports, one wit
 
 from __future__ import annotations
 
-import time
+import asyncio
 
 from rcon_core.app.fleet_links import FleetLinks, robot_link_settings
 from rcon_core.app.link import Link, LinkSettings
 from rcon_core.canvas.robots import Robot
-from rcon_core.sim import SimServer
+from rcon_core.testing import until
 
 SECRET = "fleet-secret-0123456789"
-
-
-def wait(predicate, timeout=10.0, what="condition"):
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        time.sleep(0.02)
 
 
 def state_of(link: Link) -> str:
@@ -27,39 +19,39 @@ def state_of(link: Link) -> str:
     return getattr(getattr(client, "state", None), "value", "closed") if client is not None else "closed"
 
 
-def test_each_robot_connects_with_its_own_settings_and_a_removed_one_is_closed():
-    with SimServer.in_thread(port=0) as alpha, SimServer.in_thread(port=0) as bravo, \
-            SimServer.in_thread(port=0, auth_secret=SECRET) as charlie:
-        first = Link()
-        kept = {charlie.url: SECRET}
-        links = FleetLinks(first, secret_for=kept.get)
-        robots = [Robot("r-1", "Alpha"), Robot("r-2", "Bravo", url=bravo.url),
-                  Robot("r-3", "Charlie", url=charlie.url, auth=True)]
-        try:
-            assert links.sync(robots) == ["r-1", "r-2", "r-3"]
-            assert links.link("") is first and links.link("r-1") is first
-            first.connect_to(alpha.url)
-            links.connect_saved()
-            for rid in ("r-1", "r-2", "r-3"):
-                wait(lambda rid=rid: state_of(links.link(rid)) == "connected", what=f"{rid} connected")
-            answered = []
+async def test_each_robot_connects_with_its_own_settings_and_a_removed_one_is_closed(sim_fleet):
+    alpha, bravo = await sim_fleet(2)
+    [charlie] = await sim_fleet(1, auth_secret=SECRET)
+    first = Link()  # the links run on their own bridge thread; the sims on the test's loop
+    kept = {charlie.url: SECRET}
+    links = FleetLinks(first, secret_for=kept.get)
+    robots = [Robot("r-1", "Alpha"), Robot("r-2", "Bravo", url=bravo.url),
+              Robot("r-3", "Charlie", url=charlie.url, auth=True)]
+    try:
+        assert links.sync(robots) == ["r-1", "r-2", "r-3"]
+        assert links.link("") is first and links.link("r-1") is first
+        first.connect_to(alpha.url)
+        links.connect_saved()
+        for rid in ("r-1", "r-2", "r-3"):
+            await until(lambda rid=rid: state_of(links.link(rid)) == "connected", what=f"{rid} connected")
+        answered = []
 
-            def charlie_answered():  # Charlie closes a link at its first frame unless it is a valid auth op
-                ok, url = links.link("r-3").answered_box.take()
-                if ok:
-                    answered.append(url)
-                return bool(answered)
+        def charlie_answered():  # Charlie closes a link at its first frame unless it is a valid auth op
+            ok, url = links.link("r-3").answered_box.take()
+            if ok:
+                answered.append(url)
+            return bool(answered)
 
-            wait(charlie_answered, what="Charlie answering a call after the signed auth op")
-            assert answered == [charlie.url] and len(charlie.connections) == 1
-            assert [len(s.connections) for s in (alpha, bravo)] == [1, 1]
-            # Bravo leaves the workspace: its link is closed, the others stay
-            assert links.sync([robots[0], robots[2]]) == []
-            wait(lambda: len(bravo.connections) == 0, what="Bravo's link closed")
-            assert links.ids == ["r-1", "r-3"] and state_of(links.link("r-3")) == "connected"
-        finally:
-            links.shutdown()
-            first.shutdown()
+        await until(charlie_answered, what="Charlie answering a call after the signed auth op")
+        assert answered == [charlie.url] and len(charlie.connections) == 1
+        assert [len(s.connections) for s in (alpha, bravo)] == [1, 1]
+        # Bravo leaves the workspace: its link is closed, the others stay
+        assert links.sync([robots[0], robots[2]]) == []
+        await until(lambda: len(bravo.connections) == 0, what="Bravo's link closed")
+        assert links.ids == ["r-1", "r-3"] and state_of(links.link("r-3")) == "connected"
+    finally:  # closing waits for the sims, which answer on this loop: not from it
+        await asyncio.to_thread(links.shutdown)
+        await asyncio.to_thread(first.shutdown)
 
 
 def test_a_robots_link_settings():

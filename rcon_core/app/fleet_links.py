@@ -126,7 +126,7 @@ class FleetLinks:
         self.robots = list(robots)
         wanted = {r.id for r in robots[1:]}
         for rid in [rid for rid in self._links if rid not in wanted]:
-            self._links.pop(rid).shutdown()
+            self._links.pop(rid).disconnect()  # the close runs on the bridge thread: the GUI never waits
             self.run_urls.pop(rid, None)
         new = []
         for r in robots[1:]:
