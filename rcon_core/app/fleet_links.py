@@ -166,7 +166,8 @@ class FleetLinks:
                     log.warning("robot %s: %s", r.label, exc)
 
     def shutdown(self) -> None:
-        """Close every robot's link but the first (the window closes that one itself)."""
+        """Close every robot's link but the first (the window closes that one itself, and then the bridge
+        thread). The closes run on the bridge thread side by side: nothing here waits for a robot."""
         for link in self._links.values():
-            link.shutdown()
+            link.disconnect()
         self._links.clear()
