@@ -86,7 +86,7 @@ def test_export_from_one_tablet_import_on_another_runs_on_the_robot_and_undoes(q
     assert sender.notice.kind == "info" and str(path) in sender.banner.text()
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no temp file left behind
     data = json.loads(path.read_text(encoding="utf-8"))
-    assert data["format"] == "rcon-canvas" and data["version"] == 1
+    assert data["format"] == "rcon-canvas" and data["version"] == 2
     assert data["canvas"]["name"] == "Docking"
     assert [w["id"] for w in data["canvas"]["widgets"]] == [w.id for w in exported.widgets]
     assert data["canvas"]["widgets"][2]["settings"] == MISSING_SETTINGS

@@ -37,7 +37,7 @@ def window(qtbot, tmp_path):
 
 def test_new_canvas_from_template(window, qtbot):
     menu = window.menu_button.menu()
-    [sub] = [a.menu() for a in menu.actions() if a.menu() is not None]
+    [sub] = [a.menu() for a in menu.actions() if a.menu() is not None and a.menu().objectName() == "canvas_templates"]
     assert sub.title() == "New canvas from template"
     titles = [a.text() for a in menu.actions()]
     assert titles.index("New canvas from template") == titles.index("New canvas") + 1

@@ -77,6 +77,14 @@ class LiveCanvas:
         now on (another canvas, an added or reconfigured widget) is built on ``client`` (offline)."""
         self._send(self._loop_offline, client)
 
+    def set_client(self, robot_id: str, client: Any, *, keep: bool = False,
+                   view_only: str | None | bool = False) -> None:
+        """``robot_id``'s link is ``client`` now: only that robot's widgets (and fleet-wide ones such as
+        the map of every robot) are rebuilt on it. ``keep``: they keep their models and last values (a
+        Disconnect: LINK DOWN, then STALE) and only what starts from now on uses ``client``.
+        ``view_only``: the robot's view-only mark on the new link (a reason or None; False: unchanged)."""
+        self._send(self._loop_set_client, robot_id, client, keep, view_only)
+
     def stop(self) -> None:
         """Stop every widget (returns at once; the stop runs on the bridge thread)."""
         self.running = False
@@ -151,6 +159,14 @@ class LiveCanvas:
     def _loop_offline(self, client: Any) -> None:
         if self._rt is not None:
             self._rt.client = client
+
+    def _loop_set_client(self, robot_id: str, client: Any, keep: bool, view_only: str | None | bool) -> None:
+        if self._rt is None or robot_id not in self._rt.fleet:  # a robot the next start brings in
+            return
+        before = self._running_ids()
+        self._rt.set_client(robot_id, client, restart=not keep, view_only=view_only)
+        if not keep:
+            self._post_reset(before)
 
     def _loop_stop(self) -> None:
         before = self._running_ids()

@@ -159,8 +159,10 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
         window.showFullScreen()
     else:
         window.show()
-    # the embedded robot's URL is not put in the history: its port is gone after this run
-    window.connect_to(url or config.last_url, remember=not demo)
+    # the embedded robot's URL is not put in the history: its port is gone after this run. The first robot:
+    # --url, else its URL in the layout, else the newest in the history; the others connect to their own
+    # URLs (window.fleet_ui)
+    window.connect_to(url or window.fleet_ui.first_url() or config.last_url, remember=not demo)
     if getattr(args, "screenshot", None):
         path = Path(args.screenshot)
 
