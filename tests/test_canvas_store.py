@@ -42,10 +42,11 @@ def test_round_trip_is_exact(tmp_path):
     ws = sample()
     text = dumps_workspace(ws)
     data = json.loads(text)
-    assert data["format"] == "rcon-workspace" and data["version"] == 1
+    assert data["format"] == "rcon-workspace" and data["version"] == 2
     assert data["canvases"][1]["locked"] is True
     assert data["canvases"][1]["widgets"][0]["binding"] == {
-        "name": "/lights", "type": "std_srvs/SetBool", "role": "call", "field_paths": ["request.data"]}
+        "name": "/lights", "type": "std_srvs/SetBool", "role": "call", "field_paths": ["request.data"],
+        "robot": ""}
     again = loads_workspace(text)
     assert again == ws
     assert dumps_workspace(again) == text
@@ -64,7 +65,7 @@ def test_missing_plugin_widget_and_unknown_keys_saved_back_byte_for_byte(tmp_pat
     odd = {"nested": {"list": [1, 2.5, None, True, "ü"], "big": 12345678901234567890}, "tiny": 1e-300}
     data["canvases"][0]["widgets"].append({
         "id": "w-gone", "kind": "retired.widget", "title": "Old", "binding": {"name": "/x", "type": "a/B",
-        "role": "subscribe", "field_paths": []}, "geometry": {"x": 1.0, "y": 2.0, "w": 3.0, "h": 4.0},
+        "role": "subscribe", "field_paths": [], "robot": ""}, "geometry": {"x": 1.0, "y": 2.0, "w": 3.0, "h": 4.0},
         "settings": odd, "future_widget_key": {"keep": "me"}})
     data["canvases"][0]["future_canvas_key"] = [1, 2]
     data["future_top_key"] = "yes"
@@ -107,7 +108,7 @@ def test_newer_version_is_refused(tmp_path):
     content = json.dumps({"format": "rcon-workspace", "version": 7, "canvases": []}).encode()
     path.write_bytes(content)
     store = WorkspaceStore(path)
-    with pytest.raises(NewerVersionError, match="newer RCON.*version 7.*reads up to 1"):
+    with pytest.raises(NewerVersionError, match="newer RCON.*version 7.*reads up to 2"):
         store.load()
     doc = Document()
     saver = AutoSaver(doc, store, on_error=lambda exc: errors.append(exc))
@@ -177,7 +178,7 @@ def test_export_and_import_one_canvas(tmp_path):
     deck = ws.canvas_named("Deck")
     export_canvas(deck, tmp_path / "deck.json")
     data = json.loads((tmp_path / "deck.json").read_text())
-    assert data["format"] == "rcon-canvas" and data["version"] == 1
+    assert data["format"] == "rcon-canvas" and data["version"] == 2
     back = import_canvas(tmp_path / "deck.json")
     assert back == deck
     doc = Document(ws)
@@ -227,7 +228,7 @@ VERSION_1_FILE = """{
 """
 
 
-def test_version_1_files_of_this_build_load_and_the_current_format_round_trips(tmp_path):
+def test_version_1_files_load_and_migrate_to_one_robot(tmp_path):
     ws = loads_workspace(VERSION_1_FILE)
     [canvas] = ws.canvases
     assert (ws.current, canvas.name, canvas.locked) == ("c-0f1e2d3c", "Drive", True)
@@ -237,11 +238,80 @@ def test_version_1_files_of_this_build_load_and_the_current_format_round_trips(t
     assert (w.geometry.x, w.geometry.y, w.geometry.w, w.geometry.h) == (352, 336, 288, 96)
     assert w.settings == {"minimum": 0.0, "maximum": 3.0, "units": "m/s"}
     assert ws.plugin_settings == {"std.slider": {"haptics": False}}
-    # what this build writes is still version 1 and reads back to the same workspace
-    assert json.loads(dumps_workspace(ws)) == json.loads(VERSION_1_FILE)
-    assert store_mod.VERSION == 1, "the saved shape changed: bump VERSION with a migration (see store.py)"
+    # the old single robot (whose URL the app kept: "" = the connection bar's) is the first robot now,
+    # and the widget talks to it
+    [robot] = ws.robots
+    assert (robot.id, robot.name, robot.url, robot.auth, robot.view_only) == ("r-1", "Robot", "", False, False)
+    assert ws.robot_of(w) is robot
+    # saved again it is version 2, with the robot and the binding's robot ("" = the first)
+    data = json.loads(dumps_workspace(ws))
+    assert data["version"] == 2 and data["robots"][0]["id"] == "r-1"
+    assert data["canvases"][0]["widgets"][0]["binding"]["robot"] == ""
+    old = json.loads(VERSION_1_FILE)
+    del data["robots"], data["canvases"][0]["widgets"][0]["binding"]["robot"]
+    data["version"] = 1
+    assert data == old  # nothing else changed
+
+
+# a workspace file exactly as this build writes format version 2 (kept verbatim: it must keep loading)
+VERSION_2_FILE = """{
+  "format": "rcon-workspace",
+  "version": 2,
+  "current": "c-0f1e2d3c",
+  "robots": [
+    {"id": "r-1", "name": "Alpha", "url": "ws://10.0.0.5:9090", "ca_file": "", "client_cert": "",
+     "client_key": "", "auth": false, "view_only": false, "colour": ""},
+    {"id": "r-2", "name": "Bravo", "url": "wss://10.0.0.6:9090", "ca_file": "/etc/rcon/ca.pem",
+     "client_cert": "", "client_key": "", "auth": true, "view_only": true, "colour": "#d55e00"}
+  ],
+  "canvases": [
+    {
+      "id": "c-0f1e2d3c",
+      "name": "Drive",
+      "locked": true,
+      "widgets": [
+        {
+          "id": "w-1a2b3c4d",
+          "kind": "std.slider",
+          "title": "Speed limit",
+          "binding": {"name": "/speed_limit", "type": "std_msgs/Float64", "role": "publish",
+                      "field_paths": ["data"], "robot": "r-2"},
+          "geometry": {"x": 352.0, "y": 336.0, "w": 288.0, "h": 96.0},
+          "settings": {"minimum": 0.0, "maximum": 3.0, "units": "m/s"}
+        }
+      ]
+    }
+  ],
+  "plugin_settings": {"std.slider": {"haptics": false}}
+}
+"""
+
+
+def test_version_2_files_of_this_build_load_and_the_current_format_round_trips(tmp_path):
+    ws = loads_workspace(VERSION_2_FILE)
+    alpha, bravo = ws.robots
+    assert (alpha.name, alpha.url, bravo.name, bravo.ca_file, bravo.auth, bravo.view_only) == (
+        "Alpha", "ws://10.0.0.5:9090", "Bravo", "/etc/rcon/ca.pem", True, True)
+    [w] = ws.canvases[0].widgets
+    assert w.binding.robot == "r-2" and ws.robot_of(w) is bravo
+    assert json.loads(dumps_workspace(ws)) == json.loads(VERSION_2_FILE)
+    assert store_mod.VERSION == 2, "the saved shape changed: bump VERSION with a migration (see store.py)"
     text = dumps_workspace(sample())
     assert dumps_workspace(loads_workspace(text)) == text
+
+
+@pytest.mark.parametrize("robots, expected", [
+    ('[{"id": "a"}, {"id": "a"}]', "duplicate robot ids 'a'"),
+    ('[{"id": "a", "auth": "yes"}]', "must be true or false, found 'yes' at robots[0].auth"),
+    ('[{"id": "", "name": "no id"}]', "robot #1 ('no id') has no id"),
+    ('[{"name": "no id"}]', "required field missing at robots[0].id"),
+    ('"r-1"', "robots"),
+])
+def test_bad_robots_are_refused_with_a_reason(robots, expected):
+    text = '{"format": "rcon-workspace", "version": 2, "robots": ' + robots + ', "canvases": []}'
+    with pytest.raises(WorkspaceFileError) as info:
+        loads_workspace(text)
+    assert expected in str(info.value)
 
 
 # an early development build: no canvas ids, "rect" instead of geometry, the same version number

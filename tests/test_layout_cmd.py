@@ -93,6 +93,7 @@ def test_the_shipped_schema_describes_what_the_store_writes(capsys):
     assert _schema_keys(schema, "widget") == set(widget)
     assert _schema_keys(schema, "binding") == set(widget["binding"])
     assert _schema_keys(schema, "geometry") == set(widget["geometry"])
+    assert _schema_keys(schema, "robot") == set(data["robots"][0])
     assert set(schema["$defs"]["binding"]["properties"]["role"]["enum"]) == {"subscribe", "publish", "call", "serve"}
 
 

@@ -75,6 +75,12 @@ class LiveCanvas:
         now on (another canvas, an added or reconfigured widget) is built on ``client`` (offline)."""
         self._send(self._loop_offline, client)
 
+    def set_client(self, robot_id: str, client: Any, *, keep: bool = False) -> None:
+        """``robot_id``'s link is ``client`` now: only that robot's widgets (and fleet-wide ones such as
+        the map of every robot) are rebuilt on it. ``keep``: they keep their models and last values (a
+        Disconnect: LINK DOWN, then STALE) and only what starts from now on uses ``client``."""
+        self._send(self._loop_set_client, robot_id, client, keep)
+
     def stop(self) -> None:
         """Stop every widget (returns at once; the stop runs on the bridge thread)."""
         self.running = False
@@ -149,6 +155,14 @@ class LiveCanvas:
     def _loop_offline(self, client: Any) -> None:
         if self._rt is not None:
             self._rt.client = client
+
+    def _loop_set_client(self, robot_id: str, client: Any, keep: bool) -> None:
+        if self._rt is None:
+            return
+        before = self._running_ids()
+        self._rt.set_client(robot_id, client, restart=not keep)
+        if not keep:
+            self._post_reset(before)
 
     def _loop_stop(self) -> None:
         before = self._running_ids()

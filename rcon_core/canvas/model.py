@@ -13,7 +13,9 @@ import attrs
 
 from rcon_core.plugins.model import Binding
 
-__all__ = ["Geometry", "WidgetInstance", "Canvas", "Workspace", "new_id", "Binding"]
+from .robots import Robot, UnknownRobot, default_robot, resolve_robot
+
+__all__ = ["Geometry", "WidgetInstance", "Canvas", "Workspace", "new_id", "Binding", "Robot", "UnknownRobot"]
 
 
 def new_id(prefix: str) -> str:
@@ -64,12 +66,21 @@ class Canvas:
 
 @attrs.define
 class Workspace:
-    """Every canvas, the current one, and the per-kind shared ("plugin") settings."""
+    """Every canvas, the current one, the per-kind shared ("plugin") settings and the robots (at least
+    one; the first is the one a binding without ``robot`` talks to)."""
 
     canvases: list[Canvas] = attrs.field(factory=list)
     current: str = ""
     plugin_settings: dict[str, dict[str, Any]] = attrs.field(factory=dict)
     extra: dict[str, Any] = attrs.field(factory=dict)
+    robots: list[Robot] = attrs.field(factory=lambda: [default_robot()])
+
+    def robot(self, robot_id: str) -> Robot:
+        """The robot a binding names (``""``: the first). Raises :class:`UnknownRobot` (a KeyError)."""
+        return resolve_robot(self.robots, robot_id)
+
+    def robot_of(self, widget: WidgetInstance) -> Robot:
+        return resolve_robot(self.robots, widget.binding.robot)
 
     @classmethod
     def new(cls, name: str = "Main") -> Workspace:

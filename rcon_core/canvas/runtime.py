@@ -3,13 +3,22 @@
 ::
 
     rt = CanvasRuntime(plugin_manager, client, types=type_registry, plugin_settings=ws.plugin_settings)
+    rt = CanvasRuntime(plugin_manager, Fleet([(robot_a, client_a), (robot_b, client_b)]), ...)
     rt.start(canvas)            # builds and starts every widget's model
     rt.models[widget_id].state  # what the view paints
     rt.switch(other_canvas)     # stops every widget of the old canvas (their subscriptions and
                                 #   advertisements end on the server), starts the new one's
     rt.restart_widget(inst)     # after a reconfigure
     rt.focus_lost()             # the operator looked away: models' optional on_focus_lost() (teleop stops)
+    rt.set_client(robot_id, c)  # that robot's link is another client now: only its widgets restart
     rt.stop()                   # focus_lost() first, then every model stops
+
+Several robots (:mod:`rcon_core.canvas.fleet`): each widget runs on the client of the robot its binding
+names (``binding.robot``, ``""`` = the first); each robot's link state reaches only its own widgets
+(``model.set_link``), so losing one robot's link stops that robot's commands (teleop sends nothing, its
+frames say LINK DOWN) while the others stay live. A model with ``on_fleet(robots)`` also gets a port on
+every robot (the map of every robot's fix). A binding naming a robot the workspace does not have gets a
+:class:`BrokenWidgetModel` saying so.
 
 ``on_activity(widget_id)`` (optional) is called on the loop thread right after a widget's model handled
 an incoming message, service request or service response, so a front end can repaint at once instead of
@@ -43,7 +52,9 @@ from rcon_core.plugins.manager import UnknownWidget
 from rcon_core.plugins.model import Binding, WidgetModel
 from rcon_core.plugins.spec import SettingsError
 
+from .fleet import Fleet, RobotPort
 from .model import Canvas, WidgetInstance
+from .robots import UnknownRobot
 
 __all__ = ["CanvasRuntime", "MissingWidgetModel", "BrokenWidgetModel", "UnconfiguredWidgetModel"]
 
@@ -179,18 +190,30 @@ class CanvasRuntime:
     ) -> None:
         self.pm = plugin_manager
         self.on_activity = on_activity
-        self.client = client
+        #: robot id -> client; a bare client is a fleet of one robot
+        self.fleet = client if isinstance(client, Fleet) else Fleet.single(client)
         self.types = types
         self.plugin_settings = plugin_settings if plugin_settings is not None else {}
         self.dispatch = dispatch
         self.canvas: Canvas | None = None
         self.models: dict[str, WidgetModel] = {}
-        self._nodes: dict[str, Any] = {}
-        self._remove_listener: Callable[[], None] | None = None
-        self._remove_status_listener: Callable[[], None] | None = None
-        self._link_up = True
-        self._checker: TypeChecker | None = None
+        self._nodes: dict[str, list[Any]] = {}  # widget id -> its node, then its other robots' nodes
+        self._robot_of: dict[str, str] = {}  # widget id -> robot id (resolved)
+        self._fleet_wide: set[str] = set()  # widgets whose model has on_fleet
+        self._remove: dict[str, list[Callable[[], None]]] = {}  # robot id -> listener removers
+        self._link_up: dict[str, bool] = {}
+        self._checkers: dict[str, TypeChecker] = {}
         self._checks: set[asyncio.Task[Any]] = set()
+
+    @property
+    def client(self) -> Any:
+        """The first robot's client (the only one in a one-robot workspace)."""
+        return self.fleet.client("")
+
+    @client.setter
+    def client(self, client: Any) -> None:
+        """Widgets started from now on use ``client`` for the first robot; running ones keep theirs."""
+        self.set_client("", client, restart=False)
 
     # -- lifecycle -----------------------------------------------------------------------------------
     def start(self, canvas: Canvas) -> None:
@@ -198,11 +221,8 @@ class CanvasRuntime:
         if self.canvas is not None:
             self.stop()
         self.canvas = canvas
-        if self._remove_listener is None and hasattr(self.client, "add_state_listener"):
-            self._remove_listener = self.client.add_state_listener(self._on_state)
-        if self._remove_status_listener is None and hasattr(self.client, "add_status_listener"):
-            self._remove_status_listener = self.client.add_status_listener(self._on_status)
-        self._link_up = self._client_up()
+        for robot_id in self.fleet.ids:
+            self._listen(robot_id)
         for inst in canvas.widgets:
             self._start_widget(inst)
 
@@ -214,12 +234,8 @@ class CanvasRuntime:
         self.canvas = None
         for task in list(self._checks):
             task.cancel()
-        if self._remove_listener is not None:
-            self._remove_listener()
-            self._remove_listener = None
-        if self._remove_status_listener is not None:
-            self._remove_status_listener()
-            self._remove_status_listener = None
+        for robot_id in list(self._remove):
+            self._unlisten(robot_id)
 
     def switch(self, canvas: Canvas) -> None:
         """Stop the current canvas's widgets and start ``canvas``'s."""
@@ -229,6 +245,26 @@ class CanvasRuntime:
         """Rebuild one widget's model (after its settings or binding changed)."""
         self._stop_widget(inst.id)
         return self._start_widget(inst)
+
+    def set_client(self, robot_id: str, client: Any, *, restart: bool = True) -> None:
+        """``robot_id``'s link is ``client`` now. ``restart``: its running widgets (and every fleet-wide
+        one) are rebuilt on it; else they keep the old client's nodes (a Disconnect: they show their last
+        values with LINK DOWN) and only what starts from now on uses ``client``."""
+        rid = self.fleet.resolve(robot_id)
+        if self.fleet.client(rid) is client:
+            return
+        self._unlisten(rid)
+        self.fleet.set_client(rid, client)
+        self._checkers.pop(rid, None)
+        if self.canvas is None:
+            return
+        self._listen(rid)
+        if not restart:  # the running widgets keep their nodes but hear the new link's state
+            self._on_state(rid, "connected" if self._link_up.get(rid) else "closed")
+            return
+        for inst in list(self.canvas.widgets):
+            if inst.id in self.models and (self._robot_of.get(inst.id) == rid or inst.id in self._fleet_wide):
+                self.restart_widget(inst)
 
     def add_widget(self, inst: WidgetInstance) -> WidgetModel:
         return self._start_widget(inst)
@@ -279,17 +315,29 @@ class CanvasRuntime:
             log.warning("widget %s (%s) could not be built: %s", inst.id, inst.kind, exc)
             return BrokenWidgetModel(inst, f"{inst.kind}: {exc}")
 
+    def _watched(self, node: Any, widget_id: str) -> Any:
+        if self.on_activity is None:
+            return node
+        notify = self.on_activity
+        return _WatchedPort(node, lambda: notify(widget_id))
+
     def _start_widget(self, inst: WidgetInstance) -> WidgetModel:
-        node = self.client.node(inst.id)
-        port = node
-        if self.on_activity is not None:
-            notify, widget_id = self.on_activity, inst.id
-            port = _WatchedPort(node, lambda: notify(widget_id))
-        model = self.build_model(inst, port)
-        self._nodes[inst.id] = node
-        self.models[inst.id] = model
-        model.set_link(self._link_up)
         try:
+            rid = self.fleet.resolve(inst.binding.robot)
+        except UnknownRobot as exc:
+            model: WidgetModel = BrokenWidgetModel(inst, str(exc))
+            self.models[inst.id] = model
+            model.start()
+            return model
+        node = self.fleet.client(rid).node(inst.id)
+        port = self._watched(node, inst.id)
+        model = self.build_model(inst, port)
+        self._nodes[inst.id] = [node]
+        self._robot_of[inst.id] = rid
+        self.models[inst.id] = model
+        model.set_link(self._link_up.get(rid, True))
+        try:
+            self._give_fleet(inst.id, model, rid, port)
             model.start()
         except Exception as exc:
             log.warning("widget %s (%s) failed to start: %s", inst.id, inst.kind, exc)
@@ -298,21 +346,41 @@ class CanvasRuntime:
         self._check_type(inst.id, model)
         return model
 
+    def _give_fleet(self, widget_id: str, model: WidgetModel, own: str, own_port: Any) -> None:
+        """A fleet-wide model (``on_fleet``) gets a port on every robot, and each robot's link state."""
+        hook = getattr(model, "on_fleet", None)
+        if not callable(hook) or isinstance(model, MissingWidgetModel):
+            return
+        self._fleet_wide.add(widget_id)
+        ports = []
+        for robot, client in self.fleet.items():
+            if robot.id == own:
+                port = own_port
+            else:
+                node = client.node(widget_id)
+                self._nodes[widget_id].append(node)
+                port = self._watched(node, widget_id)
+            ports.append(RobotPort(robot.id, robot.label, self.fleet.colour(robot.id), port))
+        hook(ports)
+        self._tell_robot_link(model, None)
+
     # -- does the robot know the type? ---------------------------------------------------------------
     def _check_type(self, widget_id: str, model: WidgetModel) -> None:
         """Ask the robot (once per type and connection) whether it knows a non-standard bound type."""
         b = model.binding
         if isinstance(model, MissingWidgetModel) or b.problems() or getattr(model, "dry_run", False):
             return
-        if getattr(self.client, "rosapi", None) is None:
+        rid = self._robot_of.get(widget_id, "")
+        client = self.fleet.client(rid)
+        if getattr(client, "rosapi", None) is None:
             return
         try:
             loop = asyncio.get_running_loop()
         except RuntimeError:  # not on the bridge loop (a test building models by hand)
             return
-        if self._checker is None or self._checker.client is not self.client:
-            self._checker = TypeChecker(self.client)
-        checker = self._checker
+        checker = self._checkers.get(rid)
+        if checker is None or checker.client is not client:
+            checker = self._checkers[rid] = TypeChecker(client)
 
         async def check() -> None:
             problem = await checker.problem(b.type, service=b.role.is_service)
@@ -329,13 +397,15 @@ class CanvasRuntime:
         if not task.cancelled() and task.exception() is not None:
             log.warning("checking a widget's type failed: %s", task.exception())
 
-    def _on_status(self, frame: dict[str, Any]) -> None:
+    def _on_status(self, robot_id: str, frame: dict[str, Any]) -> None:
         """A ``status`` op of level error naming one of our subscribe/advertise ops (newer servers)."""
         failure = status_failure(frame)
         if failure is None:
             return
         topic, text = failure
         for widget_id, model in list(self.models.items()):
+            if self._robot_of.get(widget_id) != robot_id:
+                continue
             if model.binding.name == topic and not model.binding.role.is_service:
                 model.set_error(f"the robot refused {topic}: {text}")
                 self._notify(widget_id)
@@ -349,25 +419,63 @@ class CanvasRuntime:
 
     def _stop_widget(self, widget_id: str) -> None:
         model = self.models.pop(widget_id, None)
-        node = self._nodes.pop(widget_id, None)
+        nodes = self._nodes.pop(widget_id, [])
+        self._robot_of.pop(widget_id, None)
+        self._fleet_wide.discard(widget_id)
         if model is not None:
             try:
                 model.stop()
             except Exception as exc:
                 log.warning("widget %s failed to stop cleanly: %s", widget_id, exc)
-        if node is not None:
+        for node in nodes:
             try:
                 node.close()
             except Exception as exc:
                 log.warning("node of widget %s failed to close: %s", widget_id, exc)
 
     # -- link state ----------------------------------------------------------------------------------
-    def _client_up(self) -> bool:
-        state = getattr(self.client, "state", None)
-        return getattr(state, "value", "connected") == "connected"
+    def link_up(self, robot_id: str = "") -> bool:
+        """Whether ``robot_id``'s link is usable, as the runtime last heard."""
+        return self._link_up.get(self.fleet.resolve(robot_id), True)
 
-    def _on_state(self, state: Any) -> None:
+    def _listen(self, robot_id: str) -> None:
+        if robot_id in self._remove:
+            return
+        client = self.fleet.client(robot_id)
+        removers = []
+        if hasattr(client, "add_state_listener"):
+            removers.append(client.add_state_listener(lambda state: self._on_state(robot_id, state)))
+        if hasattr(client, "add_status_listener"):
+            removers.append(client.add_status_listener(lambda frame: self._on_status(robot_id, frame)))
+        self._remove[robot_id] = [r for r in removers if callable(r)]
+        state = getattr(client, "state", None)
+        self._link_up[robot_id] = getattr(state, "value", "connected") == "connected"
+
+    def _unlisten(self, robot_id: str) -> None:
+        for remove in self._remove.pop(robot_id, []):
+            try:
+                remove()
+            except Exception:
+                log.debug("removing a link listener failed", exc_info=True)
+
+    def _on_state(self, robot_id: str, state: Any) -> None:
+        """One robot's link state: only its own widgets hear it (and the fleet-wide ones, per robot)."""
         up = getattr(state, "value", state) == "connected"
-        self._link_up = up
-        for model in self.models.values():
-            model.set_link(up)
+        if robot_id not in self._remove:  # an old client's late callback
+            return
+        self._link_up[robot_id] = up
+        for widget_id, model in list(self.models.items()):
+            if self._robot_of.get(widget_id) == robot_id:
+                model.set_link(up)
+            if widget_id in self._fleet_wide:
+                self._tell_robot_link(model, robot_id)
+
+    def _tell_robot_link(self, model: WidgetModel, robot_id: str | None) -> None:
+        hook = getattr(model, "on_robot_link", None)
+        if not callable(hook):
+            return
+        for rid in [robot_id] if robot_id is not None else self.fleet.ids:
+            try:
+                hook(rid, self._link_up.get(rid, True))
+            except Exception as exc:
+                log.warning("a widget failed on robot %s's link state: %s", rid, exc)

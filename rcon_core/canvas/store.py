@@ -1,13 +1,20 @@
 """Saving and loading workspaces: versioned JSON, atomic writes, backups, canvas import/export.
 
-File layout (``version`` 1)::
+File layout (``version`` 2)::
 
-    {"format": "rcon-workspace", "version": 1, "current": "c-...",
+    {"format": "rcon-workspace", "version": 2, "current": "c-...",
+     "robots": [{"id", "name", "url", "ca_file", "client_cert", "client_key", "auth", "view_only",
+       "colour"}],
      "canvases": [{"id", "name", "locked", "widgets": [{"id", "kind", "title", "binding": {"name",
-       "type", "role", "field_paths"}, "geometry": {"x", "y", "w", "h"}, "settings": {...}}]}],
+       "type", "role", "field_paths", "robot"}, "geometry": {"x", "y", "w", "h"}, "settings": {...}}]}],
      "plugin_settings": {"kind": {...}}}
 
-A single canvas exported to a file is ``{"format": "rcon-canvas", "version": 1, "canvas": {...}}``.
+A single canvas exported to a file is ``{"format": "rcon-canvas", "version": 2, "canvas": {...}}``.
+
+Versions: 1 had no ``robots`` and no ``binding.robot`` (one robot, whose URL the app kept). It migrates
+to one robot, :data:`~rcon_core.canvas.robots.DEFAULT_ROBOT_ID` named "Robot" with URL ``""`` (the
+connection bar's URL), and every binding talks to it (``robot`` ``""`` = the first robot). A version 2
+file without robots gets the same one robot.
 Keys this version does not know are kept and written back, so a newer minor addition survives a
 round trip; a widget whose plugin is missing keeps its settings byte for byte.
 
@@ -58,6 +65,7 @@ from rcon_core.plugins.model import Binding, Role
 from . import checks
 from .files import atomic_write, backup, clean_stale_temps, real_path, same_backup
 from .model import Canvas, Geometry, WidgetInstance, Workspace
+from .robots import Robot, default_robot
 
 log = logging.getLogger(__name__)
 
@@ -78,7 +86,7 @@ __all__ = [
 
 FORMAT = "rcon-workspace"
 CANVAS_FORMAT = "rcon-canvas"
-VERSION = 1
+VERSION = 2
 
 
 class WorkspaceFileError(ValueError):
@@ -123,7 +131,8 @@ def _make_converter() -> cattrs.Converter:
     conv = cattrs.Converter(forbid_extra_keys=False)
 
     def unstructure_binding(b: Binding) -> dict[str, Any]:
-        return {"name": b.name, "type": b.type, "role": b.role.value, "field_paths": list(b.field_paths)}
+        return {"name": b.name, "type": b.type, "role": b.role.value, "field_paths": list(b.field_paths),
+                "robot": b.robot}
 
     def structure_binding(data: Any, _t: Any) -> Binding:
         if not isinstance(data, dict):
@@ -131,10 +140,11 @@ def _make_converter() -> cattrs.Converter:
         paths = data.get("field_paths", ())
         if not isinstance(paths, (list, tuple)) or not all(isinstance(p, str) for p in paths):
             raise ValueError(f"binding.field_paths must be a list of strings, found {checks.found(paths)}")
-        for key in ("name", "type", "role"):
+        for key in ("name", "type", "role", "robot"):
             checks.strict_str(data.get(key, ""), f"binding.{key}")
         role = data.get("role", "subscribe")
-        return Binding(data.get("name", ""), data.get("type", ""), _ROLES.get(role, role), tuple(paths))
+        return Binding(data.get("name", ""), data.get("type", ""), _ROLES.get(role, role), tuple(paths),
+                       data.get("robot", ""))
 
     conv.register_unstructure_hook(Binding, unstructure_binding)
     conv.register_structure_hook(Binding, structure_binding)
@@ -163,7 +173,7 @@ def _make_converter() -> cattrs.Converter:
         base_struct: cattrs.SimpleStructureHook[Any, Any] = cattrs.gen.make_dict_structure_fn(cls, conv)
 
         names = frozenset(a.name for a in attrs.fields(cls)) - {"extra"}
-        what = {"WidgetInstance": "a widget", "Canvas": "a canvas"}.get(cls.__name__, cls.__name__)
+        what = {"WidgetInstance": "a widget", "Canvas": "a canvas", "Robot": "a robot"}.get(cls.__name__, cls.__name__)
 
         def structure(data: Any, _t: Any) -> Any:
             known, extra = _split_extra(names, data, what)
@@ -181,6 +191,8 @@ def _make_converter() -> cattrs.Converter:
 
     with_extra(WidgetInstance, ("id", "kind", "title", "binding", "geometry", "settings"))
     with_extra(Canvas, ("id", "name", "locked", "widgets"))
+    with_extra(Robot, ("id", "name", "url", "ca_file", "client_cert", "client_key", "auth", "view_only",
+                       "colour"))
 
     return conv
 
@@ -232,6 +244,7 @@ def workspace_to_dict(ws: Workspace) -> dict[str, Any]:
         "format": FORMAT,
         "version": VERSION,
         "current": ws.current,
+        "robots": [_CONV.unstructure(r) for r in ws.robots],
         "canvases": [_CONV.unstructure(c) for c in ws.canvases],
         "plugin_settings": ws.plugin_settings,
     }
@@ -242,6 +255,14 @@ def workspace_to_dict(ws: Workspace) -> dict[str, Any]:
 def workspace_from_dict(data: Any, path: Path | None = None) -> Workspace:
     _check_header(data, FORMAT, path)
     body = {k: v for k, v in data.items() if k not in ("format", "version")}
+    try:
+        # version 1 had no robots: its one robot (the app's URL) becomes the first robot
+        robots = _CONV.structure(body.pop("robots", []), list[Robot]) or [default_robot()]
+        for i, r in enumerate(robots):
+            if not r.id:
+                raise ValueError(f"robot #{i + 1} ({r.name!r}) has no id")
+    except Exception as exc:
+        raise WorkspaceFileError(path, f"invalid workspace: {_describe(exc, 'robots', data)}") from exc
     try:
         canvases = _CONV.structure(body.pop("canvases", []), list[Canvas])
         current = body.pop("current", "")
@@ -261,7 +282,11 @@ def workspace_from_dict(data: Any, path: Path | None = None) -> Workspace:
         shown = ", ".join(checks.found(i) for i in dup[: checks.MAX_PROBLEMS])
         more = f" and {len(dup) - checks.MAX_PROBLEMS} more" if len(dup) > checks.MAX_PROBLEMS else ""
         raise WorkspaceFileError(path, f"invalid workspace: duplicate ids {shown}{more}")
-    return Workspace(canvases, current, plugin_settings, body)
+    robot_dups = sorted(i for i, n in collections.Counter(r.id for r in robots).items() if n > 1)
+    if robot_dups:
+        raise WorkspaceFileError(path, "invalid workspace: duplicate robot ids "
+                                 + ", ".join(checks.found(i) for i in robot_dups[: checks.MAX_PROBLEMS]))
+    return Workspace(canvases, current, plugin_settings, body, robots)
 
 
 def _dumps(data: Any, path: Path | None) -> str:

@@ -79,13 +79,15 @@ class Binding:
     ``name``: the topic or service name (``""`` = not bound yet). ``type``: its type, either spelling.
     ``role``: how the widget uses it. ``field_paths``: the field(s) the widget shows or sets, e.g.
     ``("percentage",)``; empty means the whole message. On a service, paths begin with ``request`` or
-    ``response`` (``"request.data"``).
+    ``response`` (``"request.data"``). ``robot``: the id of the workspace's robot it talks to (``""`` =
+    the first robot, so one-robot layouts and plugins never set it; see ``rcon_core.canvas.robots``).
     """
 
     name: str = ""
     type: str = ""
     role: Role = attrs.field(default=Role.SUBSCRIBE, converter=_role)
     field_paths: tuple[str, ...] = attrs.field(default=(), converter=_paths)
+    robot: str = ""
 
     @property
     def field_path(self) -> str:

@@ -1,0 +1,98 @@
+"""The bridge clients of a workspace's robots, as the canvas runtime sees them. No Qt, no network.
+
+::
+
+    fleet = Fleet([(robot_a, client_a), (robot_b, client_b)])   # workspace order: the first is default
+    fleet.client("")            # the first robot's client;  fleet.client("r-2") -> client_b
+    fleet.robot("r-2")          # the Robot;  fleet.ids -> ["r-1", "r-2"]
+    fleet.set_client("r-2", c)  # another client for that robot (the runtime restarts its widgets)
+    rt = CanvasRuntime(plugin_manager, fleet, ...)               # a single client still works too
+
+How a model gets its robot's port: the runtime makes each widget's node on the client of the robot its
+binding names (``binding.robot``, ``""`` = the first) -- ``fleet.client(binding.robot).node(widget_id)``
+-- so a model only ever sees that one robot, exactly as with one robot.
+
+A widget that shows *every* robot (the GPS map) defines ``on_fleet(robots)`` on its model; the runtime
+calls it before ``start()`` with one :class:`RobotPort` per robot of the workspace (its own robot's port
+is the one the model was built with), and again when a robot's client changes. The model then subscribes
+on each ``port``; the runtime closes those nodes when the widget stops. The model is told a robot's link
+state through its optional ``on_robot_link(robot_id, up)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from typing import Any
+
+import attrs
+
+from .robots import Robot, UnknownRobot, resolve_robot, robot_colour
+
+__all__ = ["Fleet", "RobotPort"]
+
+
+@attrs.frozen
+class RobotPort:
+    """One robot as a fleet-wide widget sees it: who it is and the port (a node of its client)."""
+
+    id: str
+    name: str
+    colour: str
+    port: Any
+
+
+class Fleet:
+    """Robot id -> bridge client, in the workspace's robot order."""
+
+    def __init__(self, pairs: Iterable[tuple[Robot, Any]]) -> None:
+        self._robots: list[Robot] = []
+        self._clients: dict[str, Any] = {}
+        for robot, client in pairs:
+            self._robots.append(robot)
+            self._clients[robot.id] = client
+        if not self._robots:
+            raise ValueError("a fleet has at least one robot")
+
+    @classmethod
+    def single(cls, client: Any, robot: Robot | None = None) -> Fleet:
+        """One robot (the layouts and tests of before: a bare client)."""
+        from .robots import default_robot
+
+        return cls([(robot or default_robot(), client)])
+
+    @property
+    def robots(self) -> list[Robot]:
+        return list(self._robots)
+
+    @property
+    def ids(self) -> list[str]:
+        return [r.id for r in self._robots]
+
+    def robot(self, robot_id: str) -> Robot:
+        """The robot ``robot_id`` names (``""``: the first). Raises :class:`UnknownRobot`."""
+        return resolve_robot(self._robots, robot_id)
+
+    def resolve(self, robot_id: str) -> str:
+        return self.robot(robot_id).id
+
+    def client(self, robot_id: str = "") -> Any:
+        return self._clients[self.resolve(robot_id)]
+
+    def colour(self, robot_id: str) -> str:
+        return robot_colour(self._robots, robot_id)
+
+    def set_client(self, robot_id: str, client: Any) -> None:
+        rid = self.resolve(robot_id)
+        self._clients[rid] = client
+
+    def items(self) -> list[tuple[Robot, Any]]:
+        return [(r, self._clients[r.id]) for r in self._robots]
+
+    def __contains__(self, robot_id: object) -> bool:
+        if not isinstance(robot_id, str):
+            return False
+        try:
+            self.resolve(robot_id)
+        except UnknownRobot:
+            return False
+        return True
