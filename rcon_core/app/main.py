@@ -1,4 +1,4 @@
-"""``rcon`` without a subcommand: open the app (``--url``, ``--layout``, ``--demo``, ``--screenshot``, and
+"""``rcon`` without a subcommand: open the app (``--url``, ``--layout``, ``--demo [--robots N]``, ``--screenshot``, and
 the secure-link options ``--ca-file``, ``--client-cert``/``--client-key``, ``--auth-secret-file``)."""
 
 from __future__ import annotations
@@ -93,6 +93,18 @@ def run_app(args: Any) -> int:
     if getattr(args, "reset_layout", False) and not demo:
         print("rcon: --reset-layout resets the demo layout; use it with --demo", file=sys.stderr)
         return 2
+    robots = getattr(args, "robots", None)
+    if robots is not None:
+        from rcon_core.app.fleet_demo import check_count
+
+        if not demo:
+            print("rcon: --robots starts a fleet of embedded vessels; use it with --demo", file=sys.stderr)
+            return 2
+        try:
+            check_count(robots)
+        except ValueError as exc:
+            print(f"rcon: {exc}", file=sys.stderr)
+            return 2
     # a layout file that cannot be read is reported in the window (and never overwritten)
     layout = Path(args.layout) if getattr(args, "layout", None) else None
     existing = QtWidgets.QApplication.instance()
@@ -105,7 +117,20 @@ def run_app(args: Any) -> int:
     with contextlib.ExitStack() as stack:
         stack.enter_context(closing_on_signals(windows))
         demo_factory = None
-        if demo:
+        fleet_urls: list[str] = []
+        if demo and robots is not None:
+            from rcon_core.app.fleet_demo import connect_fleet, fleet_sims, fleet_workspace
+
+            servers = stack.enter_context(fleet_sims(robots))
+            fleet_urls = [s.url for s in servers]
+            url = fleet_urls[0]
+            if layout is None:
+                layout = config.dir / f"demo-fleet{robots}-workspace.json"
+
+            def demo_factory() -> Any:
+                return fleet_workspace(robots, plugins)
+
+        elif demo:
             from rcon_core.app.demo import demo_workspace
             from rcon_core.sim import SimServer
 
@@ -125,7 +150,10 @@ def run_app(args: Any) -> int:
             window.reset_demo_layout()
         window.show()
         # the embedded robot's URL is not put in the history: its port is gone after this run
-        window.connect_to(url or config.last_url, remember=not demo)
+        if fleet_urls:
+            connect_fleet(window, fleet_urls)
+        else:
+            window.connect_to(url or config.last_url, remember=not demo)
         if getattr(args, "screenshot", None):
             path = Path(args.screenshot)
 
