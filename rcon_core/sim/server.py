@@ -213,6 +213,10 @@ class SimServer:
         t = self.topics.get(topic)
         return len(t.client_subscribers) if t else 0
 
+    def robot_published(self) -> dict[str, int]:
+        """How many messages the robot published per topic (its names before the namespace)."""
+        return dict(self._robot_node.published_counts) if self._robot_node is not None else {}
+
     def published(self, topic: str) -> list[dict[str, Any]]:
         """Messages clients published on ``topic`` (the most recent ones, oldest first)."""
         with self._published_lock:
