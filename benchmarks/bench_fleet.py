@@ -133,7 +133,7 @@ def run(args: Any) -> dict:
         connect_fleet(window, [url for _, url, _ in sims])
 
         def all_connected() -> bool:
-            links = [window.fleet_links.link(robot_id(k)) for k in range(1, n + 1)]
+            links = [window.fleet_ui.links.link(robot_id(k)) for k in range(1, n + 1)]
             return all(lk.client is not None and lk.client.state == ConnectionState.CONNECTED for lk in links)
 
         if not ba.spin(app, 20, all_connected):

@@ -2,13 +2,23 @@
 
 from __future__ import annotations
 
-import pytest
+import subprocess
+import sys
 
-from rcon_core.app.fleet_demo import fleet_workspace
+import numpy as np
+import pytest
+from qtpy import QtCore
+from qtpy.QtTest import QTest
+
+from rcon_core.app.config import AppConfig
+from rcon_core.app.fleet_demo import connect_fleet, fleet_sims, fleet_workspace
 from rcon_core.app.main import load_plugins
+from rcon_core.app.main_window import MainWindow
+from rcon_core.canvas.runtime import MissingWidgetModel
 
 pytestmark = pytest.mark.usefixtures("qapp")
 PACKAGES = ("rcon_widgets_std", "rcon_widgets_sensors", "rcon_widgets_map")
+TIMEOUT_MS = 20_000
 
 
 @pytest.fixture(scope="module")
@@ -38,6 +48,60 @@ def test_fleet_workspace_binds_each_vessel_to_its_robot(plugins):
     assert sum(w.kind == "map.gps" for w in fleet.widgets) == 1
     with pytest.raises(ValueError, match="from 1 to 6"):
         fleet_workspace(0, plugins)
+
+
+def test_fleet_demo_shows_each_vessels_camera_and_drives_only_the_pressed_vessel(qtbot, tmp_path, plugins):
+    with fleet_sims(2, rate_scale=1.0) as sims:
+        window = MainWindow(AppConfig(tmp_path), plugins, layout_path=tmp_path / "fleet.json",
+                            demo=lambda: fleet_workspace(2, plugins))
+        qtbot.addWidget(window)
+        window.resize(1400, 800)
+        window.show()
+        QTest.qWaitForWindowExposed(window)
+        try:
+            connect_fleet(window, [s.url for s in sims])
+            canvas = window.controller.canvas
+            assert canvas.name == "Fleet"
+            hosted = {(w.kind, w.binding.robot): window.host.hosted[w.id] for w in canvas.widgets}
+            qtbot.waitUntil(lambda: all(h.view is not None for h in hosted.values()), timeout=TIMEOUT_MS)
+            for h in hosted.values():
+                assert not isinstance(h.model, MissingWidgetModel), h.widget.title
+            # each camera shows frames from its own vessel: its sky and the hull colour of its bow
+            for k, sim in enumerate(sims, start=1):
+                cam = hosted[("sensors.image", f"r-{k}")]
+                qtbot.waitUntil(lambda cam=cam: cam.model.state.count >= 3, timeout=TIMEOUT_MS)
+                rgb = cam.model.state.value.rgb
+                sky = np.asarray(sim.identity.sky[0], dtype=int)
+                assert np.abs(rgb[2, 2].astype(int) - sky).max() <= 3, (k, rgb[2, 2], sky)
+                assert tuple(int(c) for c in rgb[470, 260]) == sim.identity.hull
+                assert cam.view.frame is cam.model.state.value or cam.view.frame is not None
+            # a press on vessel 2's pad drives vessel 2 only
+            pad = hosted[("sensors.teleop", "r-2")].view
+            centre, radius = pad.pad()
+            c = centre.toPoint()
+            QTest.mousePress(pad, QtCore.Qt.MouseButton.LeftButton, pos=c)
+            QTest.mouseMove(pad, c - QtCore.QPoint(0, int(radius * 0.9)))
+            qtbot.waitUntil(lambda: any(m.get("linear", {}).get("x", 0) > 0.5
+                                        for m in sims[1].published("/boat2/cmd_vel")), timeout=TIMEOUT_MS)
+            qtbot.waitUntil(lambda: sims[1].robot.cmd_surge > 0.5, timeout=TIMEOUT_MS)
+            QTest.mouseRelease(pad, QtCore.Qt.MouseButton.LeftButton, pos=c)
+            qtbot.waitUntil(lambda: sims[1].robot.cmd_surge == 0.0, timeout=TIMEOUT_MS)
+            assert not any(m.get("linear", {}).get("x", 0) for m in sims[0].published("/boat1/cmd_vel"))
+            assert sims[0].published("/boat2/cmd_vel") == [] and sims[1].published("/cmd_vel") == []
+            assert sims[0].robot.cmd_surge == 0.0
+        finally:
+            window.shutdown()
+
+
+def test_rcon_demo_robots_opens_and_quits(tmp_path):
+    shot = tmp_path / "fleet.png"
+    code = ("import sys; from rcon_core.cli.main import main; "
+            f"sys.exit(main(['--demo', '--robots', '2', '--screenshot', {str(shot)!r}, '--quit-after', '4']))")
+    env = {**__import__("os").environ, "QT_QPA_PLATFORM": "offscreen", "XDG_CONFIG_HOME": str(tmp_path),
+           "RCON_CONFIG_DIR": str(tmp_path / "cfg")}
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, env=env)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert shot.exists() and shot.stat().st_size > 10_000
 
 
 def test_robots_needs_demo_and_a_sane_count(capsys):

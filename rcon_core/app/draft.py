@@ -43,6 +43,8 @@ class Draft:
     target: Target | None = None
     settings: Any = None
     title: str = ""
+    #: the robot the topic/service comes from (the side panel's robot; "" = the first robot)
+    robot: str = ""
 
     @property
     def field_path(self) -> str:
@@ -62,8 +64,8 @@ class Draft:
     @property
     def binding(self) -> Binding:
         if self.target is None:
-            return Binding(role=self.role)
-        return Binding(self.target.name, self.target.type, self.role, self.target.field_paths)
+            return Binding(role=self.role, robot=self.robot)
+        return Binding(self.target.name, self.target.type, self.role, self.target.field_paths, self.robot)
 
     def problems(self) -> list[str]:
         """What keeps the draft from being placed: binding first, then the settings' own checks."""

@@ -108,7 +108,7 @@ def connect_fleet(window: Any, urls: list[str]) -> None:
     run-time URLs. None of them is remembered (the ports are gone after this run)."""
     window.connect_to(urls[0], remember=False)
     for k, url in enumerate(urls[1:], start=2):
-        window.connect_robot(robot_id(k), url)
+        window.fleet_ui.connect_robot(robot_id(k), url)
 
 
 @contextlib.contextmanager

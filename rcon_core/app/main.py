@@ -150,10 +150,12 @@ def run_app(args: Any) -> int:
             window.reset_demo_layout()
         window.show()
         # the embedded robot's URL is not put in the history: its port is gone after this run
-        if fleet_urls:
+        if fleet_urls:  # the demo's vessels: run-time URLs, never saved
             connect_fleet(window, fleet_urls)
         else:
-            window.connect_to(url or config.last_url, remember=not demo)
+            # the first robot: --url, else its URL in the layout, else the newest in the history; the others
+            # connect to their own URLs (window.fleet_ui)
+            window.connect_to(url or window.fleet_ui.first_url() or config.last_url, remember=not demo)
         if getattr(args, "screenshot", None):
             path = Path(args.screenshot)
 

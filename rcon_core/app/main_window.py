@@ -20,9 +20,10 @@ from rcon_core.app.children_editor import ChildContext, link_learner
 from rcon_core.app.config import AppConfig
 from rcon_core.app.connection_bar import ConnectionBar
 from rcon_core.app.draft import Candidate, Target
+from rcon_core.app.fleet_ui import FleetUi
 from rcon_core.app.focus import focus_into, has_focus_inside
 from rcon_core.app.frame_clock import FrameClock, Waker
-from rcon_core.app.link import OFFLINE, Link
+from rcon_core.app.link import Link
 from rcon_core.app.live import LiveCanvas
 from rcon_core.app.notice_bar import NoticeBar
 from rcon_core.app.palette_panel import PalettePanel
@@ -77,7 +78,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.host = WidgetHost(plugins)
         self.live = LiveCanvas(plugins, self.link.thread, types=self.types, notify=self.waker.poke)
         self.preview_live = LiveCanvas(plugins, self.link.thread, types=self.types, notify=self.waker.poke)
-        self.preview = PreviewHost(self.host, self.preview_live, lambda: self.link.client or OFFLINE)
+        self.preview = PreviewHost(self.host, self.preview_live, lambda: self.fleet_ui.side_fleet())
         self.focus_losses = 0
         self.rates = RateMeter()
         self._last_rate_sample = 0.0
@@ -216,7 +217,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.store = WorkspaceStore(self.layout_path)
         fresh = self.demo is not None and not self.layout_path.exists()  # the demo's first start
         self.doc = Document(self.demo() if fresh and self.demo is not None else self._load_workspace())
+        self.fleet_ui = FleetUi(self)  # one link per robot; hears a change of robots before the controller
         self.controller = CanvasController(self.doc, self.store, self.host, self.live, self.stack)
+        self.controller.client = self.fleet_ui.fleet()
         self.controller.save_failed.connect(self._save_failed)
         self.controller.on_drop = self._dropped
         self.controller.on_configure = self.configure_widget
@@ -234,7 +237,6 @@ class MainWindow(QtWidgets.QMainWindow):
         self.services.picked.connect(
             lambda n, t: self._start_adding(lambda: self.add_panel.start_from_service(n, t)))
         self.palette_panel.picked.connect(self._palette_picked)
-        self.link.on_client_changed(self._client_changed)
         self.connection.state_changed.connect(self._link_state)
         QtGui.QShortcut(QtGui.QKeySequence.StandardKey.Undo, self, self.undo)
         QtGui.QShortcut(QtGui.QKeySequence.StandardKey.Redo, self, self.redo)
@@ -246,6 +248,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.quit_action.triggered.connect(self.close)
         self.addAction(self.quit_action)
         self.clock.add(self.connection.poll)
+        self.clock.add(self.fleet_ui.poll)
         self.clock.add(self._poll_catalog)
         self.clock.add(lambda _now: self._pump(None))
         self.clock.start()
@@ -681,7 +684,7 @@ class MainWindow(QtWidgets.QMainWindow):
         return out
 
     def place_draft(self) -> None:
-        draft = self.add_panel.take_draft()  # the panel closes
+        draft = self.fleet_ui.bind(self.add_panel.take_draft())  # the panel closes
         if draft is not None:
             self._settle_layout()  # the free spot is looked for in the canvas as it is without the panel
             try:
@@ -697,7 +700,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _dropped(self, _surface: Any, point: QtCore.QPoint) -> None:
         side_hidden = not self.side.isVisibleTo(self)
-        draft = self.add_panel.take_draft()  # the panel closes
+        draft = self.fleet_ui.bind(self.add_panel.take_draft())  # the panel closes
         if side_hidden and self.side.isVisibleTo(self):
             # the side panel gave its room to the add panel; coming back now it would push the canvas
             # (and the widget just dropped under the finger) sideways: it stays hidden until ▶ is tapped
@@ -816,17 +819,6 @@ class MainWindow(QtWidgets.QMainWindow):
         return next((list(m.field_paths) for m in found if m.spec.kind == spec.kind), [])
 
     # -------------------------------------------------------------------------------------- link
-    def _client_changed(self, client: Any) -> None:
-        """A new client: the runtime rebuilds the widgets on it (they hold nodes of the old one). Disconnect
-        (no client) keeps the running widgets and their last values, LINK DOWN then STALE, like a lost
-        link: only what starts afterwards runs offline."""
-        self.controller.client = client or OFFLINE
-        if client is None and self.live.running:
-            self.live.keep_running_offline(OFFLINE)
-        else:
-            self.controller.run_current()
-        self.preview.restart()
-
     # -------------------------------------------------------------------------------- painting
     def _pump(self, ids: set[str] | None = None) -> None:
         """Take the runtime's new models and refresh the views that changed (all when ``ids`` is None,
@@ -856,11 +848,11 @@ class MainWindow(QtWidgets.QMainWindow):
             self.focus_lost()
 
     def _link_state(self, state: str) -> None:
-        self.host.set_link_up(state == "connected")
+        self.host.set_link_up(state == "connected", self.fleet_ui.first_id)
 
     def _poll_catalog(self, now: float) -> None:
-        ok, catalog = self.link.catalog_box.take()
-        if ok:
+        catalog = self.fleet_ui.take_catalog()  # the side panel's robot's
+        if catalog is not None:
             self.catalog = catalog
             self.topics.set_entries(catalog["topics"])
             self.services.set_entries(catalog["services"])
@@ -897,6 +889,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.add_panel.cancel()
         self.controller.shutdown()
         self.preview_live.stop()
+        self.fleet_ui.shutdown()
         self.link.shutdown()
 
 

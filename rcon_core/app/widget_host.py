@@ -50,6 +50,12 @@ class WidgetHost:
         self.hosted: dict[str, Hosted] = {}
         self._cursor = 0
         self._link_up = False
+        #: several robots: each robot's link, by robot id; a widget's robot is its binding's (``""``:
+        #: :attr:`first_robot`). A robot not listed follows the one-robot flag (set_link_up(up)).
+        self.links_up: dict[str, bool] = {}
+        self.first_robot = ""
+        #: widget id -> (robot name, colour) on a canvas that mixes robots (see robot_marks.py)
+        self.robot_marks: dict[str, tuple[str, str]] = {}
         self._due: set[str] = set()  # changed, but refreshed less than a frame ago
         self.paint_hooks: list[Any] = []  # benchmark: fn(hosted, state) after each refresh
         #: widgets run offline on purpose (previews of controls): no LINK DOWN, a PREVIEW ONLY badge
@@ -58,7 +64,7 @@ class WidgetHost:
     # -------------------------------------------------------------------------------------- frames
     def build_frame(self, widget: WidgetInstance, frame: WidgetFrame | None = None) -> WidgetFrame:
         """The frame for ``widget`` (empty until its model arrives); an existing frame may be given."""
-        frame = frame or WidgetFrame(widget.id, widget.title or widget.kind)
+        frame = frame or WidgetFrame(widget.id, self.title_of(widget))
         self.hosted[widget.id] = Hosted(widget, frame)
         if not self.plugins.has_widget(widget.kind):
             frame.set_placeholder(_not_installed(widget.kind))
@@ -69,7 +75,13 @@ class WidgetHost:
         hosted = self.hosted.get(widget.id)
         if hosted is not None:
             hosted.widget = widget
-            hosted.frame.set_title(widget.title or widget.kind)
+            hosted.frame.set_title(self.title_of(widget))
+
+    def title_of(self, widget: WidgetInstance) -> str:
+        """The frame's title: the widget's, after its robot's name when its canvas mixes robots."""
+        title = widget.title or widget.kind
+        mark = self.robot_marks.get(widget.id)
+        return f"{mark[0]} · {title}" if mark else title
 
     def discard(self, widget_id: str) -> None:
         """Forget a widget (its frame is removed by its surface)."""
@@ -124,8 +136,17 @@ class WidgetHost:
         frame.set_view(hosted.view)
         frame.problems.set_problems(list(model.problems()))
 
-    def set_link_up(self, up: bool) -> None:
-        self._link_up = up
+    def set_link_up(self, up: bool, robot_id: str | None = None) -> None:
+        """One robot's link (``robot_id``), or, without it, every robot's (a one-robot window)."""
+        if robot_id is None:
+            self._link_up = up
+            self.links_up.clear()
+        else:
+            self.links_up[robot_id] = up
+
+    def link_up_for(self, widget: WidgetInstance) -> bool:
+        robot = widget.binding.robot or self.first_robot
+        return self.links_up.get(robot, self._link_up)
 
     # ------------------------------------------------------------------------------------ painting
     def refresh(self, ids: Iterable[str] | None = None, now: float | None = None) -> float | None:
@@ -164,7 +185,7 @@ class WidgetHost:
         if hosted.widget.id in self.dry_run:
             badge.show_status("ok", "PREVIEW ONLY")
             badge.setToolTip("not sent to the robot until the widget is placed")
-        elif state.link_down or not self._link_up:
+        elif state.link_down or not self.link_up_for(hosted.widget):
             badge.show_status("down", "LINK DOWN")
         elif state.error:
             badge.show_status("problem", "ERROR")

@@ -28,6 +28,7 @@ import attrs
 from rcon_core.plugins.model import Binding
 
 from .model import Canvas, Geometry, WidgetInstance, Workspace, new_id
+from .robots import Robot, UnknownRobot, resolve_robot
 
 __all__ = ["Document", "Change", "Command", "CanvasLocked", "EditError"]
 
@@ -44,7 +45,7 @@ class CanvasLocked(EditError):
 class Change:
     """What changed. ``what``: canvas-added, canvas-removed, canvas-renamed, canvas-locked,
     canvas-switched, widget-added, widget-removed, widget-changed, workspace-replaced,
-    plugin-settings-changed."""
+    plugin-settings-changed, robots-changed."""
 
     what: str
     canvas_id: str | None = None
@@ -307,6 +308,51 @@ class Document:
             return [Change("plugin-settings-changed")]
 
         self._run(Command(f"settings of {kind}", do, undo))
+
+    # -- robots --------------------------------------------------------------------------------------
+    def set_robots(self, robots: list[Robot]) -> None:
+        """Replace the workspace's robots (add, rename, another URL or settings, remove): one undo step.
+        Raises :class:`EditError` for no robot, a robot without id, or two with the same id."""
+        robots = copy.deepcopy(list(robots))
+        if not robots:
+            raise EditError("a workspace needs at least one robot")
+        ids = [r.id for r in robots]
+        if not all(ids) or len(set(ids)) != len(ids):
+            raise EditError("every robot needs its own id")
+        ws = self.workspace
+        old = copy.deepcopy(ws.robots)
+
+        def set_to(value: list[Robot]) -> Callable[[], list[Change]]:
+            def fn() -> list[Change]:
+                ws.robots = copy.deepcopy(value)
+                return [Change("robots-changed")]
+
+            return fn
+
+        self._run(Command("edit robots", set_to(robots), set_to(old)))
+
+    def duplicate_for_robot(self, canvas_id: str, robot_id: str, from_robot: str | None = None,
+                            name: str | None = None) -> Canvas:
+        """Re-target a canvas: a copy (fresh ids, right after the original, named after the robot) whose
+        widgets of ``from_robot`` -- every widget when None -- talk to ``robot_id``. One undo step.
+        Raises :class:`EditError` for a robot the workspace does not have."""
+        try:
+            target = resolve_robot(self.workspace.robots, robot_id)
+            source = resolve_robot(self.workspace.robots, from_robot).id if from_robot is not None else None
+        except UnknownRobot as exc:
+            raise EditError(str(exc)) from None
+        src = self._canvas(canvas_id)
+        dup = copy.deepcopy(src)
+        dup.id = new_id("c")
+        dup.name = self._unique_name(_clean_name(name) if name else f"{src.name} · {target.label}")
+        first = self.workspace.robots[0].id
+        for w in dup.widgets:
+            w.id = new_id("w")
+            if source is None or (w.binding.robot or first) == source:
+                # the first robot is written "" (the default), as a one-robot layout has it
+                w.binding = attrs.evolve(w.binding, robot="" if target.id == first else target.id)
+        self._run(self._insert_canvas(dup, self.workspace.canvases.index(src) + 1))
+        return dup
 
     # -- widgets -------------------------------------------------------------------------------------
     def _editable(self, canvas: Canvas) -> Canvas:

@@ -1,0 +1,276 @@
+"""The window's side of several robots: one link per robot, the chips, the side panel's robot, the robot
+marks on widgets, and re-targeting a canvas.
+
+:class:`FleetUi` is made by the main window right after its document (so it hears a change of robots
+before the canvas controller does) and polled once per frame. It
+
+- keeps a :class:`~rcon_core.app.fleet_links.FleetLinks` in step with the workspace's robots (the first
+  robot's link is the window's own, driven by the connection bar), connects the other robots to their
+  URLs, and gives the canvas runtime a :class:`~rcon_core.canvas.fleet.Fleet` of the current clients;
+  a client change of one robot restarts only that robot's widgets;
+- shows each robot's link on its chip (:mod:`rcon_core.app.robot_chips`) and on its own widgets (LINK
+  DOWN on that robot's frames only);
+- keeps the side panel's robot (:attr:`side_robot`): its topics and services fill the lists, new widgets
+  are bound to it, the add panel's preview runs on it;
+- marks the widgets of a canvas that mixes robots (:mod:`rcon_core.app.robot_marks`);
+- adds "Robots…" and "Duplicate for robot ▸" to the Canvas menu.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Any
+
+from qtpy import QtCore, QtWidgets
+
+from rcon_core.app.fleet_links import FleetLinks
+from rcon_core.app.link import EMPTY_CATALOG, OFFLINE, BadUrl, state_name
+from rcon_core.app.robot_chips import RobotChips, RobotPicker
+from rcon_core.app.robot_marks import apply_marks
+from rcon_core.canvas import Change, EditError
+from rcon_core.canvas.fleet import Fleet
+from rcon_core.canvas.robots import robot_colour
+
+log = logging.getLogger(__name__)
+
+__all__ = ["FleetUi"]
+
+
+class FleetUi(QtCore.QObject):
+    """Several robots in the main window (see the module docstring)."""
+
+    side_robot_changed = QtCore.Signal(str)
+
+    def __init__(self, window: Any) -> None:
+        super().__init__(window)
+        self.window = window
+        self.links = FleetLinks(window.link, secret_for=window.connection.secrets.get)
+        self.chips = RobotChips()
+        self.chips.picked.connect(self.pick_side_robot)
+        root = window.centralWidget()
+        layout = root.layout() if root is not None else None
+        if isinstance(layout, QtWidgets.QBoxLayout):
+            layout.insertWidget(1, self.chips)  # right under the connection bar
+        self.pickers = []
+        for lst in (window.topics, window.services):
+            picker = RobotPicker(lst.what)
+            picker.picked.connect(self.pick_side_robot)
+            col = lst.layout()
+            if isinstance(col, QtWidgets.QBoxLayout):
+                col.insertWidget(0, picker)
+            self.pickers.append(picker)
+        #: the robot whose topics and services the side panel shows (a robot id)
+        self.side_robot = ""
+        self.catalogs: dict[str, dict[str, list[tuple[str, str]]]] = {}
+        self._catalog_dirty = True
+        self._marks_dirty = True
+        self._states: dict[str, str] = {}
+        self._remove = window.doc.add_listener(self._doc_changed)
+        self.links.on_client_changed(self._client_changed)
+        self._sync_robots(connect=False)
+        self._add_menu()
+        # the other robots connect once the window is built (the first one: the connection bar)
+        QtCore.QTimer.singleShot(0, self.connect_saved)
+
+    # ------------------------------------------------------------------------------------ reading
+    @property
+    def robots(self) -> list[Any]:
+        return self.window.doc.workspace.robots
+
+    @property
+    def first_id(self) -> str:
+        return self.robots[0].id
+
+    def binding_robot(self, robot_id: str) -> str:
+        """What a binding stores for ``robot_id``: ``""`` for the first robot (as one-robot layouts)."""
+        return "" if not robot_id or robot_id == self.first_id else robot_id
+
+    def fleet(self) -> Fleet:
+        """The current clients, for the canvas runtime."""
+        return self.links.fleet(OFFLINE)
+
+    def side_fleet(self) -> Fleet:
+        """The same, the side panel's robot first (a preview's binding names no robot or that one)."""
+        pairs = self.fleet().items()
+        pairs.sort(key=lambda p: p[0].id != self.side_robot)
+        return Fleet(pairs)
+
+    def first_url(self) -> str:
+        return self.robots[0].url
+
+    # ------------------------------------------------------------------------------------ robots
+    def _doc_changed(self, change: Change) -> None:
+        if change.what in ("robots-changed", "workspace-replaced"):
+            self._sync_robots(connect=True)
+            if change.what == "robots-changed":  # the controller restarts on workspace-replaced itself
+                self.window.controller.run_current()
+        self._marks_dirty = True
+
+    def _sync_robots(self, *, connect: bool) -> None:
+        robots = self.robots
+        new = self.links.sync(robots)
+        self.window.host.first_robot = robots[0].id
+        controller = getattr(self.window, "controller", None)
+        if controller is not None:
+            controller.client = self.fleet()
+        if self.side_robot not in [r.id for r in robots]:
+            self.side_robot = robots[0].id
+            self._catalog_dirty = True
+        shown = [(r.id, r.label, robot_colour(robots, r.id)) for r in robots]
+        self.chips.set_robots(shown, self.side_robot)
+        for picker in self.pickers:
+            picker.set_robots(shown, self.side_robot)
+        for rid in list(self.catalogs):
+            if rid not in {r.id for r in robots}:
+                del self.catalogs[rid]
+        if connect:
+            for rid in new:
+                if rid != robots[0].id:
+                    try:
+                        self.links.connect_robot(rid)
+                    except (BadUrl, KeyError) as exc:
+                        log.warning("robot %s: %s", rid, exc)
+
+    def connect_saved(self) -> None:
+        """Connect every robot but the first to its URL (the window connects the first one)."""
+        self.links.connect_saved()
+
+    def connect_robot(self, robot_id: str, url: str | None = None) -> None:
+        """Connect ``robot_id`` to ``url`` for this run (not saved: the demo's sims) or to its saved URL.
+        The first robot goes through the connection bar (its URL field shows it)."""
+        if not robot_id or robot_id == self.first_id:
+            target = url or self.first_url()
+            if target:
+                self.window.connect_to(target, remember=url is None)
+            return
+        self.links.connect_robot(robot_id, url)
+
+    def _client_changed(self, robot_id: str, client: Any) -> None:
+        """A new client for one robot: only its widgets are rebuilt on it. Disconnect (no client) keeps its
+        running widgets and their last values, LINK DOWN then STALE, like a lost link."""
+        window = self.window
+        window.controller.client = self.fleet()
+        live = window.live
+        if not live.running:
+            window.controller.run_current()
+        elif client is None:
+            live.set_client(robot_id, OFFLINE, keep=True)
+        else:
+            live.set_client(robot_id, client)
+        if robot_id == self.side_robot:
+            self.catalogs.pop(robot_id, None)
+            self._catalog_dirty = True
+        window.preview.restart()
+
+    # ---------------------------------------------------------------------------------- side panel
+    def bind(self, draft: Any) -> Any:
+        """A draft being placed talks to the side panel's robot (whose topic or service it names)."""
+        if draft is not None:
+            draft.robot = self.binding_robot(self.side_robot)
+        return draft
+
+    def pick_side_robot(self, robot_id: str) -> None:
+        """Show ``robot_id``'s topics and services in the side panel; new widgets are bound to it."""
+        if robot_id not in [r.id for r in self.robots] or robot_id == self.side_robot:
+            self.chips.set_current(self.side_robot)
+            return
+        self.side_robot = robot_id
+        self.chips.set_current(robot_id)
+        for picker in self.pickers:
+            picker.set_current(robot_id)
+        self._catalog_dirty = True
+        self.window.preview.restart()
+        self.side_robot_changed.emit(robot_id)
+
+    def take_catalog(self) -> dict[str, list[tuple[str, str]]] | None:
+        """Every robot's new catalogue is kept; the side robot's is returned when it changed (else None)."""
+        for robot, link in self.links.items():
+            ok, catalog = link.catalog_box.take()
+            if ok:
+                self.catalogs[robot.id] = catalog
+                if robot.id == self.side_robot:
+                    self._catalog_dirty = True
+        if not self._catalog_dirty:
+            return None
+        self._catalog_dirty = False
+        return self.catalogs.get(self.side_robot, EMPTY_CATALOG)
+
+    # ------------------------------------------------------------------------------------- polling
+    def poll(self, _now: float = 0.0) -> None:
+        """Once per frame: each robot's link state on its chip and its widgets; the marks."""
+        window = self.window
+        first = self.first_id
+        for robot, link in self.links.items():
+            if robot.id == first:
+                state = window.connection.state  # the connection bar takes the first link's mailboxes
+            else:
+                ok, taken = link.state_box.take()
+                state = taken if ok else self._states.get(robot.id, "closed")
+                link.failure_box.take()  # bounded: the chip's tooltip says the state, the log the reason
+                link.error_box.take()
+                link.answered_box.take()
+            state = state_name(state)
+            if self._states.get(robot.id) != state:
+                self._states[robot.id] = state
+                window.host.set_link_up(state == "connected", robot.id)
+            latency = link.latency if state in ("connected", "degraded") else None
+            self.chips.show_state(robot.id, state, latency)
+        if self._marks_dirty:
+            self._marks_dirty = False
+            apply_marks(window.host, window.doc.workspace)
+
+    # ----------------------------------------------------------------------------------- canvas menu
+    def _add_menu(self) -> None:
+        window = self.window
+        menu = window.menu_button.menu()
+        if menu is None:
+            return
+        before = window.canvas_actions.get("delete")
+        self.retarget_menu = QtWidgets.QMenu("Duplicate for robot", menu)
+        self.retarget_menu.setObjectName("retargetMenu")
+        self.retarget_menu.aboutToShow.connect(self._fill_retarget_menu)
+        retarget = menu.insertMenu(before, self.retarget_menu) if before is not None else menu.addMenu(
+            self.retarget_menu)
+        retarget.setObjectName("canvas_retarget")
+        window.canvas_actions["retarget"] = retarget
+        robots = menu.addAction("Robots…")
+        robots.setObjectName("canvas_robots")
+        robots.triggered.connect(self.open_robots_dialog)
+        window.canvas_actions["robots"] = robots
+
+    def _fill_retarget_menu(self) -> None:
+        self.retarget_menu.clear()
+        for robot in self.robots:
+            action = self.retarget_menu.addAction(robot.label)
+            action.setObjectName(f"retarget-{robot.id}")
+            action.triggered.connect(lambda _c=False, rid=robot.id: self.retarget_current(rid))
+
+    def retarget_current(self, robot_id: str) -> None:
+        """Duplicate the current canvas for ``robot_id`` and show the copy (one undo step)."""
+        controller = self.window.controller
+        try:
+            dup = self.window.doc.duplicate_for_robot(controller.canvas.id, robot_id)
+        except EditError as exc:
+            self.window.connection.message.setText(str(exc))
+            return
+        self.window.doc.switch_canvas(dup.id)
+
+    def open_robots_dialog(self) -> QtWidgets.QDialog:
+        from rcon_core.app.robots_dialog import RobotsDialog
+
+        dialog = RobotsDialog(self.robots, self.window)
+        dialog.accepted.connect(lambda: self._robots_edited(dialog))
+        dialog.finished.connect(lambda _r: dialog.deleteLater())
+        self.robots_dialog = dialog
+        dialog.open()
+        return dialog
+
+    def _robots_edited(self, dialog: Any) -> None:
+        try:
+            self.window.doc.set_robots(dialog.robots())
+        except EditError as exc:
+            self.window.connection.message.setText(str(exc))
+
+    def shutdown(self) -> None:
+        self._remove()
+        self.links.shutdown()

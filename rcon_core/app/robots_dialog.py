@@ -1,0 +1,121 @@
+"""Canvas ▾ → Robots…: the workspace's robots, one row each (name, URL, CA file, rosauth, view only).
+
+OK replaces the robots in one undo step (``Document.set_robots``). The first robot's URL may stay empty:
+it then follows the connection bar's URL field. A robot removed here leaves its widgets in place; they
+say that their robot is not in the workspace until it is added back (or ↶). A URL the app cannot use is
+refused with its reason before anything changes.
+"""
+
+from __future__ import annotations
+
+import copy
+from typing import Any
+
+import attrs
+from qtpy import QtWidgets
+
+from rcon_core.app.connection_bar import normalize_url
+from rcon_core.app.link import BadUrl, check_url
+from rcon_core.canvas import new_id
+from rcon_core.canvas.robots import Robot
+
+__all__ = ["RobotsDialog"]
+
+COLUMNS = ("Name", "URL", "CA file", "rosauth", "View only")
+
+
+class RobotsDialog(QtWidgets.QDialog):
+    def __init__(self, robots: list[Robot], parent: QtWidgets.QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.setObjectName("robotsDialog")
+        self.setWindowTitle("Robots")
+        self._robots = copy.deepcopy(list(robots))
+        self.table = QtWidgets.QTableWidget(0, len(COLUMNS))
+        self.table.setObjectName("robotsTable")
+        self.table.setHorizontalHeaderLabels(list(COLUMNS))
+        header = self.table.horizontalHeader()
+        header.setSectionResizeMode(1, QtWidgets.QHeaderView.ResizeMode.Stretch)
+        for robot in self._robots:
+            self._add_row(robot)
+        add = QtWidgets.QPushButton("Add robot")
+        add.setObjectName("addRobot")
+        add.clicked.connect(lambda: self._add_row(Robot(new_id("r"), f"Robot {self.table.rowCount() + 1}")))
+        remove = QtWidgets.QPushButton("Remove")
+        remove.setObjectName("removeRobot")
+        remove.clicked.connect(self._remove_row)
+        self.problem = QtWidgets.QLabel()
+        self.problem.setObjectName("robotsProblem")
+        self.problem.setProperty("role", "problem")
+        self.problem.setWordWrap(True)
+        buttons = QtWidgets.QDialogButtonBox(
+            QtWidgets.QDialogButtonBox.StandardButton.Ok | QtWidgets.QDialogButtonBox.StandardButton.Cancel)
+        buttons.accepted.connect(self._ok)
+        buttons.rejected.connect(self.reject)
+        row = QtWidgets.QHBoxLayout()
+        row.addWidget(add)
+        row.addWidget(remove)
+        row.addStretch(1)
+        col = QtWidgets.QVBoxLayout(self)
+        col.addWidget(self.table, 1)
+        col.addLayout(row)
+        col.addWidget(self.problem)
+        col.addWidget(buttons)
+        self.resize(820, 360)
+
+    def _add_row(self, robot: Robot) -> None:
+        if robot not in self._robots:
+            self._robots.append(robot)
+        r = self.table.rowCount()
+        self.table.insertRow(r)
+        for c, text in enumerate((robot.name, robot.url, robot.ca_file)):
+            self.table.setItem(r, c, QtWidgets.QTableWidgetItem(text))
+        for c, flag in ((3, robot.auth), (4, robot.view_only)):
+            box = QtWidgets.QCheckBox()
+            box.setChecked(flag)
+            self.table.setCellWidget(r, c, box)
+
+    def _remove_row(self) -> None:
+        r = self.table.currentRow()
+        if r < 0 or self.table.rowCount() <= 1:
+            self.problem.setText("a workspace keeps at least one robot")
+            return
+        self.table.removeRow(r)
+        del self._robots[r]
+
+    def _text(self, r: int, c: int) -> str:
+        item = self.table.item(r, c)
+        return item.text().strip() if item is not None else ""
+
+    def _checked(self, r: int, c: int) -> bool:
+        box = self.table.cellWidget(r, c)
+        return isinstance(box, QtWidgets.QCheckBox) and box.isChecked()
+
+    def robots(self) -> list[Robot]:
+        """The robots as edited (raises BadUrl for a URL the app cannot use)."""
+        out = []
+        for r, robot in enumerate(self._robots):
+            url = self._text(r, 1)
+            if url:
+                url = check_url(normalize_url(url))
+            out.append(attrs.evolve(robot, name=self._text(r, 0) or robot.id, url=url, ca_file=self._text(r, 2),
+                                    auth=self._checked(r, 3), view_only=self._checked(r, 4)))
+        return out
+
+    def _ok(self) -> None:
+        try:
+            self.robots()
+        except BadUrl as exc:
+            self.problem.setText(str(exc))
+            return
+        self.accept()
+
+    def set_row(self, r: int, **values: Any) -> None:
+        """Fill a row's cells (name, url, ca_file: text; auth, view_only: bool), as typing would."""
+        for c, key in enumerate(("name", "url", "ca_file")):
+            if key in values:
+                self.table.setItem(r, c, QtWidgets.QTableWidgetItem(values[key]))
+        for c, key in ((3, "auth"), (4, "view_only")):
+            if key in values:
+                box = self.table.cellWidget(r, c)
+                if isinstance(box, QtWidgets.QCheckBox):
+                    box.setChecked(bool(values[key]))
