@@ -212,8 +212,21 @@ def test_rcon_sim_name_option() -> None:
         assert proc.wait(timeout=10) == 0
 
 
+async def test_a_named_sim_without_namespace_keeps_the_plain_names() -> None:
+    async with SimServer(name="boat5", namespace=False, rate_scale=2.0) as sim:
+        assert sim.topic("/cmd_vel") == "/cmd_vel" and sim.identity.namespace == ""
+        for t in ROBOT_TOPICS:
+            assert t in sim.topics and f"/boat5{t}" not in sim.topics
+        assert "/dock" in sim.services and "/kingfisher/get_loggers" in sim.services
+        # still its own vessel: its own start position and camera scene
+        assert (sim.robot.origin_lat, sim.robot.origin_lon) == Identity.of("boat5").origin
+        assert sim.identity.sky == Identity.of("boat5").sky != Identity.of().sky
+
+
 def test_rcon_sim_refuses_a_bad_name(capsys: pytest.CaptureFixture[str]) -> None:
     from rcon_core.cli.main import main
 
     assert main(["sim", "--name", "boat/2"]) == 2
     assert "--name" in capsys.readouterr().err
+    assert main(["sim", "--no-namespace"]) == 2
+    assert "--no-namespace goes with --name" in capsys.readouterr().err

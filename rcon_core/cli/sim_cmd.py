@@ -24,6 +24,9 @@ def configure(name: str, parser: argparse.ArgumentParser) -> None:
                         help="the robot's name, one vessel of a fleet: its topics, services and node move under "
                         "/NAME (/NAME/cmd_vel, /NAME/gps/fix), and it gets its own start position and camera "
                         "scene; without it the sim is the one unnamed robot")
+    parser.add_argument("--no-namespace", action="store_true",
+                        help="with --name: keep the plain topic names (/cmd_vel), as a robot behind its own "
+                        "rosbridge has them; only the start position and the camera scene change")
     parser.add_argument("--ros2", action="store_true", help="ROS 2 shapes: pkg/msg/Type, sec/nanosec, actions")
     parser.add_argument("--rate-scale", type=float, default=1.0, metavar="X",
                         help="multiply every publish rate by X (default 1.0)")
@@ -47,6 +50,9 @@ def run(name: str, args: argparse.Namespace) -> int:
         return 2
     if not 0 <= args.port <= 65535:
         print(f"rcon sim: --port must be between 0 and 65535, got {args.port}")
+        return 2
+    if args.no_namespace and args.name is None:
+        print("rcon sim: --no-namespace goes with --name", file=sys.stderr)
         return 2
     if args.name is not None:
         from rcon_core.sim.identity import check_name
@@ -94,14 +100,16 @@ async def _serve(args: argparse.Namespace, tls: ssl.SSLContext | None = None) ->
 
     server = SimServer(host=args.host, port=args.port, ros2=args.ros2, rate_scale=args.rate_scale,
                        auth_secret=args.auth, max_frame=int(args.max_frame * 1024 * 1024),
-                       plugin_types=not args.no_plugin_types, ssl=tls, name=args.name)
+                       plugin_types=not args.no_plugin_types, ssl=tls, name=args.name,
+                       namespace=not args.no_namespace)
     try:
         await server.start()
     except OSError as exc:
         print(f"rcon sim: cannot listen on {args.host}:{args.port}: {exc.strerror or exc}")
         return 1
     flavour = "ROS 2" if args.ros2 else "ROS 1"
-    who = f"Kingfisher '{server.name}' (topics under /{server.name})" if server.name else "Kingfisher"
+    ns = server.identity.namespace
+    who = f"Kingfisher '{server.name}'" + (f" (topics under {ns})" if ns else "") if server.name else "Kingfisher"
     print(f"rcon sim: {flavour} {who} simulator on {server.url} (Ctrl+C to stop)", flush=True)
     if server.types.plugin_type_names:
         print(f"rcon sim: plugin types: {', '.join(server.types.plugin_type_names)}", flush=True)

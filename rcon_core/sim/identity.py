@@ -16,6 +16,12 @@ the way a real fleet namespaces its robots (one ``ns`` per robot in the launch f
   the harbour's chart, which a fleet shares from one map server;
 * **frame ids stay as they are** (``base_link``, ``odom``...): each sim is its own TF tree.
 
+That is the layout of robots that share one ROS graph. Robots that each run their own rosbridge (RCON's
+fleet model: one link per robot, a canvas re-targeted to another boat keeps its topic names, the map
+shows the same fix topic of every robot) usually keep the plain names: ``namespaced=False``
+(``rcon sim --name boat2 --no-namespace``; the fleet demo's vessels) keeps every name as the unnamed
+sim has it and changes only the start position and the camera scene.
+
 Distinct vessels differ where an operator sees it: the **index** (the name's trailing number, ``boat2``
 -> 2, or a stable hash of a name without one; 0 without a name) picks the GPS origin, on a spiral
 a few hundred metres apart (each vessel starts at its own harbour's origin, so ``/odom`` starts at 0,0
@@ -75,19 +81,20 @@ class Identity:
 
     name: str | None = None
     index: int = 0
+    namespaced: bool = True
 
     @classmethod
-    def of(cls, name: str | None = None, index: int | None = None) -> Identity:
+    def of(cls, name: str | None = None, index: int | None = None, namespaced: bool = True) -> Identity:
         if name is not None:
             check_name(name)
-        if index is not None and (not isinstance(index, int) or index < 0):
+        if index is not None and (isinstance(index, bool) or not isinstance(index, int) or index < 0):
             raise ValueError(f"robot index must be a non-negative integer, got {index!r}")
-        return cls(name, index_of(name) if index is None else index)
+        return cls(name, index_of(name) if index is None else index, bool(namespaced))
 
     @property
     def namespace(self) -> str:
-        """``/boat2`` for a named vessel, ``""`` without a name."""
-        return f"/{self.name}" if self.name else ""
+        """``/boat2`` for a named, namespaced vessel, else ``""``."""
+        return f"/{self.name}" if self.name and self.namespaced else ""
 
     @property
     def node(self) -> str:

@@ -49,14 +49,15 @@ class SimServer:
                  auth_secret: str | None = None, *, robot: bool = True, max_frame: int = gate.DEFAULT_MAX_FRAME,
                  auth_frame_limit: int = gate.AUTH_FRAME_LIMIT, auth_timeout: float = gate.AUTH_TIMEOUT_S,
                  plugin_types: bool = False, ssl: Any = None, name: str | None = None,
-                 index: int | None = None) -> None:
+                 index: int | None = None, namespace: bool = True) -> None:
         if rate_scale <= 0:
             raise ValueError(f"rate_scale must be positive, got {rate_scale}")
         if max_frame < 1024 or auth_frame_limit < 256 or auth_timeout <= 0:
             raise ValueError("max_frame must be at least 1024 bytes, auth_frame_limit at least 256 bytes and "
                              "auth_timeout positive")
-        #: the vessel's name, namespace, start position and looks (``name``/``index``: see identity.py)
-        self.identity = Identity.of(name, index)
+        #: the vessel's name, namespace, start position and looks (``name``, ``index``, ``namespace``:
+        #: whether a named vessel's topics go under /NAME; see identity.py)
+        self.identity = Identity.of(name, index, namespace)
         self.max_frame = max_frame
         self.auth_frame_limit = auth_frame_limit
         self.auth_timeout = auth_timeout
