@@ -191,6 +191,17 @@ def run(args: Any) -> dict:
 
             return bt.run(get()).result(15)
 
+        app_lags: list[float] = []  # how late a 5 ms sleep wakes on the app's bridge loop (the teleop's)
+
+        async def lag_probe() -> None:
+            import asyncio
+
+            while True:
+                t = time.perf_counter()
+                await asyncio.sleep(0.005)
+                app_lags.append((time.perf_counter() - t - 0.005) * 1000)
+
+        lag_task = bt.run(lag_probe())
         # the measurement window
         ba.PAINTED.clear()
         ba.PASS_TIMES.clear()
@@ -214,6 +225,7 @@ def run(args: Any) -> dict:
         check.start(2)
         ba.spin(app, args.seconds)
         check.stop()
+        lag_task.cancel()
         wall = time.perf_counter() - wall0
         cpu = (time.process_time() - cpu0) / wall
         sim_cpu = [(proc_cpu_s(pid) - c0) / wall for (_, _, pid), c0 in zip(sims, sim_cpu0, strict=True)]
@@ -255,6 +267,7 @@ def run(args: Any) -> dict:
         intervals = [(b - a) * 1000 for a, b in zip(arrivals, arrivals[1:], strict=False)]
         period_ms = 1000.0 / TELEOP_HZ
         jitter = [abs(i - period_ms) for i in intervals]
+        sim_lags = [ms for t, ms in after[0]["loop_lag"] if wall0 <= t <= wall0 + wall]
         frames = [b * 1000 for b in frame_busy[1:]]
 
         def lat(name: str, values: list[float]) -> dict:
@@ -273,6 +286,10 @@ def run(args: Any) -> dict:
             "teleop_interval_p50_ms": round(ba.pct(intervals, 50), 2),
             "teleop_interval_max_ms": round(max(intervals), 2) if intervals else float("nan"),
             "teleop_jitter_p99_ms": round(ba.pct(jitter, 99), 2),
+            "teleop_jitter_p95_ms": round(ba.pct(jitter, 95), 2),
+            # what delays a command: the app's bridge loop (where the pad's ticker runs) and boat1's sim loop
+            "app_bridge_loop_lag_p99_ms": round(ba.pct(app_lags, 99), 2),
+            "sim1_loop_lag_p99_ms": round(ba.pct(sim_lags, 99), 2),
             "app_cpu_share": round(cpu, 3),
             "sim_cpu_share": [round(v, 3) for v in sim_cpu],
             "camera_frames_shown_per_s": round(sum(c["shown"] for c in cameras.values()) / wall, 1),

@@ -6,7 +6,8 @@
 - ``/boat2/bench/v0`` .. ``v19`` (std_msgs/Float64) at ``--hz``, each value the publish time
   (``time.perf_counter()``, CLOCK_MONOTONIC: comparable between processes on Linux);
 - ``/boat2/bench/stats`` (std_srvs/Trigger): ``message`` is JSON: messages published per topic so far,
-  the arrival time of every ``/boat2/cmd_vel`` message (perf_counter, as the sim received it) and the
+  the arrival time of every ``/boat2/cmd_vel`` message (perf_counter, as the sim received it), the
+  sim loop's lateness (how late a 5 ms sleep wakes up, ms; what delays the arrival of a command) and the
   process's CPU seconds.
 """
 
@@ -33,10 +34,21 @@ async def serve(name: str, values: int, hz: float) -> None:
     server.subscribe_internal(server.topic("/cmd_vel"), "geometry_msgs/Twist", node,
                               lambda _msg: arrivals.append(time.perf_counter()))
     sent = {"values": 0}
+    lags: list[tuple[float, float]] = []  # (perf_counter, ms late) of the loop's 5 ms sleeps
+
+    async def lag_probe() -> None:
+        while True:
+            t = time.perf_counter()
+            await asyncio.sleep(0.005)
+            now = time.perf_counter()
+            lags.append((now, (now - t - 0.005) * 1000))
+            del lags[:-20_000]
+
+    probe = asyncio.get_running_loop().create_task(lag_probe())
 
     def stats(_req: dict) -> dict:
         body = {"published": {**server.robot_published(), **sent}, "cmd_vel_arrivals": list(arrivals),
-                "cpu_s": time.process_time()}
+                "loop_lag": list(lags), "cpu_s": time.process_time()}
         return {"success": True, "message": json.dumps(body)}
 
     server.add_service(server.topic("/bench/stats"), "std_srvs/Trigger", node, stats)
@@ -58,6 +70,7 @@ async def serve(name: str, values: int, hz: float) -> None:
             with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(stop.wait(), max(0.0, nxt - time.perf_counter()))
     finally:
+        probe.cancel()
         await server.stop()
 
 

@@ -2,12 +2,19 @@
 
 Sensor messages are built only while someone subscribes (the cameras especially), so an idle sim costs
 almost nothing. All publish rates are multiplied by the server's ``rate_scale``.
+
+Camera frames are drawn (and JPEG-encoded) in a worker thread from a copy of the vessel's pose, then
+published from the loop: the loop never waits on a picture, so commands (``cmd_vel``) are taken as they
+arrive, as on a real robot whose camera drivers are not its rosbridge. A camera whose previous frame is
+still being drawn skips its turn (frames are dropped, never queued).
 """
 
 from __future__ import annotations
 
 import asyncio
+import concurrent.futures
 import contextlib
+import copy
 import logging
 import math
 import random
@@ -93,6 +100,8 @@ class RobotNode:
         self.rear = CameraRenderer("rear", yaw_offset=math.pi, sky=identity.sky, vessel_name=identity.name)
         self.published_counts: dict[str, int] = {}
         self._task: asyncio.Task[None] | None = None
+        self._render_pool: concurrent.futures.ThreadPoolExecutor | None = None
+        self._rendering: set[str] = set()  # cameras with a frame being drawn
         self._last_physics = time.monotonic()
         self._cmd_logged_at = float("-inf")
         self._idle = True
@@ -147,6 +156,9 @@ class RobotNode:
             with contextlib.suppress(asyncio.CancelledError):
                 await self._task
             self._task = None
+        if self._render_pool is not None:
+            self._render_pool.shutdown(wait=False, cancel_futures=True)
+            self._render_pool = None
 
     async def _run(self) -> None:
         now = time.monotonic()
@@ -345,27 +357,51 @@ class RobotNode:
         })
 
     def _pub_camera_front_image_raw(self, now: float) -> None:
-        if not self._wanted("/camera/front/image_raw"):
-            return
-        stamp = time.time()
-        img = self.front.frame(self.vessel, stamp)
-        h, w = img.shape[:2]
-        self._publish("/camera/front/image_raw", {
-            "header": self.fl.header("camera_front_optical", stamp),
-            "height": h, "width": w, "encoding": "rgb8", "is_bigendian": 0, "step": w * 3,
-            "data": img.tobytes(),
-        })
+        if self._wanted("/camera/front/image_raw"):
+            self._render("/camera/front/image_raw", self.front, self._raw_image)
 
     def _pub_camera_rear_image_raw_compressed(self, now: float) -> None:
-        if not self._wanted("/camera/rear/image_raw/compressed"):
-            return
+        if self._wanted("/camera/rear/image_raw/compressed"):
+            self._render("/camera/rear/image_raw/compressed", self.rear, self._jpeg_image)
+
+    def _raw_image(self, img: np.ndarray, stamp: float) -> dict[str, Any]:
+        h, w = img.shape[:2]
+        return {"header": self.fl.header("camera_front_optical", stamp),
+                "height": h, "width": w, "encoding": "rgb8", "is_bigendian": 0, "step": w * 3,
+                "data": img.tobytes()}
+
+    def _jpeg_image(self, img: np.ndarray, stamp: float) -> dict[str, Any]:
+        return {"header": self.fl.header("camera_rear_optical", stamp), "format": "jpeg",
+                "data": encode_jpeg(img)}
+
+    def _render(self, topic: str, camera: CameraRenderer,
+                build: Callable[[np.ndarray, float], dict[str, Any]]) -> None:
+        """Draw one frame of ``camera`` in the worker thread, then publish it on ``topic`` from the loop."""
+        if topic in self._rendering:
+            return  # the previous frame is still being drawn: skip this one, never queue
+        if self._render_pool is None:
+            self._render_pool = concurrent.futures.ThreadPoolExecutor(2, thread_name_prefix="sim-camera")
         stamp = time.time()
-        img = self.rear.frame(self.vessel, stamp)
-        self._publish("/camera/rear/image_raw/compressed", {
-            "header": self.fl.header("camera_rear_optical", stamp),
-            "format": "jpeg",
-            "data": encode_jpeg(img),
-        })
+        pose = copy.copy(self.vessel)  # the loop goes on moving the vessel while the frame is drawn
+        loop = asyncio.get_running_loop()
+        self._rendering.add(topic)
+        future = self._render_pool.submit(lambda: build(camera.frame(pose, stamp), stamp))
+
+        def done(fut: concurrent.futures.Future[dict[str, Any]]) -> None:
+            with contextlib.suppress(RuntimeError):  # the loop is closed: the sim has stopped
+                loop.call_soon_threadsafe(self._rendered, topic, fut)
+
+        future.add_done_callback(done)
+
+    def _rendered(self, topic: str, future: concurrent.futures.Future[dict[str, Any]]) -> None:
+        self._rendering.discard(topic)
+        if self._task is None or future.cancelled():
+            return  # stopped meanwhile
+        exc = future.exception()
+        if exc is not None:
+            log.error("drawing %s failed: %s", topic, exc)
+            return
+        self._publish(topic, future.result())
 
     def _pub_scan(self, now: float) -> None:
         if not self._wanted("/scan"):

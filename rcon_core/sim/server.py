@@ -214,6 +214,11 @@ class SimServer:
         t = self.topics.get(topic)
         return len(t.client_subscribers) if t else 0
 
+    @property
+    def robot_node(self) -> Any:
+        """The robot's node (its cameras, published counts); None for ``robot=False`` or before start."""
+        return self._robot_node
+
     def robot_published(self) -> dict[str, int]:
         """How many messages the robot published per topic (its names before the namespace)."""
         return dict(self._robot_node.published_counts) if self._robot_node is not None else {}
