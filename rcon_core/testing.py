@@ -4,6 +4,9 @@
   stopped cleanly afterwards.
 - ``sim_thread``: a SimServer running on its own loop in a daemon thread, for sync code (roslibpy, Qt).
 - ``sim_url``: the ``ws://`` URL of a threaded sim (usable from sync and async tests alike).
+- ``sim_fleet``: several robots (one workspace, several links): ``sims = await sim_fleet(3)`` gives
+  started SimServers on the test's loop, each on its own free loopback port; ``sim_fleet_threads(3)``
+  the same running in threads, for sync code (Qt).
 
 Both run the sim with ``rate_scale=2.0`` so streams arrive quickly in tests, and with the message and
 service types every installed widget plugin contributes (``rcon_register_types``), so a lab's widget
@@ -50,6 +53,41 @@ async def sim() -> AsyncIterator[SimServer]:
         yield server
     finally:
         await server.stop()
+
+
+@pytest_asyncio.fixture
+async def sim_fleet() -> AsyncIterator[Callable[[int], Any]]:
+    """``await sim_fleet(n)``: n started SimServers on free loopback ports (the test's loop), stopped after
+    the test (one already stopped by the test, to drop its link, is fine)."""
+    started: list[SimServer] = []
+
+    async def make(n: int) -> list[SimServer]:
+        out = []
+        for _ in range(n):
+            server = SimServer(host="127.0.0.1", port=0, rate_scale=TEST_RATE_SCALE, plugin_types=True)
+            await server.start()
+            started.append(server)
+            out.append(server)
+        return out
+
+    try:
+        yield make
+    finally:
+        for server in started:
+            await server.stop()
+
+
+@pytest.fixture
+def sim_fleet_threads() -> Iterator[Callable[[int], list[SimServer]]]:
+    """``sim_fleet_threads(n)``: n SimServers, each running in its own thread on its own free port."""
+    import contextlib
+
+    with contextlib.ExitStack() as stack:
+        def make(n: int) -> list[SimServer]:
+            return [stack.enter_context(SimServer.in_thread(host="127.0.0.1", port=0, rate_scale=TEST_RATE_SCALE,
+                                                            plugin_types=True)) for _ in range(n)]
+
+        yield make
 
 
 @pytest.fixture

@@ -61,6 +61,20 @@ def test_every_problem_is_listed_and_exit_is_1(tmp_path, capsys):
     assert any("widget w-typo (std.lable): geometry: width and height must be more than 0" in x for x in lines)
 
 
+def test_a_binding_naming_a_robot_the_workspace_lacks_is_a_problem(tmp_path, capsys):
+    data = workspace_to_dict(workspace().workspace)
+    label, slider = data["canvases"][0]["widgets"]
+    label["binding"]["robot"] = "r-9"
+    data["robots"].append({"id": "r-2", "name": "Bravo", "url": "ws://10.0.0.6:9090"})
+    slider["binding"]["robot"] = "r-2"  # a robot the workspace has: fine
+    path = tmp_path / "fleet.json"
+    path.write_text(json.dumps(data))
+    rc, _out, err = run(capsys, "layout", "validate", str(path))
+    assert rc == 1
+    assert err.strip().splitlines() == [
+        f"{path}: canvas 'Ops', widget {label['id']} (std.label): robot 'r-9' is not in this workspace"]
+
+
 @pytest.mark.parametrize("content, reason", [
     ("{", "not valid JSON"),
     ('{"format": "something-else", "version": 1}', "not an RCON workspace file"),

@@ -120,6 +120,8 @@ class FleetUi(QtCore.QObject):
         self.chips.set_robots(shown, self.side_robot)
         for picker in self.pickers:
             picker.set_robots(shown, self.side_robot)
+        if hasattr(self, "retarget_menu"):
+            self._fill_retarget_menu()
         for rid in list(self.catalogs):
             if rid not in {r.id for r in robots}:
                 del self.catalogs[rid]
@@ -233,6 +235,7 @@ class FleetUi(QtCore.QObject):
             self.retarget_menu)
         retarget.setObjectName("canvas_retarget")
         window.canvas_actions["retarget"] = retarget
+        self._fill_retarget_menu()
         robots = menu.addAction("Robots…")
         robots.setObjectName("canvas_robots")
         robots.triggered.connect(self.open_robots_dialog)

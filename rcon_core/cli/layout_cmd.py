@@ -2,7 +2,7 @@
 
 Reads the file with the store's own loaders (``loads_workspace``, ``import_canvas``: exactly what the
 app does), then checks each widget against the installed plugins: its kind is installed, it may take its
-binding's role, its binding is complete and its settings are configured. Prints one line per problem
+binding's role, its binding is complete (and names a robot the workspace has) and its settings are configured. Prints one line per problem
 and exits 1, or prints a summary and exits 0. The format is described in ``docs/layout-format.md`` and
 by the JSON Schema shipped in the package (``rcon layout schema`` prints it).
 """
@@ -74,9 +74,11 @@ def check_layout(path: Path, pm: Any) -> tuple[list[str], str]:
         if fmt == "rcon-canvas":
             canvases = [import_canvas(path)]
             current = canvases[0].id
+            robot_ids = None  # a canvas file's robots are the workspace's it is added to
         else:
             ws = loads_workspace(raw, path)
             canvases, current = ws.canvases, ws.current
+            robot_ids = {r.id for r in ws.robots}
     except WorkspaceFileError as exc:
         return [exc.reason], ""
     except (RecursionError, ValueError) as exc:  # whatever the store lets through is still a problem
@@ -90,6 +92,8 @@ def check_layout(path: Path, pm: Any) -> tuple[list[str], str]:
             widgets += 1
             where = f"canvas {canvas.name!r}, widget {w.id} ({w.kind})"
             problems += [f"{where}: {p}" for p in _widget_problems(w, pm)]
+            if robot_ids is not None and w.binding.robot and w.binding.robot not in robot_ids:
+                problems.append(f"{where}: robot {w.binding.robot!r} is not in this workspace")
     summary = f"{len(canvases)} canvas{'es' if len(canvases) != 1 else ''}, {widgets} widget{'s' if widgets != 1 else ''}"
     return problems, summary
 

@@ -5,6 +5,11 @@ through the same port and ended in :meth:`MapModel.stop`. ``heading_topic`` opti
 track's heading; otherwise it is the course between fixes. A goal tapped on the map is published as a
 ``sensor_msgs/NavSatFix`` on ``goal_topic`` (role SUBSCRIBE) or on the bound topic (role PUBLISH).
 
+With ``every_robot`` (several robots in one workspace) the map shows the bound topic's fix of every
+robot: the canvas runtime calls :meth:`MapModel.on_fleet` before ``start`` with a port per robot; the own
+robot's fix stays the main track (named and coloured as its robot), each other robot gets a track keyed
+``@<robot id>`` with its name and colour, subscribed through that robot's port.
+
 ``state.value`` is a :class:`MapValue` (immutable), rebuilt on the bridge thread at each fix.
 """
 
@@ -107,6 +112,7 @@ class MapModel(WidgetModel):
         self._tracks: dict[str, _TrackState] = {}
         self._extra_subs: list[Any] = []
         self._goal_pub: Any = None
+        self._robot_ports: list[tuple[str, Any]] = []  # (track key, port) of the other robots
         self._goal: Goal | None = None
         self._goals_sent = 0
         if binding.role is Role.SUBSCRIBE:
@@ -119,11 +125,33 @@ class MapModel(WidgetModel):
             self._tracks[topic] = _TrackState(topic, label, PALETTE[i % len(PALETTE)], settings.trail_length)
 
     # -- lifecycle (bridge thread) -------------------------------------------------------------------
+    def on_fleet(self, robots: list[Any]) -> None:
+        """The workspace's robots (``RobotPort``: id, name, colour, port), before ``start``. With
+        ``every_robot`` each other robot's fix becomes a track of its own, in its colour."""
+        self._robot_ports = []
+        for key in [k for k in self._tracks if k.startswith("@")]:
+            del self._tracks[key]
+        if not self.settings.every_robot or self.binding.role is not Role.SUBSCRIBE:
+            return
+        trail = self.settings.trail_length
+        for robot in robots:
+            if robot.port is self.port:
+                main = self._tracks.get("")
+                if main is not None:
+                    main.label, main.colour = robot.name, robot.colour
+                continue
+            key = f"@{robot.id}"
+            self._tracks[key] = _TrackState(key, robot.name, robot.colour, trail)
+            self._robot_ports.append((key, robot.port))
+
     def on_start(self) -> None:
         s = self.settings
         try:
+            for key, port in self._robot_ports:
+                self._extra_subs.append(port.subscribe(
+                    self.binding.name, functools.partial(self._guard, self._on_robot, key), type=self.binding.type))
             for key in self._tracks:
-                if key:
+                if key and not key.startswith("@"):
                     self._extra_subs.append(
                         self.port.subscribe(key, functools.partial(self._guard, self._on_extra, key), type=NAVSATFIX)
                     )
@@ -172,6 +200,17 @@ class MapModel(WidgetModel):
             fix = fix_from_message(msg)
         except GeoError as exc:
             self.set_error(f"{key}: {exc}")
+            return
+        self._record(key, fix)
+        self._replace_value()
+
+    def _on_robot(self, key: str, msg: dict[str, Any]) -> None:
+        """Another robot's fix on the bound topic (``every_robot``)."""
+        path = self.binding.field_path
+        try:
+            fix = fix_from_message(get_path(msg, path) if path else msg)
+        except (PathError, GeoError) as exc:
+            self.set_error(f"{self._tracks[key].label}: {exc}")
             return
         self._record(key, fix)
         self._replace_value()

@@ -66,6 +66,12 @@ class MapSettings:
                   "help": "Other NavSatFix topics to show, each with its own colour and trail, separated by "
                           "commas; 'name=/topic' labels one, e.g. 'operator=/phone/fix, /boat2/gps/fix'"},
     )
+    every_robot: bool = attrs.field(
+        default=False,
+        metadata={"label": "Every robot",
+                  "help": "Show the bound topic's fix of every robot of the workspace, each with its name and "
+                          "colour (several robots in one workspace)"},
+    )
     heading_topic: str = attrs.field(
         default="", validator=attrs.validators.instance_of(str),
         metadata={"label": "Heading topic",
