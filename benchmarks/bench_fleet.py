@@ -202,6 +202,12 @@ def run(args: Any) -> dict:
                 app_lags.append((time.perf_counter() - t - 0.005) * 1000)
 
         lag_task = bt.run(lag_probe())
+        if os.environ.get("BENCH_SLOW_CALLBACKS"):  # diagnosis: log what holds the bridge loop over 4 ms
+            import logging
+
+            logging.basicConfig(level=logging.WARNING)
+            bt.loop.call_soon_threadsafe(bt.loop.set_debug, True)
+            bt.loop.slow_callback_duration = 0.004
         # the measurement window
         ba.PAINTED.clear()
         ba.PASS_TIMES.clear()
