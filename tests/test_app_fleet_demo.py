@@ -74,6 +74,14 @@ def test_fleet_demo_shows_each_vessels_camera_and_drives_only_the_pressed_vessel
                 assert np.abs(rgb[2, 2].astype(int) - sky).max() <= 3, (k, rgb[2, 2], sky)
                 assert tuple(int(c) for c in rgb[470, 260]) == sim.identity.hull
                 assert cam.view.frame is cam.model.state.value or cam.view.frame is not None
+            # the one map shows both vessels' fixes, named after them
+            fleet_map = hosted[("map.gps", "r-1")]
+
+            def labels():
+                value = fleet_map.model.state.value
+                return [t.label for t in value.tracks if t.has_position] if value is not None else []
+
+            qtbot.waitUntil(lambda: labels() == ["boat1", "boat2"], timeout=TIMEOUT_MS)
             # a press on vessel 2's pad drives vessel 2 only
             pad = hosted[("sensors.teleop", "r-2")].view
             centre, radius = pad.pad()

@@ -78,16 +78,16 @@ def fleet_canvas(n: int, plugins: PluginManager) -> Canvas:
         canvas.widgets.append(_widget(
             plugins, {"sensors.image": {"max_fps": 15.0}},
             Binding("/camera/front/image_raw", "sensor_msgs/Image", Role.SUBSCRIBE, (), robot=rid),
-            (x, 16, 288, 216), f"{vessel_name(k)} front camera"))
+            (x, 16, 288, 216), "Front camera"))
         canvas.widgets.append(_widget(
             plugins, {"sensors.teleop": {"max_linear": 2.0, "max_angular": 1.0}},
             Binding("/cmd_vel", "geometry_msgs/Twist", Role.PUBLISH, (), robot=rid),
-            (x, 248, 288, 200), f"Drive {vessel_name(k)}"))
+            (x, 248, 288, 200), "Drive"))
     # one map, bound to the first vessel's fix; with every_robot it shows every vessel's (on_fleet)
     canvas.widgets.append(_widget(
         plugins, {"map.gps": _map_settings(plugins)},
         Binding("/gps/fix", "sensor_msgs/NavSatFix", Role.SUBSCRIBE, (), robot=robot_id(1)),
-        (16 + n * COLUMN_W, 16, 400, 432), "Fleet map"))
+        (16 + n * COLUMN_W, 16, 400, 432), "Map of every vessel"))
     return canvas
 
 
