@@ -314,3 +314,8 @@ def run(args: Any) -> dict:
     figures["cameras_no_backlog"] = all(
         not c["latency_last_s_p50_ms"] > 2 * c["latency_first_s_p50_ms"] + 20 for c in figures["cameras"].values())
     return figures
+
+
+if __name__ == "__main__":  # run_all.py runs every bench_*.py: the fleet of 3 unless --robots says otherwise
+    argv = sys.argv[1:]
+    raise SystemExit(ba.main(argv if "--robots" in argv else [*argv, "--robots", "3"]))
