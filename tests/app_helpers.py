@@ -75,6 +75,15 @@ def window_session(qtbot, config_dir: Path, plugins: PluginManager, **options: A
     win.shutdown()
 
 
+def all_sent(qtbot, window: MainWindow, sim: Any) -> None:
+    """Wait until everything the window sent so far has reached ``sim``: a rosapi call on the same link is
+    counted by the sim after the frames sent before it (one connection is handled in order)."""
+    key = ("call_service", "/rosapi/topics")
+    before = sim.ops_received[key]
+    window.link.refresh_catalog()
+    qtbot.waitUntil(lambda: sim.ops_received[key] > before, timeout=TIMEOUT_MS)
+
+
 def tap(widget: QtWidgets.QWidget, pos: QtCore.QPoint | None = None) -> None:
     """A finger tap on a visible, enabled widget, at its centre unless told where."""
     assert widget.isVisible() and widget.isEnabled(), widget.objectName()

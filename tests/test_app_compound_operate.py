@@ -7,11 +7,8 @@ mode, against the embedded robot: the operator types in the text child and taps 
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
-
 import pytest
-from app_helpers import entry_point_plugins, tap, window_session
+from app_helpers import entry_point_plugins, snap, tap, window_session
 from qtpy import QtWidgets
 from qtpy.QtTest import QTest
 
@@ -22,8 +19,6 @@ pytest.importorskip("rcon_widgets_std")
 from rcon_widgets_std.compound import ChildSpec, CompoundSettings  # noqa: E402
 
 pytestmark = pytest.mark.usefixtures("qapp")
-
-SHOTS = Path(os.environ.get("RCON_UX_SHOTS", "/tmp/ux-a"))
 
 
 @pytest.fixture(scope="module")
@@ -56,12 +51,6 @@ def place_compound(window, qtbot, plugins):
     return hosted, view, slider, text
 
 
-def shoot(window, name: str) -> None:
-    SHOTS.mkdir(parents=True, exist_ok=True)
-    QtWidgets.QApplication.processEvents()
-    window.grab().save(str(SHOTS / name))
-
-
 def type_into(edit: QtWidgets.QLineEdit, text: str) -> None:
     edit.setFocus()
     edit.selectAll()
@@ -76,7 +65,7 @@ def test_publish_sends_the_text_child_as_typed_not_a_default(window, sim_thread,
     type_into(text.edit, "{z: 0.3}")
     qtbot.waitUntil(lambda: "will send" in text.status.text(), timeout=5_000)
     assert "sent:" not in text.status.text()
-    shoot(window, "compound-will-send.png")
+    snap(window, "compound-will-send")
     tap(view.button)
     got = sim_thread.wait_for_published_sync("/cmd_vel", lambda m: m["angular"]["z"] == 0.3, timeout=10)
     assert got["linear"]["x"] == 1.5 and got["angular"] == {"x": 0.0, "y": 0.0, "z": 0.3}
@@ -96,7 +85,7 @@ def test_invalid_or_empty_text_child_blocks_the_publish_and_is_named(window, sim
     tap(view.button)
     qtbot.waitUntil(lambda: "angular.z" in view.status.text(), timeout=5_000)
     assert view.status.text().startswith("not published: child 2 (Text Field) on angular")
-    shoot(window, "compound-blocked.png")
+    snap(window, "compound-blocked")
     # the robot got nothing; fixing the text and tapping Publish sends it
     type_into(text.edit, "{z: -0.5}")
     tap(view.button)

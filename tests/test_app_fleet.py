@@ -98,6 +98,8 @@ def test_chips_pick_the_side_robot_and_a_new_widget_is_bound_to_it(qtbot, tmp_pa
                         timeout=TIMEOUT_MS)  # each its own robot's battery
         shot(win, "mixed-canvas")
         shot(chips, "chips")
+        # the side panel's topic rates count the listed robot's widgets only
+        assert set(win.host.topic_counts("r-2")) == {"/battery"} and win.host.topic_counts("r-3") == {}
 
         # the side panel shows Alpha's topics; a tap on Bravo's chip shows Bravo's
         assert win.fleet_ui.side_robot == "r-1" and chips.chips["r-1"].isChecked()
@@ -145,6 +147,7 @@ def test_one_robot_dropping_shows_link_down_only_on_its_widgets(qtbot, tmp_path,
         b_badge = frame_of(win, b_id).badge
         qtbot.waitUntil(lambda: b_badge.isVisible() and b_badge.text() == "LINK DOWN", timeout=TIMEOUT_MS)
         assert "RECONNECTING" in chip.text() or "DISCONNECTED" in chip.text()
+        qtbot.waitUntil(lambda: "connection refused" in chip.toolTip(), timeout=TIMEOUT_MS)  # why, in words
         # Alpha's widget stays live: no badge, its value keeps coming
         model = win.host.hosted[a_id].model
         count = model.state.count
@@ -179,6 +182,41 @@ def test_a_canvas_is_re_targeted_to_another_robot_in_one_undo_step(qtbot, tmp_pa
         tap(win.canvas_buttons["undo"])  # one step takes the copy away
         assert [c.name for c in win.controller.workspace.canvases] == ["Fleet"]
         assert win.controller.canvas is original
+    finally:
+        win.shutdown()
+
+
+def test_robots_are_added_in_the_robots_dialog_and_connect(qtbot, tmp_path, two):
+    alpha, bravo = two
+    fleet_layout(tmp_path / "config", [Robot("r-1", "Alpha")],
+                 [("Battery", "std.label", Binding(*BATTERY), LABEL, (16, 16, 240, 112))])
+    win = open_window(qtbot, tmp_path / "config", entry_point_plugins(), url=alpha.url, wait_connected=True)
+    try:
+        ui = win.fleet_ui
+        assert not ui.chips.isVisible()
+        win.canvas_actions["robots"].trigger()  # Canvas ▾ → Robots…
+        dialog = ui.robots_dialog
+        assert dialog.isVisible() and dialog.table.rowCount() == 1
+        tap(dialog.findChild(QtWidgets.QPushButton, "addRobot"))
+        assert dialog.table.rowCount() == 2
+        dialog.set_row(1, name="Bravo", url="127.0.0.1:not-a-port")
+        ok = dialog.findChild(QtWidgets.QDialogButtonBox).button(QtWidgets.QDialogButtonBox.StandardButton.Ok)
+        tap(ok)  # a URL it cannot use: refused with the reason, nothing changed
+        assert dialog.isVisible() and "port" in dialog.problem.text()
+        assert len(win.controller.workspace.robots) == 1
+        dialog.set_row(1, url=bravo.url)
+        tap(ok)
+        robots = win.controller.workspace.robots
+        assert [(r.name, r.url) for r in robots] == [("Alpha", ""), ("Bravo", bravo.url)]
+        rid = robots[1].id
+        qtbot.waitUntil(lambda: ui.chips.isVisible() and rid in ui.chips.chips, timeout=TIMEOUT_MS)
+        qtbot.waitUntil(lambda: ui.chips.chips[rid].state == "connected", timeout=TIMEOUT_MS)
+        assert ui.links.link(rid).url == bravo.url and len(bravo.connections) == 1
+        tap(win.canvas_buttons["undo"])  # one step: Bravo is gone again, its link closed
+        assert [r.name for r in win.controller.workspace.robots] == ["Alpha"]
+        qtbot.waitUntil(lambda: not ui.chips.isVisible(), timeout=TIMEOUT_MS)
+        assert rid not in ui.links.ids
+        qtbot.waitUntil(lambda: len(bravo.connections) == 0, timeout=TIMEOUT_MS)  # the link was closed
     finally:
         win.shutdown()
 

@@ -4,12 +4,9 @@ robot, which receives the messages on the new topic."""
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
-
 import pytest
-from app_helpers import entry_point_plugins, tap, tap_item, window_session
-from qtpy import QtCore, QtWidgets
+from app_helpers import entry_point_plugins, snap, tap, tap_item, window_session
+from qtpy import QtCore
 from qtpy.QtTest import QTest
 
 from rcon_core.app.new_topic import compatible_types, topic_name_problem, type_label
@@ -18,8 +15,6 @@ from rcon_core.plugins import PluginManager, Role
 
 pytest.importorskip("rcon_widgets_std")
 pytestmark = pytest.mark.usefixtures("qapp")
-
-SHOTS = Path(os.environ.get("RCON_UX_SHOTS", "/tmp/ux-a"))
 
 
 @pytest.fixture(scope="module")
@@ -31,12 +26,6 @@ def plugins() -> PluginManager:
 def window(qtbot, tmp_path, sim_thread, plugins):
     yield from window_session(qtbot, tmp_path / "config", plugins, url=sim_thread.url, wait_connected=True,
                               types=TypeRegistry.standard(), topics=("/cmd_vel",))
-
-
-def shoot(window, name: str) -> None:
-    SHOTS.mkdir(parents=True, exist_ok=True)
-    QtWidgets.QApplication.processEvents()
-    window.grab().save(str(SHOTS / name))
 
 
 def open_from_palette(window, kind: str):
@@ -68,12 +57,12 @@ def test_a_chat_on_a_topic_the_robot_does_not_have(window, sim_thread, qtbot):
     assert set(box.type_names()) == {"std_msgs/String", "rosgraph_msgs/Log"}
     QTest.keyClicks(box.search, "string")
     assert box.type_names() == ["std_msgs/String"]
-    shoot(window, "new-topic-search.png")
+    snap(window, "new-topic-search")
     item = box.item_for("std_msgs/String")
     tap_item(box.type_list, box.type_list.indexFromItem(item))
     assert panel.problems() == [], panel.problems()
     assert panel.draft.binding.name == "/ops/chat" and panel.draft.binding.type == "std_msgs/String"
-    shoot(window, "new-topic-ready.png")
+    snap(window, "new-topic-ready")
     tap(panel.place_button)
     [inst] = window.controller.canvas.widgets
     assert (inst.kind, inst.binding.name, inst.binding.role) == ("std.textview", "/ops/chat", Role.PUBLISH)

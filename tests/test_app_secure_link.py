@@ -3,15 +3,14 @@
 where there is none, in memory only; without the CA, with the wrong secret or an expired certificate the
 bar says why within 2 s and stops trying.  Drives the real window offscreen against the sim over wss://.
 
-Screenshots of the bar in each failure state go to /tmp/sec-link/ (set RCON_SHOTS to another folder)."""
+``RCON_SCREENSHOTS=DIR`` writes a PNG of the window in each failure state."""
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import pytest
-from app_helpers import open_window, tap
+from app_helpers import open_window, snap, tap
 from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
@@ -28,7 +27,6 @@ from tls_certs import make_pki  # noqa: E402
 
 pytestmark = pytest.mark.usefixtures("qapp")
 
-SHOTS = Path(os.environ.get("RCON_SHOTS", "/tmp/sec-link"))
 SECRET = "app-robot-secret"
 SAY_WHY_MS = 2_000
 
@@ -85,11 +83,6 @@ def window(qtbot, tmp_path):
     win = open_window(qtbot, tmp_path, PluginManager(environ={}), size=(1280, 800))
     yield win
     win.shutdown()
-
-
-def shoot(window, name: str) -> None:
-    SHOTS.mkdir(parents=True, exist_ok=True)
-    window.connection.grab().save(str(SHOTS / f"{name}.png"), "PNG")
 
 
 def type_into(line: QtWidgets.QLineEdit, text: str) -> None:
@@ -185,7 +178,7 @@ def test_fails_fast_with_the_reason_in_the_bar(qtbot, window, pki, store, case, 
         assert bar.state_label.text() == "DISCONNECTED" and bar.connect_button.text() == "Connect"
         assert bar.message.toolTip() == sentence
         QtWidgets.QApplication.processEvents()
-        shoot(window, f"fatal-{case.replace(' ', '-')}")
+        snap(window, f"fatal-{case.replace(' ', '-')}")
         QTest.qWait(300)
         assert bar.message.text() == sentence and bar.link.client is None  # still said, still not retrying
         assert bar.config.url_history == []

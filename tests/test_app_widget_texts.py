@@ -3,11 +3,8 @@ painted over anything else, nothing clipped, type names never cut mid-word, and 
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
-
 import pytest
-from app_helpers import entry_point_plugins, tap, window_session
+from app_helpers import entry_point_plugins, snap, tap, window_session
 from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
@@ -17,8 +14,6 @@ from rcon_core.plugins import Binding, PluginManager, Role
 
 pytest.importorskip("rcon_widgets_std")
 pytestmark = pytest.mark.usefixtures("qapp")
-
-SHOTS = Path(os.environ.get("RCON_UX_SHOTS", "/tmp/ux-a"))
 
 
 @pytest.fixture(scope="module")
@@ -30,12 +25,6 @@ def plugins() -> PluginManager:
 def window(qtbot, tmp_path, sim_thread, plugins):
     yield from window_session(qtbot, tmp_path / "config", plugins, url=sim_thread.url, wait_connected=True,
                               topics=("/cmd_vel", "/speed_limit", "/battery"))
-
-
-def shoot(window, name: str) -> None:
-    SHOTS.mkdir(parents=True, exist_ok=True)
-    QtWidgets.QApplication.processEvents()
-    window.grab().save(str(SHOTS / name))
 
 
 def place(window, qtbot, plugins, kind: str, binding: Binding, size=None, settings=None, title="w"):
@@ -68,7 +57,7 @@ def test_a_text_field_never_paints_its_status_over_the_input(window, qtbot, plug
     qtbot.waitUntil(lambda: view.status.text() == "sent: 0.8", timeout=5_000)
     # at its default size both show, one under the other
     assert view.status.isVisible() and below(view, view.edit, view.status)
-    shoot(window, "textfield-default-size.png")
+    snap(window, "textfield-default-size")
     # squeezed shorter than both need: the status line gives way (it becomes the input's tooltip)
     window.controller.set_locked(False)
     window.doc.set_geometry(inst.id, Geometry(16, 16, 240, 80))
@@ -91,7 +80,7 @@ def test_compound_child_row_buttons_are_whole(window, qtbot):
         assert b.width() >= hint.width() and b.height() >= hint.height(), (name, b.size(), hint)
     assert button(editor, "addChildButton").text() == "+ Add child"  # a glyph every font has
     panel.settings_scroll.ensureWidgetVisible(editor.add_button)
-    shoot(window, "compound-child-rows.png")
+    snap(window, "compound-child-rows")
 
 
 def test_topic_types_keep_their_own_name_when_the_column_is_narrow(window, qtbot):
@@ -111,7 +100,7 @@ def test_topic_types_keep_their_own_name_when_the_column_is_narrow(window, qtbot
         assert tree.fontMetrics().horizontalAdvance(type_line) <= width
         assert "…" in type_line or width == 110
     assert type_line == "BatteryState" and name_line == "/battery"
-    shoot(window, "topic-types.png")
+    snap(window, "topic-types")
 
 
 # ------------------------------------------------------------------------------------ the words
@@ -132,7 +121,7 @@ def test_not_configured_says_a_missing_topic_once_and_decimals_in_words(window, 
     decimals = panel.form.editor("decimals")
     assert decimals.value() == -1 and decimals.text() == "as received"  # never "-1"
     panel.settings_scroll.ensureWidgetVisible(decimals)
-    shoot(window, "textfield-settings.png")
+    snap(window, "textfield-settings")
     panel.cancel()
     panel = open_from_palette(window, "std.label")
     label_decimals = panel.form.editor("decimals")
@@ -161,7 +150,7 @@ def test_the_lights_switch_reads_as_a_state_and_says_what_a_tap_does(window, qtb
     view = hosted.view
     qtbot.waitUntil(lambda: view.button.text() == "○ Off", timeout=10_000)  # a lamp not lit: a state
     assert view.reply.text() == "tap for On"
-    shoot(window, "switch-off.png")
+    snap(window, "switch-off")
     tap(view.button)
     qtbot.waitUntil(lambda: sim_thread.robot.lights is True, timeout=10_000)
     qtbot.waitUntil(lambda: view.button.text() == "● On", timeout=10_000)

@@ -98,7 +98,7 @@ async def test_unknown_action_fails_clearly_within_the_client_timeout(sim2: SimS
     text = str(info.value)
     assert text.startswith("/no_such_action: ")
     if check:
-        assert "action does not exist (action servers: /navigate_to_fix)" in text
+        assert "action does not exist (action servers: /fibonacci, /navigate_to_fix)" in text
     else:
         assert "No action server available" in text and info.value.status == GoalStatus.UNKNOWN
 

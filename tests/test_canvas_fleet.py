@@ -192,6 +192,35 @@ async def test_a_new_client_for_one_robot_restarts_only_its_widgets(sim_fleet, p
             await client.close()
 
 
+async def test_a_view_only_robot_refuses_commands_the_others_take_them(sim_fleet, pm):
+    alpha, bravo = await sim_fleet(2)
+    clients = await clients_for([alpha, bravo])
+    ws = Workspace.new("Fleet")
+    ws.robots = [Robot("r-1", "Alpha"), Robot("r-2", "Bravo", view_only=True)]
+    doc = Document(ws)
+    c = doc.current
+    speed = ("/speed_limit", "std_msgs/Float64", "publish", "data")
+    a_cmd = doc.add_widget(c.id, "fl.slider", Binding(*speed))
+    b_cmd = doc.add_widget(c.id, "fl.slider", Binding(*speed, robot="r-2"))
+    b_label = doc.add_widget(c.id, "fl.label", Binding(*BATTERY, robot="r-2"))
+    rt = CanvasRuntime(pm, Fleet(zip(ws.robots, clients, strict=True)), types=TypeRegistry.standard())
+    try:
+        rt.start(c)
+        m = rt.models
+        assert rt.view_only_reason(robot_id="r-2") == "robot “Bravo” is view-only"
+        assert rt.view_only_reason(robot_id="r-1") is None
+        m[b_cmd.id].publish_value(1.5)
+        m[a_cmd.id].publish_value(0.5)
+        assert (await alpha.wait_for_published("/speed_limit", timeout=5.0)) == {"data": 0.5}
+        await until(lambda: "view-only" in (m[b_cmd.id].state.error or ""), what="Bravo's refusal on its widget")
+        await until(lambda: m[b_label.id].state.count > 0, what="Bravo still watched")
+        assert bravo.published("/speed_limit") == []  # nothing reached the view-only robot
+    finally:
+        rt.stop()
+        for client in clients:
+            await client.close()
+
+
 def test_a_bare_client_is_a_fleet_of_one():
     fleet = Fleet.single("client")
     assert fleet.client("") == "client" and fleet.ids == ["r-1"] and "" in fleet and "r-2" not in fleet

@@ -12,6 +12,7 @@ import pytest
 from rcon_core.canvas import (
     AutoSaver,
     Binding,
+    Canvas,
     Document,
     Geometry,
     NewerVersionError,
@@ -340,3 +341,13 @@ def test_an_unreadable_file_is_copied_once_per_content_and_can_be_moved_aside(tm
     assert len(list(tmp_path.glob("ws.json.unreadable-*"))) == 2
     store.save(Workspace.new("Fresh"))
     assert WorkspaceStore(path).load().canvases[0].name == "Fresh"
+
+
+def test_a_view_only_canvas_round_trips_and_others_do_not_write_the_key():
+    ws = Workspace.new("Watch")
+    ws.canvases[0].view_only = True
+    ws.canvases.append(Canvas("c-2", "Drive"))
+    data = json.loads(dumps_workspace(ws))
+    assert data["canvases"][0]["view_only"] is True and "view_only" not in data["canvases"][1]
+    back = loads_workspace(dumps_workspace(ws))
+    assert [c.view_only for c in back.canvases] == [True, False]

@@ -69,7 +69,7 @@ async def test_navigate_to_fix_action(sim2: SimServer) -> None:
     async with websockets.connect(sim2.url, max_size=None, max_queue=None) as ws:
         await ws.send(json.dumps({"op": "call_service", "id": "a", "service": "/rosapi/action_servers", "args": {}}))
         servers = await recv_until(ws, lambda m: m.get("id") == "a")
-        assert servers["values"] == {"action_servers": ["/navigate_to_fix"]}
+        assert servers["values"] == {"action_servers": ["/fibonacci", "/navigate_to_fix"]}
         await ws.send(json.dumps({"op": "send_action_goal", "id": "goal-1", "action": "/navigate_to_fix",
                                   "action_type": "rcon_sim/action/NavigateToFix", "feedback": True,
                                   "args": {"target": {"latitude": lat, "longitude": lon}}}))

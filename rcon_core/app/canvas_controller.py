@@ -74,6 +74,8 @@ class CanvasController(QtCore.QObject):
         self.on_configure: Callable[[str], Any] | None = None
         #: the bridge client the widgets run on (the window sets it; offline until connected)
         self.client: Any = OFFLINE
+        #: why the robot connection is view-only (the window sets it), None when it may be commanded
+        self.view_only: str | None = None
         self.saver = AutoSaver(doc, store, on_error=lambda exc: self.save_failed.emit(str(exc)))
         self._remove_listener = doc.add_listener(self._changed)
         self._rebuild_surfaces()
@@ -180,6 +182,9 @@ class CanvasController(QtCore.QObject):
         elif what == "canvas-switched":
             self._show_current()
             self.live.switch(self.canvas)
+        elif what == "canvas-view-only" and cid == current:
+            self.run_current()  # every widget gets a port that refuses (or no longer refuses)
+            self.lock_changed.emit(self.canvas.locked)
         elif what == "canvas-locked" and cid in self.surfaces:
             self.surfaces[cid].set_editable(not self.workspace.canvas(cid).locked)
             if cid == current:
@@ -215,7 +220,7 @@ class CanvasController(QtCore.QObject):
 
     def run_current(self) -> None:
         """(Re)start the current canvas's widgets on :attr:`client` (set by the window)."""
-        self.live.start(self.client, self.canvas, self.workspace.plugin_settings)
+        self.live.start(self.client, self.canvas, self.workspace.plugin_settings, view_only=self.view_only)
 
     # -------------------------------------------------------------------------------- navigation
     def switch(self, index: int) -> None:

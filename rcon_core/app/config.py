@@ -1,6 +1,7 @@
-"""Where the app keeps its state on disk: the workspace file, the URL history and each robot's connection
+"""Where the app keeps its state on disk: the workspace file, the URL history, each robot's connection
 settings (CA file, client certificate and key paths, whether it uses rosauth; never the secret, which
-lives in the OS credential store, see ``secret_store.py``).
+lives in the OS credential store, see ``secret_store.py``), the operator PIN (hashed, see
+:mod:`rcon_core.app.pin`) and which robot URLs are view-only.
 
 Everything lives under one config directory (platformdirs' user config dir by default; tests and the
 benchmark pass a temporary one), so a restart of the app finds what the operator left.
@@ -124,6 +125,31 @@ class AppConfig:
         entry["auth"] = bool(settings.get("auth", False))
         robots[url] = entry
         self._data["robots"] = robots
+        self.save()
+
+    @property
+    def pin_record(self) -> dict | None:
+        """The operator PIN's stored form (salt and scrypt hash, never the PIN), or None when unset."""
+        record = self._data.get("operator_pin")
+        return record if isinstance(record, dict) else None
+
+    def set_pin_record(self, record: dict | None) -> None:
+        if record is None:
+            self._data.pop("operator_pin", None)
+        else:
+            self._data["operator_pin"] = record
+        self.save()
+
+    def is_view_only(self, url: str) -> bool:
+        """Whether the robot at ``url`` is marked view-only (its widgets never send anything)."""
+        urls = self._data.get("view_only_urls", [])
+        return isinstance(urls, list) and url.strip() in urls
+
+    def set_view_only(self, url: str, view_only: bool) -> None:
+        url = url.strip()
+        saved = self._data.get("view_only_urls")
+        urls = [u for u in (saved if isinstance(saved, list) else []) if isinstance(u, str) and u != url]
+        self._data["view_only_urls"] = [*urls, url] if view_only else urls
         self.save()
 
     def save(self) -> None:

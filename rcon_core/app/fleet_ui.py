@@ -27,6 +27,7 @@ from rcon_core.app.fleet_links import FleetLinks
 from rcon_core.app.link import EMPTY_CATALOG, OFFLINE, BadUrl, state_name
 from rcon_core.app.robot_chips import RobotChips, RobotPicker
 from rcon_core.app.robot_marks import apply_marks
+from rcon_core.app.widget_host import RateMeter
 from rcon_core.canvas import Change, EditError
 from rcon_core.canvas.fleet import Fleet
 from rcon_core.canvas.robots import robot_colour
@@ -65,6 +66,8 @@ class FleetUi(QtCore.QObject):
         self._catalog_dirty = True
         self._marks_dirty = True
         self._states: dict[str, str] = {}
+        #: robot id -> why its link is not up (words of rcon_core.bridge.reasons), for its chip
+        self.why: dict[str, str] = {}
         self._remove = window.doc.add_listener(self._doc_changed)
         self.links.on_client_changed(self._client_changed)
         self._sync_robots(connect=False)
@@ -86,14 +89,29 @@ class FleetUi(QtCore.QObject):
         return "" if not robot_id or robot_id == self.first_id else robot_id
 
     def fleet(self) -> Fleet:
-        """The current clients, for the canvas runtime."""
-        return self.links.fleet(OFFLINE)
+        """The current clients, for the canvas runtime, with each robot's view-only mark: its own flag, or
+        its URL marked view-only in the app config (Canvas ▾ → robot view-only)."""
+        fleet = self.links.fleet(OFFLINE)
+        for robot in fleet.robots:
+            fleet.set_view_only(robot.id, self.config_view_only(robot.id))
+        return fleet
+
+    def robot_url(self, robot_id: str) -> str | None:
+        """Where the robot is: the first robot's is the connection bar's (connected, else the field)."""
+        if not robot_id or robot_id == self.first_id:
+            return self.window.robot_url() or None
+        return self.links.url_of(robot_id)
+
+    def config_view_only(self, robot_id: str) -> str | None:
+        url = self.robot_url(robot_id)
+        return f"robot {url} is view-only" if url and self.window.config.is_view_only(url) else None
 
     def side_fleet(self) -> Fleet:
         """The same, the side panel's robot first (a preview's binding names no robot or that one)."""
-        pairs = self.fleet().items()
+        fleet = self.fleet()
+        pairs = fleet.items()
         pairs.sort(key=lambda p: p[0].id != self.side_robot)
-        return Fleet(pairs)
+        return Fleet(pairs, {r.id: why for r, _c in pairs if (why := fleet.view_only_reason(r.id))})
 
     def first_url(self) -> str:
         return self.robots[0].url
@@ -158,7 +176,7 @@ class FleetUi(QtCore.QObject):
         elif client is None:
             live.set_client(robot_id, OFFLINE, keep=True)
         else:
-            live.set_client(robot_id, client)
+            live.set_client(robot_id, client, view_only=self.config_view_only(robot_id))
         if robot_id == self.side_robot:
             self.catalogs.pop(robot_id, None)
             self._catalog_dirty = True
@@ -177,6 +195,7 @@ class FleetUi(QtCore.QObject):
             self.chips.set_current(self.side_robot)
             return
         self.side_robot = robot_id
+        self.window.rates = RateMeter()  # the topic rates of the robot now listed start afresh
         self.chips.set_current(robot_id)
         for picker in self.pickers:
             picker.set_current(robot_id)
@@ -205,21 +224,39 @@ class FleetUi(QtCore.QObject):
         for robot, link in self.links.items():
             if robot.id == first:
                 state = window.connection.state  # the connection bar takes the first link's mailboxes
+                failure = window.connection.failure
+                self.why[first] = failure.text() if failure is not None else ""
             else:
                 ok, taken = link.state_box.take()
                 state = taken if ok else self._states.get(robot.id, "closed")
-                link.failure_box.take()  # bounded: the chip's tooltip says the state, the log the reason
-                link.error_box.take()
+                self._take_failure(robot.id, link)
                 link.answered_box.take()
             state = state_name(state)
             if self._states.get(robot.id) != state:
                 self._states[robot.id] = state
                 window.host.set_link_up(state == "connected", robot.id)
             latency = link.latency if state in ("connected", "degraded") else None
-            self.chips.show_state(robot.id, state, latency)
+            self.chips.show_state(robot.id, state, latency,
+                                  None if state == "connected" else self.why.get(robot.id) or None)
         if self._marks_dirty:
             self._marks_dirty = False
             apply_marks(window.host, window.doc.workspace)
+
+    def _take_failure(self, robot_id: str, link: Any) -> None:
+        """Why a robot's link is not up, in words (its chip's tooltip); a failure that retrying cannot fix
+        (TLS, a refused secret) ends that robot's link, as the connection bar does for the first."""
+        ok, failure = link.failure_box.take()
+        if ok:
+            if failure is None:
+                self.why.pop(robot_id, None)
+            else:
+                self.why[robot_id] = failure.text()
+                if failure.fatal:
+                    link.disconnect()
+                    self._states[robot_id] = "closed"
+        ok, error = link.error_box.take()
+        if ok and error:
+            self.why[robot_id] = str(error)
 
     # ----------------------------------------------------------------------------------- canvas menu
     def _add_menu(self) -> None:
@@ -238,7 +275,8 @@ class FleetUi(QtCore.QObject):
         self._fill_retarget_menu()
         robots = menu.addAction("Robots…")
         robots.setObjectName("canvas_robots")
-        robots.triggered.connect(self.open_robots_dialog)
+        robots.triggered.connect(lambda: self.window.operator_lock.guard("edit the robots",
+                                                                         self.open_robots_dialog))
         window.canvas_actions["robots"] = robots
 
     def _fill_retarget_menu(self) -> None:

@@ -46,11 +46,13 @@ class LiveCanvas:
         self.running = False
 
     # ---------------------------------------------------------------------------------- GUI thread
-    def start(self, client: Any, canvas: Canvas, plugin_settings: dict[str, Any] | None = None) -> None:
-        """(Re)build the runtime on ``client`` and start ``canvas`` (replacing whatever ran before)."""
+    def start(self, client: Any, canvas: Canvas, plugin_settings: dict[str, Any] | None = None, *,
+              view_only: str | None = None) -> None:
+        """(Re)build the runtime on ``client`` and start ``canvas`` (replacing whatever ran before);
+        ``view_only``: why the robot connection may not be commanded (see ``rcon_core.canvas.port``)."""
         self.running = True
         snap, shared = copy.deepcopy(canvas), copy.deepcopy(plugin_settings or {})
-        self._send(self._loop_start, client, snap, shared)
+        self._send(self._loop_start, client, snap, shared, view_only)
 
     def switch(self, canvas: Canvas) -> None:
         """Stop the running canvas's widgets (after telling them focus is lost), start ``canvas``'s."""
@@ -75,11 +77,13 @@ class LiveCanvas:
         now on (another canvas, an added or reconfigured widget) is built on ``client`` (offline)."""
         self._send(self._loop_offline, client)
 
-    def set_client(self, robot_id: str, client: Any, *, keep: bool = False) -> None:
+    def set_client(self, robot_id: str, client: Any, *, keep: bool = False,
+                   view_only: str | None | bool = False) -> None:
         """``robot_id``'s link is ``client`` now: only that robot's widgets (and fleet-wide ones such as
         the map of every robot) are rebuilt on it. ``keep``: they keep their models and last values (a
-        Disconnect: LINK DOWN, then STALE) and only what starts from now on uses ``client``."""
-        self._send(self._loop_set_client, robot_id, client, keep)
+        Disconnect: LINK DOWN, then STALE) and only what starts from now on uses ``client``.
+        ``view_only``: the robot's view-only mark on the new link (a reason or None; False: unchanged)."""
+        self._send(self._loop_set_client, robot_id, client, keep, view_only)
 
     def stop(self) -> None:
         """Stop every widget (returns at once; the stop runs on the bridge thread)."""
@@ -118,13 +122,13 @@ class LiveCanvas:
     def _running_ids(self) -> set[str]:
         return set(self._rt.models) if self._rt is not None else set()
 
-    def _loop_start(self, client: Any, canvas: Canvas, shared: dict[str, Any]) -> None:
+    def _loop_start(self, client: Any, canvas: Canvas, shared: dict[str, Any], view_only: str | None) -> None:
         before = self._running_ids()
         if self._rt is not None:
             self._rt.stop()
         self._rt = CanvasRuntime(
             self.plugins, client, types=self.types, plugin_settings=shared, dispatch=self.thread.call,
-            on_activity=self.notify,
+            on_activity=self.notify, view_only=view_only,
         )
         self._rt.start(canvas)
         self._post_reset(before)
@@ -156,11 +160,11 @@ class LiveCanvas:
         if self._rt is not None:
             self._rt.client = client
 
-    def _loop_set_client(self, robot_id: str, client: Any, keep: bool) -> None:
+    def _loop_set_client(self, robot_id: str, client: Any, keep: bool, view_only: str | None | bool) -> None:
         if self._rt is None:
             return
         before = self._running_ids()
-        self._rt.set_client(robot_id, client, restart=not keep)
+        self._rt.set_client(robot_id, client, restart=not keep, view_only=view_only)
         if not keep:
             self._post_reset(before)
 

@@ -1,5 +1,6 @@
-"""``rcon`` without a subcommand: open the app (``--url``, ``--layout``, ``--demo [--robots N]``, ``--screenshot``, and
-the secure-link options ``--ca-file``, ``--client-cert``/``--client-key``, ``--auth-secret-file``)."""
+"""``rcon`` without a subcommand: open the app (``--url``, ``--layout``, ``--demo [--robots N]``, ``--locked``,
+``--screenshot``, and the secure-link options ``--ca-file``, ``--client-cert``/``--client-key``,
+``--auth-secret-file``)."""
 
 from __future__ import annotations
 
@@ -29,8 +30,8 @@ def closing_on_signals(windows: list[Any]) -> Any:
     from qtpy import QtCore
 
     def close_all() -> None:
-        for window in windows:
-            window.close()
+        for window in windows:  # a signal from a shell closes even a locked window (close_now)
+            getattr(window, "close_now", window.close)()
 
     def handler(_signum: int, _frame: Any) -> None:
         QtCore.QTimer.singleShot(0, close_all)
@@ -68,7 +69,32 @@ def link_overrides(args: Any) -> Any:
 
 
 def run_app(args: Any) -> int:
-    """Open the window; returns the process exit code."""
+    """Open the window and run until it closes; returns the process exit code."""
+    from qtpy import QtCore, QtWidgets
+
+    with contextlib.ExitStack() as stack:
+        window = open_app(args, stack)
+        if isinstance(window, int):
+            return window
+        app = QtWidgets.QApplication.instance()
+        assert isinstance(app, QtWidgets.QApplication)
+        if getattr(args, "quit_after", None):
+            def quit_now() -> None:  # Qt's quit asks the windows, and a locked one would refuse
+                window.close_now()
+                app.quit()
+
+            QtCore.QTimer.singleShot(int(args.quit_after * 1000), quit_now)
+        try:
+            rc = app.exec()
+        finally:
+            window.shutdown()
+    return int(rc)
+
+
+def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
+    """Everything ``rcon`` does before the event loop runs: check the arguments, build and show the window
+    (full screen and locked with ``--locked``), connect. Returns the window, or an exit code (a message was
+    printed). What must end with the run (signal handlers, the demo's robot) is entered on ``stack``."""
     from qtpy import QtCore, QtWidgets
 
     from rcon_core.app import theme
@@ -111,64 +137,65 @@ def run_app(args: Any) -> int:
     app = existing if isinstance(existing, QtWidgets.QApplication) else QtWidgets.QApplication(sys.argv[:1])
     app.setApplicationName("RCON")
     theme.apply(app)
-    plugins = load_plugins()
     config = AppConfig()
+    locked = bool(getattr(args, "locked", False))
+    if locked and config.pin_record is None:
+        print("rcon: --locked needs an operator PIN: set one in the app (Canvas ▾ → Operator PIN…) first",
+              file=sys.stderr)
+        return 2
+    plugins = load_plugins()
     windows: list[Any] = []
-    with contextlib.ExitStack() as stack:
-        stack.enter_context(closing_on_signals(windows))
-        demo_factory = None
-        fleet_urls: list[str] = []
-        if demo and robots is not None:
-            from rcon_core.app.fleet_demo import connect_fleet, fleet_sims, fleet_workspace
+    stack.enter_context(closing_on_signals(windows))
+    demo_factory = None
+    fleet_urls: list[str] = []
+    if demo and robots is not None:
+        from rcon_core.app.fleet_demo import connect_fleet, fleet_sims, fleet_workspace
 
-            servers = stack.enter_context(fleet_sims(robots))
-            fleet_urls = [s.url for s in servers]
-            url = fleet_urls[0]
-            if layout is None:
-                layout = config.dir / f"demo-fleet{robots}-workspace.json"
+        fleet_urls = [s.url for s in stack.enter_context(fleet_sims(robots))]
+        if layout is None:
+            layout = config.dir / f"demo-fleet{robots}-workspace.json"
 
-            def demo_factory() -> Any:
-                return fleet_workspace(robots, plugins)
+        def demo_factory() -> Any:
+            return fleet_workspace(robots, plugins)
 
-        elif demo:
-            from rcon_core.app.demo import demo_workspace
-            from rcon_core.sim import SimServer
+    elif demo:
+        from rcon_core.app.demo import demo_workspace
+        from rcon_core.sim import SimServer
 
-            server = stack.enter_context(SimServer.in_thread(port=0))
-            url = server.url
-            if layout is None:
-                layout = config.dir / "demo-workspace.json"
+        server = stack.enter_context(SimServer.in_thread(port=0))
+        url = server.url
+        if layout is None:
+            layout = config.dir / "demo-workspace.json"
 
-            def demo_factory() -> Any:
-                return demo_workspace(plugins)
+        def demo_factory() -> Any:
+            return demo_workspace(plugins)
 
-        # the demo layout is built on its first start only (or when it cannot be read); edits persist
-        window = MainWindow(config, plugins, layout_path=layout, demo=demo_factory)
-        windows.append(window)
-        window.connection.overrides = overrides
-        if demo and getattr(args, "reset_layout", False):
-            window.reset_demo_layout()
+    # the demo layout is built on its first start only (or when it cannot be read); edits persist
+    window = MainWindow(config, plugins, layout_path=layout, demo=demo_factory)
+    windows.append(window)
+    window.connection.overrides = overrides
+    if demo and getattr(args, "reset_layout", False):
+        window.reset_demo_layout()
+    if locked:  # kiosk: the operator lock on from the start, full screen
+        window.operator_lock.engage()
+        window.show()  # first shown normally: a first showFullScreen() is not kept on every platform
+        window.showFullScreen()
+    else:
         window.show()
-        # the embedded robot's URL is not put in the history: its port is gone after this run
-        if fleet_urls:  # the demo's vessels: run-time URLs, never saved
-            connect_fleet(window, fleet_urls)
-        else:
-            # the first robot: --url, else its URL in the layout, else the newest in the history; the others
-            # connect to their own URLs (window.fleet_ui)
-            window.connect_to(url or window.fleet_ui.first_url() or config.last_url, remember=not demo)
-        if getattr(args, "screenshot", None):
-            path = Path(args.screenshot)
+    # the embedded robot's URL is not put in the history: its port is gone after this run. The first robot:
+    # --url, else its URL in the layout, else the newest in the history; the others connect to their own
+    # URLs (window.fleet_ui)
+    if fleet_urls:  # the demo's vessels: run-time URLs, never saved
+        connect_fleet(window, fleet_urls)
+    else:
+        window.connect_to(url or window.fleet_ui.first_url() or config.last_url, remember=not demo)
+    if getattr(args, "screenshot", None):
+        path = Path(args.screenshot)
 
-            def shoot() -> None:
-                window.grab().save(str(path), "PNG")
-                print(f"rcon: screenshot written to {path}")
+        def shoot() -> None:
+            window.grab().save(str(path), "PNG")
+            print(f"rcon: screenshot written to {path}")
 
-            delay = max(0.5, (args.quit_after or 3.0) - 0.3)
-            QtCore.QTimer.singleShot(int(delay * 1000), shoot)
-        if getattr(args, "quit_after", None):
-            QtCore.QTimer.singleShot(int(args.quit_after * 1000), app.quit)
-        try:
-            rc = app.exec()
-        finally:
-            window.shutdown()
-    return int(rc)
+        delay = max(0.5, (args.quit_after or 3.0) - 0.3)
+        QtCore.QTimer.singleShot(int(delay * 1000), shoot)
+    return window

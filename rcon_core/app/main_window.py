@@ -25,7 +25,9 @@ from rcon_core.app.focus import focus_into, has_focus_inside
 from rcon_core.app.frame_clock import FrameClock, Waker
 from rcon_core.app.link import Link
 from rcon_core.app.live import LiveCanvas
+from rcon_core.app.lock_controls import install as install_lock_controls
 from rcon_core.app.notice_bar import NoticeBar
+from rcon_core.app.operator_lock import OperatorLock
 from rcon_core.app.palette_panel import PalettePanel
 from rcon_core.app.preview import PreviewHost
 from rcon_core.app.settings_form import SettingsForm, form_label, tune_form
@@ -255,6 +257,9 @@ class MainWindow(QtWidgets.QMainWindow):
         app = QtWidgets.QApplication.instance()
         if isinstance(app, QtGui.QGuiApplication):
             app.applicationStateChanged.connect(self._app_state_changed)
+        #: the operator lock (PIN) over Operate mode, and the view-only controls: see lock_controls
+        self.operator_lock = OperatorLock(config, self)
+        install_lock_controls(self)
         self.resize(self.initial_size())
 
     # ------------------------------------------------------------------------------------ workspace
@@ -513,6 +518,10 @@ class MainWindow(QtWidgets.QMainWindow):
         if not checked:
             self._show_mode(self.controller.canvas.locked)  # tapping the active segment: nothing changes
             return
+        if not locked and self.operator_lock.engaged:
+            self._show_mode(True)  # still Operate: the PIN first
+            self.operator_lock.guard("leave Operate mode", lambda: self._mode_toggled(False, True))
+            return
         if locked != self.controller.canvas.locked:
             self.controller.set_locked(locked)
         self._show_lock(locked)
@@ -624,6 +633,8 @@ class MainWindow(QtWidgets.QMainWindow):
                                     if locked else "Tap to lock the canvas for operation")
         self.edit_button.setToolTip("Edit (current): move, resize, add and delete widgets" if not locked
                                     else "Tap to unlock the canvas for editing")
+        if getattr(self, "operator_lock", None) is not None and self.operator_lock.engaged:
+            self.edit_button.setMinimumWidth(self.edit_button.sizeHint().width())  # text and padlock
 
     def _show_lock(self, locked: bool) -> None:
         self._show_mode(locked)
@@ -653,6 +664,9 @@ class MainWindow(QtWidgets.QMainWindow):
             return
 
         def unlock_and_start() -> None:
+            if self.operator_lock.engaged:
+                self.operator_lock.guard(what, unlock_and_start)
+                return
             self.notice.dismiss()
             self.controller.set_locked(False)
             start()
@@ -819,6 +833,25 @@ class MainWindow(QtWidgets.QMainWindow):
         return next((list(m.field_paths) for m in found if m.spec.kind == spec.kind), [])
 
     # -------------------------------------------------------------------------------------- link
+    def robot_url(self) -> str:
+        """The robot's URL: the connected one, else what the URL field holds."""
+        from rcon_core.app.connection_bar import normalize_url
+
+        return self.link.url if self.link.client is not None and self.link.url else normalize_url(
+            self.connection.url.currentText())
+
+    def connection_view_only(self) -> str | None:
+        """Why the robot connection is view-only (marked so in the app config), or None."""
+        url = self.robot_url()
+        return f"robot {url} is view-only" if url and self.config.is_view_only(url) else None
+
+    def apply_view_only(self) -> None:
+        """The robot's view-only mark changed: every widget (and the preview) restarts on ports that
+        refuse, or no longer refuse, to send (each robot's mark travels in the fleet, see fleet_ui)."""
+        self.controller.client = self.fleet_ui.fleet()
+        self.controller.run_current()
+        self.preview.restart()
+
     # -------------------------------------------------------------------------------- painting
     def _pump(self, ids: set[str] | None = None) -> None:
         """Take the runtime's new models and refresh the views that changed (all when ``ids`` is None,
@@ -858,7 +891,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.services.set_entries(catalog["services"])
         if now - self._last_rate_sample >= 1.0:
             self._last_rate_sample = now
-            self.topics.set_rates(self.rates.sample(self.host.topic_counts(), now))
+            self.topics.set_rates(self.rates.sample(self.host.topic_counts(self.fleet_ui.side_robot), now))
         if self.first_paint_at is None:
             self.first_paint_at = time.perf_counter()
 
@@ -869,8 +902,17 @@ class MainWindow(QtWidgets.QMainWindow):
 
     # -------------------------------------------------------------------------------------- closing
     def closeEvent(self, event: QtGui.QCloseEvent) -> None:
+        if self.operator_lock.engaged and not getattr(self, "_close_now", False) and not getattr(self, "_shut", False):
+            event.ignore()  # quitting needs the PIN while the operator lock is on
+            self.operator_lock.guard("quit RCON", self.close_now)
+            return
         self.shutdown()
         super().closeEvent(event)
+
+    def close_now(self) -> None:
+        """Close even while the operator lock is on (after the PIN, or on SIGINT/SIGTERM from a shell)."""
+        self._close_now = True
+        self.close()
 
     def shutdown(self) -> None:
         """Stop the clock and the widgets, save, and close the link (idempotent)."""

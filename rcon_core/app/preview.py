@@ -27,6 +27,8 @@ class PreviewHost:
         self.live = live
         self.client = client
         self.widget: WidgetInstance | None = None
+        #: the robot connection is view-only (why), set by the window: the preview's port refuses too
+        self.view_only: str | None = None
 
     def build(self, draft: Any, frame: WidgetFrame) -> None:
         """Show ``draft`` in ``frame``: its view appears when the runtime has built the model."""
@@ -59,4 +61,4 @@ class PreviewHost:
         """Run the preview again on the current client (after the link changed)."""
         if self.widget is not None:
             client = self.client() if self.live_on_robot else OFFLINE
-            self.live.start(client, Canvas("preview", "Preview", [self.widget]))
+            self.live.start(client, Canvas("preview", "Preview", [self.widget]), view_only=self.view_only)

@@ -40,21 +40,22 @@ class RobotChip(QtWidgets.QPushButton):
         self.setCheckable(True)
         self.setAccessibleName(f"robot {name}")
         self.name, self.colour = name, colour
-        self.state, self.latency = "closed", None
-        self._shown: tuple[str, str, bool] | None = None
+        self.state, self.latency, self.why = "closed", None, None
+        self._shown: tuple[str, str, bool, str | None] | None = None
         self.show_state("closed", None)
 
-    def show_state(self, state: str, latency: float | None) -> None:
-        self.state, self.latency = state, latency
+    def show_state(self, state: str, latency: float | None, why: str | None = None) -> None:
+        """The link's state, its round trip (while connected) and why it is not up (the tooltip)."""
+        self.state, self.latency, self.why = state, latency, why
         lat = latency_text(latency) if state in ("connected", "degraded") else ""
         text = f"{self.name}  {STATE_TEXT.get(state, state.upper())}" + (f"  {lat}" if lat else "")
-        key = (text, state, self.isChecked())
+        key = (text, state, self.isChecked(), why)
         if key == self._shown:
             return
         self._shown = key
         self.setText(text)
-        self.setToolTip(f"{self.name}: {STATE_TEXT.get(state, state)}"
-                        + (f", round trip {lat}" if lat else "") + ". Tap to show its topics and services.")
+        self.setToolTip(f"{self.name}: {STATE_TEXT.get(state, state)}" + (f", round trip {lat}" if lat else "")
+                        + (f" ({why})" if why else "") + ". Tap to show its topics and services.")
         fg, bg = STATE_STYLE.get(state, ("#000000", "#d8d8d8"))
         edge = "#000000" if self.isChecked() else "#707070"
         weight = 4 if self.isChecked() else 2
@@ -103,12 +104,12 @@ class RobotChips(QtWidgets.QFrame):
     def set_current(self, robot_id: str) -> None:
         for rid, chip in self.chips.items():
             chip.setChecked(rid == robot_id)
-            chip.show_state(chip.state, chip.latency)
+            chip.show_state(chip.state, chip.latency, chip.why)
 
-    def show_state(self, robot_id: str, state: str, latency: float | None) -> None:
+    def show_state(self, robot_id: str, state: str, latency: float | None, why: str | None = None) -> None:
         chip = self.chips.get(robot_id)
         if chip is not None:
-            chip.show_state(state, latency)
+            chip.show_state(state, latency, why)
 
 
 class RobotPicker(QtWidgets.QWidget):

@@ -32,7 +32,8 @@ def frame_min_size() -> QtCore.QSize:
 class Badge(QtWidgets.QLabel):
     """A small status pill at the right end of the frame's title bar."""
 
-    COLOURS = {"stale": "#a85400", "down": "#b00000", "problem": "#b00000", "ok": "#006b1b"}
+    COLOURS = {"stale": "#a85400", "down": "#b00000", "problem": "#b00000", "ok": "#006b1b",
+               "view-only": "#3a3a3a"}
 
     def __init__(self, parent: QtWidgets.QWidget) -> None:
         super().__init__(parent)

@@ -135,6 +135,10 @@ class WidgetHost:
             return
         frame.set_view(hosted.view)
         frame.problems.set_problems(list(model.problems()))
+        reason = view_only_control(hosted.widget, model)
+        if reason:  # the port refuses anyway (rcon_core.canvas.port); the controls say so
+            hosted.view.setEnabled(False)
+            hosted.view.setToolTip(f"View only: {reason}. Nothing is sent to the robot.")
 
     def set_link_up(self, up: bool, robot_id: str | None = None) -> None:
         """One robot's link (``robot_id``), or, without it, every robot's (a one-robot window)."""
@@ -185,6 +189,9 @@ class WidgetHost:
         if hosted.widget.id in self.dry_run:
             badge.show_status("ok", "PREVIEW ONLY")
             badge.setToolTip("not sent to the robot until the widget is placed")
+        elif view_only_control(hosted.widget, model):
+            badge.show_status("view-only", "VIEW ONLY")
+            badge.setToolTip(f"{model.view_only}: nothing is sent to the robot")
         elif state.link_down or not self.link_up_for(hosted.widget):
             badge.show_status("down", "LINK DOWN")
         elif state.error:
@@ -211,14 +218,25 @@ class WidgetHost:
         for hook in self.paint_hooks:
             hook(hosted, state)
 
-    def topic_counts(self) -> dict[str, int]:
-        """Values received per subscribed topic (the largest over its widgets), for the topic rates."""
+    def topic_counts(self, robot_id: str | None = None) -> dict[str, int]:
+        """Values received per subscribed topic (the largest over its widgets), for the topic rates; with
+        ``robot_id``, of that robot's widgets only (the side panel lists one robot's topics)."""
         out: dict[str, int] = {}
         for hosted in self.hosted.values():
             binding = hosted.widget.binding
+            if robot_id is not None and (binding.robot or self.first_robot) != robot_id:
+                continue
             if hosted.model is not None and binding.role.value == "subscribe" and binding.name:
                 out[binding.name] = max(out.get(binding.name, 0), hosted.model.state.count)
         return out
+
+
+def view_only_control(widget: WidgetInstance, model: Any) -> str | None:
+    """Why ``widget`` (a publishing, calling or serving one) runs view-only, or None."""
+    reason = getattr(model, "view_only", None)
+    if reason and widget.binding.role.value != "subscribe":
+        return str(reason)
+    return None
 
 
 def _not_installed(kind: str) -> str:

@@ -1,5 +1,6 @@
 """RCON's rosbridge v2 client (asyncio + websockets).  No Qt.  See ``client.py`` for behaviour decisions."""
 
+from .action_server import ActionServer, ServedGoal
 from .client import BridgeClient, ConnectionState
 from .errors import (
     ActionError,
@@ -14,9 +15,12 @@ from .errors import (
     ServiceTimeoutError,
 )
 from .nodes import ActionGoal, GoalStatus, Node, Publisher, ServiceServer, Subscription
+from .params import ParamNotFoundError, ParamRejectedError
+from .rosinfo import RosInfo
 
 __all__ = [
-    "ActionError", "ActionGoal", "ActionTimeoutError", "AuthRefusedError", "BridgeClient", "BridgeError", "ConnectionLostError",
-    "ConnectionState", "GoalStatus", "LinkSettingsError", "Node", "NotConnectedError", "ProtocolError", "Publisher", "ServiceError",
-    "ServiceServer", "ServiceTimeoutError", "Subscription",
+    "ActionError", "ActionGoal", "ActionServer", "ActionTimeoutError", "AuthRefusedError", "BridgeClient",
+    "BridgeError", "ConnectionLostError", "ConnectionState", "GoalStatus", "LinkSettingsError", "Node",
+    "NotConnectedError", "ParamNotFoundError", "ParamRejectedError", "ProtocolError", "Publisher", "RosInfo",
+    "ServedGoal", "ServiceError", "ServiceServer", "ServiceTimeoutError", "Subscription",
 ]

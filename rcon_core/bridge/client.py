@@ -67,7 +67,13 @@ ROS 2 actions
     bad args; ``values`` is then the error string), an error ``status`` naming the goal, or the optional
     client-side ``timeout`` raise ``ActionError``.  By default the client also asks
     ``/rosapi/action_servers`` and fails a goal to an unlisted action within ``call_timeout``, because a
-    ROS 1 rosbridge drops ``send_action_goal`` without any answer.
+    ROS 1 rosbridge drops ``send_action_goal`` without any answer.  Actions this client *provides*
+    (``node.advertise_action``) live in ``action_server.py``: the server's ``send_action_goal`` and
+    ``cancel_action_goal`` frames go to ``client.provided_actions``.
+
+ROS 1 or ROS 2
+    ``detect_ros()`` / ``ros_version`` (``rosinfo.py``); ``client.params`` names parameters the way the
+    server's ROS does (``params.py``); ``cbor-raw`` payloads of a ROS 2 server are CDR (``cdrdecode.py``).
 
 Bad input from the server
     No exception raised while handling one frame ends the read loop: the loop body and the slow path
@@ -102,6 +108,8 @@ from websockets.asyncio.client import ClientConnection, connect
 from websockets.exceptions import ConnectionClosed
 from websockets.protocol import State
 
+from .action_server import ProvidedActions
+from .cdrdecode import CdrDecoder, SniffingDecoder, flavour_from_typedefs
 from .defaults import default_from_typedefs
 from .errors import (
     ActionError,
@@ -117,9 +125,12 @@ from .errors import (
 from .freshness import LinkWatch, TimedFrame, watch_link
 from .nodes import ActionGoal, Node, Publisher, ServiceServer, Subscription
 from .offload import BigFrames, decode_big
+from .params import Params
 from .protocol import FragmentAssembler, RefusedFrame, decode_binary, decode_png, encode
 from .rawdecode import RawDecoder, _short, has_fixed_arrays
 from .reasons import Failure, describe, refused_auth
+from .rosinfo import RosInfo
+from .rosinfo import detect as detect_ros
 from .safety import bounded_repr, safe_text
 from .secure import ssl_context
 from .topics import AdvertEntry, TopicEntry
@@ -270,6 +281,7 @@ class BridgeClient:
         self._typedefs: dict[str, list[dict[str, Any]]] = {}
         self._response_defaults: dict[str, tuple[dict[str, Any], set[str]]] = {}
         self._raw = RawDecoder()
+        self._cdr = CdrDecoder()  # cbor-raw from ROS 2 servers (CDR)
         warn = self._fragment_warning
         self._fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=self.max_message_size, warn=warn)
         self._png_fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=self.max_message_size, warn=warn)
@@ -277,15 +289,19 @@ class BridgeClient:
         self._seq = 0
         self._bad_counts: dict[str, int] = {}
         self._tasks: set[asyncio.Task[Any]] = set()
+        self.provided_actions = ProvidedActions(self._send)  # actions this client serves (ROS 2)
         self._ops: dict[str, Callable[[dict[str, Any]], None]] = {
             "publish": self._on_publish, "fragment": self._on_fragment, "png": self._on_png,
             "service_response": self._on_service_response, "call_service": self._on_call_service,
             "status": self._on_status, "action_feedback": self._on_action_feedback,
-            "action_result": self._on_action_result,
+            "action_result": self._on_action_result, "send_action_goal": self.provided_actions.on_goal,
+            "cancel_action_goal": self.provided_actions.on_cancel,
         }
         from .rosapi import Rosapi
 
         self.rosapi = Rosapi(self)
+        self.ros_info: RosInfo | None = None  # set by detect_ros(); see rosinfo.py
+        self.params = Params(self)  # ROS 1 and ROS 2 parameters; see params.py
 
     # ================================================================== state
 
@@ -296,6 +312,17 @@ class BridgeClient:
     @property
     def connected(self) -> bool:
         return self._ws is not None
+
+    @property
+    def ros_version(self) -> int | None:
+        """1 or 2 once ``detect_ros()`` found out (or ``ros_info`` was set), else None."""
+        return self.ros_info.version if self.ros_info is not None else None
+
+    async def detect_ros(self, refresh: bool = False) -> RosInfo:
+        """Which ROS the server runs (asked once; ``refresh`` asks again).  See ``rosinfo.py``."""
+        if self.ros_info is None or refresh:
+            self.ros_info = await detect_ros(self)
+        return self.ros_info
 
     def add_state_listener(self, fn: Callable[[ConnectionState], None]) -> Callable[[], None]:
         """Call ``fn(state)`` on every change; returns a function that removes the listener."""
@@ -501,6 +528,7 @@ class BridgeClient:
                 advert.pending = None
         for srv in self._services.values():
             self._send({"op": "advertise_service", "service": srv.service, "type": srv.type})
+        self.provided_actions.restore()
         for topic in self._topics.values():
             topic.sid = None
             topic.sent_options = None
@@ -524,6 +552,7 @@ class BridgeClient:
         for gid, goal in list(self._goals.items()):
             goal._settle(error=ConnectionLostError(f"connection lost while goal {gid} was active"))
         self._goals.clear()
+        self.provided_actions.disconnected()
 
     # ================================================================== writing
 
@@ -877,6 +906,8 @@ class BridgeClient:
                 log.info("%s [%s] has fixed-size arrays, which rosbridge's cbor encoder cannot send; "
                          "using cbor-raw instead", entry.topic, type_name)
                 opts["compression"] = "cbor-raw"
+            if opts["compression"] == "cbor-raw":
+                self._learn_raw_flavour(type_name, typedefs)
         except Exception as exc:
             log.warning("%s: cannot prepare %s compression (%s); subscribing without compression",
                         entry.topic, opts["compression"], exc)
@@ -898,9 +929,28 @@ class BridgeClient:
         if old is not None:
             self._send({"op": "unsubscribe", "id": old, "topic": entry.topic})
 
+    def _learn_raw_flavour(self, type_name: str, typedefs: list[dict[str, Any]]) -> None:
+        """cbor-raw is CDR from a ROS 2 server: hand the typedefs to the CDR decoder when the server is (or
+        its typedefs look) ROS 2; when neither tells, each payload is sniffed (``cdrdecode.py``)."""
+        version = self.ros_version or flavour_from_typedefs(typedefs)
+        if version != 1:
+            self._cdr.add_typedefs(typedefs)
+        if version is None:
+            self._cdr.uncertain.add(_short(type_name))
+        else:
+            self._cdr.uncertain.discard(_short(type_name))
+
     def _raw_decoder(self, type_name: str) -> Any:
-        """cbor-raw decoding: the registry's ``deserialize_ros1`` when a registry is given and knows the
-        type (it learns the server's typedefs in ``typedefs()``), else the built-in typedef-driven decoder."""
+        """cbor-raw decoding: CDR for types learned from a ROS 2 server (sniffed per payload when the flavour
+        is unknown); else the registry's ``deserialize_ros1`` when a registry is given and knows the type (it
+        learns the server's typedefs in ``typedefs()``), else the built-in typedef-driven decoder."""
+        if self._cdr.knows(type_name):
+            if _short(type_name) in self._cdr.uncertain:
+                return SniffingDecoder(self._cdr, self._ros1_decoder(type_name))
+            return self._cdr
+        return self._ros1_decoder(type_name)
+
+    def _ros1_decoder(self, type_name: str) -> Any:
         reg = self.registry
         if reg is not None and hasattr(reg, "deserialize_ros1"):
             try:
@@ -924,6 +974,8 @@ class BridgeClient:
                 raise
             log.info("rosapi message_details failed for %s (%s); using the local registry", type_name, exc)
             typedefs = self.registry.typedefs(type_name)
+        if not typedefs and self.registry is not None and self.registry.has(type_name):
+            typedefs = self.registry.typedefs(type_name)  # rosapi 2.x answers [] for what it cannot load
         if not typedefs:
             raise BridgeError(f"the server has no definition for {type_name}")
         self._typedefs[key] = typedefs
@@ -1203,6 +1255,7 @@ class BridgeClient:
             log.debug("action_feedback for unknown goal %r", m.get("id"))
             return
         goal.feedback_count += 1
+        goal.last_feedback = m.get("values")
         if goal.feedback_callback is not None:
             values = m.get("values")
             try:

@@ -1,6 +1,6 @@
 """Nodes: every consumer of the bridge (a widget, a CLI command, a panel) is a node with a unique id.
 
-A node owns what it asked for (subscriptions, publishers, advertised services, action goals) and
+A node owns what it asked for (subscriptions, publishers, advertised services and actions, action goals) and
 ``node.close()`` ends all of it.  Messages are routed only to the nodes that subscribed; nodes on the
 same topic share one rosbridge subscription (see ``topics.py``).  All methods run on the client's loop.
 """
@@ -133,6 +133,11 @@ class GoalStatus(enum.IntEnum):
     CANCELED = 5
     ABORTED = 6
 
+    @property
+    def word(self) -> str:
+        """The status in words: ``"succeeded"``, ``"canceled"``, ``"aborted"``, ``"executing"``..."""
+        return self.name.lower()
+
 
 class ActionGoal:
     """A goal sent with ``send_action_goal``.  ``await goal.result()``; ``goal.cancel()``.
@@ -151,6 +156,7 @@ class ActionGoal:
         self.id = goal_id
         self.feedback_callback = feedback
         self.feedback_count = 0
+        self.last_feedback: dict[str, Any] | None = None
         self.status: int | None = None
         self.cancel_requested = False
         self._timer: asyncio.TimerHandle | None = None
@@ -159,6 +165,29 @@ class ActionGoal:
     @property
     def done(self) -> bool:
         return self._future.done()
+
+    @property
+    def outcome(self) -> str:
+        """How the goal stands, in words: ``running``, ``canceling``, ``succeeded``, ``canceled``,
+        ``aborted``, ``timed out``, ``failed`` (could not be run) or ``unknown (link lost)``: a goal
+        whose link dropped never reads as a success."""
+        if not self._future.done():
+            return "canceling" if self.cancel_requested else "running"
+        if self._future.cancelled():
+            return "failed"
+        error = self._future.exception()
+        if error is None:
+            try:
+                return GoalStatus(self.status).word
+            except ValueError:
+                return f"ended with status {self.status}"
+        from .errors import ActionTimeoutError, ConnectionLostError
+
+        if isinstance(error, ConnectionLostError):
+            return "unknown (link lost)"
+        if isinstance(error, ActionTimeoutError):
+            return "timed out"
+        return "failed"
 
     @property
     def succeeded(self) -> bool:
@@ -205,6 +234,7 @@ class Node:
         self._pubs: set[Publisher] = set()
         self._services: set[ServiceServer] = set()
         self._goals: set[ActionGoal] = set()
+        self.action_servers: set[Any] = set()  # provided actions (action_server.ActionServer)
         self.closed = False
 
     def __repr__(self) -> str:
@@ -296,8 +326,17 @@ class Node:
         goal._future.add_done_callback(lambda _f: self._goals.discard(goal))
         return goal
 
+    def advertise_action(self, action: str, type: str, handler: Callable[[Any], Any]) -> Any:
+        """Provide the ROS 2 action ``action`` (``advertise_action``); ``handler(goal)`` runs each goal other
+        parties send and returns the result message.  Returns an ``action_server.ActionServer``; see that
+        module for feedback, cancel and failure handling."""
+        self._check()
+        srv = self.client.provided_actions.create(self, action, type, handler)
+        self.action_servers.add(srv)
+        return srv
+
     def close(self) -> None:
-        """End every subscription, advertisement, service and goal of this node."""
+        """End every subscription, advertisement, service, provided action and goal of this node."""
         if self.closed:
             return
         for s in list(self._subs):
@@ -306,6 +345,8 @@ class Node:
             p.unadvertise()
         for srv in list(self._services):
             srv.unadvertise()
+        for action in list(self.action_servers):
+            action.unadvertise()
         for g in list(self._goals):
             g.cancel()
         self.closed = True

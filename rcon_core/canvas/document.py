@@ -43,7 +43,7 @@ class CanvasLocked(EditError):
 
 @attrs.frozen
 class Change:
-    """What changed. ``what``: canvas-added, canvas-removed, canvas-renamed, canvas-locked,
+    """What changed. ``what``: canvas-added, canvas-removed, canvas-renamed, canvas-locked, canvas-view-only,
     canvas-switched, widget-added, widget-removed, widget-changed, workspace-replaced,
     plugin-settings-changed, robots-changed."""
 
@@ -289,6 +289,15 @@ class Document:
             return fn
 
         self._run(Command("lock canvas" if locked else "unlock canvas", set_to(locked), set_to(old)))
+
+    def set_view_only(self, canvas_id: str, view_only: bool) -> None:
+        """Mark a canvas view-only (its widgets never send anything) or not. A setting of the canvas,
+        saved with it, not an undo step (like the operator-mode switch); allowed on a locked canvas
+        (making it view-only is always safe; the app asks for the operator PIN to undo it)."""
+        canvas = self._canvas(canvas_id)
+        if canvas.view_only != view_only:
+            canvas.view_only = view_only
+            self._notify([Change("canvas-view-only", canvas.id)])
 
     def set_plugin_settings(self, kind: str, settings: dict[str, Any]) -> None:
         """Replace the shared settings of one widget kind."""

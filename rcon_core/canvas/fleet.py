@@ -6,6 +6,7 @@
     fleet.client("")            # the first robot's client;  fleet.client("r-2") -> client_b
     fleet.robot("r-2")          # the Robot;  fleet.ids -> ["r-1", "r-2"]
     fleet.set_client("r-2", c)  # another client for that robot (the runtime restarts its widgets)
+    fleet.view_only_reason("r-2")  # why it may not be commanded (Robot.view_only, or Fleet(view_only=...))
     rt = CanvasRuntime(plugin_manager, fleet, ...)               # a single client still works too
 
 How a model gets its robot's port: the runtime makes each widget's node on the client of the robot its
@@ -44,9 +45,11 @@ class RobotPort:
 class Fleet:
     """Robot id -> bridge client, in the workspace's robot order."""
 
-    def __init__(self, pairs: Iterable[tuple[Robot, Any]]) -> None:
+    def __init__(self, pairs: Iterable[tuple[Robot, Any]], view_only: dict[str, str] | None = None) -> None:
         self._robots: list[Robot] = []
         self._clients: dict[str, Any] = {}
+        #: robot id -> why it may not be commanded, beyond its own ``view_only`` flag (the app's per-URL mark)
+        self._view_only: dict[str, str] = dict(view_only or {})
         for robot, client in pairs:
             self._robots.append(robot)
             self._clients[robot.id] = client
@@ -84,6 +87,20 @@ class Fleet:
     def set_client(self, robot_id: str, client: Any) -> None:
         rid = self.resolve(robot_id)
         self._clients[rid] = client
+
+    def set_view_only(self, robot_id: str, reason: str | None) -> None:
+        rid = self.resolve(robot_id)
+        if reason:
+            self._view_only[rid] = reason
+        else:
+            self._view_only.pop(rid, None)
+
+    def view_only_reason(self, robot_id: str = "") -> str | None:
+        """Why ``robot_id`` may not be commanded (its ``view_only`` flag, or a mark given to the fleet)."""
+        robot = self.robot(robot_id)
+        if robot.id in self._view_only:
+            return self._view_only[robot.id]
+        return f"robot “{robot.label}” is view-only" if robot.view_only else None
 
     def items(self) -> list[tuple[Robot, Any]]:
         return [(r, self._clients[r.id]) for r in self._robots]

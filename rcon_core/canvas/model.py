@@ -55,6 +55,8 @@ class Canvas:
     name: str
     widgets: list[WidgetInstance] = attrs.field(factory=list)
     locked: bool = False  #: a locked canvas refuses edits (operator mode)
+    #: a view-only canvas never publishes, calls or serves: its widgets' ports refuse (canvas.port)
+    view_only: bool = False
     extra: dict[str, Any] = attrs.field(factory=dict)
 
     def widget(self, widget_id: str) -> WidgetInstance:

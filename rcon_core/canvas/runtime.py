@@ -24,6 +24,11 @@ every robot (the map of every robot's fix). A binding naming a robot the workspa
 an incoming message, service request or service response, so a front end can repaint at once instead of
 polling on its next frame.
 
+Every model gets a :class:`rcon_core.canvas.port.GuardedPort` onto its node, never the node itself.
+``CanvasRuntime(..., view_only="reason")`` (every robot of this runtime is view-only), a robot marked
+view-only in the fleet (``Fleet.view_only_reason(robot_id)``) or a canvas with ``view_only`` set makes
+those ports refuse to publish, call or serve (``rt.view_only_reason(canvas, robot_id)``).
+
 Call these on the bridge loop thread (from the GUI: ``bridge_thread.call(rt.switch, canvas)``); pass
 ``dispatch=bridge_thread.call`` so the models' GUI-side actions reach the loop thread too.
 
@@ -42,7 +47,6 @@ be built otherwise (an import error) gets a :class:`BrokenWidgetModel`; the othe
 from __future__ import annotations
 
 import asyncio
-import inspect
 import logging
 from collections.abc import Callable
 from typing import Any
@@ -54,6 +58,7 @@ from rcon_core.plugins.spec import SettingsError
 
 from .fleet import Fleet, RobotPort
 from .model import Canvas, WidgetInstance
+from .port import GuardedPort
 from .robots import UnknownRobot
 
 __all__ = ["CanvasRuntime", "MissingWidgetModel", "BrokenWidgetModel", "UnconfiguredWidgetModel"]
@@ -126,55 +131,6 @@ class UnconfiguredWidgetModel(MissingWidgetModel):
         return list(self._problems)
 
 
-class _WatchedPort:
-    """A widget's node that reports activity after each incoming message, request or response."""
-
-    def __init__(self, node: Any, notify: Callable[[], None]) -> None:
-        self._node = node
-        self._notify = notify
-
-    def _ping(self) -> None:
-        try:
-            self._notify()
-        except Exception:
-            log.exception("activity listener failed")
-
-    def subscribe(self, topic: str, callback: Callable[[Any], Any], **options: Any) -> Any:
-        def watched(msg: Any) -> Any:
-            try:
-                return callback(msg)
-            finally:
-                self._ping()
-
-        return self._node.subscribe(topic, watched, **options)
-
-    def advertise_service(self, name: str, type: str, handler: Callable[[Any], Any]) -> Any:
-        def watched(request: Any) -> Any:
-            result = handler(request)
-            if inspect.isawaitable(result):
-                async def finish() -> Any:
-                    try:
-                        return await result
-                    finally:
-                        self._ping()
-
-                return finish()
-            self._ping()
-            return result
-
-        return self._node.advertise_service(name, type, watched)
-
-    async def call_service(self, name: str, args: Any = None, timeout: float | None = None) -> Any:
-        try:
-            return await self._node.call_service(name, args, timeout=timeout)
-        finally:
-            # after the caller's on_response, which runs in the same task step as this return
-            asyncio.get_running_loop().call_soon(self._ping)
-
-    def __getattr__(self, name: str) -> Any:  # advertise, close, ...
-        return getattr(self._node, name)
-
-
 class CanvasRuntime:
     """Creates, starts and stops the models of one canvas at a time."""
 
@@ -187,8 +143,12 @@ class CanvasRuntime:
         plugin_settings: dict[str, dict[str, Any]] | None = None,
         dispatch: Callable[[Callable[[], Any]], Any] | None = None,
         on_activity: Callable[[str], Any] | None = None,
+        view_only: str | None = None,
     ) -> None:
         self.pm = plugin_manager
+        #: every robot of this runtime is view-only: why (None: each robot's own mark decides); see
+        #: :meth:`view_only_reason`
+        self.view_only = view_only
         self.on_activity = on_activity
         #: robot id -> client; a bare client is a fleet of one robot
         self.fleet = client if isinstance(client, Fleet) else Fleet.single(client)
@@ -246,11 +206,15 @@ class CanvasRuntime:
         self._stop_widget(inst.id)
         return self._start_widget(inst)
 
-    def set_client(self, robot_id: str, client: Any, *, restart: bool = True) -> None:
+    def set_client(self, robot_id: str, client: Any, *, restart: bool = True,
+                   view_only: str | None | bool = False) -> None:
         """``robot_id``'s link is ``client`` now. ``restart``: its running widgets (and every fleet-wide
         one) are rebuilt on it; else they keep the old client's nodes (a Disconnect: they show their last
-        values with LINK DOWN) and only what starts from now on uses ``client``."""
+        values with LINK DOWN) and only what starts from now on uses ``client``. ``view_only``: the
+        robot's view-only mark for the new link (a reason or None; False: unchanged)."""
         rid = self.fleet.resolve(robot_id)
+        if view_only is not False:
+            self.fleet.set_view_only(rid, view_only or None)
         if self.fleet.client(rid) is client:
             return
         self._unlisten(rid)
@@ -315,11 +279,37 @@ class CanvasRuntime:
             log.warning("widget %s (%s) could not be built: %s", inst.id, inst.kind, exc)
             return BrokenWidgetModel(inst, f"{inst.kind}: {exc}")
 
-    def _watched(self, node: Any, widget_id: str) -> Any:
-        if self.on_activity is None:
-            return node
-        notify = self.on_activity
-        return _WatchedPort(node, lambda: notify(widget_id))
+    def view_only_reason(self, canvas: Canvas | None = None, robot_id: str = "") -> str | None:
+        """Why the widgets of ``canvas`` (default: the running one) on ``robot_id`` (``""``: the first)
+        may not send anything, or None."""
+        if self.view_only:
+            return self.view_only
+        try:
+            reason = self.fleet.view_only_reason(robot_id)
+        except UnknownRobot:
+            reason = None
+        if reason:
+            return reason
+        canvas = canvas if canvas is not None else self.canvas
+        if canvas is not None and canvas.view_only:
+            return f"canvas “{canvas.name}” is view-only"
+        return None
+
+    def _port(self, node: Any, widget_id: str, robot_id: str, built: list[WidgetModel]) -> GuardedPort:
+        """The model's only way to the robot (view-only enforced there, see canvas.port)."""
+        notify = None
+        if self.on_activity is not None:
+            on_activity = self.on_activity
+
+            def notify() -> None:
+                on_activity(widget_id)
+
+        def refused(text: str) -> None:
+            for m in built:
+                m.set_error(text)
+
+        return GuardedPort(node, notify=notify, view_only=self.view_only_reason(robot_id=robot_id),
+                           on_refused=refused, link=id(self.fleet.client(robot_id)))
 
     def _start_widget(self, inst: WidgetInstance) -> WidgetModel:
         try:
@@ -330,14 +320,16 @@ class CanvasRuntime:
             model.start()
             return model
         node = self.fleet.client(rid).node(inst.id)
-        port = self._watched(node, inst.id)
+        built: list[WidgetModel] = []
+        port = self._port(node, inst.id, rid, built)
         model = self.build_model(inst, port)
+        built.append(model)
         self._nodes[inst.id] = [node]
         self._robot_of[inst.id] = rid
         self.models[inst.id] = model
         model.set_link(self._link_up.get(rid, True))
         try:
-            self._give_fleet(inst.id, model, rid, port)
+            self._give_fleet(inst.id, model, rid, port, built)
             model.start()
         except Exception as exc:
             log.warning("widget %s (%s) failed to start: %s", inst.id, inst.kind, exc)
@@ -346,7 +338,8 @@ class CanvasRuntime:
         self._check_type(inst.id, model)
         return model
 
-    def _give_fleet(self, widget_id: str, model: WidgetModel, own: str, own_port: Any) -> None:
+    def _give_fleet(self, widget_id: str, model: WidgetModel, own: str, own_port: Any,
+                    built: list[WidgetModel]) -> None:
         """A fleet-wide model (``on_fleet``) gets a port on every robot, and each robot's link state."""
         hook = getattr(model, "on_fleet", None)
         if not callable(hook) or isinstance(model, MissingWidgetModel):
@@ -359,7 +352,7 @@ class CanvasRuntime:
             else:
                 node = client.node(widget_id)
                 self._nodes[widget_id].append(node)
-                port = self._watched(node, widget_id)
+                port = self._port(node, widget_id, robot.id, built)
             ports.append(RobotPort(robot.id, robot.label, self.fleet.colour(robot.id), port))
         hook(ports)
         self._tell_robot_link(model, None)

@@ -5,8 +5,9 @@ File layout (``version`` 2)::
     {"format": "rcon-workspace", "version": 2, "current": "c-...",
      "robots": [{"id", "name", "url", "ca_file", "client_cert", "client_key", "auth", "view_only",
        "colour"}],
-     "canvases": [{"id", "name", "locked", "widgets": [{"id", "kind", "title", "binding": {"name",
-       "type", "role", "field_paths", "robot"}, "geometry": {"x", "y", "w", "h"}, "settings": {...}}]}],
+     "canvases": [{"id", "name", "locked", "view_only" (written only when true), "widgets": [{"id",
+       "kind", "title", "binding": {"name", "type", "role", "field_paths", "robot"}, "geometry": {"x",
+       "y", "w", "h"}, "settings": {...}}]}],
      "plugin_settings": {"kind": {...}}}
 
 A single canvas exported to a file is ``{"format": "rcon-canvas", "version": 2, "canvas": {...}}``.
@@ -169,7 +170,8 @@ def _make_converter() -> cattrs.Converter:
 
     conv.register_structure_hook_func(lambda t: t == dict[str, Any], structure_settings)
 
-    def with_extra(cls: type, order: tuple[str, ...]) -> None:
+    def with_extra(cls: type, order: tuple[str, ...], optional: tuple[str, ...] = ()) -> None:
+        # ``optional`` keys are written only when set (a file without them reads the same)
         base_struct: cattrs.SimpleStructureHook[Any, Any] = cattrs.gen.make_dict_structure_fn(cls, conv)
 
         names = frozenset(a.name for a in attrs.fields(cls)) - {"extra"}
@@ -182,7 +184,8 @@ def _make_converter() -> cattrs.Converter:
             return obj
 
         def unstructure(obj: Any) -> dict[str, Any]:
-            out = {k: conv.unstructure(getattr(obj, k)) for k in order}
+            out = {k: conv.unstructure(getattr(obj, k)) for k in order
+                   if k not in optional or getattr(obj, k)}
             out.update(obj.extra)
             return out
 
@@ -190,7 +193,7 @@ def _make_converter() -> cattrs.Converter:
         conv.register_unstructure_hook(cls, unstructure)
 
     with_extra(WidgetInstance, ("id", "kind", "title", "binding", "geometry", "settings"))
-    with_extra(Canvas, ("id", "name", "locked", "widgets"))
+    with_extra(Canvas, ("id", "name", "locked", "view_only", "widgets"), optional=("view_only",))
     with_extra(Robot, ("id", "name", "url", "ca_file", "client_cert", "client_key", "auth", "view_only",
                        "colour"))
 

@@ -20,6 +20,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "echo": ("rcon_core.cli.bridge_cmds", "print messages arriving on a topic"),
     "pub": ("rcon_core.cli.bridge_cmds", "publish a message on a topic"),
     "call": ("rcon_core.cli.bridge_cmds", "call a service"),
+    "info": ("rcon_core.cli.info_cmd", "which ROS the robot runs (version, distro) and its rosbridge capabilities"),
     "plugins": ("rcon_core.cli.plugin_cmds", "list installed widget packages and their widgets"),
     "match": ("rcon_core.cli.plugin_cmds", "list the widgets that fit a type and role, ranked"),
     "new-widget": ("rcon_core.cli.new_widget", "write a new widget package (pyproject, plugin, model, view, tests)"),
@@ -41,6 +42,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "port) and open the fleet canvas: every vessel's camera and teleop pad, one map")
     parser.add_argument("--reset-layout", action="store_true",
                         help="with --demo: replace the saved demo layout by a fresh one")
+    parser.add_argument("--locked", action="store_true",
+                        help="kiosk: start full screen with the operator lock on (needs an operator PIN)")
     parser.add_argument("--screenshot", metavar="PATH", help="write a PNG of the window, then exit")
     parser.add_argument("--quit-after", type=float, metavar="SECONDS", help="quit after this many seconds")
     from rcon_core.cli.link_options import add_link_options

@@ -27,7 +27,9 @@ def configure(name: str, parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-namespace", action="store_true",
                         help="with --name: keep the plain topic names (/cmd_vel), as a robot behind its own "
                         "rosbridge has them; only the start position and the camera scene change")
-    parser.add_argument("--ros2", action="store_true", help="ROS 2 shapes: pkg/msg/Type, sec/nanosec, actions")
+    parser.add_argument("--ros2", action="store_true",
+                        help="answer as rosbridge 2.x on ROS 2: pkg/msg/Type, sec/nanosec, rosapi_msgs, "
+                        "<node>:<param> parameters, actions, CDR cbor-raw")
     parser.add_argument("--rate-scale", type=float, default=1.0, metavar="X",
                         help="multiply every publish rate by X (default 1.0)")
     parser.add_argument("--auth", metavar="SECRET", help="require a rosauth 'auth' op signed with SECRET")

@@ -314,6 +314,18 @@ class TypeRegistry:
 
         return deserialize(self, self.resolve(name), data)
 
+    def serialize_cdr(self, name: str, msg: dict[str, Any]) -> bytes:
+        """ROS 2 CDR (with its 4-byte header), as rosbridge 2.x sends ``cbor-raw``; see ``cdr.py``."""
+        from .cdr import serialize
+
+        return serialize(self, self.resolve(name), msg)
+
+    def deserialize_cdr(self, name: str, data: bytes | bytearray | memoryview) -> dict[str, Any]:
+        """ROS 2 CDR -> wire-shape dict (``uint8[]`` as bytes, NaN stays NaN)."""
+        from .cdr import deserialize
+
+        return deserialize(self, self.resolve(name), data)
+
     def __contains__(self, name: object) -> bool:
         return isinstance(name, str) and self.has(name)
 

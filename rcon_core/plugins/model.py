@@ -132,7 +132,8 @@ class ServiceServer(Protocol):
 
 
 class BridgePort(Protocol):
-    """The slice of a bridge client node (``client.node(id)``) a model may use. Tests may pass a fake."""
+    """The slice of a bridge client node (``client.node(id)``) a model may use. Tests may pass a fake or a
+    node; in the app it is a ``rcon_core.canvas.port.GuardedPort`` (sealed; refuses to send when view-only)."""
 
     def subscribe(
         self, topic: str, callback: Callable[[dict[str, Any]], Any], **options: Any
@@ -192,7 +193,7 @@ class WidgetModel:
 
     - ``settings``: the per-instance settings object (``spec.make_settings(dict)``), or None.
     - ``binding``: a :class:`Binding`.
-    - ``port``: a :class:`BridgePort`, normally ``client.node(instance_id)``.
+    - ``port``: a :class:`BridgePort`: in the app a ``GuardedPort`` onto ``client.node(instance_id)``.
     - ``types``: an ``rcon_core.msgs.TypeRegistry`` (for default messages), or None.
     - ``plugin_settings``: the per-kind shared settings object, or None.
     - ``dispatch``: runs a function on the bridge loop thread; default runs it immediately.
@@ -246,6 +247,16 @@ class WidgetModel:
         self._tasks: set[asyncio.Task[Any]] = set()
         if settings is not None and getattr(settings, "stale_after", None) is not None:
             self.stale_after = float(settings.stale_after)
+
+    @property
+    def view_only(self) -> str | None:
+        """Why this widget may not send anything (its port is view-only), or None. Views show their
+        controls disabled with this reason; the port refuses regardless (see ``rcon_core.canvas.port``)."""
+        try:
+            reason = getattr(self.port, "view_only", None)
+        except Exception:  # a port that refuses every use (a placeholder's) sends nothing either way
+            return None
+        return reason if isinstance(reason, str) and reason else None
 
     # -- lifecycle (bridge loop thread) --------------------------------------------------------------
     @property
@@ -359,7 +370,14 @@ class WidgetModel:
             self.set_error("not publishing: the widget is not running or has no topic")
             return False
         pub = self._pub
-        self._dispatch(lambda: pub.publish(msg))
+
+        def send() -> None:
+            try:
+                pub.publish(msg)
+            except Exception as exc:  # a view-only port refuses, a closed link raises: shown, not lost
+                self.set_error(str(exc) or type(exc).__name__)
+
+        self._dispatch(send)
         return True
 
     def build_message(self, value: Any, path: str | None = None) -> dict[str, Any]:

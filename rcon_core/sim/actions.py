@@ -1,6 +1,7 @@
-"""The sim's one ROS 2 action: drive to a GPS fix (``send_action_goal`` ... ``action_result``).
+"""The robot's ROS 2 action: drive to a GPS fix (``send_action_goal`` ... ``action_result``).
 
-Frames follow ROSBRIDGE_PROTOCOL.md and rosbridge_suite's ROS 2 ``send_action_goal`` capability:
+``ros2_actions.ActionHub`` routes the goals for ``/navigate_to_fix`` here (after its checks of the action
+type and name); the other action servers of the sim live in ``ros2_actions.py``.  Frames follow ROSBRIDGE_PROTOCOL.md and rosbridge_suite's ROS 2 ``send_action_goal`` capability:
 
 * ``action_feedback`` (``id``, ``action``, ``values``) only when the goal asked ``feedback: true`` (the
   spec's default is false); 5 Hz scaled by rate_scale while the vessel steers toward the goal.

@@ -2,7 +2,9 @@
 
 Works from rosapi typedefs (the layout ``TypeRegistry.typedefs`` returns): missing fields get defaults,
 integers are accepted for floats, ``uint8[]``/``char[]`` become ``bytes``, numeric arrays numpy arrays.
-Errors carry the real server's wording, e.g. ``std_srvs/SetBoolRequest message requires a bool for
+In ROS 2 mode a ``builtin_interfaces/Time``/``Duration`` takes ``sec``/``nanosec`` or ``secs``/``nsecs`` (missing
+ones are 0) and a Time the string ``"now"``, as rosbridge 2.x reads them.  Errors carry the real server's
+wording, e.g. ``std_srvs/SetBoolRequest message requires a bool for
 field data, but got a <class 'str'>``.
 """
 
@@ -25,6 +27,11 @@ _DTYPES: dict[str, Any] = {
     "float32": np.float32, "float64": np.float64, "float": np.float32, "double": np.float64,
 }
 BYTES_TYPES = {"uint8", "char", "octet"}
+
+
+#: ROS 2 spellings of the time types in typedefs (ROS 1's ``time``/``duration`` are primitives there)
+_ROS2_TIMES = {"builtin_interfaces/Time", "builtin_interfaces/msg/Time", "builtin_interfaces/Duration",
+               "builtin_interfaces/msg/Duration"}
 
 
 class ConversionError(ValueError):
@@ -145,6 +152,8 @@ class Converter:
             if isinstance(value, str):
                 return value
             raise ConversionError(f"{owner} message requires a {ftype} for field {name}, but got a {_pytype(value)}")
+        if ftype in _ROS2_TIMES:
+            return self._ros2_time(value, ftype, owner, name)
         if ftype in self.defs:
             if not isinstance(value, dict):
                 raise ConversionError(
@@ -152,6 +161,21 @@ class Converter:
                 )
             return self._message(value, ftype)
         raise ConversionError(f"{owner} message field {name} has unknown type {ftype}")
+
+    def _ros2_time(self, value: Any, ftype: str, owner: str, name: str) -> dict[str, Any]:
+        """rosbridge 2.x's time fields: ``sec``/``nanosec`` or the ROS 1 ``secs``/``nsecs``, missing ones 0,
+        and the string ``"now"`` for a Time."""
+        if value == "now" and "Time" in ftype and self._now is not None:
+            return self._now()
+        if not isinstance(value, dict):
+            raise ConversionError(f"{owner} message requires a {ftype} for field {name}, but got a {_pytype(value)}")
+        sec = value.get("sec", value.get("secs", 0))
+        nanosec = value.get("nanosec", value.get("nsecs", 0))
+        for part in (sec, nanosec):
+            if not isinstance(part, int) or isinstance(part, bool):
+                raise ConversionError(f"{owner} message requires an int32/uint32 time for field {name}, "
+                                      f"but got {_pytype(part)}")
+        return {"sec": sec, "nanosec": nanosec}
 
     def from_args(self, args: Any) -> dict[str, Any]:
         """Service call arguments: an object, an array mapped in field order, or missing/null."""

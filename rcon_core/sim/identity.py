@@ -12,7 +12,8 @@ the way a real fleet namespaces its robots (one ``ns`` per robot in the launch f
   ``/boat2/reset_pose``), its ROS 2 action (``/boat2/navigate_to_fix``) and its node
   (``/boat2/kingfisher``, so ``/rosout`` lines, rosapi's node list and the logger services follow);
 * **global** (unchanged): the ROS infrastructure the rosbridge server brings (``/rosout``,
-  ``/rosout_agg``, ``/client_count``, ``/rosapi/*``, the bridge's own logger services) and ``/map``,
+  ``/rosout_agg``, ``/client_count``, ``/rosapi/*``, the bridge's own logger services, the ROS 2
+  tutorial action ``/fibonacci``) and ``/map``,
   the harbour's chart, which a fleet shares from one map server;
 * **frame ids stay as they are** (``base_link``, ``odom``...): each sim is its own TF tree.
 

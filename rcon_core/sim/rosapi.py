@@ -1,4 +1,7 @@
-"""The /rosapi services of the sim, answering in the real rosapi's shapes (rosbridge_suite 0.11.17)."""
+"""The /rosapi services of the sim, answering in the real rosapi's shapes (rosbridge_suite 0.11.17).
+
+ROS 2 mode uses the subclass in ``ros2_rosapi.py`` (rosapi 2.x: ``rosapi_msgs`` types, node parameters).
+"""
 
 from __future__ import annotations
 
@@ -238,15 +241,24 @@ _SERVICES: list[tuple[str, str]] = [
 
 
 def add_logger_services(server: SimServer, api: Rosapi, node: str) -> None:
-    """``<node>/get_loggers`` and ``<node>/set_logger_level``, as every rospy node has."""
+    """``<node>/get_loggers`` and ``<node>/set_logger_level``, as every rospy node has; in ROS 2 mode the
+    node's parameter services instead (``ros2_param_services.py``)."""
     if server.ros2:
+        from .ros2_param_services import add_parameter_services
+
+        add_parameter_services(server, node)
         return
     server.add_service(f"{node}/get_loggers", "roscpp/GetLoggers", node, api.get_loggers_for(node))
     server.add_service(f"{node}/set_logger_level", "roscpp/SetLoggerLevel", node, api.set_logger_level_for(node))
 
 
 def install(server: SimServer) -> Rosapi:
-    """Register the /rosapi services (and the bridge nodes' logger services) on ``server``."""
+    """Register the /rosapi services (and the bridge nodes' logger services) on ``server``; in ROS 2 mode
+    the rosapi 2.x set of ``ros2_rosapi.py``."""
+    if server.ros2:
+        from .ros2_rosapi import install as install_ros2
+
+        return install_ros2(server)
     api = Rosapi(server)
     add_logger_services(server, api, ROSOUT_NODE)
     add_logger_services(server, api, ROSAPI_NODE)

@@ -81,6 +81,7 @@ class SimServer:
         self.robot: Any = None
         self._robot_node: Any = None
         self._actions: Any = None
+        self.action_hub: Any = None  # ROS 2: ros2_actions.ActionHub
         self._server: Server | None = None
         self._port = 0
         self._client_ids = itertools.count(0)
@@ -88,6 +89,8 @@ class SimServer:
         self._published_lock = threading.Lock()
         self._published_event: asyncio.Event | None = None
         self._tasks: set[asyncio.Task[Any]] = set()
+        #: every operation clients sent, by (op, topic/service/action name): what tests check reached it
+        self.ops_received: collections.Counter[tuple[str, str]] = collections.Counter()
 
     # -- lifecycle ------------------------------------------------------------------------------------
 
@@ -123,6 +126,11 @@ class SimServer:
         if not self.ros2:
             self.advertise_internal("/rosout_agg", self.flavour.msg("rosgraph_msgs", "Log"), ROSOUT_NODE)
         self.advertise_internal("/client_count", self.flavour.msg("std_msgs", "Int32"), BRIDGE_NODE, latched=True)
+        if self.ros2:
+            from .ros2_actions import ActionHub, FibonacciServer
+
+            self.action_hub = ActionHub(self)
+            self.action_hub.add(FibonacciServer(self.action_hub))
         rosapi.install(self)
         if self._with_robot:
             from .robot_node import RobotNode
@@ -134,6 +142,7 @@ class SimServer:
                 from .actions import NavigateActionServer
 
                 self._actions = NavigateActionServer(self, self._robot_node)
+                self.action_hub.add(self._actions)
         limits: dict[str, Any] = {"max_size": self.max_frame}
         if self.auth_secret is not None:  # the first message is small; the gate raises the limit after it
             limits = {"max_size": self.auth_frame_limit,
@@ -151,8 +160,8 @@ class SimServer:
         """Stop simulating and close every connection."""
         if self._robot_node is not None:
             await self._robot_node.stop()
-        if self._actions is not None:
-            await self._actions.stop()
+        if self.action_hub is not None:
+            await self.action_hub.stop()
         for task in list(self._tasks):
             task.cancel()
         for task in list(self._tasks):
@@ -428,6 +437,8 @@ class SimServer:
             self._unadvertise(conn, name)
         for svc in [s for s in self.services.values() if s.provider is conn]:
             self._remove_client_service(svc, "the providing client disconnected")
+        if self.action_hub is not None:
+            self.action_hub.connection_closed(conn)
 
     async def _receive(self, conn: Connection, message: str | bytes) -> None:
         for frame in parse_frame(message, conn.label):
@@ -443,6 +454,8 @@ class SimServer:
                           "one of: %s.", conn.label, sorted(self._ops()))
             return
         op = msg["op"]
+        target = msg.get("topic") or msg.get("service") or msg.get("action") or ""
+        self.ops_received[(str(op), target if isinstance(target, str) else "")] += 1
         handler = self._ops().get(op) if isinstance(op, str) else None
         if handler is None:
             log.error("%s [id: %s] Unknown operation: %s.  Allowed operations: %s", conn.label, msg.get("id"),
@@ -470,9 +483,8 @@ class SimServer:
             "set_level": lambda conn, msg: None,
             "auth": lambda conn, msg: None,  # already authenticated (or no auth configured)
         }
-        if self._actions is not None:
-            ops["send_action_goal"] = self._actions.op_send_goal
-            ops["cancel_action_goal"] = self._actions.op_cancel_goal
+        if self.action_hub is not None:
+            ops.update(self.action_hub.ops())
         return ops
 
     # -- topic ops ------------------------------------------------------------------------------------

@@ -17,7 +17,7 @@ log = logging.getLogger(__name__)
 
 
 class TypeSource:
-    """Typedefs, converters and ROS 1 serialization for the sim, in the flavour's type spelling."""
+    """Typedefs, converters and cbor-raw serialization (ROS 1 or CDR) for the sim, in the flavour's spelling."""
 
     def __init__(self, ros2: bool, now: Callable[[], dict[str, int]], plugin_types: bool = False) -> None:
         self.ros2 = ros2
@@ -81,8 +81,11 @@ class TypeSource:
         return self._converters[key]
 
     def serialize(self, name: str, msg: dict[str, Any]) -> bytes:
-        """ROS 1 serialization (for ``cbor-raw``); raises when the registry cannot do it."""
+        """The ``cbor-raw`` payload: CDR in ROS 2 mode (as rosbridge 2.x sends it), else ROS 1
+        serialization; raises when the registry cannot do it."""
         reg = self.registry
         if reg is None:
             raise RuntimeError("message definitions unavailable")
+        if self.ros2:
+            return bytes(reg.serialize_cdr(name, msg))
         return bytes(reg.serialize_ros1(name, msg))

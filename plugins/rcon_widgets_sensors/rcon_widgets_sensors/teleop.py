@@ -160,7 +160,9 @@ class TeleopModel(WidgetModel):
         self._x = self._y = 0.0
         self._sent = 0
         self._reason = ""
-        self._group_key = (id(getattr(port, "client", port)), binding.name)
+        # pads of one robot on one topic share a group: the port's ``link`` names the robot
+        link = getattr(port, "link", None)  # a GuardedPort from the runtime; a bare node has its client
+        self._group_key = (link if link is not None else id(getattr(port, "client", port)), binding.name)
         self.send_times: list[float] = []  # monotonic time of each publish (tests, diagnostics)
         self._publish_value()
 

@@ -51,8 +51,13 @@ async def client(sim):
     await c.close()
 
 
-def pad(client, settings=None, name="/cmd_vel", type_name=TWIST, node="pad"):
-    return TeleopModel(settings or TeleopSettings(), Binding(name, type_name, "publish"), client.node(node),
+def pad(client, settings=None, name="/cmd_vel", type_name=TWIST, node="pad", guarded=False):
+    port = client.node(node)
+    if guarded:  # as the canvas runtime gives it: a GuardedPort naming the robot's link, no way to the client
+        from rcon_core.canvas.port import GuardedPort
+
+        port = GuardedPort(port, link=id(client))
+    return TeleopModel(settings or TeleopSettings(), Binding(name, type_name, "publish"), port,
                        types=TypeRegistry.standard())
 
 
@@ -165,11 +170,13 @@ async def test_link_drop_zero_after_reconnect_then_silence(sim, client):
         model.stop()
 
 
-async def test_two_pads_merge_into_one_stream(sim, client):
+@pytest.mark.parametrize("guarded", [False, True], ids=["bare-nodes", "runtime-ports"])
+async def test_two_pads_merge_into_one_stream(sim, client, guarded):
     rx = Receiver(sim)
-    linear = pad(client, TeleopSettings(horizontal="", vertical="linear.x", rate_hz=10), node="left")
+    linear = pad(client, TeleopSettings(horizontal="", vertical="linear.x", rate_hz=10), node="left",
+                 guarded=guarded)
     angular = pad(client, TeleopSettings(horizontal="-angular.z", vertical="", rate_hz=10, dead_zone=0),
-                  node="right")
+                  node="right", guarded=guarded)
     linear.start()
     angular.start()
     try:

@@ -11,7 +11,7 @@ from typing import Any
 import attrs
 
 from rcon_core.msgs import MessageTextError
-from rcon_core.msgs.text import parse_text
+from rcon_core.msgs.text import parse_text, to_text
 from rcon_core.plugins import Role
 
 from .base import StdModel
@@ -45,6 +45,14 @@ class ButtonSettings:
     release_payload: str = attrs.field(
         default="", metadata={"label": "Release request / message", "multiline": True,
                               "help": "YAML or JSON for the release call (or a message published on release)"}
+    )
+    confirm: bool = attrs.field(
+        default=False, metadata={"label": "Ask before sending",
+                                 "help": "a dialog shows the exact service and request (or topic and message) first; nothing is sent until Send"}
+    )
+    hold_to_send: bool = attrs.field(
+        default=False, metadata={"label": "Hold to send",
+                                 "help": "press and hold 1 s (a bar fills) to send; a shorter press sends nothing"}
     )
 
     def problems(self) -> list[str]:
@@ -110,6 +118,27 @@ class ButtonModel(StdModel):
             except (KeyError, ValueError) as exc:
                 out.append(f"{what}: {exc}")
         return out
+
+    def describe_send(self) -> tuple[str, str] | None:
+        """What a press sends, for "ask before sending": ``(what, detail)`` with the exact service (or
+        topic), type and request (or message) as YAML; None when it cannot be built yet."""
+        b, s = self.binding, self.settings
+        if b.problems() or not self.types_ready:
+            return None
+        try:
+            first = to_text(self.build()).strip() or "{}"
+            if b.role is Role.PUBLISH:
+                detail = f"Message:\n{first}"
+                if s.release_payload:
+                    detail += f"\n\nThen, on release, the message:\n{to_text(self.build(True)).strip() or '{}'}"
+                return f"Publish on {b.name} ({b.type})?", detail
+            detail = f"Request:\n{first}"
+            if s.release_service and self.types.has(self._payload_type(True)):
+                again = to_text(self.build(True)).strip() or "{}"
+                detail += f"\n\nThen, on release: call {s.release_service} with:\n{again}"
+        except (MessageTextError, KeyError, ValueError):
+            return None
+        return f"Call {b.name} ({b.type})?", detail
 
     # -- actions (any thread) -----------------------------------------------------------------------
     def press(self) -> None:

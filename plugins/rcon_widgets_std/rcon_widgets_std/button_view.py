@@ -9,6 +9,7 @@ from typing import Any
 
 from qtpy import QtCore, QtWidgets
 
+from .send_guard import SendGuard
 from .view_common import BAD, MUTED, OK, ButtonFace, Caption, fit_caption, vbox
 
 
@@ -26,6 +27,10 @@ class ButtonView(QtWidgets.QWidget):
         self.button.released.connect(model.release)
         layout.addWidget(self.button, 1)
         self.face = ButtonFace(self.button, text)
+        # "ask before sending" / "hold to send": the guard takes the presses (pressed/released never fire)
+        self.guard = SendGuard(self.button, ask=model.settings.confirm, hold=model.settings.hold_to_send,
+                               describe=model.describe_send, send=model.press, release=model.release,
+                               face=self.face)
         self.result = Caption("")
         self.result.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
         layout.addWidget(self.result)

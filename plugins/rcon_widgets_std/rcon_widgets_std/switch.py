@@ -13,6 +13,7 @@ from typing import Any
 
 import attrs
 
+from rcon_core.msgs.text import to_text
 from rcon_core.plugins import Role
 from rcon_core.plugins.paths import PathError, get_path, set_path, split_service_path
 
@@ -33,6 +34,14 @@ class SwitchSettings:
     state_field: str = attrs.field(default="data", metadata={"label": "State field", "help": "bool field in it"})
     stale_after: float = attrs.field(default=30.0, metadata={"label": "Stale after (s)", "min": 0.0,
                                                             "help": "0 = a static (latched) topic: never stale once it delivered"})
+    confirm: bool = attrs.field(
+        default=False, metadata={"label": "Ask before sending",
+                                 "help": "a dialog shows the exact service and request (or topic and message) first; nothing is sent until Send"}
+    )
+    hold_to_send: bool = attrs.field(
+        default=False, metadata={"label": "Hold to send",
+                                 "help": "press and hold 1 s (a bar fills) to send; a shorter press sends nothing"}
+    )
 
     def problems(self) -> list[str]:
         out = []
@@ -122,6 +131,19 @@ class SwitchModel(StdModel):
             self._call(bool(on))
         else:
             self.set_error("this switch only shows the state (subscribe)")
+
+    def describe_set(self, on: bool) -> tuple[str, str] | None:
+        """What :meth:`set` sends, for "ask before sending": ``(what, detail)`` with the exact service (or
+        topic), type and request (or message) as YAML; None when it cannot be built yet."""
+        b = self.binding
+        if b.problems() or not self.types_ready or b.role is Role.SUBSCRIBE:
+            return None
+        try:
+            if b.role is Role.PUBLISH:
+                return f"Publish on {b.name} ({b.type})?", f"Message:\n{to_text(self.build_message(bool(on))).strip()}"
+            return f"Call {b.name} ({b.type})?", f"Request:\n{to_text(self.request_for(bool(on))).strip()}"
+        except (PathError, KeyError, ValueError):
+            return None
 
     def request_for(self, on: bool) -> dict[str, Any]:
         """The service request: the default request with ``on`` at the bound ``request.*`` field."""

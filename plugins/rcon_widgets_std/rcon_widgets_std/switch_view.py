@@ -15,6 +15,7 @@ from qtpy import QtCore, QtWidgets
 
 from rcon_core.plugins import Role
 
+from .send_guard import SendGuard
 from .view_common import BAD, MUTED, OK, ButtonFace, Caption, fit_caption, vbox
 
 
@@ -31,6 +32,10 @@ class SwitchView(QtWidgets.QWidget):
         self.button.clicked.connect(self._clicked)
         layout.addWidget(self.button, 1)
         self.face = ButtonFace(self.button, "?")
+        #: the state a confirm dialog showed: what is sent on Send, even if the robot's state moved meanwhile
+        self._pending: bool | None = None
+        self.guard = SendGuard(self.button, ask=model.settings.confirm, hold=model.settings.hold_to_send,
+                               describe=self._describe, send=self._send_guarded, face=self.face)
         self._was_busy = False
         self.reply = Caption("")
         self._reply: tuple[str, str] | None = None  # (text, colour) shown in the reply line
@@ -38,6 +43,19 @@ class SwitchView(QtWidgets.QWidget):
         layout.addWidget(self.reply)
         self._paint(None, "", None)
         self._live = False  # refreshed at least once (an error already there when built is not news)
+
+    def _target(self) -> bool:
+        return not bool(getattr(self.model.state.value, "on", None))
+
+    def _describe(self) -> tuple[str, str] | None:
+        self._pending = self._target()
+        return self.model.describe_set(self._pending)
+
+    def _send_guarded(self) -> None:
+        target = self._pending if self._pending is not None else self._target()
+        self._pending = None
+        self.model.set(target)
+        self.refresh(self.model.state)
 
     def _clicked(self, checked: bool) -> None:
         self.model.set(bool(checked))

@@ -1,0 +1,237 @@
+"""The operator lock: Operate mode that only the operator PIN leaves.
+
+Two notions, kept apart:
+
+- **Operate mode** (``Canvas.locked``, saved in the layout) is a convenience: the widgets take touches and
+  nothing moves by accident. Anyone can tap *Edit* to leave it.
+- **The operator lock** (this module, a state of the running app, never saved in the layout) keeps the
+  app in Operate mode: while it is engaged, leaving Operate mode, editing (adding widgets, the canvas
+  menu's new/rename/duplicate/delete/import), turning view-only off, changing the robot (connect,
+  disconnect, the URL) and quitting ask for the PIN first. The right PIN disengages the lock and the
+  action goes on; a wrong one changes nothing. Switching between canvases stays free; each canvas shown
+  is put in Operate mode. ``rcon --locked`` starts with the lock engaged, full screen (a kiosk).
+
+The PIN is set in the app (*Canvas ▾ → Operator PIN…*) and kept hashed in the app config (see
+:mod:`rcon_core.app.pin`), never in the layout. After :data:`MAX_TRIES` wrong PINs in a row, every try is
+refused for :data:`BACKOFF_S` seconds (doubling each time), so guessing a 4-digit PIN takes days.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import Any
+
+from qtpy import QtCore, QtWidgets
+
+from rcon_core.app.config import AppConfig
+from rcon_core.app.pin import check_pin, make_record, pin_problem
+
+MAX_TRIES = 5
+BACKOFF_S = 30.0
+
+
+class PinDialog(QtWidgets.QDialog):
+    """Asks for a PIN (twice with ``repeat``), with a digit pad for a touch screen. ``check(pin)`` decides
+    on OK: None accepts, a sentence is shown and the dialog stays open (the field is cleared)."""
+
+    def __init__(self, parent: QtWidgets.QWidget, title: str, prompt: str,
+                 check: Callable[[str], str | None], *, repeat: bool = False) -> None:
+        super().__init__(parent)
+        self.setObjectName("pinDialog")
+        self.setWindowTitle(title)
+        self.setWindowModality(QtCore.Qt.WindowModality.WindowModal)
+        self._check = check
+        col = QtWidgets.QVBoxLayout(self)
+        heading = QtWidgets.QLabel(prompt)
+        heading.setObjectName("pinPrompt")
+        heading.setWordWrap(True)
+        heading.setProperty("role", "heading")
+        col.addWidget(heading)
+        self.field = self._pin_field("pinField", "PIN")
+        col.addWidget(self.field)
+        self.repeat: QtWidgets.QLineEdit | None = None
+        if repeat:
+            self.repeat = self._pin_field("pinRepeat", "the same PIN again")
+            col.addWidget(self.repeat)
+        pad = QtWidgets.QGridLayout()
+        self.keys: dict[str, QtWidgets.QPushButton] = {}
+        for i, key in enumerate("123456789⌫0"):
+            button = QtWidgets.QPushButton(key)
+            button.setObjectName(f"pinKey{key if key.isdigit() else 'Back'}")
+            button.setFocusPolicy(QtCore.Qt.FocusPolicy.NoFocus)
+            button.clicked.connect(lambda _=False, k=key: self._key(k))
+            self.keys[key] = button
+            pad.addWidget(button, i // 3, i % 3)
+        col.addLayout(pad)
+        self.message = QtWidgets.QLabel()
+        self.message.setObjectName("pinMessage")
+        self.message.setProperty("role", "problem")
+        self.message.setWordWrap(True)
+        col.addWidget(self.message)
+        buttons = QtWidgets.QDialogButtonBox()
+        self.ok = buttons.addButton("OK", QtWidgets.QDialogButtonBox.ButtonRole.AcceptRole)
+        self.ok.setObjectName("pinOk")
+        self.cancel = buttons.addButton(QtWidgets.QDialogButtonBox.StandardButton.Cancel)
+        self.cancel.setObjectName("pinCancel")
+        self.ok.clicked.connect(self.submit)
+        self.cancel.clicked.connect(self.reject)
+        col.addWidget(buttons)
+        self.field.returnPressed.connect(self.submit)
+        if self.repeat is not None:
+            self.repeat.returnPressed.connect(self.submit)
+
+    def _pin_field(self, name: str, placeholder: str) -> QtWidgets.QLineEdit:
+        field = QtWidgets.QLineEdit()
+        field.setObjectName(name)
+        field.setEchoMode(QtWidgets.QLineEdit.EchoMode.Password)
+        field.setPlaceholderText(placeholder)
+        field.setMaxLength(12)
+        field.setInputMethodHints(QtCore.Qt.InputMethodHint.ImhDigitsOnly
+                                  | QtCore.Qt.InputMethodHint.ImhSensitiveData)
+        return field
+
+    def _key(self, key: str) -> None:
+        target = self.repeat if self.repeat is not None and self.repeat.hasFocus() else self.field
+        if key == "⌫":
+            target.backspace()
+        else:
+            target.insert(key)
+
+    def submit(self) -> None:
+        pin = self.field.text()
+        if self.repeat is not None and self.repeat.text() != pin:
+            self._refuse("the two PINs differ")
+            return
+        problem = self._check(pin)
+        if problem:
+            self._refuse(problem)
+            return
+        self.accept()
+
+    def _refuse(self, text: str) -> None:
+        self.message.setText(text)
+        self.field.clear()
+        if self.repeat is not None:
+            self.repeat.clear()
+        self.field.setFocus()
+
+
+class OperatorLock(QtCore.QObject):
+    """Whether the operator lock is engaged, and the PIN dialogs. ``changed(engaged)`` on every change."""
+
+    changed = QtCore.Signal(bool)
+
+    def __init__(self, config: AppConfig, window: QtWidgets.QWidget,
+                 clock: Callable[[], float] = time.monotonic) -> None:
+        super().__init__(window)
+        self.config = config
+        self.window = window
+        self.clock = clock
+        self.engaged = False
+        self.wrong = 0
+        self.blocked_until = 0.0
+        self._backoff = BACKOFF_S
+        self.dialog: PinDialog | None = None
+
+    @property
+    def has_pin(self) -> bool:
+        return self.config.pin_record is not None
+
+    # ------------------------------------------------------------------------------- engaging
+    def engage(self) -> bool:
+        """Engage the lock; False (nothing changes) when no PIN is set."""
+        if not self.has_pin:
+            return False
+        if not self.engaged:
+            self.engaged = True
+            self.changed.emit(True)
+        return True
+
+    def disengage(self) -> None:
+        if self.engaged:
+            self.engaged = False
+            self.changed.emit(False)
+
+    def try_pin(self, pin: str) -> str | None:
+        """Disengage with ``pin``: None when it was right, else why not (wrong, or wait after too many)."""
+        now = self.clock()
+        if now < self.blocked_until:
+            return f"too many wrong PINs: try again in {int(self.blocked_until - now + 0.999)} s"
+        if check_pin(self.config.pin_record, pin):
+            self.wrong = 0
+            self._backoff = BACKOFF_S
+            self.disengage()
+            return None
+        self.wrong += 1
+        if self.wrong >= MAX_TRIES:
+            self.wrong = 0
+            self.blocked_until = now + self._backoff
+            wait = self._backoff
+            self._backoff *= 2
+            return f"wrong PIN; too many wrong PINs: try again in {int(wait)} s"
+        return "wrong PIN"
+
+    # ------------------------------------------------------------------------------- asking
+    def guard(self, what: str, then: Callable[[], object]) -> PinDialog | None:
+        """Run ``then`` now when the lock is not engaged; else ask for the PIN (saying it is needed to
+        ``what``) and run it once the right PIN disengaged the lock. Returns the open dialog, if any."""
+        if not self.engaged:
+            then()
+            return None
+        return self._open(PinDialog(self.window, "Operator lock", f"Operator lock: enter the PIN to {what}.",
+                                    self.try_pin), then)
+
+    def engage_dialog(self) -> PinDialog | None:
+        """The lock button: engage, asking for a new PIN first when none is set."""
+        if self.engage():
+            return None
+        return self.set_pin_dialog(then=self.engage)
+
+    def set_pin_dialog(self, then: Callable[[], object] | None = None) -> PinDialog | None:
+        """Set or change the PIN (asked twice); changing it asks for the current one first."""
+        def ask_new() -> None:
+            def store(pin: str) -> str | None:
+                problem = pin_problem(pin)
+                if problem:
+                    return problem
+                self.config.set_pin_record(make_record(pin))
+                return None
+
+            self._open(PinDialog(self.window, "Operator PIN",
+                                 "Choose the operator PIN (4 to 12 digits): it locks Operate mode.", store,
+                                 repeat=True), then or (lambda: None))
+
+        if not self.has_pin:
+            ask_new()
+            return self.dialog
+
+        def check_current(pin: str) -> str | None:
+            return None if check_pin(self.config.pin_record, pin) else "wrong PIN"
+
+        return self._open(PinDialog(self.window, "Operator PIN", "Enter the current operator PIN to change it.",
+                                    check_current), ask_new)
+
+    def _open(self, dialog: PinDialog, then: Callable[[], object]) -> PinDialog:
+        if self.dialog is not None and self.dialog.isVisible():
+            self.dialog.reject()
+        self.dialog = dialog
+        dialog.accepted.connect(lambda: then())
+        dialog.finished.connect(lambda _r, d=dialog: self._closed(d))
+        dialog.open()
+        dialog.field.setFocus()
+        return dialog
+
+    def _closed(self, dialog: PinDialog) -> None:
+        if self.dialog is dialog:
+            self.dialog = None
+        dialog.deleteLater()
+
+    def status_text(self) -> str:
+        return "Locked" if self.engaged else "Lock"
+
+
+def lock_tooltip(lock: Any) -> str:
+    if lock.engaged:
+        return "Operator lock on: editing, leaving Operate mode, changing the robot and quitting need the PIN"
+    return "Lock Operate mode with the operator PIN" if lock.has_pin else "Choose an operator PIN and lock"

@@ -1,0 +1,48 @@
+"""The operator PIN is kept as a salted scrypt hash: never the PIN, different each time, damaged records
+never match, and PINs that are not 4 to 12 digits are refused with the reason."""
+
+import json
+
+import pytest
+
+from rcon_core.app.config import AppConfig
+from rcon_core.app.pin import check_pin, make_record, pin_problem
+
+
+def test_a_pin_is_stored_salted_and_hashed_and_checked():
+    a, b = make_record("2468"), make_record("2468")
+    assert a["salt"] != b["salt"] and a["hash"] != b["hash"]  # a fresh salt each time
+    assert "2468" not in json.dumps(a)
+    assert check_pin(a, "2468") and check_pin(b, "2468")
+    assert not check_pin(a, "2469") and not check_pin(a, "")
+
+
+@pytest.mark.parametrize("record", [
+    None, {}, {"kdf": "md5"}, {"kdf": "scrypt", "n": 16384, "r": 8, "p": 1, "salt": "zz", "hash": "00"},
+    {"kdf": "scrypt", "n": 2**40, "r": 8, "p": 1, "salt": "00", "hash": "00"}, "scrypt",
+])
+def test_a_damaged_record_never_matches(record):
+    assert check_pin(record, "2468") is False
+
+
+@pytest.mark.parametrize("pin, problem", [
+    ("123", "4 to 12 digits"), ("1234567890123", "4 to 12 digits"), ("12a4", "digits only"),
+    ("١٢٣٤", "digits only"), ("", "digits only"),
+])
+def test_bad_pins_are_refused_with_the_reason(pin, problem):
+    assert problem in pin_problem(pin)
+    with pytest.raises(ValueError, match=problem):
+        make_record(pin)
+
+
+def test_the_config_keeps_the_pin_record_and_view_only_robots(tmp_path):
+    config = AppConfig(tmp_path)
+    assert config.pin_record is None and not config.is_view_only("ws://robot:9090")
+    config.set_pin_record(make_record("97531"))
+    config.set_view_only("ws://robot:9090", True)
+    again = AppConfig(tmp_path)
+    assert check_pin(again.pin_record, "97531") and again.is_view_only("ws://robot:9090")
+    again.set_view_only("ws://robot:9090", False)
+    again.set_pin_record(None)
+    last = AppConfig(tmp_path)
+    assert last.pin_record is None and not last.is_view_only("ws://robot:9090")
