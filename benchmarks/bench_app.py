@@ -15,6 +15,9 @@ Figures (latencies p50/p95/p99, from the publish time stamp carried in the messa
 ``--view std.label`` uses the real Label widget of ``rcon_widgets_std`` (value + age caption).
 Usage: ``QT_QPA_PLATFORM=offscreen python benchmarks/bench_app.py [--widgets 50] [--hz 20] [--seconds 8]
 [--view label|std.label] [--operator] [--out FILE.json]``.
+
+``--robots N`` runs the fleet benchmark instead (``bench_fleet.py``: N vessels, each a sim in its own
+process with two cameras and 20 values at 20 Hz, one window, a held teleop pad; the JSON has ``robots``).
 """
 
 from __future__ import annotations
@@ -212,8 +215,22 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--operator", action="store_true", help="operator (locked) mode instead of edit mode")
     parser.add_argument("--in-process-sim", action="store_true",
                         help="run the simulated robot in this process (its memory and CPU then count too)")
+    parser.add_argument("--robots", type=int, metavar="N",
+                        help="the fleet benchmark: N vessels in their own processes (see bench_fleet.py)")
     args = parser.parse_args(argv)
     os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+    if args.robots is not None:
+        if not 1 <= args.robots <= 6:
+            parser.error("--robots must be from 1 to 6")
+        sys.path.insert(0, str(Path(__file__).resolve().parent))
+        import bench_fleet
+
+        figures = bench_fleet.run(args)
+        for key, value in figures.items():
+            print(f"{key:36s} {value}")
+        if args.out:
+            args.out.write_text(json.dumps(figures, indent=2))
+        return 0
 
     t0 = time.perf_counter()
     from qtpy import QtWidgets

@@ -1,4 +1,4 @@
-"""``rcon`` without a subcommand: open the app (``--url``, ``--layout``, ``--demo``, ``--locked``,
+"""``rcon`` without a subcommand: open the app (``--url``, ``--layout``, ``--demo [--robots N]``, ``--locked``,
 ``--screenshot``, and the secure-link options ``--ca-file``, ``--client-cert``/``--client-key``,
 ``--auth-secret-file``)."""
 
@@ -119,6 +119,18 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
     if getattr(args, "reset_layout", False) and not demo:
         print("rcon: --reset-layout resets the demo layout; use it with --demo", file=sys.stderr)
         return 2
+    robots = getattr(args, "robots", None)
+    if robots is not None:
+        from rcon_core.app.fleet_demo import check_count
+
+        if not demo:
+            print("rcon: --robots starts a fleet of embedded vessels; use it with --demo", file=sys.stderr)
+            return 2
+        try:
+            check_count(robots)
+        except ValueError as exc:
+            print(f"rcon: {exc}", file=sys.stderr)
+            return 2
     # a layout file that cannot be read is reported in the window (and never overwritten)
     layout = Path(args.layout) if getattr(args, "layout", None) else None
     existing = QtWidgets.QApplication.instance()
@@ -135,7 +147,18 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
     windows: list[Any] = []
     stack.enter_context(closing_on_signals(windows))
     demo_factory = None
-    if demo:
+    fleet_urls: list[str] = []
+    if demo and robots is not None:
+        from rcon_core.app.fleet_demo import connect_fleet, fleet_sims, fleet_workspace
+
+        fleet_urls = [s.url for s in stack.enter_context(fleet_sims(robots))]
+        if layout is None:
+            layout = config.dir / f"demo-fleet{robots}-workspace.json"
+
+        def demo_factory() -> Any:
+            return fleet_workspace(robots, plugins)
+
+    elif demo:
         from rcon_core.app.demo import demo_workspace
         from rcon_core.sim import SimServer
 
@@ -162,7 +185,10 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
     # the embedded robot's URL is not put in the history: its port is gone after this run. The first robot:
     # --url, else its URL in the layout, else the newest in the history; the others connect to their own
     # URLs (window.fleet_ui)
-    window.connect_to(url or window.fleet_ui.first_url() or config.last_url, remember=not demo)
+    if fleet_urls:  # the demo's vessels: run-time URLs, never saved
+        connect_fleet(window, fleet_urls)
+    else:
+        window.connect_to(url or window.fleet_ui.first_url() or config.last_url, remember=not demo)
     if getattr(args, "screenshot", None):
         path = Path(args.screenshot)
 

@@ -37,6 +37,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--url", help="rosbridge WebSocket URL to connect to (default: last used)")
     parser.add_argument("--layout", help="layout file to open instead of the saved workspace")
     parser.add_argument("--demo", action="store_true", help="start the embedded robot and open the demo layout")
+    parser.add_argument("--robots", type=int, metavar="N",
+                        help="with --demo: start N embedded vessels (boat1..boatN, each its own sim on its own "
+                        "port) and open the fleet canvas: every vessel's camera and teleop pad, one map")
     parser.add_argument("--reset-layout", action="store_true",
                         help="with --demo: replace the saved demo layout by a fresh one")
     parser.add_argument("--locked", action="store_true",

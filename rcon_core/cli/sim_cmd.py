@@ -20,6 +20,13 @@ rcon sim: WARNING: add --auth SECRET (and --tls-cert/--tls-key), or listen on 12
 def configure(name: str, parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
     parser.add_argument("--port", type=int, default=9090, help="port to listen on (default 9090; 0 = any free)")
+    parser.add_argument("--name", metavar="NAME",
+                        help="the robot's name, one vessel of a fleet: its topics, services and node move under "
+                        "/NAME (/NAME/cmd_vel, /NAME/gps/fix), and it gets its own start position and camera "
+                        "scene; without it the sim is the one unnamed robot")
+    parser.add_argument("--no-namespace", action="store_true",
+                        help="with --name: keep the plain topic names (/cmd_vel), as a robot behind its own "
+                        "rosbridge has them; only the start position and the camera scene change")
     parser.add_argument("--ros2", action="store_true",
                         help="answer as rosbridge 2.x on ROS 2: pkg/msg/Type, sec/nanosec, rosapi_msgs, "
                         "<node>:<param> parameters, actions, CDR cbor-raw")
@@ -46,6 +53,17 @@ def run(name: str, args: argparse.Namespace) -> int:
     if not 0 <= args.port <= 65535:
         print(f"rcon sim: --port must be between 0 and 65535, got {args.port}")
         return 2
+    if args.no_namespace and args.name is None:
+        print("rcon sim: --no-namespace goes with --name", file=sys.stderr)
+        return 2
+    if args.name is not None:
+        from rcon_core.sim.identity import check_name
+
+        try:
+            check_name(args.name)
+        except ValueError as exc:
+            print(f"rcon sim: --name: {exc}", file=sys.stderr)
+            return 2
     if bool(args.tls_cert) != bool(args.tls_key):
         print("rcon sim: --tls-cert and --tls-key go together", file=sys.stderr)
         return 2
@@ -84,14 +102,17 @@ async def _serve(args: argparse.Namespace, tls: ssl.SSLContext | None = None) ->
 
     server = SimServer(host=args.host, port=args.port, ros2=args.ros2, rate_scale=args.rate_scale,
                        auth_secret=args.auth, max_frame=int(args.max_frame * 1024 * 1024),
-                       plugin_types=not args.no_plugin_types, ssl=tls)
+                       plugin_types=not args.no_plugin_types, ssl=tls, name=args.name,
+                       namespace=not args.no_namespace)
     try:
         await server.start()
     except OSError as exc:
         print(f"rcon sim: cannot listen on {args.host}:{args.port}: {exc.strerror or exc}")
         return 1
     flavour = "ROS 2" if args.ros2 else "ROS 1"
-    print(f"rcon sim: {flavour} Kingfisher simulator on {server.url} (Ctrl+C to stop)", flush=True)
+    ns = server.identity.namespace
+    who = f"Kingfisher '{server.name}'" + (f" (topics under {ns})" if ns else "") if server.name else "Kingfisher"
+    print(f"rcon sim: {flavour} {who} simulator on {server.url} (Ctrl+C to stop)", flush=True)
     if server.types.plugin_type_names:
         print(f"rcon sim: plugin types: {', '.join(server.types.plugin_type_names)}", flush=True)
     stop = asyncio.Event()

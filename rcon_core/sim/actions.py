@@ -60,13 +60,12 @@ def _finite_number(value: Any) -> float | None:
 
 
 class NavigateActionServer:
-    """Serves ``/navigate_to_fix`` on the sim's robot."""
-
-    name = ACTION_NAME
+    """Serves ``/navigate_to_fix`` on the sim's robot (``/NAME/navigate_to_fix`` for a named vessel)."""
 
     def __init__(self, server: SimServer, node: RobotNode) -> None:
         self.server = server
         self.node = node
+        self.name = node.ns(ACTION_NAME)
         self.type = ACTION_TYPE
         self.goal: _Goal | None = None
 
@@ -85,7 +84,7 @@ class NavigateActionServer:
         if pkg_type(action_type) != pkg_type(ACTION_TYPE):  # either spelling matches
             self._fail(conn, goal_id, action, f"Unable to load the action type {action_type}")
             return
-        if action != ACTION_NAME:  # rosbridge waits 1 s for the server (wait_for_server) before it gives up
+        if action != self.name:  # rosbridge waits 1 s for the server (wait_for_server) before it gives up
             asyncio.get_running_loop().call_later(SERVER_WAIT_S, self._fail, conn, goal_id, action,
                                                   "No action server available")
             return
@@ -109,7 +108,7 @@ class NavigateActionServer:
         goal = _Goal(conn, goal_id, x, y, max(0.5, tolerance), max(0.1, max_speed), bool(msg.get("feedback", False)))
         self.goal = goal
         goal.task = asyncio.get_running_loop().create_task(self._drive(goal))
-        self.server.log("/kingfisher", "info", f"Navigating to {lat:.6f}, {lon:.6f} "
+        self.server.log(self.node.node, "info", f"Navigating to {lat:.6f}, {lon:.6f} "
                         f"({math.hypot(x - self.node.vessel.x, y - self.node.vessel.y):.1f} m away)",
                         function="navigate_to_fix")
 
@@ -148,7 +147,7 @@ class NavigateActionServer:
             speed = min(goal.max_speed, 0.4 * dist) if abs(error) < 0.7 else 0.2
             v.command(speed, 1.5 * error, time.monotonic())
             if goal.feedback:
-                self.server._send_text(goal.conn, {"op": "action_feedback", "id": goal.goal_id, "action": ACTION_NAME,
+                self.server._send_text(goal.conn, {"op": "action_feedback", "id": goal.goal_id, "action": self.name,
                                                    "values": {"distance_remaining": dist,
                                                               "current": self.node.fix_message()}})
             await asyncio.sleep(period)
@@ -164,11 +163,11 @@ class NavigateActionServer:
         dist = self._distance(goal)
         self._result(goal.conn, goal.goal_id, status, {"success": success, "message": message, "distance": dist})
         level = "info" if success else "warn"
-        self.server.log("/kingfisher", level, f"navigate_to_fix {message}", function="navigate_to_fix")
+        self.server.log(self.node.node, level, f"navigate_to_fix {message}", function="navigate_to_fix")
 
     def _result(self, conn: Connection, goal_id: Any, status: int, values: dict[str, Any]) -> None:
         """A goal that ended (any terminal status): ``result: true``, as rosbridge's ``_success`` sends."""
-        frame: dict[str, Any] = {"op": "action_result", "id": goal_id, "action": ACTION_NAME, "values": values,
+        frame: dict[str, Any] = {"op": "action_result", "id": goal_id, "action": self.name, "values": values,
                                  "status": status, "result": True}
         if goal_id is None:
             del frame["id"]

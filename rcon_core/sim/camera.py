@@ -23,8 +23,13 @@ class CameraRenderer:
     """Renders RGB frames for one camera mounted on the vessel."""
 
     def __init__(self, name: str, width: int = 640, height: int = 480, hfov_deg: float = 90.0,
-                 yaw_offset: float = 0.0, mount_height: float = 0.6) -> None:
+                 yaw_offset: float = 0.0, mount_height: float = 0.6, *,
+                 sky: tuple[tuple[int, int, int], tuple[int, int, int]] = ((120, 170, 225), (200, 225, 245)),
+                 bow: tuple[tuple[int, int, int], str] | None = None, vessel_name: str | None = None) -> None:
         self.name = name
+        #: (hull colour, painted text): the bow seen at the bottom of the picture (a fleet's vessel)
+        self.bow = bow
+        self.vessel_name = vessel_name
         self.width = width
         self.height = height
         self.yaw_offset = yaw_offset
@@ -33,7 +38,7 @@ class CameraRenderer:
         self._cols = np.arange(width, dtype=np.float64)
         self._rows = np.arange(height, dtype=np.float64)[:, None]
         self._col_angles = np.arctan((width / 2 - self._cols) / self.focal)  # left of centre is positive
-        self._sky = self._gradient((120, 170, 225), (200, 225, 245), height)
+        self._sky = self._gradient(sky[0], sky[1], height)
         self._water = self._gradient((60, 110, 140), (20, 55, 80), height)
         self._cache_key: tuple[int, ...] | None = None
         self._cache: np.ndarray | None = None
@@ -56,7 +61,8 @@ class CameraRenderer:
         img = self._cache.copy()
         stamp = time.time() if stamp is None else stamp
         text = time.strftime("%Y-%m-%d %H:%M:%S", time.gmtime(stamp)) + f".{int(stamp * 10) % 10} UTC"
-        label = f"{self.name}  {math.degrees(heading) % 360:05.1f} deg  {vessel.surge:+.2f} m/s"
+        camera = f"{self.vessel_name} {self.name}" if self.vessel_name else self.name
+        label = f"{camera}  {math.degrees(heading) % 360:05.1f} deg  {vessel.surge:+.2f} m/s"
         for y, line in ((self.height - 32, label), (self.height - 12, text)):
             cv2.putText(img, line, (10, y), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0, 0, 0), 3, cv2.LINE_AA)
             cv2.putText(img, line, (10, y), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (255, 255, 255), 1, cv2.LINE_AA)
@@ -105,7 +111,21 @@ class CameraRenderer:
             cv2.circle(img, (cx, cy - 2 * r), r, color, -1, cv2.LINE_AA)
             if vessel.lights and dist_b < 25:
                 cv2.circle(img, (cx, cy - 2 * r), max(1, r // 2), (255, 255, 210), -1, cv2.LINE_AA)
+        if self.bow is not None:
+            self._draw_bow(img, *self.bow)
         return img
+
+    def _draw_bow(self, img: np.ndarray, colour: tuple[int, int, int], text: str) -> None:
+        """The vessel's own bow, in its hull colour with its name painted on, at the bottom centre."""
+        w, h = self.width, self.height
+        top, base = int(h * 0.80), h
+        pts = np.array([[w // 2, top], [int(w * 0.70), base], [int(w * 0.30), base]], dtype=np.int32)
+        cv2.fillConvexPoly(img, pts, colour, cv2.LINE_AA)
+        shade = (0, 0, 0) if sum(colour) > 380 else (255, 255, 255)
+        scale = 0.6
+        (tw, th), _ = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, scale, 2)
+        cv2.putText(img, text, (w // 2 - tw // 2, top + int(0.55 * (base - top))), cv2.FONT_HERSHEY_SIMPLEX, scale, shade, 2,
+                    cv2.LINE_AA)
 
 
 def encode_jpeg(rgb: np.ndarray, quality: int = 80) -> bytes:

@@ -2,12 +2,19 @@
 
 Sensor messages are built only while someone subscribes (the cameras especially), so an idle sim costs
 almost nothing. All publish rates are multiplied by the server's ``rate_scale``.
+
+Camera frames are drawn (and JPEG-encoded) in a worker thread from a copy of the vessel's pose, then
+published from the loop: the loop never waits on a picture, so commands (``cmd_vel``) are taken as they
+arrive, as on a real robot whose camera drivers are not its rosbridge. A camera whose previous frame is
+still being drawn skips its turn (frames are dropped, never queued).
 """
 
 from __future__ import annotations
 
 import asyncio
+import concurrent.futures
 import contextlib
+import copy
 import logging
 import math
 import random
@@ -20,6 +27,7 @@ import numpy as np
 
 from . import world
 from .camera import CameraRenderer, encode_jpeg
+from .identity import Identity
 from .rosapi import add_logger_services
 from .vessel import Vessel
 
@@ -28,10 +36,10 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
-NODE = "/kingfisher"
+NODE = "/kingfisher"  # the unnamed sim's node; a named one is /NAME/kingfisher (identity.py)
 PHYSICS_HZ = 50.0
 
-#: topic -> base rate in Hz (scaled by rate_scale)
+#: topic (before the namespace) -> base rate in Hz (scaled by rate_scale)
 RATES: dict[str, float] = {
     "/odom": 20.0,
     "/gps/fix": 5.0,
@@ -69,18 +77,31 @@ class _Periodic:
 
 
 class RobotNode:
-    """Publishes the vessel's sensors and takes its commands."""
+    """Publishes the vessel's sensors and takes its commands.
 
-    def __init__(self, server: SimServer, vessel: Vessel | None = None) -> None:
+    Topic names in this class are written without the namespace (``/cmd_vel``); ``self.ns`` maps them to
+    the graph's names (``/boat2/cmd_vel`` for a named vessel, see identity.py).
+    """
+
+    def __init__(self, server: SimServer, vessel: Vessel | None = None, identity: Identity | None = None) -> None:
         self.server = server
-        self.vessel = vessel or Vessel()
+        self.identity = identity = identity or Identity()
+        if vessel is None:
+            lat, lon = identity.origin
+            vessel = Vessel(origin_lat=lat, origin_lon=lon)
+        self.vessel = vessel
+        self.node = identity.node
+        self.ns = identity.topic
         self.fl = server.flavour
-        self.rng = random.Random(7)
+        self.rng = random.Random(7 + identity.index)
         self.lidar = world.Lidar()
-        self.front = CameraRenderer("front")
-        self.rear = CameraRenderer("rear", yaw_offset=math.pi)
+        bow = (identity.hull, identity.label) if identity.hull is not None else None
+        self.front = CameraRenderer("front", sky=identity.sky, bow=bow, vessel_name=identity.name)
+        self.rear = CameraRenderer("rear", yaw_offset=math.pi, sky=identity.sky, vessel_name=identity.name)
         self.published_counts: dict[str, int] = {}
         self._task: asyncio.Task[None] | None = None
+        self._render_pool: concurrent.futures.ThreadPoolExecutor | None = None
+        self._rendering: set[str] = set()  # cameras with a frame being drawn
         self._last_physics = time.monotonic()
         self._cmd_logged_at = float("-inf")
         self._idle = True
@@ -99,16 +120,18 @@ class RobotNode:
             "/lights/state": m("std_msgs", "Bool"),
         }
         for topic, type_name in self.types.items():
-            server.advertise_internal(topic, type_name, NODE, latched=topic in ("/map", "/lights/state"))
-        server.subscribe_internal("/cmd_vel", m("geometry_msgs", "Twist"), NODE, self._on_cmd_vel)
-        server.subscribe_internal("/speed_limit", m("std_msgs", "Float64"), NODE, self._on_speed_limit)
-        server.add_service("/reset_pose", s("std_srvs", "Empty"), NODE, self._srv_reset_pose)
-        server.add_service("/lights/set", s("std_srvs", "SetBool"), NODE, self._srv_lights)
-        server.add_service("/dock", s("std_srvs", "Trigger"), NODE, self._srv_dock)
+            server.advertise_internal(self.ns(topic) if topic != "/map" else topic, type_name, self.node,
+                                      latched=topic in ("/map", "/lights/state"))
+        ns, node = self.ns, self.node
+        server.subscribe_internal(ns("/cmd_vel"), m("geometry_msgs", "Twist"), node, self._on_cmd_vel)
+        server.subscribe_internal(ns("/speed_limit"), m("std_msgs", "Float64"), node, self._on_speed_limit)
+        server.add_service(ns("/reset_pose"), s("std_srvs", "Empty"), node, self._srv_reset_pose)
+        server.add_service(ns("/lights/set"), s("std_srvs", "SetBool"), node, self._srv_lights)
+        server.add_service(ns("/dock"), s("std_srvs", "Trigger"), node, self._srv_dock)
         if server.rosapi is not None:
-            add_logger_services(server, server.rosapi, NODE)
+            add_logger_services(server, server.rosapi, node)
         p = self.vessel.params
-        server.params_tree.set(NODE, {
+        server.params_tree.set(node, {
             "max_speed": p.max_surge, "max_yaw_rate": p.max_yaw_rate, "watchdog_timeout": p.watchdog_s,
             "battery_capacity_ah": p.capacity_ah, "frame_id": "base_link",
             "gps": {"origin_lat": self.vessel.origin_lat, "origin_lon": self.vessel.origin_lon},
@@ -122,7 +145,8 @@ class RobotNode:
     def start(self) -> None:
         self._publish_map()
         self._publish_lights()
-        self.server.log(NODE, "info", "Kingfisher simulator up: thrusters armed, waiting for /cmd_vel",
+        self.server.log(self.node, "info",
+                        f"Kingfisher simulator up: thrusters armed, waiting for {self.ns('/cmd_vel')}",
                         function="start")
         self._task = asyncio.get_running_loop().create_task(self._run(), name="sim-robot")
 
@@ -132,6 +156,9 @@ class RobotNode:
             with contextlib.suppress(asyncio.CancelledError):
                 await self._task
             self._task = None
+        if self._render_pool is not None:
+            self._render_pool.shutdown(wait=False, cancel_futures=True)
+            self._render_pool = None
 
     async def _run(self) -> None:
         now = time.monotonic()
@@ -155,9 +182,13 @@ class RobotNode:
                     except Exception:  # noqa: BLE001 - a sensor bug must not stop the robot
                         log.exception("publishing %s failed", e.topic or "physics")
 
+    def graph_name(self, topic: str) -> str:
+        """The graph's name of one of the robot's topics (``/map`` is shared, never namespaced)."""
+        return topic if topic == "/map" else self.ns(topic)
+
     def _publish(self, topic: str, msg: dict[str, Any]) -> None:
         self.published_counts[topic] = self.published_counts.get(topic, 0) + 1
-        self.server.publish(topic, msg, NODE)
+        self.server.publish(self.graph_name(topic), msg, self.node)
 
     # -- physics and events -------------------------------------------------------------------------
 
@@ -167,14 +198,14 @@ class RobotNode:
         v = self.vessel
         for event in v.step(dt, now):
             if event == "watchdog":
-                self.server.log(NODE, "warn", f"No /cmd_vel for {v.params.watchdog_s:.1f} s: watchdog stopped "
+                self.server.log(self.node, "warn", f"No /cmd_vel for {v.params.watchdog_s:.1f} s: watchdog stopped "
                                 "the thrusters", function="watchdog")
                 self._idle = True
             elif event == "battery_low":
-                self.server.log(NODE, "warn", f"Battery low: {v.battery_fraction * 100:.0f}% "
+                self.server.log(self.node, "warn", f"Battery low: {v.battery_fraction * 100:.0f}% "
                                 f"({v.voltage:.1f} V); return to dock", function="battery")
             elif event == "docked":
-                self.server.log(NODE, "info", f"Docked; charging at {v.current:.1f} A", function="dock")
+                self.server.log(self.node, "info", f"Docked; charging at {v.current:.1f} A", function="dock")
 
     def _on_cmd_vel(self, msg: dict[str, Any]) -> None:
         linear = msg.get("linear") or {}
@@ -185,26 +216,26 @@ class RobotNode:
         was_docking = self.vessel.docking
         self.vessel.command(surge, yaw_rate, now)
         if was_docking:
-            self.server.log(NODE, "warn", "Docking cancelled by a /cmd_vel command", function="cmd_vel")
+            self.server.log(self.node, "warn", "Docking cancelled by a /cmd_vel command", function="cmd_vel")
         if self._idle or now - self._cmd_logged_at > 10.0:
             self._idle = False
             self._cmd_logged_at = now
-            self.server.log(NODE, "info", f"cmd_vel received: surge {self.vessel.cmd_surge:.2f} m/s, yaw rate "
+            self.server.log(self.node, "info", f"cmd_vel received: surge {self.vessel.cmd_surge:.2f} m/s, yaw rate "
                             f"{self.vessel.cmd_yaw_rate:.2f} rad/s", function="cmd_vel")
 
     def _on_speed_limit(self, msg: dict[str, Any]) -> None:
         value = msg.get("data")
         if not isinstance(value, int | float) or not math.isfinite(value) or value < 0:
-            self.server.log(NODE, "error", f"Ignoring invalid speed limit {value!r}", function="speed_limit")
+            self.server.log(self.node, "error", f"Ignoring invalid speed limit {value!r}", function="speed_limit")
             return
         self.vessel.speed_limit = float(value)
-        self.server.log(NODE, "info", f"Speed limit set to {value:.2f} m/s", function="speed_limit")
+        self.server.log(self.node, "info", f"Speed limit set to {value:.2f} m/s", function="speed_limit")
 
     # -- services -----------------------------------------------------------------------------------
 
     def _srv_reset_pose(self, req: dict[str, Any]) -> dict[str, Any]:
         self.vessel.reset_pose()
-        self.server.log(NODE, "info", "Pose reset to the origin", function="reset_pose")
+        self.server.log(self.node, "info", "Pose reset to the origin", function="reset_pose")
         return {}
 
     def _srv_lights(self, req: dict[str, Any]) -> dict[str, Any]:
@@ -213,7 +244,7 @@ class RobotNode:
         self.vessel.lights = on
         if changed:
             self._publish_lights()
-            self.server.log(NODE, "info", f"Lights {'on' if on else 'off'}", function="lights")
+            self.server.log(self.node, "info", f"Lights {'on' if on else 'off'}", function="lights")
         return {"success": True, "message": f"lights {'on' if on else 'off'}"}
 
     def _srv_dock(self, req: dict[str, Any]) -> dict[str, Any]:
@@ -223,11 +254,11 @@ class RobotNode:
         if v.dock_distance < 1.5:
             v.docked = True
             v.docking = False
-            self.server.log(NODE, "info", "Docked; charging", function="dock")
+            self.server.log(self.node, "info", "Docked; charging", function="dock")
             return {"success": True, "message": "docked"}
         v.docking = True
         v.watchdog_tripped = False
-        self.server.log(NODE, "info", f"Docking started: {v.dock_distance:.1f} m to the dock", function="dock")
+        self.server.log(self.node, "info", f"Docking started: {v.dock_distance:.1f} m to the dock", function="dock")
         return {"success": True, "message": f"docking started, {v.dock_distance:.1f} m to go"}
 
     # -- latched topics -----------------------------------------------------------------------------
@@ -252,7 +283,7 @@ class RobotNode:
     # -- periodic publishers ------------------------------------------------------------------------
 
     def _wanted(self, topic: str) -> bool:
-        return self.server.has_subscribers(topic)
+        return self.server.has_subscribers(self.graph_name(topic))
 
     def _pub_odom(self, now: float) -> None:
         if not self._wanted("/odom"):
@@ -326,27 +357,51 @@ class RobotNode:
         })
 
     def _pub_camera_front_image_raw(self, now: float) -> None:
-        if not self._wanted("/camera/front/image_raw"):
-            return
-        stamp = time.time()
-        img = self.front.frame(self.vessel, stamp)
-        h, w = img.shape[:2]
-        self._publish("/camera/front/image_raw", {
-            "header": self.fl.header("camera_front_optical", stamp),
-            "height": h, "width": w, "encoding": "rgb8", "is_bigendian": 0, "step": w * 3,
-            "data": img.tobytes(),
-        })
+        if self._wanted("/camera/front/image_raw"):
+            self._render("/camera/front/image_raw", self.front, self._raw_image)
 
     def _pub_camera_rear_image_raw_compressed(self, now: float) -> None:
-        if not self._wanted("/camera/rear/image_raw/compressed"):
-            return
+        if self._wanted("/camera/rear/image_raw/compressed"):
+            self._render("/camera/rear/image_raw/compressed", self.rear, self._jpeg_image)
+
+    def _raw_image(self, img: np.ndarray, stamp: float) -> dict[str, Any]:
+        h, w = img.shape[:2]
+        return {"header": self.fl.header("camera_front_optical", stamp),
+                "height": h, "width": w, "encoding": "rgb8", "is_bigendian": 0, "step": w * 3,
+                "data": img.tobytes()}
+
+    def _jpeg_image(self, img: np.ndarray, stamp: float) -> dict[str, Any]:
+        return {"header": self.fl.header("camera_rear_optical", stamp), "format": "jpeg",
+                "data": encode_jpeg(img)}
+
+    def _render(self, topic: str, camera: CameraRenderer,
+                build: Callable[[np.ndarray, float], dict[str, Any]]) -> None:
+        """Draw one frame of ``camera`` in the worker thread, then publish it on ``topic`` from the loop."""
+        if topic in self._rendering:
+            return  # the previous frame is still being drawn: skip this one, never queue
+        if self._render_pool is None:
+            self._render_pool = concurrent.futures.ThreadPoolExecutor(2, thread_name_prefix="sim-camera")
         stamp = time.time()
-        img = self.rear.frame(self.vessel, stamp)
-        self._publish("/camera/rear/image_raw/compressed", {
-            "header": self.fl.header("camera_rear_optical", stamp),
-            "format": "jpeg",
-            "data": encode_jpeg(img),
-        })
+        pose = copy.copy(self.vessel)  # the loop goes on moving the vessel while the frame is drawn
+        loop = asyncio.get_running_loop()
+        self._rendering.add(topic)
+        future = self._render_pool.submit(lambda: build(camera.frame(pose, stamp), stamp))
+
+        def done(fut: concurrent.futures.Future[dict[str, Any]]) -> None:
+            with contextlib.suppress(RuntimeError):  # the loop is closed: the sim has stopped
+                loop.call_soon_threadsafe(self._rendered, topic, fut)
+
+        future.add_done_callback(done)
+
+    def _rendered(self, topic: str, future: concurrent.futures.Future[dict[str, Any]]) -> None:
+        self._rendering.discard(topic)
+        if self._task is None or future.cancelled():
+            return  # stopped meanwhile
+        exc = future.exception()
+        if exc is not None:
+            log.error("drawing %s failed: %s", topic, exc)
+            return
+        self._publish(topic, future.result())
 
     def _pub_scan(self, now: float) -> None:
         if not self._wanted("/scan"):

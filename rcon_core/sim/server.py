@@ -5,6 +5,8 @@ README): no acknowledgements except service responses, errors only in the log, l
 (in linear time, see ``frames.py``). Slow clients never stall the simulation: each connection has its own
 bounded, drop-oldest send queue. Incoming messages are limited to ``max_frame`` bytes (32 MB); with
 ``auth_secret`` nothing but one small ``auth`` op is read before a client is authenticated (``gate.py``).
+``name`` makes the sim one vessel of a fleet: its own topics, services, action and node under ``/NAME``,
+its own start position and camera scene (``identity.py``); without it the sim is unchanged.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ from .convert import ConversionError
 from .flavour import Flavour
 from .frames import parse_frame
 from .graph import BRIDGE_NODE, ROSOUT_NODE, InternalCallback, Service, ServiceFailure, ServiceHandler, Topic
+from .identity import Identity
 from .params import ParamTree
 from .typesource import TypeSource
 
@@ -47,12 +50,16 @@ class SimServer:
     def __init__(self, host: str = "127.0.0.1", port: int = 0, ros2: bool = False, rate_scale: float = 1.0,
                  auth_secret: str | None = None, *, robot: bool = True, max_frame: int = gate.DEFAULT_MAX_FRAME,
                  auth_frame_limit: int = gate.AUTH_FRAME_LIMIT, auth_timeout: float = gate.AUTH_TIMEOUT_S,
-                 plugin_types: bool = False, ssl: Any = None) -> None:
+                 plugin_types: bool = False, ssl: Any = None, name: str | None = None,
+                 index: int | None = None, namespace: bool = True) -> None:
         if rate_scale <= 0:
             raise ValueError(f"rate_scale must be positive, got {rate_scale}")
         if max_frame < 1024 or auth_frame_limit < 256 or auth_timeout <= 0:
             raise ValueError("max_frame must be at least 1024 bytes, auth_frame_limit at least 256 bytes and "
                              "auth_timeout positive")
+        #: the vessel's name, namespace, start position and looks (``name``, ``index``, ``namespace``:
+        #: whether a named vessel's topics go under /NAME; see identity.py)
+        self.identity = Identity.of(name, index, namespace)
         self.max_frame = max_frame
         self.auth_frame_limit = auth_frame_limit
         self.auth_timeout = auth_timeout
@@ -94,6 +101,15 @@ class SimServer:
         return self._port
 
     @property
+    def name(self) -> str | None:
+        """The robot's name (None for the unnamed sim)."""
+        return self.identity.name
+
+    def topic(self, name: str) -> str:
+        """The graph name of one of the robot's own topics/services/actions: ``/cmd_vel`` -> ``/boat2/cmd_vel``."""
+        return self.identity.topic(name)
+
+    @property
     def url(self) -> str:
         host = f"[{self.host}]" if ":" in self.host else self.host
         return f"{'wss' if self.ssl is not None else 'ws'}://{host}:{self._port}"
@@ -121,7 +137,7 @@ class SimServer:
         if self._with_robot:
             from .robot_node import RobotNode
 
-            self._robot_node = RobotNode(self)
+            self._robot_node = RobotNode(self, identity=self.identity)
             self.robot = self._robot_node.vessel
             self._robot_node.start()
             if self.ros2:
@@ -139,7 +155,8 @@ class SimServer:
         self._port = sock.getsockname()[1]
         self.publish("/client_count", {"data": 0}, BRIDGE_NODE)
         self.log(BRIDGE_NODE, "info", f"Rosbridge WebSocket server started on port {self._port}")
-        log.info("sim listening on %s (ros2=%s, rate_scale=%s)", self.url, self.ros2, self.rate_scale)
+        log.info("sim %s listening on %s (ros2=%s, rate_scale=%s)", self.name or "(unnamed)", self.url, self.ros2,
+                 self.rate_scale)
 
     async def stop(self) -> None:
         """Stop simulating and close every connection."""
@@ -207,6 +224,15 @@ class SimServer:
         """How many client connections are currently subscribed to ``topic``."""
         t = self.topics.get(topic)
         return len(t.client_subscribers) if t else 0
+
+    @property
+    def robot_node(self) -> Any:
+        """The robot's node (its cameras, published counts); None for ``robot=False`` or before start."""
+        return self._robot_node
+
+    def robot_published(self) -> dict[str, int]:
+        """How many messages the robot published per topic (its names before the namespace)."""
+        return dict(self._robot_node.published_counts) if self._robot_node is not None else {}
 
     def published(self, topic: str) -> list[dict[str, Any]]:
         """Messages clients published on ``topic`` (the most recent ones, oldest first)."""

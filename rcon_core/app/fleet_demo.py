@@ -1,0 +1,130 @@
+"""The fleet demo (``rcon --demo --robots N``): N embedded vessels, one workspace, one canvas for them all.
+
+Each vessel is its own :class:`~rcon_core.sim.SimServer` (named ``boat1`` ... ``boatN``: it starts a few
+hundred metres from the others and its camera has its own sky and its name on the bow; see
+``rcon_core/sim/identity.py``) on its own free loopback port, in its own thread. Like boats that each run
+their own rosbridge, the vessels keep the plain topic names (``/cmd_vel`` on every one; ``namespace=False``):
+which vessel a widget talks to is its binding's robot, so a canvas re-targeted to another boat works
+as it is and the map shows the same fix topic of every robot. The workspace has one robot per vessel
+(``r-1`` ... ``r-N``, named after the vessel) and:
+
+- canvas **Fleet**: a column per vessel with its front camera above its teleop pad (each pad is bound to
+  its own vessel and publishes only there), and one GPS map with every vessel's fix (``every_robot``);
+- canvas **Drive · boatK** per vessel: the single-robot demo's Drive canvas, bound to that vessel.
+
+No Qt here: the window wires the links (``rcon_core/app/main.py``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Iterator
+from typing import Any
+
+from rcon_core.canvas import Canvas, Geometry, WidgetInstance, Workspace, new_id
+from rcon_core.canvas.robots import Robot
+from rcon_core.plugins import Binding, PluginManager, Role
+
+from .demo import DRIVE, pick_kind
+
+MAX_ROBOTS = 6  #: the sim has six distinct camera scenes
+COLUMN_W = 304  #: a vessel's column on the Fleet canvas: camera 288 x 216 above its pad 288 x 200
+
+
+def vessel_name(k: int) -> str:
+    """The k-th vessel's name (1-based): ``boat1``..."""
+    return f"boat{k}"
+
+
+def robot_id(k: int) -> str:
+    return f"r-{k}"
+
+
+def check_count(n: Any) -> int:
+    if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_ROBOTS:
+        raise ValueError(f"--robots must be a whole number from 1 to {MAX_ROBOTS}, got {n!r}")
+    return n
+
+
+def _widget(plugins: PluginManager, kinds: dict[str, dict[str, Any]], binding: Binding,
+            rect: tuple[int, int, int, int], title: str) -> WidgetInstance:
+    kind = pick_kind(plugins, list(kinds))
+    settings = dict(kinds[kind])
+    if plugins.has_widget(kind):
+        spec = plugins.widget(kind)
+        try:  # the stored form of the settings object: every field, defaults filled in
+            settings = spec.settings_to_dict(spec.make_settings(settings))
+        except Exception:
+            pass  # kept as written; the widget shows what is wrong with it
+    return WidgetInstance(new_id("w"), kind, binding, Geometry(*rect), settings, title)
+
+
+def _map_settings(plugins: PluginManager) -> dict[str, Any]:
+    """The map's settings: every robot's fix when this map knows how (``every_robot``)."""
+    if plugins.has_widget("map.gps"):
+        spec = plugins.widget("map.gps")
+        try:
+            spec.make_settings({"every_robot": True})
+            return {"every_robot": True}
+        except Exception:
+            pass  # a map without the setting shows the first vessel's fix
+    return {}
+
+
+def fleet_canvas(n: int, plugins: PluginManager) -> Canvas:
+    canvas = Canvas(new_id("c"), "Fleet", locked=True)
+    for k in range(1, n + 1):
+        rid, x = robot_id(k), 16 + (k - 1) * COLUMN_W
+        canvas.widgets.append(_widget(
+            plugins, {"sensors.image": {"max_fps": 15.0}},
+            Binding("/camera/front/image_raw", "sensor_msgs/Image", Role.SUBSCRIBE, (), robot=rid),
+            (x, 16, 288, 216), "Front camera"))
+        canvas.widgets.append(_widget(
+            plugins, {"sensors.teleop": {"max_linear": 2.0, "max_angular": 1.0}},
+            Binding("/cmd_vel", "geometry_msgs/Twist", Role.PUBLISH, (), robot=rid),
+            (x, 248, 288, 200), "Drive"))
+    # one map, bound to the first vessel's fix; with every_robot it shows every vessel's (on_fleet)
+    canvas.widgets.append(_widget(
+        plugins, {"map.gps": _map_settings(plugins)},
+        Binding("/gps/fix", "sensor_msgs/NavSatFix", Role.SUBSCRIBE, (), robot=robot_id(1)),
+        (16 + n * COLUMN_W, 16, 400, 432), "Map of every vessel"))
+    return canvas
+
+
+def drive_canvas(k: int, plugins: PluginManager) -> Canvas:
+    canvas = Canvas(new_id("c"), f"Drive · {vessel_name(k)}", locked=True)
+    for title, kinds, target, type_name, role, paths, rect in DRIVE:
+        canvas.widgets.append(_widget(plugins, kinds, Binding(target, type_name, role, paths, robot=robot_id(k)),
+                                      rect, title))
+    return canvas
+
+
+def fleet_workspace(n: int, plugins: PluginManager) -> Workspace:
+    """The fleet demo's workspace for ``n`` vessels (robots ``r-1``.. with empty URLs: the app connects
+    them to the sims' run-time ports, which are never saved)."""
+    check_count(n)
+    canvases = [fleet_canvas(n, plugins)] + [drive_canvas(k, plugins) for k in range(1, n + 1)]
+    ws = Workspace(canvases, canvases[0].id)
+    ws.robots = [Robot(robot_id(k), vessel_name(k)) for k in range(1, n + 1)]
+    return ws
+
+
+def connect_fleet(window: Any, urls: list[str]) -> None:
+    """Connect the window's robots to the sims: the first through the connection bar, the others with
+    run-time URLs. None of them is remembered (the ports are gone after this run)."""
+    window.connect_to(urls[0], remember=False)
+    for k, url in enumerate(urls[1:], start=2):
+        window.fleet_ui.connect_robot(robot_id(k), url)
+
+
+@contextlib.contextmanager
+def fleet_sims(n: int, **kwargs: Any) -> Iterator[list[Any]]:
+    """N named SimServers (boat1..), each on its own free loopback port and its own thread, with the plain
+    topic names (``namespace=False``: each vessel has its own rosbridge)."""
+    from rcon_core.sim import SimServer
+
+    check_count(n)
+    kwargs.setdefault("namespace", False)
+    with contextlib.ExitStack() as stack:
+        yield [stack.enter_context(SimServer.in_thread(port=0, name=vessel_name(k), **kwargs))
+               for k in range(1, n + 1)]
