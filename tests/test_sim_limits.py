@@ -232,6 +232,20 @@ async def test_a_megabyte_of_garbage_does_not_stall_the_sim():
         await sim.stop()
 
 
+def test_the_scanner_skips_deep_objects_whatever_the_recursion_limit():
+    """Found by the full suite: another test had raised the interpreter's recursion limit, and the 5000-deep
+    object then parsed (a C stack overflow risk); the depth is now checked before parsing."""
+    import sys
+
+    old = sys.getrecursionlimit()
+    sys.setrecursionlimit(20_000)
+    try:
+        text = '{"op": "a"} {"deep": ' + "[" * 5000 + "]" * 5000 + '} {"op": "b", "ok": [[[1]]]}'
+        assert [v.get("op") for v in scan_objects(text)] == ["a", "b"]
+    finally:
+        sys.setrecursionlimit(old)
+
+
 def test_the_scanner_finds_every_balanced_object_and_skips_broken_ones():
     text = ('junk {"op": "a"}{"op": "b", "s": "}{\\"}"} {"op": tru} {"op": "c", "x": NaN} '
             '{"deep": ' + "[" * 5000 + "]" * 5000 + '} {"op": "d"} {"open": "never closed')

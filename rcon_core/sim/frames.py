@@ -5,7 +5,9 @@ in time linear in the frame's size.
 * A ``NaN`` or ``Infinity`` literal (Python's ``json.dumps`` writes them): the standard library's parser.
 * Several objects back to back in one frame (``{...}{...}``), or garbage between objects: each balanced
   top-level ``{...}`` is found with a brace matcher that skips strings (regular expressions, no
-  backtracking), then parsed once; one that does not parse is skipped as a whole. At most
+  backtracking), then parsed once; one that does not parse, or nests deeper than :data:`MAX_DEPTH`
+  (checked before parsing: the standard library's parser recurses, and how deep it may go depends on the
+  interpreter's recursion limit), is skipped as a whole. At most
   :data:`MAX_VALUES` objects are tried per frame, and only frames up to :data:`LENIENT_LIMIT` bytes are
   scanned this way (a bigger frame must be one JSON value).
 
@@ -31,10 +33,34 @@ __all__ = ["parse_frame", "scan_objects", "LENIENT_LIMIT", "MAX_VALUES"]
 LENIENT_LIMIT = 1024 * 1024
 #: at most this many objects are tried in one frame
 MAX_VALUES = 1000
+#: objects nested deeper than this are skipped unparsed (no ROS message comes near it)
+MAX_DEPTH = 100
 
 _decoder = json.JSONDecoder()
 _TOKEN = re.compile(r'\{+|\}+|"')
 _STRING_REST = re.compile(r'(?:[^"\\]++|\\.)*+"', re.DOTALL)  # possessive: never backtracks
+_NEST = re.compile(r'[\[\]{}"]')
+
+
+def _nests_deeper(text: str, limit: int) -> bool:
+    """Whether brackets and braces outside strings nest deeper than ``limit`` in ``text`` (linear)."""
+    depth = 0
+    pos = 0
+    while True:
+        m = _NEST.search(text, pos)
+        if m is None:
+            return False
+        c = m.group()
+        if c == '"':
+            rest = _STRING_REST.match(text, m.end())
+            if rest is None:
+                return False  # an unterminated string: the parser refuses it anyway
+            pos = rest.end()
+            continue
+        depth = depth + 1 if c in "[{" else depth - 1
+        if depth > limit:
+            return True
+        pos = m.end()
 
 
 def _segment_end(text: str, start: int) -> int | None:
@@ -72,10 +98,12 @@ def scan_objects(text: str) -> list[Any]:
         end = _segment_end(text, start)
         if end is None:
             break
-        try:
-            values.append(_decoder.decode(text[start:end]))
-        except (ValueError, RecursionError):
-            pass  # this object is broken: skip it whole
+        segment = text[start:end]
+        if not _nests_deeper(segment, MAX_DEPTH):
+            try:
+                values.append(_decoder.decode(segment))
+            except (ValueError, RecursionError):
+                pass  # this object is broken: skip it whole
         pos = end
     return values
 
