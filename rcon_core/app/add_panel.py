@@ -400,12 +400,13 @@ class AddPanel(QtWidgets.QWidget):
         scroll.setWidget(inner)
         outer.addWidget(scroll, 1)
         self.drag_handle = DragHandle(self)
-        self.place_button = QtWidgets.QPushButton("Place on canvas")
+        self.place_button = QtWidgets.QPushButton("Place")  # one word: it shares a row with Back and Cancel
+        self.place_button.setToolTip("Place on the canvas, in the first free spot in sight")
         self.place_button.setObjectName("placeButton")
         self.place_button.setProperty("primary", True)
         self.place_button.clicked.connect(self._place_clicked)
         outer.addWidget(self.drag_handle)
-        nav = self._nav(self._settings_back)  # one row: ‹ Back, Place on canvas, Cancel (room for the form)
+        nav = self._nav(self._settings_back)  # one row: ‹ Back, Place, Cancel (room for the form)
         for i in range(nav.count()):
             if nav.itemAt(i).spacerItem() is not None:
                 nav.takeAt(i)  # the Place button takes the room between Back and Cancel

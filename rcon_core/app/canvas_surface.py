@@ -27,7 +27,7 @@ EMPTY_HINTS = {
     "hidden": "This canvas is empty.\nTap ▶ at the top left to show the topics, services and widgets,\n"
               "then pick one to add it.",
     "adding": "This canvas is empty.\nChoose in the panel on the right, then drag the preview here\n"
-              "or tap Place on canvas.",
+              "or tap Place.",
 }
 
 
