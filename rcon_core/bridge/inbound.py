@@ -7,7 +7,8 @@ Decision: the read loop
     (:meth:`Inbound.other`), which unwraps ``fragment`` and ``png`` frames and hands every op to the
     session (``session.handle``).  Frames above ``big_frame`` (1 MB) are decoded in a worker thread while
     the read loop waits for them, so the event loop keeps serving and the order of delivery is kept
-    (``offload.py``).
+    (``offload.py``).  A frame of a latest-only topic (every consumer asked for ``queue_length`` 1) is
+    skipped before decoding when a newer frame of the same topic already waits (``latest.py``).
 
 Decision: bad input from the server
     No exception raised while handling one frame ends the read loop: the loop body and the slow path
@@ -27,12 +28,13 @@ number of messages in progress, ``completed`` counts the finished ones).
 from __future__ import annotations
 
 import logging
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Iterable
 from typing import Any
 
 import orjson
 
 from .errors import ProtocolError
+from .latest import LatestOnly
 from .offload import BigFrames, decode_big
 from .protocol import FragmentAssembler, RefusedFrame, decode_binary, decode_png
 from .safety import safe_text
@@ -77,22 +79,29 @@ class Inbound:
         self.max_size = max_size
         self.big_frame = big_frame
         self.big = BigFrames(typed_arrays, max_size)
+        self.latest = LatestOnly(session.topics, stats)
         warn = self._fragment_warning
         self.fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_size, warn=warn)
         self.png_fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_size, warn=warn)
         #: a big message completed by fragments or a big png: the read loop awaits it (order is kept)
         self.deferred: Callable[[], Awaitable[Any]] | None = None
 
-    async def read(self, recv: Callable[[], Awaitable[str | bytes]]) -> None:
-        """Read frames until ``recv`` raises (the connection closed)."""
+    async def read(self, recv: Callable[[], Awaitable[str | bytes]],
+                   waiting: Callable[[], Iterable[bytes]] | None = None) -> None:
+        """Read frames until ``recv`` raises (the connection closed).  ``waiting()``: the frames received
+        and not read yet (``Link.waiting``); with it, stale frames of latest-only topics are skipped."""
         loads = _loads
         topics = self.session.topics
         big = self.big_frame
         other = self.other
         failed = self.bad.failed
+        latest = self.latest
+        skip_size = latest.min_size if waiting is not None else 1 << 62
         while True:
             raw = await recv()
             try:  # the frame boundary: nothing raised while handling one frame ends the loop
+                if len(raw) >= skip_size and latest.stale(raw, waiting):  # type: ignore[arg-type]
+                    continue
                 if len(raw) > big:
                     m = await self.decode_big(raw)
                     if m is None:
