@@ -78,3 +78,52 @@ async def test_stale_frames_of_a_latest_only_topic_are_skipped_and_counted(sim_t
         assert c.session.topics["/burst/all"].skipped == 0
     finally:
         await c.close()
+
+
+async def test_the_read_loop_gives_the_event_loop_a_turn_within_a_backlog(sim_thread):
+    """A backlog of small frames already received is not read in one go: timers and other links on the
+    loop get a turn at least every ``YIELD_EVERY`` frames (a teleop pad's tick is not held by a backlog)."""
+    import asyncio
+
+    from rcon_core.bridge.inbound import YIELD_EVERY
+
+    node = "/backlog_pub"
+    count = 150
+    sim_thread.run_sync(lambda: sim_thread.advertise_internal("/backlog/v", "std_msgs/Int32", node))
+    sim_thread.run_sync(lambda: sim_thread.advertise_internal("/backlog/start", "std_msgs/Int32", node))
+    got: list[int] = []
+    turns: list[int] = []  # len(got) each time the probe ran
+
+    def burst():
+        for i in range(count):
+            sim_thread.publish("/backlog/v", {"data": i}, node)
+
+    def on_start(_msg):  # hold the client's loop while the sim writes the whole burst
+        sim_thread.run_sync(burst)
+        time.sleep(0.3)
+
+    loop = asyncio.get_running_loop()
+    done = asyncio.Event()
+
+    def probe():
+        turns.append(len(got))
+        if len(got) < count:
+            loop.call_soon(probe)
+        else:
+            done.set()
+
+    c = BridgeClient(sim_thread.url, reconnect=False, latency_interval=3600)
+    await c.connect(timeout=10)
+    try:
+        n = c.node("backlog")
+        n.subscribe("/backlog/v", lambda m: got.append(m["data"]), type="std_msgs/Int32")
+        n.subscribe("/backlog/start", on_start, type="std_msgs/Int32")
+        await until(lambda: sim_thread.has_subscribers("/backlog/v") and sim_thread.has_subscribers("/backlog/start"))
+        probe()
+        sim_thread.run_sync(lambda: sim_thread.publish("/backlog/start", {"data": 1}, node))
+        await asyncio.wait_for(done.wait(), 10)
+        assert got == list(range(count))  # every frame, in order
+        steps = [b - a for a, b in zip(turns, turns[1:], strict=False)]
+        assert max(steps) <= YIELD_EVERY, f"the read loop delivered {max(steps)} frames without a turn"
+    finally:
+        await c.close()

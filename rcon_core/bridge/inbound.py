@@ -10,6 +10,13 @@ Decision: the read loop
     (``offload.py``).  A frame of a latest-only topic (every consumer asked for ``queue_length`` 1) is
     skipped before decoding when a newer frame of the same topic already waits (``latest.py``).
 
+Decision: sharing the loop
+    ``await recv()`` does not give the event loop a turn while websockets already holds received frames: a
+    256 kB read holds hundreds of small frames, and a link that fell behind holds several camera frames.
+    The read loop therefore yields (``await asyncio.sleep(0)``) every ``YIELD_EVERY`` (64) frames and
+    before each frame of 32 kB or more, so due timers (a teleop pad's 20 Hz command), writes and the other
+    robots' links on the same loop wait for at most that much work, not for the whole backlog.
+
 Decision: bad input from the server
     No exception raised while handling one frame ends the read loop: the loop body and the slow path
     catch everything at the frame boundary (``stats["frame_errors"]``).  Invalid JSON, unknown ops,
@@ -27,6 +34,7 @@ number of messages in progress, ``completed`` counts the finished ones).
 
 from __future__ import annotations
 
+import asyncio
 import logging
 from collections.abc import Awaitable, Callable, Iterable
 from typing import Any
@@ -42,6 +50,9 @@ from .safety import safe_text
 log = logging.getLogger(__name__)
 
 _loads = orjson.loads
+_sleep = asyncio.sleep
+#: the read loop hands the event loop back after this many frames in a row (and before each big one)
+YIELD_EVERY = 64
 
 
 class BadFrames:
@@ -97,8 +108,15 @@ class Inbound:
         failed = self.bad.failed
         latest = self.latest
         skip_size = latest.min_size if waiting is not None else 1 << 62
+        heavy = latest.min_size
+        burst = YIELD_EVERY
+        n = 0
         while True:
             raw = await recv()
+            n += 1
+            if n >= burst or len(raw) >= heavy:  # let timers and other links run (see "sharing the loop")
+                n = 0
+                await _sleep(0)
             try:  # the frame boundary: nothing raised while handling one frame ends the loop
                 if len(raw) >= skip_size and latest.stale(raw, waiting):  # type: ignore[arg-type]
                     continue
