@@ -127,3 +127,39 @@ async def test_the_read_loop_gives_the_event_loop_a_turn_within_a_backlog(sim_th
         assert max(steps) <= YIELD_EVERY, f"the read loop delivered {max(steps)} frames without a turn"
     finally:
         await c.close()
+
+
+async def test_frames_bigger_than_one_read_are_skipped_when_a_newer_one_is_in_the_kernel(sim_thread):
+    """Camera-sized frames (600 kB, more than asyncio reads per turn): the backlog sits in the kernel's
+    buffers, not yet in websockets' queue; the read loop reads ahead before deciding, so stale frames are
+    still skipped and the newest is delivered."""
+    node = "/big_pub"
+    big = "y" * 600_000
+    count = 4
+    sim_thread.run_sync(lambda: sim_thread.advertise_internal("/big/cam", "std_msgs/String", node))
+    got: list[int] = []
+
+    def publish(i: int) -> None:
+        sim_thread.run_sync(lambda: sim_thread.publish("/big/cam", {"data": f"{i}:{big}"}, node))
+
+    def on_frame(msg):
+        i = int(msg["data"].split(":", 1)[0])
+        got.append(i)
+        if i == 0:  # hold the client's loop while the sim writes the burst into the socket
+            for k in range(1, count):
+                publish(k)
+                time.sleep(0.05)
+            time.sleep(0.2)
+
+    c = BridgeClient(sim_thread.url, reconnect=False, latency_interval=3600)
+    await c.connect(timeout=10)
+    try:
+        c.node("big").subscribe("/big/cam", on_frame, type="std_msgs/String", queue_length=1)
+        await until(lambda: sim_thread.has_subscribers("/big/cam"))
+        publish(0)
+        await until(lambda: got and got[-1] == count - 1, what="the newest frame delivered")
+        assert got == sorted(got) and got[0] == 0
+        assert c.stats["stale_skipped"] >= 1, f"delivered {got}: no stale frame was skipped"
+        assert len(got) + c.stats["stale_skipped"] <= count
+    finally:
+        await c.close()

@@ -118,7 +118,7 @@ class Inbound:
                 n = 0
                 await _sleep(0)
             try:  # the frame boundary: nothing raised while handling one frame ends the loop
-                if len(raw) >= skip_size and latest.stale(raw, waiting):  # type: ignore[arg-type]
+                if len(raw) >= skip_size and await latest.stale(raw, waiting):  # type: ignore[arg-type]
                     continue
                 if len(raw) > big:
                     m = await self.decode_big(raw)
