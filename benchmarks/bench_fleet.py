@@ -9,7 +9,8 @@ Figures (``robots`` in the JSON): publish-to-painted p50/p95/p99 of the values (
 the camera frames (``camera_paint_latency_*``, from the header stamp), GUI frame time p50/p95, per camera
 the frames the sim published, the app received, painted (``shown``) and dropped in the window (latest
 wins: ``dropped`` = published - shown) with the latency of the frames shown in the first and the last
-second (a growing backlog would show as a growing latency), idle RSS, CPU of the app and of each sim,
+second (a growing backlog would show as a growing latency), the stale camera frames the bridge skipped
+before decoding (``stale_skipped_by_the_bridge``: a newer frame of the topic was already waiting), idle RSS, CPU of the app and of each sim,
 the teleop pad's publish intervals as the sim received them (jitter = |interval - period|, p99), and the
 load average of the machine.
 """
@@ -268,6 +269,9 @@ def run(args: Any) -> dict:
                     "latency_p99_ms": round(ba.pct(lat_ms, 99), 1),
                 }
         figures["cameras"] = cameras
+        # stale camera frames the bridge skipped before decoding (latest-only topics, rcon_core/bridge/latest.py)
+        clients = [window.fleet_ui.links.link(robot_id(k)).client for k in range(1, n + 1)]
+        figures["stale_skipped_by_the_bridge"] = sum(c.stats.get("stale_skipped", 0) for c in clients if c)
         # ---- teleop at the sim
         arrivals = [t for t in after[0]["cmd_vel_arrivals"] if t >= wall0 and t <= wall0 + wall]
         intervals = [(b - a) * 1000 for a, b in zip(arrivals, arrivals[1:], strict=False)]

@@ -143,7 +143,8 @@ class BridgeClient:
         self.stats: dict[str, int] = {"connects": 0, "bad_frames": 0, "dropped_while_down": 0,
                                       "dropped_on_disconnect": 0, "oversize_frames": 0, "frame_errors": 0,
                                       "png_refused": 0, "non_object_msgs": 0, "big_frames": 0,
-                                      "stale_dropped": 0, "degraded": 0, "stall_cuts": 0}
+                                      "stale_dropped": 0, "degraded": 0, "stall_cuts": 0,
+                                      "stale_skipped": 0}
         self._state = ConnectionState.CLOSED
         self._state_listeners: list[Callable[[ConnectionState], None]] = []
         #: the current connection (None while down); see ``wslink.py``
@@ -386,7 +387,7 @@ class BridgeClient:
             self.session.attached(link)
             self._connected.set()
             self._set_state(ConnectionState.CONNECTED)
-            await self.inbound.read(link.recv)
+            await self.inbound.read(link.recv, link.waiting)
         except ConnectionClosed as exc:
             self.last_error = exc
         finally:

@@ -7,7 +7,15 @@ Decision: the read loop
     (:meth:`Inbound.other`), which unwraps ``fragment`` and ``png`` frames and hands every op to the
     session (``session.handle``).  Frames above ``big_frame`` (1 MB) are decoded in a worker thread while
     the read loop waits for them, so the event loop keeps serving and the order of delivery is kept
-    (``offload.py``).
+    (``offload.py``).  A frame of a latest-only topic (every consumer asked for ``queue_length`` 1) is
+    skipped before decoding when a newer frame of the same topic already waits (``latest.py``).
+
+Decision: sharing the loop
+    ``await recv()`` does not give the event loop a turn while websockets already holds received frames: a
+    256 kB read holds hundreds of small frames, and a link that fell behind holds several camera frames.
+    The read loop therefore yields (``await asyncio.sleep(0)``) every ``YIELD_EVERY`` (64) frames and
+    before each frame of 32 kB or more, so due timers (a teleop pad's 20 Hz command), writes and the other
+    robots' links on the same loop wait for at most that much work, not for the whole backlog.
 
 Decision: bad input from the server
     No exception raised while handling one frame ends the read loop: the loop body and the slow path
@@ -26,13 +34,15 @@ number of messages in progress, ``completed`` counts the finished ones).
 
 from __future__ import annotations
 
+import asyncio
 import logging
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Iterable
 from typing import Any
 
 import orjson
 
 from .errors import ProtocolError
+from .latest import LatestOnly
 from .offload import BigFrames, decode_big
 from .protocol import FragmentAssembler, RefusedFrame, decode_binary, decode_png
 from .safety import safe_text
@@ -40,6 +50,9 @@ from .safety import safe_text
 log = logging.getLogger(__name__)
 
 _loads = orjson.loads
+_sleep = asyncio.sleep
+#: the read loop hands the event loop back after this many frames in a row (and before each big one)
+YIELD_EVERY = 64
 
 
 class BadFrames:
@@ -77,22 +90,36 @@ class Inbound:
         self.max_size = max_size
         self.big_frame = big_frame
         self.big = BigFrames(typed_arrays, max_size)
+        self.latest = LatestOnly(session.topics, stats)
         warn = self._fragment_warning
         self.fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_size, warn=warn)
         self.png_fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_size, warn=warn)
         #: a big message completed by fragments or a big png: the read loop awaits it (order is kept)
         self.deferred: Callable[[], Awaitable[Any]] | None = None
 
-    async def read(self, recv: Callable[[], Awaitable[str | bytes]]) -> None:
-        """Read frames until ``recv`` raises (the connection closed)."""
+    async def read(self, recv: Callable[[], Awaitable[str | bytes]],
+                   waiting: Callable[[], Iterable[bytes]] | None = None) -> None:
+        """Read frames until ``recv`` raises (the connection closed).  ``waiting()``: the frames received
+        and not read yet (``Link.waiting``); with it, stale frames of latest-only topics are skipped."""
         loads = _loads
         topics = self.session.topics
         big = self.big_frame
         other = self.other
         failed = self.bad.failed
+        latest = self.latest
+        skip_size = latest.min_size if waiting is not None else 1 << 62
+        heavy = latest.min_size
+        burst = YIELD_EVERY
+        n = 0
         while True:
             raw = await recv()
+            n += 1
+            if n >= burst or len(raw) >= heavy:  # let timers and other links run (see "sharing the loop")
+                n = 0
+                await _sleep(0)
             try:  # the frame boundary: nothing raised while handling one frame ends the loop
+                if len(raw) >= skip_size and await latest.stale(raw, waiting):  # type: ignore[arg-type]
+                    continue
                 if len(raw) > big:
                     m = await self.decode_big(raw)
                     if m is None:

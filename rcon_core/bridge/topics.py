@@ -4,7 +4,8 @@ Several nodes on one topic share ONE rosbridge subscription.  Its options are me
 
 * ``throttle_rate``: the smallest (the tightest a consumer asked for wins; rosbridge does the same across
   ids on one topic, README point 11);
-* ``queue_length``: the largest (what rosbridge itself picks across ids);
+* ``queue_length``: the largest (what rosbridge itself picks across ids); when every consumer asked for 1
+  the topic is also *latest-only* on the client side (``latest.py``);
 * ``fragment_size``: the smallest given;
 * ``compression``: the first of ``cbor``, ``cbor-raw``, ``png``, ``none`` that any consumer asked for
   (every mode is decoded into the same dicts, so the cheapest binary form serves everybody);
@@ -36,7 +37,7 @@ class TopicEntry:
     """The client's one subscription to a topic, fanned out to every node's callback."""
 
     __slots__ = ("topic", "subs", "deliver", "fast", "sid", "sent_options", "raw_type", "decoder", "received",
-                 "report")
+                 "report", "latest_only", "skipped")
 
     def __init__(self, topic: str, report: Callable[[str, str], None]) -> None:
         self.report = report  # ``report(kind, message)``: a payload that cannot be decoded (a bad frame)
@@ -47,6 +48,10 @@ class TopicEntry:
         self.raw_type: str | None = None  # set when the active subscription is cbor-raw
         self.decoder: Any = None
         self.received = 0
+        #: every consumer asked for ``queue_length`` 1: stale frames are skipped when a newer one waits
+        #: (``latest.py``); ``skipped`` counts them
+        self.latest_only = False
+        self.skipped = 0
         #: ``deliver(msg)`` never raises: callback errors are logged.  ``fast(msg)`` is what the client's
         #: read loop calls, inside its own ``try``: the one consumer's callback itself when there is one
         #: consumer (no wrapper frame per message), else the same as ``deliver``.
@@ -74,6 +79,7 @@ class TopicEntry:
     def rebuild(self) -> None:
         """Pick the delivery functions for the current set of consumers (no per-message branching)."""
         subs = self.subs
+        self.latest_only = bool(subs) and all(s.queue_length == 1 for s in subs)
         if self.raw_type is not None:
             self.deliver = self.fast = self._deliver_raw
         elif not subs:

@@ -19,6 +19,11 @@ Decision: commands and their freshness limit (see ``freshness.py``)
     carries its deadline (:class:`~rcon_core.bridge.freshness.TimedFrame`) and the writer drops it once
     the deadline passed (``on_stale(pub)`` counts it).
 
+Decision: looking into the receive queue
+    :meth:`Link.waiting` lists the frames websockets has received but ``recv`` has not returned yet (its
+    ``recv_messages`` assembler, an internal; an empty list when a version lacks it), so the read loop can
+    skip a stale frame of a latest-only topic (``latest.py``).  It only reads that queue.
+
 Everything else the bridge does with the connection goes through :class:`Link` too (``ping``, ``close``,
 ``abort``, ``cut``, the write buffer size for the stall watch), so no other module touches ``ws`` or its
 transport.
@@ -38,11 +43,13 @@ from typing import Any
 
 from websockets.asyncio.client import ClientConnection
 from websockets.exceptions import ConnectionClosed
+from websockets.frames import Opcode
 from websockets.protocol import State
 
 from .freshness import LinkWatch, TimedFrame, cut
 
 _OPEN = State.OPEN
+_DATA = (Opcode.TEXT, Opcode.BINARY)
 _monotonic = time.monotonic
 
 
@@ -144,6 +151,15 @@ class Link:
         return n
 
     # -- reading and the connection ----------------------------------------------------------------
+
+    def waiting(self) -> list[bytes]:
+        """The payloads of the complete text and binary frames already received and not yet read by
+        ``recv`` (websockets' receive queue), oldest first; read only, for ``latest.py``."""
+        assembler = getattr(self.ws, "recv_messages", None)
+        frames = getattr(getattr(assembler, "frames", None), "queue", None)
+        if not frames:
+            return []
+        return [f.data for f in frames if f.fin and f.opcode in _DATA]
 
     async def ping(self) -> Awaitable[float]:
         """Send a WebSocket ping; the result is a waiter that gives the round trip in seconds."""

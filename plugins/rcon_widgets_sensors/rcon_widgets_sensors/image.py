@@ -10,11 +10,13 @@ to send no more than the view can show: ``throttle_rate`` from ``max_fps``, ``qu
 from __future__ import annotations
 
 import collections
+import sys
 import threading
 import time
 from typing import Any
 
 import attrs
+import cv2
 import numpy as np
 
 from rcon_core.msgs import time as rtime
@@ -67,9 +69,22 @@ class ImageSettings:
         return out
 
 
+def to_rgb32(rgb: np.ndarray) -> np.ndarray:
+    """``rgb`` (H x W x 3 uint8) as H x W x 4 uint8 in the memory layout of Qt's ``Format_RGB32`` (each pixel
+    the 32-bit word 0xffRRGGBB in native byte order), the format Qt's raster painter scales without a
+    conversion: a smooth draw of a 640x480 frame costs about a third of drawing the RGB888 array."""
+    if sys.byteorder == "little":  # B, G, R, 0xff in memory
+        return cv2.cvtColor(np.ascontiguousarray(rgb), cv2.COLOR_RGB2BGRA)
+    out = np.empty((rgb.shape[0], rgb.shape[1], 4), np.uint8)  # 0xff, R, G, B
+    out[..., 0], out[..., 1:] = 255, rgb
+    return out
+
+
 @attrs.frozen(eq=False)
 class Frame:
     """A decoded frame, ready to paint: ``rgb`` is H x W x 3 uint8, C-contiguous, never modified.
+    ``rgb32``: the same pixels laid out for Qt's ``Format_RGB32`` (:func:`to_rgb32`), made where the frame
+    is made (a decode or capture thread), so the GUI thread paints without converting the format.
 
     ``stamp``: the message header's time (epoch seconds) or None; ``received``/``decoded``: wall clock
     when it arrived / was ready. ``fps``: frames decoded per second lately. ``dropped``: frames skipped so
@@ -87,6 +102,7 @@ class Frame:
     dropped: int = 0
     smooth: bool = True
     counts: ScanCounts | None = None
+    rgb32: np.ndarray = attrs.field(default=attrs.Factory(lambda self: to_rgb32(self.rgb), takes_self=True))
 
     @property
     def width(self) -> int:

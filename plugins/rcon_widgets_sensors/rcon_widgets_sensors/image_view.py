@@ -1,7 +1,7 @@
 """The Image widget's Qt view: paints the newest decoded frame; pinch/pan/double-tap to zoom.
 
-The model hands over a ready RGB array; the view wraps it in a QImage without copying and draws it
-scaled (the one copy is the scaling itself). Touch: one finger pans, two fingers pinch-zoom around their
+The model hands over a ready frame (its pixels already in Qt's RGB32 layout, ``Frame.rgb32``); the view
+wraps them in a QImage without copying and draws it scaled (the one copy is the scaling itself). Touch: one finger pans, two fingers pinch-zoom around their
 centre, a double tap fits the image again. Mouse: drag pans, the wheel zooms, a double click fits.
 """
 
@@ -67,10 +67,11 @@ class ImageView(QtWidgets.QWidget):
         value = state.value
         if isinstance(value, Frame) and value is not self.frame:
             self.frame = value
-            rgb = value.rgb
-            # no copy: the QImage reads the array's memory; self.frame keeps the array alive
-            self._qimage = QtGui.QImage(rgb.data, value.width, value.height, rgb.strides[0],
-                                        QtGui.QImage.Format.Format_RGB888)
+            px = value.rgb32
+            # no copy: the QImage reads the array's memory; self.frame keeps the array alive. RGB32 (made
+            # off the GUI thread) is the format the raster painter scales without converting it first
+            self._qimage = QtGui.QImage(px.data, value.width, value.height, px.strides[0],
+                                        QtGui.QImage.Format.Format_RGB32)
             self.viewport.set_image(value.width, value.height)
         self.update()
 

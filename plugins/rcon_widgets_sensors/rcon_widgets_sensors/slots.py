@@ -19,6 +19,9 @@ log = logging.getLogger(__name__)
 
 __all__ = ["LatestSlot", "SlotWorker", "LoopTicker"]
 
+#: a LoopTicker call later than this fraction of its period restarts the schedule from its own time
+LATE_FRACTION = 0.1
+
 _EMPTY = object()
 
 
@@ -104,6 +107,11 @@ class SlotWorker:
 class LoopTicker:
     """Calls ``fn()`` every ``period`` seconds on the running asyncio loop, steadily (no catch-up bursts).
 
+    A call that runs more than ``LATE_FRACTION`` of a period late (the loop was busy) restarts the schedule
+    from that moment: the next call comes a whole period later, not early to keep the old phase (two
+    commands 20 ms apart after one 80 ms late at 20 Hz would be two jitters instead of one).  Smaller
+    lateness keeps the phase, so the average rate holds.
+
     ``start`` and ``stop`` must be called on the loop thread. ``clock``: what the ticks are timed and
     scheduled on instead of the running loop, anything with a loop's ``time()`` and ``call_at(when, fn)``
     (tests pass ``rcon_core.testing.ManualClock`` so a rate is checked without the wall clock).
@@ -142,9 +150,10 @@ class LoopTicker:
     def _tick(self) -> None:
         assert self._loop is not None
         now = self._loop.time()
+        late = now - self._due
         self._due += self.period
-        if self._due < now:  # fell behind (a busy loop): skip, never burst
-            self._due = now + self.period
+        if late > self.period * LATE_FRACTION:  # woke up late (a busy loop): start the period from now, so
+            self._due = now + self.period  # the next call is a whole period away, never a short catch-up
         self._handle = self._loop.call_at(self._due, self._tick)
         try:
             self._fn()

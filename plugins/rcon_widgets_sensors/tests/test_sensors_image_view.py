@@ -198,3 +198,35 @@ def test_overlay_ticker_leaves_a_fresh_picture_alone(view, qtbot):
     paints = PaintRects(view)
     QtCore.QCoreApplication.processEvents()
     assert paints.rects == []
+
+
+def test_an_rgb8_frame_is_painted_with_its_own_colours(view, qtbot):
+    """The view paints the frame's RGB32 copy (made by the decode worker, so the GUI thread converts no
+    format): red, green, blue and a grey stay themselves, in the right places."""
+    h, w = 48, 64
+    rgb = np.zeros((h, w, 3), np.uint8)
+    rgb[: h // 2, : w // 2] = (220, 30, 10)
+    rgb[: h // 2, w // 2:] = (20, 200, 40)
+    rgb[h // 2:, : w // 2] = (15, 25, 210)
+    rgb[h // 2:, w // 2:] = (128, 128, 128)
+    msg = {"header": {"stamp": {"secs": 1, "nsecs": 0}, "frame_id": "cam"}, "height": h, "width": w,
+           "encoding": "rgb8", "is_bigendian": 0, "step": w * 3, "data": rgb.tobytes()}
+    frame = feed(view.model, msg)
+    assert frame.rgb32.shape == (h, w, 4) and frame.rgb32.dtype == np.uint8
+    view.resize(w * 4, h * 4)  # fits exactly: the picture fills the widget
+    view.refresh(view.model.state)
+    qtbot.waitUntil(lambda: view.frame is frame, timeout=3000)
+    img = grab(view)
+    x0, y0, ww, hh = view.viewport.rect()
+
+    def at(fx, fy):
+        c = img.pixelColor(int(x0 + fx * ww), int(y0 + fy * hh))
+        return c.red(), c.green(), c.blue()
+
+    def near(a, b):
+        return all(abs(p - q) <= 3 for p, q in zip(a, b, strict=True))
+
+    assert near(at(0.25, 0.6 * 0.5), (220, 30, 10))
+    assert near(at(0.75, 0.6 * 0.5), (20, 200, 40))
+    assert near(at(0.25, 0.75), (15, 25, 210))
+    assert near(at(0.75, 0.75), (128, 128, 128))
