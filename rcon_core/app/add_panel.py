@@ -31,14 +31,14 @@ from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app.action_type import ActionTypeBox
 from rcon_core.app.canvas_surface import DRAFT_MIME
-from rcon_core.app.catalog_panel import short_type
-from rcon_core.app.children_editor import ChildContext
 from rcon_core.app.draft import Candidate, Draft, Target, field_type, suggested_title
 from rcon_core.app.new_topic import NEW_TOPIC, NewTopicBox, add_new_topic_entry, new_topic_index
 from rcon_core.app.preview_slot import PreviewSlot
 from rcon_core.app.settings_form import SettingsForm, form_label, guard_wheel, tune_form
 from rcon_core.app.widget_frame import WidgetFrame
+from rcon_core.msgs.names import pkg_type
 from rcon_core.plugins import Binding, Role, SettingsError, WidgetSpec
+from rcon_core.plugins.children import ChildContext
 
 ROLE_TEXT = {
     Role.SUBSCRIBE: ("Show it", "subscribe: a widget displays the messages"),
@@ -470,7 +470,7 @@ class AddPanel(QtWidgets.QWidget):
             item.setToolTip(cand.reason or cand.spec.description)
             self.candidates.addItem(item)
         self.no_candidates.setText(
-            "" if found else f"No installed widget can {role.value} {short_type(self._picked.type)}."
+            "" if found else f"No installed widget can {role.value} {pkg_type(self._picked.type)}."
         )
         self.no_candidates.setVisible(not found)
         self.stack.setCurrentWidget(self.widgets_page)

@@ -6,8 +6,8 @@ from typing import Any
 
 import attrs
 
-from rcon_core.app.settings_form import settings_problems
 from rcon_core.plugins import Binding, Role, WidgetSpec
+from rcon_core.plugins.children import settings_problems
 from rcon_core.plugins.paths import parse_path
 
 

@@ -16,7 +16,7 @@ from rcon_core.app.add_panel import AddPanel, FieldChooser
 from rcon_core.app.canvas_controller import CANVAS_SUFFIX, CanvasController, file_name_for
 from rcon_core.app.canvas_tabs import CanvasTabs
 from rcon_core.app.catalog_panel import CatalogList
-from rcon_core.app.children_editor import ChildContext, link_learner
+from rcon_core.app.children_editor import link_learner
 from rcon_core.app.config import AppConfig
 from rcon_core.app.connection_bar import ConnectionBar
 from rcon_core.app.draft import Candidate, Target
@@ -36,6 +36,7 @@ from rcon_core.app.template_menu import add_template_menu
 from rcon_core.app.widget_host import RateMeter, WidgetHost
 from rcon_core.canvas import Canvas, Document, EditError, Workspace, WorkspaceFileError, WorkspaceStore
 from rcon_core.plugins import Binding, PluginManager, Role, WidgetSpec
+from rcon_core.plugins.children import ChildContext
 
 log = logging.getLogger(__name__)
 

@@ -46,6 +46,7 @@ import attrs
 
 from rcon_core.msgs import MessageTextError
 from rcon_core.plugins import Binding, Role, WidgetModel, WidgetSpec
+from rcon_core.plugins.children import child_role
 from rcon_core.plugins.paths import PathError, get_path, parse_path, set_path, split_service_path
 
 from .base import StdModel
@@ -280,11 +281,7 @@ class CompoundModel(StdModel):
         return "", path
 
     def _child_role(self, part: str) -> Role:
-        role = self.binding.role
-        if role is Role.PUBLISH or (role is Role.CALL and part == "request") or (
-                role is Role.SERVE and part == "response"):
-            return Role.PUBLISH
-        return Role.SUBSCRIBE
+        return child_role(self.binding.role, part)
 
     def on_types_ready(self) -> None:
         self.build_children()
