@@ -406,7 +406,7 @@ def test_the_configure_dialog_is_a_labelled_form(qtbot, tmp_path):
         [configure] = [a for a in menu.actions() if a.objectName() == "configure"]
         configure.trigger()
         menu.close()
-        dialog = window.configure_dialog
+        dialog = window.configurer.dialog
         qtbot.waitUntil(dialog.isVisible)
         title = dialog.findChild(QtWidgets.QLineEdit, "configureTitle")
         labels = [lbl for lbl in dialog.findChildren(QtWidgets.QLabel) if lbl.buddy() is title]

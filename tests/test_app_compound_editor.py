@@ -146,8 +146,8 @@ def test_configure_a_placed_compound_edits_its_children_in_the_dialog(window, qt
 
     inst = window.doc.add_widget(doc.canvas.id, "std.compound", Binding("/cmd_vel", "geometry_msgs/Twist",
                                  Role.PUBLISH), Geometry(16, 16, 320, 240), spec.settings_to_dict(settings), "Drive")
-    window.configure_widget(inst.id)
-    dialog = window.configure_dialog
+    window.configurer.open(inst.id)
+    dialog = window.configurer.dialog
     form = dialog.findChild(SettingsForm)
     editor = form.children_editors["children"]
     assert editor.catalog().binding.name == "/cmd_vel"  # found from the placed widget

@@ -55,7 +55,7 @@ def open_configure(window: MainWindow, qtbot, widget_id: str) -> QtWidgets.QDial
     [configure] = [a for a in menu.actions() if a.objectName() == "configure"]
     configure.trigger()
     menu.close()
-    dialog = window.configure_dialog
+    dialog = window.configurer.dialog
     qtbot.waitUntil(dialog.isVisible, timeout=5_000)
     return dialog
 

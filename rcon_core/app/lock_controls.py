@@ -41,7 +41,7 @@ def install(window: Any) -> None:
             continue
         slot = {"new": window.new_canvas, "rename": window.rename_canvas_dialog,
                 "duplicate": window.duplicate_canvas, "delete": window.delete_canvas,
-                "import": window.import_canvas_dialog, "reset_demo": window.reset_demo_dialog}[name]
+                "import": window.canvas_files.import_dialog, "reset_demo": window.reset_demo_dialog}[name]
         action.triggered.disconnect()
         action.triggered.connect(lambda _=False, slot=slot, what=what: lock.guard(what, slot))
     menu = window.menu_button.menu()
