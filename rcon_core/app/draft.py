@@ -6,6 +6,7 @@ from typing import Any
 
 import attrs
 
+from rcon_core.matcher import match
 from rcon_core.plugins import Binding, Role, WidgetSpec
 from rcon_core.plugins.children import settings_problems
 from rcon_core.plugins.paths import parse_path
@@ -141,3 +142,24 @@ def suggested_title(name: str, field_path: str = "", *, service: bool = False) -
         return f"{base} · {field}"
     return base
 
+
+def rank_widgets(type_name: str, role: Role, types: Any, plugins: Any) -> list[Candidate]:
+    """The widgets that fit ``type_name`` in ``role``, best first, as the add panel lists them."""
+    try:
+        found = match(type_name, role, types, plugins)
+    except ValueError:  # no type known (an action whose type the robot did not tell): nothing fits
+        return []
+    return [Candidate(m.spec, (m.field_path,) if m.field_path else (), float(int(m.rank)), m.reason,
+                      tuple(m.field_paths)) for m in found]
+
+
+def targets_for(spec: WidgetSpec, role: Role, entries: list[tuple[str, str]], types: Any,
+                plugins: Any) -> list[Target]:
+    """The robot's topics (services, actions: ``entries`` of name and type) a widget of ``spec`` fits."""
+    out = []
+    for name, type_name in entries:
+        for m in match(type_name, role, types, plugins):
+            if m.spec.kind == spec.kind:
+                out.append(Target(name, type_name, (m.field_path,) if m.field_path else (), tuple(m.field_paths)))
+                break
+    return out

@@ -1,8 +1,16 @@
-"""The main window: connection bar, side panels, canvas switcher, canvases and the add-widget panel."""
+"""The main window: the composition root that builds the app's parts and wires them together.
+
+The parts live in their own modules: the connection bar (``connection_bar.py``), the side panel's lists
+(``catalog_panel.py``, ``params_panel.py``, ``palette_panel.py``) and whether it shows (``side_panel.py``),
+the canvas bar (``canvas_bar.py``), the canvases (``canvas_controller.py``), the add panel
+(``add_panel.py``), the Configure dialog (``configure_dialog.py``), canvas export/import
+(``canvas_files.py``), the layout file's messages (``layout_file.py``), the robots (``fleet_ui.py``) and the
+operator lock (``operator_lock.py``, ``lock_controls.py``). Problems go to the notice bar (``notice_bar.py``)
+floating over the canvas column.
+"""
 
 from __future__ import annotations
 
-import logging
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -20,10 +28,11 @@ from rcon_core.app.children_editor import link_learner
 from rcon_core.app.config import AppConfig
 from rcon_core.app.configure_dialog import WidgetConfigurer
 from rcon_core.app.connection_bar import ConnectionBar
-from rcon_core.app.draft import Candidate, Target
+from rcon_core.app.draft import Candidate, Target, rank_widgets, targets_for
 from rcon_core.app.fleet_ui import FleetUi
 from rcon_core.app.focus import focus_into, has_focus_inside
 from rcon_core.app.frame_clock import FrameClock, Waker
+from rcon_core.app.layout_file import LayoutFile
 from rcon_core.app.link import Link
 from rcon_core.app.live import LiveCanvas
 from rcon_core.app.lock_controls import install as install_lock_controls
@@ -35,11 +44,9 @@ from rcon_core.app.preview import PreviewHost
 from rcon_core.app.side_panel import PANEL_MIN, SIDE_MIN, SidePanelPolicy
 from rcon_core.app.template_menu import add_template_menu
 from rcon_core.app.widget_host import RateMeter, WidgetHost
-from rcon_core.canvas import Document, Workspace, WorkspaceFileError, WorkspaceStore
+from rcon_core.canvas import Document, Workspace
 from rcon_core.plugins import Binding, PluginManager, Role, WidgetSpec
 from rcon_core.plugins.children import ChildContext
-
-log = logging.getLogger(__name__)
 
 ACTIONS_EMPTY = "No actions: a ROS 2 robot's action servers are listed here once connected."
 
@@ -175,13 +182,14 @@ class MainWindow(QtWidgets.QMainWindow):
 
         # ---- workspace
         self.layout_path = Path(layout_path) if layout_path is not None else config.workspace_path
-        self.store = WorkspaceStore(self.layout_path)
+        self.layout_file = LayoutFile(self.layout_path, self.notice, demo, lambda: self.controller.saver.flush())
+        self.store = self.layout_file.store
         fresh = self.demo is not None and not self.layout_path.exists()  # the demo's first start
-        self.doc = Document(self.demo() if fresh and self.demo is not None else self._load_workspace())
+        self.doc = Document(self.demo() if fresh and self.demo is not None else self.layout_file.load())
         self.fleet_ui = FleetUi(self)  # one link per robot; hears a change of robots before the controller
         self.controller = CanvasController(self.doc, self.store, self.host, self.live, self.stack)
         self.controller.client = self.fleet_ui.fleet()
-        self.controller.save_failed.connect(self._save_failed)
+        self.controller.save_failed.connect(self.layout_file.save_failed)
         self.controller.on_drop = self._dropped
         self.side_policy.hint_changed.connect(self.controller.set_hint)
         self.canvas_files = CanvasFiles(self, self.controller, self.notice, plugins, self._in_edit_mode,
@@ -195,7 +203,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self._sync_tabs()
         self._show_lock(self.controller.canvas.locked)
         self.controller.run_current()  # offline (LINK DOWN) until a robot is connected
-        if fresh or self._demo_rebuilt:
+        if fresh or self.layout_file.demo_rebuilt:
             self.controller.saver.flush()  # the demo layout is on disk from its first start on
 
         # ---- signals and the frame clock
@@ -226,54 +234,6 @@ class MainWindow(QtWidgets.QMainWindow):
         self.resize(self.initial_size())
 
     # ------------------------------------------------------------------------------------ workspace
-    _demo_rebuilt = False
-
-    def _load_workspace(self) -> Workspace:
-        """The saved workspace; a file that cannot be read is reported on the banner and left alone (the
-        demo's own layout is moved aside once and built afresh instead)."""
-        try:
-            return self.store.load()
-        except WorkspaceFileError as exc:
-            if self.demo is not None:
-                try:
-                    kept = self.store.move_aside()
-                except WorkspaceFileError as aside:  # no copy could be kept: leave it, say so
-                    self.show_file_problem(f"{exc}; {aside.reason}")
-                    return Workspace.new()
-                log.warning("demo layout unreadable (%s); moved to %s, building a fresh one", exc.reason, kept)
-                self._demo_rebuilt = True
-                self.notice.show_notice(
-                    f"ℹ The saved demo layout could not be read ({exc.reason}). It was moved to {kept} and "
-                    "a fresh demo layout was built.", kind="info")
-                return self.demo()
-            log.error("%s; starting with an empty workspace", exc)
-            self.show_file_problem(str(exc))
-            return Workspace.new()
-
-    def show_file_problem(self, text: str) -> None:
-        self.notice.show_notice(
-            f"⚠ The layout could not be opened: {text}.\nThe file is left as it is and will not be "
-            "overwritten: changes made now are not saved. Start a new layout to move the file aside "
-            "(its content is kept) and save again.",
-            actions=[("Start a new layout", self.start_new_layout)],
-        )
-
-    def start_new_layout(self) -> None:
-        """The way out of an unreadable layout: move the file aside explicitly and save from now on."""
-        try:
-            kept = self.store.move_aside()
-        except WorkspaceFileError as exc:
-            self.show_file_problem(str(exc))
-            return
-        self.controller.saver.flush()
-        where = f" The old file was kept as {kept}." if kept is not None else ""
-        self.notice.show_notice(f"ℹ New layout started: it is saved to {self.layout_path}.{where}", kind="info")
-
-    def _save_failed(self, text: str) -> None:
-        if self.store.read_only:
-            return  # the banner already says why nothing is saved
-        self.notice.show_notice(f"⚠ The layout could not be saved: {text}")
-
     def open_workspace(self, workspace: Workspace) -> None:
         """Replace the workspace; saved like any change."""
         self.doc.replace_workspace(workspace)
@@ -446,30 +406,10 @@ class MainWindow(QtWidgets.QMainWindow):
                                 "(locked).", kind="info", actions=[("Switch to Edit mode", unlock_and_start)])
 
     def rank_widgets(self, type_name: str, role: Role) -> list[Candidate]:
-        from rcon_core.matcher import match
-
-        out = []
-        try:
-            found = match(type_name, role, self.types, self.plugins)
-        except ValueError:  # no type known (an action whose type the robot did not tell): nothing fits
-            return []
-        for m in found:
-            paths = (m.field_path,) if m.field_path else ()
-            out.append(Candidate(m.spec, paths, float(int(m.rank)), m.reason, tuple(m.field_paths)))
-        return out
+        return rank_widgets(type_name, role, self.types, self.plugins)
 
     def targets_for(self, spec: WidgetSpec, role: Role) -> list[Target]:
-        from rcon_core.matcher import match
-
-        entries = self.catalog.get(f"{role.noun}s", [])
-        out = []
-        for name, type_name in entries:
-            for m in match(type_name, role, self.types, self.plugins):
-                if m.spec.kind == spec.kind:
-                    out.append(Target(name, type_name, (m.field_path,) if m.field_path else (),
-                                      tuple(m.field_paths)))
-                    break
-        return out
+        return targets_for(spec, role, self.catalog.get(f"{role.noun}s", []), self.types, self.plugins)
 
     def place_draft(self) -> None:
         draft = self.fleet_ui.bind(self.add_panel.take_draft())  # the panel closes
