@@ -12,7 +12,7 @@ from app_helpers import Pinch, window_session
 from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
-from rcon_core.app.add_panel import FieldChooser
+from rcon_core.app.choosers import FieldChooser
 from rcon_core.app.draft import Draft, Target
 from rcon_core.app.main_window import MainWindow
 from rcon_core.app.settings_form import TEXT_INSET

@@ -15,7 +15,7 @@ from typing import Any
 import attrs
 from qtpy import QtWidgets
 
-from rcon_core.app.add_panel import FieldChooser
+from rcon_core.app.choosers import FieldChooser
 from rcon_core.app.settings_form import SettingsForm, form_label, tune_form
 from rcon_core.canvas import Document
 from rcon_core.matcher import match

@@ -11,6 +11,28 @@ from rcon_core.plugins import Binding, Role, WidgetSpec
 from rcon_core.plugins.children import settings_problems
 from rcon_core.plugins.paths import parse_path
 
+#: each role's button on the add panel: (what it does, in words; what it means)
+ROLE_TEXT = {
+    Role.SUBSCRIBE: ("Show it", "subscribe: a widget displays the messages"),
+    Role.PUBLISH: ("Send on it", "publish: a widget sends messages"),
+    Role.CALL: ("Call it", "call: a widget sends requests and shows the answer"),
+    Role.SERVE: ("Answer it", "serve: a widget answers requests from the robot"),
+    Role.ACTION: ("Send goals", "action: a widget sends goals, shows feedback and the result, and can cancel"),
+}
+
+#: categories whose widgets are for sending: they prefer publish/call over subscribe
+SENDING_CATEGORIES = frozenset({"controls", "input"})
+SENDING_FIRST = (Role.PUBLISH, Role.CALL, Role.ACTION, Role.SERVE, Role.SUBSCRIBE)
+SHOWING_FIRST = (Role.SUBSCRIBE, Role.PUBLISH, Role.CALL, Role.SERVE, Role.ACTION)
+
+
+def role_preference(spec: WidgetSpec) -> list[Role]:
+    """The widget's roles, the one an operator most likely wants first: widgets of the category "Controls"
+    or "Input" prefer to send (publish, then call, action, serve, subscribe), every other widget prefers to
+    show (subscribe, then publish, call, serve, action)."""
+    order = SENDING_FIRST if spec.category.strip().lower() in SENDING_CATEGORIES else SHOWING_FIRST
+    return [r for r in order if r in spec.roles]
+
 
 @attrs.define
 class Candidate:
