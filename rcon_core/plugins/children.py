@@ -7,8 +7,9 @@ A settings field is a *children field* when it is a ``list`` of an attrs class w
 
 * :func:`child_role`: a child fills what the parent sends and shows what it receives;
 * :class:`ChildCatalog`: the fields of the parent's bound type (:func:`rcon_core.msgs.walk_fields`), the
-  kinds that fit each (:func:`rcon_core.matcher.match`) and each child's problems, the one place a child
-  is checked (:meth:`ChildCatalog.problems`);
+  kinds that fit each (:func:`rcon_core.matcher.match`) and where each child sits;
+* :func:`child_name`, :func:`child_problems` (:func:`kind_problems`, :func:`role_problem`): how a child is
+  named and checked, shared by the catalog, a compound's settings and a compound's model;
 * :func:`fetch_typedefs`: the robot's rosapi typedefs of a type the registry does not know yet;
 * :func:`settings_problems`: a settings instance's own ``problems()``, a broken one reported, not raised.
 
@@ -30,8 +31,9 @@ from rcon_core.plugins.paths import PathError, split_service_path
 from rcon_core.plugins.spec import Role, WidgetSpec
 
 __all__ = [
-    "CHILD_FIELDS", "ChildCatalog", "ChildContext", "FieldChoice", "KindChoice", "Learn", "child_role",
-    "children_item_class", "fetch_typedefs", "paths_overlap", "settings_problems", "short_type",
+    "CHILD_FIELDS", "ChildCatalog", "ChildContext", "FieldChoice", "KindChoice", "Learn", "child_name",
+    "child_problems", "child_role", "children_item_class", "fetch_typedefs", "kind_problems", "paths_overlap",
+    "role_problem", "settings_problems", "short_type",
 ]
 
 #: the fields an attrs class needs to describe one child
@@ -224,18 +226,14 @@ class ChildCatalog:
 
     def child_name(self, index: int, item: Any) -> str:
         """``child 2 (Slider) on linear.x``: how problems name a child."""
-        spec = self.spec_of(item.kind)
-        what = getattr(item, "title", "") or (spec.title if spec is not None else item.kind or "?")
-        return f"child {index + 1} ({what}) on {item.field_path or 'the whole message'}"
+        return child_name(index + 1, item, self.spec_of(item.kind))
 
     def placement_problems(self, item: Any) -> list[str]:
         """What is wrong with where the child sits: no such widget, no such field, a kind that does
         not fit the field. Empty while the bound type is unknown (nothing to check against yet)."""
-        if not item.kind:
-            return ["no widget chosen"]
         spec = self.spec_of(item.kind)
         if spec is None:
-            return [f"no installed widget package offers {item.kind!r}"]
+            return kind_problems(item, spec)
         if item.kind in self.exclude:
             return [f"{spec.title} cannot be a child here"]
         if self.binding is None or not self.known():
@@ -249,7 +247,7 @@ class ChildCatalog:
         if choice is None:
             return [f"{self.type_name} has no field {item.field_path!r}"]
         if not any(k.spec.kind == item.kind for k in self.kinds_for(choice)):
-            return [f"{spec.title} cannot {choice.role.value} {choice.label} ({choice.type_label})"]
+            return [f"{role_problem(spec, choice.role)} {choice.label} ({choice.type_label})"]
         return []
 
     def settings_problems(self, item: Any) -> list[str]:
@@ -265,6 +263,40 @@ class ChildCatalog:
             return None
         return Binding(f"{self.binding.name}#{index + 1}", choice.part_type, choice.role,
                        (choice.rest,) if choice.rest else ())
+
+
+# ------------------------------------------------------------------------------------------ checking
+# The checks every holder of children shares (the children editor's catalog above, a compound's settings
+# and its model): how a child is named, and what is wrong with its kind, its role and its settings.
+def child_name(number: int, item: Any, spec: WidgetSpec | None) -> str:
+    """``child 2 (Slider) on linear.x``: how problems name child ``number`` (from 1): its title, else its
+    widget's title, else its kind."""
+    what = getattr(item, "title", "") or (spec.title if spec is not None else item.kind or "?")
+    return f"child {number} ({what}) on {item.field_path or 'the whole message'}"
+
+
+def kind_problems(item: Any, spec: WidgetSpec | None) -> list[str]:
+    """What is wrong with the child's kind: none chosen, or no installed package offers it (``spec`` is
+    the kind's spec, None when unknown)."""
+    if not item.kind:
+        return ["no widget chosen"]
+    return [f"no installed widget package offers {item.kind!r}"] if spec is None else []
+
+
+def role_problem(spec: WidgetSpec, role: Role) -> str:
+    """``Label cannot publish``: a child of this kind cannot take the role its place gives it."""
+    return f"{spec.title} cannot {role.value}"
+
+
+def child_problems(item: Any, spec: WidgetSpec | None, role: Role | None = None) -> list[str]:
+    """Everything wrong with a child that needs no message type: its kind, its role (when ``role``, the
+    role its place gives it, is known) and its own settings. Unnamed: prefix :func:`child_name`."""
+    out = kind_problems(item, spec)
+    if spec is None:
+        return out
+    if role is not None and role not in spec.roles:
+        out.append(role_problem(spec, role))
+    return out + spec.settings_problems(item.settings)
 
 
 # ------------------------------------------------------------------------------------------ learning
