@@ -462,18 +462,6 @@ class MainWindow(QtWidgets.QMainWindow):
         dialog.deleteLater()
 
     # -------------------------------------------------------------------------------------- link
-    def robot_url(self) -> str:
-        """The robot's URL: the connected one, else what the URL field holds."""
-        from rcon_core.app.connection_bar import normalize_url
-
-        return self.link.url if self.link.client is not None and self.link.url else normalize_url(
-            self.connection.url.currentText())
-
-    def connection_view_only(self) -> str | None:
-        """Why the robot connection is view-only (marked so in the app config), or None."""
-        url = self.robot_url()
-        return f"robot {url} is view-only" if url and self.config.is_view_only(url) else None
-
     def apply_view_only(self) -> None:
         """The robot's view-only mark changed: every widget (and the preview) restarts on ports that
         refuse, or no longer refuse, to send (each robot's mark travels in the fleet, see fleet_ui)."""
