@@ -324,7 +324,7 @@ class FleetUi(QtCore.QObject):
         try:
             dup = self.window.doc.duplicate_for_robot(controller.canvas.id, robot_id)
         except EditError as exc:
-            self.window.connection.message.setText(str(exc))
+            self.window.notice.show_notice(f"⚠ {exc}")
             return
         self.window.doc.switch_canvas(dup.id)
 
@@ -342,7 +342,7 @@ class FleetUi(QtCore.QObject):
         try:
             self.window.doc.set_robots(dialog.robots())
         except EditError as exc:
-            self.window.connection.message.setText(str(exc))
+            self.window.notice.show_notice(f"⚠ {exc}")
 
     def shutdown(self) -> None:
         self._remove()
