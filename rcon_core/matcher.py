@@ -30,7 +30,8 @@ from typing import Any
 
 import attrs
 
-from rcon_core.msgs import names
+from rcon_core.msgs import names, walk_fields
+from rcon_core.msgs.walk import own_fields
 from rcon_core.plugins.spec import (
     ACTION_PARTS,
     FIELD_PREDICATES,
@@ -47,10 +48,6 @@ __all__ = ["match", "Match", "Rank", "candidate_paths"]
 
 #: used when a widget gives no ``prefer`` list: the usual names of "the value" of a message
 DEFAULT_PREFER = ("data", "value", "percentage", "position", "x")
-#: how deep to look for fields (BatteryState's header.stamp is depth 2)
-MAX_DEPTH = 6
-#: the member rosbags/IDL put in empty ROS 2 messages; not a real field
-_PLACEHOLDER = "structure_needs_at_least_one_member"
 
 
 class Rank(enum.IntEnum):
@@ -97,24 +94,17 @@ class _Node:
     fields: tuple[Any, ...] = ()  # the message's own fields (messages only)
 
 
-def _join(prefix: str, name: str) -> str:
-    return f"{prefix}.{name}" if prefix else name
-
-
-def _walk(types: Any, type_name: str, prefix: str, depth: int = 0) -> Iterator[tuple[str, _Node]]:
+def _walk(types: Any, type_name: str, prefix: str) -> Iterator[tuple[str, _Node]]:
     """Yield ("message", node) for the message and every scalar nested message, ("leaf", node) for
-    every builtin field (scalars and arrays). Arrays of messages are not descended."""
-    fields = tuple(f for f in types.fields(type_name) if f.name != _PLACEHOLDER)
-    yield "message", _Node(prefix, type_name, None, fields)
-    for f in fields:
-        path = _join(prefix, f.name)
+    every builtin field (scalars and arrays): :func:`rcon_core.msgs.walk_fields`, with each message's
+    own fields for the message predicates."""
+    yield "message", _Node(prefix, type_name, None, own_fields(types, type_name))
+    for step in walk_fields(types, type_name, prefix):
+        f = step.field
         if f.is_builtin:
-            yield "leaf", _Node(path, f.base, f)
-        elif f.array_len is None and depth < MAX_DEPTH:
-            for kind, node in _walk(types, f.base, path, depth + 1):
-                if node.field is None and node.path == path:
-                    node = attrs.evolve(node, field=f)
-                yield kind, node
+            yield "leaf", _Node(step.path, f.base, f)
+        else:
+            yield "message", _Node(step.path, f.base, f, own_fields(types, f.base))
 
 
 def _roots(types: Any, type_name: str, role: Role, acc: Accepts) -> list[tuple[str, str]]:

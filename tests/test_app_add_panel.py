@@ -15,9 +15,11 @@ from app_helpers import choose_kind, tap, tap_item, window_session
 from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
-from rcon_core.app import add_panel
 from rcon_core.app.add_panel import AddPanel
+from rcon_core.app.choosers import TARGET_ROLE
+from rcon_core.app.draft import role_preference
 from rcon_core.app.main_window import MainWindow
+from rcon_core.app.new_topic import NEW_TOPIC
 from rcon_core.app.theme import touch_px
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Role
@@ -97,8 +99,8 @@ def open_from_palette(window: MainWindow, kind: str) -> AddPanel:
 def offered(panel: AddPanel) -> list[tuple[str, str]]:
     """(name, role) of each target in the Topic/Service chooser, in order (not its "+ New topic…" entry)."""
     combo = panel.target_combo
-    return [(combo.itemData(i).name, combo.itemData(i, add_panel.TARGET_ROLE)) for i in range(1, combo.count())
-            if combo.itemData(i, add_panel.NEW_TOPIC) is not True]
+    return [(combo.itemData(i).name, combo.itemData(i, TARGET_ROLE)) for i in range(1, combo.count())
+            if combo.itemData(i, NEW_TOPIC) is not True]
 
 
 def field_entries(panel: AddPanel) -> list[str]:
@@ -145,9 +147,9 @@ def test_changing_role_rebuilds_the_targets_and_the_preview(window, qtbot, plugi
 
 # ------------------------------------------------------------------------------------- 5 default role
 def test_a_control_from_the_palette_starts_sending_and_a_display_starts_showing(window, qtbot, plugins, sim_thread):
-    assert add_panel.role_preference(plugins.widget("std.slider"))[0] is Role.PUBLISH
-    assert add_panel.role_preference(plugins.widget("std.label")) == [Role.SUBSCRIBE]
-    assert add_panel.role_preference(plugins.widget("std.textview"))[0] is Role.SUBSCRIBE
+    assert role_preference(plugins.widget("std.slider"))[0] is Role.PUBLISH
+    assert role_preference(plugins.widget("std.label")) == [Role.SUBSCRIBE]
+    assert role_preference(plugins.widget("std.textview"))[0] is Role.SUBSCRIBE
     panel = open_from_palette(window, "std.textview")
     assert panel.draft.role is Role.SUBSCRIBE
     panel.cancel()

@@ -377,6 +377,18 @@ def test_deleting_a_canvas_with_widgets_asks_first_and_undo_brings_it_back(qtbot
         window.shutdown()
 
 
+def test_a_refused_canvas_edit_is_said_on_the_notice_bar_not_in_the_connection_bar(qtbot, tmp_path):
+    window = open_window(qtbot, tmp_path, None)
+    try:
+        before = window.connection.message.text()
+        window.delete_canvas()  # the only canvas: refused (its menu entry is greyed out for that reason)
+        assert [c.name for c in window.controller.workspace.canvases] == ["Main"]
+        assert window.notice.kind == "problem" and "cannot delete the last canvas" in window.banner.text()
+        assert window.connection.message.text() == before  # the connection's own line is left alone
+    finally:
+        window.shutdown()
+
+
 def test_duplicate_puts_the_copy_on_a_free_spot(qtbot, tmp_path):
     window = open_window(qtbot, tmp_path, None)
     try:
@@ -406,7 +418,7 @@ def test_the_configure_dialog_is_a_labelled_form(qtbot, tmp_path):
         [configure] = [a for a in menu.actions() if a.objectName() == "configure"]
         configure.trigger()
         menu.close()
-        dialog = window.configure_dialog
+        dialog = window.configurer.dialog
         qtbot.waitUntil(dialog.isVisible)
         title = dialog.findChild(QtWidgets.QLineEdit, "configureTitle")
         labels = [lbl for lbl in dialog.findChildren(QtWidgets.QLabel) if lbl.buddy() is title]

@@ -11,11 +11,12 @@ from app_helpers import choose_kind, compound_in_operate, tap, tap_item, tap_top
 from qtpy import QtWidgets
 from qtpy.QtTest import QTest
 
-from rcon_core.app.children_editor import ChildCatalog, ChildrenEditor, child_role, children_item_class
+from rcon_core.app.children_editor import ChildrenEditor
 from rcon_core.app.main_window import MainWindow
 from rcon_core.app.settings_form import SettingsForm
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding, Role
+from rcon_core.plugins.children import ChildCatalog, child_role, children_item_class
 
 pytest.importorskip("rcon_widgets_std")
 from rcon_widgets_std.compound import ChildSpec, CompoundSettings  # noqa: E402
@@ -145,8 +146,8 @@ def test_configure_a_placed_compound_edits_its_children_in_the_dialog(window, qt
 
     inst = window.doc.add_widget(doc.canvas.id, "std.compound", Binding("/cmd_vel", "geometry_msgs/Twist",
                                  Role.PUBLISH), Geometry(16, 16, 320, 240), spec.settings_to_dict(settings), "Drive")
-    window.configure_widget(inst.id)
-    dialog = window.configure_dialog
+    window.configurer.open(inst.id)
+    dialog = window.configurer.dialog
     form = dialog.findChild(SettingsForm)
     editor = form.children_editors["children"]
     assert editor.catalog().binding.name == "/cmd_vel"  # found from the placed widget
@@ -219,7 +220,7 @@ def test_a_service_request_filled_and_its_response_shown(types, plugins):
 
 
 def test_a_form_given_its_context_composes_a_service_request(qtbot, types, plugins):
-    from rcon_core.app.children_editor import ChildContext
+    from rcon_core.plugins.children import ChildContext
 
     bound = {"binding": Binding("/lights/set", "std_srvs/SetBool", Role.CALL)}
     form = SettingsForm(CompoundSettings(), context=ChildContext(types, plugins, lambda: bound["binding"]))

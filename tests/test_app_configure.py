@@ -12,7 +12,7 @@ from app_helpers import Pinch, window_session
 from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
-from rcon_core.app.add_panel import FieldChooser
+from rcon_core.app.choosers import FieldChooser
 from rcon_core.app.draft import Draft, Target
 from rcon_core.app.main_window import MainWindow
 from rcon_core.app.settings_form import TEXT_INSET
@@ -55,7 +55,7 @@ def open_configure(window: MainWindow, qtbot, widget_id: str) -> QtWidgets.QDial
     [configure] = [a for a in menu.actions() if a.objectName() == "configure"]
     configure.trigger()
     menu.close()
-    dialog = window.configure_dialog
+    dialog = window.configurer.dialog
     qtbot.waitUntil(dialog.isVisible, timeout=5_000)
     return dialog
 

@@ -30,7 +30,7 @@ MISSING_SETTINGS = {"opening": 0.25, "limits": [0, 1], "nested": {"é": "ü", "n
 def open_window(qtbot, config_dir: Path, url: str | None = None) -> MainWindow:
     """The probe plugin's window at the offscreen screen's size, connected to ``url`` if given."""
     window = open_app_window(qtbot, config_dir, make_plugins(), url=url, size=None, wait_connected=True)
-    window.share_dir = config_dir.parent  # never the real home folder
+    window.canvas_files.share_dir = config_dir.parent  # never the real home folder
     return window
 
 
@@ -73,7 +73,7 @@ def test_export_from_one_tablet_import_on_another_runs_on_the_robot_and_undoes(q
     assert [a.text() for a in sender.menu_button.menu().actions()][-2:] == ["Export canvas…", "Import canvas…"]
     # export works in Operate mode (it changes nothing); the dialog proposes the canvas's name
     sender.canvas_actions["export"].trigger()
-    dialog = sender.share_dialog
+    dialog = sender.canvas_files.dialog
     assert dialog.objectName() == "exportDialog"
     assert dialog.acceptMode() == QtWidgets.QFileDialog.AcceptMode.AcceptSave
     assert [Path(f).name for f in dialog.selectedFiles()] == ["Docking.rcon-canvas.json"]
@@ -98,8 +98,8 @@ def test_export_from_one_tablet_import_on_another_runs_on_the_robot_and_undoes(q
     try:
         doc = receiver.doc
         assert [c.name for c in doc.workspace.canvases] == ["Main"] and not doc.can_undo
-        dialog = receiver.import_canvas_dialog()
-        assert dialog is receiver.share_dialog and dialog.objectName() == "importDialog"
+        dialog = receiver.canvas_files.import_dialog()
+        assert dialog is receiver.canvas_files.dialog and dialog.objectName() == "importDialog"
         assert dialog.fileMode() == QtWidgets.QFileDialog.FileMode.ExistingFile
         pick(dialog, path)
         canvas = receiver.controller.canvas  # switched to it
@@ -127,7 +127,7 @@ def test_export_from_one_tablet_import_on_another_runs_on_the_robot_and_undoes(q
 
         # the same file again: a unique name and fresh widget ids (the first copy holds them now)
         receiver.switch_canvas(0)
-        again = receiver.import_canvas_from(path)
+        again = receiver.canvas_files.import_from(path)
         assert again is not None and again.name == "Docking (2)" and receiver.controller.canvas is again
         first_ids = {w.id for w in doc.workspace.canvas_named("Docking").widgets}
         assert not first_ids & {w.id for w in again.widgets} and len({w.id for w in again.widgets}) == 3
@@ -180,9 +180,9 @@ def test_a_file_that_cannot_be_used_says_why_and_changes_nothing(qtbot, tmp_path
         for name, (path, reason) in cases.items():
             window.notice.dismiss()
             if name == "corrupt":  # through the dialog once, like an operator
-                pick(window.import_canvas_dialog(), path)
+                pick(window.canvas_files.import_dialog(), path)
             else:
-                assert window.import_canvas_from(path) is None, name
+                assert window.canvas_files.import_from(path) is None, name
             assert window.notice.isVisible() and window.notice.kind == "problem", name
             text = window.banner.text()
             assert text.startswith("⚠ The canvas could not be imported") and reason in text, (name, text)
@@ -198,13 +198,13 @@ def test_import_needs_edit_mode_export_does_not(qtbot, tmp_path):
     window = open_window(qtbot, tmp_path / "config")
     try:
         build_docking(window)  # leaves the canvas in Operate mode
-        path = window.export_canvas_to(tmp_path / "deck.rcon-canvas.json")
+        path = window.canvas_files.export_to(tmp_path / "deck.rcon-canvas.json")
         assert path is not None and path.is_file() and window.controller.canvas.locked
-        window.share_dialog = None
-        assert window.import_canvas_dialog() is None and window.share_dialog is None  # no dialog
+        window.canvas_files.dialog = None
+        assert window.canvas_files.import_dialog() is None and window.canvas_files.dialog is None  # no dialog
         assert window.notice.kind == "info"
         assert "Switch to Edit mode to import a canvas" in window.banner.text()
-        assert window.import_canvas_from(path) is None  # the same refusal when called directly
+        assert window.canvas_files.import_from(path) is None  # the same refusal when called directly
         assert len(window.doc.workspace.canvases) == 2
         tap_notice(qtbot, window, "Switch to Edit mode")  # unlocks, then imports what was picked
         assert not window.doc.workspace.canvas_named("Docking").locked
@@ -212,16 +212,16 @@ def test_import_needs_edit_mode_export_does_not(qtbot, tmp_path):
         # the menu's own path: switching to Edit mode opens the dialog
         window.controller.set_locked(True)
         window.canvas_actions["import"].trigger()
-        assert window.share_dialog is None
+        assert window.canvas_files.dialog is None
         tap_notice(qtbot, window, "Switch to Edit mode")
-        dialog = window.share_dialog
+        dialog = window.canvas_files.dialog
         assert dialog is not None and dialog.objectName() == "importDialog" and dialog.isVisible()
         dialog.reject()
         assert len(window.doc.workspace.canvases) == 3  # cancelled: nothing imported
         # a place that cannot be written: the notice says so, nothing else happens
         blocker = tmp_path / "a-file"
         blocker.write_text("x")
-        assert window.export_canvas_to(blocker / "deck.rcon-canvas.json") is None
+        assert window.canvas_files.export_to(blocker / "deck.rcon-canvas.json") is None
         assert window.notice.kind == "problem" and "could not be exported" in window.banner.text()
     finally:
         window.shutdown()
@@ -238,14 +238,14 @@ def test_names_of_files_and_canvases(qtbot, tmp_path):
     path.write_text(json.dumps({"format": "rcon-canvas", "version": 1, "canvas": {"id": "", "name": "  "}}))
     window = open_window(qtbot, tmp_path / "config")
     try:
-        canvas = window.import_canvas_from(path)
+        canvas = window.canvas_files.import_from(path)
         assert canvas is not None and canvas.name == "Harbour" and canvas.id
         # geometry off the grid or off the canvas is put on it (what is saved is always on the grid)
         odd = tmp_path / "odd.rcon-canvas.json"
         odd.write_text(json.dumps({"format": "rcon-canvas", "version": 1, "canvas": {
             "id": "c-x", "name": "Odd", "widgets": [{"id": "w-x", "kind": "apptest.probe",
                                                      "geometry": {"x": -50, "y": 23, "w": 201, "h": 90}}]}}))
-        odd_canvas = window.import_canvas_from(odd)
+        odd_canvas = window.canvas_files.import_from(odd)
         assert odd_canvas is not None
         g = odd_canvas.widgets[0].geometry
         assert (g.x, g.y) == (0, 16) and g.w % 16 == 0 and g.h % 16 == 0

@@ -182,6 +182,11 @@ def test_a_canvas_is_re_targeted_to_another_robot_in_one_undo_step(qtbot, tmp_pa
         tap(win.canvas_buttons["undo"])  # one step takes the copy away
         assert [c.name for c in win.controller.workspace.canvases] == ["Fleet"]
         assert win.controller.canvas is original
+        before = win.connection.message.text()
+        win.fleet_ui.retarget_current("r-9")  # no such robot: refused on the notice bar, nothing changes
+        assert win.notice.kind == "problem" and "r-9" in win.banner.text(), win.banner.text()
+        assert win.connection.message.text() == before
+        assert [c.name for c in win.controller.workspace.canvases] == ["Fleet"]
     finally:
         win.shutdown()
 

@@ -6,9 +6,9 @@ from __future__ import annotations
 import pytest
 from app_helpers import window_session
 
-from rcon_core.app.children_editor import ChildCatalog
 from rcon_core.matcher import match
 from rcon_core.plugins import Binding, PluginManager, Role, hookimpl
+from rcon_core.plugins.children import ChildCatalog
 
 pytest.importorskip("rcon_widgets_std")
 pytestmark = pytest.mark.usefixtures("qapp")

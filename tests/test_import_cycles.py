@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-CLEAN = ["rcon_core/bridge", "rcon_core/msgs"]
+CLEAN = ["rcon_core/bridge", "rcon_core/msgs", "rcon_core/app", "rcon_core/plugins"]
 
 
 def _finder():
@@ -25,6 +25,7 @@ def test_the_cleaned_packages_have_no_import_cycle() -> None:
     finder = _finder()
     edges = finder.graph([ROOT / d for d in CLEAN])
     assert "rcon_core.bridge.client" in edges and "rcon_core.msgs.registry" in edges
+    assert "rcon_core.app.children_editor" in edges and "rcon_core.plugins.children" in edges
     assert finder.cycles(edges) == []
 
 

@@ -13,7 +13,7 @@ from typing import Any
 
 from qtpy import QtCore, QtWidgets
 
-from rcon_core.app.catalog_panel import short_type
+from rcon_core.msgs.names import pkg_type
 
 
 def known_action_types(types: Any) -> list[str]:
@@ -50,7 +50,7 @@ class ActionTypeBox(QtWidgets.QWidget):
         self.combo.clear()
         self.combo.addItem("— choose the action's type —", None)
         for t in known_action_types(types):
-            self.combo.addItem(short_type(t), t)
+            self.combo.addItem(pkg_type(t), t)
             self.combo.setItemData(self.combo.count() - 1, t, QtCore.Qt.ItemDataRole.ToolTipRole)
         self.combo.setCurrentIndex(0)
         self.combo.blockSignals(False)

@@ -8,11 +8,9 @@
 The settings page shows a live preview of the widget.  While the draft has problems the preview carries
 a warning overlay listing them; once valid it can be dragged onto the canvas or placed with "Place".
 
-Which role a widget picked from the palette starts with (:func:`role_preference`): widgets of the
-category "Controls" or "Input" prefer to send (publish, then call, serve, subscribe), every other widget
-prefers to show (subscribe, then publish, call, serve); of the roles the widget has, the first one for
-which the robot offers a compatible topic or service is chosen (the first one if none has any). The
-Topic/Service chooser lists the targets compatible with the current role first, then those only
+A widget picked from the palette starts with the role it most likely serves
+(:func:`rcon_core.app.draft.role_preference`), the first of its roles the robot offers a compatible
+topic or service for. The Topic/Service chooser lists the targets compatible with the current role first, then those only
 compatible with another of the widget's roles (marked ``· to <role>``); choosing one of those switches the
 role to it. For topics it ends with *+ New topic…*: a name and a type for a topic the robot does not
 have yet (:mod:`rcon_core.app.new_topic`).
@@ -23,215 +21,27 @@ with each field's type); it is hidden when there is only one, or when the widget
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from typing import Any
 
 import attrs
 from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app.action_type import ActionTypeBox
-from rcon_core.app.canvas_surface import DRAFT_MIME
-from rcon_core.app.catalog_panel import short_type
-from rcon_core.app.children_editor import ChildContext
-from rcon_core.app.draft import Candidate, Draft, Target, field_type, suggested_title
+from rcon_core.app.choosers import DragHandle, ElidingCombo, FieldChooser, NameLabel, TargetChooser, heading
+from rcon_core.app.draft import ROLE_TEXT, Candidate, Draft, Target, role_preference, suggested_title
 from rcon_core.app.new_topic import NEW_TOPIC, NewTopicBox, add_new_topic_entry, new_topic_index
 from rcon_core.app.preview_slot import PreviewSlot
-from rcon_core.app.settings_form import SettingsForm, form_label, guard_wheel, tune_form
+from rcon_core.app.settings_form import SettingsForm, form_label, tune_form
 from rcon_core.app.widget_frame import WidgetFrame
+from rcon_core.msgs.names import pkg_type
 from rcon_core.plugins import Binding, Role, SettingsError, WidgetSpec
-
-ROLE_TEXT = {
-    Role.SUBSCRIBE: ("Show it", "subscribe: a widget displays the messages"),
-    Role.PUBLISH: ("Send on it", "publish: a widget sends messages"),
-    Role.CALL: ("Call it", "call: a widget sends requests and shows the answer"),
-    Role.SERVE: ("Answer it", "serve: a widget answers requests from the robot"),
-    Role.ACTION: ("Send goals", "action: a widget sends goals, shows feedback and the result, and can cancel"),
-}
-
-#: categories whose widgets are for sending: they prefer publish/call over subscribe
-SENDING_CATEGORIES = frozenset({"controls", "input"})
-SENDING_FIRST = (Role.PUBLISH, Role.CALL, Role.ACTION, Role.SERVE, Role.SUBSCRIBE)
-SHOWING_FIRST = (Role.SUBSCRIBE, Role.PUBLISH, Role.CALL, Role.SERVE, Role.ACTION)
-#: item data role of the target chooser holding the role a target is compatible with
-TARGET_ROLE = QtCore.Qt.ItemDataRole.UserRole + 1
-
-
-def role_preference(spec: WidgetSpec) -> list[Role]:
-    """The widget's roles, the one an operator most likely wants first (see the module docstring)."""
-    order = SENDING_FIRST if spec.category.strip().lower() in SENDING_CATEGORIES else SHOWING_FIRST
-    return [r for r in order if r in spec.roles]
-
+from rcon_core.plugins.children import ChildContext
 
 #: rank_widgets(type_name, role) -> candidates, best first
 RankWidgets = Callable[[str, Role], list[Candidate]]
 #: targets_for(spec, role) -> compatible topics or services
 TargetsFor = Callable[[WidgetSpec, Role], list[Target]]
-
-
-def _heading(text: str) -> QtWidgets.QLabel:
-    label = QtWidgets.QLabel(text)
-    label.setProperty("role", "heading")
-    label.setWordWrap(True)
-    return label
-
-
-class NameLabel(QtWidgets.QLabel):
-    """A heading showing one name (a topic, a service, a widget) on one line, never broken at a slash:
-    elided in the middle when the panel is too narrow, the full name in its tooltip."""
-
-    def __init__(self, name: str = "") -> None:
-        super().__init__()
-        self.setProperty("role", "heading")
-        self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored, QtWidgets.QSizePolicy.Policy.Preferred)
-        self.full_name = ""
-        self.set_name(name)
-
-    def set_name(self, name: str) -> None:
-        self.full_name = name
-        self.setToolTip(name)
-        self.setAccessibleName(name)
-        self._elide()
-
-    def minimumSizeHint(self) -> QtCore.QSize:
-        return QtCore.QSize(0, super().minimumSizeHint().height())
-
-    def resizeEvent(self, event: QtGui.QResizeEvent) -> None:
-        super().resizeEvent(event)
-        self._elide()
-
-    def changeEvent(self, event: QtCore.QEvent) -> None:
-        super().changeEvent(event)
-        if event.type() in (QtCore.QEvent.Type.FontChange, QtCore.QEvent.Type.StyleChange):
-            self._elide()
-
-    def _elide(self) -> None:
-        width = self.contentsRect().width()
-        text = self.full_name
-        if self.isVisible() and width > 0:
-            text = self.fontMetrics().elidedText(text, QtCore.Qt.TextElideMode.ElideMiddle, width)
-        if text != self.text():
-            self.setText(text)
-
-
-def type_tail(type_name: str) -> str:
-    """``sensor_msgs/msg/BatteryState`` -> ``BatteryState``: what fits in a chooser; builtins as they are."""
-    return type_name.rsplit("/", 1)[-1]
-
-
-class ElidingCombo(QtWidgets.QComboBox):
-    """A combo box that shows its current text cut with "…" when the panel is too narrow (instead of
-    clipping it mid-letter), the whole text in its tooltip. Touch-sized like every combo (theme)."""
-
-    def __init__(self, name: str) -> None:
-        super().__init__()
-        self.setObjectName(name)
-        self.setSizeAdjustPolicy(QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
-        self.setMinimumContentsLength(8)
-        self.currentTextChanged.connect(self.setToolTip)
-        guard_wheel(self)
-        # the popup's entries touch-sized too (style sheet item rules need a styled delegate)
-        from rcon_core.app.theme import current_touch_px
-
-        self.setItemDelegate(QtWidgets.QStyledItemDelegate(self))
-        self.view().setStyleSheet(f"QAbstractItemView::item {{ min-height: {current_touch_px()}px; }}")
-
-    def paintEvent(self, event: QtGui.QPaintEvent) -> None:
-        painter = QtWidgets.QStylePainter(self)
-        opt = QtWidgets.QStyleOptionComboBox()
-        self.initStyleOption(opt)
-        painter.drawComplexControl(QtWidgets.QStyle.ComplexControl.CC_ComboBox, opt)
-        field = self.style().subControlRect(QtWidgets.QStyle.ComplexControl.CC_ComboBox, opt,
-                                            QtWidgets.QStyle.SubControl.SC_ComboBoxEditField, self)
-        opt.currentText = self.fontMetrics().elidedText(opt.currentText, QtCore.Qt.TextElideMode.ElideRight,
-                                                        max(0, field.width() - 4))
-        painter.drawControl(QtWidgets.QStyle.ControlElement.CE_ComboBoxLabel, opt)
-
-
-class FieldChooser(ElidingCombo):
-    """The *Field* chooser: which field of the message a widget shows or sets, listed with each field's
-    type (``voltage · float32``), best first. Used by the add panel and by Configure on a placed widget.
-
-    ``chosen(path)`` is emitted when the operator picks a field (not when the list is filled).
-    """
-
-    chosen = QtCore.Signal(str)
-
-    def __init__(self, name: str = "fieldCombo") -> None:
-        super().__init__(name)
-        self.setAccessibleDescription("Which field of the message the widget shows or sets")
-        self.currentIndexChanged.connect(self._index_changed)
-
-    def set_fields(self, paths: Sequence[str], current: str, *, types: Any = None, type_name: str = "",
-                   service: bool = False) -> bool:
-        """List ``paths`` (``current`` first when it is not among them) and select ``current``; each with its
-        type when ``types`` knows ``type_name``. Returns whether there is a choice to make (2+ fields)."""
-        listed = list(dict.fromkeys(paths))
-        if current and current not in listed:
-            listed.insert(0, current)
-        self.blockSignals(True)
-        self.clear()
-        for path in listed:
-            tp = field_type(types, type_name, path, service) if types is not None and type_name else ""
-            self.addItem(f"{path} · {type_tail(tp)}" if tp else path, path)
-            self.setItemData(self.count() - 1, f"{path}: {tp or 'type unknown'}", QtCore.Qt.ItemDataRole.ToolTipRole)
-        if listed:
-            self.setCurrentIndex(listed.index(current) if current in listed else 0)
-        self.blockSignals(False)
-        self.setToolTip(self.currentText())
-        return len(listed) > 1
-
-    def paths(self) -> list[str]:
-        return [self.itemData(i) for i in range(self.count())]
-
-    def current_path(self) -> str | None:
-        """The selected field path (None when the list is empty)."""
-        return self.currentData()
-
-    def choose(self, path: str) -> None:
-        """Select ``path``; ValueError if it is not offered."""
-        index = self.findData(path)
-        if index < 0:
-            raise ValueError(f"{path!r} is not a field this widget can use here (offered: {self.paths()})")
-        self.setCurrentIndex(index)
-
-    def _index_changed(self, index: int) -> None:
-        path = self.itemData(index)
-        if path is not None:
-            self.chosen.emit(path)
-
-
-class DragHandle(QtWidgets.QLabel):
-    """Press and drag this onto a canvas to drop the draft there."""
-
-    def __init__(self, panel: AddPanel) -> None:
-        super().__init__("✥ Drag onto the canvas")
-        self.setObjectName("dragHandle")
-        self.panel = panel
-        self.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
-        self.setWordWrap(True)  # "Not ready: <the first problem>" wraps instead of being cut at both ends
-        self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored, QtWidgets.QSizePolicy.Policy.Preferred)
-        self.setStyleSheet("padding: 4px 8px; border:3px dashed #0040a0; color:#0040a0; font-weight:bold; border-radius:6px;")
-        self._press: QtCore.QPoint | None = None
-
-    def mousePressEvent(self, event: QtGui.QMouseEvent) -> None:
-        self._press = event.position().toPoint()
-
-    def mouseMoveEvent(self, event: QtGui.QMouseEvent) -> None:
-        if self._press is None or not self.isEnabled():
-            return
-        if (event.position().toPoint() - self._press).manhattanLength() < 10:
-            return
-        self._press = None
-        drag = QtGui.QDrag(self)
-        mime = QtCore.QMimeData()
-        mime.setData(DRAFT_MIME, QtCore.QByteArray(b"draft"))
-        drag.setMimeData(mime)
-        preview = self.panel.preview_frame
-        if preview is not None:
-            pix = preview.grab().scaledToWidth(min(240, max(60, preview.width())))
-            drag.setPixmap(pix)
-            drag.setHotSpot(QtCore.QPoint(12, 12))
-        drag.exec(QtCore.Qt.DropAction.CopyAction)
 
 
 class AddPanel(QtWidgets.QWidget):
@@ -327,7 +137,7 @@ class AddPanel(QtWidgets.QWidget):
     def _build_widgets_page(self) -> QtWidgets.QWidget:
         page = QtWidgets.QWidget()
         col = QtWidgets.QVBoxLayout(page)
-        self.widgets_title = _heading("")
+        self.widgets_title = heading("")
         self.widgets_title.setObjectName("widgetsTitle")
         self.widgets_name = NameLabel()
         self.widgets_name.setObjectName("widgetsName")
@@ -375,7 +185,7 @@ class AddPanel(QtWidgets.QWidget):
         binding_box = tune_form(QtWidgets.QFormLayout())
         self.role_combo = ElidingCombo("roleCombo")
         self.role_combo.currentIndexChanged.connect(self._role_combo_changed)
-        self.target_combo = ElidingCombo("targetCombo")
+        self.target_combo = TargetChooser("targetCombo")
         self.target_combo.currentIndexChanged.connect(self._target_changed)
         self.target_label = form_label("Topic", self.target_combo)
         self.field_combo = FieldChooser("fieldCombo")
@@ -399,7 +209,7 @@ class AddPanel(QtWidgets.QWidget):
         self.settings_col.addStretch(1)
         scroll.setWidget(inner)
         outer.addWidget(scroll, 1)
-        self.drag_handle = DragHandle(self)
+        self.drag_handle = DragHandle(lambda: self.preview_frame)
         self.place_button = QtWidgets.QPushButton("Place")  # one word: it shares a row with Back and Cancel
         self.place_button.setToolTip("Place on the canvas, in the first free spot in sight")
         self.place_button.setObjectName("placeButton")
@@ -471,7 +281,7 @@ class AddPanel(QtWidgets.QWidget):
             item.setToolTip(cand.reason or cand.spec.description)
             self.candidates.addItem(item)
         self.no_candidates.setText(
-            "" if found else f"No installed widget can {role.value} {short_type(self._picked.type)}."
+            "" if found else f"No installed widget can {role.value} {pkg_type(self._picked.type)}."
         )
         self.no_candidates.setVisible(not found)
         self.stack.setCurrentWidget(self.widgets_page)
@@ -550,34 +360,13 @@ class AddPanel(QtWidgets.QWidget):
         combo.blockSignals(True)
         combo.clear()
         if self._pick_target:
-            self._targets = self._targets_for(draft.spec, draft.role)
-            combo.addItem("— choose —", None)
-            for t in self._targets:
-                combo.addItem(f"{t.name}  ({type_tail(t.type)})", t)
-                combo.setItemData(combo.count() - 1, draft.role.value, TARGET_ROLE)
-            offered = {t.name for t in self._targets}
-            for role in self._roles:
-                if role is draft.role:
-                    continue
-                for t in self._targets_for(draft.spec, role):
-                    if t.name in offered:
-                        continue
-                    offered.add(t.name)
-                    combo.addItem(f"{t.name}  ({type_tail(t.type)})  · to {role.value}", t)
-                    i = combo.count() - 1
-                    combo.setItemData(i, role.value, TARGET_ROLE)
-                    combo.setItemData(i, f"Choosing this makes the widget {role.value} instead of {draft.role.value}",
-                                      QtCore.Qt.ItemDataRole.ToolTipRole)
+            self._targets = combo.list_targets(draft.spec, draft.role, self._roles, self._targets_for)
             new_index = None  # a widget on a topic may also make a new one (needs the type registry)
             if not draft.role.is_service and not draft.role.is_action and self._child_context is not None:
                 new_index = add_new_topic_entry(combo)
             combo.setEnabled(True)
             keep = draft.target
-            index = 0
-            if keep is not None:
-                index = next((i for i in range(1, combo.count())
-                              if combo.itemData(i) is not None and combo.itemData(i).name == keep.name
-                              and combo.itemData(i, TARGET_ROLE) == draft.role.value), 0)
+            index = combo.index_of(keep.name, draft.role) if keep is not None else 0
             if self._new_topic_on and new_index is not None:
                 index = new_index  # the operator's new topic survives a role change
             combo.setCurrentIndex(index)
@@ -588,9 +377,7 @@ class AddPanel(QtWidgets.QWidget):
                     chosen = attrs.evolve(chosen, field_paths=keep.field_paths)
             draft.target = chosen
         else:
-            fixed = draft.target
-            combo.addItem(f"{fixed.name}  ({type_tail(fixed.type)})" if fixed else "—", fixed)
-            combo.setEnabled(False)
+            combo.show_fixed(draft.target)
         combo.blockSignals(False)
 
     def _show_new_topic(self, on: bool) -> None:
@@ -639,13 +426,7 @@ class AddPanel(QtWidgets.QWidget):
 
     def choose_target(self, name: str) -> None:
         """Select the compatible topic/service ``name`` (pathway 3); ValueError if it is not offered."""
-        for i in range(1, self.target_combo.count()):
-            t = self.target_combo.itemData(i)
-            if t is not None and t.name == name:
-                self.target_combo.setCurrentIndex(i)
-                return
-        offered = [t.name for i in range(1, self.target_combo.count()) if (t := self.target_combo.itemData(i))]
-        raise ValueError(f"{name!r} is not compatible with this widget (offered: {offered})")
+        self.target_combo.choose(name)
 
     def choose_field(self, path: str) -> None:
         """Select the field ``path`` of the chosen target; ValueError if the widget cannot use it."""
@@ -672,9 +453,8 @@ class AddPanel(QtWidgets.QWidget):
             self._new_topic_changed()
             return
         target = self.target_combo.itemData(index)
-        tagged = self.target_combo.itemData(index, TARGET_ROLE)  # a plain str: Qt drops the enum
         self.draft.target = target
-        role = Role.parse(tagged) if tagged else self.draft.role
+        role = self.target_combo.role_at(index) or self.draft.role
         if target is not None and role is not self.draft.role:
             self._set_role(role)  # only compatible with another role: the widget takes that one
             return

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from qtpy import QtCore, QtGui, QtWidgets
 
+from rcon_core.msgs.names import pkg_type
+
 NAME_ROLE = QtCore.Qt.ItemDataRole.UserRole
 #: the second line of an entry whose type the robot did not tell
 UNKNOWN = "type unknown"
@@ -71,7 +73,7 @@ class CatalogList(QtWidgets.QWidget):
         self.tree.clear()
         self._items = {}
         for name, type_name in entries:
-            item = QtWidgets.QTreeWidgetItem([f"{name}\n{short_type(type_name) or UNKNOWN}"])
+            item = QtWidgets.QTreeWidgetItem([f"{name}\n{pkg_type(type_name) or UNKNOWN}"])
             item.setData(0, NAME_ROLE, name)
             item.setData(0, TYPE_ROLE, type_name)
             item.setToolTip(0, f"{name}\n{type_name}")
@@ -113,7 +115,7 @@ class CatalogList(QtWidgets.QWidget):
 def elide_type(metrics: QtGui.QFontMetrics, type_name: str, width: int) -> str:
     """``type_name`` (short form) fitted into ``width`` px: the package is cut first, the type's own name
     last (and then only at its end)."""
-    full = short_type(type_name)
+    full = pkg_type(type_name)
     if metrics.horizontalAdvance(full) <= width or "/" not in full:
         return full if metrics.horizontalAdvance(full) <= width else metrics.elidedText(
             full, QtCore.Qt.TextElideMode.ElideRight, width)
@@ -152,8 +154,3 @@ class NameTypeDelegate(QtWidgets.QStyledItemDelegate):
         style = widget.style() if widget is not None else QtWidgets.QApplication.style()
         style.drawControl(QtWidgets.QStyle.ControlElement.CE_ItemViewItem, opt, painter, widget)
 
-
-def short_type(type_name: str) -> str:
-    """``sensor_msgs/msg/Image`` -> ``sensor_msgs/Image`` (the column is narrow)."""
-    parts = type_name.split("/")
-    return f"{parts[0]}/{parts[-1]}" if len(parts) == 3 else type_name

@@ -127,6 +127,16 @@ class ConnectionBar(QtWidgets.QFrame):
         self._show_state("closed")
 
     # ---------------------------------------------------------------------------------------- actions
+    def robot_url(self) -> str:
+        """The robot's URL: the connected one, else what the URL field holds."""
+        return self.link.url if self.link.client is not None and self.link.url else normalize_url(
+            self.url.currentText())
+
+    def view_only_reason(self) -> str | None:
+        """Why the robot connection is view-only (marked so in the app config), or None."""
+        url = self.robot_url()
+        return f"robot {url} is view-only" if url and self.config.is_view_only(url) else None
+
     def toggle(self) -> None:
         if self.link.client is None:
             self.connect_clicked()

@@ -6,9 +6,32 @@ from typing import Any
 
 import attrs
 
-from rcon_core.app.settings_form import settings_problems
+from rcon_core.matcher import match
 from rcon_core.plugins import Binding, Role, WidgetSpec
+from rcon_core.plugins.children import settings_problems
 from rcon_core.plugins.paths import parse_path
+
+#: each role's button on the add panel: (what it does, in words; what it means)
+ROLE_TEXT = {
+    Role.SUBSCRIBE: ("Show it", "subscribe: a widget displays the messages"),
+    Role.PUBLISH: ("Send on it", "publish: a widget sends messages"),
+    Role.CALL: ("Call it", "call: a widget sends requests and shows the answer"),
+    Role.SERVE: ("Answer it", "serve: a widget answers requests from the robot"),
+    Role.ACTION: ("Send goals", "action: a widget sends goals, shows feedback and the result, and can cancel"),
+}
+
+#: categories whose widgets are for sending: they prefer publish/call over subscribe
+SENDING_CATEGORIES = frozenset({"controls", "input"})
+SENDING_FIRST = (Role.PUBLISH, Role.CALL, Role.ACTION, Role.SERVE, Role.SUBSCRIBE)
+SHOWING_FIRST = (Role.SUBSCRIBE, Role.PUBLISH, Role.CALL, Role.SERVE, Role.ACTION)
+
+
+def role_preference(spec: WidgetSpec) -> list[Role]:
+    """The widget's roles, the one an operator most likely wants first: widgets of the category "Controls"
+    or "Input" prefer to send (publish, then call, action, serve, subscribe), every other widget prefers to
+    show (subscribe, then publish, call, serve, action)."""
+    order = SENDING_FIRST if spec.category.strip().lower() in SENDING_CATEGORIES else SHOWING_FIRST
+    return [r for r in order if r in spec.roles]
 
 
 @attrs.define
@@ -141,3 +164,24 @@ def suggested_title(name: str, field_path: str = "", *, service: bool = False) -
         return f"{base} · {field}"
     return base
 
+
+def rank_widgets(type_name: str, role: Role, types: Any, plugins: Any) -> list[Candidate]:
+    """The widgets that fit ``type_name`` in ``role``, best first, as the add panel lists them."""
+    try:
+        found = match(type_name, role, types, plugins)
+    except ValueError:  # no type known (an action whose type the robot did not tell): nothing fits
+        return []
+    return [Candidate(m.spec, (m.field_path,) if m.field_path else (), float(int(m.rank)), m.reason,
+                      tuple(m.field_paths)) for m in found]
+
+
+def targets_for(spec: WidgetSpec, role: Role, entries: list[tuple[str, str]], types: Any,
+                plugins: Any) -> list[Target]:
+    """The robot's topics (services, actions: ``entries`` of name and type) a widget of ``spec`` fits."""
+    out = []
+    for name, type_name in entries:
+        for m in match(type_name, role, types, plugins):
+            if m.spec.kind == spec.kind:
+                out.append(Target(name, type_name, (m.field_path,) if m.field_path else (), tuple(m.field_paths)))
+                break
+    return out

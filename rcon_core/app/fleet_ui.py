@@ -100,7 +100,7 @@ class FleetUi(QtCore.QObject):
     def robot_url(self, robot_id: str) -> str | None:
         """Where the robot is: the first robot's is the connection bar's (connected, else the field)."""
         if not robot_id or robot_id == self.first_id:
-            return self.window.robot_url() or None
+            return self.window.connection.robot_url() or None
         return self.links.url_of(robot_id)
 
     def config_view_only(self, robot_id: str) -> str | None:
@@ -324,7 +324,7 @@ class FleetUi(QtCore.QObject):
         try:
             dup = self.window.doc.duplicate_for_robot(controller.canvas.id, robot_id)
         except EditError as exc:
-            self.window.connection.message.setText(str(exc))
+            self.window.notice.show_notice(f"⚠ {exc}")
             return
         self.window.doc.switch_canvas(dup.id)
 
@@ -342,7 +342,7 @@ class FleetUi(QtCore.QObject):
         try:
             self.window.doc.set_robots(dialog.robots())
         except EditError as exc:
-            self.window.connection.message.setText(str(exc))
+            self.window.notice.show_notice(f"⚠ {exc}")
 
     def shutdown(self) -> None:
         self._remove()

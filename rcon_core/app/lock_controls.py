@@ -41,7 +41,7 @@ def install(window: Any) -> None:
             continue
         slot = {"new": window.new_canvas, "rename": window.rename_canvas_dialog,
                 "duplicate": window.duplicate_canvas, "delete": window.delete_canvas,
-                "import": window.import_canvas_dialog, "reset_demo": window.reset_demo_dialog}[name]
+                "import": window.canvas_files.import_dialog, "reset_demo": window.reset_demo_dialog}[name]
         action.triggered.disconnect()
         action.triggered.connect(lambda _=False, slot=slot, what=what: lock.guard(what, slot))
     menu = window.menu_button.menu()
@@ -103,7 +103,7 @@ def show(window: Any) -> None:
     window.connection.url.setToolTip("Locked: tap Connect/Disconnect and enter the PIN to change the robot"
                                      if engaged else "")
     window.canvas_actions["view_only"].setChecked(window.controller.canvas.view_only)
-    window.canvas_actions["robot_view_only"].setChecked(bool(window.connection_view_only()))
+    window.canvas_actions["robot_view_only"].setChecked(bool(window.connection.view_only_reason()))
 
 
 def padlock_icon() -> QtGui.QIcon:
@@ -145,7 +145,7 @@ def set_canvas_view_only(window: Any, on: bool) -> None:
 
 
 def set_robot_view_only(window: Any, on: bool) -> None:
-    url = window.robot_url()
+    url = window.connection.robot_url()
 
     def apply(value: bool) -> None:
         window.config.set_view_only(url, value)

@@ -1,28 +1,38 @@
-"""The main window: connection bar, side panels, canvas switcher, canvases and the add-widget panel."""
+"""The main window: the composition root that builds the app's parts and wires them together.
+
+The parts live in their own modules: the connection bar (``connection_bar.py``), the side panel's lists
+(``catalog_panel.py``, ``params_panel.py``, ``palette_panel.py``) and whether it shows (``side_panel.py``),
+the canvas bar (``canvas_bar.py``), the canvases (``canvas_controller.py``), the add panel
+(``add_panel.py``), the Configure dialog (``configure_dialog.py``), canvas export/import
+(``canvas_files.py``), the layout file's messages (``layout_file.py``), the robots (``fleet_ui.py``) and the
+operator lock (``operator_lock.py``, ``lock_controls.py``). Problems go to the notice bar (``notice_bar.py``)
+floating over the canvas column.
+"""
 
 from __future__ import annotations
 
-import logging
 import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import attrs
 from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app import theme
-from rcon_core.app.add_panel import AddPanel, FieldChooser
-from rcon_core.app.canvas_controller import CANVAS_SUFFIX, CanvasController, file_name_for
-from rcon_core.app.canvas_tabs import CanvasTabs
+from rcon_core.app.add_panel import AddPanel
+from rcon_core.app.canvas_bar import COMPACT_BELOW, CanvasBar
+from rcon_core.app.canvas_controller import CanvasController
+from rcon_core.app.canvas_files import CanvasFiles
 from rcon_core.app.catalog_panel import CatalogList
-from rcon_core.app.children_editor import ChildContext, link_learner
+from rcon_core.app.children_editor import link_learner
 from rcon_core.app.config import AppConfig
+from rcon_core.app.configure_dialog import WidgetConfigurer
 from rcon_core.app.connection_bar import ConnectionBar
-from rcon_core.app.draft import Candidate, Target
+from rcon_core.app.draft import Candidate, Target, rank_widgets, targets_for
 from rcon_core.app.fleet_ui import FleetUi
 from rcon_core.app.focus import focus_into, has_focus_inside
 from rcon_core.app.frame_clock import FrameClock, Waker
+from rcon_core.app.layout_file import LayoutFile
 from rcon_core.app.link import Link
 from rcon_core.app.live import LiveCanvas
 from rcon_core.app.lock_controls import install as install_lock_controls
@@ -31,20 +41,14 @@ from rcon_core.app.operator_lock import OperatorLock
 from rcon_core.app.palette_panel import PalettePanel
 from rcon_core.app.params_panel import ParamsPanel
 from rcon_core.app.preview import PreviewHost
-from rcon_core.app.settings_form import SettingsForm, form_label, tune_form
+from rcon_core.app.side_panel import PANEL_MIN, SIDE_MIN, SidePanelPolicy
 from rcon_core.app.template_menu import add_template_menu
 from rcon_core.app.widget_host import RateMeter, WidgetHost
-from rcon_core.canvas import Canvas, Document, EditError, Workspace, WorkspaceFileError, WorkspaceStore
+from rcon_core.canvas import Document, Workspace
 from rcon_core.plugins import Binding, PluginManager, Role, WidgetSpec
+from rcon_core.plugins.children import ChildContext
 
-log = logging.getLogger(__name__)
-
-#: narrowest side panel (topics, services, widgets) and add panel
-SIDE_MIN = 372  # with the tab column down its left edge (about 42 px)
-PANEL_MIN = 310
 ACTIONS_EMPTY = "No actions: a ROS 2 robot's action servers are listed here once connected."
-#: a window narrower than this is a small screen: in Operate mode the side panel hides itself
-SMALL_WINDOW = 1100
 
 
 class MainWindow(QtWidgets.QMainWindow):
@@ -67,6 +71,10 @@ class MainWindow(QtWidgets.QMainWindow):
         self.setAttribute(QtCore.Qt.WidgetAttribute.WA_AcceptTouchEvents)
         self.setWindowTitle("RCON")
         self.config = config
+        self._shut = False  #: shutdown() ran (closing is idempotent)
+        self._close_now = False  #: close without asking for the PIN (after it, or on a signal)
+        #: the operator lock (PIN) over Operate mode; its controls are installed at the end (lock_controls)
+        self.operator_lock = OperatorLock(config, self)
         self.plugins = plugins
         #: builds the demo layout (``rcon --demo``): used when there is none yet, or it cannot be read
         self.demo = demo
@@ -88,8 +96,6 @@ class MainWindow(QtWidgets.QMainWindow):
         self._last_rate_sample = 0.0
         self.catalog: dict[str, list[tuple[str, str]]] = {"topics": [], "services": [], "actions": []}
         self.first_paint_at: float | None = None
-        #: where the export/import file dialogs open (the folder used last in this session)
-        self.share_dir = Path.home()
 
         # ---- widgets
         self.connection = ConnectionBar(self.link, config)
@@ -108,70 +114,23 @@ class MainWindow(QtWidgets.QMainWindow):
         self.side.addTab(self.palette_panel, "Widgets")
         self.side.setTabPosition(QtWidgets.QTabWidget.TabPosition.West)  # five tabs: all in sight
         self.side.setMinimumWidth(SIDE_MIN)
-        #: the operator's own show/hide of the side panel (the toggle), kept until the automatic choice
-        #: (small window in Operate mode, or the add panel needing the room) changes
-        self._side_override: bool | None = None
-        self._side_auto_hidden: bool | None = None
 
-        self.tabs = CanvasTabs()  # whole names, scrolling when they do not all fit
+        self.canvas_bar = CanvasBar({
+            "new": ("New canvas", self.new_canvas),
+            "rename": ("Rename…", self.rename_canvas_dialog),
+            "duplicate": ("Duplicate", self.duplicate_canvas),
+            "delete": ("Delete…", self.delete_canvas),
+            "export": ("Export canvas…", lambda: self.canvas_files.export_dialog()),
+            "import": ("Import canvas…", lambda: self.canvas_files.import_dialog()),
+            **({"reset_demo": ("Reset demo layout…", self.reset_demo_dialog)} if demo is not None else {}),
+        }, self.undo, self.redo)
+        bar = self.canvas_bar  # its parts, by the names the lock controls and the tests use
+        self.tabs, self.menu_button, self.edit_button, self.lock_button = (
+            bar.tabs, bar.menu_button, bar.edit_button, bar.lock_button)
+        self.canvas_actions, self.canvas_buttons = bar.canvas_actions, bar.canvas_buttons
         self.tabs.currentChanged.connect(self._tab_changed)
-        # the mode: a two-segment control, the active segment filled ("Edit | Operate"); lock_button is the
-        # Operate segment (checked = the canvas is locked)
-        self.edit_button = QtWidgets.QPushButton("✎ Edit")
-        self.edit_button.setObjectName("editButton")
-        self.lock_button = QtWidgets.QPushButton("Operate")
-        self.lock_button.setObjectName("lockButton")
-        for button, locked in ((self.edit_button, False), (self.lock_button, True)):
-            button.setCheckable(True)
-            button.toggled.connect(lambda checked, locked=locked: self._mode_toggled(locked, checked))
-        mode_switch = QtWidgets.QFrame()
-        mode_switch.setObjectName("modeSwitch")
-        mode_switch.setToolTip("Edit: move, resize, add and delete widgets. Operate: the canvas is locked and "
-                               "the widgets take your touches.")
-        seg = QtWidgets.QHBoxLayout(mode_switch)
-        seg.setContentsMargins(0, 0, 0, 0)
-        seg.setSpacing(0)
-        seg.addWidget(self.edit_button)
-        seg.addWidget(self.lock_button)
-        mode_bar = QtWidgets.QFrame()
-        mode_bar.setObjectName("modeBar")
-        row = QtWidgets.QHBoxLayout(mode_bar)
-        row.setContentsMargins(6, 6, 12, 6)  # the last segment clear of the window's edge
-        row.setSpacing(4)
-        row.addWidget(self.tabs, 1)
-        self.canvas_buttons: dict[str, QtWidgets.QPushButton] = {}
-        self.canvas_actions: dict[str, QtGui.QAction] = {}
-        menu_button = QtWidgets.QPushButton("Canvas ▾")
-        menu_button.setObjectName("canvasMenuButton")
-        menu_button.setToolTip("New, rename, duplicate, delete, export or import canvases")
-        self.menu_button = menu_button
-        self._compact = False
-        canvas_menu = QtWidgets.QMenu(menu_button)
-        for name, text, slot in (
-            ("new", "New canvas", self.new_canvas),
-            ("rename", "Rename…", self.rename_canvas_dialog),
-            ("duplicate", "Duplicate", self.duplicate_canvas),
-            ("delete", "Delete…", self.delete_canvas),
-            ("export", "Export canvas…", self.export_canvas_dialog),
-            ("import", "Import canvas…", self.import_canvas_dialog),
-            *((("reset_demo", "Reset demo layout…", self.reset_demo_dialog),) if demo is not None else ()),
-        ):
-            action = canvas_menu.addAction(text)
-            action.setObjectName(f"canvas_{name}")
-            action.triggered.connect(slot)
-            self.canvas_actions[name] = action
-        self.template_menu = add_template_menu(self, canvas_menu, before=self.canvas_actions["rename"])
-        menu_button.setMenu(canvas_menu)
-        row.addWidget(menu_button)
-        for name, text, slot in (("undo", "↶", self.undo), ("redo", "↷", self.redo)):
-            b = QtWidgets.QPushButton(text)
-            b.setObjectName(f"canvas_{name}")
-            b.setToolTip(name.capitalize())
-            b.setProperty("square", True)
-            b.clicked.connect(slot)
-            self.canvas_buttons[name] = b
-            row.addWidget(b)
-        row.addWidget(mode_switch)
+        bar.mode_tapped.connect(self._mode_toggled)
+        self.template_menu = add_template_menu(self, bar.menu, before=self.canvas_actions["rename"])
 
         self.stack = QtWidgets.QStackedWidget()
         self.add_panel = AddPanel(self.rank_widgets, self.targets_for, self.preview.build, self.preview.release,
@@ -184,7 +143,7 @@ class MainWindow(QtWidgets.QMainWindow):
         ccol = QtWidgets.QVBoxLayout(center)
         ccol.setContentsMargins(0, 0, 0, 0)
         ccol.setSpacing(0)
-        ccol.addWidget(mode_bar)
+        ccol.addWidget(self.canvas_bar)
         ccol.addWidget(self.stack, 1)
         split = QtWidgets.QSplitter()
         split.setHandleWidth(12)
@@ -196,14 +155,14 @@ class MainWindow(QtWidgets.QMainWindow):
         split.setChildrenCollapsible(False)
         self.split = split
         self.center = center
-        center.installEventFilter(self)  # the canvas bar gets compact when the centre is narrow
-        self.add_panel.installEventFilter(self)  # the add panel gets room when it opens
         # shows or hides the side panel (topics, services, widgets): room for the canvas on a small screen;
         # first on the connection bar, above the side panel
         self.side_toggle = QtWidgets.QPushButton()
         self.side_toggle.setObjectName("sideToggle")
-        self.side_toggle.clicked.connect(self.toggle_side)
         self.side_toggle.setProperty("square", True)
+        self.side_policy = SidePanelPolicy(self, self.side, self.side_toggle, split, center, self.add_panel)
+        center.installEventFilter(self)  # the canvas bar gets compact when the centre is narrow
+        self.add_panel.installEventFilter(self)  # the add panel gets room when it opens
         bar = self.connection.layout()
         if isinstance(bar, QtWidgets.QBoxLayout):
             bar.insertWidget(0, self.side_toggle)
@@ -223,22 +182,28 @@ class MainWindow(QtWidgets.QMainWindow):
 
         # ---- workspace
         self.layout_path = Path(layout_path) if layout_path is not None else config.workspace_path
-        self.store = WorkspaceStore(self.layout_path)
+        self.layout_file = LayoutFile(self.layout_path, self.notice, demo, lambda: self.controller.saver.flush())
+        self.store = self.layout_file.store
         fresh = self.demo is not None and not self.layout_path.exists()  # the demo's first start
-        self.doc = Document(self.demo() if fresh and self.demo is not None else self._load_workspace())
+        self.doc = Document(self.demo() if fresh and self.demo is not None else self.layout_file.load())
         self.fleet_ui = FleetUi(self)  # one link per robot; hears a change of robots before the controller
         self.controller = CanvasController(self.doc, self.store, self.host, self.live, self.stack)
         self.controller.client = self.fleet_ui.fleet()
-        self.controller.save_failed.connect(self._save_failed)
+        self.controller.save_failed.connect(self.layout_file.save_failed)
         self.controller.on_drop = self._dropped
-        self.controller.on_configure = self.configure_widget
+        self.side_policy.hint_changed.connect(self.controller.set_hint)
+        self.canvas_files = CanvasFiles(self, self.controller, self.notice, plugins, self._in_edit_mode,
+                                        self._dialog_closed)
+        self.configurer = WidgetConfigurer(self, self.doc, plugins, self.types, self.child_context,
+                                           self._dialog_closed)
+        self.controller.on_configure = self.configurer.open
         self.controller.canvases_changed.connect(self._sync_tabs)
         self.controller.current_changed.connect(self._sync_tabs)
         self.controller.lock_changed.connect(self._show_lock)
         self._sync_tabs()
         self._show_lock(self.controller.canvas.locked)
         self.controller.run_current()  # offline (LINK DOWN) until a robot is connected
-        if fresh or self._demo_rebuilt:
+        if fresh or self.layout_file.demo_rebuilt:
             self.controller.saver.flush()  # the demo layout is on disk from its first start on
 
         # ---- signals and the frame clock
@@ -265,60 +230,10 @@ class MainWindow(QtWidgets.QMainWindow):
         app = QtWidgets.QApplication.instance()
         if isinstance(app, QtGui.QGuiApplication):
             app.applicationStateChanged.connect(self._app_state_changed)
-        #: the operator lock (PIN) over Operate mode, and the view-only controls: see lock_controls
-        self.operator_lock = OperatorLock(config, self)
-        install_lock_controls(self)
+        install_lock_controls(self)  # the operator lock's and the view-only controls
         self.resize(self.initial_size())
 
     # ------------------------------------------------------------------------------------ workspace
-    _demo_rebuilt = False
-
-    def _load_workspace(self) -> Workspace:
-        """The saved workspace; a file that cannot be read is reported on the banner and left alone (the
-        demo's own layout is moved aside once and built afresh instead)."""
-        try:
-            return self.store.load()
-        except WorkspaceFileError as exc:
-            if self.demo is not None:
-                try:
-                    kept = self.store.move_aside()
-                except WorkspaceFileError as aside:  # no copy could be kept: leave it, say so
-                    self.show_file_problem(f"{exc}; {aside.reason}")
-                    return Workspace.new()
-                log.warning("demo layout unreadable (%s); moved to %s, building a fresh one", exc.reason, kept)
-                self._demo_rebuilt = True
-                self.notice.show_notice(
-                    f"ℹ The saved demo layout could not be read ({exc.reason}). It was moved to {kept} and "
-                    "a fresh demo layout was built.", kind="info")
-                return self.demo()
-            log.error("%s; starting with an empty workspace", exc)
-            self.show_file_problem(str(exc))
-            return Workspace.new()
-
-    def show_file_problem(self, text: str) -> None:
-        self.notice.show_notice(
-            f"⚠ The layout could not be opened: {text}.\nThe file is left as it is and will not be "
-            "overwritten: changes made now are not saved. Start a new layout to move the file aside "
-            "(its content is kept) and save again.",
-            actions=[("Start a new layout", self.start_new_layout)],
-        )
-
-    def start_new_layout(self) -> None:
-        """The way out of an unreadable layout: move the file aside explicitly and save from now on."""
-        try:
-            kept = self.store.move_aside()
-        except WorkspaceFileError as exc:
-            self.show_file_problem(str(exc))
-            return
-        self.controller.saver.flush()
-        where = f" The old file was kept as {kept}." if kept is not None else ""
-        self.notice.show_notice(f"ℹ New layout started: it is saved to {self.layout_path}.{where}", kind="info")
-
-    def _save_failed(self, text: str) -> None:
-        if self.store.read_only:
-            return  # the banner already says why nothing is saved
-        self.notice.show_notice(f"⚠ The layout could not be saved: {text}")
-
     def open_workspace(self, workspace: Workspace) -> None:
         """Replace the workspace; saved like any change."""
         self.doc.replace_workspace(workspace)
@@ -360,25 +275,8 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _sync_tabs(self, *_: Any) -> None:
         canvases = self.controller.workspace.canvases
-        self.tabs.blockSignals(True)
-        while self.tabs.count():
-            self.tabs.removeTab(0)
-        for canvas in canvases:
-            self.tabs.addTab(canvas.name)
-        self.tabs.setCurrentIndex(self.controller.index)
-        self.tabs.blockSignals(False)
-        self._fit_tabs()
-        self.canvas_actions["delete"].setEnabled(len(canvases) > 1 and not self.controller.canvas.locked)
-
-    def _fit_tabs(self) -> None:
-        """The canvas tabs never get so narrow that only the scroll arrows show: room for the widest tab
-        (up to about 12 letters) and, when they overflow, the two scroll buttons."""
-        fm = self.tabs.fontMetrics()
-        widest = max((self.tabs.tabSizeHint(i).width() for i in range(self.tabs.count())), default=0)
-        readable = min(widest, fm.horizontalAdvance("M" * 12))
-        scrollers = 2 * theme.current_touch_px() + 4 if self.tabs.count() > 1 else 0
-        every = sum(self.tabs.tabSizeHint(i).width() for i in range(self.tabs.count()))
-        self.tabs.setMinimumWidth(min(every, readable + scrollers))
+        self.canvas_bar.show_canvases([c.name for c in canvases], self.controller.index,
+                                      self.controller.canvas.locked)
 
     def _tab_changed(self, index: int) -> None:
         self.controller.switch(index)
@@ -398,7 +296,7 @@ class MainWindow(QtWidgets.QMainWindow):
             try:
                 self.controller.rename_canvas(index, name)
             except ValueError as exc:
-                self.connection.message.setText(str(exc))
+                self.notice.show_notice(f"⚠ {exc}")
 
     def duplicate_canvas(self) -> None:
         self.controller.duplicate_canvas(self.controller.index)
@@ -412,7 +310,7 @@ class MainWindow(QtWidgets.QMainWindow):
                 try:
                     self.controller.delete_canvas(self.controller.workspace.canvases.index(canvas))
                 except ValueError as exc:
-                    self.connection.message.setText(str(exc))
+                    self.notice.show_notice(f"⚠ {exc}")
 
         if not canvas.widgets or len(self.controller.workspace.canvases) < 2:
             delete()  # nothing to lose (or refused with a message: the last canvas stays)
@@ -421,99 +319,6 @@ class MainWindow(QtWidgets.QMainWindow):
         self.confirm(f"Delete canvas “{canvas.name}”?",
                      f"It holds {count} widget{'s' if count != 1 else ''}. Undo (↶, Ctrl+Z) brings it back.",
                      "Delete", delete)
-
-    # ------------------------------------------------------------------------ sharing one canvas
-    def file_dialog(self, name: str, title: str, *, save: bool) -> QtWidgets.QFileDialog:
-        """A window-modal file dialog (Qt's own, not the platform's: the same on a tablet and offscreen),
-        opening in :attr:`share_dir`. The caller connects ``fileSelected`` and calls ``open()``."""
-        dialog = QtWidgets.QFileDialog(self, title, str(self.share_dir))
-        dialog.setObjectName(name)
-        dialog.setOption(QtWidgets.QFileDialog.Option.DontUseNativeDialog, True)
-        dialog.setNameFilters([f"RCON canvas (*{CANVAS_SUFFIX})", "JSON (*.json)", "All files (*)"])
-        if save:
-            dialog.setAcceptMode(QtWidgets.QFileDialog.AcceptMode.AcceptSave)
-            dialog.setFileMode(QtWidgets.QFileDialog.FileMode.AnyFile)
-            dialog.setDefaultSuffix(CANVAS_SUFFIX.lstrip("."))
-        else:
-            dialog.setAcceptMode(QtWidgets.QFileDialog.AcceptMode.AcceptOpen)
-            dialog.setFileMode(QtWidgets.QFileDialog.FileMode.ExistingFile)
-        touch = theme.current_touch_px()  # rows a finger can pick, the file name readable in full
-        dialog.setStyleSheet(f"QTreeView::item, QListView::item {{ min-height: {touch}px; }}"
-                             " QTreeView::item:selected, QListView::item:selected"
-                             " { background: #0040a0; color: #ffffff; }")
-        screen = self.screen().availableGeometry() if self.screen() is not None else QtCore.QRect(0, 0, 1024, 700)
-        dialog.resize(min(1000, screen.width() - 40), min(700, screen.height() - 40))
-        files = dialog.findChild(QtWidgets.QTreeView, "treeView")
-        if files is not None:
-            files.header().resizeSection(0, max(files.header().sectionSize(0), dialog.width() // 2))
-        dialog.finished.connect(lambda _result: self._dialog_closed(dialog))
-        self.share_dialog = dialog
-        return dialog
-
-    def export_canvas_dialog(self) -> QtWidgets.QFileDialog:
-        """Ask where to write the current canvas (default name from the canvas's name); works in Operate
-        mode too (exporting changes nothing). The dialog only picks the path: :meth:`export_canvas_to`."""
-        canvas = self.controller.canvas
-        dialog = self.file_dialog("exportDialog", f"Export canvas “{canvas.name}”", save=True)
-        dialog.selectFile(str(self.share_dir / file_name_for(canvas.name)))
-        dialog.fileSelected.connect(lambda path: self.export_canvas_to(path, canvas))
-        dialog.open()
-        return dialog
-
-    def export_canvas_to(self, path: str | Path, canvas: Canvas | None = None) -> Path | None:
-        """Write ``canvas`` (default: the current one) to ``path`` atomically; the notice bar says where,
-        or why not. Returns the path written, or None."""
-        canvas = canvas if canvas is not None else self.controller.canvas
-        canvases = self.controller.workspace.canvases
-        if canvas not in canvases:
-            self.notice.show_notice(f"⚠ Canvas “{canvas.name}” was not exported: it no longer exists.")
-            return None
-        try:
-            written = self.controller.export_canvas(canvases.index(canvas), path)
-        except OSError as exc:
-            self.notice.show_notice(f"⚠ Canvas “{canvas.name}” could not be exported to {path}: "
-                                    f"{exc.strerror or exc}.")
-            return None
-        self.share_dir = written.parent
-        self.notice.show_notice(f"ℹ Canvas “{canvas.name}” exported to {written}.", kind="info")
-        return written
-
-    def import_canvas_dialog(self) -> QtWidgets.QFileDialog | None:
-        """Ask for a canvas file to add (Edit mode only: in Operate mode the notice offers to switch).
-        The dialog only picks the path: :meth:`import_canvas_from`."""
-        opened: list[QtWidgets.QFileDialog] = []
-
-        def open_dialog() -> None:
-            dialog = self.file_dialog("importDialog", "Import canvas", save=False)
-            dialog.fileSelected.connect(self.import_canvas_from)
-            dialog.open()
-            opened.append(dialog)
-
-        self._in_edit_mode("import a canvas", open_dialog)
-        return opened[0] if opened else None
-
-    def import_canvas_from(self, path: str | Path) -> Canvas | None:
-        """Add the canvas in ``path`` (one undo step) and show it. A file that cannot be used (corrupt,
-        newer, not a canvas file) changes nothing: the notice bar says why. Returns the added canvas."""
-        path = Path(path)
-        if self.controller.canvas.locked:
-            self._in_edit_mode("import a canvas", lambda: self.import_canvas_from(path))
-            return None
-        try:
-            canvas = self.controller.import_canvas(path)
-        except (WorkspaceFileError, EditError) as exc:
-            detail = str(exc) if isinstance(exc, WorkspaceFileError) else f"{path}: {exc}"
-            self.notice.show_notice(f"⚠ The canvas could not be imported: {detail}. Nothing was changed.")
-            return None
-        self.share_dir = path.parent
-        missing = sorted({w.kind for w in canvas.widgets if not self.plugins.has_widget(w.kind)})
-        count = sum(1 for w in canvas.widgets if w.kind in missing)
-        text = f"ℹ Canvas “{canvas.name}” imported from {path.name} (↶ removes it)."
-        if missing:
-            text += (f" {count} widget{'s' if count != 1 else ''} need{'' if count != 1 else 's'} a package "
-                     f"that is not installed ({', '.join(missing)}): shown as placeholders, their settings kept.")
-        self.notice.show_notice(text, kind="info")
-        return canvas
 
     def undo(self) -> None:
         self.controller.undo()
@@ -540,11 +345,11 @@ class MainWindow(QtWidgets.QMainWindow):
             self._fit_mode_bar()
         elif obj is self.add_panel and event.type() == QtCore.QEvent.Type.Show:
             self._fit_mode_bar()
-            self._update_side()  # at once, before the layout would widen the window for the panel
-            QtCore.QTimer.singleShot(0, self._make_room_for_add_panel)
+            self.side_policy.update()  # at once, before the layout would widen the window for the panel
+            QtCore.QTimer.singleShot(0, self.side_policy.make_room_for_add_panel)
         elif obj is self.add_panel and event.type() == QtCore.QEvent.Type.Hide:
             self._fit_mode_bar()
-            self._update_side()
+            self.side_policy.update()
         return super().eventFilter(obj, event)
 
     def initial_size(self) -> QtCore.QSize:
@@ -557,102 +362,19 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def resizeEvent(self, event: QtGui.QResizeEvent) -> None:
         super().resizeEvent(event)
-        self._update_side()
-
-    def _centre_min(self) -> int:
-        return self.center.minimumSizeHint().width()
-
-    def _room_for_side(self) -> bool:
-        """Whether the side panel fits beside the canvas bar (and the add panel when it is open) without
-        widening the window."""
-        need = SIDE_MIN + self._centre_min() + self.split.handleWidth()
-        if self.add_panel.isVisible():
-            need += PANEL_MIN + self.split.handleWidth()
-        return self.width() >= need
-
-    def _side_auto_hide(self) -> bool:
-        """Whether the side panel should give its room away: a small window in Operate mode, or no room."""
-        if self.controller.canvas.locked and self.width() < SMALL_WINDOW:
-            return True
-        return not self._room_for_side()
-
-    def _update_side(self) -> None:
-        """Show or hide the side panel: the automatic choice, unless the operator used the toggle since
-        that choice last changed."""
-        if not hasattr(self, "controller"):
-            return  # still building
-        auto = self._side_auto_hide()
-        if auto != self._side_auto_hidden:
-            self._side_auto_hidden = auto
-            self._side_override = None
-        room = self._room_for_side()
-        shown = self._side_override if self._side_override is not None else not auto
-        shown = shown and room  # never by widening the window past the screen
-        if shown != self.side.isVisibleTo(self):
-            self.side.setVisible(shown)
-        self.side_toggle.setText("◀" if shown else "▶")
-        self.controller.set_hint("side" if shown else "adding" if self.add_panel.isVisible() else "hidden")
-        self.side_toggle.setEnabled(shown or room)
-        tip = ("Hide topics, services and widgets (more room for the canvas)" if shown
-               else "Show topics, services and widgets" if room
-               else "No room for topics, services and widgets beside the canvas"
-                    + (" and the add panel" if self.add_panel.isVisible() else ""))
-        self.side_toggle.setToolTip(tip)
-        self.side_toggle.setAccessibleName(tip)
-
-    def toggle_side(self) -> None:
-        """The operator shows or hides the side panel."""
-        self._side_override = not self.side.isVisibleTo(self)
-        self._update_side()
-        if self.add_panel.isVisible():
-            self._make_room_for_add_panel()
-
-    def _make_room_for_add_panel(self) -> None:
-        """The add panel takes its room from the side panel and the canvas, never by growing the window."""
-        self._update_side()
-        if not self.add_panel.isVisible():
-            return
-        sizes = self.split.sizes()
-        total = sum(sizes)
-        side = max(sizes[0], SIDE_MIN) if self.side.isVisibleTo(self) else 0
-        room = total - side - self._centre_min()
-        panel = max(PANEL_MIN, min(460, max(400, total // 3), room))
-        self.split.setSizes([side, max(0, total - side - panel), panel])
+        self.side_policy.update()
 
     def _fit_mode_bar(self) -> None:
-        """Short labels on the canvas bar when the centre is narrow (e.g. the add panel is open), so the
-        tabs keep their room and no button text is cut."""
+        """Short labels on the canvas bar when the centre is narrow (e.g. the add panel is open)."""
         room = self.width() - self.side.width() - (self.add_panel.width() if self.add_panel.isVisible() else 0)
-        compact = self.add_panel.isVisible() or room < 820
-        if compact != self._compact:
-            self._compact = compact
-            self.menu_button.setText("☰" if compact else "Canvas ▾")
-            self._show_mode(self.controller.canvas.locked)
+        self.canvas_bar.set_compact(self.add_panel.isVisible() or room < COMPACT_BELOW)
 
     def _show_mode(self, locked: bool) -> None:
-        """The mode control shows the current mode: its segment is filled (checked), the other is not."""
-        for button, checked in ((self.lock_button, locked), (self.edit_button, not locked)):
-            button.blockSignals(True)
-            button.setChecked(checked)
-            button.blockSignals(False)
-            fm = button.fontMetrics()
-            button.setMinimumWidth(fm.horizontalAdvance(button.text()) + 44)
-        self.lock_button.setToolTip("Operate (current): the canvas is locked, the widgets take your touches"
-                                    if locked else "Tap to lock the canvas for operation")
-        self.edit_button.setToolTip("Edit (current): move, resize, add and delete widgets" if not locked
-                                    else "Tap to unlock the canvas for editing")
-        if getattr(self, "operator_lock", None) is not None and self.operator_lock.engaged:
-            self.edit_button.setMinimumWidth(self.edit_button.sizeHint().width())  # text and padlock
+        self.canvas_bar.show_mode(locked, self.operator_lock.engaged)
 
     def _show_lock(self, locked: bool) -> None:
-        self._show_mode(locked)
-        self._update_side()
-        for name in ("undo", "redo"):
-            self.canvas_buttons[name].setEnabled(not locked)
-        for name in ("rename", "delete"):
-            self.canvas_actions[name].setEnabled(
-                not locked and (name != "delete" or len(self.controller.workspace.canvases) > 1)
-            )
+        self.canvas_bar.show_lock(locked, len(self.controller.workspace.canvases), self.operator_lock.engaged)
+        self.side_policy.set_locked(locked)
         if locked:
             self.add_panel.cancel()
 
@@ -684,30 +406,10 @@ class MainWindow(QtWidgets.QMainWindow):
                                 "(locked).", kind="info", actions=[("Switch to Edit mode", unlock_and_start)])
 
     def rank_widgets(self, type_name: str, role: Role) -> list[Candidate]:
-        from rcon_core.matcher import match
-
-        out = []
-        try:
-            found = match(type_name, role, self.types, self.plugins)
-        except ValueError:  # no type known (an action whose type the robot did not tell): nothing fits
-            return []
-        for m in found:
-            paths = (m.field_path,) if m.field_path else ()
-            out.append(Candidate(m.spec, paths, float(int(m.rank)), m.reason, tuple(m.field_paths)))
-        return out
+        return rank_widgets(type_name, role, self.types, self.plugins)
 
     def targets_for(self, spec: WidgetSpec, role: Role) -> list[Target]:
-        from rcon_core.matcher import match
-
-        entries = self.catalog.get(f"{role.noun}s", [])
-        out = []
-        for name, type_name in entries:
-            for m in match(type_name, role, self.types, self.plugins):
-                if m.spec.kind == spec.kind:
-                    out.append(Target(name, type_name, (m.field_path,) if m.field_path else (),
-                                      tuple(m.field_paths)))
-                    break
-        return out
+        return targets_for(spec, role, self.catalog.get(f"{role.noun}s", []), self.types, self.plugins)
 
     def place_draft(self) -> None:
         draft = self.fleet_ui.bind(self.add_panel.take_draft())  # the panel closes
@@ -716,7 +418,7 @@ class MainWindow(QtWidgets.QMainWindow):
             try:
                 self.controller.add_draft(draft)
             except ValueError as exc:
-                self.connection.message.setText(str(exc))
+                self.notice.show_notice(f"⚠ {exc}")
 
     def _settle_layout(self) -> None:
         """Apply pending layout changes now (the add panel just closed, the side panel may be back), so
@@ -730,8 +432,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if side_hidden and self.side.isVisibleTo(self):
             # the side panel gave its room to the add panel; coming back now it would push the canvas
             # (and the widget just dropped under the finger) sideways: it stays hidden until ▶ is tapped
-            self._side_override = False
-            self._update_side()
+            self.side_policy.keep_hidden()
         if draft is not None:
             self.controller.add_draft(draft, point)
 
@@ -739,77 +440,6 @@ class MainWindow(QtWidgets.QMainWindow):
         """What a settings form's children editor needs: types, widgets, the parent's binding, and a way to
         learn a type from the robot."""
         return ChildContext(self.types, self.plugins, binding, link_learner(self.link))
-
-    def configure_widget(self, instance_id: str) -> None:
-        """Edit a placed widget's field, title and settings in a dialog; OK is one undo step (Ctrl+Z
-        restores all of it). A new field rebinds the running widget (the runtime rebuilds its model)."""
-        try:
-            _canvas, inst = self.controller.workspace.find_widget(instance_id)
-        except KeyError:
-            return
-        if not self.plugins.has_widget(inst.kind):
-            return
-        spec = self.plugins.widget(inst.kind)
-        settings = spec.make_settings(inst.settings)
-        binding = inst.binding
-        dialog = QtWidgets.QDialog(self)
-        dialog.setObjectName("configureDialog")
-        dialog.setWindowTitle(f"Configure {inst.title or spec.title}")
-        col = QtWidgets.QVBoxLayout(dialog)
-        # one white page holding every label and field (no label boxes on the dialog's grey)
-        body = QtWidgets.QFrame()
-        body.setObjectName("configureBody")
-        body.setStyleSheet("QFrame#configureBody { background: #ffffff; border: 3px solid #000000;"
-                           " border-radius: 6px; }")
-        body_col = QtWidgets.QVBoxLayout(body)
-        body_col.setContentsMargins(16, 12, 16, 12)
-        heading = QtWidgets.QLabel(f"{spec.title} on {binding.name}" if binding.name else spec.title)
-        heading.setProperty("role", "heading")
-        body_col.addWidget(heading)
-        top = QtWidgets.QFormLayout()
-        tune_form(top)
-        field = FieldChooser("configureField")
-        field_label = form_label("Field", field)
-        top.addRow(field_label, field)
-        top.setRowVisible(field, field.set_fields(
-            self.field_choices(spec, binding), binding.field_path, types=self.types, type_name=binding.type,
-            service=binding.role.is_service))
-        title = QtWidgets.QLineEdit(inst.title)
-        title.setObjectName("configureTitle")
-        title.setPlaceholderText(spec.title)
-        title_label = form_label("Title", title)
-        top.addRow(title_label, title)
-        body_col.addLayout(top)
-        form = SettingsForm(settings, context=self.child_context(lambda: binding)) if settings is not None else None
-        if form is not None:
-            body_col.addWidget(form)
-            _align_with(top, (field_label, title_label), form)
-        body_col.addStretch(1)  # a taller dialog leaves the rows as they are
-        col.addWidget(body, 1)
-        buttons = QtWidgets.QDialogButtonBox(
-            QtWidgets.QDialogButtonBox.StandardButton.Ok | QtWidgets.QDialogButtonBox.StandardButton.Cancel
-        )
-        buttons.accepted.connect(dialog.accept)
-        buttons.rejected.connect(dialog.reject)
-        col.addWidget(buttons)
-        self.configure_dialog = dialog
-
-        def apply() -> None:
-            path = field.current_path()
-            rebound = None
-            if top.isRowVisible(field) and path is not None and path != binding.field_path:
-                rest = tuple(p for p in binding.field_paths[1:] if p != path)
-                rebound = attrs.evolve(binding, field_paths=(path, *rest))
-            self.doc.reconfigure_widget(  # one undo step for field, title and settings together
-                instance_id,
-                settings=spec.settings_to_dict(form.value()) if form is not None else None,
-                binding=rebound,
-                title=title.text(),
-            )
-
-        dialog.accepted.connect(apply)
-        dialog.finished.connect(lambda _result: self._dialog_closed(dialog))
-        dialog.open()
 
     def _confirm_closed(self) -> None:
         """After a confirm dialog (either answer) the keyboard is the window's again: Ctrl+Z, Ctrl+Q work."""
@@ -831,32 +461,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.activateWindow()
         dialog.deleteLater()
 
-    def field_choices(self, spec: WidgetSpec, binding: Binding) -> list[str]:
-        """The fields a widget of ``spec`` can bind on ``binding``'s type in its role, best first (the
-        matcher's ``field_paths``); empty when it takes the whole message or the type is not known."""
-        from rcon_core.matcher import match
-
-        if not binding.type or not binding.field_paths:
-            return []
-        try:
-            found = match(binding.type, binding.role, self.types, self.plugins)
-        except ValueError:  # a malformed type name in the layout: nothing to choose from
-            return []
-        return next((list(m.field_paths) for m in found if m.spec.kind == spec.kind), [])
-
     # -------------------------------------------------------------------------------------- link
-    def robot_url(self) -> str:
-        """The robot's URL: the connected one, else what the URL field holds."""
-        from rcon_core.app.connection_bar import normalize_url
-
-        return self.link.url if self.link.client is not None and self.link.url else normalize_url(
-            self.connection.url.currentText())
-
-    def connection_view_only(self) -> str | None:
-        """Why the robot connection is view-only (marked so in the app config), or None."""
-        url = self.robot_url()
-        return f"robot {url} is view-only" if url and self.config.is_view_only(url) else None
-
     def apply_view_only(self) -> None:
         """The robot's view-only mark changed: every widget (and the preview) restarts on ports that
         refuse, or no longer refuse, to send (each robot's mark travels in the fleet, see fleet_ui)."""
@@ -877,7 +482,7 @@ class MainWindow(QtWidgets.QMainWindow):
     # -------------------------------------------------------------------------------- focus
     def focus_lost(self) -> None:
         """The operator's attention left the window: running widgets are told (teleop stops driving)."""
-        if getattr(self, "_shut", False):
+        if self._shut:
             return
         self.focus_losses += 1
         self.live.focus_lost()
@@ -915,7 +520,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     # -------------------------------------------------------------------------------------- closing
     def closeEvent(self, event: QtGui.QCloseEvent) -> None:
-        if self.operator_lock.engaged and not getattr(self, "_close_now", False) and not getattr(self, "_shut", False):
+        if self.operator_lock.engaged and not self._close_now and not self._shut:
             event.ignore()  # quitting needs the PIN while the operator lock is on
             self.operator_lock.guard("quit RCON", self.close_now)
             return
@@ -929,7 +534,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def shutdown(self) -> None:
         """Stop the clock and the widgets, save, and close the link (idempotent)."""
-        if getattr(self, "_shut", False):
+        if self._shut:
             return
         self._shut = True
         self.clock.stop()
@@ -946,23 +551,4 @@ class MainWindow(QtWidgets.QMainWindow):
         self.preview_live.stop()
         self.fleet_ui.shutdown()
         self.link.shutdown()
-
-
-def _align_with(top: QtWidgets.QFormLayout, labels: tuple[QtWidgets.QLabel, ...], form: QtWidgets.QWidget) -> None:
-    """Give the dialog's own rows (field, title) the settings form's margins and label column, so the
-    dialog reads as one form."""
-    inner = form.layout()
-    if not isinstance(inner, QtWidgets.QFormLayout):
-        return
-    top.setContentsMargins(inner.contentsMargins())
-    top.setHorizontalSpacing(inner.horizontalSpacing())
-    top.setLabelAlignment(inner.labelAlignment())
-    widths = [label.sizeHint().width() for label in labels]
-    for row in range(inner.rowCount()):
-        item = inner.itemAt(row, QtWidgets.QFormLayout.ItemRole.LabelRole)
-        widget = item.widget() if item is not None else None
-        if widget is not None:
-            widths.append(widget.sizeHint().width())
-    for label in labels:
-        label.setMinimumWidth(max(widths))
 

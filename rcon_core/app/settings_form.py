@@ -3,7 +3,7 @@
 Supported field types: ``str``, ``int``, ``float``, ``bool``, ``enum.Enum`` subclasses, ``typing.Literal``
 and any field with ``metadata={"choices": [...]}``.  Optional metadata: ``label``, ``help``, ``min``,
 ``max``, ``step``, ``decimals``.  A *children field* (a ``list`` of an attrs class with ``kind``,
-``field_path`` and ``settings``, see :mod:`rcon_core.app.children_editor`) gets the children editor;
+``field_path`` and ``settings``, see :mod:`rcon_core.plugins.children`) gets the children editor;
 its metadata may add ``exclude_kinds`` (kinds that cannot be children).  Fields of other types keep
 their value and are not shown.
 
@@ -25,7 +25,8 @@ from typing import Any
 import attrs
 from qtpy import QtCore, QtGui, QtWidgets
 
-from rcon_core.app.children_editor import ChildContext, ChildrenEditor, children_item_class
+from rcon_core.app.children_editor import ChildrenEditor
+from rcon_core.plugins.children import ChildContext, children_item_class, settings_problems
 
 #: a context, or a function giving the current one
 ContextArg = ChildContext | typing.Callable[[], ChildContext | None] | None
@@ -242,7 +243,7 @@ class SettingsForm(QtWidgets.QWidget):
         item_cls = children_item_class(tp)
         if item_cls is not None:
             children = ChildrenEditor(item_cls, list(value or []), self.child_context,
-                                      exclude=tuple(meta.get("exclude_kinds", ())))
+                                      exclude=tuple(meta.get("exclude_kinds", ())), form=SettingsForm)
             self.children_editors[field.name] = children
             children.changed.connect(self._edited)
             return children, children.value
@@ -330,13 +331,3 @@ class SettingsForm(QtWidgets.QWidget):
             out += [p for p in children.problems() if p not in out]
         return out
 
-
-def settings_problems(settings: Any) -> list[str]:
-    """``settings.problems()`` if the class has it, else no problems."""
-    fn = getattr(settings, "problems", None)
-    if fn is None:
-        return []
-    try:
-        return [str(p) for p in fn()]
-    except Exception as exc:  # a broken problems() is itself a problem to show, not a crash
-        return [f"settings check failed: {exc}"]

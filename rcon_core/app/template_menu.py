@@ -25,7 +25,7 @@ def add_template_menu(window: Any, menu: QtWidgets.QMenu, before: QtGui.QAction 
         action = sub.addAction(template.title)
         action.setObjectName(f"template_{n}")
         action.setToolTip(template.description or f"from {template.package}")
-        action.triggered.connect(lambda _checked=False, path=template.path: window.import_canvas_from(path))
+        action.triggered.connect(lambda _checked=False, path=template.path: window.canvas_files.import_from(path))
     if not templates:
         none = sub.addAction("No installed package offers one")
         none.setObjectName("template_none")

@@ -7,6 +7,7 @@ from .model import Constant, FieldDef, MsgDef
 from .names import normalize, to_ros1, to_ros2
 from .registry import TypeRegistry, UnknownTypeError
 from .text import MessageTextError, Problem
+from .walk import walk_fields
 
 __all__ = [
     "TypeRegistry",
@@ -19,4 +20,5 @@ __all__ = [
     "normalize",
     "to_ros1",
     "to_ros2",
+    "walk_fields",
 ]

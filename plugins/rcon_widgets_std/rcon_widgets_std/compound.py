@@ -46,6 +46,7 @@ import attrs
 
 from rcon_core.msgs import MessageTextError
 from rcon_core.plugins import Binding, Role, WidgetModel, WidgetSpec
+from rcon_core.plugins.children import child_name, child_problems, child_role, role_problem
 from rcon_core.plugins.paths import PathError, get_path, parse_path, set_path, split_service_path
 
 from .base import StdModel
@@ -137,15 +138,17 @@ CHILD_GAP = 6.0
 CHILD_MIN = (160.0, 96.0)
 
 
-def _child_settings_problems(number: int, child: ChildSpec) -> list[str]:
-    """The child's own settings problems, the child named (``child 2 (Slider) on linear.x: …``)."""
-    where = child.field_path or "the whole message"
+def _spec_or_none(kind: str) -> WidgetSpec | None:
     try:
-        spec = find_spec(child.kind)
+        return find_spec(kind)
     except KeyError:
-        return [f"child {number} ({child.kind}) on {where}: no installed widget package offers {child.kind!r}"]
-    name = f"child {number} ({child.title or spec.title}) on {where}"
-    return [f"{name}: {p}" for p in spec.settings_problems(child.settings)]
+        return None
+
+
+def _child_settings_problems(number: int, child: ChildSpec) -> list[str]:
+    """The child's kind and own settings problems, the child named (``child 2 (Slider) on linear.x: …``)."""
+    spec = _spec_or_none(child.kind)
+    return [f"{child_name(number, child, spec)}: {p}" for p in child_problems(child, spec)]
 
 
 _MANAGER: Any = None
@@ -280,11 +283,7 @@ class CompoundModel(StdModel):
         return "", path
 
     def _child_role(self, part: str) -> Role:
-        role = self.binding.role
-        if role is Role.PUBLISH or (role is Role.CALL and part == "request") or (
-                role is Role.SERVE and part == "response"):
-            return Role.PUBLISH
-        return Role.SUBSCRIBE
+        return child_role(self.binding.role, part)
 
     def on_types_ready(self) -> None:
         self.build_children()
@@ -315,7 +314,7 @@ class CompoundModel(StdModel):
         part, rest = self._split(cfg.field_path)
         role = self._child_role(part)
         if role not in spec.roles:
-            raise ValueError(f"{spec.title} cannot {role.value} (it offers {', '.join(sorted(spec.roles))})")
+            raise ValueError(f"{role_problem(spec, role)} (it offers {', '.join(sorted(spec.roles))})")
         field_at(self.types, self._part_type(part), rest)  # PathError naming the missing part
         binding = Binding(f"{self.binding.name}#{index + 1}", self._part_type(part), role, (rest,) if rest else ())
         settings = spec.make_settings(cfg.settings)
@@ -345,13 +344,11 @@ class CompoundModel(StdModel):
             try:  # not started yet: check what building would say, without starting anything
                 for i, cfg in enumerate(self.settings.children):
                     try:
-                        spec = find_spec(cfg.kind)
+                        spec = _spec_or_none(cfg.kind)
                         part, rest = self._split(cfg.field_path)
                         field_at(self.types, self._part_type(part), rest)
-                        if self._child_role(part) not in spec.roles:
-                            out.append(f"child {i + 1} ({cfg.kind}): {spec.title} cannot "
-                                       f"{self._child_role(part).value}")
-                        out += [f"child {i + 1} ({cfg.kind}): {p}" for p in spec.settings_problems(cfg.settings)]
+                        out += [f"child {i + 1} ({cfg.kind}): {p}"
+                                for p in child_problems(cfg, spec, self._child_role(part))]
                     except Exception as exc:
                         out.append(f"child {i + 1} ({cfg.kind or '?'}): {exc}")
             except Exception as exc:
@@ -425,8 +422,7 @@ class CompoundModel(StdModel):
 
     def child_name(self, child: Child) -> str:
         """``child 2 (Text Field) on angular``: how problems name a child."""
-        where = child.cfg.field_path or "the whole message"
-        return f"child {child.index + 1} ({child.cfg.title or child.spec.title}) on {where}"
+        return child_name(child.index + 1, child.cfg, child.spec)
 
     def _send_now(self) -> None:
         role = self.binding.role
