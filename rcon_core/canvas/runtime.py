@@ -52,6 +52,7 @@ from collections.abc import Callable
 from typing import Any
 
 from rcon_core.bridge.typecheck import TypeChecker, status_failure
+from rcon_core.plugins.context import SharedResources, WidgetContext
 from rcon_core.plugins.manager import UnknownWidget
 from rcon_core.plugins.model import Binding, WidgetModel
 from rcon_core.plugins.spec import SettingsError
@@ -162,6 +163,8 @@ class CanvasRuntime:
         self._fleet_wide: set[str] = set()  # widgets whose model has on_fleet
         self._remove: dict[str, list[Callable[[], None]]] = {}  # robot id -> listener removers
         self._link_up: dict[str, bool] = {}
+        #: objects the widgets on one robot link share (``WidgetContext.shared``), by the port's ``link``
+        self.shared = SharedResources()
         self._checkers: dict[str, TypeChecker] = {}
         self._checks: set[asyncio.Task[Any]] = set()
 
@@ -213,6 +216,7 @@ class CanvasRuntime:
             self.fleet.set_view_only(rid, view_only or None)
         if self.fleet.client(rid) is client:
             return
+        old = self.fleet.client(rid)
         self._unlisten(rid)
         self.fleet.set_client(rid, client)
         self._checkers.pop(rid, None)
@@ -225,6 +229,7 @@ class CanvasRuntime:
         for inst in list(self.canvas.widgets):
             if inst.id in self.models and (self._robot_of.get(inst.id) == rid or inst.id in self._fleet_wide):
                 self.restart_widget(inst)
+        self.shared.forget(id(old))  # nobody is on the old link any more
 
     def add_widget(self, inst: WidgetInstance) -> WidgetModel:
         return self._start_widget(inst)
@@ -267,7 +272,8 @@ class CanvasRuntime:
             if binding.role not in spec.roles:
                 roles = ", ".join(sorted(r.value for r in spec.roles))
                 raise ValueError(f"{spec.title} cannot {binding.role.value} (it can: {roles})")
-            kwargs: dict[str, Any] = {"types": self.types, "plugin_settings": shared}
+            context = WidgetContext(self.pm.widget, getattr(port, "link", None), self.shared)
+            kwargs: dict[str, Any] = {"types": self.types, "plugin_settings": shared, "context": context}
             if self.dispatch is not None:
                 kwargs["dispatch"] = self.dispatch
             return model_cls(settings, binding, port, **kwargs)

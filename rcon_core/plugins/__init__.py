@@ -7,6 +7,7 @@
 See ``docs/hooks.md`` (the hooks) and ``docs/writing-a-widget-plugin.md`` (a guide).
 """
 
+from .context import SharedResources, SpecLookup, WidgetContext
 from .hookspecs import hookimpl, hookspec
 from .manager import DISABLE_ENV, ENTRY_POINT_GROUP, PluginInfo, PluginManager, UnknownWidget
 from .model import Binding, BridgePort, WidgetModel, WidgetState
@@ -50,6 +51,9 @@ __all__ = [
     "WidgetState",
     "Binding",
     "BridgePort",
+    "WidgetContext",
+    "SharedResources",
+    "SpecLookup",
     "WidgetRegistry",
     "TypeContributions",
     "TemplateRegistry",

@@ -156,7 +156,7 @@ class TeleopModel(WidgetModel):
         :class:`~rcon_widgets_sensors.slots.LoopTicker`); tests pass ``rcon_core.testing.ManualClock``, as
         ``clock`` too, so ``send_times`` follow it."""
         super().__init__(settings if settings is not None else TeleopSettings(), binding, port, **kwargs)
-        self._id = next(_ids)
+        self.pad_id = next(_ids)  # tells the pads of one group apart
         self._ticker_clock = ticker_clock
         self._ticker: LoopTicker | None = None
         self._active = False
@@ -283,7 +283,7 @@ class TeleopModel(WidgetModel):
     def _merged(self) -> dict[str, Any]:
         msg = self.template()
         g = self._group()
-        for contrib in [g.contrib.get(m._id, {}) for m in g.members]:
+        for contrib in [g.contrib.get(m.pad_id, {}) for m in g.members]:
             for path, value in contrib.items():
                 msg = set_path(msg, path, value)
         header = msg.get("header")
@@ -315,7 +315,7 @@ class TeleopModel(WidgetModel):
             return
         self._x, self._y = x, y
         g = self._group()
-        g.contrib[self._id] = self.command_for(x, y)
+        g.contrib[self.pad_id] = self.command_for(x, y)
         if not self._active:
             self._active = True
             self._reason = ""
@@ -344,7 +344,7 @@ class TeleopModel(WidgetModel):
             self._active = False
             self._reason = reason
             g = self._group()
-            g.contrib.pop(self._id, None)
+            g.contrib.pop(self.pad_id, None)
             self._send()  # own axes now zero (others' still held if any)
             if self in g.members:
                 g.members.remove(self)
