@@ -33,7 +33,10 @@ import asyncio
 import inspect
 import logging
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .fleet import BridgeNode
 
 __all__ = ["GuardedPort", "ViewOnlyError", "READ_ONLY_SERVICES"]
 
@@ -117,7 +120,7 @@ class GuardedPort:
 
     def __init__(
         self,
-        node: Any,
+        node: BridgeNode,
         *,
         notify: Callable[[], None] | None = None,
         view_only: str | None = None,
@@ -154,7 +157,7 @@ class GuardedPort:
         return f"<GuardedPort view_only={self.view_only!r}>"
 
 
-def _operations(port: GuardedPort, node: Any, notify: Callable[[], None] | None, view_only: str | None,
+def _operations(port: GuardedPort, node: BridgeNode, notify: Callable[[], None] | None, view_only: str | None,
                 on_refused: Callable[[str], None] | None) -> dict[str, Callable[..., Any]]:
     """The port's operations as closures over ``node`` (so no attribute of the port names it)."""
 

@@ -51,13 +51,14 @@ import logging
 from collections.abc import Callable
 from typing import Any
 
+from rcon_core.bridge.client import ConnectionState
 from rcon_core.bridge.typecheck import TypeChecker, status_failure
 from rcon_core.plugins.context import SharedResources, WidgetContext
 from rcon_core.plugins.manager import UnknownWidget
-from rcon_core.plugins.model import Binding, WidgetModel
+from rcon_core.plugins.model import Binding, BridgePort, WidgetModel
 from rcon_core.plugins.spec import SettingsError
 
-from .fleet import Fleet, RobotPort
+from .fleet import BridgeNode, Fleet, RobotClient, RobotPort
 from .model import Canvas, WidgetInstance
 from .port import GuardedPort
 from .robots import UnknownRobot
@@ -80,6 +81,12 @@ def _log_once(level: int, fmt: str, *args: Any) -> None:
         _LOGGED.clear()
     _LOGGED.add(key)
     log.log(level, fmt, *args)
+
+
+def _is_up(state: ConnectionState | str) -> bool:
+    """Whether a link state is usable: only CONNECTED (DEGRADED, a stalled link, counts as down). A test's
+    fake client may report the state by its value (``"connected"``)."""
+    return state is ConnectionState.CONNECTED or state == ConnectionState.CONNECTED.value
 
 
 class _NoPort:
@@ -138,7 +145,7 @@ class CanvasRuntime:
     def __init__(
         self,
         plugin_manager: Any,
-        client: Any,
+        client: Fleet | RobotClient,
         *,
         types: Any = None,
         plugin_settings: dict[str, dict[str, Any]] | None = None,
@@ -169,12 +176,12 @@ class CanvasRuntime:
         self._checks: set[asyncio.Task[Any]] = set()
 
     @property
-    def client(self) -> Any:
+    def client(self) -> RobotClient:
         """The first robot's client (the only one in a one-robot workspace)."""
         return self.fleet.client("")
 
     @client.setter
-    def client(self, client: Any) -> None:
+    def client(self, client: RobotClient) -> None:
         """Widgets started from now on use ``client`` for the first robot; running ones keep theirs."""
         self.set_client("", client, restart=False)
 
@@ -205,7 +212,7 @@ class CanvasRuntime:
         self._stop_widget(inst.id)
         return self._start_widget(inst)
 
-    def set_client(self, robot_id: str, client: Any, *, restart: bool = True,
+    def set_client(self, robot_id: str, client: RobotClient, *, restart: bool = True,
                    view_only: str | None | bool = False) -> None:
         """``robot_id``'s link is ``client`` now. ``restart``: its running widgets (and every fleet-wide
         one) are rebuilt on it; else they keep the old client's nodes (a Disconnect: they show their last
@@ -224,7 +231,7 @@ class CanvasRuntime:
             return
         self._listen(rid)
         if not restart:  # the running widgets keep their nodes but hear the new link's state
-            self._on_state(rid, "connected" if self._link_up.get(rid) else "closed")
+            self._on_state(rid, ConnectionState.CONNECTED if self._link_up.get(rid) else ConnectionState.CLOSED)
             return
         for inst in list(self.canvas.widgets):
             if inst.id in self.models and (self._robot_of.get(inst.id) == rid or inst.id in self._fleet_wide):
@@ -249,7 +256,7 @@ class CanvasRuntime:
                     log.warning("widget %s failed on focus loss: %s", widget_id, exc)
 
     # -- one widget ----------------------------------------------------------------------------------
-    def build_model(self, inst: WidgetInstance, port: Any) -> WidgetModel:
+    def build_model(self, inst: WidgetInstance, port: BridgePort) -> WidgetModel:
         """The model for one instance (a placeholder when the plugin is missing or the build fails)."""
         try:
             spec = self.pm.widget(inst.kind)
@@ -297,7 +304,7 @@ class CanvasRuntime:
             return f"canvas “{canvas.name}” is view-only"
         return None
 
-    def _port(self, node: Any, widget_id: str, robot_id: str, built: list[WidgetModel]) -> GuardedPort:
+    def _port(self, node: BridgeNode, widget_id: str, robot_id: str, built: list[WidgetModel]) -> GuardedPort:
         """The model's only way to the robot (view-only enforced there, see canvas.port)."""
         notify = None
         if self.on_activity is not None:
@@ -443,8 +450,7 @@ class CanvasRuntime:
         if hasattr(client, "add_status_listener"):
             removers.append(client.add_status_listener(lambda frame: self._on_status(robot_id, frame)))
         self._remove[robot_id] = [r for r in removers if callable(r)]
-        state = getattr(client, "state", None)
-        self._link_up[robot_id] = getattr(state, "value", "connected") == "connected"
+        self._link_up[robot_id] = _is_up(getattr(client, "state", ConnectionState.CONNECTED))
 
     def _unlisten(self, robot_id: str) -> None:
         for remove in self._remove.pop(robot_id, []):
@@ -453,9 +459,9 @@ class CanvasRuntime:
             except Exception:
                 log.debug("removing a link listener failed", exc_info=True)
 
-    def _on_state(self, robot_id: str, state: Any) -> None:
+    def _on_state(self, robot_id: str, state: ConnectionState) -> None:
         """One robot's link state: only its own widgets hear it (and the fleet-wide ones, per robot)."""
-        up = getattr(state, "value", state) == "connected"
+        up = _is_up(state)
         if robot_id not in self._remove:  # an old client's late callback
             return
         self._link_up[robot_id] = up
