@@ -54,7 +54,7 @@ from typing import Any
 from rcon_core.bridge.client import ConnectionState
 from rcon_core.bridge.typecheck import TypeChecker, status_failure
 from rcon_core.plugins.context import SharedResources, WidgetContext
-from rcon_core.plugins.manager import UnknownWidget
+from rcon_core.plugins.manager import PluginManager, UnknownWidget
 from rcon_core.plugins.model import Binding, BridgePort, WidgetModel
 from rcon_core.plugins.spec import SettingsError
 
@@ -144,7 +144,7 @@ class CanvasRuntime:
 
     def __init__(
         self,
-        plugin_manager: Any,
+        plugin_manager: PluginManager,
         client: Fleet | RobotClient,
         *,
         types: Any = None,
@@ -220,7 +220,7 @@ class CanvasRuntime:
         robot's view-only mark for the new link (a reason or None; False: unchanged)."""
         rid = self.fleet.resolve(robot_id)
         if view_only is not False:
-            self.fleet.set_view_only(rid, view_only or None)
+            self.fleet.set_view_only(rid, view_only if isinstance(view_only, str) and view_only else None)
         if self.fleet.client(rid) is client:
             return
         old = self.fleet.client(rid)

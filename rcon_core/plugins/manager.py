@@ -23,7 +23,7 @@ import logging
 import os
 import traceback
 from collections.abc import Iterable, Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import attrs
 import pluggy
@@ -32,8 +32,12 @@ from . import hookspecs
 from .registry import CanvasTemplate, TemplateRegistry, TypeContributions, TypeDefinition, WidgetRegistry
 from .spec import WidgetSpec
 
+if TYPE_CHECKING:
+    from rcon_core.msgs import TypeRegistry
+
 __all__ = [
     "PluginManager", "PluginInfo", "UnknownWidget", "ENTRY_POINT_GROUP", "DISABLE_ENV", "installed_plugin_types",
+    "TypeSink",
 ]
 
 ENTRY_POINT_GROUP = "rcon.widgets"
@@ -100,6 +104,19 @@ def _disabled_from_env(environ: Mapping[str, str]) -> set[str]:
 def _one_line(exc: BaseException) -> str:
     text = str(exc).strip().splitlines()
     return f"{type(exc).__name__}: {text[0]}" if text else type(exc).__name__
+
+
+class TypeSink(Protocol):
+    """What :meth:`PluginManager.apply_types` and :meth:`~PluginManager.type_problems` need of a type
+    registry (``rcon_core.msgs.TypeRegistry`` is one): learn definitions, then look them up."""
+
+    def add_msg_text(self, name: str, text: str) -> list[str]: ...
+
+    def add_typedefs(self, typedefs: Any, root: str | None = None) -> list[str]: ...
+
+    def typedefs(self, name: str) -> list[dict[str, Any]]: ...
+
+    def service_typedefs(self, name: str, part: str) -> list[dict[str, Any]]: ...
 
 
 class PluginManager:
@@ -279,7 +296,7 @@ class PluginManager:
         """Every definition contributed through ``rcon_register_types`` by loaded plugins."""
         return [d for p in self.plugins if p.status == "loaded" for d in p.types]
 
-    def apply_types(self, types: Any) -> list[str]:
+    def apply_types(self, types: TypeSink) -> list[str]:
         """Add contributed definitions to an ``rcon_core.msgs.TypeRegistry``.
 
         ``.msg``/``.srv`` text goes through ``types.add_msg_text``, typedefs through
@@ -305,7 +322,7 @@ class PluginManager:
             added += mine
         return added
 
-    def type_problems(self, types: Any) -> dict[str, list[str]]:
+    def type_problems(self, types: TypeSink) -> dict[str, list[str]]:
         """After :meth:`apply_types`: per plugin name, each contributed type that does not resolve in
         ``types`` (it uses a type nobody defines, often a misspelt builtin such as ``flaot64``)."""
         out: dict[str, list[str]] = {}
@@ -323,7 +340,7 @@ class PluginManager:
                     out.setdefault(info.name, []).append(f"type {d.name}: {exc}")
         return out
 
-    def type_registry(self, ros2: bool = False) -> Any:
+    def type_registry(self, ros2: bool = False) -> TypeRegistry:
         """A standard ``rcon_core.msgs.TypeRegistry`` for the flavour plus every type the loaded plugins
         contribute: the one registry every type look-up (app, CLI, matcher, sim) starts from."""
         from rcon_core.msgs import TypeRegistry
@@ -333,7 +350,7 @@ class PluginManager:
         return types
 
 
-def installed_plugin_types(types: Any) -> list[str]:
+def installed_plugin_types(types: TypeSink) -> list[str]:
     """Add the types of every installed (enabled) plugin to ``types``; returns the names added.
 
     A plugin that fails is skipped (and logged), like everywhere else.
