@@ -3,7 +3,7 @@
 Several nodes on one topic share ONE rosbridge subscription.  Its options are merged:
 
 * ``throttle_rate``: the smallest (the tightest a consumer asked for wins; rosbridge does the same across
-  ids on one topic, README point 11);
+  ids on one topic, ``subscribe_options.jsonl:113-114``);
 * ``queue_length``: the largest (what rosbridge itself picks across ids);
 * ``fragment_size``: the smallest given;
 * ``compression``: the first of ``cbor``, ``cbor-raw``, ``png``, ``none`` that any consumer asked for
@@ -137,7 +137,7 @@ class AdvertEntry:
         self.topic = topic
         #: the start of every publish frame of this topic, up to the message (encoded once)
         self.head = b'{"op":"publish","topic":' + orjson.dumps(topic) + b',"msg":'
-        self.tail = b"}"  # the end of every publish frame: ``,"latch":true}`` when latched (README point 25)
+        self.tail = b"}"  # the end of every publish frame: ``,"latch":true}`` when latched (``client_publish.jsonl:26-30``)
         self.type = type
         self.pubs: list[Publisher] = []
         self.latch = False
