@@ -1,8 +1,8 @@
 """SimServer: a rosbridge v2 server (``websockets``) around the simulated vessel.
 
 Every client op of rosbridge 0.11 is handled the way the real server does it (the recorded frames in
-``tests/recordings/``): no acknowledgements except service responses, errors only in the log, lenient input parsing
-(in linear time, see ``frames.py``). Slow clients never stall the simulation: each connection has its own
+``tests/recordings/``): no acknowledgements except service responses, errors only in the log, lenient
+input parsing (in linear time, see ``frames.py``). Slow clients never stall the simulation: each connection has its own
 bounded, drop-oldest send queue. Incoming messages are limited to ``max_frame`` bytes (32 MB); with
 ``auth_secret`` nothing but one small ``auth`` op is read before a client is authenticated (``gate.py``).
 ``name`` makes the sim one vessel of a fleet: its own topics, services, action and node under ``/NAME``,
