@@ -111,8 +111,9 @@ class GuardedPort:
     ``notify``: called after each incoming message, service request and service response (the app
     repaints at once). ``view_only``: None, or the sentence saying why nothing may be sent.
     ``on_refused(sentence)``: told about each refusal. ``link``: an opaque, hashable key naming the
-    connection (the same for every widget on one robot), so models can share per-robot resources (the
-    teleop pads of one robot merge their axes) without a way to the connection itself. ``widget_id``: the
+    connection (the same for every widget on one robot); the runtime keys each model's
+    ``WidgetContext.shared`` objects by it (the teleop pads of one robot merge their axes through one),
+    so nothing needs a way to the connection itself. ``widget_id``: the
     widget instance's id, the same across rebuilds of its model (a model may leave word for its successor).
     """
 

@@ -139,7 +139,8 @@ class BridgePort(Protocol):
 
     Besides these methods the app's port carries three plain attributes a model may read with
     ``getattr(port, name, None)`` (a fake may lack them): ``view_only`` (None or why nothing may be sent),
-    ``link`` (an opaque key, the same for every widget on one robot: share per-robot resources by it) and
+    ``link`` (an opaque key, the same for every widget on one robot; to share per-robot objects use
+    ``WidgetContext.shared``, which is keyed by it) and
     ``widget_id`` (the widget instance's id, the same across rebuilds of its model)."""
 
     def subscribe(
