@@ -44,7 +44,7 @@ def serve(rate_scale: float) -> int:
                 break
         cpu = marks["stop"][0] - marks["start"][0]
         wall = marks["stop"][1] - marks["start"][1]
-        renders = {"front": server._robot_node.front.renders, "rear": server._robot_node.rear.renders}
+        renders = {"front": server.robot_node.front.renders, "rear": server.robot_node.rear.renders}
         print(json.dumps({"cpu_s": cpu, "wall_s": wall, "renders": renders}), flush=True)
         await server.stop()
 

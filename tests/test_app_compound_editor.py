@@ -15,7 +15,7 @@ from rcon_core.app.children_editor import ChildrenEditor
 from rcon_core.app.main_window import MainWindow
 from rcon_core.app.settings_form import SettingsForm
 from rcon_core.msgs import TypeRegistry
-from rcon_core.plugins import Binding, Role
+from rcon_core.plugins import Accepts, Binding, PluginManager, Role, WidgetSpec, hookimpl
 from rcon_core.plugins.children import ChildCatalog, child_role, children_item_class
 
 pytest.importorskip("rcon_widgets_std")
@@ -195,6 +195,27 @@ def test_fields_and_fitting_kinds_of_a_published_twist(types, plugins):
     assert cat.placement_problems(ChildSpec("lab.nothing", "linear.x")) == [
         "no installed widget package offers 'lab.nothing'"]
     assert cat.placement_problems(ChildSpec("std.slider", "angular.z")) == []
+
+
+class _Knobs:
+    @hookimpl
+    def rcon_register_widgets(self, registry):
+        registry.add(WidgetSpec(kind="knobs.knob", title="Knob", model="rcon_core.plugins.model:WidgetModel",
+                                roles=[Role.PUBLISH], accepts=Accepts(fields=["numeric"])))
+
+
+def test_a_disabled_plugins_widget_is_not_offered_as_a_child(types):
+    """The children editor lists the kinds of the app's plugin manager: a disabled plugin's are not offered
+    and a child of one is refused (the Compound does not build it either: its context is the same manager)."""
+    offers = {}
+    for disabled in ((), ("knobs",)):
+        pm = PluginManager(disabled=disabled, environ={})
+        pm.register(_Knobs(), "knobs")
+        cat = ChildCatalog(types, pm, Binding("/speed_limit", "std_msgs/Float64", Role.PUBLISH))
+        offers[disabled] = kinds(cat, "data")
+        problems = cat.placement_problems(ChildSpec("knobs.knob", "data"))
+        assert problems == ([] if not disabled else ["no installed widget package offers 'knobs.knob'"])
+    assert "knobs.knob" in offers[()] and "knobs.knob" not in offers[("knobs",)]
 
 
 def test_an_imu_from_accelerometer_gyroscope_and_magnetometer_children(types, plugins):

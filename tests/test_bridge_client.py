@@ -111,7 +111,7 @@ async def test_fragmented_png_frames_are_reassembled_and_decoded(server, client,
 
 
 async def test_cbor_on_fixed_array_types_switches_to_cbor_raw(server, client):
-    """README point 14: rosbridge's cbor sends nothing for Imu; the client asks for cbor-raw instead."""
+    """rosbridge's cbor sends nothing for Imu (publish_cbor.jsonl:12-14); the client asks for cbor-raw instead."""
     got, scans = [], []
     client.node("imu").subscribe("/rec/imu", got.append, type="sensor_msgs/Imu", compression="cbor")
     client.node("scan").subscribe("/rec/scan", scans.append, type="sensor_msgs/LaserScan", compression="cbor")
@@ -215,7 +215,7 @@ async def test_advertise_publish_and_latch_in_every_publish(server, client):
     (p,) = await server.wait_for("publish", topic="/client/cmd_vel")
     assert p["msg"] == {"linear": {"x": 0.25}} and "latch" not in p
     (lp,) = await server.wait_for("publish", topic="/client/latched")
-    assert lp["latch"] is True  # README point 25
+    assert lp["latch"] is True  # repeated in every publish (client_publish.jsonl:26-30)
     with pytest.raises(TypeError):
         pub.publish([1, 2])
 

@@ -216,7 +216,7 @@ def test_cbor_raw_decodes_with_the_servers_typedefs():
     json_map = next(line["received"]["msg"] for line in load("publish_json.jsonl")
                     if (line.get("received") or {}).get("topic") == "/rec/map")
     raw_map = decoded["/rec/map"]
-    raw_map["header"].pop("seq"), json_map["header"].pop("seq")  # seq counts per subscriber (README point 8)
+    raw_map["header"].pop("seq"), json_map["header"].pop("seq")  # seq counts per subscriber (publish_json.jsonl:26)
     assert raw_map == json_map
     # ... and the JSON scan's nulls are real NaN/inf here
     ranges = decoded["/rec/scan"]["ranges"]

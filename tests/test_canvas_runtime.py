@@ -120,6 +120,42 @@ async def test_link_state_reaches_the_models(sim, pm):
     rt.stop()
 
 
+async def test_models_get_the_apps_plugins_and_share_per_link_through_their_context(sim, pm):
+    """WidgetContext: specs through the runtime's plugin manager (a disabled plugin's kinds are unknown
+    there), one shared object per key for the widgets on one robot link."""
+    doc, ops, _nav, w = layout()
+    pm.register(Other(), "other")
+    off = PluginManager(disabled=["other"], environ={})
+    off.register(P(), "rt")
+    off.register(Other(), "other")
+    client = BridgeClient(sim.url, reconnect=False)
+    await client.connect()
+    try:
+        for manager, offered in ((pm, True), (off, False)):
+            rt = CanvasRuntime(manager, client, types=TypeRegistry.standard())
+            rt.start(ops)
+            label, slider = rt.models[w["label"].id], rt.models[w["slider"].id]
+            assert label.context.spec("rt.slider").kind == "rt.slider"
+            if offered:
+                assert label.context.spec("other.dial").kind == "other.dial"
+            else:
+                with pytest.raises(KeyError):
+                    label.context.spec("other.dial")
+            made = label.context.shared("pads", object)
+            assert slider.context.shared("pads", object) is made
+            assert CanvasRuntime(manager, client).shared.get(id(client), "pads", object) is not made
+            rt.stop()
+    finally:
+        await client.close()
+
+
+class Other:
+    @hookimpl
+    def rcon_register_widgets(self, registry):
+        registry.add(WidgetSpec(kind="other.dial", title="Dial", model="rcon_core.plugins.model:WidgetModel",
+                                roles=["subscribe"], accepts=Accepts(messages=["any"])))
+
+
 async def test_reconfigure_restarts_one_widget(sim, pm):
     doc, ops, _nav, w = layout()
     client = BridgeClient(sim.url, reconnect=False)

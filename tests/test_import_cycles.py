@@ -11,7 +11,9 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-CLEAN = ["rcon_core/bridge", "rcon_core/msgs", "rcon_core/app", "rcon_core/plugins"]
+CLEAN = ["rcon_core/bridge", "rcon_core/msgs", "rcon_core/app", "rcon_core/canvas", "rcon_core/plugins"]
+#: no cycle of real imports; the sim's op handlers still name ``SimServer`` in annotations only
+CLEAN_RUNTIME = [*CLEAN, "rcon_core/sim"]
 
 
 def _finder():
@@ -23,9 +25,10 @@ def _finder():
 
 def test_the_cleaned_packages_have_no_import_cycle() -> None:
     finder = _finder()
-    edges = finder.graph([ROOT / d for d in CLEAN])
+    edges = finder.graph([ROOT / d for d in CLEAN_RUNTIME])
     assert "rcon_core.bridge.client" in edges and "rcon_core.msgs.registry" in edges
     assert "rcon_core.app.children_editor" in edges and "rcon_core.plugins.children" in edges
+    assert "rcon_core.sim.server" in edges and "rcon_core.canvas.runtime" in edges
     assert finder.cycles(edges) == []
 
 

@@ -24,7 +24,7 @@ Reconnect
     exponential backoff (``backoff_min`` doubling up to ``backoff_max``) with full jitter.  After every
     (re)connect the client sends, in order: ``auth`` (when configured), ``set_level`` (when set), every
     advertisement, every advertised service and action, then every subscription -- rosbridge forgets all
-    of them with the connection (README point 30; ``session.py``).  TLS certificate errors and a refused
+    of them with the connection (``reconnect.jsonl:8``; ``session.py``).  TLS certificate errors and a refused
     ``auth`` are fatal rather than retried.  Each failed attempt is put in words by ``reasons.describe``; ``client.failure`` holds
     the last one and failure listeners get it, with the time of the next attempt (``retry_at``).
 

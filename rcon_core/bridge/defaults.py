@@ -1,7 +1,7 @@
 """All-zero messages for answers the client must give without a handler's help -- the registry's defaults.
 
 Used when an advertised service's handler fails: rosbridge 0.11 rejects a ``service_response`` whose
-``values`` is not an object and the ROS caller then waits forever (README point 21), so the client answers
+``values`` is not an object and the ROS caller then waits forever (``client_service.jsonl:7``), so the client answers
 with the response type's default message instead (``services.py``).  There is one notion of a default
 message, :meth:`rcon_core.msgs.TypeRegistry.default`: a type the client's registry does not know is learned
 from the server's ``/rosapi/service_response_details`` typedefs (ROS 1 ``pkg/Type`` base names, or ROS 2 IDL

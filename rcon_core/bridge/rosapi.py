@@ -1,6 +1,6 @@
 """Async helpers over the ``/rosapi/*`` services (ROS 1 rosapi 0.11 and ROS 2 rosapi).
 
-Quirks handled (README point 31): parameter values travel as JSON text inside strings (``get_param``
+Quirks handled (``rosapi.jsonl:47-49``): parameter values travel as JSON text inside strings (``get_param``
 returns ``"7"``, ``"\\"hi\\""``; ``set_param`` needs JSON text); unknown names give empty results, not
 failures (``topic_type`` of an unknown topic is ``""``, returned here as ``None``).
 """

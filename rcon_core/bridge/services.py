@@ -5,7 +5,7 @@ Decision: a failed handler is answered with an object
     *object*: the response type's default message (from the registry, else the server's
     ``/rosapi/service_response_details``, cached; ``{}`` when neither knows it), the error text in its
     ``message`` string field when it has one.  rosbridge 0.11 ignores ``result`` and rejects a
-    non-object ``values``, which would leave the ROS caller waiting forever (README point 21), so the
+    non-object ``values``, which would leave the ROS caller waiting forever (``client_service.jsonl:7``), so the
     error string alone would never reach anybody.  A call for a service this client does not provide is
     answered with ``{}`` for the same reason.
 """

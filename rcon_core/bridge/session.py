@@ -10,7 +10,7 @@ and public methods for the nodes.  ``BridgeClient`` (``client.py``) keeps connec
 watch and writing; ``inbound.py`` reads.
 
 Decision: after every (re)connect
-    rosbridge forgets everything with the connection (README point 30), so :meth:`attached` sends, after
+    rosbridge forgets everything with the connection (``reconnect.jsonl:8``), so :meth:`attached` sends, after
     the client's ``auth``: ``set_level`` (when set), every advertisement (and the latest value of a latched
     topic published while down), every advertised service and action, then every subscription.
 
@@ -22,7 +22,7 @@ Decision: publishing while the link is down or stalled
     A publisher's ``max_age`` (0.25 s by default for non-latched topics) is its freshness limit: a publish
     is never written after it (``wslink.Link.send_command``, ``freshness.py``; ``stats["stale_dropped"]``).
     The frame around a message is encoded once per advertisement (``AdvertEntry.head``); ``latch`` is
-    repeated in every publish (README point 25: otherwise the topic is re-registered).
+    repeated in every publish (``client_publish.jsonl:26-30``: otherwise the topic is re-registered).
 
 Decision: service calls
     Every call has a client-side timeout (``timeout`` or ``call_timeout``) even though rosbridge 0.11

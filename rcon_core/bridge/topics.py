@@ -3,7 +3,7 @@
 Several nodes on one topic share ONE rosbridge subscription.  Its options are merged:
 
 * ``throttle_rate``: the smallest (the tightest a consumer asked for wins; rosbridge does the same across
-  ids on one topic, README point 11);
+  ids on one topic, ``subscribe_options.jsonl:113-114``);
 * ``queue_length``: the largest (what rosbridge itself picks across ids); when every consumer asked for 1
   the topic is also *latest-only* on the client side (``latest.py``);
 * ``fragment_size``: the smallest given;
@@ -143,7 +143,7 @@ class AdvertEntry:
         self.topic = topic
         #: the start of every publish frame of this topic, up to the message (encoded once)
         self.head = b'{"op":"publish","topic":' + orjson.dumps(topic) + b',"msg":'
-        self.tail = b"}"  # the end of every publish frame: ``,"latch":true}`` when latched (README point 25)
+        self.tail = b"}"  # the end of every publish frame: ``,"latch":true}`` when latched (``client_publish.jsonl:26-30``)
         self.type = type
         self.pubs: list[Publisher] = []
         self.latch = False

@@ -22,14 +22,32 @@ state through its optional ``on_robot_link(robot_id, up)``.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
-from typing import Any
+from collections.abc import Callable, Iterable
+from typing import Any, Protocol
 
 import attrs
 
+from rcon_core.plugins.model import BridgePort
+
 from .robots import Robot, UnknownRobot, resolve_robot, robot_colour
 
-__all__ = ["Fleet", "RobotPort"]
+__all__ = ["Fleet", "RobotPort", "BridgeNode", "RobotClient"]
+
+
+class BridgeNode(BridgePort, Protocol):
+    """One widget's node of a robot's client, as the runtime wraps it in a ``GuardedPort``: a model's
+    :class:`~rcon_core.plugins.model.BridgePort` plus ROS 2 action goals (``rcon_core.bridge.Node`` is one)."""
+
+    def send_action_goal(self, action: str, action_type: str, args: Any = None,
+                         feedback: Callable[[Any], Any] | None = None, **options: Any) -> Any: ...
+
+
+class RobotClient(Protocol):
+    """What the runtime needs of one robot's bridge client (``rcon_core.bridge.BridgeClient`` is one): a
+    node per widget. Its link-state listeners (``add_state_listener``, ``add_status_listener``, ``state``)
+    are optional: a client without them is taken to be connected."""
+
+    def node(self, label: str) -> BridgeNode: ...
 
 
 @attrs.frozen
@@ -39,15 +57,15 @@ class RobotPort:
     id: str
     name: str
     colour: str
-    port: Any
+    port: BridgePort
 
 
 class Fleet:
     """Robot id -> bridge client, in the workspace's robot order."""
 
-    def __init__(self, pairs: Iterable[tuple[Robot, Any]], view_only: dict[str, str] | None = None) -> None:
+    def __init__(self, pairs: Iterable[tuple[Robot, RobotClient]], view_only: dict[str, str] | None = None) -> None:
         self._robots: list[Robot] = []
-        self._clients: dict[str, Any] = {}
+        self._clients: dict[str, RobotClient] = {}
         #: robot id -> why it may not be commanded, beyond its own ``view_only`` flag (the app's per-URL mark)
         self._view_only: dict[str, str] = dict(view_only or {})
         for robot, client in pairs:
@@ -57,7 +75,7 @@ class Fleet:
             raise ValueError("a fleet has at least one robot")
 
     @classmethod
-    def single(cls, client: Any, robot: Robot | None = None) -> Fleet:
+    def single(cls, client: RobotClient, robot: Robot | None = None) -> Fleet:
         """One robot (the layouts and tests of before: a bare client)."""
         from .robots import default_robot
 
@@ -78,13 +96,13 @@ class Fleet:
     def resolve(self, robot_id: str) -> str:
         return self.robot(robot_id).id
 
-    def client(self, robot_id: str = "") -> Any:
+    def client(self, robot_id: str = "") -> RobotClient:
         return self._clients[self.resolve(robot_id)]
 
     def colour(self, robot_id: str) -> str:
         return robot_colour(self._robots, robot_id)
 
-    def set_client(self, robot_id: str, client: Any) -> None:
+    def set_client(self, robot_id: str, client: RobotClient) -> None:
         rid = self.resolve(robot_id)
         self._clients[rid] = client
 

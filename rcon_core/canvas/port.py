@@ -33,7 +33,10 @@ import asyncio
 import inspect
 import logging
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .fleet import BridgeNode
 
 __all__ = ["GuardedPort", "ViewOnlyError", "READ_ONLY_SERVICES"]
 
@@ -108,8 +111,9 @@ class GuardedPort:
     ``notify``: called after each incoming message, service request and service response (the app
     repaints at once). ``view_only``: None, or the sentence saying why nothing may be sent.
     ``on_refused(sentence)``: told about each refusal. ``link``: an opaque, hashable key naming the
-    connection (the same for every widget on one robot), so models can share per-robot resources (the
-    teleop pads of one robot merge their axes) without a way to the connection itself. ``widget_id``: the
+    connection (the same for every widget on one robot); the runtime keys each model's
+    ``WidgetContext.shared`` objects by it (the teleop pads of one robot merge their axes through one),
+    so nothing needs a way to the connection itself. ``widget_id``: the
     widget instance's id, the same across rebuilds of its model (a model may leave word for its successor).
     """
 
@@ -117,7 +121,7 @@ class GuardedPort:
 
     def __init__(
         self,
-        node: Any,
+        node: BridgeNode,
         *,
         notify: Callable[[], None] | None = None,
         view_only: str | None = None,
@@ -154,7 +158,7 @@ class GuardedPort:
         return f"<GuardedPort view_only={self.view_only!r}>"
 
 
-def _operations(port: GuardedPort, node: Any, notify: Callable[[], None] | None, view_only: str | None,
+def _operations(port: GuardedPort, node: BridgeNode, notify: Callable[[], None] | None, view_only: str | None,
                 on_refused: Callable[[str], None] | None) -> dict[str, Callable[..., Any]]:
     """The port's operations as closures over ``node`` (so no attribute of the port names it)."""
 

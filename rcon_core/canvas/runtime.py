@@ -51,12 +51,14 @@ import logging
 from collections.abc import Callable
 from typing import Any
 
+from rcon_core.bridge.client import ConnectionState
 from rcon_core.bridge.typecheck import TypeChecker, status_failure
-from rcon_core.plugins.manager import UnknownWidget
-from rcon_core.plugins.model import Binding, WidgetModel
+from rcon_core.plugins.context import SharedResources, WidgetContext
+from rcon_core.plugins.manager import PluginManager, UnknownWidget
+from rcon_core.plugins.model import Binding, BridgePort, WidgetModel
 from rcon_core.plugins.spec import SettingsError
 
-from .fleet import Fleet, RobotPort
+from .fleet import BridgeNode, Fleet, RobotClient, RobotPort
 from .model import Canvas, WidgetInstance
 from .port import GuardedPort
 from .robots import UnknownRobot
@@ -79,6 +81,12 @@ def _log_once(level: int, fmt: str, *args: Any) -> None:
         _LOGGED.clear()
     _LOGGED.add(key)
     log.log(level, fmt, *args)
+
+
+def _is_up(state: ConnectionState | str) -> bool:
+    """Whether a link state is usable: only CONNECTED (DEGRADED, a stalled link, counts as down). A test's
+    fake client may report the state by its value (``"connected"``)."""
+    return state is ConnectionState.CONNECTED or state == ConnectionState.CONNECTED.value
 
 
 class _NoPort:
@@ -136,8 +144,8 @@ class CanvasRuntime:
 
     def __init__(
         self,
-        plugin_manager: Any,
-        client: Any,
+        plugin_manager: PluginManager,
+        client: Fleet | RobotClient,
         *,
         types: Any = None,
         plugin_settings: dict[str, dict[str, Any]] | None = None,
@@ -162,16 +170,18 @@ class CanvasRuntime:
         self._fleet_wide: set[str] = set()  # widgets whose model has on_fleet
         self._remove: dict[str, list[Callable[[], None]]] = {}  # robot id -> listener removers
         self._link_up: dict[str, bool] = {}
+        #: objects the widgets on one robot link share (``WidgetContext.shared``), by the port's ``link``
+        self.shared = SharedResources()
         self._checkers: dict[str, TypeChecker] = {}
         self._checks: set[asyncio.Task[Any]] = set()
 
     @property
-    def client(self) -> Any:
+    def client(self) -> RobotClient:
         """The first robot's client (the only one in a one-robot workspace)."""
         return self.fleet.client("")
 
     @client.setter
-    def client(self, client: Any) -> None:
+    def client(self, client: RobotClient) -> None:
         """Widgets started from now on use ``client`` for the first robot; running ones keep theirs."""
         self.set_client("", client, restart=False)
 
@@ -202,7 +212,7 @@ class CanvasRuntime:
         self._stop_widget(inst.id)
         return self._start_widget(inst)
 
-    def set_client(self, robot_id: str, client: Any, *, restart: bool = True,
+    def set_client(self, robot_id: str, client: RobotClient, *, restart: bool = True,
                    view_only: str | None | bool = False) -> None:
         """``robot_id``'s link is ``client`` now. ``restart``: its running widgets (and every fleet-wide
         one) are rebuilt on it; else they keep the old client's nodes (a Disconnect: they show their last
@@ -210,9 +220,10 @@ class CanvasRuntime:
         robot's view-only mark for the new link (a reason or None; False: unchanged)."""
         rid = self.fleet.resolve(robot_id)
         if view_only is not False:
-            self.fleet.set_view_only(rid, view_only or None)
+            self.fleet.set_view_only(rid, view_only if isinstance(view_only, str) and view_only else None)
         if self.fleet.client(rid) is client:
             return
+        old = self.fleet.client(rid)
         self._unlisten(rid)
         self.fleet.set_client(rid, client)
         self._checkers.pop(rid, None)
@@ -220,11 +231,12 @@ class CanvasRuntime:
             return
         self._listen(rid)
         if not restart:  # the running widgets keep their nodes but hear the new link's state
-            self._on_state(rid, "connected" if self._link_up.get(rid) else "closed")
+            self._on_state(rid, ConnectionState.CONNECTED if self._link_up.get(rid) else ConnectionState.CLOSED)
             return
         for inst in list(self.canvas.widgets):
             if inst.id in self.models and (self._robot_of.get(inst.id) == rid or inst.id in self._fleet_wide):
                 self.restart_widget(inst)
+        self.shared.forget(id(old))  # nobody is on the old link any more
 
     def add_widget(self, inst: WidgetInstance) -> WidgetModel:
         return self._start_widget(inst)
@@ -244,7 +256,7 @@ class CanvasRuntime:
                     log.warning("widget %s failed on focus loss: %s", widget_id, exc)
 
     # -- one widget ----------------------------------------------------------------------------------
-    def build_model(self, inst: WidgetInstance, port: Any) -> WidgetModel:
+    def build_model(self, inst: WidgetInstance, port: BridgePort) -> WidgetModel:
         """The model for one instance (a placeholder when the plugin is missing or the build fails)."""
         try:
             spec = self.pm.widget(inst.kind)
@@ -267,7 +279,8 @@ class CanvasRuntime:
             if binding.role not in spec.roles:
                 roles = ", ".join(sorted(r.value for r in spec.roles))
                 raise ValueError(f"{spec.title} cannot {binding.role.value} (it can: {roles})")
-            kwargs: dict[str, Any] = {"types": self.types, "plugin_settings": shared}
+            context = WidgetContext(self.pm.widget, getattr(port, "link", None), self.shared)
+            kwargs: dict[str, Any] = {"types": self.types, "plugin_settings": shared, "context": context}
             if self.dispatch is not None:
                 kwargs["dispatch"] = self.dispatch
             return model_cls(settings, binding, port, **kwargs)
@@ -291,7 +304,7 @@ class CanvasRuntime:
             return f"canvas “{canvas.name}” is view-only"
         return None
 
-    def _port(self, node: Any, widget_id: str, robot_id: str, built: list[WidgetModel]) -> GuardedPort:
+    def _port(self, node: BridgeNode, widget_id: str, robot_id: str, built: list[WidgetModel]) -> GuardedPort:
         """The model's only way to the robot (view-only enforced there, see canvas.port)."""
         notify = None
         if self.on_activity is not None:
@@ -437,8 +450,7 @@ class CanvasRuntime:
         if hasattr(client, "add_status_listener"):
             removers.append(client.add_status_listener(lambda frame: self._on_status(robot_id, frame)))
         self._remove[robot_id] = [r for r in removers if callable(r)]
-        state = getattr(client, "state", None)
-        self._link_up[robot_id] = getattr(state, "value", "connected") == "connected"
+        self._link_up[robot_id] = _is_up(getattr(client, "state", ConnectionState.CONNECTED))
 
     def _unlisten(self, robot_id: str) -> None:
         for remove in self._remove.pop(robot_id, []):
@@ -447,9 +459,9 @@ class CanvasRuntime:
             except Exception:
                 log.debug("removing a link listener failed", exc_info=True)
 
-    def _on_state(self, robot_id: str, state: Any) -> None:
+    def _on_state(self, robot_id: str, state: ConnectionState) -> None:
         """One robot's link state: only its own widgets hear it (and the fleet-wide ones, per robot)."""
-        up = getattr(state, "value", state) == "connected"
+        up = _is_up(state)
         if robot_id not in self._remove:  # an old client's late callback
             return
         self._link_up[robot_id] = up

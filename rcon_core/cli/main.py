@@ -55,7 +55,7 @@ def build_parser() -> argparse.ArgumentParser:
         try:
             mod = importlib.import_module(module)
         except ImportError as exc:  # a command whose module is missing must not break the others
-            p.set_defaults(_unavailable=f"{name}: unavailable ({exc})")
+            p.set_defaults(command_unavailable=f"{name}: unavailable ({exc})")
             continue
         mod.configure(name, p)
     return parser
@@ -68,8 +68,8 @@ def main(argv: list[str] | None = None) -> int:
         from rcon_core.app.main import run_app
 
         return run_app(args)
-    if getattr(args, "_unavailable", None):
-        print(args._unavailable, file=sys.stderr)
+    if getattr(args, "command_unavailable", None):
+        print(args.command_unavailable, file=sys.stderr)
         return 2
     module = importlib.import_module(COMMANDS[args.command][0])
     return int(module.run(args.command, args) or 0)

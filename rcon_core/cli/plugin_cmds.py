@@ -8,6 +8,7 @@ import json
 import sys
 from typing import Any
 
+from rcon_core.plugins.manager import PluginStatus
 from rcon_core.plugins.spec import Role
 
 
@@ -58,10 +59,10 @@ def _plugins(pm: Any, args: argparse.Namespace) -> int:
     for info in infos:
         head = f"{info.dist or info.name} {info.version}".strip()
         origin = f"(entry point {info.name!r} -> {info.value})"
-        if info.status == "failed":
+        if info.status is PluginStatus.FAILED:
             print(f"{head} {origin}: FAILED: {info.error}")
             continue
-        if info.status == "disabled":
+        if info.status is PluginStatus.DISABLED:
             print(f"{head} {origin}: disabled")
             continue
         print(f"{head} {origin}: {len(info.widgets)} widget(s)")
@@ -87,10 +88,10 @@ def _check(pm: Any, types: Any) -> int:
         if problems:
             name = next(i.name for i in pm.plugins if i.package == template.package)
             unresolved.setdefault(name, []).extend(f"template {template.title!r}: {p}" for p in problems)
-    failed = [i for i in pm.plugins if i.status == "failed" or i.name in unresolved]
+    failed = [i for i in pm.plugins if i.status is PluginStatus.FAILED or i.name in unresolved]
     for info in failed:
         where = f"{info.dist} {info.version}".strip() or info.value
-        why = [info.error] if info.status == "failed" else unresolved[info.name]
+        why = [info.error] if info.status is PluginStatus.FAILED else unresolved[info.name]
         for reason in why:
             print(f"rcon plugins: plugin {info.name!r} ({where}) failed: {reason}", file=sys.stderr)
     if failed:

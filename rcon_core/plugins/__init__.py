@@ -7,8 +7,9 @@
 See ``docs/hooks.md`` (the hooks) and ``docs/writing-a-widget-plugin.md`` (a guide).
 """
 
+from .context import SharedResources, SpecLookup, WidgetContext
 from .hookspecs import hookimpl, hookspec
-from .manager import DISABLE_ENV, ENTRY_POINT_GROUP, PluginInfo, PluginManager, UnknownWidget
+from .manager import DISABLE_ENV, ENTRY_POINT_GROUP, PluginInfo, PluginManager, PluginStatus, UnknownWidget
 from .model import Binding, BridgePort, WidgetModel, WidgetState
 from .paths import PathError, get_path, set_path
 from .registry import (
@@ -35,6 +36,7 @@ __all__ = [
     "hookspec",
     "PluginManager",
     "PluginInfo",
+    "PluginStatus",
     "UnknownWidget",
     "ENTRY_POINT_GROUP",
     "DISABLE_ENV",
@@ -50,6 +52,9 @@ __all__ = [
     "WidgetState",
     "Binding",
     "BridgePort",
+    "WidgetContext",
+    "SharedResources",
+    "SpecLookup",
     "WidgetRegistry",
     "TypeContributions",
     "TemplateRegistry",

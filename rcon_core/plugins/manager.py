@@ -18,12 +18,13 @@ recorded with status ``"failed"`` and the reason, and every other plugin still l
 
 from __future__ import annotations
 
+import enum
 import importlib.metadata as md
 import logging
 import os
 import traceback
 from collections.abc import Iterable, Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import attrs
 import pluggy
@@ -32,8 +33,12 @@ from . import hookspecs
 from .registry import CanvasTemplate, TemplateRegistry, TypeContributions, TypeDefinition, WidgetRegistry
 from .spec import WidgetSpec
 
+if TYPE_CHECKING:
+    from rcon_core.msgs import TypeRegistry
+
 __all__ = [
     "PluginManager", "PluginInfo", "UnknownWidget", "ENTRY_POINT_GROUP", "DISABLE_ENV", "installed_plugin_types",
+    "TypeSink", "PluginStatus",
 ]
 
 ENTRY_POINT_GROUP = "rcon.widgets"
@@ -49,6 +54,14 @@ class UnknownWidget(KeyError):
         return str(self.args[0]) if self.args else "unknown widget"
 
 
+class PluginStatus(enum.StrEnum):
+    """Where a plugin stands; a ``str`` too, so ``info.status == "loaded"`` and JSON output keep working."""
+
+    LOADED = "loaded"  #: its hooks ran; its widgets, types and templates are offered
+    FAILED = "failed"  #: an import or a hook raised (``PluginInfo.error`` says what); nothing of it is offered
+    DISABLED = "disabled"  #: named in ``disabled`` or ``RCON_DISABLE_PLUGINS``; nothing of it is used
+
+
 @attrs.define
 class PluginInfo:
     """What the manager knows about one plugin (one entry point, or one object given to register())."""
@@ -57,7 +70,7 @@ class PluginInfo:
     dist: str = ""  #: distribution name, e.g. "rcon-widgets-std"; "" when registered directly
     version: str = ""  #: distribution version
     value: str = ""  #: entry-point value, e.g. "rcon_widgets_std.plugin"
-    status: str = "loaded"  #: "loaded" | "failed" | "disabled"
+    status: PluginStatus = PluginStatus.LOADED
     error: str | None = None  #: one-line reason when failed
     details: str | None = None  #: traceback text when failed
     widgets: list[WidgetSpec] = attrs.field(factory=list)
@@ -102,6 +115,19 @@ def _one_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {text[0]}" if text else type(exc).__name__
 
 
+class TypeSink(Protocol):
+    """What :meth:`PluginManager.apply_types` and :meth:`~PluginManager.type_problems` need of a type
+    registry (``rcon_core.msgs.TypeRegistry`` is one): learn definitions, then look them up."""
+
+    def add_msg_text(self, name: str, text: str) -> list[str]: ...
+
+    def add_typedefs(self, typedefs: Any, root: str | None = None) -> list[str]: ...
+
+    def typedefs(self, name: str) -> list[dict[str, Any]]: ...
+
+    def service_typedefs(self, name: str, part: str) -> list[dict[str, Any]]: ...
+
+
 class PluginManager:
     """Discovers, loads and queries widget plugins. One per app (or per test)."""
 
@@ -139,14 +165,14 @@ class PluginManager:
                 value=ep.value,
             )
             if info.name in self._infos:
-                info.status, info.error = "failed", f"another plugin is already named {info.name!r}"
+                info.status, info.error = PluginStatus.FAILED, f"another plugin is already named {info.name!r}"
                 self._infos[f"{info.name}@{info.dist}"] = info
                 found.append(info)
                 continue
             self._infos[info.name] = info
             found.append(info)
             if self._is_disabled(info):
-                info.status = "disabled"
+                info.status = PluginStatus.DISABLED
                 continue
             try:
                 obj = ep.load()
@@ -169,7 +195,7 @@ class PluginManager:
         info = PluginInfo(name=name, dist=dist, version=version, value=repr(plugin))
         self._infos[name] = info
         if self._is_disabled(info):
-            info.status = "disabled"
+            info.status = PluginStatus.DISABLED
         else:
             self._register_obj(plugin, info)
         self._collected = False
@@ -184,7 +210,7 @@ class PluginManager:
         self.pluggy.check_pending()  # hooks with an rcon_ prefix that match no spec raise here
 
     def _fail(self, info: PluginInfo, exc: BaseException) -> None:
-        info.status = "failed"
+        info.status = PluginStatus.FAILED
         info.error = _one_line(exc)
         info.details = "".join(traceback.format_exception(exc))
         info.widgets.clear()
@@ -216,7 +242,7 @@ class PluginManager:
             info.widgets.extend(reg.specs)
         for impl in self.pluggy.hook.rcon_register_types.get_hookimpls():
             info = self._infos[impl.plugin_name]
-            if info.status == "failed":
+            if info.status is PluginStatus.FAILED:
                 continue
             contrib = TypeContributions(info.package)
             try:
@@ -229,7 +255,7 @@ class PluginManager:
             info.types.extend(contrib.definitions)
         for impl in self.pluggy.hook.rcon_canvas_templates.get_hookimpls():
             info = self._infos[impl.plugin_name]
-            if info.status == "failed":
+            if info.status is PluginStatus.FAILED:
                 continue
             templates = TemplateRegistry(info.package)
             try:
@@ -249,7 +275,7 @@ class PluginManager:
 
     @property
     def failed(self) -> list[PluginInfo]:
-        return [p for p in self.plugins if p.status == "failed"]
+        return [p for p in self.plugins if p.status is PluginStatus.FAILED]
 
     def widgets(self) -> list[WidgetSpec]:
         """Every widget of every loaded plugin, in registration order."""
@@ -273,13 +299,13 @@ class PluginManager:
 
     def canvas_templates(self) -> list[CanvasTemplate]:
         """Every example canvas the loaded plugins offer (``rcon_canvas_templates``), in plugin order."""
-        return [t for p in self.plugins if p.status == "loaded" for t in p.templates]
+        return [t for p in self.plugins if p.status is PluginStatus.LOADED for t in p.templates]
 
     def type_definitions(self) -> list[TypeDefinition]:
         """Every definition contributed through ``rcon_register_types`` by loaded plugins."""
-        return [d for p in self.plugins if p.status == "loaded" for d in p.types]
+        return [d for p in self.plugins if p.status is PluginStatus.LOADED for d in p.types]
 
-    def apply_types(self, types: Any) -> list[str]:
+    def apply_types(self, types: TypeSink) -> list[str]:
         """Add contributed definitions to an ``rcon_core.msgs.TypeRegistry``.
 
         ``.msg``/``.srv`` text goes through ``types.add_msg_text``, typedefs through
@@ -288,7 +314,7 @@ class PluginManager:
         """
         added: list[str] = []
         for info in self.plugins:
-            if info.status != "loaded":
+            if info.status is not PluginStatus.LOADED:
                 continue
             mine: list[str] = []
             try:
@@ -305,12 +331,12 @@ class PluginManager:
             added += mine
         return added
 
-    def type_problems(self, types: Any) -> dict[str, list[str]]:
+    def type_problems(self, types: TypeSink) -> dict[str, list[str]]:
         """After :meth:`apply_types`: per plugin name, each contributed type that does not resolve in
         ``types`` (it uses a type nobody defines, often a misspelt builtin such as ``flaot64``)."""
         out: dict[str, list[str]] = {}
         for info in self.plugins:
-            if info.status != "loaded":
+            if info.status is not PluginStatus.LOADED:
                 continue
             for d in info.types:
                 try:
@@ -323,7 +349,7 @@ class PluginManager:
                     out.setdefault(info.name, []).append(f"type {d.name}: {exc}")
         return out
 
-    def type_registry(self, ros2: bool = False) -> Any:
+    def type_registry(self, ros2: bool = False) -> TypeRegistry:
         """A standard ``rcon_core.msgs.TypeRegistry`` for the flavour plus every type the loaded plugins
         contribute: the one registry every type look-up (app, CLI, matcher, sim) starts from."""
         from rcon_core.msgs import TypeRegistry
@@ -333,7 +359,7 @@ class PluginManager:
         return types
 
 
-def installed_plugin_types(types: Any) -> list[str]:
+def installed_plugin_types(types: TypeSink) -> list[str]:
     """Add the types of every installed (enabled) plugin to ``types``; returns the names added.
 
     A plugin that fails is skipped (and logged), like everywhere else.

@@ -47,6 +47,7 @@ import attrs
 
 from rcon_core.msgs.names import normalize
 
+from .context import WidgetContext
 from .paths import PathError, get_path, set_path, split_service_path
 from .spec import Role
 
@@ -138,7 +139,8 @@ class BridgePort(Protocol):
 
     Besides these methods the app's port carries three plain attributes a model may read with
     ``getattr(port, name, None)`` (a fake may lack them): ``view_only`` (None or why nothing may be sent),
-    ``link`` (an opaque key, the same for every widget on one robot: share per-robot resources by it) and
+    ``link`` (an opaque key, the same for every widget on one robot; to share per-robot objects use
+    ``WidgetContext.shared``, which is keyed by it) and
     ``widget_id`` (the widget instance's id, the same across rebuilds of its model)."""
 
     def subscribe(
@@ -204,6 +206,8 @@ class WidgetModel:
     - ``plugin_settings``: the per-kind shared settings object, or None.
     - ``dispatch``: runs a function on the bridge loop thread; default runs it immediately.
     - ``clock``: monotonic seconds, for ages (tests may pass a fake).
+    - ``context``: a :class:`~rcon_core.plugins.context.WidgetContext` (other kinds' specs through the
+      app's plugin manager, objects shared per robot link); default :meth:`WidgetContext.standalone`.
     """
 
     #: seconds without a value after which ``state.stale`` is True; None disables; 0 = a static topic
@@ -226,8 +230,10 @@ class WidgetModel:
         plugin_settings: Any = None,
         dispatch: Dispatch | None = None,
         clock: Callable[[], float] = time.monotonic,
+        context: WidgetContext | None = None,
     ) -> None:
         self.settings = settings
+        self.context = context if context is not None else WidgetContext.standalone()
         self.binding = binding
         self.port = port
         self.types = types

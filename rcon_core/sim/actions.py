@@ -27,6 +27,8 @@ from typing import TYPE_CHECKING, Any
 
 from rcon_core.msgs.names import pkg_type
 
+from .ops import field, send_frame
+
 if TYPE_CHECKING:
     from .connection import Connection
     from .robot_node import RobotNode
@@ -76,10 +78,8 @@ class NavigateActionServer:
                 await self.goal.task
 
     def op_send_goal(self, conn: Connection, msg: dict[str, Any]) -> None:
-        from .server import _field
-
-        action = _field(msg, "action", str)
-        action_type = _field(msg, "action_type", str)
+        action = field(msg, "action", str)
+        action_type = field(msg, "action_type", str)
         goal_id = msg.get("id")
         if pkg_type(action_type) != pkg_type(ACTION_TYPE):  # either spelling matches
             self._fail(conn, goal_id, action, f"Unable to load the action type {action_type}")
@@ -119,7 +119,7 @@ class NavigateActionServer:
                                  "status": STATUS_UNKNOWN, "result": False}
         if goal_id is not None:
             frame["id"] = goal_id
-        self.server._send_text(conn, frame)
+        send_frame(conn, frame)
 
     def op_cancel_goal(self, conn: Connection, msg: dict[str, Any]) -> None:
         goal = self.goal
@@ -147,9 +147,9 @@ class NavigateActionServer:
             speed = min(goal.max_speed, 0.4 * dist) if abs(error) < 0.7 else 0.2
             v.command(speed, 1.5 * error, time.monotonic())
             if goal.feedback:
-                self.server._send_text(goal.conn, {"op": "action_feedback", "id": goal.goal_id, "action": self.name,
-                                                   "values": {"distance_remaining": dist,
-                                                              "current": self.node.fix_message()}})
+                send_frame(goal.conn, {"op": "action_feedback", "id": goal.goal_id, "action": self.name,
+                                       "values": {"distance_remaining": dist,
+                                                  "current": self.node.fix_message()}})
             await asyncio.sleep(period)
         v.command(0.0, 0.0, time.monotonic())  # the client went away: stop
 
@@ -171,4 +171,4 @@ class NavigateActionServer:
                                  "status": status, "result": True}
         if goal_id is None:
             del frame["id"]
-        self.server._send_text(conn, frame)
+        send_frame(conn, frame)

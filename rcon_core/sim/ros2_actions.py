@@ -38,6 +38,9 @@ import logging
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from .ops import OpError, send_frame
+from .ops import field as op_field
+
 if TYPE_CHECKING:
     from .connection import Connection
     from .server import SimServer
@@ -121,7 +124,7 @@ class ActionHub:
     def _frame(self, goal: Goal, frame: dict[str, Any]) -> None:
         if goal.caller_id is not None:
             frame["id"] = goal.caller_id
-        self.server._send_text(goal.caller, frame)
+        send_frame(goal.caller, frame)
 
     def send_feedback(self, goal: Goal, values: Any) -> None:
         if goal.feedback and goal in self.goals:
@@ -143,15 +146,13 @@ class ActionHub:
                                  "status": STATUS_UNKNOWN, "result": False}
         if cid is not None:
             frame["id"] = cid
-        self.server._send_text(conn, frame)
+        send_frame(conn, frame)
 
     # -- caller ops -----------------------------------------------------------------------------------
 
     def op_send_goal(self, conn: Connection, msg: dict[str, Any]) -> None:
-        from .server import _field
-
-        action = _field(msg, "action", str)
-        action_type = _field(msg, "action_type", str)
+        action = op_field(msg, "action", str)
+        action_type = op_field(msg, "action_type", str)
         cid = msg.get("id")
         name = action
         if "#" in action:
@@ -205,9 +206,7 @@ class ActionHub:
         return converter.default() if converter is not None else {}
 
     def op_cancel_goal(self, conn: Connection, msg: dict[str, Any]) -> None:
-        from .server import _field
-
-        action = _field(msg, "action", str)
+        action = op_field(msg, "action", str)
         cid = msg.get("id")
         name = action
         if "#" in action:
@@ -227,71 +226,61 @@ class ActionHub:
     # -- advertiser ops -------------------------------------------------------------------------------
 
     def op_advertise(self, conn: Connection, msg: dict[str, Any]) -> None:
-        from .server import _field, _OpError
-
-        name = _field(msg, "action", str)
-        type_name = _field(msg, "type", str)
+        name = op_field(msg, "action", str)
+        type_name = op_field(msg, "type", str)
         if not self.server.types.has(f"{action_name(type_name)}_Goal"):
-            raise _OpError(f"Unable to load the action type {type_name}")
+            raise OpError(f"Unable to load the action type {type_name}")
         old = self.providers.get(name)
         if old is not None:
             if not isinstance(old, ClientAction):
-                raise _OpError(f"Action {name} is already provided by the robot")
+                raise OpError(f"Action {name} is already provided by the robot")
             log.warning("[Client %s] Duplicate action advertised. Overwriting %s.", conn.id, name)
             old.shutdown("the action was advertised again")
         self.providers[name] = ClientAction(self, conn, name, type_name)
         log.info("[Client %s] Advertised action %s", conn.id, name)
 
     def op_unadvertise(self, conn: Connection, msg: dict[str, Any]) -> None:
-        from .server import _field, _OpError
-
-        name = _field(msg, "action", str)
+        name = op_field(msg, "action", str)
         provider = self.providers.get(name)
         if not isinstance(provider, ClientAction) or provider.conn is not conn:
-            raise _OpError(f"Action {name} has not been advertised via rosbridge, can't unadvertise.")
+            raise OpError(f"Action {name} has not been advertised via rosbridge, can't unadvertise.")
         del self.providers[name]
         provider.shutdown("the action was unadvertised")
         log.info("[Client %s] Unadvertised action %s", conn.id, name)
 
     def _advertised(self, conn: Connection, msg: dict[str, Any]) -> tuple[ClientAction, Goal]:
-        from .server import _field, _OpError
-
-        name = _field(msg, "action", str)
+        name = op_field(msg, "action", str)
         provider = self.providers.get(name)
         if not isinstance(provider, ClientAction) or provider.conn is not conn:
-            raise _OpError(f"Action {name} has not been advertised via rosbridge.")
+            raise OpError(f"Action {name} has not been advertised via rosbridge.")
         goal = provider.goals.get(msg.get("id"))  # type: ignore[arg-type]
         if goal is None:
-            raise _OpError(f"no goal in flight with id {msg.get('id')!r} on {name}")
+            raise OpError(f"no goal in flight with id {msg.get('id')!r} on {name}")
         return provider, goal
 
     def _typed(self, provider: ClientAction, part: str, values: Any) -> Any:
         """The advertiser's values as a whole ``part`` message (defaults filled in), as rosbridge fills a
         ROS message from them; refused with the reason when they do not fit."""
         from .convert import ConversionError
-        from .server import _OpError
-
         converter = self.server.types.converter(f"{action_name(provider.type)}_{part}")
         if converter is None:
             return values
         if not isinstance(values, dict):
-            raise _OpError(f"Expected field values to be one of (<class 'dict'>,). Invalid value: {values}")
+            raise OpError(f"Expected field values to be one of (<class 'dict'>,). Invalid value: {values}")
         try:
             return converter.convert(values)
         except ConversionError as exc:
-            raise _OpError(str(exc)) from exc
+            raise OpError(str(exc)) from exc
 
     def op_feedback(self, conn: Connection, msg: dict[str, Any]) -> None:
         provider, goal = self._advertised(conn, msg)
         self.send_feedback(goal, self._typed(provider, "Feedback", msg.get("values", {})))
 
     def op_result(self, conn: Connection, msg: dict[str, Any]) -> None:
-        from .server import _field, _OpError
-
-        _field(msg, "status", int)
+        op_field(msg, "status", int)
         result = msg.get("result")
         if not isinstance(result, bool):
-            raise _OpError(f"Expected field result to be one of (<class 'bool'>,). Invalid value: {result}")
+            raise OpError(f"Expected field result to be one of (<class 'bool'>,). Invalid value: {result}")
         provider, goal = self._advertised(conn, msg)
         if not result:
             del provider.goals[goal.server_id]
@@ -317,14 +306,13 @@ class ClientAction:
     def start(self, goal: Goal, args: dict[str, Any]) -> None:
         goal.server_id = f"action_goal:{self.name}:{next(self._ids)}"
         self.goals[goal.server_id] = goal
-        self.hub.server._send_text(self.conn, {"op": "send_action_goal", "id": goal.server_id, "action": self.name,
-                                               "action_type": self.type, "args": args, "feedback": True})
+        send_frame(self.conn, {"op": "send_action_goal", "id": goal.server_id, "action": self.name,
+                               "action_type": self.type, "args": args, "feedback": True})
 
     def cancel(self, goal: Goal) -> None:
         if goal.server_id in self.goals:
             log.warning("Canceling action %s", goal.server_id)
-            self.hub.server._send_text(self.conn, {"op": "cancel_action_goal", "id": goal.server_id,
-                                                   "action": self.name})
+            send_frame(self.conn, {"op": "cancel_action_goal", "id": goal.server_id, "action": self.name})
 
     def shutdown(self, reason: str) -> None:
         if self.goals:

@@ -28,7 +28,7 @@ from rcon_core.msgs.names import pkg_type
 
 from .graph import BRIDGE_NODE, ROSAPI_NODE, ROSOUT_NODE
 from .ros2_params import NodeParameters, get_param_value, set_param_value, split_name
-from .rosapi import SEPARATOR, Rosapi, _fail
+from .rosapi import SEPARATOR, Rosapi, fail
 
 if TYPE_CHECKING:
     from .server import SimServer
@@ -185,7 +185,7 @@ class Ros2Rosapi(Rosapi):
         try:
             set_param_value(self.node_params, args.get("name", ""), args.get("value", ""))
         except ValueError as exc:
-            raise _fail(str(exc)) from exc
+            raise fail(str(exc)) from exc
         return {}
 
     def has_param(self, args: dict[str, Any]) -> dict[str, Any]:

@@ -25,7 +25,8 @@ _LEVELS = {"debug": "DEBUG", "info": "INFO", "warn": "WARN", "warning": "WARN", 
 SEPARATOR = "=" * 80
 
 
-def _fail(text: str) -> ServiceFailure:
+def fail(text: str) -> ServiceFailure:
+    """A service failure in the words rosapi uses (``error processing request: ...``)."""
     return ServiceFailure(f"error processing request: {text}")
 
 
@@ -130,7 +131,7 @@ class Rosapi:
         }
 
     def action_servers(self, args: dict[str, Any]) -> dict[str, Any]:
-        actions = self.server._actions
+        actions = self.server.navigate_action
         return {"action_servers": [actions.name] if actions is not None else []}
 
     # -- types --------------------------------------------------------------------------------------
@@ -139,14 +140,14 @@ class Rosapi:
         type_name = args.get("type", "")
         typedefs = self.server.types.typedefs(type_name)
         if not typedefs:
-            raise _fail(f"Unable to load the type {type_name}: unknown message type")
+            raise fail(f"Unable to load the type {type_name}: unknown message type")
         return {"typedefs": typedefs}
 
     def _service_details(self, args: dict[str, Any], part: str) -> dict[str, Any]:
         type_name = args.get("type", "")
         typedefs = self.server.types.service_typedefs(type_name, part)
         if typedefs is None:
-            raise _fail(f"Unable to load the service type {type_name}: unknown service type")
+            raise fail(f"Unable to load the service type {type_name}: unknown service type")
         return {"typedefs": typedefs}
 
     def service_request_details(self, args: dict[str, Any]) -> dict[str, Any]:
@@ -166,14 +167,14 @@ class Rosapi:
             try:
                 return {"value": json.dumps(json.loads(default))}
             except ValueError as exc:
-                raise _fail(f"the default for get_param must be JSON text: {exc}") from exc
+                raise fail(f"the default for get_param must be JSON text: {exc}") from exc
         return {"value": "null"}
 
     def set_param(self, args: dict[str, Any]) -> dict[str, Any]:
         try:
             value = json.loads(args.get("value", ""))
         except ValueError as exc:
-            raise _fail("Due to the type flexibility of the ROS parameter server, the value argument to "
+            raise fail("Due to the type flexibility of the ROS parameter server, the value argument to "
                         "set_param must be a JSON-formatted string.") from exc
         self.params.set(args.get("name", ""), value)
         return {}
@@ -216,7 +217,7 @@ class Rosapi:
         def set_logger_level(args: dict[str, Any]) -> dict[str, Any]:
             level = _LEVELS.get(str(args.get("level", "")).lower())
             if level is None:
-                raise _fail(f"unknown logger level {args.get('level')!r}: use debug, info, warn, error or fatal")
+                raise fail(f"unknown logger level {args.get('level')!r}: use debug, info, warn, error or fatal")
             table[args.get("logger", "")] = level
             return {}
 
@@ -250,12 +251,8 @@ def add_logger_services(server: SimServer, api: Rosapi, node: str) -> None:
 
 
 def install(server: SimServer) -> Rosapi:
-    """Register the /rosapi services (and the bridge nodes' logger services) on ``server``; in ROS 2 mode
-    the rosapi 2.x set of ``ros2_rosapi.py``."""
-    if server.ros2:
-        from .ros2_rosapi import install as install_ros2
-
-        return install_ros2(server)
+    """Register the /rosapi services (and the bridge nodes' logger services) on a ROS 1 ``server`` (a ROS 2
+    server gets the rosapi 2.x set of ``ros2_rosapi.py``)."""
     api = Rosapi(server)
     add_logger_services(server, api, ROSOUT_NODE)
     add_logger_services(server, api, ROSAPI_NODE)

@@ -1,8 +1,8 @@
 """SimServer: a rosbridge v2 server (``websockets``) around the simulated vessel.
 
-Every client op of rosbridge 0.11 is handled the way the real server does it (see the recordings'
-README): no acknowledgements except service responses, errors only in the log, lenient input parsing
-(in linear time, see ``frames.py``). Slow clients never stall the simulation: each connection has its own
+Every client op of rosbridge 0.11 is handled the way the real server does it (the recorded frames in
+``tests/recordings/``): no acknowledgements except service responses, errors only in the log, lenient
+input parsing (in linear time, see ``frames.py``). Slow clients never stall the simulation: each connection has its own
 bounded, drop-oldest send queue. Incoming messages are limited to ``max_frame`` bytes (32 MB); with
 ``auth_secret`` nothing but one small ``auth`` op is read before a client is authenticated (``gate.py``).
 ``name`` makes the sim one vessel of a fleet: its own topics, services, action and node under ``/NAME``,
@@ -27,14 +27,16 @@ from websockets.exceptions import ConnectionClosed
 
 from rcon_core.msgs.names import pkg_type
 
-from . import encoding, gate
+from . import assembly, fanout, gate
 from .connection import Connection, SubOptions, TopicSubscription
 from .convert import ConversionError
 from .flavour import Flavour
 from .frames import parse_frame
-from .graph import BRIDGE_NODE, ROSOUT_NODE, InternalCallback, Service, ServiceFailure, ServiceHandler, Topic
+from .graph import BRIDGE_NODE, ROSOUT_NODE, InternalCallback, Service, ServiceHandler, Topic
 from .identity import Identity
+from .ops import OpError, field, nonneg_int, retype
 from .params import ParamTree
+from .services import ServiceOps
 from .typesource import TypeSource
 
 log = logging.getLogger("rcon.sim")
@@ -74,15 +76,17 @@ class SimServer:
         self.types = TypeSource(ros2, lambda: self.flavour.time(), plugin_types=plugin_types)
         self.topics: dict[str, Topic] = {}
         self.services: dict[str, Service] = {}
+        self.service_ops = ServiceOps(self)  # call_service and the services clients provide (services.py)
         self.connections: set[Connection] = set()
         self.params_tree = ParamTree()
         self.rosapi: Any = None
         self.loop: asyncio.AbstractEventLoop | None = None
         self.started_at = time.time()
-        self._with_robot = robot
-        self.robot: Any = None
-        self._robot_node: Any = None
-        self._actions: Any = None
+        self.with_robot = robot  # start() adds the simulated vessel
+        self.robot: Any = None  # the simulated vessel (vessel.Vessel); None for robot=False or before start
+        #: the robot's node (its cameras, published counts: robot_node.RobotNode); None for ``robot=False``
+        self.robot_node: Any = None
+        self.navigate_action: Any = None  # ROS 2: the robot's action server (actions.NavigateActionServer)
         self.action_hub: Any = None  # ROS 2: ros2_actions.ActionHub
         self._server: Server | None = None
         self._port = 0
@@ -115,9 +119,7 @@ class SimServer:
         return f"{'wss' if self.ssl is not None else 'ws'}://{host}:{self._port}"
 
     async def start(self) -> None:
-        """Bind the socket, set up rosapi and the robot, and start simulating."""
-        from . import rosapi
-
+        """Bind the socket, set up rosapi and the robot (``assembly.py``), and start simulating."""
         self.loop = asyncio.get_running_loop()
         self._published_event = asyncio.Event()
         self.started_at = time.time()
@@ -128,23 +130,7 @@ class SimServer:
         if not self.ros2:
             self.advertise_internal("/rosout_agg", self.flavour.msg("rosgraph_msgs", "Log"), ROSOUT_NODE)
         self.advertise_internal("/client_count", self.flavour.msg("std_msgs", "Int32"), BRIDGE_NODE, latched=True)
-        if self.ros2:
-            from .ros2_actions import ActionHub, FibonacciServer
-
-            self.action_hub = ActionHub(self)
-            self.action_hub.add(FibonacciServer(self.action_hub))
-        rosapi.install(self)
-        if self._with_robot:
-            from .robot_node import RobotNode
-
-            self._robot_node = RobotNode(self, identity=self.identity)
-            self.robot = self._robot_node.vessel
-            self._robot_node.start()
-            if self.ros2:
-                from .actions import NavigateActionServer
-
-                self._actions = NavigateActionServer(self, self._robot_node)
-                self.action_hub.add(self._actions)
+        assembly.furnish(self)
         limits: dict[str, Any] = {"max_size": self.max_frame}
         if self.auth_secret is not None:  # the first message is small; the gate raises the limit after it
             limits = {"max_size": self.auth_frame_limit,
@@ -160,8 +146,8 @@ class SimServer:
 
     async def stop(self) -> None:
         """Stop simulating and close every connection."""
-        if self._robot_node is not None:
-            await self._robot_node.stop()
+        if self.robot_node is not None:
+            await self.robot_node.stop()
         if self.action_hub is not None:
             await self.action_hub.stop()
         for task in list(self._tasks):
@@ -212,7 +198,8 @@ class SimServer:
 
         return asyncio.run_coroutine_threadsafe(call(), self.loop).result(timeout)
 
-    def _spawn(self, coro: Any) -> asyncio.Task[Any]:
+    def spawn(self, coro: Any) -> asyncio.Task[Any]:
+        """Run ``coro`` as a task the server cancels when it stops."""
         task = asyncio.get_running_loop().create_task(coro)
         self._tasks.add(task)
         task.add_done_callback(self._tasks.discard)
@@ -225,14 +212,9 @@ class SimServer:
         t = self.topics.get(topic)
         return len(t.client_subscribers) if t else 0
 
-    @property
-    def robot_node(self) -> Any:
-        """The robot's node (its cameras, published counts); None for ``robot=False`` or before start."""
-        return self._robot_node
-
     def robot_published(self) -> dict[str, int]:
         """How many messages the robot published per topic (its names before the namespace)."""
-        return dict(self._robot_node.published_counts) if self._robot_node is not None else {}
+        return dict(self.robot_node.published_counts) if self.robot_node is not None else {}
 
     def published(self, topic: str) -> list[dict[str, Any]]:
         """Messages clients published on ``topic`` (the most recent ones, oldest first)."""
@@ -305,7 +287,7 @@ class SimServer:
                 except Exception:  # noqa: BLE001 - one broken callback must not stop the others
                     log.exception("subscriber callback on %s failed", name)
         if topic.client_subscribers:
-            self._fan_out(topic, msg)
+            fanout.fan_out(topic, msg, self.flavour, self.types)
 
     def log(self, node: str, level: str, text: str, *, function: str = "", line: int = 0) -> None:
         """A /rosout line from ``node`` (``level``: debug, info, warn, error, fatal)."""
@@ -325,60 +307,9 @@ class SimServer:
         if "/rosout_agg" in self.topics:
             self.publish("/rosout_agg", dict(msg), ROSOUT_NODE)
 
-    # -- fan-out and encoding -------------------------------------------------------------------------
-
-    def _fan_out(self, topic: Topic, msg: dict[str, Any]) -> None:
-        cache: dict[Any, Any] = {}
-        now = time.monotonic()
-        for conn in list(topic.client_subscribers):
-            sub = conn.subscriptions.get(topic.name)
-            if sub is None:
-                continue
-            throttle = sub.throttle_s
-            if throttle > 0 and now - sub.last_sent < throttle:
-                continue  # throttling drops, it does not delay
-            payload = self._encoded(cache, topic, msg, sub.compression, conn.fragment_size)
-            if payload is None:
-                continue
-            sub.last_sent = now
-            conn.send(payload, topic=topic.name, queue_length=sub.queue_length)
-
-    def _encoded(self, cache: dict[Any, Any], topic: Topic, msg: dict[str, Any], compression: str,
-                 fragment_size: int | None) -> str | bytes | list[str] | None:
-        key = (compression, fragment_size)
-        if key in cache:
-            return cache[key]
-        try:
-            payload: str | bytes | list[str] | None
-            if compression == "cbor":
-                payload = encoding.cbor_dumps(encoding.publish_frame(topic.name, msg))
-            elif compression == "cbor-raw":
-                raw = {**self.flavour.time(), "bytes": self.types.serialize(topic.type, msg)}
-                if self.ros2:
-                    raw = {"secs": raw["sec"], "nsecs": raw["nanosec"], "bytes": raw["bytes"]}
-                payload = encoding.cbor_dumps(encoding.publish_frame(topic.name, raw))
-            else:
-                text = cache.get("text")
-                if text is None:
-                    text = cache["text"] = encoding.dumps(encoding.publish_frame(topic.name, msg))
-                if compression == "png":
-                    text = encoding.png_frame(text)
-                payload = text
-                if fragment_size and len(text) > fragment_size:
-                    payload = encoding.fragments(text, fragment_size)
-        except Exception as exc:  # noqa: BLE001 - mirror rosbridge: log once per message, send nothing
-            log.error("Exception calling subscribe callback: %s", exc)
-            payload = None
-        cache[key] = payload
-        return payload
-
-    def _send_text(self, conn: Connection, frame: dict[str, Any]) -> None:
-        """Send a non-publish frame (a reply or a request), fragmented if the connection asked for it."""
-        text = encoding.dumps(frame)
-        if conn.fragment_size and len(text) > conn.fragment_size:
-            conn.send(encoding.fragments(text, conn.fragment_size))
-        else:
-            conn.send(text)
+    async def call(self, name: str, args: Any = None) -> tuple[bool, Any]:
+        """Call a service of the graph: ``(True, values)`` or ``(False, error text)`` (``services.py``)."""
+        return await self.service_ops.call(name, args)
 
     # -- connections ----------------------------------------------------------------------------------
 
@@ -437,8 +368,7 @@ class SimServer:
         conn.subscriptions.clear()
         for name in list(conn.advertised):
             self._unadvertise(conn, name)
-        for svc in [s for s in self.services.values() if s.provider is conn]:
-            self._remove_client_service(svc, "the providing client disconnected")
+        self.service_ops.connection_closed(conn)
         if self.action_hub is not None:
             self.action_hub.connection_closed(conn)
 
@@ -467,7 +397,7 @@ class SimServer:
             result = handler(conn, msg)
             if inspect.isawaitable(result):
                 await result
-        except _OpError as exc:
+        except OpError as exc:
             log.error("%s [id: %s] %s: %s", conn.label, msg.get("id"), op, exc)
 
     def _ops(self) -> dict[str, Callable[[Connection, dict[str, Any]], Any]]:
@@ -477,14 +407,11 @@ class SimServer:
             "publish": self._op_publish,
             "subscribe": self._op_subscribe,
             "unsubscribe": self._op_unsubscribe,
-            "call_service": self._op_call_service,
-            "advertise_service": self._op_advertise_service,
-            "unadvertise_service": self._op_unadvertise_service,
-            "service_response": self._op_service_response,
             "fragment": self._op_fragment,
             "set_level": lambda conn, msg: None,
             "auth": lambda conn, msg: None,  # already authenticated (or no auth configured)
         }
+        ops.update(self.service_ops.ops())
         if self.action_hub is not None:
             ops.update(self.action_hub.ops())
         return ops
@@ -492,14 +419,14 @@ class SimServer:
     # -- topic ops ------------------------------------------------------------------------------------
 
     def _op_advertise(self, conn: Connection, msg: dict[str, Any]) -> None:
-        name = _field(msg, "topic", str)
-        type_name = _field(msg, "type", str)
+        name = field(msg, "topic", str)
+        type_name = field(msg, "type", str)
         if not self.types.has(type_name):
-            raise _OpError(f"Unable to import msg class {type_name.rsplit('/', 1)[-1]} from package "
+            raise OpError(f"Unable to import msg class {type_name.rsplit('/', 1)[-1]} from package "
                            f"{type_name.split('/', 1)[0]}")
         topic = self.topics.get(name)
         if topic is not None and topic.is_alive() and pkg_type(topic.type) != pkg_type(type_name):
-            raise _OpError(f"Tried to register topic {name} with type {type_name} but it is already "
+            raise OpError(f"Tried to register topic {name} with type {type_name} but it is already "
                            f"established with type {topic.type}")
         latch = bool(msg.get("latch", False))
         if name in conn.advertised:
@@ -508,16 +435,16 @@ class SimServer:
             return
         if topic is None or not topic.is_alive():
             topic = self.topics[name] = Topic(name, self.flavour.wire(type_name), latch) if topic is None \
-                else _retype(topic, self.flavour.wire(type_name))
+                else retype(topic, self.flavour.wire(type_name))
         topic.latched = topic.latched or latch
         topic.publishers[BRIDGE_NODE] += 1
         conn.advertised[name] = topic.type
         log.info("%s Advertised %s", conn.label, name)
 
     def _op_unadvertise(self, conn: Connection, msg: dict[str, Any]) -> None:
-        name = _field(msg, "topic", str)
+        name = field(msg, "topic", str)
         if name not in conn.advertised:
-            raise _OpError(f"Topic {name} has not been advertised by this client")
+            raise OpError(f"Topic {name} has not been advertised by this client")
         self._unadvertise(conn, name)
 
     def _unadvertise(self, conn: Connection, name: str) -> None:
@@ -530,10 +457,10 @@ class SimServer:
                 topic.latched_msgs.pop(BRIDGE_NODE, None)
 
     def _op_publish(self, conn: Connection, msg: dict[str, Any]) -> None:
-        name = _field(msg, "topic", str)
+        name = field(msg, "topic", str)
         topic = self.topics.get(name)
         if topic is None or not topic.is_alive():
-            raise _OpError(f"Cannot infer topic type for topic {name} as it is not yet advertised")
+            raise OpError(f"Cannot infer topic type for topic {name} as it is not yet advertised")
         if name not in conn.advertised:  # publish without advertise: rosbridge registers a publisher
             conn.advertised[name] = topic.type
             topic.publishers[BRIDGE_NODE] += 1
@@ -545,9 +472,9 @@ class SimServer:
             try:
                 body = converter.convert(body)
             except ConversionError as exc:
-                raise _OpError(str(exc)) from exc
+                raise OpError(str(exc)) from exc
         elif not isinstance(body, dict):
-            raise _OpError(f"Expected a JSON object for type {topic.type}")
+            raise OpError(f"Expected a JSON object for type {topic.type}")
         with self._published_lock:
             self._published.setdefault(name, collections.deque(maxlen=PUBLISHED_KEEP)).append(body)
         assert self._published_event is not None
@@ -555,20 +482,20 @@ class SimServer:
         self.publish(name, body, BRIDGE_NODE)
 
     def _op_subscribe(self, conn: Connection, msg: dict[str, Any]) -> None:
-        name = _field(msg, "topic", str)
+        name = field(msg, "topic", str)
         type_name = msg.get("type")
         if type_name is not None and not isinstance(type_name, str):
-            raise _OpError(f"Expected field type to be one of (<class 'str'>,). Invalid value: {type_name}")
+            raise OpError(f"Expected field type to be one of (<class 'str'>,). Invalid value: {type_name}")
         topic = self.topics.get(name)
         if topic is None or not topic.is_alive():
             if not type_name:
-                raise _OpError(f"Cannot infer topic type for topic {name} as it is not yet advertised")
+                raise OpError(f"Cannot infer topic type for topic {name} as it is not yet advertised")
             if not self.types.has(type_name):
-                raise _OpError(f"Unable to load the type {type_name}")
+                raise OpError(f"Unable to load the type {type_name}")
             topic = self.topics[name] = Topic(name, self.flavour.wire(type_name)) if topic is None \
-                else _retype(topic, self.flavour.wire(type_name))
+                else retype(topic, self.flavour.wire(type_name))
         elif type_name and pkg_type(type_name) != pkg_type(topic.type):
-            raise _OpError(f"Tried to register topic {name} with type {type_name} but it is already established "
+            raise OpError(f"Tried to register topic {name} with type {type_name} but it is already established "
                            f"with type {topic.type}")
         fragment_size = msg.get("fragment_size")
         if isinstance(fragment_size, int) and not isinstance(fragment_size, bool) and fragment_size > 0:
@@ -578,8 +505,8 @@ class SimServer:
             log.warning("%s unknown compression %r, sending plain JSON", conn.label, compression)
             compression = "none"
         options = SubOptions(
-            throttle_rate=_nonneg_int(msg.get("throttle_rate")),
-            queue_length=_nonneg_int(msg.get("queue_length")),
+            throttle_rate=nonneg_int(msg.get("throttle_rate")),
+            queue_length=nonneg_int(msg.get("queue_length")),
             compression=compression,
         )
         sub = conn.subscriptions.get(name)
@@ -593,13 +520,14 @@ class SimServer:
         if first and topic.latched_msgs:
             now = time.monotonic()
             for latched in list(topic.latched_msgs.values()):
-                payload = self._encoded({}, topic, latched, sub.compression, conn.fragment_size)
+                payload = fanout.encoded({}, topic, latched, sub.compression, conn.fragment_size, self.flavour,
+                                         self.types)
                 if payload is not None:
                     conn.send(payload, topic=name)
             sub.last_sent = now
 
     def _op_unsubscribe(self, conn: Connection, msg: dict[str, Any]) -> None:
-        name = _field(msg, "topic", str)
+        name = field(msg, "topic", str)
         sub = conn.subscriptions.get(name)
         if sub is None:
             return
@@ -620,12 +548,12 @@ class SimServer:
         frag_id = msg.get("id")
         data, num, total = msg.get("data"), msg.get("num"), msg.get("total")
         if not isinstance(data, str) or not isinstance(num, int) or not isinstance(total, int | float):
-            raise _OpError("fragment needs string data, integer num and numeric total")
+            raise OpError("fragment needs string data, integer num and numeric total")
         held = sum(len(d) for p in conn.incoming_fragments.values() for d in p.values())
         if held + len(data) > self.max_frame or (frag_id not in conn.incoming_fragments
                                                 and len(conn.incoming_fragments) >= MAX_FRAGMENTED):
             conn.incoming_fragments.clear()
-            raise _OpError(f"fragments held exceed {self.max_frame} bytes or {MAX_FRAGMENTED} messages; "
+            raise OpError(f"fragments held exceed {self.max_frame} bytes or {MAX_FRAGMENTED} messages; "
                            "all partial messages were dropped")
         parts = conn.incoming_fragments.setdefault(frag_id, {})
         parts[num] = data
@@ -633,134 +561,4 @@ class SimServer:
         if len(parts) >= count and all(i in parts for i in range(count)):
             del conn.incoming_fragments[frag_id]
             text = "".join(parts[i] for i in range(count))
-            self._spawn(self._receive(conn, text))
-
-    # -- service ops ----------------------------------------------------------------------------------
-
-    def _op_call_service(self, conn: Connection, msg: dict[str, Any]) -> None:
-        service = _field(msg, "service", str)
-        self._spawn(self._call_service(conn, msg, service))
-
-    async def _call_service(self, conn: Connection, msg: dict[str, Any], service: str) -> None:
-        call_id = msg.get("id")
-        has_id = "id" in msg
-        name = service
-        if "#" in service and not has_id:
-            name, call_id = service.split("#", 1)
-            has_id = True
-        ok, values = await self.call(name, msg.get("args"))
-        frame: dict[str, Any] = {"op": "service_response", "service": service, "values": values, "result": ok}
-        if has_id:
-            frame["id"] = call_id
-        self._send_text(conn, frame)
-
-    async def call(self, name: str, args: Any = None) -> tuple[bool, Any]:
-        """Call a service of the graph: ``(True, values)`` or ``(False, error text)``."""
-        svc = self.services.get(name)
-        if svc is None:
-            return False, f"Service {name} does not exist"
-        request = self.types.converter(svc.type, "request")
-        if request is not None:
-            try:
-                args = request.from_args(args)
-            except ConversionError as exc:
-                return False, str(exc)
-        elif args is None:
-            args = {}
-        try:
-            if svc.provider is not None:
-                values = await self._call_client_service(svc, args)
-            else:
-                assert svc.handler is not None
-                result = svc.handler(args)
-                values = await result if inspect.isawaitable(result) else result
-        except ServiceFailure as exc:
-            return False, f"service [{name}] responded with an error: b'{exc}'"
-        except Exception as exc:  # noqa: BLE001 - a handler bug is reported like a ROS handler exception
-            log.exception("service %s failed", name)
-            return False, f"service [{name}] responded with an error: b'error processing request: {exc}'"
-        response = self.types.converter(svc.type, "response")
-        if response is not None and isinstance(values, dict):
-            try:
-                values = response.convert(values)
-            except ConversionError as exc:
-                return False, f"service [{name}] responded with an error: b'error processing request: {exc}'"
-        return True, values
-
-    async def _call_client_service(self, svc: Service, args: dict[str, Any]) -> dict[str, Any]:
-        assert svc.provider is not None and self.loop is not None
-        svc.counter += 1
-        request_id = f"service_request:{svc.name}:{svc.counter}"
-        future: asyncio.Future[dict[str, Any]] = self.loop.create_future()
-        svc.pending[request_id] = future
-        self._send_text(svc.provider, {"op": "call_service", "id": request_id, "service": svc.name, "args": args})
-        try:
-            return await future
-        finally:
-            svc.pending.pop(request_id, None)
-
-    def _op_advertise_service(self, conn: Connection, msg: dict[str, Any]) -> None:
-        name = _field(msg, "service", str)
-        type_name = _field(msg, "type", str)
-        old = self.services.get(name)
-        if old is not None:
-            if old.provider is None:
-                raise _OpError(f"Service {name} is already provided by {old.node}")
-            self._remove_client_service(old, "the service was advertised again")
-        self.services[name] = Service(name, self.flavour.wire(type_name, "srv"), BRIDGE_NODE, provider=conn)
-        log.info("%s Advertised service %s.", conn.label, name)
-
-    def _op_unadvertise_service(self, conn: Connection, msg: dict[str, Any]) -> None:
-        name = _field(msg, "service", str)
-        svc = self.services.get(name)
-        if svc is None or svc.provider is None:
-            raise _OpError(f"Service {name} has not been advertised via rosbridge, can't unadvertise.")
-        self._remove_client_service(svc, "service handler returned None")
-        log.warning("%s Service %s was unadvertised", conn.label, name)
-
-    def _remove_client_service(self, svc: Service, reason: str) -> None:
-        if self.services.get(svc.name) is svc:
-            del self.services[svc.name]
-        for future in list(svc.pending.values()):
-            if not future.done():
-                future.set_exception(ServiceFailure(f"service cannot process request: {reason}"))
-        svc.pending.clear()
-
-    def _op_service_response(self, conn: Connection, msg: dict[str, Any]) -> None:
-        name = _field(msg, "service", str)
-        svc = self.services.get(name)
-        if svc is None or svc.provider is not conn:
-            raise _OpError(f"Service {name} has not been advertised via rosbridge.")
-        values = msg.get("values", {})
-        if not isinstance(values, dict):
-            raise _OpError(f"Expected field values to be one of (<class 'dict'>,). Invalid value: {values}")
-        future = svc.pending.get(msg.get("id"))  # type: ignore[arg-type]
-        if future is None:
-            raise _OpError(f"no pending request with id {msg.get('id')!r} for {name}")
-        if not future.done():
-            future.set_result(values)
-
-
-class _OpError(Exception):
-    """A client frame the server refuses; logged, never answered (rosbridge 0.11)."""
-
-
-def _field(msg: dict[str, Any], name: str, kind: type) -> Any:
-    if name not in msg:
-        raise _OpError(f"Expected a {name} field but none was found.")
-    value = msg[name]
-    if not isinstance(value, kind) or isinstance(value, bool):
-        raise _OpError(f"Expected field {name} to be one of ({kind},). Invalid value: {value}")
-    return value
-
-
-def _nonneg_int(value: Any) -> int:
-    if isinstance(value, int | float) and not isinstance(value, bool) and value > 0:
-        return int(value)
-    return 0
-
-
-def _retype(topic: Topic, type_name: str) -> Topic:
-    topic.type = type_name
-    topic.latched_msgs.clear()
-    return topic
+            self.spawn(self._receive(conn, text))

@@ -14,7 +14,8 @@ so a stall never delivers a burst of old commands (see ``rcon_core/bridge/freshn
 
 Several pads bound to the same topic on the same connection (two thumbs: linear on one, angular on the
 other) form a group: their axes are merged into one message, published by one of them at its rate, so
-they never fight; each pad's release zeroes only its own axes.
+they never fight; each pad's release zeroes only its own axes. The group is an object the model's
+``WidgetContext`` shares per robot link (``context.shared``), so pads of two robots never merge.
 """
 
 from __future__ import annotations
@@ -22,7 +23,6 @@ from __future__ import annotations
 import itertools
 import math
 import re
-import threading
 import time
 from typing import Any
 
@@ -140,8 +140,8 @@ class _Group:
         self.contrib: dict[int, dict[str, float]] = {}
 
 
-_groups: dict[tuple[int, str], _Group] = {}
-_groups_lock = threading.Lock()
+#: the pads' groups are shared per robot link under this key and the topic name (``WidgetContext.shared``)
+GROUP_KEY = "rcon_widgets_sensors.teleop.group"
 _ids = itertools.count(1)
 
 
@@ -156,7 +156,7 @@ class TeleopModel(WidgetModel):
         :class:`~rcon_widgets_sensors.slots.LoopTicker`); tests pass ``rcon_core.testing.ManualClock``, as
         ``clock`` too, so ``send_times`` follow it."""
         super().__init__(settings if settings is not None else TeleopSettings(), binding, port, **kwargs)
-        self._id = next(_ids)
+        self.pad_id = next(_ids)  # tells the pads of one group apart
         self._ticker_clock = ticker_clock
         self._ticker: LoopTicker | None = None
         self._active = False
@@ -165,9 +165,6 @@ class TeleopModel(WidgetModel):
         self._x = self._y = 0.0
         self._sent = 0
         self._reason = ""
-        # pads of one robot on one topic share a group: the port's ``link`` names the robot
-        link = getattr(port, "link", None)  # a GuardedPort from the runtime; a bare node has its client
-        self._group_key = (link if link is not None else id(getattr(port, "client", port)), binding.name)
         self.send_times: list[float] = []  # the model's clock at each publish (tests, diagnostics)
         self._show_value()
 
@@ -274,16 +271,14 @@ class TeleopModel(WidgetModel):
 
     # -- loop thread ----------------------------------------------------------------------------------
     def _group(self) -> _Group:
-        with _groups_lock:
-            g = _groups.get(self._group_key)
-            if g is None:
-                g = _groups[self._group_key] = _Group()
-            return g
+        """The group of the pads on this robot link and topic (made by the first of them)."""
+        group: _Group = self.context.shared((GROUP_KEY, self.binding.name), _Group)
+        return group
 
     def _merged(self) -> dict[str, Any]:
         msg = self.template()
         g = self._group()
-        for contrib in [g.contrib.get(m._id, {}) for m in g.members]:
+        for contrib in [g.contrib.get(m.pad_id, {}) for m in g.members]:
             for path, value in contrib.items():
                 msg = set_path(msg, path, value)
         header = msg.get("header")
@@ -315,7 +310,7 @@ class TeleopModel(WidgetModel):
             return
         self._x, self._y = x, y
         g = self._group()
-        g.contrib[self._id] = self.command_for(x, y)
+        g.contrib[self.pad_id] = self.command_for(x, y)
         if not self._active:
             self._active = True
             self._reason = ""
@@ -344,7 +339,7 @@ class TeleopModel(WidgetModel):
             self._active = False
             self._reason = reason
             g = self._group()
-            g.contrib.pop(self._id, None)
+            g.contrib.pop(self.pad_id, None)
             self._send()  # own axes now zero (others' still held if any)
             if self in g.members:
                 g.members.remove(self)
@@ -361,11 +356,7 @@ class TeleopModel(WidgetModel):
     # -- lifecycle ------------------------------------------------------------------------------------
     def on_stop(self) -> None:
         self._force_release("stopped")
-        self._zero_pending = False
-        with _groups_lock:
-            g = _groups.get(self._group_key)
-            if g is not None and not g.members:
-                _groups.pop(self._group_key, None)
+        self._zero_pending = False  # the group stays with the link (one small object per topic)
 
     def set_link(self, up: bool) -> None:
         was_down = self.state.link_down

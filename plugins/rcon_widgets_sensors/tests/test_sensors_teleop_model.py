@@ -12,7 +12,7 @@ from rcon_widgets_sensors.teleop import TeleopModel, TeleopSettings, TeleopValue
 
 from rcon_core.bridge import BridgeClient, ConnectionState
 from rcon_core.msgs import TypeRegistry
-from rcon_core.plugins import Binding
+from rcon_core.plugins import Binding, SharedResources, WidgetContext
 from rcon_core.testing import until
 
 TWIST = "geometry_msgs/Twist"
@@ -51,14 +51,17 @@ async def client(sim):
     await c.close()
 
 
-def pad(client, settings=None, name="/cmd_vel", type_name=TWIST, node="pad", guarded=False):
+def pad(client, settings=None, name="/cmd_vel", type_name=TWIST, node="pad", guarded=False, shared=None):
+    """A pad on its own node of ``client``; ``shared``: the store of the runtime the pads share (pads on one
+    link merge through it, as the canvas runtime arranges with ``WidgetContext``)."""
+    context = WidgetContext(link=id(client), resources=shared) if shared is not None else None
     port = client.node(node)
     if guarded:  # as the canvas runtime gives it: a GuardedPort naming the robot's link, no way to the client
         from rcon_core.canvas.port import GuardedPort
 
         port = GuardedPort(port, link=id(client))
     return TeleopModel(settings or TeleopSettings(), Binding(name, type_name, "publish"), port,
-                       types=TypeRegistry.standard())
+                       types=TypeRegistry.standard(), context=context)
 
 
 async def test_stream_while_held_zero_on_release_then_silence(sim, client):
@@ -166,10 +169,11 @@ async def test_link_drop_zero_after_reconnect_then_silence(sim, client):
 @pytest.mark.parametrize("guarded", [False, True], ids=["bare-nodes", "runtime-ports"])
 async def test_two_pads_merge_into_one_stream(sim, client, guarded):
     rx = Receiver(sim)
+    shared = SharedResources()
     linear = pad(client, TeleopSettings(horizontal="", vertical="linear.x", rate_hz=10), node="left",
-                 guarded=guarded)
+                 guarded=guarded, shared=shared)
     angular = pad(client, TeleopSettings(horizontal="-angular.z", vertical="", rate_hz=10, dead_zone=0),
-                  node="right", guarded=guarded)
+                  node="right", guarded=guarded, shared=shared)
 
     def both(m):
         return m["linear"]["x"] == pytest.approx(1.0) and m["angular"]["z"] == pytest.approx(-0.5)

@@ -7,15 +7,15 @@ robot. ``test_sensors_teleop_model.py`` drives the same model against the sim en
 import pytest
 from rcon_widgets_sensors.teleop import TeleopModel, TeleopSettings
 
-from rcon_core.plugins import Binding
+from rcon_core.plugins import Binding, SharedResources, WidgetContext
 from rcon_core.testing import ManualClock, RecordingPort
 
 TWIST = "geometry_msgs/Twist"
 
 
-def pad(port, clock, settings=None):
+def pad(port, clock, settings=None, context=None):
     return TeleopModel(settings or TeleopSettings(), Binding("/cmd_vel", TWIST, "publish"), port,
-                       clock=clock, ticker_clock=clock)
+                       clock=clock, ticker_clock=clock, context=context)
 
 
 def sent(port):
@@ -56,6 +56,27 @@ def test_held_pad_publishes_at_its_rate_then_one_zero_on_release():
 REASONS = {"release": "released", "on_focus_lost": "focus lost", "stop": "stopped", "link_down": "link down"}
 
 
+def test_pads_on_two_robot_links_do_not_merge():
+    """Each robot's pads form their own group (``WidgetContext.shared`` is per link): two streams."""
+    clock, shared = ManualClock(), SharedResources()
+    port_a, port_b = RecordingPort(), RecordingPort()
+    a = pad(port_a, clock, TeleopSettings(horizontal="", vertical="linear.x", rate_hz=10), on_link(shared, "a"))
+    b = pad(port_b, clock, TeleopSettings(horizontal="-angular.z", vertical="", rate_hz=10, dead_zone=0),
+            on_link(shared, "b"))
+    a.start()
+    b.start()
+    try:
+        a.set_axes(0.0, 1.0)
+        b.set_axes(0.5, 0.0)
+        clock.advance(1.025)
+        assert len(sent(port_a)) == 11 and len(sent(port_b)) == 11  # each its own stream, its own axes only
+        assert sent(port_a)[-1]["linear"]["x"] == pytest.approx(1.0) and sent(port_a)[-1]["angular"]["z"] == 0
+        assert sent(port_b)[-1]["angular"]["z"] == pytest.approx(-0.5) and sent(port_b)[-1]["linear"]["x"] == 0
+    finally:
+        a.stop()
+        b.stop()
+
+
 @pytest.mark.parametrize("let_go", list(REASONS))
 def test_every_way_of_letting_go_sends_one_zero_at_once(let_go):
     clock, port = ManualClock(), RecordingPort()
@@ -80,10 +101,16 @@ def test_every_way_of_letting_go_sends_one_zero_at_once(let_go):
         model.stop()
 
 
+def on_link(shared, link):
+    """The context the canvas runtime gives a widget on robot link ``link`` (one store per runtime)."""
+    return WidgetContext(link=link, resources=shared)
+
+
 def test_two_pads_on_one_connection_merge_into_one_stream():
-    clock, port = ManualClock(), RecordingPort()  # one port: one connection, one group
-    linear = pad(port, clock, TeleopSettings(horizontal="", vertical="linear.x", rate_hz=10))
-    angular = pad(port, clock, TeleopSettings(horizontal="-angular.z", vertical="", rate_hz=10, dead_zone=0))
+    clock, port, shared = ManualClock(), RecordingPort(), SharedResources()  # one link: one group
+    linear = pad(port, clock, TeleopSettings(horizontal="", vertical="linear.x", rate_hz=10), on_link(shared, 1))
+    angular = pad(port, clock, TeleopSettings(horizontal="-angular.z", vertical="", rate_hz=10, dead_zone=0),
+                  on_link(shared, 1))
     linear.start()
     angular.start()
     try:

@@ -10,7 +10,7 @@ from rcon_widgets_sensors.teleop import TeleopModel, TeleopSettings
 from rcon_widgets_sensors.teleop_view import TeleopView
 
 from rcon_core.msgs import TypeRegistry
-from rcon_core.plugins import Binding
+from rcon_core.plugins import Binding, SharedResources, WidgetContext
 
 
 class Robot:
@@ -29,10 +29,12 @@ def zero(m):
     return not any(m["linear"].values()) and not any(m["angular"].values())
 
 
-def make_pad(threaded_client, settings, node):
+def make_pad(threaded_client, settings, node, shared=None):
+    """A pad and its view; pads given one ``shared`` store are on one robot link (as in the canvas runtime)."""
     bt, client = threaded_client
+    context = WidgetContext(link=id(client), resources=shared) if shared is not None else None
     model = TeleopModel(settings, Binding("/cmd_vel", "geometry_msgs/Twist", "publish"), client.node(node),
-                        types=TypeRegistry.standard(), dispatch=bt.call)
+                        types=TypeRegistry.standard(), dispatch=bt.call, context=context)
     bt.call(model.start).result(5)
     view = TeleopView(model)
     return model, view
@@ -44,8 +46,11 @@ def wait(qtbot, pred, timeout=3000):
 
 @pytest.fixture
 def two_pads(qtbot, threaded_client):
-    left_m, left = make_pad(threaded_client, TeleopSettings(horizontal="", vertical="linear.x", dead_zone=0), "left")
-    right_m, right = make_pad(threaded_client, TeleopSettings(horizontal="-angular.z", vertical="", dead_zone=0), "right")
+    shared = SharedResources()
+    left_m, left = make_pad(threaded_client, TeleopSettings(horizontal="", vertical="linear.x", dead_zone=0), "left",
+                            shared)
+    right_m, right = make_pad(threaded_client, TeleopSettings(horizontal="-angular.z", vertical="", dead_zone=0),
+                              "right", shared)
     win = QtWidgets.QWidget()
     lay = QtWidgets.QHBoxLayout(win)
     lay.addWidget(left)

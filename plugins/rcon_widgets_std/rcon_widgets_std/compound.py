@@ -38,14 +38,13 @@ compound sends, so it should say what *will* be sent, not what was.
 from __future__ import annotations
 
 import copy
-import threading
 import time
 from typing import Any
 
 import attrs
 
 from rcon_core.msgs import MessageTextError
-from rcon_core.plugins import Binding, Role, WidgetModel, WidgetSpec
+from rcon_core.plugins import Binding, Role, WidgetContext, WidgetModel, WidgetSpec
 from rcon_core.plugins.children import child_name, child_problems, child_role, role_problem
 from rcon_core.plugins.paths import PathError, get_path, parse_path, set_path, split_service_path
 
@@ -151,27 +150,17 @@ def _child_settings_problems(number: int, child: ChildSpec) -> list[str]:
     return [f"{child_name(number, child, spec)}: {p}" for p in child_problems(child, spec)]
 
 
-_MANAGER: Any = None
-_MANAGER_LOCK = threading.Lock()
-
-
 def find_spec(kind: str) -> WidgetSpec:
-    """The spec of a child kind: this package's own directly, others through the ``rcon.widgets`` entry
-    points (honouring ``RCON_DISABLE_PLUGINS``). Raises KeyError (UnknownWidget) when nobody offers it."""
+    """The spec of a child kind where no model's context is at hand (settings checks, sizes): this
+    package's own directly, others through :meth:`WidgetContext.standalone` (the installed entry points,
+    honouring ``RCON_DISABLE_PLUGINS``). A model asks its context instead (:meth:`CompoundModel.find_spec`),
+    which is the app's plugin manager. Raises KeyError (UnknownWidget) when nobody offers it."""
     from .plugin import specs
 
     for spec in specs():
         if spec.kind == kind:
             return spec
-    global _MANAGER
-    with _MANAGER_LOCK:
-        if _MANAGER is None:
-            from rcon_core.plugins import PluginManager
-
-            pm = PluginManager()
-            pm.load_entry_points()
-            _MANAGER = pm
-    return _MANAGER.widget(kind)
+    return WidgetContext.standalone().spec(kind)
 
 
 @attrs.frozen
@@ -206,7 +195,7 @@ class _Captured:
         self.compound, self.index = compound, index
 
     def publish(self, msg: dict[str, Any]) -> bool:
-        self.compound._child_published(self.index, msg)
+        self.compound.child_published(self.index, msg)
         return True
 
     def unadvertise(self) -> None:
@@ -282,6 +271,11 @@ class CompoundModel(StdModel):
             return split_service_path(path)
         return "", path
 
+    def find_spec(self, kind: str) -> WidgetSpec:
+        """A child kind's spec through the runtime's context: a kind of a disabled plugin is unknown here
+        (KeyError), as it is everywhere in the app."""
+        return self.context.spec(kind)
+
     def _child_role(self, part: str) -> Role:
         return child_role(self.binding.role, part)
 
@@ -310,7 +304,7 @@ class CompoundModel(StdModel):
         self.children_version += 1
 
     def _build_child(self, index: int, cfg: ChildSpec) -> Child:
-        spec = find_spec(cfg.kind)
+        spec = self.find_spec(cfg.kind)
         part, rest = self._split(cfg.field_path)
         role = self._child_role(part)
         if role not in spec.roles:
@@ -320,7 +314,7 @@ class CompoundModel(StdModel):
         settings = spec.make_settings(cfg.settings)
         port = ChildPort(self)
         model = spec.load_model()(settings, binding, port, types=self.types, dispatch=self._dispatch,
-                                  clock=self._clock)
+                                  clock=self._clock, context=self.context)
         child = Child(index, spec, model, cfg, role is Role.PUBLISH, part)
         port.child = child
         return child
@@ -344,7 +338,10 @@ class CompoundModel(StdModel):
             try:  # not started yet: check what building would say, without starting anything
                 for i, cfg in enumerate(self.settings.children):
                     try:
-                        spec = _spec_or_none(cfg.kind)
+                        try:  # through the context: a disabled plugin's kind is unknown here
+                            spec: WidgetSpec | None = self.find_spec(cfg.kind)
+                        except KeyError:
+                            spec = None
                         part, rest = self._split(cfg.field_path)
                         field_at(self.types, self._part_type(part), rest)
                         out += [f"child {i + 1} ({cfg.kind}): {p}"
@@ -360,7 +357,8 @@ class CompoundModel(StdModel):
         return out
 
     # -- composing -----------------------------------------------------------------------------------
-    def _child_published(self, index: int, msg: dict[str, Any]) -> None:
+    def child_published(self, index: int, msg: dict[str, Any]) -> None:
+        """What input child ``index`` published through its port: its value goes into the composed message."""
         child = self.children[index]
         path = child.cfg.field_path
         _part, rest = self._split(path)

@@ -13,11 +13,13 @@ def bridge(sim):
 
 
 def build(model_cls, settings, name, type_, role, paths=(), *, client=None, types=None, node="w", clock=None,
-          port=None):
+          port=None, context=None):
     """A model bound as given, on its own node of ``client``, on ``port`` (e.g. a ``RecordingPort``) or on
-    no port."""
+    no port; ``context``: a ``WidgetContext`` (default: the standalone one)."""
     kwargs = {"types": types if types is not None else TypeRegistry.standard()}
     if clock is not None:
         kwargs["clock"] = clock
+    if context is not None:
+        kwargs["context"] = context
     port = client.node(node) if client is not None else port
     return model_cls(settings, Binding(name, type_, role, paths), port, **kwargs)

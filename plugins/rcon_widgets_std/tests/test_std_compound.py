@@ -9,7 +9,7 @@ from rcon_widgets_std.compound import ChildSpec, CompoundModel, CompoundSettings
 from std_testkit import bridge, build
 
 from rcon_core.msgs import TypeRegistry
-from rcon_core.plugins import Accepts, PluginManager, Role, WidgetModel, WidgetSpec, hookimpl
+from rcon_core.plugins import Accepts, PluginManager, Role, WidgetContext, WidgetModel, WidgetSpec, hookimpl
 from rcon_core.testing import until
 
 
@@ -156,18 +156,37 @@ class OtherPackage:
                                 accepts=Accepts(fields=["numeric"])))
 
 
-async def test_a_child_from_another_package(sim, monkeypatch):
+async def test_a_child_from_another_package(sim):
     pm = PluginManager(environ={})
     pm.register(OtherPackage(), "lab")
-    monkeypatch.setattr(compound_mod, "_MANAGER", pm)
     async with bridge(sim) as client:
         settings = CompoundSettings(children=[child("lab.knob", "data")])
-        m = build(CompoundModel, settings, "/speed_limit", "std_msgs/Float64", "publish", client=client)
+        m = build(CompoundModel, settings, "/speed_limit", "std_msgs/Float64", "publish", client=client,
+                  context=WidgetContext(pm.widget))
         m.start()
+        assert m.children[0].model.context is m.context  # a child is built with the compound's context
         m.children[0].model.turn(1.5)
         m.send()
         await sim.wait_for_published("/speed_limit", lambda msg: msg["data"] == 1.5, timeout=10)
         m.stop()
+
+
+def test_a_disabled_plugins_widget_is_not_built_as_a_child():
+    """The compound finds its children's kinds through the app's plugin manager (its context): a kind of
+    a plugin the operator disabled is unknown there, so no child is built and the problem names it."""
+    enabled = PluginManager(environ={})
+    enabled.register(OtherPackage(), "lab")
+    disabled = PluginManager(disabled=["lab"], environ={})
+    disabled.register(OtherPackage(), "lab")
+    settings = CompoundSettings(children=[child("lab.knob", "data")])
+    on = build(CompoundModel, settings, "/speed_limit", "std_msgs/Float64", "publish",
+               context=WidgetContext(enabled.widget))
+    off = build(CompoundModel, settings, "/speed_limit", "std_msgs/Float64", "publish",
+                context=WidgetContext(disabled.widget))
+    on.build_children()
+    off.build_children()
+    assert [type(c.model) for c in on.children] == [Knob]
+    assert off.children == [] and any("lab.knob" in p for p in off.problems()), off.problems()
 
 
 @pytest.mark.parametrize(
