@@ -170,6 +170,23 @@ def choose_kind(window: MainWindow, role: Role, kind: str) -> AddPanel:
     return panel
 
 
+def snap_with(window: QtWidgets.QWidget, dialog: QtWidgets.QWidget, name: str) -> None:
+    """Like :func:`snap`, with ``dialog`` (a separate top-level window) drawn where it is over the window."""
+    out = os.environ.get("RCON_SCREENSHOTS", "")
+    if not out or out == "1":
+        return
+    from qtpy import QtCore, QtGui
+
+    QtWidgets.QApplication.processEvents()
+    picture = window.grab()
+    painter = QtGui.QPainter(picture)
+    painter.drawPixmap(dialog.mapToGlobal(QtCore.QPoint(0, 0)) - window.mapToGlobal(QtCore.QPoint(0, 0)),
+                       dialog.grab())
+    painter.end()
+    Path(out).mkdir(parents=True, exist_ok=True)
+    picture.save(str(Path(out) / f"{name}.png"))
+
+
 def snap(window: QtWidgets.QWidget, name: str) -> None:
     """With ``RCON_SCREENSHOTS=DIR`` set, save a PNG of ``window`` as it is now (to look at it as a person
     would); otherwise nothing."""

@@ -7,11 +7,9 @@ away (cancelled, and said so), a lost link (the fate is unknown, never a success
 from __future__ import annotations
 
 import math
-import os
-from pathlib import Path
 
 import pytest
-from app_helpers import TIMEOUT_MS, choose_kind, entry_point_plugins, tap, tap_item, window_session
+from app_helpers import TIMEOUT_MS, choose_kind, entry_point_plugins, snap, tap, tap_item, window_session
 from qtpy import QtWidgets
 from qtpy.QtTest import QTest
 
@@ -25,7 +23,6 @@ from rcon_widgets_std.action_view import PHASE_TEXT  # noqa: E402
 
 pytestmark = pytest.mark.usefixtures("qapp")
 
-SHOTS = Path(os.environ.get("RCON_ROS2_UI_SHOTS", "/tmp/ros2-ui"))
 NAV = "/navigate_to_fix"
 NAV_TYPE = "rcon_sim/action/NavigateToFix"
 
@@ -44,12 +41,6 @@ def sim2():
 @pytest.fixture
 def window(qtbot, tmp_path, sim2, plugins):
     yield from window_session(qtbot, tmp_path / "config", plugins, url=sim2.url, wait_connected=True)
-
-
-def shoot(window, name: str) -> None:
-    SHOTS.mkdir(parents=True, exist_ok=True)
-    QtWidgets.QApplication.processEvents()
-    window.grab().save(str(SHOTS / name))
 
 
 def fix_at(sim: SimServer, east: float, north: float) -> tuple[float, float]:
@@ -96,7 +87,7 @@ def test_actions_list_and_the_add_pathway_place_an_action_widget(window, qtbot, 
     assert window.actions.item(NAV).data(0, 257) == NAV_TYPE  # the type, from /rosapi/action_type
     assert window.actions.item("/fibonacci") is not None
     window.side.setCurrentWidget(window.actions)
-    shoot(window, "actions-list.png")
+    snap(window, "actions-list")
     tree = window.actions.tree
     tap_item(tree, tree.indexFromItem(window.actions.item(NAV)))
     panel = window.add_panel
@@ -118,12 +109,12 @@ def test_goal_drives_to_the_fix_with_feedback_and_succeeds(window, sim2, qtbot, 
     assert view.progress.isVisible() and "distance_remaining" in view.progress.format()
     assert view.cancel_button.isEnabled()
     assert view.status.text().startswith(PHASE_TEXT["active"][0])
-    shoot(window, "action-in-flight.png")
+    snap(window, "action-in-flight")
     qtbot.waitUntil(lambda: view.status.text().startswith("✓ Succeeded"), timeout=30_000)
     assert phase(view) == "succeeded" and view.status.colour == PHASE_TEXT["succeeded"][1]
     assert view.progress.value() == 1000 and "arrived" in view.result.text()
     assert not view.cancel_button.isEnabled()
-    shoot(window, "action-succeeded.png")
+    snap(window, "action-succeeded")
     here = sim2.robot.lat_lon()
     assert abs(here[0] - lat) < 3e-5 and abs(here[1] - lon) < 4e-5  # within a few metres of the fix
 
@@ -135,7 +126,7 @@ def test_cancel_stops_the_vessel_and_says_canceled(window, sim2, qtbot, plugins)
     tap(view.cancel_button)
     qtbot.waitUntil(lambda: view.status.text().startswith("⊘ Canceled"), timeout=TIMEOUT_MS)
     assert phase(view) == "canceled" and view.status.colour == PHASE_TEXT["canceled"][1]
-    shoot(window, "action-canceled.png")
+    snap(window, "action-canceled")
     v = sim2.robot
     assert v.cmd_surge == 0.0  # the cancel stopped the drive at once
     qtbot.waitUntil(lambda: abs(v.surge) < 0.02, timeout=TIMEOUT_MS)  # and it coasts to a stop

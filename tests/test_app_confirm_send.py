@@ -4,24 +4,22 @@ sends after a 1 s hold (a bar fills) and nothing on a short press."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import pytest
 from app_helpers import (
     LEFT,
     NO_MOD,
     TIMEOUT_MS,
     all_sent,
+    snap_with,
     tap,
     window_session,
 )
-from qtpy import QtCore, QtGui, QtWidgets
+from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
 from rcon_core.canvas import Binding, Geometry
 
 pytestmark = pytest.mark.usefixtures("qapp")
-SHOTS = Path("/tmp/sec-lock")
 CALLS = ("call_service", "/lights/set")
 
 
@@ -53,15 +51,6 @@ def answer(qtbot, box, name: str) -> None:
     qtbot.waitUntil(lambda: not box.isVisible(), timeout=TIMEOUT_MS)
 
 
-def shot_with(window, box, name: str) -> None:
-    SHOTS.mkdir(exist_ok=True)
-    picture = window.grab()
-    painter = QtGui.QPainter(picture)
-    painter.drawPixmap(box.mapToGlobal(QtCore.QPoint(0, 0)) - window.mapToGlobal(QtCore.QPoint(0, 0)), box.grab())
-    painter.end()
-    picture.save(str(SHOTS / name))
-
-
 def test_ask_before_sending_shows_the_exact_call_and_cancel_sends_nothing(window, qtbot, sim_thread):
     sim = sim_thread
     sim.robot.lights = False
@@ -72,7 +61,7 @@ def test_ask_before_sending_shows_the_exact_call_and_cancel_sends_nothing(window
     box = confirm_box(qtbot, view)
     assert box.text() == "Call /lights/set (std_srvs/SetBool)?"
     assert box.informativeText() == "Request:\ndata: true"
-    shot_with(window, box, "confirm-dialog.png")
+    snap_with(window, box, "confirm-dialog")
     answer(qtbot, box, "sendConfirmCancel")
     all_sent(qtbot, window, sim)
     assert sim.ops_received[CALLS] == calls and sim.robot.lights is False

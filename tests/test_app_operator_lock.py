@@ -6,11 +6,9 @@ from __future__ import annotations
 
 import contextlib
 import json
-from pathlib import Path
 
 import pytest
-from app_helpers import entry_point_plugins, open_window, tap
-from qtpy import QtCore, QtGui
+from app_helpers import entry_point_plugins, open_window, snap_with, tap
 from qtpy.QtTest import QTest
 
 from rcon_core.app.config import AppConfig
@@ -20,18 +18,6 @@ from rcon_core.app.pin import check_pin, make_record
 from rcon_core.cli.main import build_parser
 
 pytestmark = pytest.mark.usefixtures("qapp")
-SHOTS = Path("/tmp/sec-lock")
-
-
-def grab_with_dialog(window, dialog, name: str) -> None:
-    """A picture of the window with its dialog drawn where it is (for a person to look at)."""
-    SHOTS.mkdir(exist_ok=True)
-    shot = window.grab()
-    painter = QtGui.QPainter(shot)
-    painter.drawPixmap(dialog.mapToGlobal(QtCore.QPoint(0, 0)) - window.mapToGlobal(QtCore.QPoint(0, 0)),
-                       dialog.grab())
-    painter.end()
-    shot.save(str(SHOTS / name))
 
 
 def pin_dialog(window, qtbot) -> PinDialog:
@@ -84,7 +70,7 @@ def test_the_pin_lock_blocks_editing_leaving_operate_deleting_the_robot_and_quit
     tap(window.edit_button)
     dialog = pin_dialog(window, qtbot)
     assert "leave Operate mode" in dialog.findChild(type(dialog.message), "pinPrompt").text()
-    grab_with_dialog(window, dialog, "lock-prompt.png")
+    snap_with(window, dialog, "lock-prompt")
     cancel(dialog, qtbot)
     assert ctl.canvas.locked and lock.engaged and window.lock_button.isChecked()
 

@@ -4,11 +4,8 @@ written), written only after the confirmation, read back; Refresh fetches again.
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
-
 import pytest
-from app_helpers import TIMEOUT_MS, entry_point_plugins, tap, tap_item, window_session
+from app_helpers import TIMEOUT_MS, entry_point_plugins, snap, tap, tap_item, window_session
 from qtpy import QtWidgets
 from qtpy.QtTest import QTest
 
@@ -17,8 +14,6 @@ from rcon_core.sim import SimServer
 from rcon_core.testing import TEST_RATE_SCALE
 
 pytestmark = pytest.mark.usefixtures("qapp")
-
-SHOTS = Path(os.environ.get("RCON_ROS2_UI_SHOTS", "/tmp/ros2-ui"))
 
 
 @pytest.fixture(scope="module")
@@ -94,7 +89,7 @@ def test_browse_search_and_edit_with_confirmation(window, robot, qtbot):
     panel.filter.clear()
     assert not panel.item(max_speed).isHidden()
     if version == 2:
-        shoot(window, "params-panel.png")
+        snap(window, "params-panel")
     # a text of the wrong kind is refused on the spot, naming what was expected; nothing is written
     tap_param(panel, max_speed)
     assert panel.editor.isVisible() and panel.edit_name.text() == max_speed and "float" in panel.edit_kind.text()
@@ -118,7 +113,7 @@ def test_browse_search_and_edit_with_confirmation(window, robot, qtbot):
     assert value_on_robot(version, sim, "max_speed") == 1.25
     assert panel.shown_value(max_speed) == "1.25"
     if version == 2:
-        shoot(window, "params-set.png")
+        snap(window, "params-set")
 
 
 def test_bool_string_and_list_values_are_checked_by_kind(window, robot, qtbot):
@@ -153,12 +148,6 @@ def test_refresh_fetches_changes_made_elsewhere(window, robot, qtbot):
     assert panel.shown_value(name) != "0.5"  # nothing polls behind the operator's back
     tap(panel.refresh_button)
     qtbot.waitUntil(lambda: not panel.busy and panel.shown_value(name) == "0.5", timeout=TIMEOUT_MS)
-
-
-def shoot(window, name: str) -> None:
-    SHOTS.mkdir(parents=True, exist_ok=True)
-    QtWidgets.QApplication.processEvents()
-    window.grab().save(str(SHOTS / name))
 
 
 @pytest.fixture

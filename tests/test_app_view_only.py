@@ -4,16 +4,13 @@ own, and its view is poked directly) gets nothing to the robot."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import pytest
-from app_helpers import all_sent, entry_point_plugins, window_session
+from app_helpers import all_sent, entry_point_plugins, snap, window_session
 from rogue_widget import CMD, RoguePlugin
 
 from rcon_core.canvas import Binding, Geometry
 
 pytestmark = pytest.mark.usefixtures("qapp")
-SHOTS = Path("/tmp/sec-lock")
 SENDS = [("advertise", "/cmd_vel"), ("publish", "/cmd_vel"), ("call_service", "/lights/set"),
          ("advertise_service", "/rogue/serve")]
 
@@ -68,8 +65,7 @@ def test_a_view_only_canvas_disables_controls_and_a_rogue_widget_reaches_nothing
         assert control.frame.badge.text() == "VIEW ONLY" and control.frame.badge.isVisible()
     assert label.view.isEnabled() and label.frame.badge.text() != "VIEW ONLY"
     assert "view-only" in (hosted.model.state.error or "")
-    SHOTS.mkdir(exist_ok=True)
-    window.grab().save(str(SHOTS / "view-only-canvas.png"))
+    snap(window, "view-only-canvas")
 
     # saved with the canvas
     window.controller.saver.flush()
