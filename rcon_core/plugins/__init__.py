@@ -11,6 +11,7 @@ from .context import SharedResources, SpecLookup, WidgetContext
 from .hookspecs import hookimpl, hookspec
 from .manager import DISABLE_ENV, ENTRY_POINT_GROUP, PluginInfo, PluginManager, PluginStatus, UnknownWidget
 from .model import Binding, BridgePort, WidgetModel, WidgetState
+from .model_types import ModelTypes
 from .paths import PathError, get_path, set_path
 from .registry import (
     CanvasTemplate,
@@ -50,6 +51,7 @@ __all__ = [
     "resolve",
     "WidgetModel",
     "WidgetState",
+    "ModelTypes",
     "Binding",
     "BridgePort",
     "WidgetContext",
