@@ -32,6 +32,7 @@ import attrs
 
 from rcon_core.msgs import names, walk_fields
 from rcon_core.msgs.walk import own_fields
+from rcon_core.plugins.context import WidgetCatalog
 from rcon_core.plugins.model_types import ModelTypes
 from rcon_core.plugins.spec import (
     ACTION_PARTS,
@@ -208,7 +209,7 @@ def _match_one(spec: WidgetSpec, role: Role, type_name: str, types: ModelTypes, 
     return None
 
 
-def match(type_name: str, role: Role | str, types: ModelTypes, plugin_manager: Any) -> list[Match]:
+def match(type_name: str, role: Role | str, types: ModelTypes, plugin_manager: WidgetCatalog) -> list[Match]:
     """The widgets that fit ``type_name`` in ``role``, best first (see the module docstring).
 
     ``types`` is an ``rcon_core.msgs.TypeRegistry`` (or None: name-based matches only);

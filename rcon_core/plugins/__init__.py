@@ -7,7 +7,7 @@
 See ``docs/hooks.md`` (the hooks) and ``docs/writing-a-widget-plugin.md`` (a guide).
 """
 
-from .context import SharedResources, SpecLookup, WidgetContext
+from .context import SharedResources, SpecLookup, WidgetCatalog, WidgetContext
 from .hookspecs import hookimpl, hookspec
 from .manager import DISABLE_ENV, ENTRY_POINT_GROUP, PluginInfo, PluginManager, PluginStatus, UnknownWidget
 from .model import Binding, BridgePort, WidgetModel, WidgetState
@@ -57,6 +57,7 @@ __all__ = [
     "WidgetContext",
     "SharedResources",
     "SpecLookup",
+    "WidgetCatalog",
     "WidgetRegistry",
     "TypeContributions",
     "TemplateRegistry",
