@@ -237,7 +237,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from rcon_core.app.config import AppConfig
     from rcon_core.app.main_window import MainWindow
-    from rcon_core.bridge import BridgeClient
+    from rcon_core.bridge import BridgeClient, ConnectionState
     from rcon_core.canvas import Canvas, Geometry, WidgetInstance, Workspace
     from rcon_core.plugins import Binding, Role
 
@@ -254,7 +254,7 @@ def main(argv: list[str] | None = None) -> int:
         figures["startup_s"] = round(window.first_paint_at - t_start, 3)
         figures["startup_with_imports_s"] = round(window.first_paint_at - t0, 3)
         window.connect_to(url)
-        spin(app, 10, lambda: window.connection.state == "connected")
+        spin(app, 10, lambda: window.connection.state is ConnectionState.CONNECTED)
         spin(app, 1.0)
         figures["idle_rss_mb"] = round(rss_mb(), 1)
 

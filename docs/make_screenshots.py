@@ -135,6 +135,7 @@ def run(out: Path) -> list[Path]:
     from rcon_core.app import theme
     from rcon_core.app.config import AppConfig
     from rcon_core.app.main_window import MainWindow
+    from rcon_core.bridge import ConnectionState
     from rcon_core.plugins import PluginManager, Role
     from rcon_core.sim import SimServer
 
@@ -151,7 +152,7 @@ def run(out: Path) -> list[Path]:
         shoot = Shooter(win, out)
         try:
             win.connect_to(robot.url, remember=False)
-            wait_until(lambda: win.connection.state == "connected", "the connection")
+            wait_until(lambda: win.connection.state is ConnectionState.CONNECTED, "the connection")
             for topic in ("/battery", "/cmd_vel"):
                 wait_until(lambda topic=topic: win.topics.item(topic) is not None, f"{topic} to be listed")
             win.side.setCurrentWidget(win.topics)

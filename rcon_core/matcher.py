@@ -32,6 +32,8 @@ import attrs
 
 from rcon_core.msgs import names, walk_fields
 from rcon_core.msgs.walk import own_fields
+from rcon_core.plugins.context import WidgetCatalog
+from rcon_core.plugins.model_types import ModelTypes
 from rcon_core.plugins.spec import (
     ACTION_PARTS,
     FIELD_PREDICATES,
@@ -94,7 +96,7 @@ class _Node:
     fields: tuple[Any, ...] = ()  # the message's own fields (messages only)
 
 
-def _walk(types: Any, type_name: str, prefix: str) -> Iterator[tuple[str, _Node]]:
+def _walk(types: ModelTypes, type_name: str, prefix: str) -> Iterator[tuple[str, _Node]]:
     """Yield ("message", node) for the message and every scalar nested message, ("leaf", node) for
     every builtin field (scalars and arrays): :func:`rcon_core.msgs.walk_fields`, with each message's
     own fields for the message predicates."""
@@ -107,7 +109,7 @@ def _walk(types: Any, type_name: str, prefix: str) -> Iterator[tuple[str, _Node]
             yield "message", _Node(step.path, f.base, f, own_fields(types, f.base))
 
 
-def _roots(types: Any, type_name: str, role: Role, acc: Accepts) -> list[tuple[str, str]]:
+def _roots(types: ModelTypes, type_name: str, role: Role, acc: Accepts) -> list[tuple[str, str]]:
     """(path prefix, message type) to search: the message itself, the service parts in role order, or
     the action's parts (goal, feedback, result)."""
     if role.is_action:
@@ -136,7 +138,7 @@ def _message_fits(pred: str | MessagePredicate, type_name: str, fields: list[Fie
         return False
 
 
-def candidate_paths(spec: WidgetSpec, role: Role | str, type_name: str, types: Any) -> list[str]:
+def candidate_paths(spec: WidgetSpec, role: Role | str, type_name: str, types: ModelTypes) -> list[str]:
     """Every path of ``type_name`` the spec's structural predicates fit, best first.
 
     Raises the registry's UnknownTypeError when the type (or a type it uses) is unknown.
@@ -186,7 +188,7 @@ def _listed(spec_types: tuple[str, ...], wanted: set[str], role: Role) -> bool:
     return False
 
 
-def _match_one(spec: WidgetSpec, role: Role, type_name: str, types: Any, wanted: set[str]) -> Match | None:
+def _match_one(spec: WidgetSpec, role: Role, type_name: str, types: ModelTypes, wanted: set[str]) -> Match | None:
     acc = spec.accepts
     package = type_name.strip("/").split("/")[0]
     try:
@@ -207,7 +209,7 @@ def _match_one(spec: WidgetSpec, role: Role, type_name: str, types: Any, wanted:
     return None
 
 
-def match(type_name: str, role: Role | str, types: Any, plugin_manager: Any) -> list[Match]:
+def match(type_name: str, role: Role | str, types: ModelTypes, plugin_manager: WidgetCatalog) -> list[Match]:
     """The widgets that fit ``type_name`` in ``role``, best first (see the module docstring).
 
     ``types`` is an ``rcon_core.msgs.TypeRegistry`` (or None: name-based matches only);

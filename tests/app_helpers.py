@@ -19,6 +19,7 @@ from qtpy.QtTest import QTest
 from rcon_core.app.add_panel import AddPanel
 from rcon_core.app.config import AppConfig
 from rcon_core.app.main_window import MainWindow
+from rcon_core.bridge import ConnectionState
 from rcon_core.canvas import Workspace
 from rcon_core.plugins import PluginManager, Role
 
@@ -65,7 +66,7 @@ def open_window(
     if url:
         win.connect_to(url)
         if wait_connected:
-            qtbot.waitUntil(lambda: win.connection.state == "connected", timeout=TIMEOUT_MS)
+            qtbot.waitUntil(lambda: win.connection.state is ConnectionState.CONNECTED, timeout=TIMEOUT_MS)
         for topic in topics:
             qtbot.waitUntil(lambda topic=topic: win.topics.item(topic) is not None, timeout=TIMEOUT_MS)
         for service in services:

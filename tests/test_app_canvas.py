@@ -14,6 +14,7 @@ from test_app_window import make_plugins, robot  # noqa: F401 - fixture re-used
 from rcon_core.app.draft import Draft, Target
 from rcon_core.app.geometry import snap
 from rcon_core.app.main_window import MainWindow
+from rcon_core.bridge import ConnectionState
 from rcon_core.plugins import Role
 
 pytestmark = pytest.mark.usefixtures("qapp")
@@ -179,12 +180,12 @@ def test_ui_stays_responsive_while_the_link_drops_and_returns(qtbot, tmp_path):
         qtbot.wait(300)
     try:
         # the server is gone: the app notices, keeps painting, and shows the link down
-        qtbot.waitUntil(lambda: window.connection.state in ("reconnecting", "connecting"), timeout=10_000)
+        qtbot.waitUntil(lambda: window.connection.state in (ConnectionState.RECONNECTING, ConnectionState.CONNECTING), timeout=10_000)
         frame = next(iter(window.controller.surface.frames.values()))
         qtbot.waitUntil(lambda: frame.badge.isVisible() and frame.badge.text() == "LINK DOWN", timeout=5_000)
         qtbot.wait(500)
         with SimServer.in_thread(port=port) as second:
-            qtbot.waitUntil(lambda: window.connection.state == "connected", timeout=15_000)
+            qtbot.waitUntil(lambda: window.connection.state is ConnectionState.CONNECTED, timeout=15_000)
             qtbot.waitUntil(lambda: second.topic_subscriber_count("/battery") == 1, timeout=10_000)
             qtbot.waitUntil(lambda: frame.badge.text() != "LINK DOWN" or not frame.badge.isVisible(), timeout=10_000)
             timer.stop()

@@ -10,6 +10,7 @@ from rcon_core.app.config import AppConfig
 from rcon_core.app.demo import CAMERAS, DRIVE, SENSORS, demo_workspace
 from rcon_core.app.main import load_plugins
 from rcon_core.app.main_window import MainWindow
+from rcon_core.bridge import ConnectionState
 from rcon_core.canvas.runtime import MissingWidgetModel
 
 pytestmark = pytest.mark.usefixtures("qapp")
@@ -48,7 +49,7 @@ def test_demo_runs_on_the_robot_without_warnings(qtbot, tmp_path, plugins, robot
     QTest.qWaitForWindowExposed(window)
     try:
         window.connect_to(robot.url)
-        qtbot.waitUntil(lambda: window.connection.state == "connected", timeout=10_000)
+        qtbot.waitUntil(lambda: window.connection.state is ConnectionState.CONNECTED, timeout=10_000)
         window.open_workspace(demo_workspace(plugins))
         for index in range(len(window.controller.workspace.canvases)):
             window.switch_canvas(index)

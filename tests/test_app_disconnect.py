@@ -8,6 +8,7 @@ from app_helpers import choose_kind, entry_point_plugins, tap, tap_topic, window
 from qtpy import QtWidgets
 
 from rcon_core.app.main_window import MainWindow
+from rcon_core.bridge import ConnectionState
 from rcon_core.plugins import Role
 
 pytestmark = pytest.mark.usefixtures("qapp")
@@ -38,7 +39,7 @@ def test_disconnect_keeps_the_last_values_marked_link_down_and_connect_brings_th
     assert not frame.badge.isVisible()
 
     tap(window.connection.connect_button)  # "Disconnect"
-    qtbot.waitUntil(lambda: window.connection.state == "closed", timeout=5_000)
+    qtbot.waitUntil(lambda: window.connection.state is ConnectionState.CLOSED, timeout=5_000)
     qtbot.waitUntil(lambda: frame.badge.isVisible() and frame.badge.text() == "LINK DOWN", timeout=5_000)
     qtbot.wait(300)  # time for a rebuild to show up, were there one
     QtWidgets.QApplication.processEvents()
@@ -55,7 +56,7 @@ def test_disconnect_keeps_the_last_values_marked_link_down_and_connect_brings_th
     qtbot.waitUntil(lambda: frame.badge.isVisible() and frame.badge.text() == "LINK DOWN", timeout=5_000)
 
     tap(window.connection.connect_button)  # Connect again: live values
-    qtbot.waitUntil(lambda: window.connection.state == "connected", timeout=10_000)
+    qtbot.waitUntil(lambda: window.connection.state is ConnectionState.CONNECTED, timeout=10_000)
     qtbot.waitUntil(lambda: not frame.badge.isVisible(), timeout=10_000)
     qtbot.waitUntil(lambda: shown(window, wid) not in ("", "–"), timeout=10_000)
     # rebuilt on the new link, and taking the robot's values

@@ -15,6 +15,7 @@ import pytest
 from app_helpers import TIMEOUT_MS, choose_kind, entry_point_plugins, open_window, tap, tap_topic
 from qtpy import QtGui, QtWidgets
 
+from rcon_core.bridge import ConnectionState
 from rcon_core.canvas import Binding, Document, Geometry, Workspace, WorkspaceStore
 from rcon_core.canvas.robots import Robot, robot_colour
 from rcon_core.plugins import Role
@@ -74,7 +75,7 @@ def open_fleet(qtbot, tmp_path, alpha, bravo, widgets):
     win = open_window(qtbot, tmp_path / "config", entry_point_plugins(), url=alpha.url, size=(1280, 800),
                       wait_connected=True)
     chips = win.fleet_ui.chips
-    qtbot.waitUntil(lambda: chips.chips["r-2"].state == "connected", timeout=TIMEOUT_MS)
+    qtbot.waitUntil(lambda: chips.chips["r-2"].state is ConnectionState.CONNECTED, timeout=TIMEOUT_MS)
     return win, ws
 
 
@@ -87,7 +88,7 @@ def test_chips_pick_the_side_robot_and_a_new_widget_is_bound_to_it(qtbot, tmp_pa
         a_id, b_id = (w.id for w in win.controller.canvas.widgets)
         chips = win.fleet_ui.chips
         assert chips.isVisible() and list(chips.chips) == ["r-1", "r-2"]
-        qtbot.waitUntil(lambda: chips.chips["r-1"].state == "connected", timeout=TIMEOUT_MS)
+        qtbot.waitUntil(lambda: chips.chips["r-1"].state is ConnectionState.CONNECTED, timeout=TIMEOUT_MS)
         assert chips.chips["r-1"].text().startswith("Alpha  CONNECTED")
         qtbot.waitUntil(lambda: chips.chips["r-2"].text().endswith("ms"), timeout=TIMEOUT_MS)  # its round trip
         # a mixed canvas: each frame says its robot (name in the title, the robot's colour on its edge)
@@ -143,7 +144,7 @@ def test_one_robot_dropping_shows_link_down_only_on_its_widgets(qtbot, tmp_path,
                         timeout=TIMEOUT_MS)
         stop_sim(bravo)  # Bravo's link drops
         chip = win.fleet_ui.chips.chips["r-2"]
-        qtbot.waitUntil(lambda: chip.state in ("reconnecting", "closed"), timeout=TIMEOUT_MS)
+        qtbot.waitUntil(lambda: chip.state in (ConnectionState.RECONNECTING, ConnectionState.CLOSED), timeout=TIMEOUT_MS)
         b_badge = frame_of(win, b_id).badge
         qtbot.waitUntil(lambda: b_badge.isVisible() and b_badge.text() == "LINK DOWN", timeout=TIMEOUT_MS)
         assert "RECONNECTING" in chip.text() or "DISCONNECTED" in chip.text()
@@ -153,7 +154,7 @@ def test_one_robot_dropping_shows_link_down_only_on_its_widgets(qtbot, tmp_path,
         count = model.state.count
         qtbot.waitUntil(lambda: model.state.count > count + 2, timeout=TIMEOUT_MS)
         assert not frame_of(win, a_id).badge.isVisible()
-        assert win.connection.state == "connected" and win.fleet_ui.chips.chips["r-1"].state == "connected"
+        assert win.connection.state is ConnectionState.CONNECTED and win.fleet_ui.chips.chips["r-1"].state is ConnectionState.CONNECTED
         assert shown(win, b_id) not in ("", "–")  # Bravo's last value is kept
         shot(win, "bravo-down")
     finally:
@@ -218,7 +219,7 @@ def test_robots_are_added_in_the_robots_dialog_and_connect(qtbot, tmp_path, two)
         assert [(r.name, r.url) for r in robots] == [("Alpha", ""), ("Bravo", alpha.url)]
         rid = robots[1].id
         qtbot.waitUntil(lambda: ui.chips.isVisible() and rid in ui.chips.chips, timeout=TIMEOUT_MS)
-        qtbot.waitUntil(lambda: ui.chips.chips[rid].state == "connected", timeout=TIMEOUT_MS)
+        qtbot.waitUntil(lambda: ui.chips.chips[rid].state is ConnectionState.CONNECTED, timeout=TIMEOUT_MS)
         assert ui.links.link(rid).url == alpha.url and "view only" not in ui.chips.chips[rid].text()
         win.canvas_actions["robots"].trigger()  # Bravo is only watched: its chip says so
         ui.robots_dialog.set_row(1, view_only=True)
@@ -231,7 +232,7 @@ def test_robots_are_added_in_the_robots_dialog_and_connect(qtbot, tmp_path, two)
         ui.robots_dialog.set_row(1, url=bravo.url)
         ui.robots_dialog.accept()
         qtbot.waitUntil(lambda: ui.links.link(rid).url == bravo.url, timeout=TIMEOUT_MS)
-        qtbot.waitUntil(lambda: ui.chips.chips[rid].state == "connected", timeout=TIMEOUT_MS)
+        qtbot.waitUntil(lambda: ui.chips.chips[rid].state is ConnectionState.CONNECTED, timeout=TIMEOUT_MS)
         qtbot.waitUntil(lambda: len(bravo.connections) == 1, timeout=TIMEOUT_MS)
         tap(win.canvas_buttons["undo"])  # back to Alpha's URL
         qtbot.waitUntil(lambda: len(bravo.connections) == 0, timeout=TIMEOUT_MS)
@@ -293,7 +294,7 @@ def test_three_robots_one_map_shows_every_fix(qtbot, tmp_path, sim_fleet_threads
     win = open_window(qtbot, tmp_path / "config", entry_point_plugins(), url=sims[0].url, wait_connected=True)
     try:
         chips = win.fleet_ui.chips.chips
-        qtbot.waitUntil(lambda: all(c.state == "connected" for c in chips.values()), timeout=TIMEOUT_MS)
+        qtbot.waitUntil(lambda: all(c.state is ConnectionState.CONNECTED for c in chips.values()), timeout=TIMEOUT_MS)
         map_id = win.controller.canvas.widgets[0].id
 
         def labels():
@@ -320,7 +321,7 @@ def test_the_side_robot_decides_the_actions_and_parameters_listed(qtbot, tmp_pat
         win = open_window(qtbot, tmp_path / "config", entry_point_plugins(), url=alpha.url, wait_connected=True)
         try:
             ui = win.fleet_ui
-            qtbot.waitUntil(lambda: ui.chips.chips["r-2"].state == "connected", timeout=TIMEOUT_MS)
+            qtbot.waitUntil(lambda: ui.chips.chips["r-2"].state is ConnectionState.CONNECTED, timeout=TIMEOUT_MS)
             qtbot.waitUntil(lambda: win.topics.item("/battery") is not None, timeout=TIMEOUT_MS)
             assert win.actions.item("/fibonacci") is None  # Alpha (ROS 1) has no actions
             assert win.params_panel.link is win.link
@@ -360,7 +361,7 @@ def test_rcon_layout_opens_a_link_to_every_robot_at_its_url(qtbot, tmp_path, sim
         qtbot.addWidget(window)
         try:
             chips = window.fleet_ui.chips.chips
-            qtbot.waitUntil(lambda: all(c.state == "connected" for c in chips.values()), timeout=TIMEOUT_MS)
+            qtbot.waitUntil(lambda: all(c.state is ConnectionState.CONNECTED for c in chips.values()), timeout=TIMEOUT_MS)
             assert window.link.url == alpha.url and window.connection.url.currentText() == alpha.url
             assert window.fleet_ui.links.link("r-2").url == bravo.url
             assert len(alpha.connections) == 1 and len(bravo.connections) == 1

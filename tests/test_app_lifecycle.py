@@ -21,6 +21,7 @@ from test_app_window import make_plugins
 
 from rcon_core.app.config import AppConfig
 from rcon_core.app.main_window import MainWindow
+from rcon_core.bridge import ConnectionState
 from rcon_core.canvas import Binding, Canvas, Geometry, WidgetInstance, Workspace, new_id
 
 pytestmark = pytest.mark.usefixtures("qapp")
@@ -255,7 +256,7 @@ def test_a_url_without_scheme_is_ws_and_a_rejected_one_never_hides_the_active_ur
         try:
             type_url(window, f"127.0.0.1:{robot.port}")  # no scheme: ws:// is meant
             assert window.link.url == f"ws://127.0.0.1:{robot.port}"
-            qtbot.waitUntil(lambda: window.connection.state == "connected", timeout=10_000)
+            qtbot.waitUntil(lambda: window.connection.state is ConnectionState.CONNECTED, timeout=10_000)
             assert window.connection.url.currentText() == f"ws://127.0.0.1:{robot.port}"
             button = window.connection.connect_button
             assert button.text() == "Disconnect"

@@ -8,6 +8,7 @@ import asyncio
 import pytest
 from app_helpers import entry_point_plugins, window_session
 
+from rcon_core.bridge import ConnectionState
 from rcon_core.loopback import StallProxy
 
 pytestmark = pytest.mark.usefixtures("qapp")
@@ -31,9 +32,9 @@ def test_a_stalled_link_shows_degraded_then_connected_again(window, qtbot, proxy
     bar = window.connection
     assert bar.state_label.text() == "CONNECTED"
     sim_thread.run_sync(proxy.stall)
-    qtbot.waitUntil(lambda: bar.state == "degraded", timeout=3_000)
+    qtbot.waitUntil(lambda: bar.state is ConnectionState.DEGRADED, timeout=3_000)
     assert bar.state_label.text() == "DEGRADED" and bar.state_label.property("state") == "degraded"
     assert bar.connect_button.text() == "Disconnect"
     sim_thread.run_sync(proxy.resume)
-    qtbot.waitUntil(lambda: bar.state == "connected", timeout=5_000)
+    qtbot.waitUntil(lambda: bar.state is ConnectionState.CONNECTED, timeout=5_000)
     assert bar.state_label.text() == "CONNECTED"

@@ -13,6 +13,7 @@ from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
 from rcon_core.app.config import AppConfig
+from rcon_core.bridge import ConnectionState
 from rcon_core.plugins import PluginManager
 from rcon_core.sim import SimServer
 
@@ -126,7 +127,7 @@ def test_no_message_widens_the_window_and_the_message_is_true(qtbot, window, rob
                                          "trying ws://127.0.0.1:1: connection refused · retrying")
     assert "still connected" not in bar.message.text()
     type_url(window, robot.url)
-    qtbot.waitUntil(lambda: bar.state == "connected", timeout=10_000)
+    qtbot.waitUntil(lambda: bar.state is ConnectionState.CONNECTED, timeout=10_000)
     bar_least["connected"] = bar.minimumSizeHint().width()
     # the state word, the Connect/Disconnect label and the latency never change what the bar needs
     assert len(set(bar_least.values())) == 1, bar_least

@@ -15,6 +15,7 @@ from rcon_core.app.config import AppConfig
 from rcon_core.app.main import open_app, run_app
 from rcon_core.app.operator_lock import PinDialog
 from rcon_core.app.pin import check_pin, make_record
+from rcon_core.bridge import ConnectionState
 from rcon_core.cli.main import build_parser
 
 pytestmark = pytest.mark.usefixtures("qapp")
@@ -108,7 +109,7 @@ def test_the_pin_lock_blocks_editing_leaving_operate_deleting_the_robot_and_quit
     assert not window.connection.url.isEnabled()
     tap(window.connection.connect_button)
     cancel(pin_dialog(window, qtbot), qtbot)
-    assert window.connection.state == "connected" and window.link.client is not None
+    assert window.connection.state is ConnectionState.CONNECTED and window.link.client is not None
 
     # quitting (Ctrl+Q, the window's close button): asks, Cancel keeps the window
     window.close()
@@ -159,7 +160,7 @@ def test_rcon_locked_starts_full_screen_with_the_lock_on(qtbot, tmp_path, sim_ur
         qtbot.addWidget(window)
         try:
             assert window.isFullScreen() and window.operator_lock.engaged and window.controller.canvas.locked
-            qtbot.waitUntil(lambda: window.connection.state == "connected", timeout=10_000)
+            qtbot.waitUntil(lambda: window.connection.state is ConnectionState.CONNECTED, timeout=10_000)
             window.close()  # refused while locked: the PIN dialog opens instead
             dialog = pin_dialog(window, qtbot)
             assert window.isVisible() and "quit" in dialog.findChild(type(dialog.message), "pinPrompt").text()

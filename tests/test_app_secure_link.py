@@ -16,6 +16,7 @@ from qtpy.QtTest import QTest
 
 from rcon_core.app.link import LinkSettings
 from rcon_core.app.secret_store import SERVICE
+from rcon_core.bridge import ConnectionState
 from rcon_core.plugins import PluginManager
 from rcon_core.sim import SimServer
 
@@ -116,7 +117,7 @@ def test_connects_with_the_ca_file_and_a_secret_kept_in_the_credential_store(qtb
     dialog = fill_settings(qtbot, window, robot.url, ca=pki.ca, secret=SECRET)
     assert dialog.where.text() == "kept in the system's credential store"
     bar = window.connection
-    qtbot.waitUntil(lambda: bar.state == "connected", timeout=10_000)
+    qtbot.waitUntil(lambda: bar.state is ConnectionState.CONNECTED, timeout=10_000)
     qtbot.waitUntil(lambda: window.topics.item("/cmd_vel") is not None, timeout=10_000)
     # the robot saw the authenticated client; the secret is in the store, never in the app's files
     assert store.passwords == {(SERVICE, robot.url): SECRET}
@@ -127,11 +128,11 @@ def test_connects_with_the_ca_file_and_a_secret_kept_in_the_credential_store(qtb
     assert saved == {"ca_file": str(pki.ca), "client_cert": "", "client_key": "", "auth": True}
     # next start: the settings and the secret come back without asking
     bar.toggle()
-    qtbot.waitUntil(lambda: bar.state == "closed")
+    qtbot.waitUntil(lambda: bar.state is ConnectionState.CLOSED)
     fresh = type(bar.secrets)()
     assert fresh.get(robot.url) == SECRET
     tap(bar.connect_button)
-    qtbot.waitUntil(lambda: bar.state == "connected", timeout=10_000)
+    qtbot.waitUntil(lambda: bar.state is ConnectionState.CONNECTED, timeout=10_000)
     assert bar.dialog is dialog  # no new dialog was needed
 
 
@@ -139,7 +140,7 @@ def test_without_a_credential_store_the_secret_is_asked_each_start(qtbot, window
     dialog = fill_settings(qtbot, window, robot.url, ca=pki.ca, secret=SECRET)
     assert dialog.where.text().startswith("no credential store on this system")
     bar = window.connection
-    qtbot.waitUntil(lambda: bar.state == "connected", timeout=10_000)
+    qtbot.waitUntil(lambda: bar.state is ConnectionState.CONNECTED, timeout=10_000)
     for f in tmp_path.rglob("*"):
         if f.is_file():
             assert SECRET not in f.read_text(errors="replace"), f
@@ -154,7 +155,7 @@ def test_without_a_credential_store_the_secret_is_asked_each_start(qtbot, window
         assert again.connection.message.text().startswith("this robot checks a secret")
         type_into(asking.secret, SECRET)
         tap(asking.save_button)
-        qtbot.waitUntil(lambda: again.connection.state == "connected", timeout=10_000)
+        qtbot.waitUntil(lambda: again.connection.state is ConnectionState.CONNECTED, timeout=10_000)
     finally:
         again.shutdown()
 
@@ -172,7 +173,7 @@ def test_fails_fast_with_the_reason_in_the_bar(qtbot, window, pki, store, case, 
         bar = window.connection
         qtbot.waitUntil(lambda: bar.message.text() == sentence, timeout=SAY_WHY_MS)
         # fatal: the link is ended, not retried; the operator changes a setting and taps Connect
-        assert bar.link.client is None and bar.state == "closed"
+        assert bar.link.client is None and bar.state is ConnectionState.CLOSED
         assert bar.state_label.text() == "DISCONNECTED" and bar.connect_button.text() == "Connect"
         assert bar.message.toolTip() == sentence
         QtWidgets.QApplication.processEvents()
@@ -192,5 +193,5 @@ def test_command_line_settings_apply(qtbot, window, robot, pki, store):
     """``rcon --ca-file ... `` with ``RCON_AUTH_SECRET``: the overrides reach the link."""
     window.connection.overrides = LinkSettings(ca_file=str(pki.ca), secret=SECRET)
     type_url(window, robot.url)
-    qtbot.waitUntil(lambda: window.connection.state == "connected", timeout=10_000)
+    qtbot.waitUntil(lambda: window.connection.state is ConnectionState.CONNECTED, timeout=10_000)
     assert window.connection.dialog is None

@@ -8,6 +8,7 @@ import pytest
 from app_helpers import all_sent, entry_point_plugins, snap, window_session
 from rogue_widget import CMD, RoguePlugin
 
+from rcon_core.bridge import ConnectionState
 from rcon_core.canvas import Binding, Geometry
 
 pytestmark = pytest.mark.usefixtures("qapp")
@@ -95,7 +96,7 @@ def test_a_view_only_robot_is_remembered_and_its_widgets_send_nothing(window, qt
     # reconnecting keeps it (the mark belongs to the URL, in the app config)
     window.connection.toggle()
     window.connect_to(sim_url)
-    qtbot.waitUntil(lambda: window.connection.state == "connected", timeout=10_000)
+    qtbot.waitUntil(lambda: window.connection.state is ConnectionState.CONNECTED, timeout=10_000)
     hosted = model_of(window, qtbot, rogue.id, True)
     qtbot.waitUntil(lambda: "call" in hosted.model.attempts, timeout=10_000)
     all_sent(qtbot, window, sim)

@@ -475,10 +475,10 @@ class ChildrenEditor(QtWidgets.QWidget):
             if settings is not None and self._form is None:
                 lay.addWidget(_label("Its settings are edited in the settings form.", "hint"))
             elif settings is not None:
-                outer = self
+                outer, parent_context = self, self._context  # the child's context is drawn from ours
 
                 def child_context() -> ChildContext | None:
-                    ctx = outer._context()
+                    ctx = parent_context()
                     if ctx is None:
                         return None
                     i = outer.editing if outer.editing is not None else index

@@ -23,6 +23,7 @@ from rcon_core.app.link import BadUrl, Link, LinkSettings, check_url
 from rcon_core.app.link_settings import LinkSettingsDialog
 from rcon_core.app.secret_store import SecretStore
 from rcon_core.app.theme import repolish
+from rcon_core.bridge import ConnectionState
 
 
 def normalize_url(text: str) -> str:
@@ -35,19 +36,23 @@ def normalize_url(text: str) -> str:
     return text
 
 
+#: the words the operator reads for each link state
 STATE_TEXT = {
-    "connecting": "CONNECTING",
-    "connected": "CONNECTED",
-    "degraded": "DEGRADED",  # connected, but the link is stalled: commands are not sent (bridge/freshness.py)
-    "reconnecting": "RECONNECTING",
-    "closed": "DISCONNECTED",
+    ConnectionState.CONNECTING: "CONNECTING",
+    ConnectionState.CONNECTED: "CONNECTED",
+    # connected, but the link is stalled: commands are not sent (bridge/freshness.py)
+    ConnectionState.DEGRADED: "DEGRADED",
+    ConnectionState.RECONNECTING: "RECONNECTING",
+    ConnectionState.CLOSED: "DISCONNECTED",
 }
+#: the states in which a round trip means something
+LIVE_STATES = (ConnectionState.CONNECTED, ConnectionState.DEGRADED)
 
 
 class ConnectionBar(QtWidgets.QFrame):
     """Shows and drives the :class:`Link`; call :meth:`poll` once per frame."""
 
-    state_changed = QtCore.Signal(str)
+    state_changed = QtCore.Signal(object)  # a ConnectionState
 
     def __init__(self, link: Link, config: AppConfig, parent: QtWidgets.QWidget | None = None) -> None:
         super().__init__(parent)
@@ -57,7 +62,7 @@ class ConnectionBar(QtWidgets.QFrame):
         #: settings from the command line (--ca-file, --client-cert/--client-key, the secret from
         #: RCON_AUTH_SECRET or --auth-secret-file): they apply to every robot of this run
         self.overrides = LinkSettings()
-        self.state = "closed"
+        self.state = ConnectionState.CLOSED
         self.failure: Any = None  # the last reasons.Failure shown, until the link comes up
         self.note = ""  # a rejected URL, said before the failure of the link still in use
         self.dialog: LinkSettingsDialog | None = None
@@ -107,7 +112,7 @@ class ConnectionBar(QtWidgets.QFrame):
         self.state_label = QtWidgets.QLabel()
         self.state_label.setObjectName("linkState")
         self.state_label.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
-        self.state_label.setProperty("state", "closed")
+        self.state_label.setProperty("state", ConnectionState.CLOSED.value)
         self.latency_label = QtWidgets.QLabel("—")
         self.latency_label.setObjectName("latency")
         self.latency_label.setToolTip("round-trip time to the robot")
@@ -124,7 +129,7 @@ class ConnectionBar(QtWidgets.QFrame):
         row.addWidget(self.state_label)
         row.addWidget(self.latency_label)
         row.addWidget(self.message, 2)  # the message gets the room: the reason comes first, then the countdown
-        self._show_state("closed")
+        self._show_state(ConnectionState.CLOSED)
 
     # ---------------------------------------------------------------------------------------- actions
     def robot_url(self) -> str:
@@ -144,7 +149,7 @@ class ConnectionBar(QtWidgets.QFrame):
             self.link.disconnect()
             self.failure, self.note = None, ""
             self.message.clear()
-            self._show_state("closed")
+            self._show_state(ConnectionState.CLOSED)
 
     def _return_pressed(self) -> None:
         # an editable combo hands the ignored Return back to its line edit, which emits returnPressed a
@@ -177,13 +182,13 @@ class ConnectionBar(QtWidgets.QFrame):
         # the auth op tells (a robot refusing the secret opens the link and then closes it)
         self._remember_on_answer = settings.secret is not None
         self._set_field(text)
-        self._show_state("connecting")
+        self._show_state(ConnectionState.CONNECTING)
 
     def _bad_url(self, exc: BadUrl) -> None:
         active = self.link.url if self.link.client is not None else None
         if active:  # the field shows the URL actually in use, never the rejected text
             self._set_field(active)
-            verb = "still connected to" if self.state == "connected" else "still trying"
+            verb = "still connected to" if self.state is ConnectionState.CONNECTED else "still trying"
             self.note = f"{exc} · {verb} {active}"
         else:
             self.note = str(exc)
@@ -274,8 +279,8 @@ class ConnectionBar(QtWidgets.QFrame):
             self.failure = failure
             if failure is not None and failure.fatal:
                 self.link.disconnect()  # retrying cannot help: the operator changes a setting first
-                self._show_state("closed")
-            elif failure is None and self.state != "connected":
+                self._show_state(ConnectionState.CLOSED)
+            elif failure is None and self.state is not ConnectionState.CONNECTED:
                 self.message.clear()
         ok, answered = self.link.answered_box.take()
         if ok and answered is not None and answered == self._remember == self.link.url:
@@ -283,23 +288,23 @@ class ConnectionBar(QtWidgets.QFrame):
         if self.failure is not None:
             why = self.failure.text()
             self.message.setText(f"{self.note}: {why}" if self.note else why)
-        latency = self.link.latency if self.state in ("connected", "degraded") else None
+        latency = self.link.latency if self.state in LIVE_STATES else None
         text = "—" if latency is None else ("<1 ms" if latency < 0.0005 else f"{latency * 1000:.0f} ms")
         if text != self._last_latency_text:
             self._last_latency_text = text
             self.latency_label.setText(text)
 
-    def _show_state(self, state: str) -> None:
+    def _show_state(self, state: ConnectionState) -> None:
         self.state = state
-        self.state_label.setText(STATE_TEXT.get(state, state.upper()))
-        self.state_label.setProperty("state", state)
+        self.state_label.setText(STATE_TEXT[state])
+        self.state_label.setProperty("state", state.value)  # the theme's selectors use the value
         repolish(self.state_label)
         self.connect_button.setText("Connect" if self.link.client is None else "Disconnect")
         self._fit_widths()
         # a latency means something only while connected; otherwise its room goes to the message, which
         # then asks for that room as its minimum: the bar's minimum width is the same in every state
         # (the smaller minimum first, so the bar never asks for both at once, not even for one layout pass)
-        connected = state == "connected"
+        connected = state is ConnectionState.CONNECTED
         spacing = layout.spacing() if (layout := self.layout()) is not None else 0
         if connected:
             self.message.setMinimumWidth(0)
@@ -307,7 +312,7 @@ class ConnectionBar(QtWidgets.QFrame):
         else:
             self.latency_label.setVisible(False)
             self.message.setMinimumWidth(self.latency_label.minimumSizeHint().width() + spacing)
-        if state == "connected":
+        if connected:
             self.failure, self.note = None, ""
             self.message.clear()
             if self._remember is not None and self._remember == self.link.url and not self._remember_on_answer:

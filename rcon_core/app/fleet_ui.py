@@ -23,11 +23,13 @@ from typing import Any
 
 from qtpy import QtCore, QtGui, QtWidgets
 
+from rcon_core.app.connection_bar import LIVE_STATES
 from rcon_core.app.fleet_links import FleetLinks
-from rcon_core.app.link import EMPTY_CATALOG, OFFLINE, BadUrl, state_name
+from rcon_core.app.link import EMPTY_CATALOG, OFFLINE, BadUrl, as_state
 from rcon_core.app.robot_chips import RobotChips, RobotPicker
 from rcon_core.app.robot_marks import apply_marks
 from rcon_core.app.widget_host import RateMeter
+from rcon_core.bridge import ConnectionState
 from rcon_core.canvas import Change, EditError
 from rcon_core.canvas.fleet import Fleet
 from rcon_core.canvas.robots import robot_colour
@@ -66,7 +68,7 @@ class FleetUi(QtCore.QObject):
         self.catalogs: dict[str, dict[str, list[tuple[str, str]]]] = {}
         self._catalog_dirty = True
         self._marks_dirty = True
-        self._states: dict[str, str] = {}
+        self._states: dict[str, ConnectionState] = {}
         #: robot id -> why its link is not up (words of rcon_core.bridge.reasons), for its chip
         self.why: dict[str, str] = {}
         self._remove = window.doc.add_listener(self._doc_changed)
@@ -253,18 +255,18 @@ class FleetUi(QtCore.QObject):
                 self.why[first] = failure.text() if failure is not None else ""
             else:
                 ok, taken = link.state_box.take()
-                state = taken if ok else self._states.get(robot.id, "closed")
+                state = taken if ok else self._states.get(robot.id, ConnectionState.CLOSED)
                 self._take_failure(robot.id, link)
                 link.answered_box.take()
-            state = state_name(state)
+            state = as_state(state)
             if self._states.get(robot.id) != state:
                 self._states[robot.id] = state
-                window.host.set_link_up(state == "connected", robot.id)
-            latency = link.latency if state in ("connected", "degraded") else None
+                window.host.set_link_up(state is ConnectionState.CONNECTED, robot.id)
+            latency = link.latency if state in LIVE_STATES else None
             view_only = self.config_view_only(robot.id) or (f"robot “{robot.label}” is view-only"
                                                             if robot.view_only else None)
             self.chips.show_state(robot.id, state, latency,
-                                  None if state == "connected" else self.why.get(robot.id) or None, view_only)
+                                  None if state is ConnectionState.CONNECTED else self.why.get(robot.id) or None, view_only)
         if self._marks_dirty:
             self._marks_dirty = False
             apply_marks(window.host, window.doc.workspace)
@@ -280,7 +282,7 @@ class FleetUi(QtCore.QObject):
                 self.why[robot_id] = failure.text()
                 if failure.fatal:
                     link.disconnect()
-                    self._states[robot_id] = "closed"
+                    self._states[robot_id] = ConnectionState.CLOSED
         ok, error = link.error_box.take()
         if ok and error:
             self.why[robot_id] = str(error)

@@ -1,7 +1,8 @@
 """The app's link to the robot: one BridgeClient living on a BridgeThread, seen from the GUI thread.
 
 Every network operation runs on the bridge thread.  The GUI reads what the bridge thread left behind:
-the connection state in a :class:`LatestValue` mailbox, the latency as a float attribute, the topic
+the connection state (a :class:`rcon_core.bridge.ConnectionState`: the app's link has no state the
+bridge client lacks, so the app compares and stores that enum, never its words) in a :class:`LatestValue` mailbox, the latency as a float attribute, the topic
 and service catalogue in another mailbox, and why the last attempt failed (a
 :class:`rcon_core.bridge.reasons.Failure`, None once connected) in a third.  Nothing here blocks the GUI
 thread.  Connecting to another robot, or disconnecting, empties the catalogue at once: the previous
@@ -80,10 +81,9 @@ class LinkSettings:
                 "client_key": self.client_key or None, "auth": rosauth(self.secret, url) if self.secret else None}
 
 
-def state_name(state: Any) -> str:
-    """``ConnectionState.CONNECTED`` -> ``"connected"`` (also accepts plain strings)."""
-    name = getattr(state, "name", None) or getattr(state, "value", None) or str(state)
-    return str(name).lower().rsplit(".", 1)[-1]
+def as_state(state: ConnectionState | str) -> ConnectionState:
+    """``ConnectionState.CONNECTED`` as it is; its value ``"connected"`` as the member."""
+    return state if isinstance(state, ConnectionState) else ConnectionState(str(state).lower())
 
 
 class Link:
@@ -105,7 +105,7 @@ class Link:
         self._catalog_task: asyncio.Task | None = None
         self._generation = 0
         self._listeners: list[Callable[[BridgeClient | None], None]] = []
-        self.state_box.put("closed")
+        self.state_box.put(ConnectionState.CLOSED)
 
     # ------------------------------------------------------------------------------------- GUI side
     def on_client_changed(self, fn: Callable[[BridgeClient | None], None]) -> None:
@@ -120,7 +120,7 @@ class Link:
         gen = self._generation
         client = BridgeClient(url, reconnect=True, **(settings or LinkSettings()).client_options(url))
         self.client, self.url = client, url
-        self.state_box.put("connecting")
+        self.state_box.put(ConnectionState.CONNECTING)
         self.thread.call(self._wire, client, gen)
         for fn in self._listeners:
             fn(client)
@@ -136,7 +136,7 @@ class Link:
         for fn in self._listeners:
             fn(None)
         self.thread.run(self._close(client))
-        self.state_box.put("closed")
+        self.state_box.put(ConnectionState.CLOSED)
 
     @property
     def latency(self) -> float | None:
@@ -160,8 +160,8 @@ class Link:
     def _wire(self, client: BridgeClient, gen: int) -> None:
         def on_state(state: Any) -> None:
             if gen == self._generation:
-                self.state_box.put(state_name(state))
-                if state_name(state) == "connected":
+                self.state_box.put(as_state(state))
+                if as_state(state) is ConnectionState.CONNECTED:
                     self.failure_box.put(None)
                     self._start_catalog(client, gen)
 
@@ -181,7 +181,7 @@ class Link:
                 self.error_box.put(f"could not connect: {exc}")
             return
         if gen == self._generation:
-            self.state_box.put(state_name(client.state))
+            self.state_box.put(as_state(client.state))
             self._start_catalog(client, gen)
         try:  # the robot answers a call: it accepted the link (and the auth op, if any)
             await confirm_auth(client)
@@ -197,7 +197,7 @@ class Link:
 
     async def _catalog_loop(self, client: BridgeClient, gen: int) -> None:
         while gen == self._generation:
-            if state_name(client.state) == "connected":
+            if client.state is ConnectionState.CONNECTED:
                 try:
                     catalog = await fetch_catalog(client)
                     if gen == self._generation:

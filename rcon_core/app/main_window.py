@@ -44,6 +44,7 @@ from rcon_core.app.preview import PreviewHost
 from rcon_core.app.side_panel import PANEL_MIN, SIDE_MIN, SidePanelPolicy
 from rcon_core.app.template_menu import add_template_menu
 from rcon_core.app.widget_host import RateMeter, WidgetHost
+from rcon_core.bridge import ConnectionState
 from rcon_core.canvas import Document, Workspace
 from rcon_core.plugins import Binding, PluginManager, Role, WidgetSpec
 from rcon_core.plugins.children import ChildContext
@@ -497,8 +498,8 @@ class MainWindow(QtWidgets.QMainWindow):
         if event.type() == QtCore.QEvent.Type.ActivationChange and not self.isActiveWindow():
             self.focus_lost()
 
-    def _link_state(self, state: str) -> None:
-        self.host.set_link_up(state == "connected", self.fleet_ui.first_id)
+    def _link_state(self, state: ConnectionState) -> None:
+        self.host.set_link_up(state is ConnectionState.CONNECTED, self.fleet_ui.first_id)
 
     def _poll_catalog(self, now: float) -> None:
         catalog = self.fleet_ui.take_catalog()  # the side panel's robot's

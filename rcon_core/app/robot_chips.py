@@ -12,15 +12,16 @@ from __future__ import annotations
 
 from qtpy import QtCore, QtWidgets
 
-from rcon_core.app.connection_bar import STATE_TEXT
+from rcon_core.app.connection_bar import LIVE_STATES, STATE_TEXT
+from rcon_core.bridge import ConnectionState
 
 #: chip text colour on each state (the chip's own colour is its robot's, on its left edge)
 STATE_STYLE = {
-    "connected": ("#ffffff", "#006b2e"),
-    "degraded": ("#000000", "#ffcc00"),
-    "connecting": ("#000000", "#d8d8d8"),
-    "reconnecting": ("#000000", "#ffcc00"),
-    "closed": ("#ffffff", "#a00000"),
+    ConnectionState.CONNECTED: ("#ffffff", "#006b2e"),
+    ConnectionState.DEGRADED: ("#000000", "#ffcc00"),
+    ConnectionState.CONNECTING: ("#000000", "#d8d8d8"),
+    ConnectionState.RECONNECTING: ("#000000", "#ffcc00"),
+    ConnectionState.CLOSED: ("#ffffff", "#a00000"),
 }
 
 
@@ -40,28 +41,28 @@ class RobotChip(QtWidgets.QPushButton):
         self.setCheckable(True)
         self.setAccessibleName(f"robot {name}")
         self.name, self.colour = name, colour
-        self.state, self.latency, self.why = "closed", None, None
+        self.state, self.latency, self.why = ConnectionState.CLOSED, None, None
         #: why the operator may only watch this robot (None: it takes commands); shown on the chip
         self.view_only: str | None = None
         self._shown: tuple[str, str, bool, str | None] | None = None
-        self.show_state("closed", None)
+        self.show_state(ConnectionState.CLOSED, None)
 
-    def show_state(self, state: str, latency: float | None, why: str | None = None) -> None:
+    def show_state(self, state: ConnectionState, latency: float | None, why: str | None = None) -> None:
         """The link's state, its round trip (while connected) and why it is not up (the tooltip)."""
         self.state, self.latency, self.why = state, latency, why
-        lat = latency_text(latency) if state in ("connected", "degraded") else ""
+        lat = latency_text(latency) if state in LIVE_STATES else ""
         name = f"{self.name} · view only" if self.view_only else self.name
-        text = f"{name}  {STATE_TEXT.get(state, state.upper())}" + (f"  {lat}" if lat else "")
+        text = f"{name}  {STATE_TEXT[state]}" + (f"  {lat}" if lat else "")
         key = (text, state, self.isChecked(), why)
         if key == self._shown:
             return
         self._shown = key
         self.setText(text)
-        self.setToolTip(f"{self.name}: {STATE_TEXT.get(state, state)}" + (f", round trip {lat}" if lat else "")
+        self.setToolTip(f"{self.name}: {STATE_TEXT[state]}" + (f", round trip {lat}" if lat else "")
                         + (f" ({why})" if why else "")
                         + (f"; {self.view_only}: nothing is sent to it" if self.view_only else "")
                         + ". Tap to show its topics and services.")
-        fg, bg = STATE_STYLE.get(state, ("#000000", "#d8d8d8"))
+        fg, bg = STATE_STYLE[state]
         edge = "#000000" if self.isChecked() else "#707070"
         weight = 4 if self.isChecked() else 2
         self.setStyleSheet(
@@ -111,7 +112,7 @@ class RobotChips(QtWidgets.QFrame):
             chip.setChecked(rid == robot_id)
             chip.show_state(chip.state, chip.latency, chip.why)
 
-    def show_state(self, robot_id: str, state: str, latency: float | None, why: str | None = None,
+    def show_state(self, robot_id: str, state: ConnectionState, latency: float | None, why: str | None = None,
                    view_only: str | None = None) -> None:
         chip = self.chips.get(robot_id)
         if chip is not None:

@@ -18,7 +18,7 @@ from typing import Any
 from rcon_core.app.widget_frame import WidgetFrame
 from rcon_core.canvas import WidgetInstance
 from rcon_core.canvas.runtime import BrokenWidgetModel, MissingWidgetModel, UnconfiguredWidgetModel
-from rcon_core.plugins import PluginManager, UnknownWidget
+from rcon_core.plugins import PluginManager, Role, UnknownWidget
 
 log = logging.getLogger(__name__)
 
@@ -226,7 +226,7 @@ class WidgetHost:
             binding = hosted.widget.binding
             if robot_id is not None and (binding.robot or self.first_robot) != robot_id:
                 continue
-            if hosted.model is not None and binding.role.value == "subscribe" and binding.name:
+            if hosted.model is not None and binding.role is Role.SUBSCRIBE and binding.name:
                 out[binding.name] = max(out.get(binding.name, 0), hosted.model.state.count)
         return out
 

@@ -56,6 +56,7 @@ from rcon_core.bridge.typecheck import TypeChecker, status_failure
 from rcon_core.plugins.context import SharedResources, WidgetContext
 from rcon_core.plugins.manager import PluginManager, UnknownWidget
 from rcon_core.plugins.model import Binding, BridgePort, WidgetModel
+from rcon_core.plugins.model_types import ModelTypes
 from rcon_core.plugins.spec import SettingsError
 
 from .fleet import BridgeNode, Fleet, RobotClient, RobotPort
@@ -147,7 +148,7 @@ class CanvasRuntime:
         plugin_manager: PluginManager,
         client: Fleet | RobotClient,
         *,
-        types: Any = None,
+        types: ModelTypes | None = None,
         plugin_settings: dict[str, dict[str, Any]] | None = None,
         dispatch: Callable[[Callable[[], Any]], Any] | None = None,
         on_activity: Callable[[str], Any] | None = None,

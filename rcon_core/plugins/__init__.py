@@ -7,10 +7,11 @@
 See ``docs/hooks.md`` (the hooks) and ``docs/writing-a-widget-plugin.md`` (a guide).
 """
 
-from .context import SharedResources, SpecLookup, WidgetContext
+from .context import SharedResources, SpecLookup, WidgetCatalog, WidgetContext
 from .hookspecs import hookimpl, hookspec
 from .manager import DISABLE_ENV, ENTRY_POINT_GROUP, PluginInfo, PluginManager, PluginStatus, UnknownWidget
 from .model import Binding, BridgePort, WidgetModel, WidgetState
+from .model_types import ModelTypes
 from .paths import PathError, get_path, set_path
 from .registry import (
     CanvasTemplate,
@@ -50,11 +51,13 @@ __all__ = [
     "resolve",
     "WidgetModel",
     "WidgetState",
+    "ModelTypes",
     "Binding",
     "BridgePort",
     "WidgetContext",
     "SharedResources",
     "SpecLookup",
+    "WidgetCatalog",
     "WidgetRegistry",
     "TypeContributions",
     "TemplateRegistry",

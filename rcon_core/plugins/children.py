@@ -26,7 +26,9 @@ import attrs
 
 from rcon_core.matcher import Match, Rank, match
 from rcon_core.msgs import names, walk_fields
+from rcon_core.plugins.context import WidgetCatalog
 from rcon_core.plugins.model import Binding
+from rcon_core.plugins.model_types import ModelTypes
 from rcon_core.plugins.paths import PathError, split_service_path
 from rcon_core.plugins.spec import Role, WidgetSpec
 
@@ -73,8 +75,8 @@ def child_role(parent: Role, part: str = "") -> Role:
 class ChildContext:
     """What the children editor needs from its surroundings."""
 
-    types: Any  #: the TypeRegistry
-    plugins: Any  #: anything with ``widgets()``, ``widget(kind)``, ``has_widget(kind)``
+    types: ModelTypes  #: the app's type registry
+    plugins: WidgetCatalog  #: the enabled widget kinds (the app's plugin manager)
     binding: Callable[[], Binding | None]  #: the parent widget's binding, as currently chosen
     learn: Learn | None = None  #: fetches typedefs from the robot (None: offline)
 
@@ -120,7 +122,7 @@ def _join(prefix: str, name: str) -> str:
 class ChildCatalog:
     """Fields of the parent's bound type, the kinds that fit each, and each child's problems (no Qt)."""
 
-    def __init__(self, types: Any, plugins: Any, binding: Binding | None, exclude: tuple[str, ...] = ()) -> None:
+    def __init__(self, types: ModelTypes, plugins: WidgetCatalog, binding: Binding | None, exclude: tuple[str, ...] = ()) -> None:
         self.types, self.plugins, self.binding = types, plugins, binding
         self.exclude = set(exclude)
         self._matches: dict[tuple[str, Role], list[Match]] = {}

@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING, Any, Protocol, TypeVar
 if TYPE_CHECKING:
     from .spec import WidgetSpec
 
-__all__ = ["SpecLookup", "SharedResources", "WidgetContext"]
+__all__ = ["SpecLookup", "WidgetCatalog", "SharedResources", "WidgetContext"]
 
 T = TypeVar("T")
 
@@ -38,6 +38,17 @@ class SpecLookup(Protocol):
     offers it: ``PluginManager.widget`` is one."""
 
     def __call__(self, kind: str) -> WidgetSpec: ...
+
+
+class WidgetCatalog(Protocol):
+    """The enabled widget kinds, as the matcher and the children logic read them: ``PluginManager`` is
+    one."""
+
+    def widgets(self) -> list[WidgetSpec]: ...
+
+    def widget(self, kind: str) -> WidgetSpec: ...
+
+    def has_widget(self, kind: str) -> bool: ...
 
 
 class SharedResources:

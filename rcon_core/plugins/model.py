@@ -48,6 +48,7 @@ import attrs
 from rcon_core.msgs.names import normalize
 
 from .context import WidgetContext
+from .model_types import ModelTypes
 from .paths import PathError, get_path, set_path, split_service_path
 from .spec import Role
 
@@ -226,7 +227,7 @@ class WidgetModel:
         binding: Binding,
         port: BridgePort,
         *,
-        types: Any = None,
+        types: ModelTypes | None = None,
         plugin_settings: Any = None,
         dispatch: Dispatch | None = None,
         clock: Callable[[], float] = time.monotonic,
@@ -236,7 +237,8 @@ class WidgetModel:
         self.context = context if context is not None else WidgetContext.standalone()
         self.binding = binding
         self.port = port
-        self.types = types
+        #: the app's type registry (None: a model that needs no definitions, e.g. in a bare test)
+        self.types: ModelTypes | None = types
         self.plugin_settings = plugin_settings
         self._dispatch: Dispatch = dispatch or _call_now
         self._clock = clock
@@ -371,9 +373,8 @@ class WidgetModel:
 
     def _service_part_type(self, part: str) -> str:
         # registries name service parts by the service type plus the part; ask the registry if it can
-        fn = getattr(self.types, "service_part_name", None)
-        if fn is not None:
-            return fn(self.binding.type, part)
+        if self.types is not None:
+            return self.types.service_part_name(self.binding.type, part)
         return f"{self.binding.type}_{part.capitalize()}"
 
     # -- outgoing (any thread) -----------------------------------------------------------------------

@@ -29,8 +29,10 @@ class MBTilesReader:
         self.path = Path(path)
         if not self.path.is_file():
             raise MBTilesError(f"MBTiles file {str(self.path)!r} does not exist")
+        #: the SQLite URI the file is opened with: ``mode=ro``, SQLite refuses every write through it
+        self.uri = f"{self.path.resolve().as_uri()}?mode=ro"
         try:
-            self._db = sqlite3.connect(f"{self.path.resolve().as_uri()}?mode=ro", uri=True)
+            self._db = sqlite3.connect(self.uri, uri=True)
             names = {r[0] for r in self._db.execute("SELECT name FROM sqlite_master WHERE type IN ('table','view')")}
         except sqlite3.DatabaseError as exc:
             raise MBTilesError(f"{str(self.path)!r} is not an SQLite file: {exc}") from exc

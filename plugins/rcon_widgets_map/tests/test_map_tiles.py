@@ -118,8 +118,15 @@ def test_mbtiles_errors_are_specific(tmp_path):
 
 
 def test_reader_opens_read_only(mbtiles_file):
-    with MBTilesReader(mbtiles_file) as r, pytest.raises(sqlite3.OperationalError, match="readonly"):
-        r._db.execute("DELETE FROM tiles")
+    before = (mbtiles_file.read_bytes(), mbtiles_file.stat().st_mtime_ns)
+    with MBTilesReader(mbtiles_file) as r:
+        assert "mode=ro" in r.uri
+        assert r.tile(0, 0, 0) is not None and r.metadata["name"] == "test harbour"  # read through it
+        other = sqlite3.connect(r.uri, uri=True)  # the reader's URI: SQLite refuses a write through it
+        with pytest.raises(sqlite3.OperationalError, match="readonly"):
+            other.execute("DELETE FROM tiles")
+        other.close()
+    assert (mbtiles_file.read_bytes(), mbtiles_file.stat().st_mtime_ns) == before
 
 
 # -- online tiles --------------------------------------------------------------------------------------

@@ -4,6 +4,7 @@ UInt8..64 or any numeric field of a larger message. Settings and model; the view
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 import attrs
@@ -111,12 +112,18 @@ def number_range(minimum: float, maximum: float, step: float, base: str) -> Numb
 
 
 class NumericModel(StdModel):
-    """Shared by Slider and Stepper: the bound field's type, the range, rate-limited publishing."""
+    """Shared by Slider and Stepper: the bound field's type, the range, rate-limited publishing.
 
-    def __init__(self, settings: Any, *args: Any, **kwargs: Any) -> None:
+    ``schedule(delay, fn)`` arranges the rate limiter's one delayed send of a kept value (default: the
+    bridge loop's ``call_later``); a test passes its own to run that send when it chooses, with the
+    model's ``clock``.
+    """
+
+    def __init__(self, settings: Any, *args: Any,
+                 schedule: Callable[[float, Callable[[], None]], Any] | None = None, **kwargs: Any) -> None:
         super().__init__(settings, *args, **kwargs)
         self._limiter = RateLimiter(self._send, settings.rate_hz if settings is not None else 10.0,
-                                    clock=self._clock)
+                                    schedule=schedule, clock=self._clock)
 
     @property
     def field_base(self) -> str:

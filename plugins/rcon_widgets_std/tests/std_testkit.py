@@ -13,10 +13,11 @@ def bridge(sim):
 
 
 def build(model_cls, settings, name, type_, role, paths=(), *, client=None, types=None, node="w", clock=None,
-          port=None, context=None):
+          port=None, context=None, **extra):
     """A model bound as given, on its own node of ``client``, on ``port`` (e.g. a ``RecordingPort``) or on
-    no port; ``context``: a ``WidgetContext`` (default: the standalone one)."""
-    kwargs = {"types": types if types is not None else TypeRegistry.standard()}
+    no port; ``context``: a ``WidgetContext`` (default: the standalone one); ``extra``: the model's own
+    keyword arguments (e.g. a numeric model's ``schedule``)."""
+    kwargs = {"types": types if types is not None else TypeRegistry.standard(), **extra}
     if clock is not None:
         kwargs["clock"] = clock
     if context is not None:

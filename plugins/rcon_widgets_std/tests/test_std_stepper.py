@@ -29,9 +29,9 @@ def test_integer_field_and_problems():
 
 def test_rate_limit_with_a_fake_clock():
     clock, sent, timers = ManualClock(), [], []
-    m = build(StepperModel, StepperSettings(rate_hz=2), "/n", "std_msgs/Int32", "publish", "data", clock=clock)
+    m = build(StepperModel, StepperSettings(rate_hz=2), "/n", "std_msgs/Int32", "publish", "data", clock=clock,
+              schedule=lambda delay, fn: timers.append(fn))
     m.publish_value = lambda v: sent.append(v) or True
-    m._limiter._schedule = lambda delay, fn: timers.append(fn)
     m.up()
     m.up()
     m.up()
