@@ -241,7 +241,7 @@ async def part_stall(stall: float, rate_hz: float = 50.0) -> dict[str, Any]:
 
 
 def _layout(n: int) -> Any:
-    from rcon_core.canvas.model import Canvas, Geometry, WidgetInstance, Workspace
+    from rcon_core.canvas.workspace import Canvas, Geometry, WidgetInstance, Workspace
     from rcon_core.plugins.model import Binding
 
     canvases = [Canvas(f"c-{c}", f"Canvas {c}", [

@@ -5,7 +5,6 @@ No Qt. ``runtime`` (imported on demand) starts and stops the widget models of a 
 
 from .autosave import AutoSaver
 from .document import CanvasLocked, Change, Command, Document, EditError
-from .model import Binding, Canvas, Geometry, WidgetInstance, Workspace, new_id
 from .store import (
     NewerVersionError,
     WorkspaceFileError,
@@ -16,6 +15,7 @@ from .store import (
     import_canvas,
     loads_workspace,
 )
+from .workspace import Binding, Canvas, Geometry, WidgetInstance, Workspace, new_id
 
 __all__ = [
     "AutoSaver",

@@ -27,8 +27,8 @@ import attrs
 
 from rcon_core.plugins.model import Binding
 
-from .model import Canvas, Geometry, WidgetInstance, Workspace, new_id
 from .robots import Robot, UnknownRobot, default_robot, resolve_robot
+from .workspace import Canvas, Geometry, WidgetInstance, Workspace, new_id
 
 __all__ = ["Document", "Change", "Command", "CanvasLocked", "EditError"]
 

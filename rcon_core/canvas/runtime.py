@@ -60,9 +60,9 @@ from rcon_core.plugins.model_types import ModelTypes
 from rcon_core.plugins.spec import SettingsError
 
 from .fleet import BridgeNode, Fleet, RobotClient, RobotPort
-from .model import Canvas, WidgetInstance
 from .port import GuardedPort
 from .robots import UnknownRobot
+from .workspace import Canvas, WidgetInstance
 
 __all__ = ["CanvasRuntime", "MissingWidgetModel", "BrokenWidgetModel", "UnconfiguredWidgetModel"]
 

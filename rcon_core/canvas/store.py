@@ -65,8 +65,8 @@ from rcon_core.plugins.model import Binding, Role
 
 from . import checks
 from .files import atomic_write, backup, clean_stale_temps, real_path, same_backup
-from .model import Canvas, Geometry, WidgetInstance, Workspace
 from .robots import Robot, default_robot
+from .workspace import Canvas, Geometry, WidgetInstance, Workspace
 
 log = logging.getLogger(__name__)
 

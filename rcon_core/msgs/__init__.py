@@ -3,7 +3,7 @@
 No Qt here. Messages travel as plain wire-shape dicts; see ``docs/architecture.md``.
 """
 
-from .model import Constant, FieldDef, MsgDef
+from .fielddefs import Constant, FieldDef, MsgDef
 from .names import normalize, to_ros1, to_ros2
 from .registry import TypeRegistry, UnknownTypeError
 from .text import MessageTextError, Problem

@@ -7,7 +7,7 @@ A ROS 1 action server talks over topics ``<ns>/goal``, ``<ns>/cancel``, ``<ns>/s
 from __future__ import annotations
 
 from . import names
-from .model import FieldDef, MsgDef
+from .fielddefs import FieldDef, MsgDef
 
 __all__ = ["actionlib_wrappers"]
 

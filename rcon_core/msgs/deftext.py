@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from . import names
-from .model import MsgDef
+from .fielddefs import MsgDef
 
 if TYPE_CHECKING:
     from .lookup import TypeLookup

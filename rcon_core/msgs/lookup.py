@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import Any, Protocol
 
-from .model import FieldDef, MsgDef
+from .fielddefs import FieldDef, MsgDef
 
 
 class TypeLookup(Protocol):

@@ -6,7 +6,7 @@ import re
 from typing import Any
 
 from . import names
-from .model import IDL_ALIASES, PRIMITIVES, TIME_TYPES, Constant, FieldDef, MsgDef
+from .fielddefs import IDL_ALIASES, PRIMITIVES, TIME_TYPES, Constant, FieldDef, MsgDef
 
 __all__ = ["parse_msg", "parse_interface", "resolve_base", "MsgParseError"]
 

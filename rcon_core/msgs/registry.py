@@ -15,7 +15,7 @@ from . import text as msg_text
 from .actions import actionlib_wrappers
 from .cdr import CdrCodec
 from .deftext import definition_text
-from .model import TIME_TYPES, Constant, FieldDef, MsgDef, is_binary, primitive
+from .fielddefs import TIME_TYPES, Constant, FieldDef, MsgDef, is_binary, primitive
 from .parse import parse_interface
 from .ros1_wire import Ros1Codec
 from .sources import standard_defs, standard_interfaces

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .model import TIME_TYPES, FieldDef, is_binary, primitive
+from .fielddefs import TIME_TYPES, FieldDef, is_binary, primitive
 from .values import as_bytes
 
 if TYPE_CHECKING:

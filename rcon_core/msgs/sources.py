@@ -11,7 +11,7 @@ from types import MappingProxyType
 from typing import Any
 
 from .actions import actionlib_wrappers
-from .model import Constant, FieldDef, MsgDef
+from .fielddefs import Constant, FieldDef, MsgDef
 from .parse import TIME_NAMES, parse_interface
 
 __all__ = ["standard_defs", "from_rosbags_fielddefs", "bundled_texts"]

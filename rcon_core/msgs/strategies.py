@@ -6,7 +6,7 @@ import base64
 
 from hypothesis import strategies as st
 
-from rcon_core.msgs.model import TIME_TYPES, is_binary, primitive
+from rcon_core.msgs.fielddefs import TIME_TYPES, is_binary, primitive
 
 
 def scalar(reg, base, binary_as="base64", text=None):

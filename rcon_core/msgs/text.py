@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 
 import attrs
 
-from .model import TIME_TYPES, FieldDef, is_binary, primitive
+from .fielddefs import TIME_TYPES, FieldDef, is_binary, primitive
 
 if TYPE_CHECKING:
     from .lookup import TypeLookup

@@ -20,7 +20,7 @@ import attrs
 import cattrs
 
 from . import names
-from .model import TIME_TYPES, FieldDef, is_binary, primitive
+from .fielddefs import TIME_TYPES, FieldDef, is_binary, primitive
 from .time import read as read_time
 from .values import as_bytes, to_base64
 

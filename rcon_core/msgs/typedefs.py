@@ -20,7 +20,7 @@ import re
 from typing import TYPE_CHECKING, Any
 
 from . import names
-from .model import IDL_ALIASES, PRIMITIVES, TIME_TYPES, Constant, FieldDef, MsgDef
+from .fielddefs import IDL_ALIASES, PRIMITIVES, TIME_TYPES, Constant, FieldDef, MsgDef
 
 if TYPE_CHECKING:
     from .lookup import TypeLookup

@@ -12,8 +12,8 @@ from __future__ import annotations
 
 from typing import Any, Protocol
 
+from rcon_core.msgs.fielddefs import FieldDef
 from rcon_core.msgs.lookup import TypeLookup
-from rcon_core.msgs.model import FieldDef
 
 
 class ModelTypes(TypeLookup, Protocol):
