@@ -83,13 +83,13 @@ def phase(view) -> str:
 
 
 def test_actions_list_and_the_add_pathway_place_an_action_widget(window, qtbot, plugins):
-    qtbot.waitUntil(lambda: window.actions.item(NAV) is not None, timeout=TIMEOUT_MS)
-    assert window.actions.item(NAV).data(0, 257) == NAV_TYPE  # the type, from /rosapi/action_type
-    assert window.actions.item("/fibonacci") is not None
-    window.side.setCurrentWidget(window.actions)
+    qtbot.waitUntil(lambda: window.actions_list.item(NAV) is not None, timeout=TIMEOUT_MS)
+    assert window.actions_list.item(NAV).data(0, 257) == NAV_TYPE  # the type, from /rosapi/action_type
+    assert window.actions_list.item("/fibonacci") is not None
+    window.side.setCurrentWidget(window.actions_list)
     snap(window, "actions-list")
-    tree = window.actions.tree
-    tap_item(tree, tree.indexFromItem(window.actions.item(NAV)))
+    tree = window.actions_list.tree
+    tap_item(tree, tree.indexFromItem(window.actions_list.item(NAV)))
     panel = window.add_panel
     assert panel.role_buttons[Role.ACTION].isVisible()
     assert not panel.role_buttons[Role.SUBSCRIBE].isVisible() and not panel.role_buttons[Role.CALL].isVisible()
@@ -174,12 +174,12 @@ def test_an_action_listed_without_its_type_asks_for_it_then_places_the_widget(qt
     with SimServer.in_thread(host="127.0.0.1", port=0, rate_scale=TEST_RATE_SCALE, ros2=True) as sim:
         del sim.services["/rosapi/action_type"]  # a rosapi 2.1.0: it cannot tell an action's type
         for window in window_session(qtbot, tmp_path / "config", plugins, url=sim.url, wait_connected=True):
-            qtbot.waitUntil(lambda actions=window.actions: actions.item(NAV) is not None, timeout=TIMEOUT_MS)
-            assert window.actions.item(NAV).data(0, 257) == ""
-            assert window.actions.item(NAV).text(0).endswith("type unknown")
-            window.side.setCurrentWidget(window.actions)
-            tree = window.actions.tree
-            tap_item(tree, tree.indexFromItem(window.actions.item(NAV)))
+            qtbot.waitUntil(lambda actions=window.actions_list: actions.item(NAV) is not None, timeout=TIMEOUT_MS)
+            assert window.actions_list.item(NAV).data(0, 257) == ""
+            assert window.actions_list.item(NAV).text(0).endswith("type unknown")
+            window.side.setCurrentWidget(window.actions_list)
+            tree = window.actions_list.tree
+            tap_item(tree, tree.indexFromItem(window.actions_list.item(NAV)))
             panel = window.add_panel
             assert panel.role_type.text() == "type unknown" and panel.action_type_box.isVisible()
             assert not panel.role_buttons[Role.ACTION].isEnabled()  # nothing fits a type nobody knows
@@ -203,9 +203,9 @@ def test_no_type_at_all_offers_no_widget_and_says_so(window, qtbot):
 def test_a_ros1_robot_lists_no_actions_and_says_why(qtbot, tmp_path, sim_thread, plugins):
     for window in window_session(qtbot, tmp_path / "config", plugins, url=sim_thread.url, wait_connected=True,
                                  topics=("/cmd_vel",)):
-        window.side.setCurrentWidget(window.actions)
-        assert window.catalog["actions"] == [] and window.actions.tree.topLevelItemCount() == 0
-        assert window.actions.empty.isVisible() and "ROS 2" in window.actions.empty.text()
+        window.side.setCurrentWidget(window.actions_list)
+        assert window.catalog["actions"] == [] and window.actions_list.tree.topLevelItemCount() == 0
+        assert window.actions_list.empty.isVisible() and "ROS 2" in window.actions_list.empty.text()
 
 
 def test_a_bad_new_goal_while_one_runs_is_named_and_the_run_goes_on(window, sim2, qtbot, plugins):

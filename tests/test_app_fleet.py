@@ -323,10 +323,10 @@ def test_the_side_robot_decides_the_actions_and_parameters_listed(qtbot, tmp_pat
             ui = win.fleet_ui
             qtbot.waitUntil(lambda: ui.chips.chips["r-2"].state is ConnectionState.CONNECTED, timeout=TIMEOUT_MS)
             qtbot.waitUntil(lambda: win.topics.item("/battery") is not None, timeout=TIMEOUT_MS)
-            assert win.actions.item("/fibonacci") is None  # Alpha (ROS 1) has no actions
+            assert win.actions_list.item("/fibonacci") is None  # Alpha (ROS 1) has no actions
             assert win.params_panel.link is win.link
             tap(ui.chips.chips["r-2"])
-            qtbot.waitUntil(lambda: win.actions.item("/fibonacci") is not None, timeout=TIMEOUT_MS)
+            qtbot.waitUntil(lambda: win.actions_list.item("/fibonacci") is not None, timeout=TIMEOUT_MS)
             assert ui.pickers[2].combo.currentText() == "Bravo"  # the Actions list's picker too
             panel = win.params_panel
             assert panel.link is ui.links.link("r-2")
@@ -334,7 +334,7 @@ def test_the_side_robot_decides_the_actions_and_parameters_listed(qtbot, tmp_pat
             qtbot.waitUntil(lambda: panel.item("/kingfisher:max_speed") is not None and not panel.busy,
                             timeout=TIMEOUT_MS)
             tap(ui.chips.chips["r-1"])
-            qtbot.waitUntil(lambda: win.actions.item("/fibonacci") is None, timeout=TIMEOUT_MS)
+            qtbot.waitUntil(lambda: win.actions_list.item("/fibonacci") is None, timeout=TIMEOUT_MS)
             assert panel.link is win.link
             qtbot.waitUntil(lambda: panel.item("/kingfisher/max_speed") is not None and not panel.busy,
                             timeout=TIMEOUT_MS)  # Alpha's, by namespace (ROS 1)

@@ -203,6 +203,18 @@ def test_palette_says_so_when_no_widget_is_installed(qtbot, tmp_path):
         window.shutdown()
 
 
+def test_window_keeps_qt_actions_and_its_actions_catalog_apart(qtbot, tmp_path):
+    """The Actions catalog once sat on ``window.actions``, hiding ``QWidget.actions()`` (mypy found it)."""
+    window = MainWindow(AppConfig(tmp_path), PluginManager(environ={}))
+    qtbot.addWidget(window)
+    try:
+        assert window.quit_action in window.actions()  # Qt's own list of the window's actions
+        assert window.side.indexOf(window.actions_list) >= 0
+        assert window.side.tabText(window.side.indexOf(window.actions_list)) == "Actions"
+    finally:
+        window.shutdown()
+
+
 def place_from_palette(window: MainWindow, caption: str) -> None:
     """What a person does: tap the widget in the palette, pick a topic, fill the caption, tap Place."""
     window.side.setCurrentWidget(window.palette_panel)

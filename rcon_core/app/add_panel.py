@@ -218,7 +218,8 @@ class AddPanel(QtWidgets.QWidget):
         outer.addWidget(self.drag_handle)
         nav = self._nav(self._settings_back)  # one row: ‹ Back, Place, Cancel (room for the form)
         for i in range(nav.count()):
-            if nav.itemAt(i).spacerItem() is not None:
+            item = nav.itemAt(i)
+            if item is not None and item.spacerItem() is not None:
                 nav.takeAt(i)  # the Place button takes the room between Back and Cancel
                 nav.insertWidget(i, self.place_button, 1)
                 break

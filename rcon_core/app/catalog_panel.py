@@ -129,7 +129,8 @@ def elide_type(metrics: QtGui.QFontMetrics, type_name: str, width: int) -> str:
 class NameTypeDelegate(QtWidgets.QStyledItemDelegate):
     """Paints a catalog row's two lines, each cut on its own (see the module docstring)."""
 
-    def lines(self, index: QtCore.QModelIndex, option: QtWidgets.QStyleOptionViewItem) -> str:
+    def lines(self, index: QtCore.QModelIndex | QtCore.QPersistentModelIndex,
+              option: QtWidgets.QStyleOptionViewItem) -> str:
         """The text painted for the row at ``index`` given ``option``'s rect and font."""
         opt = QtWidgets.QStyleOptionViewItem(option)
         self.initStyleOption(opt, index)
@@ -146,7 +147,7 @@ class NameTypeDelegate(QtWidgets.QStyledItemDelegate):
         return f"{fm.elidedText(name, QtCore.Qt.TextElideMode.ElideMiddle, width)}{line_break}{shown}"
 
     def paint(self, painter: QtGui.QPainter, option: QtWidgets.QStyleOptionViewItem,
-              index: QtCore.QModelIndex) -> None:
+              index: QtCore.QModelIndex | QtCore.QPersistentModelIndex) -> None:
         opt = QtWidgets.QStyleOptionViewItem(option)
         self.initStyleOption(opt, index)
         opt.text = self.lines(index, option)

@@ -472,9 +472,10 @@ class ChildrenEditor(QtWidgets.QWidget):
                 settings = spec.make_settings({})
             if note:
                 lay.addWidget(_label(note, "problem"))
-            if settings is not None and self._form is None:
+            make_form = self._form
+            if settings is not None and make_form is None:
                 lay.addWidget(_label("Its settings are edited in the settings form.", "hint"))
-            elif settings is not None:
+            elif settings is not None and make_form is not None:
                 outer, parent_context = self, self._context  # the child's context is drawn from ours
 
                 def child_context() -> ChildContext | None:
@@ -486,7 +487,7 @@ class ChildrenEditor(QtWidgets.QWidget):
                                         lambda: outer.catalog().child_binding(i, outer.children_list[i]),  # type: ignore[union-attr]
                                         ctx.learn)
 
-                form = self._form(settings, context=child_context)
+                form = make_form(settings, context=child_context)
                 form.setObjectName("childSettingsForm")
                 form.changed.connect(self._child_form_edited)
                 lay.addWidget(form)

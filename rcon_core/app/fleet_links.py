@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
+from functools import partial
 from typing import Any
 
 from rcon_core.canvas.fleet import Fleet
@@ -132,7 +133,7 @@ class FleetLinks:
         for r in robots[1:]:
             if r.id not in self._links:
                 link = Link(self.thread)
-                link.on_client_changed(lambda client, link=link: self._changed(link, client))
+                link.on_client_changed(partial(self._changed, link))
                 self._links[r.id] = link
                 new.append(r.id)
         if robots and robots[0].id != old_first:

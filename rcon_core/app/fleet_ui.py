@@ -56,7 +56,7 @@ class FleetUi(QtCore.QObject):
         if isinstance(layout, QtWidgets.QBoxLayout):
             layout.insertWidget(1, self.chips)  # right under the connection bar
         self.pickers = []
-        for lst in (window.topics, window.services, window.actions):
+        for lst in (window.topics, window.services, window.actions_list):
             picker = RobotPicker(lst.what)
             picker.picked.connect(self.pick_side_robot)
             col = lst.layout()

@@ -55,6 +55,11 @@ ACTIONS_EMPTY = "No actions: a ROS 2 robot's action servers are listed here once
 class MainWindow(QtWidgets.QMainWindow):
     """RCON's window. ``plugins`` and ``config`` are injected so tests use their own."""
 
+    # made in __init__ after the lambdas that reach them are wired (declared here so they have a type there)
+    fleet_ui: FleetUi
+    controller: CanvasController
+    canvas_files: CanvasFiles
+
     def __init__(
         self,
         config: AppConfig,
@@ -102,14 +107,14 @@ class MainWindow(QtWidgets.QMainWindow):
         self.connection = ConnectionBar(self.link, config)
         self.topics = CatalogList("topics", with_rate=True)
         self.services = CatalogList("services", with_rate=False)
-        self.actions = CatalogList("actions", with_rate=False, empty=ACTIONS_EMPTY)
+        self.actions_list = CatalogList("actions", with_rate=False, empty=ACTIONS_EMPTY)
         self.palette_panel = PalettePanel()
         self.palette_panel.set_specs(plugins.widgets())
         self.side = QtWidgets.QTabWidget()
         self.side.setObjectName("sidePanel")
         self.side.addTab(self.topics, "Topics")
         self.side.addTab(self.services, "Services")
-        self.side.addTab(self.actions, "Actions")
+        self.side.addTab(self.actions_list, "Actions")
         self.params_panel = ParamsPanel(self.link, self.confirm)
         self.side.addTab(self.params_panel, "Params")
         self.side.addTab(self.palette_panel, "Widgets")
@@ -164,9 +169,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.side_policy = SidePanelPolicy(self, self.side, self.side_toggle, split, center, self.add_panel)
         center.installEventFilter(self)  # the canvas bar gets compact when the centre is narrow
         self.add_panel.installEventFilter(self)  # the add panel gets room when it opens
-        bar = self.connection.layout()
-        if isinstance(bar, QtWidgets.QBoxLayout):
-            bar.insertWidget(0, self.side_toggle)
+        conn_row = self.connection.layout()
+        if isinstance(conn_row, QtWidgets.QBoxLayout):
+            conn_row.insertWidget(0, self.side_toggle)
         root = QtWidgets.QWidget()
         rcol = QtWidgets.QVBoxLayout(root)
         rcol.setContentsMargins(0, 0, 0, 0)
@@ -211,7 +216,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.topics.picked.connect(lambda n, t: self._start_adding(lambda: self.add_panel.start_from_topic(n, t)))
         self.services.picked.connect(
             lambda n, t: self._start_adding(lambda: self.add_panel.start_from_service(n, t)))
-        self.actions.picked.connect(lambda n, t: self._start_adding(lambda: self.add_panel.start_from_action(n, t)))
+        self.actions_list.picked.connect(
+            lambda n, t: self._start_adding(lambda: self.add_panel.start_from_action(n, t)))
         self.palette_panel.picked.connect(self._palette_picked)
         self.connection.state_changed.connect(self._link_state)
         QtGui.QShortcut(QtGui.QKeySequence.StandardKey.Undo, self, self.undo)
@@ -507,7 +513,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.catalog = catalog
             self.topics.set_entries(catalog["topics"])
             self.services.set_entries(catalog["services"])
-            self.actions.set_entries(catalog.get("actions", []))
+            self.actions_list.set_entries(catalog.get("actions", []))
         if now - self._last_rate_sample >= 1.0:
             self._last_rate_sample = now
             self.topics.set_rates(self.rates.sample(self.host.topic_counts(self.fleet_ui.side_robot), now))

@@ -80,6 +80,11 @@ def value_text(value: Any) -> str:
     return yaml.safe_dump(value, default_flow_style=True, width=10_000).strip().removesuffix("...").strip()
 
 
+def _children(head: QtWidgets.QTreeWidgetItem) -> list[QtWidgets.QTreeWidgetItem]:
+    kids = (head.child(j) for j in range(head.childCount()))
+    return [kid for kid in kids if kid is not None]
+
+
 class ParamsPanel(QtWidgets.QWidget):
     """The Parameters tab. ``link`` is the app's :class:`~rcon_core.app.link.Link`."""
 
@@ -132,12 +137,12 @@ class ParamsPanel(QtWidgets.QWidget):
         self.edit_value = QtWidgets.QLineEdit()
         self.edit_value.setObjectName("paramValue")
         self.edit_value.returnPressed.connect(self.set_clicked)
+        self.edit_problem = QtWidgets.QLabel()
         self.edit_value.textChanged.connect(lambda _t: self.edit_problem.setText(""))
         self.set_button = QtWidgets.QPushButton("Set…")
         self.set_button.setObjectName("paramSet")
         self.set_button.setProperty("primary", True)
         self.set_button.clicked.connect(self.set_clicked)
-        self.edit_problem = QtWidgets.QLabel()
         self.edit_problem.setObjectName("paramProblem")
         self.edit_problem.setProperty("role", "problem")
         self.edit_problem.setWordWrap(True)
@@ -231,8 +236,7 @@ class ParamsPanel(QtWidgets.QWidget):
                             if count else "The robot has no parameters.")
 
     def _fill(self, groups: dict[str, dict[str, Any]]) -> None:
-        expanded = {self.tree.topLevelItem(i).text(0) for i in range(self.tree.topLevelItemCount())
-                    if self.tree.topLevelItem(i).isExpanded()}
+        expanded = {head.text(0) for head in self._heads() if head.isExpanded()}
         self.tree.clear()
         self.values = {}
         for owner, owned in groups.items():
@@ -262,20 +266,22 @@ class ParamsPanel(QtWidgets.QWidget):
 
     def item(self, name: str) -> QtWidgets.QTreeWidgetItem | None:
         """The row of parameter ``name`` (tests, and the editor)."""
-        for i in range(self.tree.topLevelItemCount()):
-            head = self.tree.topLevelItem(i)
-            for j in range(head.childCount()):
-                if head.child(j).data(0, NAME_ROLE) == name:
-                    return head.child(j)
+        for head in self._heads():
+            for child in _children(head):
+                if child.data(0, NAME_ROLE) == name:
+                    return child
         return None
+
+    def _heads(self) -> list[QtWidgets.QTreeWidgetItem]:
+        """The tree's top-level rows (one per node or namespace)."""
+        heads = (self.tree.topLevelItem(i) for i in range(self.tree.topLevelItemCount()))
+        return [head for head in heads if head is not None]
 
     def _apply_filter(self, text: str) -> None:
         words = text.lower().split()
-        for i in range(self.tree.topLevelItemCount()):
-            head = self.tree.topLevelItem(i)
+        for head in self._heads():
             shown = 0
-            for j in range(head.childCount()):
-                child = head.child(j)
+            for child in _children(head):
                 hay = child.text(0).replace("\n", " ").lower() + " " + child.data(0, NAME_ROLE).lower()
                 hit = all(w in hay for w in words)
                 child.setHidden(not hit)

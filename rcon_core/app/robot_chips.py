@@ -41,10 +41,12 @@ class RobotChip(QtWidgets.QPushButton):
         self.setCheckable(True)
         self.setAccessibleName(f"robot {name}")
         self.name, self.colour = name, colour
-        self.state, self.latency, self.why = ConnectionState.CLOSED, None, None
+        self.state: ConnectionState = ConnectionState.CLOSED
+        self.latency: float | None = None
+        self.why: str | None = None
         #: why the operator may only watch this robot (None: it takes commands); shown on the chip
         self.view_only: str | None = None
-        self._shown: tuple[str, str, bool, str | None] | None = None
+        self._shown: tuple[str, ConnectionState, bool, str | None] | None = None
         self.show_state(ConnectionState.CLOSED, None)
 
     def show_state(self, state: ConnectionState, latency: float | None, why: str | None = None) -> None:

@@ -159,7 +159,7 @@ Report = Callable[[str, Any], bool]
 async def watch_link(link: Any, watch: LinkWatch, pong_timeout: float, report: Report) -> None:
     """Probe one connection (a ``wslink.Link``) until it closes: pings, stall and recovery reports, the cut
     and the timeout."""
-    probes: set[asyncio.Future[None]] = set()
+    probes: set[asyncio.Task[None]] = set()
     try:
         while True:
             now = time.monotonic()

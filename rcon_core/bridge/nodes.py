@@ -177,10 +177,12 @@ class ActionGoal:
             return "failed"
         error = self._future.exception()
         if error is None:
-            try:
-                return GoalStatus(self.status).word
-            except ValueError:
-                return f"ended with status {self.status}"
+            if self.status is not None:
+                try:
+                    return GoalStatus(self.status).word
+                except ValueError:
+                    pass
+            return f"ended with status {self.status}"
         from .errors import ActionTimeoutError, ConnectionLostError
 
         if isinstance(error, ConnectionLostError):

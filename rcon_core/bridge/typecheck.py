@@ -118,7 +118,7 @@ class TypeChecker:
         fut = self._asking.get(key)
         if fut is None:
             fut = self._asking[key] = asyncio.ensure_future(robot_knows(self.client, type_name, service))
-            fut.add_done_callback(lambda _f, key=key: self._asking.pop(key, None))
+            fut.add_done_callback(lambda _f: self._asking.pop(key, None))  # key is not rebound
         known = await asyncio.shield(fut)
         if known:
             self._known.add(key)

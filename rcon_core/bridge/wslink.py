@@ -130,14 +130,14 @@ class Link:
             while True:
                 while out:
                     item = out.popleft()
-                    if item.__class__ is TimedFrame:  # a command: never written after its freshness limit
+                    if isinstance(item, TimedFrame):  # a command: never written after its freshness limit
                         now = _monotonic()
-                        if now > item.deadline or self.degraded:  # type: ignore[union-attr]
-                            self.on_stale(item.pub)  # type: ignore[union-attr]
+                        if now > item.deadline or self.degraded:
+                            self.on_stale(item.pub)
                             continue
                         if self.watch is not None:
                             self.watch.command(now)
-                        item = item.data  # type: ignore[union-attr]
+                        item = item.data
                     await ws.send(item, text=True)
                 event.clear()
                 await event.wait()

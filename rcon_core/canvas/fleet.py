@@ -27,7 +27,7 @@ from typing import Any, Protocol
 
 import attrs
 
-from rcon_core.plugins.model import BridgePort
+from rcon_core.plugins.model import BridgePort, Publisher, Subscription
 
 from .robots import Robot, UnknownRobot, resolve_robot, robot_colour
 
@@ -36,10 +36,16 @@ __all__ = ["Fleet", "RobotPort", "BridgeNode", "RobotClient"]
 
 class BridgeNode(BridgePort, Protocol):
     """One widget's node of a robot's client, as the runtime wraps it in a ``GuardedPort``: a model's
-    :class:`~rcon_core.plugins.model.BridgePort` plus ROS 2 action goals (``rcon_core.bridge.Node`` is one)."""
+    :class:`~rcon_core.plugins.model.BridgePort` plus ROS 2 action goals (``rcon_core.bridge.Node`` is one).
 
-    def send_action_goal(self, action: str, action_type: str, args: Any = None,
-                         feedback: Callable[[Any], Any] | None = None, **options: Any) -> Any: ...
+    The port passes a model's options on as they come; a node takes the options of its own kind (a
+    ``Node``'s ``type``, ``throttle_rate``, ``latch``, ``timeout``...), which need not be any keywords at
+    all: hence the open ``*args, **options`` here, which any such node fits."""
+
+    def subscribe(self, topic: str, callback: Callable[[dict[str, Any]], Any],
+                  *args: Any, **options: Any) -> Subscription: ...
+    def advertise(self, topic: str, type: str, *args: Any, **options: Any) -> Publisher: ...
+    def send_action_goal(self, action: str, action_type: str, *args: Any, **options: Any) -> Any: ...
 
 
 class RobotClient(Protocol):

@@ -143,7 +143,7 @@ def _make_converter() -> cattrs.Converter:
             raise ValueError(f"binding.field_paths must be a list of strings, found {checks.found(paths)}")
         for key in ("name", "type", "role", "robot"):
             checks.strict_str(data.get(key, ""), f"binding.{key}")
-        role = data.get("role", "subscribe")
+        role: str = data.get("role", "subscribe")  # checked a str above
         return Binding(data.get("name", ""), data.get("type", ""), _ROLES.get(role, role), tuple(paths),
                        data.get("robot", ""))
 

@@ -126,7 +126,8 @@ class Subscription(Protocol):
 
 
 class Publisher(Protocol):
-    def publish(self, msg: dict[str, Any]) -> None: ...
+    #: a bridge node's publisher returns False when the message was dropped (link down, not latched)
+    def publish(self, msg: dict[str, Any]) -> bool | None: ...
     def unadvertise(self) -> None: ...
 
 

@@ -213,7 +213,9 @@ class ActionHub:
             name, tail = action.split("#", 1)
             cid = tail if cid is None else cid
         provider = self.providers.get(name)
-        if provider is not None and hasattr(provider, "op_cancel_goal"):
+        if provider is None:  # no such action: no goal of it to cancel
+            return
+        if hasattr(provider, "op_cancel_goal"):
             provider.op_cancel_goal(conn, msg)
             return
         for goal in self.goals:
