@@ -16,6 +16,7 @@ from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app.canvas_surface import DRAFT_MIME
 from rcon_core.app.draft import Target, field_type
+from rcon_core.app.elided_label import OneLineLabel
 from rcon_core.app.settings_form import guard_wheel
 from rcon_core.app.theme import current_touch_px
 from rcon_core.plugins import Role, WidgetSpec
@@ -34,14 +35,13 @@ def heading(text: str) -> QtWidgets.QLabel:
     return label
 
 
-class NameLabel(QtWidgets.QLabel):
+class NameLabel(OneLineLabel):
     """A heading showing one name (a topic, a service, a widget) on one line, never broken at a slash:
     elided in the middle when the panel is too narrow, the full name in its tooltip."""
 
     def __init__(self, name: str = "") -> None:
         super().__init__()
         self.setProperty("role", "heading")
-        self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored, QtWidgets.QSizePolicy.Policy.Preferred)
         self.full_name = ""
         self.set_name(name)
 
@@ -50,18 +50,6 @@ class NameLabel(QtWidgets.QLabel):
         self.setToolTip(name)
         self.setAccessibleName(name)
         self._elide()
-
-    def minimumSizeHint(self) -> QtCore.QSize:
-        return QtCore.QSize(0, super().minimumSizeHint().height())
-
-    def resizeEvent(self, event: QtGui.QResizeEvent) -> None:
-        super().resizeEvent(event)
-        self._elide()
-
-    def changeEvent(self, event: QtCore.QEvent) -> None:
-        super().changeEvent(event)
-        if event.type() in (QtCore.QEvent.Type.FontChange, QtCore.QEvent.Type.StyleChange):
-            self._elide()
 
     def _elide(self) -> None:
         width = self.contentsRect().width()

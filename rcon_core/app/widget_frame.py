@@ -16,6 +16,7 @@ import math
 
 from qtpy import QtCore, QtGui, QtWidgets
 
+from rcon_core.app.elided_label import OneLineLabel
 from rcon_core.app.geometry import GRID, fit_rect, scaled_about_center, snap_rect, snap_up
 from rcon_core.app.theme import current_touch_px, repolish
 
@@ -64,7 +65,7 @@ class Badge(QtWidgets.QLabel):
             frame.layout_overlays()
 
 
-class FrameTitle(QtWidgets.QLabel):
+class FrameTitle(OneLineLabel):
     """The frame's title on one line: cut with "…" when the frame is too narrow (never mid-letter), the
     full title in its tooltip; :attr:`reserve` px at its right end are kept for the status badge.
     Its side padding is a contents margin (:attr:`PAD`, not the style sheet's), so the room to elide in is
@@ -74,7 +75,6 @@ class FrameTitle(QtWidgets.QLabel):
 
     def __init__(self, title: str, parent: QtWidgets.QWidget | None = None) -> None:
         super().__init__(parent)
-        self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored, QtWidgets.QSizePolicy.Policy.Preferred)
         self.full_title = ""
         self.reserve = 0
         self.setIndent(0)  # the text starts at the contents rect (PAD), nothing more
@@ -94,19 +94,6 @@ class FrameTitle(QtWidgets.QLabel):
     def set_reserve(self, px: int) -> None:
         if px != self.reserve:
             self.reserve = px
-            self._elide()
-
-    def minimumSizeHint(self) -> QtCore.QSize:
-        return QtCore.QSize(0, super().minimumSizeHint().height())
-
-    def resizeEvent(self, event: QtGui.QResizeEvent) -> None:
-        super().resizeEvent(event)
-        self._elide()
-
-    def changeEvent(self, event: QtCore.QEvent) -> None:
-        super().changeEvent(event)
-        if event.type() in (QtCore.QEvent.Type.FontChange, QtCore.QEvent.Type.StyleChange,
-                            QtCore.QEvent.Type.ContentsRectChange):
             self._elide()
 
     def _elide(self) -> None:
