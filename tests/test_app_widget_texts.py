@@ -93,7 +93,10 @@ def test_topic_types_keep_their_own_name_when_the_column_is_narrow(window, qtbot
         # the package gave way (to "…", or wholly when even that does not fit), never the type's name
         assert type_line.endswith("/BatteryState" if width >= 150 else "BatteryState"), (width, type_line)
         assert tree.fontMetrics().horizontalAdvance(type_line) <= width
-        assert "…" in type_line or width == 110
+        if tree.fontMetrics().horizontalAdvance("sensor_msgs/BatteryState") <= width:
+            assert type_line == "sensor_msgs/BatteryState"  # a column wide enough cuts nothing
+        else:
+            assert "…" in type_line or width == 110
     assert type_line == "BatteryState" and name_line == "/battery"
     snap(window, "topic-types")
 
