@@ -14,7 +14,7 @@ Figures (latencies p50/p95/p99, from the publish time stamp carried in the messa
 ``--view label`` (default) shows each value in a plain QLabel subclass under the app's theme;
 ``--view std.label`` uses the real Label widget of ``rcon_widgets_std`` (value + age caption).
 Usage: ``QT_QPA_PLATFORM=offscreen python benchmarks/bench_app.py [--widgets 50] [--hz 20] [--seconds 8]
-[--view label|std.label] [--operator] [--out FILE.json]``.
+[--view label|std.label] [--operator] [--no-gc-policy] [--out FILE.json]``.
 
 ``--robots N`` runs the fleet benchmark instead (``bench_fleet.py``: N vessels, each a sim in its own
 process with two cameras and 20 values at 20 Hz, one window, a held teleop pad; the JSON has ``robots``).
@@ -215,6 +215,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--operator", action="store_true", help="operator (locked) mode instead of edit mode")
     parser.add_argument("--in-process-sim", action="store_true",
                         help="run the simulated robot in this process (its memory and CPU then count too)")
+    parser.add_argument("--no-gc-policy", action="store_true",
+                        help="leave the garbage collector at Python's defaults (rcon_core/gcpolicy.py)")
     parser.add_argument("--robots", type=int, metavar="N",
                         help="the fleet benchmark: N vessels in their own processes (see bench_fleet.py)")
     args = parser.parse_args(argv)
@@ -248,7 +250,10 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory() as tmp, sim_url(args.in_process_sim) as url:
         # ---- start-up to the first painted (empty) canvas, and idle memory
         t_start = time.perf_counter()
-        window = MainWindow(AppConfig(Path(tmp) / "cfg"), make_plugins(args.view))
+        from rcon_core.gcpolicy import CollectorPolicy
+
+        window = MainWindow(AppConfig(Path(tmp) / "cfg"), make_plugins(args.view),
+                            collector=None if args.no_gc_policy else CollectorPolicy())
         window.show()
         spin(app, 10, lambda: window.first_paint_at is not None)
         figures["startup_s"] = round(window.first_paint_at - t_start, 3)

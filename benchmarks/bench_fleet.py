@@ -18,6 +18,7 @@ load average of the machine.
 from __future__ import annotations
 
 import contextlib
+import gc
 import json
 import os
 import re
@@ -118,6 +119,7 @@ def run(args: Any) -> dict:
     from rcon_core.app.fleet_demo import connect_fleet, robot_id
     from rcon_core.app.main_window import MainWindow
     from rcon_core.bridge import BridgeClient, ConnectionState
+    from rcon_core.gcpolicy import CollectorPolicy
 
     n = args.robots
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication([])
@@ -126,7 +128,9 @@ def run(args: Any) -> dict:
                                "teleop_hz": TELEOP_HZ, "load_average_before": [round(v, 2) for v in os.getloadavg()]}
     plugins = fleet_plugins()
     with tempfile.TemporaryDirectory() as tmp, fleet_processes(n, args.hz) as sims:
-        window = MainWindow(AppConfig(Path(tmp) / "cfg"), plugins)
+        # the collector policy the app's entry point gives its window (rcon_core/app/main.py)
+        collector = None if args.no_gc_policy else CollectorPolicy()
+        window = MainWindow(AppConfig(Path(tmp) / "cfg"), plugins, collector=collector)
         window.resize(1900, min(2000, 120 + n * ROW_H + 260))
         window.show()
         window.activateWindow()
@@ -209,6 +213,16 @@ def run(args: Any) -> dict:
             logging.basicConfig(level=logging.WARNING)
             bt.loop.call_soon_threadsafe(bt.loop.set_debug, True)
             bt.loop.slow_callback_duration = 0.004
+        gc_pauses: list[tuple[int, float]] = []  # (generation, ms) of each collection in the window
+        gc_started = [0.0]
+
+        def gc_watch(phase: str, info: dict) -> None:
+            if phase == "start":
+                gc_started[0] = time.perf_counter()
+            else:
+                gc_pauses.append((info["generation"], (time.perf_counter() - gc_started[0]) * 1000))
+
+        gc.callbacks.append(gc_watch)
         # the measurement window
         ba.PAINTED.clear()
         ba.PASS_TIMES.clear()
@@ -233,6 +247,7 @@ def run(args: Any) -> dict:
         ba.spin(app, args.seconds)
         check.stop()
         lag_task.cancel()
+        gc.callbacks.remove(gc_watch)
         wall = time.perf_counter() - wall0
         cpu = (time.process_time() - cpu0) / wall
         sim_cpu = [(proc_cpu_s(pid) - c0) / wall for (_, _, pid), c0 in zip(sims, sim_cpu0, strict=True)]
@@ -277,6 +292,11 @@ def run(args: Any) -> dict:
         intervals = [(b - a) * 1000 for a, b in zip(arrivals, arrivals[1:], strict=False)]
         period_ms = 1000.0 / TELEOP_HZ
         jitter = [abs(i - period_ms) for i in intervals]
+        # the same at the app: the model's clock when it handed each command to the link (what the sim's
+        # figure adds to this is the way there: the app's socket write, loopback and the sim's loop)
+        model = hosted["teleop-1"].model
+        sent = [t for t in model.send_times if wall0 <= t <= wall0 + wall]
+        app_jitter = [abs((b - a) * 1000 - period_ms) for a, b in zip(sent, sent[1:], strict=False)]
         sim_lags = [ms for t, ms in after[0]["loop_lag"] if wall0 <= t <= wall0 + wall]
         frames = [b * 1000 for b in frame_busy[1:]]
 
@@ -297,10 +317,19 @@ def run(args: Any) -> dict:
             "teleop_interval_max_ms": round(max(intervals), 2) if intervals else float("nan"),
             "teleop_jitter_p99_ms": round(ba.pct(jitter, 99), 2),
             "teleop_jitter_p95_ms": round(ba.pct(jitter, 95), 2),
+            "teleop_jitter_at_the_app_p99_ms": round(ba.pct(app_jitter, 99), 2),
+            "teleop_jitter_at_the_app_max_ms": round(max(app_jitter), 2) if app_jitter else float("nan"),
             # what delays a command: the app's bridge loop (where the pad's ticker runs) and boat1's sim loop
             "app_bridge_loop_lag_p99_ms": round(ba.pct(app_lags, 99), 2),
             "sim1_loop_lag_p99_ms": round(ba.pct(sim_lags, 99), 2),
             "app_cpu_share": round(cpu, 3),
+            # the garbage collector stops every thread of the app while it runs
+            "gc_collections": len(gc_pauses),
+            "gc_pause_max_ms": round(max((ms for _g, ms in gc_pauses), default=0.0), 2),
+            "gc_pause_total_ms": round(sum(ms for _g, ms in gc_pauses), 1),
+            "gc_gen2_pauses_ms": [round(ms, 1) for g, ms in gc_pauses if g == 2],
+            "gc_policy": collector is not None,
+            "gc_settle_pauses_ms": [round(ms, 1) for ms in collector.pauses_ms] if collector else [],
             "sim_cpu_share": [round(v, 3) for v in sim_cpu],
             "camera_frames_shown_per_s": round(sum(c["shown"] for c in cameras.values()) / wall, 1),
             "app_cpu_ms_per_camera_frame_shown": round(

@@ -20,12 +20,14 @@ import json
 import signal
 import time
 
+from rcon_core.gcpolicy import keep_settled
 from rcon_core.sim import SimServer
 
 
 async def serve(name: str, values: int, hz: float) -> None:
     server = SimServer(port=0, name=name)
     await server.start()
+    settler = asyncio.get_running_loop().create_task(keep_settled())  # as `rcon sim` does
     node = server.topic("/bench")
     topics = [server.topic(f"/bench/v{i}") for i in range(values)]
     for t in topics:
@@ -71,6 +73,7 @@ async def serve(name: str, values: int, hz: float) -> None:
                 await asyncio.wait_for(stop.wait(), max(0.0, nxt - time.perf_counter()))
     finally:
         probe.cancel()
+        settler.cancel()
         await server.stop()
 
 

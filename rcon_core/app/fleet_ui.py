@@ -262,6 +262,8 @@ class FleetUi(QtCore.QObject):
             if self._states.get(robot.id) != state:
                 self._states[robot.id] = state
                 window.host.set_link_up(state is ConnectionState.CONNECTED, robot.id)
+                if state is ConnectionState.CONNECTED and robot.id != first:
+                    window.link_came_up()
             latency = link.latency if state in LIVE_STATES else None
             view_only = self.config_view_only(robot.id) or (f"robot “{robot.label}” is view-only"
                                                             if robot.view_only else None)

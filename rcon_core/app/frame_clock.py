@@ -21,7 +21,7 @@ class FrameClock(QtCore.QObject):
 
     def __init__(self, parent: QtCore.QObject | None = None, hz: int = FRAME_HZ) -> None:
         super().__init__(parent)
-        self._consumers: list[Callable[[float], None]] = []
+        self._consumers: list[Callable[[float], object]] = []
         self._timer = QtCore.QTimer(self)
         self._timer.setTimerType(QtCore.Qt.TimerType.PreciseTimer)
         self._timer.setInterval(max(1, round(1000 / hz)))
@@ -32,12 +32,12 @@ class FrameClock(QtCore.QObject):
         self.gaps: deque[float] = deque(maxlen=4096)
         self.ticks = 0
 
-    def add(self, consumer: Callable[[float], None]) -> None:
+    def add(self, consumer: Callable[[float], object]) -> None:
         """Register ``consumer(now)`` to be called every frame."""
         if consumer not in self._consumers:
             self._consumers.append(consumer)
 
-    def remove(self, consumer: Callable[[float], None]) -> None:
+    def remove(self, consumer: Callable[[float], object]) -> None:
         if consumer in self._consumers:
             self._consumers.remove(consumer)
 

@@ -102,6 +102,7 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
     from rcon_core.app.connection_bar import normalize_url
     from rcon_core.app.link import BadUrl, check_url
     from rcon_core.app.main_window import MainWindow
+    from rcon_core.gcpolicy import CollectorPolicy
 
     url = getattr(args, "url", None)
     if url:
@@ -171,7 +172,8 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
             return demo_workspace(plugins)
 
     # the demo layout is built on its first start only (or when it cannot be read); edits persist
-    window = MainWindow(config, plugins, layout_path=layout, demo=demo_factory)
+    # the collector's pauses kept short while robots stream (rcon_core/gcpolicy.py)
+    window = MainWindow(config, plugins, layout_path=layout, demo=demo_factory, collector=CollectorPolicy())
     windows.append(window)
     window.connection.overrides = overrides
     if demo and getattr(args, "reset_layout", False):

@@ -46,9 +46,13 @@ from rcon_core.app.template_menu import add_template_menu
 from rcon_core.app.widget_host import RateMeter, WidgetHost
 from rcon_core.bridge import ConnectionState
 from rcon_core.canvas import Document, Workspace
+from rcon_core.canvas.document import Change
+from rcon_core.gcpolicy import CollectorPolicy
 from rcon_core.plugins import Binding, PluginManager, Role, WidgetSpec
 from rcon_core.plugins.children import ChildContext
 
+#: seconds after a robot connects until the collector freezes what its catalogue brought (``gcpolicy.py``)
+SETTLE_AFTER_CONNECT = 5.0
 ACTIONS_EMPTY = "No actions: a ROS 2 robot's action servers are listed here once connected."
 
 
@@ -69,6 +73,7 @@ class MainWindow(QtWidgets.QMainWindow):
         types: Any = None,
         link: Link | None = None,
         demo: Callable[[], Workspace] | None = None,
+        collector: CollectorPolicy | None = None,
     ) -> None:
         super().__init__()
         app = QtWidgets.QApplication.instance()
@@ -87,6 +92,10 @@ class MainWindow(QtWidgets.QMainWindow):
         self.types = types if types is not None else plugins.type_registry()  # with plugins' types
         self.link = link or Link()
         self.clock = FrameClock(self)
+        #: when the garbage collector may pause the process (``rcon_core/gcpolicy.py``); the app's entry
+        #: point passes one, embedders and tests may leave it out (then Python's defaults apply)
+        self.collector = collector
+        self._remove_gc_listener: Callable[[], object] | None = None
         #: wakes the GUI as soon as the bridge thread has something (a value, new models)
         self.waker = Waker(self._pump, self)
         self._due_timer = QtCore.QTimer(self)
@@ -233,6 +242,10 @@ class MainWindow(QtWidgets.QMainWindow):
         self.clock.add(self.fleet_ui.poll)
         self.clock.add(self._poll_catalog)
         self.clock.add(lambda _now: self._pump(None))
+        if collector is not None:
+            collector.soon(1.0, full=True)  # once the window is built and shown
+            self.clock.add(collector.poll)
+            self._remove_gc_listener = self.doc.add_listener(self._settle_after)
         self.clock.start()
         app = QtWidgets.QApplication.instance()
         if isinstance(app, QtGui.QGuiApplication):
@@ -506,6 +519,20 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _link_state(self, state: ConnectionState) -> None:
         self.host.set_link_up(state is ConnectionState.CONNECTED, self.fleet_ui.first_id)
+        if state is ConnectionState.CONNECTED:
+            self.link_came_up()
+
+    def link_came_up(self) -> None:
+        """A robot's link is up: its catalogue and message classes arrive in the next seconds, then the
+        collector freezes them (a light settle, see ``gcpolicy.py``)."""
+        if self.collector is not None:
+            self.collector.soon(SETTLE_AFTER_CONNECT)
+
+    def _settle_after(self, change: Change) -> None:
+        """Widgets were made and dropped (a workspace opened, another canvas shown): a full settle at
+        the next frame, when the pause is not felt."""
+        if self.collector is not None and change.what in ("workspace-replaced", "canvas-switched"):
+            self.collector.soon(0.0, full=True)
 
     def _poll_catalog(self, now: float) -> None:
         catalog = self.fleet_ui.take_catalog()  # the side panel's robot's
@@ -547,6 +574,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.clock.stop()
         self.waker.stop()
         self._due_timer.stop()
+        if self._remove_gc_listener is not None:
+            self._remove_gc_listener()
         app = QtWidgets.QApplication.instance()
         if isinstance(app, QtGui.QGuiApplication):
             try:

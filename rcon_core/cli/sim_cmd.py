@@ -120,8 +120,13 @@ async def _serve(args: argparse.Namespace, tls: ssl.SSLContext | None = None) ->
     for sig in (signal.SIGINT, signal.SIGTERM):
         with contextlib.suppress(NotImplementedError, RuntimeError):
             loop.add_signal_handler(sig, stop.set)
+    from rcon_core.gcpolicy import keep_settled
+
+    settler = asyncio.create_task(keep_settled())  # the collector's pauses kept short (gcpolicy.py)
     try:
         await stop.wait()
     finally:
+        settler.cancel()
         await server.stop()
     return 0
+
