@@ -7,8 +7,9 @@
   (``time.perf_counter()``, CLOCK_MONOTONIC: comparable between processes on Linux);
 - ``/boat2/bench/stats`` (std_srvs/Trigger): ``message`` is JSON: messages published per topic so far,
   the arrival time of every ``/boat2/cmd_vel`` message (perf_counter, as the sim received it), the
-  sim loop's lateness (how late a 5 ms sleep wakes up, ms; what delays the arrival of a command) and the
-  process's CPU seconds.
+  sim loop's lateness (how late a 5 ms sleep wakes up, ms; what delays the arrival of a command), the
+  process's CPU seconds, and per camera topic the (header stamp, wall clock) of each frame as it was
+  published (drawn and encoded, handed to the subscribers).
 """
 
 from __future__ import annotations
@@ -36,6 +37,21 @@ async def serve(name: str, values: int, hz: float) -> None:
     server.subscribe_internal(server.topic("/cmd_vel"), "geometry_msgs/Twist", node,
                               lambda _msg: arrivals.append(time.perf_counter()))
     sent = {"values": 0}
+    # camera frames as they are published (after drawing and encoding): (header stamp, wall clock), so the
+    # benchmark can tell publish-to-painted apart from capture-to-painted
+    camera_published: dict[str, list[tuple[float, float]]] = {}
+
+    def camera_publish(topic: str, msg: dict) -> None:
+        stamp = msg["header"]["stamp"]
+        secs = stamp.get("secs", stamp.get("sec", 0)) + stamp.get("nsecs", stamp.get("nanosec", 0)) * 1e-9
+        rows = camera_published.setdefault(topic, [])
+        rows.append((secs, time.time()))
+        del rows[:-600]
+
+    for cam, type_name in (("/camera/front/image_raw", "sensor_msgs/Image"),
+                           ("/camera/rear/image_raw/compressed", "sensor_msgs/CompressedImage")):
+        server.subscribe_internal(server.topic(cam), type_name, node,
+                                  lambda msg, cam=cam: camera_publish(cam, msg))
     lags: list[tuple[float, float]] = []  # (perf_counter, ms late) of the loop's 5 ms sleeps
 
     async def lag_probe() -> None:
@@ -50,7 +66,7 @@ async def serve(name: str, values: int, hz: float) -> None:
 
     def stats(_req: dict) -> dict:
         body = {"published": {**server.robot_published(), **sent}, "cmd_vel_arrivals": list(arrivals),
-                "loop_lag": list(lags), "cpu_s": time.process_time()}
+                "loop_lag": list(lags), "cpu_s": time.process_time(), "camera_published": camera_published}
         return {"success": True, "message": json.dumps(body)}
 
     server.add_service(server.topic("/bench/stats"), "std_srvs/Trigger", node, stats)
