@@ -25,6 +25,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from rcon_core.priority import lower_this_thread
+
 from . import world
 from .camera import CameraRenderer, encode_jpeg
 from .identity import Identity
@@ -380,7 +382,9 @@ class RobotNode:
         if topic in self._rendering:
             return  # the previous frame is still being drawn: skip this one, never queue
         if self._render_pool is None:
-            self._render_pool = concurrent.futures.ThreadPoolExecutor(2, thread_name_prefix="sim-camera")
+            # below the loop that receives commands (rcon_core/priority.py)
+            self._render_pool = concurrent.futures.ThreadPoolExecutor(2, thread_name_prefix="sim-camera",
+                                                                      initializer=lower_this_thread)
         stamp = time.time()
         pose = copy.copy(self.vessel)  # the loop goes on moving the vessel while the frame is drawn
         loop = asyncio.get_running_loop()

@@ -15,6 +15,8 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
+from rcon_core.priority import lower_this_thread
+
 log = logging.getLogger(__name__)
 
 __all__ = ["LatestSlot", "SlotWorker", "LoopTicker"]
@@ -64,12 +66,15 @@ class LatestSlot:
 class SlotWorker:
     """A daemon thread feeding each newest item of its slot to ``handle(item)``.
 
-    Exceptions from ``handle`` go to ``on_error(exc)`` (the thread keeps running).
+    Exceptions from ``handle`` go to ``on_error(exc)`` (the thread keeps running).  ``background`` (the
+    default): the thread runs at a lower OS priority than the GUI and bridge threads
+    (:func:`rcon_core.priority.lower_this_thread`): its work is the kind that may wait.
     """
 
     def __init__(self, name: str, handle: Callable[[Any], None],
-                 on_error: Callable[[BaseException], None] | None = None) -> None:
+                 on_error: Callable[[BaseException], None] | None = None, *, background: bool = True) -> None:
         self.slot = LatestSlot()
+        self.background = background
         self._handle = handle
         self._on_error = on_error
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
@@ -79,6 +84,8 @@ class SlotWorker:
         self.slot.put(item)
 
     def _run(self) -> None:
+        if self.background:
+            lower_this_thread()
         while True:
             ok, item = self.slot.take()
             if not ok:
