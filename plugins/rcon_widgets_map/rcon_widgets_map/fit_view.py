@@ -2,8 +2,8 @@
 (every robot's fix, the extra fixes) is on screen, clear of the buttons, the names and the scale bar.
 
 On while the *Fit* button is down: the map opens that way with the setting ``fit_all`` (the fleet demo's
-map), and the button brings it back at any time. While it is on, a marker that is not in view (a robot's
-first fix, or one that moved out) fits the map again; markers moving about inside the view do not, so the
+map), and the button brings it back at any time. While it is on, a marker's first position, or a marker
+out of view (one that moved out), fits the map again; markers moving about inside the view do not, so the
 map does not twitch with every fix. Panning or zooming by hand turns it off for good (the map never jumps
 on its own after that), as does *Follow*, which keeps one robot in the middle instead.
 """
@@ -34,6 +34,7 @@ class FitControls:
         self.button.setToolTip("Show every marker (panning or zooming by hand turns this off)")
         self.button.clicked.connect(self._clicked)
         self.button.setVisible(self.fitting)
+        self._fitted: set[str] = set()  #: the markers (track keys) of the last fit
 
     # -- what to fit ------------------------------------------------------------------------------
     @staticmethod
@@ -55,7 +56,7 @@ class FitControls:
     # -- state ------------------------------------------------------------------------------------
     def sync(self, value: Any) -> bool:
         """A new map value: show the button when there is more than one marker to fit, and while fitting,
-        fit again if a marker is out of view. True when the map was fitted now."""
+        fit again if a marker has just got its first position or is out of view. True when fitted now."""
         wanted = self.fitting or (value is not None and len(value.tracks) > 1)
         if wanted != self.button.isVisible():
             self.button.setVisible(wanted)
@@ -63,10 +64,11 @@ class FitControls:
         if not self.fitting:
             return False
         points = self.points(value)
+        keys = {t.key for t in value.tracks if t.has_position} if value is not None else set()
         left, top, right, bottom = self.inset(value)
         slack = (max(0.0, left - SLACK_PX), max(0.0, top - SLACK_PX), max(0.0, right - SLACK_PX),
                  max(0.0, bottom - SLACK_PX))
-        if points and not all(self.view.viewport.shows(lat, lon, slack) for lat, lon in points):
+        if not keys <= self._fitted or not all(self.view.viewport.shows(lat, lon, slack) for lat, lon in points):
             self.fit(value)
             return True
         return False
@@ -76,6 +78,7 @@ class FitControls:
         points = self.points(value)
         if points:
             self.view.viewport.fit(points, self.inset(value), max_zoom=float(self.view.settings.zoom))
+            self._fitted = {t.key for t in value.tracks if t.has_position}
 
     def stop(self) -> None:
         """The operator moved the map (or chose Follow): never fit on its own again until *Fit*."""
