@@ -52,6 +52,12 @@ def test_the_fleet_canvas_fits_a_tablet_without_scrolling(qtbot, tmp_path, fleet
                 assert (window.width(), window.height()) == size
                 scroll = window.controller.surface.scroll_area
                 viewport = scroll.viewport()
+                frames = [h.frame.geometry() for h in hosted.values()]
+                for (kind, robot), h in hosted.items():
+                    g = h.widget.geometry  # shown at the layout's size (none grown into a neighbour)...
+                    assert h.frame.geometry() == QtCore.QRect(int(g.x), int(g.y), int(g.w), int(g.h)), (kind, robot)
+                    # ...over no other
+                    assert sum(h.frame.geometry().intersects(f) for f in frames) == 1, (kind, robot)
                 for (kind, robot), h in hosted.items():  # every widget wholly in sight
                     corner = h.frame.mapTo(viewport, QtCore.QPoint(0, 0))
                     assert viewport.rect().contains(QtCore.QRect(corner, h.frame.size())), (

@@ -34,8 +34,11 @@ MAX_ROBOTS = 6  #: the sim has six distinct camera scenes
 #: the part of the Fleet canvas the layout fills (canvas units, from the 16-unit margin): what a 1024x600
 #: tablet shows below the toolbars and what a 1280x800 window shows beside its side panel, less the margins
 FIT_W, FIT_H = 864, 352
-GAP = 16  #: between tiles and from the canvas's edge
-TILE_H = 168  #: a vessel's tile: its camera beside its pad, both this tall (two rows fill FIT_H)
+GAP = 16  #: between tiles and from the canvas's edge (the canvas grid: every rect below stays on it)
+TILE_H = 160  #: a vessel's tile: its camera beside its pad, both this tall (two rows and a gap within FIT_H)
+#: (camera, pad) widths in one column and in two; none below the smallest frame at 48 px touch targets
+#: (144 x 112, ``widget_frame.frame_min_size``), so no frame is grown into its neighbour when placed
+TILE_WIDTHS = {1: (192, 176), 2: (144, 144)}
 
 
 def vessel_name(k: int) -> str:
@@ -94,7 +97,7 @@ def fleet_canvas(n: int, plugins: PluginManager) -> Canvas:
     canvas = Canvas(new_id("c"), "Fleet", locked=True)
     cols = fleet_columns(n)
     rows = -(-n // cols)
-    cam_w, pad_w = (192, 176) if cols == 1 else (160, 128)
+    cam_w, pad_w = TILE_WIDTHS[cols]
     tile_w = cam_w + GAP + pad_w
     for k in range(1, n + 1):
         rid = robot_id(k)
