@@ -82,14 +82,20 @@ def test_the_fleet_map_shows_every_vessel_and_keeps_still_after_a_pan(qtbot, tmp
             fleet_map = hosted[("map.gps", "r-1")]
 
             def fixes():  # the map's view is rebuilt as each vessel's link comes up: always the current one
-                value = fleet_map.view.value
+                value = fleet_map.view.value if fleet_map.view is not None else None
                 return {t.label: t for t in value.tracks if t.has_position} if value is not None else {}
 
             def in_view():
                 """Vessel name -> whether its marker lies on the map, clear of the buttons above it."""
                 view = fleet_map.view
+                if view is None or not view.isVisible():  # a view just rebuilt, not laid out yet
+                    return {}
                 top = max(b.geometry().bottom() for b in view.control_buttons() if b.isVisible())
                 return {name: view.viewport.shows(t.lat, t.lon, inset=(0, top, 0, 0)) for name, t in fixes().items()}
+
+            def all_in_view():
+                shown = in_view()
+                return len(shown) == 3 and all(shown.values())
 
             def at_sim(name, sim):
                 lat, lon = sim.robot.lat_lon()
@@ -98,7 +104,7 @@ def test_the_fleet_map_shows_every_vessel_and_keeps_still_after_a_pan(qtbot, tmp
 
             # it opens showing all three, as close as they allow (they start a few hundred metres apart)
             qtbot.waitUntil(lambda: sorted(fixes()) == ["boat1", "boat2", "boat3"], timeout=TIMEOUT_MS)
-            qtbot.waitUntil(lambda: all(in_view().values()), timeout=TIMEOUT_MS)
+            qtbot.waitUntil(all_in_view, timeout=TIMEOUT_MS)
             view = fleet_map.view
             assert view.fit.fitting and not view.following
             assert view.viewport.zoom <= view.settings.zoom
@@ -117,7 +123,7 @@ def test_the_fleet_map_shows_every_vessel_and_keeps_still_after_a_pan(qtbot, tmp
             # boat3 turns up 3 km away: the map fits again, further out
             sims[2].robot.x += 3000.0
             qtbot.waitUntil(lambda: at_sim("boat3", sims[2]), timeout=TIMEOUT_MS)
-            qtbot.waitUntil(lambda: all(in_view().values()), timeout=TIMEOUT_MS)
+            qtbot.waitUntil(all_in_view, timeout=TIMEOUT_MS)
             assert view.viewport.zoom < opened - 1.0
             # the operator drags the map: from then on it never moves on its own
             centre = view.rect().center()
@@ -134,7 +140,7 @@ def test_the_fleet_map_shows_every_vessel_and_keeps_still_after_a_pan(qtbot, tmp
             assert in_view()["boat2"] is False
             # Fit brings every vessel back in view
             tap(view.fit.button)
-            assert view.fit.fitting and all(in_view().values())
+            assert view.fit.fitting and all_in_view()
             assert fleet_map.view is view  # one view all along since the three fixes came in
             snap(window, "fleet-map-3-fit-again")
         finally:
