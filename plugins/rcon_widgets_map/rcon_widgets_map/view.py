@@ -6,8 +6,8 @@ asks for the visible ones while painting and repaints when one arrives.
 
 Gestures: drag pans (and turns *follow* off), the wheel or a pinch zooms, a tap opens a confirm bubble
 for a goal at that point: nothing is sent until *Send* is pressed. *Fit* (and the setting ``fit_all``)
-keeps every marker in view until the map is panned or zoomed by hand (:mod:`.fit_view`). With a navigation action set, a long
-press offers *Navigate here* in the same bubble (:mod:`.nav_view`).
+keeps every marker in view until the map is panned or zoomed by hand (:mod:`.fit_view`). With a
+navigation action set, a long press offers *Navigate here* in the same bubble (:mod:`.nav_view`).
 """
 
 from __future__ import annotations
@@ -294,7 +294,7 @@ class MapView(QtWidgets.QWidget):
             return
         sx, sy = self.viewport.to_screen(*point)
         w, h = self.bubble.width(), self.bubble.height()
-        top = self.follow_button.geometry().bottom() + 6
+        top = max(b.geometry().bottom() for b in self.control_buttons() if b.isVisibleTo(self)) + 6
         if sx + 24 + w <= self.width() - 4:
             x, y = sx + 24, sy - h / 2
         elif sx - 24 - w >= 4:

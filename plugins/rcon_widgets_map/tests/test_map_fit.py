@@ -163,3 +163,26 @@ def test_a_map_with_one_marker_has_no_fit_button(qtbot, sim_thread, threaded_cli
     main = view.value.main
     assert view.viewport.to_screen(main.lat, main.lon) == pytest.approx((240, 200), abs=1.0)
     bt.call(model.stop).result(5)
+
+
+def test_the_goal_bubble_stays_below_the_second_row_of_buttons(qtbot, sim_thread, threaded_client):
+    bt, client = threaded_client
+    model = MapModel(MapSettings(zoom=18.0, fit_all=True), Binding("/gps/fix", "sensor_msgs/NavSatFix", "subscribe"),
+                     client.node("map-narrow"), types=TYPES, dispatch=bt.call)
+    bt.call(model.start).result(5)
+    qtbot.waitUntil(lambda: model.state.value is not None and model.state.value.main.has_position, timeout=10_000)
+    view = MapView(model)
+    qtbot.addWidget(view)
+    view.setStyleSheet("QToolButton { min-width: 64px; min-height: 48px; }")
+    view.resize(224, 400)
+    view.show()
+    qtbot.waitExposed(view)
+    view.refresh(model.state)
+    buttons = [b for b in view.control_buttons() if b.isVisible()]
+    assert len(buttons) == 4 and len({b.y() for b in buttons}) == 2
+    lowest = max(b.geometry().bottom() for b in buttons)
+    qtbot.mouseClick(view, Qt.MouseButton.LeftButton, pos=QtCore.QPoint(60, 130))  # near the top: a goal there
+    assert view.bubble.isVisible()
+    bubble = view.bubble.geometry()
+    assert bubble.top() > lowest and not any(bubble.intersects(b.geometry()) for b in buttons)  # over no button
+    bt.call(model.stop).result(5)
