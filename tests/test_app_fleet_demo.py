@@ -45,6 +45,7 @@ def test_fleet_workspace_binds_each_vessel_to_its_robot(plugins):
             assert plugins.widget(w.kind).settings_problems(w.settings) == [], w.title
     (fleet_map,) = [w for w in fleet.widgets if w.kind == "map.gps"]
     assert plugins.widget("map.gps").settings_problems(fleet_map.settings) == []
+    assert fleet_map.settings["every_robot"] and fleet_map.settings["fit_all"]  # every vessel, all in view
     with pytest.raises(ValueError, match="from 1 to 6"):
         fleet_workspace(0, plugins)
 

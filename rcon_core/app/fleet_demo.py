@@ -8,8 +8,11 @@ which vessel a widget talks to is its binding's robot, so a canvas re-targeted t
 as it is and the map shows the same fix topic of every robot. The workspace has one robot per vessel
 (``r-1`` ... ``r-N``, named after the vessel) and:
 
-- canvas **Fleet**: a column per vessel with its front camera above its teleop pad (each pad is bound to
-  its own vessel and publishes only there), and one GPS map with every vessel's fix (``every_robot``);
+- canvas **Fleet**: a tile per vessel with its front camera beside its teleop pad (each pad is bound to
+  its own vessel and publishes only there), the tiles in a grid (one column for two vessels, two for more),
+  and right of them one GPS map with every vessel's fix (``every_robot``) that opens showing them all
+  (``fit_all``). Up to four vessels the canvas fits a 1024x600 tablet and a 1280x800 window with the side
+  panel open, without scrolling (:func:`fleet_canvas`);
 - canvas **Drive · boatK** per vessel: the single-robot demo's Drive canvas, bound to that vessel.
 
 No Qt here: the window wires the links (``rcon_core/app/main.py``).
@@ -28,7 +31,14 @@ from rcon_core.plugins import Binding, PluginManager, Role
 from .demo import DRIVE, pick_kind
 
 MAX_ROBOTS = 6  #: the sim has six distinct camera scenes
-COLUMN_W = 304  #: a vessel's column on the Fleet canvas: camera 288 x 216 above its pad 288 x 200
+#: the part of the Fleet canvas the layout fills (canvas units, from the 16-unit margin): what a 1024x600
+#: tablet shows below the toolbars and what a 1280x800 window shows beside its side panel, less the margins
+FIT_W, FIT_H = 864, 352
+GAP = 16  #: between tiles and from the canvas's edge (the canvas grid: every rect below stays on it)
+TILE_H = 160  #: a vessel's tile: its camera beside its pad, both this tall (two rows and a gap within FIT_H)
+#: (camera, pad) widths in one column and in two; none below the smallest frame at 48 px touch targets
+#: (144 x 112, ``widget_frame.frame_min_size``), so no frame is grown into its neighbour when placed
+TILE_WIDTHS = {1: (192, 176), 2: (144, 144)}
 
 
 def vessel_name(k: int) -> str:
@@ -60,34 +70,54 @@ def _widget(plugins: PluginManager, kinds: dict[str, dict[str, Any]], binding: B
 
 
 def _map_settings(plugins: PluginManager) -> dict[str, Any]:
-    """The map's settings: every robot's fix when this map knows how (``every_robot``)."""
+    """The map's settings: every robot's fix, all of them in view, as far as this map knows how
+    (``every_robot``, then ``fit_all``)."""
+    out: dict[str, Any] = {}
     if plugins.has_widget("map.gps"):
         spec = plugins.widget("map.gps")
-        try:
-            spec.make_settings({"every_robot": True})
-            return {"every_robot": True}
-        except Exception:
-            pass  # a map without the setting shows the first vessel's fix
-    return {}
+        for name in ("every_robot", "fit_all"):
+            try:
+                spec.make_settings({**out, name: True})
+            except Exception:
+                break  # an older map without the setting: it shows what it can
+            out[name] = True
+    return out
+
+
+def fleet_columns(n: int) -> int:
+    """How many columns of vessel tiles the Fleet canvas has: one for up to two vessels, else two (more
+    than four vessels add rows below, the only case that scrolls)."""
+    return 1 if n <= 2 else 2
 
 
 def fleet_canvas(n: int, plugins: PluginManager) -> Canvas:
+    """The Fleet canvas: vessel tiles (camera beside pad) in a grid of :func:`fleet_columns` columns, filled
+    row by row, and the map right of them as tall as the grid. With one column the tiles are wider (a larger
+    camera and pad); with two they are narrower and the map keeps the width that is left."""
     canvas = Canvas(new_id("c"), "Fleet", locked=True)
+    cols = fleet_columns(n)
+    rows = -(-n // cols)
+    cam_w, pad_w = TILE_WIDTHS[cols]
+    tile_w = cam_w + GAP + pad_w
     for k in range(1, n + 1):
-        rid, x = robot_id(k), 16 + (k - 1) * COLUMN_W
+        rid = robot_id(k)
+        col, row = (k - 1) % cols, (k - 1) // cols
+        x, y = GAP + col * (tile_w + GAP), GAP + row * (TILE_H + GAP)
         canvas.widgets.append(_widget(
             plugins, {"sensors.image": {"max_fps": 15.0}},
             Binding("/camera/front/image_raw", "sensor_msgs/Image", Role.SUBSCRIBE, (), robot=rid),
-            (x, 16, 288, 216), "Front camera"))
+            (x, y, cam_w, TILE_H), "Front camera"))
         canvas.widgets.append(_widget(
             plugins, {"sensors.teleop": {"max_linear": 2.0, "max_angular": 1.0}},
             Binding("/cmd_vel", "geometry_msgs/Twist", Role.PUBLISH, (), robot=rid),
-            (x, 248, 288, 200), "Drive"))
+            (x + cam_w + GAP, y, pad_w, TILE_H), "Drive"))
     # one map, bound to the first vessel's fix; with every_robot it shows every vessel's (on_fleet)
+    map_x = GAP + cols * (tile_w + GAP)
+    map_h = max(2, rows) * TILE_H + (max(2, rows) - 1) * GAP
     canvas.widgets.append(_widget(
         plugins, {"map.gps": _map_settings(plugins)},
         Binding("/gps/fix", "sensor_msgs/NavSatFix", Role.SUBSCRIBE, (), robot=robot_id(1)),
-        (16 + n * COLUMN_W, 16, 400, 432), "Map of every vessel"))
+        (map_x, GAP, GAP + FIT_W - map_x, map_h), "Map of every vessel"))
     return canvas
 
 

@@ -105,6 +105,13 @@ class MapSettings:
                           "cached on disk for offline use. Empty: offline only"},
     )
     follow: bool = attrs.field(default=True, metadata={"label": "Follow the robot"})
+    fit_all: bool = attrs.field(
+        default=False,
+        metadata={"label": "Show every marker",
+                  "help": "Open centred and zoomed on every marker (every robot, the extra fixes), and again "
+                          "when one is out of view, until you pan or zoom; the Fit button brings it back. "
+                          "Takes the place of following the robot"},
+    )
     zoom: float = attrs.field(
         default=18.0, converter=float, validator=attrs.validators.and_(attrs.validators.ge(1.0),
                                                                        attrs.validators.le(21.0)),

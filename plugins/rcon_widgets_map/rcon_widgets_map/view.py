@@ -5,8 +5,9 @@ Paints only the model's prepared :class:`~rcon_widgets_map.model.MapValue`. Tile
 asks for the visible ones while painting and repaints when one arrives.
 
 Gestures: drag pans (and turns *follow* off), the wheel or a pinch zooms, a tap opens a confirm bubble
-for a goal at that point: nothing is sent until *Send* is pressed. With a navigation action set, a long
-press offers *Navigate here* in the same bubble (:mod:`.nav_view`).
+for a goal at that point: nothing is sent until *Send* is pressed. *Fit* (and the setting ``fit_all``)
+keeps every marker in view until the map is panned or zoomed by hand (:mod:`.fit_view`). With a
+navigation action set, a long press offers *Navigate here* in the same bubble (:mod:`.nav_view`).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from typing import Any
 from qtpy import QtCore, QtGui, QtWidgets
 
 from . import mercator, scale
+from .fit_view import FitControls
 from .http_tiles import HttpTileSource
 from .loader import TileLoader
 from .model import MapValue, Track
@@ -113,6 +115,9 @@ class MapView(QtWidgets.QWidget):
         self.zoom_out.clicked.connect(lambda: self.zoom_by(-1.0))
         self.bubble = _Bubble(self)
         self.nav = NavigateControls(self)
+        self.fit = FitControls(self)
+        if self.fit.fitting:  # every marker in view, not one robot in the middle
+            self.follow_button.setChecked(False)
         self.bubble.send.clicked.connect(lambda: self.nav.confirm() if self.nav.pending else self.confirm_goal())
         self.bubble.cancel.clicked.connect(self.cancel_goal)
 
@@ -121,7 +126,7 @@ class MapView(QtWidgets.QWidget):
         self._ager.setInterval(1000)
         self._ager.timeout.connect(self._age)
         self._ager.start()
-        self._place_controls()
+        self.place_controls()
 
     # -- tiles ----------------------------------------------------------------------------------------
     def _make_loader(self, plugin: MapPluginSettings) -> TileLoader | None:
@@ -165,10 +170,12 @@ class MapView(QtWidgets.QWidget):
         self.value = value
         self.nav.sync(value)
         target = self._follow_target()
-        if target is not None and (self.follow_button.isChecked() or not self._centred_once):
+        if self.fit.sync(value):
+            self._centred_once = True
+        elif target is not None and not self.fit.fitting and (self.following or not self._centred_once):
             self.viewport.centre_on(target.lat, target.lon)  # type: ignore[arg-type]
             self._centred_once = True
-        self._viewport_changed()
+        self.viewport_changed()
 
     def _age(self) -> None:
         if self.value is not None and self.isVisible():
@@ -183,16 +190,18 @@ class MapView(QtWidgets.QWidget):
         return next((t for t in self.value.tracks if t.has_position), None)
 
     # -- viewport changes -----------------------------------------------------------------------------
-    def _viewport_changed(self) -> None:
+    def viewport_changed(self) -> None:
+        """The viewport moved: place the bubble again and repaint."""
         self._place_bubble()
         self.update()
 
     def _follow_toggled(self, on: bool) -> None:
         if on:
+            self.fit.stop()  # one robot in the middle, not every marker
             target = self._follow_target()
             if target is not None:
                 self.viewport.centre_on(target.lat, target.lon)  # type: ignore[arg-type]
-        self._viewport_changed()
+        self.viewport_changed()
 
     def set_follow(self, on: bool) -> None:
         self.follow_button.setChecked(on)
@@ -202,32 +211,47 @@ class MapView(QtWidgets.QWidget):
         return self.follow_button.isChecked()
 
     def zoom_by(self, steps: float, at: QtCore.QPointF | None = None) -> None:
-        """Zoom in (``steps`` > 0) or out, about ``at`` (screen) or the centre when following."""
+        """Zoom in (``steps`` > 0) or out, about ``at`` (screen) or the centre when following. By hand: the
+        map stops fitting every marker."""
+        self.fit.stop()
         if at is None or self.following:
             self.viewport.zoom_at(self.viewport.zoom + steps)
         else:
             self.viewport.zoom_at(self.viewport.zoom + steps, at.x(), at.y())
-        self._viewport_changed()
+        self.viewport_changed()
 
     def pan_by(self, dx: float, dy: float) -> None:
-        """Drag the map by (dx, dy) pixels; turns follow off."""
+        """Drag the map by (dx, dy) pixels; turns follow and fitting off."""
         self.set_follow(False)
+        self.fit.stop()
         self.viewport.pan(dx, dy)
-        self._viewport_changed()
+        self.viewport_changed()
 
     def resizeEvent(self, event: QtGui.QResizeEvent) -> None:  # noqa: N802 - Qt API
         self.viewport.width, self.viewport.height = max(1, self.width()), max(1, self.height())
-        self._place_controls()
+        self.place_controls()
+        if self.fit.fitting:
+            self.fit.fit(self.value)
         self._place_bubble()
         super().resizeEvent(event)
 
-    def _place_controls(self) -> None:
+    def control_buttons(self) -> list[QtWidgets.QToolButton]:
+        """The buttons at the top right, right to left."""
+        return [self.zoom_out, self.zoom_in, self.follow_button, self.fit.button]
+
+    def place_controls(self) -> None:
+        """Right to left along the top; on a narrow map the ones that do not fit go on a row below."""
         m = 8
-        x = self.width() - m
-        for b in (self.zoom_out, self.zoom_in, self.follow_button):
+        x, y, row_h = self.width() - m, m, 0
+        for b in self.control_buttons():
+            if not b.isVisibleTo(self):
+                continue
             b.adjustSize()
+            if x - b.width() < m and x < self.width() - m:
+                x, y, row_h = self.width() - m, y + row_h + 6, 0
             x -= b.width()
-            b.move(x, m)
+            b.move(x, y)
+            row_h = max(row_h, b.height())
             x -= 6
         self.nav.place()
 
@@ -243,7 +267,7 @@ class MapView(QtWidgets.QWidget):
         self.bubble.adjustSize()
         self.bubble.show()
         self.bubble.raise_()
-        self._viewport_changed()
+        self.viewport_changed()
 
     def confirm_goal(self) -> bool:
         """Send the pending goal; returns whether something was published."""
@@ -270,7 +294,7 @@ class MapView(QtWidgets.QWidget):
             return
         sx, sy = self.viewport.to_screen(*point)
         w, h = self.bubble.width(), self.bubble.height()
-        top = self.follow_button.geometry().bottom() + 6
+        top = max(b.geometry().bottom() for b in self.control_buttons() if b.isVisibleTo(self)) + 6
         if sx + 24 + w <= self.width() - 4:
             x, y = sx + 24, sy - h / 2
         elif sx - 24 - w >= 4:

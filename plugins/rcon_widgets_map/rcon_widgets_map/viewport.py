@@ -1,7 +1,8 @@
 """What part of the world a map view shows: centre, fractional zoom, size in pixels. Pure Python.
 
 The view keeps one :class:`Viewport` and asks it to convert between screen pixels and lat/lon, to pan,
-to zoom about a point (mouse wheel, pinch) and which tiles cover the screen.
+to zoom about a point (mouse wheel, pinch), to show several points at once (:meth:`Viewport.fit`) and
+which tiles cover the screen.
 """
 
 from __future__ import annotations
@@ -87,6 +88,37 @@ class Viewport:
         self.zoom = zoom
         px, py = self.to_screen(lat, lon)
         self.pan(sx - px, sy - py)
+
+    def fit(self, points: list[tuple[float, float]], inset: tuple[float, float, float, float],
+            max_zoom: float) -> None:
+        """Centre and zoom so every ``(lat, lon)`` of ``points`` lies inside the screen less ``inset``
+        (left, top, right, bottom pixels), at ``max_zoom`` at most (one point: centred there at ``max_zoom``).
+        Longitudes are taken nearest the first point's, so a group across the antimeridian stays together."""
+        if not points:
+            return
+        left, top, right, bottom = inset
+        lon0 = points[0][1]
+        # world pixels at zoom 0 (256 across the world); longitudes unwrapped about the first point's
+        xy = [m.latlon_to_world(lat, lon0 + (lon - lon0 + 180.0) % 360.0 - 180.0, 0.0) for lat, lon in points]
+        x0, x1 = min(x for x, _ in xy), max(x for x, _ in xy)
+        y0, y1 = min(y for _, y in xy), max(y for _, y in xy)
+        room_w, room_h = max(1.0, self.width - left - right), max(1.0, self.height - top - bottom)
+        zoom = max_zoom
+        if x1 > x0:
+            zoom = min(zoom, math.log2(room_w / (x1 - x0)))
+        if y1 > y0:
+            zoom = min(zoom, math.log2(room_h / (y1 - y0)))
+        self.zoom = self._clamp_zoom(zoom)
+        lat, lon = m.world_to_latlon((x0 + x1) / 2.0, (y0 + y1) / 2.0, 0.0)
+        self.centre_on(lat, (lon + 180.0) % 360.0 - 180.0)
+        # the group's middle goes to the middle of the room the inset leaves (not of the whole screen)
+        self.pan((left - right) / 2.0, (top - bottom) / 2.0)
+
+    def shows(self, lat: float, lon: float, inset: tuple[float, float, float, float] = (0, 0, 0, 0)) -> bool:
+        """Whether the point lies on screen, inside ``inset`` (left, top, right, bottom pixels) from the edges."""
+        x, y = self.to_screen(lat, lon)
+        left, top, right, bottom = inset
+        return left <= x <= self.width - right and top <= y <= self.height - bottom
 
     # -- tiles -------------------------------------------------------------------------------------
     def tile_zoom(self, max_tile_zoom: int = m.MAX_ZOOM, min_tile_zoom: int = 0) -> int:

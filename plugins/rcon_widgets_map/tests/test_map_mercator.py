@@ -108,6 +108,32 @@ def test_pan_moves_content_with_the_finger(lat, lon, zoom, dx, dy):
     assert vp.to_screen(plat, plon) == pytest.approx((px + dx, py + dy), abs=1e-4)
 
 
+@settings(max_examples=80)
+@given(st.floats(-70, 70), st.floats(-180, 180), st.lists(st.tuples(st.floats(-3000, 3000), st.floats(-3000, 3000)),
+                                                         min_size=1, max_size=6),
+       st.integers(200, 900), st.integers(200, 700), st.tuples(*[st.integers(0, 60)] * 4), st.floats(12, 19))
+@example(10.0, 179.99, [(0.0, 0.0), (800.0, 0.0)], 400, 300, (0, 0, 0, 0), 18.0)  # across the antimeridian
+def test_fit_shows_every_point_inside_the_inset_as_close_as_it_can(lat, lon, offsets, w, h, inset, max_zoom):
+    points = [m.offset_m(lat, lon, east, north) for east, north in offsets]
+    vp = Viewport(0.0, 0.0, 3.0, w, h)
+    vp.fit(points, inset, max_zoom=max_zoom)
+    assert vp.zoom <= max_zoom
+    left, top, right, bottom = inset
+    xs, ys = zip(*(vp.to_screen(*p) for p in points), strict=True)
+    assert min(xs) >= left - 1e-3 and max(xs) <= w - right + 1e-3, (xs, inset)
+    assert min(ys) >= top - 1e-3 and max(ys) <= h - bottom + 1e-3, (ys, inset)
+    # the group sits in the middle of the room the inset leaves...
+    assert (min(xs) + max(xs)) / 2 == pytest.approx((left + w - right) / 2, abs=1e-3)
+    assert (min(ys) + max(ys)) / 2 == pytest.approx((top + h - bottom) / 2, abs=1e-3)
+    # ...and fills it one way unless the zoom is at its most (no zooming out further than it must)
+    if vp.zoom < max_zoom:
+        assert max(max(xs) - min(xs) - (w - left - right), max(ys) - min(ys) - (h - top - bottom)) == pytest.approx(
+            0.0, abs=1e-3)
+    assert all(vp.shows(*p, inset=(left - 1e-3, top - 1e-3, right - 1e-3, bottom - 1e-3)) for p in points)
+    if len(set(offsets)) == 1:  # one place: centred there at the most zoom
+        assert vp.zoom == max_zoom
+
+
 @settings(max_examples=60)
 @given(st.floats(-80, 80), st.floats(-179, 179), st.floats(1, 21), st.integers(1, 19))
 def test_tiles_cover_the_screen_exactly_once(lat, lon, zoom, max_tile_zoom):
