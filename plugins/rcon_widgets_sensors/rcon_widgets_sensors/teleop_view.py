@@ -29,6 +29,8 @@ class TeleopView(QtWidgets.QWidget):
     def __init__(self, model: Any, parent: QtWidgets.QWidget | None = None) -> None:
         super().__init__(parent)
         self.model = model
+        #: the status line under the pad as last painted (elided to the width; tests, accessibility)
+        self.status_shown = ""
         self._touch_id: int | None = None
         self._dead_touch = False  # focus was lost mid-touch: ignore this touch until it ends
         self._mouse_down = False
@@ -213,9 +215,11 @@ class TeleopView(QtWidgets.QWidget):
             p.drawText(top, QtCore.Qt.AlignmentFlag.AlignRight | QtCore.Qt.AlignmentFlag.AlignVCenter, h + " →")
         # status line
         p.setPen(pal.color(QtGui.QPalette.ColorRole.WindowText))
-        status = self.status_text()
-        p.drawText(QtCore.QRectF(4, self.height() - 20, self.width() - 8, 18),
-                   QtCore.Qt.AlignmentFlag.AlignCenter, status)
+        room = QtCore.QRectF(4, self.height() - 20, self.width() - 8, 18)
+        # a narrow pad (a fleet tile) shows the line's beginning and "…", never both ends cut off
+        self.status_shown = p.fontMetrics().elidedText(self.status_text(), QtCore.Qt.TextElideMode.ElideRight,
+                                                       int(room.width()))
+        p.drawText(room, QtCore.Qt.AlignmentFlag.AlignCenter, self.status_shown)
         p.end()
 
     @property
