@@ -90,7 +90,7 @@ def paint_scale(width: int, height: int, display: Display) -> float:
 def shrink(rgb: np.ndarray, scale: float) -> np.ndarray:
     """``rgb`` (any channel count) resized by ``scale`` with area interpolation when that makes it more
     than :data:`SHRINK_ABOVE` times smaller per side; else ``rgb`` itself. Sizes round up."""
-    if scale * SHRINK_ABOVE >= 1.0:
+    if scale * SHRINK_ABOVE >= 1.0 - 1e-9:  # exactly 1.2x too big is left alone too
         return rgb
     h, w = rgb.shape[:2]
     size = (max(1, math.ceil(w * scale - 1e-9)), max(1, math.ceil(h * scale - 1e-9)))

@@ -128,6 +128,8 @@ def test_never_upscaled_and_small_excess_left_alone():
     assert model.decode(raw_msg(rgb)).rgb.shape == (480, 640, 3)
     model.set_display_size(600, 450)  # 640 is only 1.07x too big: the painter's scaling costs less
     assert model.decode(raw_msg(rgb)).rgb.shape == (480, 640, 3)
+    model.set_display_size(640, 400)  # exactly 1.2x too big (480 rows into 400): left alone as well
+    assert model.decode(raw_msg(rgb)).rgb.shape == (480, 640, 3)
     tiny = np.ascontiguousarray(rgb[::10, ::10])  # 64x48 source into a 320x240 box: stays 64x48
     f = model.decode(raw_msg(tiny))
     assert f.rgb.shape == (48, 64, 3) and (f.width, f.height) == (64, 48)
