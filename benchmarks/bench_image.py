@@ -1,7 +1,8 @@
 """Benchmark of the Image widget: can it keep up with camera streams without growing latency?
 
-Two streams are served by a loopback SimServer (robot off; frames published with the sim's own
-encoding, CBOR as the widget asks): 1280x720 JPEG at 30 fps and 640x480 rgb8 (raw) at 30 fps. Each is shown
+Three streams are served by a loopback SimServer (robot off; frames published with the sim's own
+encoding, CBOR as the widget asks): 1280x720 JPEG, 640x480 JPEG and 640x480 rgb8 (raw), at 30 fps, one
+after the other (``--only NAME`` for one). Each is shown
 by the real Image widget (model + view, offscreen Qt) driven like the app drives it (a 60 Hz frame tick
 that refreshes the view when ``state.seq`` moved). Figures per stream: frames published and shown per
 second, frames dropped (latest-wins), and publish-to-painted latency p50/p99 (header stamp -> the view
@@ -32,6 +33,7 @@ import numpy as np
 
 STREAMS = {
     "jpeg_1280x720": ("sensor_msgs/CompressedImage", 1280, 720),
+    "jpeg_640x480": ("sensor_msgs/CompressedImage", 640, 480),  # the fleet benchmark's rear cameras
     "rgb8_640x480": ("sensor_msgs/Image", 640, 480),
 }
 
