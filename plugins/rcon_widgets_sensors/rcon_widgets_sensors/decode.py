@@ -15,8 +15,8 @@ fits the picture into, already grown by its zoom) caps the pixels made: :func:`p
 display pixels one source pixel becomes there, and nothing is made bigger than that needs. A JPEG is
 decoded with OpenCV's reduced decoding (1/2, 1/4 or 1/8 size, far cheaper than a full decode), the
 largest reduction still at least the painted size; anything still more than :data:`SHRINK_ABOVE` times
-too big (raw images, PNG, a JPEG between two reductions) is shrunk with area interpolation
-(:func:`shrink`). Never upscaled; no ``display`` (or 0) = full resolution. The 8-bit raw encodings are
+too big (raw images, PNG, a JPEG between two reductions) is shrunk (:func:`shrink`: area-interpolated
+halvings, then bilinear for the rest, a factor under 2). Never upscaled; no ``display`` (or 0) = full resolution. The 8-bit raw encodings are
 shrunk before their colour conversion (it commutes with an area resize), the others after.
 """
 
@@ -88,13 +88,27 @@ def paint_scale(width: int, height: int, display: Display) -> float:
 
 
 def shrink(rgb: np.ndarray, scale: float) -> np.ndarray:
-    """``rgb`` (any channel count) resized by ``scale`` with area interpolation when that makes it more
-    than :data:`SHRINK_ABOVE` times smaller per side; else ``rgb`` itself. Sizes round up."""
+    """``rgb`` (any channel count) resized by ``scale`` when that makes it more than :data:`SHRINK_ABOVE`
+    times smaller per side; else ``rgb`` itself. Sizes round up.
+
+    How, for speed: halvings with area interpolation (each an exact 2x2 mean, OpenCV's fast path: under
+    0.1 ms for 640x480) while the result stays at least the target, then, if the rest is still more than
+    :data:`SHRINK_ABOVE` too big (a factor under 2), bilinear to the target size. One area resize by a
+    factor that is not an integer costs 1.5-2 ms for 640x480 on the development machine (measured), more
+    than the painter's smooth scaling it saves; a factor under 2 needs no area average."""
     if scale * SHRINK_ABOVE >= 1.0 - 1e-9:  # exactly 1.2x too big is left alone too
         return rgb
     h, w = rgb.shape[:2]
-    size = (max(1, math.ceil(w * scale - 1e-9)), max(1, math.ceil(h * scale - 1e-9)))
-    return cv2.resize(_contig(rgb), size, interpolation=cv2.INTER_AREA)
+    tw, th = max(1, math.ceil(w * scale - 1e-9)), max(1, math.ceil(h * scale - 1e-9))
+    out = _contig(rgb)
+    while out.shape[1] % 2 == 0 and out.shape[0] % 2 == 0 and out.shape[1] // 2 >= tw and out.shape[0] // 2 >= th:
+        out = cv2.resize(out, (out.shape[1] // 2, out.shape[0] // 2), interpolation=cv2.INTER_AREA)
+    ow, oh = out.shape[1], out.shape[0]
+    if ow <= tw * SHRINK_ABOVE + 1e-9 and oh <= th * SHRINK_ABOVE + 1e-9:
+        return out
+    # odd sides stop the halving early: a rest of 2x or more still needs the area average
+    interp = cv2.INTER_AREA if ow >= 2 * tw or oh >= 2 * th else cv2.INTER_LINEAR
+    return cv2.resize(out, (tw, th), interpolation=interp)
 
 
 _SOF_MARKERS = frozenset(range(0xC0, 0xD0)) - {0xC4, 0xC8, 0xCC}  # DHT, JPG and DAC are no frame headers

@@ -11,7 +11,13 @@ from qtpy import QtCore, QtGui
 from qtpy.QtTest import QTest
 from rcon_widgets_sensors.camera import CameraModel, CameraSettings
 from rcon_widgets_sensors.camera_view import CameraView
-from rcon_widgets_sensors.decode import DecodeError, decode_compressed, decode_compressed_sized, jpeg_size
+from rcon_widgets_sensors.decode import (
+    DecodeError,
+    decode_compressed,
+    decode_compressed_sized,
+    jpeg_size,
+    shrink,
+)
 from rcon_widgets_sensors.image import Frame, ImageModel, ImageSettings
 from rcon_widgets_sensors.image_view import ImageView
 from sensors_helpers import in_thread
@@ -119,6 +125,21 @@ def test_a_raw_frame_is_shrunk_to_the_display_size_with_area_interpolation(encod
     model.set_display_size(200.4, 1000)  # device pixels may be fractional: rounded up
     assert model.display_size == (201, 1000)
     assert model.decode(msg).rgb.shape == (151, 201, 3)
+
+
+@pytest.mark.parametrize("display", [(200, 150), (100, 80), (500, 400), (400, 300), (50, 38)])
+@pytest.mark.parametrize("odd", [False, True])
+def test_a_shrink_to_any_size_is_close_to_an_area_resize(display, odd):
+    """Area halvings, then bilinear for a rest under 2x (fast); odd sides stop the halving early."""
+    rgb = picture()
+    if odd:
+        rgb = np.ascontiguousarray(rgb[:479, :639])
+    h, w = rgb.shape[:2]
+    scale = min(display[0] / w, display[1] / h)
+    out = shrink(rgb, scale)
+    want = (int(np.ceil(h * scale - 1e-9)), int(np.ceil(w * scale - 1e-9)))
+    assert out.shape[:2] == want or (scale * 1.2 >= 1 and out.shape[:2] == (h, w))
+    assert mean_abs_diff(out, area(rgb, out.shape[1], out.shape[0])) < 1.0
 
 
 def test_never_upscaled_and_small_excess_left_alone():
