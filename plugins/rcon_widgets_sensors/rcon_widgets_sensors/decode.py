@@ -15,9 +15,10 @@ fits the picture into, already grown by its zoom) caps the pixels made: :func:`p
 display pixels one source pixel becomes there, and nothing is made bigger than that needs. A JPEG is
 decoded with OpenCV's reduced decoding (1/2, 1/4 or 1/8 size, far cheaper than a full decode), the
 largest reduction still at least the painted size; anything still more than :data:`SHRINK_ABOVE` times
-too big (raw images, PNG, a JPEG between two reductions) is shrunk (:func:`shrink`: area-interpolated
-halvings, then bilinear for the rest, a factor under 2). Never upscaled; no ``display`` (or 0) = full resolution. The 8-bit raw encodings are
-shrunk before their colour conversion (it commutes with an area resize), the others after.
+too big (raw images, PNG, a JPEG between two reductions) is shrunk (:func:`shrink`: area-averaged
+halvings, then bilinear for the rest, a factor under 2). Never upscaled; no ``display`` (or a 0 in it) =
+full resolution. The 8-bit raw encodings are shrunk before their colour conversion (a per-pixel
+conversion commutes with the resize), the others (bayer, yuv, 16-bit, depth) after.
 """
 
 from __future__ import annotations

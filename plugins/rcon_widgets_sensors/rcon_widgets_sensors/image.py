@@ -4,11 +4,11 @@ The model never decodes on the bridge loop: ``on_message`` hands the message to 
 through a latest-wins slot (a burst of big frames costs the loop nothing and older frames are dropped,
 never queued), and the worker publishes a ready :class:`Frame` with ``set_value``. The view tells the
 model how big it paints (:meth:`ImageModel.set_display_size`: its size in device pixels, grown by its
-zoom) and the worker makes no more pixels than that needs (a reduced JPEG decode, an area resize of raw
-images: :mod:`.decode`), then lays them out for Qt's painter (RGB32) on the same thread; the frame keeps
-the source picture's size for the overlay and the zoom arithmetic. The server is asked
-to send no more than the view can show: ``throttle_rate`` from ``max_fps``, ``queue_length`` 1, CBOR
-(binary data, no base64) when ``compression`` is ``"auto"``.
+zoom) and the worker makes no more pixels than that needs (a reduced JPEG decode, a shrink of raw and
+PNG images: :mod:`.decode`; laser scans and occupancy grids are drawn as before), then lays them out for
+Qt's painter (RGB32) on the same thread; the frame keeps the source picture's size for the overlay and
+the zoom arithmetic. The server is asked to send no more than the view can show: ``throttle_rate`` from
+``max_fps``, ``queue_length`` 1, CBOR (binary data, no base64) when ``compression`` is ``"auto"``.
 """
 
 from __future__ import annotations
