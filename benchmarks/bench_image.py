@@ -1,14 +1,20 @@
 """Benchmark of the Image widget: can it keep up with camera streams without growing latency?
 
-Two streams are served by a loopback SimServer (robot off; frames published with the sim's own
-encoding, CBOR as the widget asks): 1280x720 JPEG at 30 fps and 640x480 rgb8 (raw) at 30 fps. Each is shown
+Three streams are served by a loopback SimServer (robot off; frames published with the sim's own
+encoding, CBOR as the widget asks): 1280x720 JPEG, 640x480 JPEG and 640x480 rgb8 (raw), at 30 fps, one
+after the other (``--only NAME`` for one). Each is shown
 by the real Image widget (model + view, offscreen Qt) driven like the app drives it (a 60 Hz frame tick
 that refreshes the view when ``state.seq`` moved). Figures per stream: frames published and shown per
 second, frames dropped (latest-wins), and publish-to-painted latency p50/p99 (header stamp -> the view
 finished painting that frame), plus the latency trend (last second vs first second: growing latency
-means a queue builds up).
+means a queue builds up), the decode worker's CPU per frame (``decode_cpu_ms_*``: thread CPU time of
+``ImageModel.decode``, which makes the frame at the view's size and its RGB32 copy), the view's
+``paintEvent`` time (``paint_ms_*``, GUI thread) and the size of the pixel array painted.
 
-Usage: ``QT_QPA_PLATFORM=offscreen python benchmarks/bench_image.py [--seconds 6] [--fps 30] [--out FILE.json]``
+``--view WxH`` sets the view's size (default 640x400; the fleet console's camera views are about 320x260).
+
+Usage: ``QT_QPA_PLATFORM=offscreen python benchmarks/bench_image.py [--seconds 6] [--fps 30] [--view WxH]
+[--out FILE.json]``
 """
 
 from __future__ import annotations
@@ -27,6 +33,7 @@ import numpy as np
 
 STREAMS = {
     "jpeg_1280x720": ("sensor_msgs/CompressedImage", 1280, 720),
+    "jpeg_640x480": ("sensor_msgs/CompressedImage", 640, 480),  # the fleet benchmark's rear cameras
     "rgb8_640x480": ("sensor_msgs/Image", 640, 480),
 }
 
@@ -79,7 +86,8 @@ async def publish_stream(server: Any, topic: str, type_name: str, payloads: list
         await asyncio.sleep(due - now)
 
 
-def run_stream(name: str, seconds: float, fps: float, warmup: float = 1.0) -> dict[str, Any]:
+def run_stream(name: str, seconds: float, fps: float, warmup: float = 1.0,
+               view_size: tuple[int, int] = (640, 400)) -> dict[str, Any]:
     from qtpy import QtCore, QtWidgets
     from rcon_widgets_sensors.image import ImageModel, ImageSettings
     from rcon_widgets_sensors.image_view import ImageView
@@ -108,8 +116,27 @@ def run_stream(name: str, seconds: float, fps: float, warmup: float = 1.0) -> di
         bt.run(client.connect()).result(10)
         model = ImageModel(ImageSettings(max_fps=fps), Binding(topic, type_name, "subscribe"),
                            client.node("bench-image"), dispatch=bt.call)
+        decode_cpu: list[float] = []  # thread CPU seconds per decode (worker thread)
+        real_decode = model.decode
+
+        def timed_decode(msg: dict[str, Any], received: float | None = None) -> Any:
+            c0 = time.thread_time()
+            frame = real_decode(msg, received)
+            decode_cpu.append(time.thread_time() - c0)
+            return frame
+
+        model.decode = timed_decode
         view = ImageView(model)
-        view.resize(640, 400)
+        paint_s: list[float] = []  # wall seconds per paintEvent (GUI thread)
+        real_paint = view.paintEvent
+
+        def timed_paint(event: Any) -> None:
+            p0 = time.perf_counter()
+            real_paint(event)
+            paint_s.append(time.perf_counter() - p0)
+
+        view.paintEvent = timed_paint
+        view.resize(*view_size)
         view.show()
         painted: list[tuple[float, float, int]] = []  # (painted wall time, latency s, frame index)
         view.on_painted = lambda frame, t: painted.append((t, t - (frame.stamp or frame.received), frame.index))
@@ -140,6 +167,8 @@ def run_stream(name: str, seconds: float, fps: float, warmup: float = 1.0) -> di
         loop.exec()
         fut.result(5)
         timer.stop()
+        shown = view.frame
+        pixels = f"{shown.rgb.shape[1]}x{shown.rgb.shape[0]}" if shown is not None else "-"
         end_wall, end_cpu = time.time(), time.process_time()
         bt.call(model.stop).result(5)
         bt.run(client.close()).result(5)
@@ -148,6 +177,9 @@ def run_stream(name: str, seconds: float, fps: float, warmup: float = 1.0) -> di
     t0, pub0, cpu_start = marks[0] if marks else (painted[0][0], 0, cpu0)
     measured = [p for p in painted if p[0] >= t0]
     span = max(1e-6, (measured[-1][0] - t0) if measured else seconds)
+    n_skip = max(0, int(len(decode_cpu) * warmup / (warmup + seconds)))  # roughly the warm-up's decodes
+    dec = [d * 1000 for d in decode_cpu[n_skip:]]
+    pnt = [d * 1000 for d in paint_s[len(paint_s) // 10:]]
     lat = [p[1] * 1000 for p in measured]
     first = [p[1] * 1000 for p in measured if p[0] < t0 + 1.0]
     last = [p[1] * 1000 for p in measured if p[0] > measured[-1][0] - 1.0] if measured else []
@@ -163,6 +195,12 @@ def run_stream(name: str, seconds: float, fps: float, warmup: float = 1.0) -> di
         "latency_last_s_p50_ms": round(pct(last, 50), 1),
         "process_cpu_percent_incl_server": round(100 * (end_cpu - cpu_start) / max(1e-6, end_wall - t0), 1),
         "frames_painted": len(measured),
+        "view": f"{view_size[0]}x{view_size[1]}",
+        "pixels_painted": pixels,
+        "decode_cpu_ms_p50": round(pct(dec, 50), 2),
+        "decode_cpu_ms_p95": round(pct(dec, 95), 2),
+        "paint_ms_p50": round(pct(pnt, 50), 2),
+        "paint_ms_p95": round(pct(pnt, 95), 2),
     }
 
 
@@ -171,20 +209,31 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seconds", type=float, default=6.0)
     parser.add_argument("--fps", type=float, default=30.0)
     parser.add_argument("--only", choices=sorted(STREAMS), default=None)
+    parser.add_argument("--view", default="640x400", help="the view's size WxH (default 640x400)")
     parser.add_argument("--out", type=Path)
     args = parser.parse_args(argv)
+    try:
+        w, h = (int(v) for v in args.view.lower().split("x"))
+        view_size = (w, h)
+        assert min(view_size) > 0
+    except (ValueError, AssertionError):
+        parser.error(f"--view wants WxH in pixels, e.g. 320x260, not {args.view!r}")
     os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
     results = []
     for name in STREAMS:
         if args.only and name != args.only:
             continue
-        r = run_stream(name, args.seconds, args.fps)
+        r = run_stream(name, args.seconds, args.fps, view_size=view_size)
         results.append(r)
         print(f"{name:>15}: published {r['published_fps']:5.1f}/s  shown {r['shown_fps']:5.1f}/s  "
               f"latency p50 {r['latency_p50_ms']:6.1f} ms  p99 {r['latency_p99_ms']:6.1f} ms  "
               f"(first s {r['latency_first_s_p50_ms']:.1f}, last s {r['latency_last_s_p50_ms']:.1f})  "
               f"dropped {r['dropped_latest_wins']}  process cpu {r['process_cpu_percent_incl_server']:.0f}%", flush=True)
-    figures = {"benchmark": "image", "seconds": args.seconds, "fps": args.fps, "streams": results}
+        print(f"{'':>15}  view {r['view']} painting {r['pixels_painted']} px: decode cpu p50 "
+              f"{r['decode_cpu_ms_p50']:.2f} ms p95 {r['decode_cpu_ms_p95']:.2f} ms; paintEvent p50 "
+              f"{r['paint_ms_p50']:.2f} ms p95 {r['paint_ms_p95']:.2f} ms", flush=True)
+    figures = {"benchmark": "image", "seconds": args.seconds, "fps": args.fps, "view": args.view,
+               "streams": results}
     if args.out:
         args.out.write_text(json.dumps(figures, indent=2))
     ok = all(r["shown_fps"] >= 0.8 * r["published_fps"] for r in results)

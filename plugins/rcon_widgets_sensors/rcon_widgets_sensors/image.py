@@ -2,14 +2,19 @@
 
 The model never decodes on the bridge loop: ``on_message`` hands the message to a decode worker thread
 through a latest-wins slot (a burst of big frames costs the loop nothing and older frames are dropped,
-never queued), and the worker publishes a ready :class:`Frame` with ``set_value``. The server is asked
-to send no more than the view can show: ``throttle_rate`` from ``max_fps``, ``queue_length`` 1, CBOR
-(binary data, no base64) when ``compression`` is ``"auto"``.
+never queued), and the worker publishes a ready :class:`Frame` with ``set_value``. The view tells the
+model how big it paints (:meth:`ImageModel.set_display_size`: its size in device pixels, grown by its
+zoom) and the worker makes no more pixels than that needs (a reduced JPEG decode, a shrink of raw and
+PNG images: :mod:`.decode`; laser scans and occupancy grids are drawn as before), then lays them out for
+Qt's painter (RGB32) on the same thread; the frame keeps the source picture's size for the overlay and
+the zoom arithmetic. The server is asked to send no more than the view can show: ``throttle_rate`` from
+``max_fps``, ``queue_length`` 1, CBOR (binary data, no base64) when ``compression`` is ``"auto"``.
 """
 
 from __future__ import annotations
 
 import collections
+import math
 import sys
 import threading
 import time
@@ -23,7 +28,7 @@ from rcon_core.msgs import time as rtime
 from rcon_core.plugins import WidgetModel
 from rcon_core.plugins.paths import PathError, get_path
 
-from .decode import DecodeError, decode_compressed, decode_image, message_kind
+from .decode import DecodeError, decode_compressed_sized, decode_image, message_kind
 from .scan_render import ScanCounts, render_grid, render_scan
 from .slots import SlotWorker
 
@@ -86,6 +91,11 @@ class Frame:
     ``rgb32``: the same pixels laid out for Qt's ``Format_RGB32`` (:func:`to_rgb32`), made where the frame
     is made (a decode or capture thread), so the GUI thread paints without converting the format.
 
+    ``width``/``height``: the SOURCE picture's size (what the overlay says; the view's zoom and pan work in
+    these pixels). ``rgb`` may be smaller than that when the model decoded for a smaller display
+    (:meth:`ImageModel.set_display_size`): it covers the whole picture, so the view draws the whole array
+    into the rectangle the source size would fill. ``pixel_width``/``pixel_height``: the array's size.
+
     ``stamp``: the message header's time (epoch seconds) or None; ``received``/``decoded``: wall clock
     when it arrived / was ready. ``fps``: frames decoded per second lately. ``dropped``: frames skipped so
     far because a newer one came first. ``kind``: image, compressed, scan or grid; ``info``: for people.
@@ -102,14 +112,26 @@ class Frame:
     dropped: int = 0
     smooth: bool = True
     counts: ScanCounts | None = None
+    source_width: int = attrs.field(default=attrs.Factory(lambda self: int(self.rgb.shape[1]), takes_self=True))
+    source_height: int = attrs.field(default=attrs.Factory(lambda self: int(self.rgb.shape[0]), takes_self=True))
     rgb32: np.ndarray = attrs.field(default=attrs.Factory(lambda self: to_rgb32(self.rgb), takes_self=True))
 
     @property
     def width(self) -> int:
-        return int(self.rgb.shape[1])
+        """The source picture's width (the pixel array may be smaller: :attr:`pixel_width`)."""
+        return self.source_width
 
     @property
     def height(self) -> int:
+        return self.source_height
+
+    @property
+    def pixel_width(self) -> int:
+        """The width of ``rgb``/``rgb32``: at most the source width."""
+        return int(self.rgb.shape[1])
+
+    @property
+    def pixel_height(self) -> int:
         return int(self.rgb.shape[0])
 
 
@@ -144,6 +166,8 @@ class ImageModel(WidgetModel):
         self._frames = 0
         self._times: collections.deque[float] = collections.deque(maxlen=90)
         self._frame_cond = threading.Condition()
+        self._display_lock = threading.Lock()
+        self._display: tuple[int, int] | None = None
 
     # -- server options ---------------------------------------------------------------------------------
     def subscribe_options(self) -> dict[str, Any]:
@@ -186,6 +210,22 @@ class ImageModel(WidgetModel):
         w = self._worker
         return w.slot.dropped if w is not None else 0
 
+    # -- display size (any thread) --------------------------------------------------------------------
+    def set_display_size(self, width: float, height: float) -> None:
+        """The box, in device pixels, the view fits the picture into (its size x device pixel ratio, times
+        its zoom when zoomed in). Frames decoded from now on carry no more pixels than a picture fitted
+        there needs; a 0 (or less) = full resolution. Thread-safe, cheap, no Qt: the view calls it on
+        resize and zoom; the next frame comes at the new size."""
+        w, h = math.ceil(width), math.ceil(height)
+        with self._display_lock:
+            self._display = (w, h) if w > 0 and h > 0 else None
+
+    @property
+    def display_size(self) -> tuple[int, int] | None:
+        """What :meth:`set_display_size` set last, or None (full resolution)."""
+        with self._display_lock:
+            return self._display
+
     # -- decoding (worker thread) ---------------------------------------------------------------------
     def _decode_failed(self, exc: BaseException) -> None:
         self.set_error(str(exc) if isinstance(exc, DecodeError | PathError) else f"{type(exc).__name__}: {exc}")
@@ -200,12 +240,15 @@ class ImageModel(WidgetModel):
         depth = (s.depth_min, s.depth_max) if s.depth_max > s.depth_min else None
         counts = None
         smooth = s.smooth
+        display = self.display_size
+        src_w = src_h = 0
         if kind == "image":
-            rgb = decode_image(body, depth)
-            info = f"{rgb.shape[1]}×{rgb.shape[0]} {body.get('encoding')}"
+            rgb = decode_image(body, depth, display)
+            src_w, src_h = int(body["width"]), int(body["height"])  # decode_image checked them
+            info = f"{src_w}×{src_h} {body.get('encoding')}"
         elif kind == "compressed":
-            rgb = decode_compressed(body, depth)
-            info = f"{rgb.shape[1]}×{rgb.shape[0]} {body.get('format') or 'compressed'}"
+            rgb, src_w, src_h = decode_compressed_sized(body, depth, display)
+            info = f"{src_w}×{src_h} {body.get('format') or 'compressed'}"
         elif kind == "scan":
             rgb, counts = render_scan(body, max_range=s.scan_range or None)
             info = f"{counts.valid} hits, {counts.out_of_range} out of range, {counts.invalid} no return"
@@ -225,7 +268,8 @@ class ImageModel(WidgetModel):
             if len(self._times) > 1 and self._times[-1] > self._times[0]:
                 fps = (len(self._times) - 1) / (self._times[-1] - self._times[0])
         return Frame(rgb=rgb, kind=kind, info=info, stamp=_stamp(body), received=received, decoded=now,
-                     index=index, fps=fps, dropped=self.dropped, smooth=smooth, counts=counts)
+                     index=index, fps=fps, dropped=self.dropped, smooth=smooth, counts=counts,
+                     source_width=src_w or int(rgb.shape[1]), source_height=src_h or int(rgb.shape[0]))
 
     def _decode(self, item: tuple[dict[str, Any], float]) -> None:
         msg, received = item

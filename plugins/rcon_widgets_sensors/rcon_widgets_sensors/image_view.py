@@ -1,8 +1,14 @@
 """The Image widget's Qt view: paints the newest decoded frame; pinch/pan/double-tap to zoom.
 
-The model hands over a ready frame (its pixels already in Qt's RGB32 layout, ``Frame.rgb32``); the view
-wraps them in a QImage without copying and draws it scaled (the one copy is the scaling itself). Touch: one finger pans, two fingers pinch-zoom around their
-centre, a double tap fits the image again. Mouse: drag pans, the wheel zooms, a double click fits.
+The view tells the model the size it paints at (``set_display_size``: the widget's size in device
+pixels, times the zoom; on resize and on every zoom change), so the decode worker makes frames no bigger
+than needed (a 640x480 camera in a 320x260 view arrives as 320x240; zoomed in, at full resolution). The
+model hands over a ready frame (its pixels already in Qt's RGB32 layout, ``Frame.rgb32``); the view wraps
+them in a QImage without copying and draws the whole array scaled into the rectangle the SOURCE size
+(``Frame.width``/``height``, which the viewport's zoom and pan work in) fills, so a smaller array lands
+exactly where the full one would (the one copy is the scaling itself). Touch: one finger pans, two fingers
+pinch-zoom around their centre, a double tap fits the image again. Mouse: drag pans, the wheel zooms, a
+double click fits.
 """
 
 from __future__ import annotations
@@ -46,6 +52,8 @@ class ImageView(QtWidgets.QWidget):
         self._last_tap: tuple[float, QtCore.QPointF] | None = None
         self._touch_moved = False
         self._drag_from: QtCore.QPointF | None = None
+        #: the display size last handed to the model (device pixels), None before the first
+        self.display_size_sent: tuple[int, int] | None = None
         self.setAttribute(QtCore.Qt.WidgetAttribute.WA_AcceptTouchEvents, True)
         self.setAttribute(QtCore.Qt.WidgetAttribute.WA_OpaquePaintEvent, True)
         self.setMinimumSize(80, 60)
@@ -70,7 +78,7 @@ class ImageView(QtWidgets.QWidget):
             px = value.rgb32
             # no copy: the QImage reads the array's memory; self.frame keeps the array alive. RGB32 (made
             # off the GUI thread) is the format the raster painter scales without converting it first
-            self._qimage = QtGui.QImage(px.data, value.width, value.height, px.strides[0],
+            self._qimage = QtGui.QImage(px.data, px.shape[1], px.shape[0], px.strides[0],
                                         QtGui.QImage.Format.Format_RGB32)
             self.viewport.set_image(value.width, value.height)
         self.update()
@@ -93,9 +101,24 @@ class ImageView(QtWidgets.QWidget):
         idle = time.time() - self.frame.received
         return idle if idle >= STALE_AFTER_S else None
 
+    # -- the size the model decodes for ---------------------------------------------------------------------
+    def sync_display_size(self) -> None:
+        """Hand the model the box the picture is painted into, in device pixels (widget size x device
+        pixel ratio x zoom), when it changed. Models without ``set_display_size`` (the Camera widget's
+        preview) are left alone."""
+        setter = getattr(self.model, "set_display_size", None)
+        if setter is None:
+            return
+        k = self.devicePixelRatioF() * self.viewport.zoom
+        size = (math.ceil(self.width() * k - 1e-6), math.ceil(self.height() * k - 1e-6))
+        if size != self.display_size_sent:
+            self.display_size_sent = size
+            setter(*size)
+
     # -- painting -----------------------------------------------------------------------------------------
     def resizeEvent(self, event: QtGui.QResizeEvent) -> None:  # noqa: N802
         self.viewport.resize(self.width(), self.height())
+        self.sync_display_size()
         super().resizeEvent(event)
 
     def paintEvent(self, _event: QtGui.QPaintEvent) -> None:  # noqa: N802
@@ -105,10 +128,12 @@ class ImageView(QtWidgets.QWidget):
         if frame is not None and img is not None:
             vp = self.viewport
             vp.resize(self.width(), self.height())
+            self.sync_display_size()  # a no-op unless changed; also follows a new device pixel ratio
             x, y, w, h = vp.rect()
             if frame.smooth and vp.scale < 4:
                 p.setRenderHint(QtGui.QPainter.RenderHint.SmoothPixmapTransform, True)
-            p.drawImage(QtCore.QRectF(x, y, w, h), img, QtCore.QRectF(0, 0, frame.width, frame.height))
+            # the whole array (maybe smaller than the source) into the source's rectangle
+            p.drawImage(QtCore.QRectF(x, y, w, h), img, QtCore.QRectF(0, 0, img.width(), img.height()))
             p.setRenderHint(QtGui.QPainter.RenderHint.SmoothPixmapTransform, False)
         self._paint_status(p)
         p.end()
@@ -207,6 +232,7 @@ class ImageView(QtWidgets.QWidget):
             self.viewport.pan_by(new_c.x() - old_c.x(), new_c.y() - old_c.y())
             if old_d > 4:
                 self.viewport.zoom_at(new_d / old_d, new_c.x(), new_c.y())
+                self.sync_display_size()
             self._touch_moved = True
         elif len(common) == 1 and len(pts) == 1:
             i = common[0]
@@ -236,6 +262,7 @@ class ImageView(QtWidgets.QWidget):
     def fit(self) -> None:
         """Show the whole image again."""
         self.viewport.fit()
+        self.sync_display_size()
         self.update()
 
     # -- mouse -----------------------------------------------------------------------------------------
@@ -260,6 +287,7 @@ class ImageView(QtWidgets.QWidget):
         if steps:
             pos = e.position()
             self.viewport.zoom_at(1.25 ** steps, pos.x(), pos.y())
+            self.sync_display_size()
             self.update()
 
 
