@@ -164,21 +164,23 @@ def test_offline_pad_on_the_canvas_still_says_link_down(qtbot, dry_run):
 
 
 def test_a_narrow_pad_shows_the_start_of_its_status_line_whole_never_both_ends_cut(qtbot):
-    """A fleet tile's pad (144 px): "idle · touch to drive (10 Hz)" does not fit; the painted line keeps its
-    beginning and ends in "…" within the pad, instead of being centred and cut at both edges."""
+    """A pad narrower than its status line (a fleet tile's): the painted line keeps its beginning and ends in
+    "…" within the pad, instead of being centred and cut at both edges; a wide pad shows it whole."""
     model, view = offline_pad(dry_run=True)
     qtbot.addWidget(view)
-    view.resize(144, 160)
     view.show()
     full = view.status_text()
-    view.grab()  # paints it
-    shown = view.status_shown
     font = view.font()  # the pad's small text, as paintEvent sets it
     font.setPointSizeF(max(7.0, font.pointSizeF() * 0.8))
     fm = QtGui.QFontMetrics(font)
+    narrow = max(view.minimumWidth(), fm.horizontalAdvance(full) * 2 // 3)
+    view.resize(narrow, 160)
+    view.grab()  # paints it
+    shown = view.status_shown
+    assert fm.horizontalAdvance(full) > view.width() - 8, "the test needs a line that does not fit"
     assert shown != full and shown.endswith("…") and full.startswith(shown[:-1])
     assert fm.horizontalAdvance(shown) <= view.width() - 8
-    view.resize(400, 300)
-    view.grab()  # paints it
+    view.resize(fm.horizontalAdvance(full) + 40, 300)
+    view.grab()
     assert view.status_shown == full
     model.stop()
