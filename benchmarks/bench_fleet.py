@@ -105,6 +105,23 @@ def workspace(n: int, plugins: Any) -> Any:
     return ws
 
 
+def thread_cpu_s() -> dict[str, float]:
+    """CPU seconds of each of this process's threads so far, summed by thread name (Linux)."""
+    out: dict[str, float] = {}
+    names = {t.native_id: t.name for t in __import__("threading").enumerate()}
+    tick = os.sysconf("SC_CLK_TCK")
+    for tid in os.listdir("/proc/self/task"):
+        try:
+            with open(f"/proc/self/task/{tid}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        name = names.get(int(tid)) or "(not a Python thread)"
+        name = re.sub(r"[-_]?\d+$", "", name)  # workers of one kind together
+        out[name] = out.get(name, 0.0) + (int(fields[11]) + int(fields[12])) / tick
+    return out
+
+
 def proc_cpu_s(pid: int) -> float:
     with open(f"/proc/{pid}/stat") as f:
         fields = f.read().rsplit(")", 1)[1].split()
@@ -242,17 +259,30 @@ def run(args: Any) -> dict:
         window.clock._consumers.insert(0, measure_tick)
         before = sim_stats()
         sim_cpu0 = [proc_cpu_s(pid) for _, _, pid in sims]
+        threads0 = thread_cpu_s()
         t_start, cpu0, wall0 = time.time(), time.process_time(), time.perf_counter()
         check = QtCore.QTimer()
         check.timeout.connect(camera_paints)
         check.start(2)
+        profiler = None
+        if os.environ.get("BENCH_PROFILE"):  # diagnosis: cProfile of the GUI thread over the window
+            import cProfile
+
+            profiler = cProfile.Profile()
+            profiler.enable()
         ba.spin(app, args.seconds)
+        if profiler is not None:
+            profiler.disable()
+            profiler.dump_stats(os.environ["BENCH_PROFILE"])
         check.stop()
         lag_task.cancel()
         gc.callbacks.remove(gc_watch)
         wall = time.perf_counter() - wall0
         cpu = (time.process_time() - cpu0) / wall
         sim_cpu = [(proc_cpu_s(pid) - c0) / wall for (_, _, pid), c0 in zip(sims, sim_cpu0, strict=True)]
+        threads1 = thread_cpu_s()
+        thread_share = {name: round((t - threads0.get(name, 0.0)) / wall, 3) for name, t in threads1.items()
+                        if t - threads0.get(name, 0.0) > 0.005 * wall}
         after = sim_stats()
         t_end = time.time()
         QTest.mouseRelease(pad, QtCore.Qt.MouseButton.LeftButton, pos=c)
@@ -339,6 +369,8 @@ def run(args: Any) -> dict:
             "gc_policy": collector is not None,
             "gc_settle_pauses_ms": [round(ms, 1) for ms in collector.pauses_ms] if collector else [],
             "sim_cpu_share": [round(v, 3) for v in sim_cpu],
+            # the app's CPU by thread (name; workers of a kind summed): MainThread = the GUI
+            "app_cpu_share_by_thread": dict(sorted(thread_share.items(), key=lambda kv: -kv[1])),
             "camera_frames_shown_per_s": round(sum(c["shown"] for c in cameras.values()) / wall, 1),
             "app_cpu_ms_per_camera_frame_shown": round(
                 cpu * wall * 1000 / max(1, sum(c["shown"] for c in cameras.values())), 2),

@@ -51,6 +51,9 @@ from rcon_core.gcpolicy import CollectorPolicy
 from rcon_core.plugins import Binding, PluginManager, Role, WidgetSpec
 from rcon_core.plugins.children import ChildContext
 
+#: seconds between two passes over every widget for what changes without a message (ageing to STALE, link
+#: state); new values do not wait for it (the waker)
+FULL_PASS_EVERY = 0.1
 #: seconds after a robot connects until the collector freezes what its catalogue brought (``gcpolicy.py``)
 SETTLE_AFTER_CONNECT = 5.0
 ACTIONS_EMPTY = "No actions: a ROS 2 robot's action servers are listed here once connected."
@@ -92,6 +95,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.types = types if types is not None else plugins.type_registry()  # with plugins' types
         self.link = link or Link()
         self.clock = FrameClock(self)
+        self._last_full_pass = 0.0
         #: when the garbage collector may pause the process (``rcon_core/gcpolicy.py``); the app's entry
         #: point passes one, embedders and tests may leave it out (then Python's defaults apply)
         self.collector = collector
@@ -241,7 +245,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.clock.add(self.connection.poll)
         self.clock.add(self.fleet_ui.poll)
         self.clock.add(self._poll_catalog)
-        self.clock.add(lambda _now: self._pump(None))
+        self.clock.add(self._ageing_pass)
         if collector is not None:
             collector.soon(1.0, full=True)  # once the window is built and shown
             self.clock.add(collector.poll)
@@ -490,6 +494,15 @@ class MainWindow(QtWidgets.QMainWindow):
         self.preview.restart()
 
     # -------------------------------------------------------------------------------- painting
+    def _ageing_pass(self, now: float) -> None:
+        """From the frame clock: every ``FULL_PASS_EVERY`` s a pass over all widgets (their badges age,
+        link states show); in the ticks between, only the widgets waiting for their frame interval."""
+        if now - self._last_full_pass >= FULL_PASS_EVERY:
+            self._last_full_pass = now
+            self._pump(None)
+        elif self.host.waiting:
+            self._pump(set())
+
     def _pump(self, ids: set[str] | None = None) -> None:
         """Take the runtime's new models and refresh the views that changed (all when ``ids`` is None,
         else those widgets and the ones waiting for their frame interval)."""

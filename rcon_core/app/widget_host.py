@@ -153,6 +153,11 @@ class WidgetHost:
         return self.links_up.get(robot, self._link_up)
 
     # ------------------------------------------------------------------------------------ painting
+    @property
+    def waiting(self) -> bool:
+        """Whether some widget changed but waits for its frame interval (or the frame budget)."""
+        return bool(self._due)
+
     def refresh(self, ids: Iterable[str] | None = None, now: float | None = None) -> float | None:
         """Refresh the views whose model changed (all, or only ``ids`` and those waiting for their
         interval), within the frame budget, fairly. Returns seconds until a waiting widget is due."""
