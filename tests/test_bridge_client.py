@@ -585,8 +585,14 @@ async def test_reconnect_restores_everything_and_handles_publishes_while_down(se
 
     await server.start()  # same port
     await until(lambda: c.state is ConnectionState.CONNECTED, timeout=10)
+
+    def restored() -> list[tuple[str, str]]:
+        return [(f["op"], f.get("topic") or f.get("service")) for f in server.received[received_before:]]
+
+    # CONNECTED is the client's word; the server reads the restoring frames a moment later (a loaded machine)
+    await until(lambda: {("advertise", "/cmd_vel"), ("subscribe", "/rec/str"), ("publish", "/mode")} <= set(restored()))
     new = server.received[received_before:]
-    ops = [(f["op"], f.get("topic") or f.get("service")) for f in new]
+    ops = restored()
     assert ("advertise", "/cmd_vel") in ops and ("advertise", "/mode") in ops
     assert ("advertise_service", "/client/trigger") in ops and ("subscribe", "/rec/str") in ops
     assert new[0] == {"op": "set_level", "level": "error"}
