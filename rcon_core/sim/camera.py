@@ -2,6 +2,13 @@
 
 A pinhole camera at ``height`` metres looks along the hull (front) or backwards (rear). The scene without
 the overlay is cached by a quantised pose, so a vessel at rest costs a copy and a line of text per frame.
+
+A new scene is cheap too (the vessel rolls and pitches all the time, so it is the usual case): full-frame sky,
+water and shore images are made once, and each column's first shore row and first water row (from the tilted
+horizon and the shore's height at that bearing) pick between them. Rows above every column's first shore row
+are one copy of the sky, rows below every column's first water row one copy of the water, and only the rows
+in between are chosen pixel by pixel, with OpenCV's masked copy. Big copies and OpenCV calls release the GIL,
+so the drawing thread leaves the sim's event loop free.
 """
 
 from __future__ import annotations
@@ -17,6 +24,7 @@ from .world import BUOYS
 
 SHORE_Y = 40.0
 SHORE_HEIGHT = 9.0
+SHORE_COLOUR = (70, 85, 70)
 
 
 class CameraRenderer:
@@ -38,8 +46,10 @@ class CameraRenderer:
         self._cols = np.arange(width, dtype=np.float64)
         self._rows = np.arange(height, dtype=np.float64)[:, None]
         self._col_angles = np.arctan((width / 2 - self._cols) / self.focal)  # left of centre is positive
-        self._sky = self._gradient(sky[0], sky[1], height)
-        self._water = self._gradient((60, 110, 140), (20, 55, 80), height)
+        self._sky = self._full(self._gradient(sky[0], sky[1], height))
+        self._water = self._full(self._gradient((60, 110, 140), (20, 55, 80), height))
+        self._shore = np.empty_like(self._sky)
+        self._shore[:] = SHORE_COLOUR
         self._cache_key: tuple[int, ...] | None = None
         self._cache: np.ndarray | None = None
         self.renders = 0
@@ -48,6 +58,10 @@ class CameraRenderer:
     def _gradient(top: tuple[int, int, int], bottom: tuple[int, int, int], rows: int) -> np.ndarray:
         t = np.linspace(0.0, 1.0, rows)[:, None]
         return (np.array(top)[None, :] * (1 - t) + np.array(bottom)[None, :] * t).astype(np.uint8)
+
+    def _full(self, gradient: np.ndarray) -> np.ndarray:
+        """A (height x width x 3) image of a per-row ``gradient``: every column the same."""
+        return np.ascontiguousarray(np.broadcast_to(gradient[:, None, :], (self.height, self.width, 3)))
 
     def frame(self, vessel: Vessel, stamp: float | None = None) -> np.ndarray:
         """An RGB uint8 image (height x width x 3) of what the camera sees now."""
@@ -75,9 +89,6 @@ class CameraRenderer:
         roll = vessel.roll * sign
         # horizon row per column, tilted by roll and shifted by pitch
         horizon = h / 2 + f * math.tan(pitch) + (self._cols - w / 2) * math.tan(roll)
-        rows = self._rows
-        below = rows >= horizon[None, :]
-        img = np.where(below[:, :, None], self._water[:, None, :], self._sky[:, None, :]).astype(np.uint8)
         # the shore: a band above the horizon where a column's ray meets the line y = SHORE_Y
         theta = heading + self._col_angles
         s = np.sin(theta)
@@ -85,9 +96,19 @@ class CameraRenderer:
             dist = np.where(s > 1e-3, (SHORE_Y - vessel.y) / s, np.inf)
         dist = np.where(dist > 0.5, dist, np.inf)
         band = np.where(np.isfinite(dist), np.clip(f * SHORE_HEIGHT / np.maximum(dist, 1.0), 0, h), 0.0)
-        shore_top = horizon - band
-        shore = (rows >= shore_top[None, :]) & ~below & (band[None, :] > 0.5)
-        img[shore] = (70, 85, 70)
+        # a row r is water where r >= horizon, shore where horizon - band <= r < horizon (if band > 0.5):
+        # as whole rows, water from ceil(horizon) and shore from ceil(horizon - band)
+        water_from = np.clip(np.ceil(horizon), 0, h).astype(np.intp)
+        shore_from = np.where(band > 0.5, np.clip(np.ceil(horizon - band), 0, h).astype(np.intp), water_from)
+        top, bottom = int(shore_from.min()), int(water_from.max())
+        img = np.empty_like(self._sky)
+        img[:bottom] = self._sky[:bottom]
+        img[bottom:] = self._water[bottom:]
+        if top < bottom:  # the rows where columns differ: sky, then shore, then water
+            rows = np.arange(top, bottom)[:, None]
+            mixed = img[top:bottom]  # a view: OpenCV's masked copies write into img
+            cv2.copyTo(self._shore[top:bottom], (rows >= shore_from).view(np.uint8), mixed)
+            cv2.copyTo(self._water[top:bottom], (rows >= water_from).view(np.uint8), mixed)
         # buoys, far to near
         items = []
         for b in BUOYS:
