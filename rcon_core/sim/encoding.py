@@ -4,12 +4,18 @@ Messages inside the sim are plain dicts.  ``bytes`` values stand for ``uint8[]``
 arrays for other numeric arrays, so each encoding can render them the way rosbridge does: base64 text and
 plain JSON lists (float32 widened to double, NaN/inf as ``null``) in JSON; byte strings and RFC 8746
 typed arrays in CBOR.
+
+A camera image's pixels are most of its message (a 640x480 rgb8 frame is 900 KB). ``cbor_dumps`` encodes
+such a message with each long byte string replaced by a short placeholder and splices the bytes in at the
+end, one copy, instead of letting the CBOR encoder copy them through its growing buffer (several times
+slower, and on the sim's event loop). The output is byte for byte what ``cbor2.dumps`` gives.
 """
 
 from __future__ import annotations
 
 import base64
 import math
+import os
 import struct
 import zlib
 from typing import Any
@@ -54,7 +60,8 @@ def loads(text: str | bytes) -> Any:
     return orjson.loads(text)
 
 
-def _cbor_default(encoder: cbor2.CBOREncoder, value: Any) -> None:
+def cbor_default(encoder: cbor2.CBOREncoder, value: Any) -> None:
+    """cbor2's ``default`` hook: numpy arrays as typed arrays, numpy scalars as numbers, buffers as bytes."""
     if isinstance(value, np.ndarray):
         name = value.dtype.name
         tag = _CBOR_TAGS.get(name)
@@ -73,9 +80,64 @@ def _cbor_default(encoder: cbor2.CBOREncoder, value: Any) -> None:
     raise cbor2.CBOREncodeTypeError(f"cannot encode {type(value).__name__} as CBOR")
 
 
+#: byte strings at least this long are spliced into the CBOR output rather than encoded by cbor2
+SPLICE_MIN = 32 * 1024
+SPLICE_TOKEN = b"rcon-splice:" + os.urandom(8)  # never inside a real message (and checked)
+
+
 def cbor_dumps(obj: Any) -> bytes:
     """CBOR bytes: ``bytes`` as byte strings, numeric numpy arrays as typed arrays, floats as doubles."""
-    return cbor2.dumps(obj, default=_cbor_default)
+    spliced: list[bytes | bytearray] = []
+    lifted = _lift(obj, spliced)
+    if not spliced:
+        return cbor2.dumps(obj, default=cbor_default)
+    out = cbor2.dumps(lifted, default=cbor_default)
+    parts: list[bytes | bytearray] = []
+    at = 0
+    for i, value in enumerate(spliced):
+        mark = cbor2.dumps(SPLICE_TOKEN + i.to_bytes(4, "big"))
+        found = out.find(mark, at)
+        if found < 0 or out.find(mark, found + len(mark)) >= 0:  # cannot happen; never splice blindly
+            return cbor2.dumps(obj, default=cbor_default)
+        parts += (out[at:found], _bytes_head(len(value)), value)
+        at = found + len(mark)
+    parts.append(out[at:])
+    return b"".join(parts)
+
+
+def _lift(obj: Any, spliced: list[bytes | bytearray]) -> Any:
+    """``obj`` with each byte string of SPLICE_MIN bytes or more replaced by a placeholder (appended to
+    ``spliced`` in encoding order); the same object where there is none. Looks inside dicts and lists of
+    dicts (messages and arrays of messages), not inside lists of numbers or strings, which are never bytes."""
+    if isinstance(obj, dict):
+        out = None
+        for key, value in obj.items():
+            new = _lift(value, spliced)
+            if new is not value:
+                if out is None:
+                    out = dict(obj)
+                out[key] = new
+        return obj if out is None else out
+    if isinstance(obj, list | tuple) and obj and isinstance(obj[0], dict):
+        items = [_lift(v, spliced) for v in obj]
+        return obj if all(a is b for a, b in zip(items, obj, strict=True)) else items
+    if isinstance(obj, bytes | bytearray) and len(obj) >= SPLICE_MIN:
+        spliced.append(obj)
+        return SPLICE_TOKEN + (len(spliced) - 1).to_bytes(4, "big")
+    return obj
+
+
+def _bytes_head(n: int) -> bytes:
+    """The CBOR head of a byte string of ``n`` bytes (major type 2)."""
+    if n < 24:
+        return bytes([0x40 | n])
+    if n < 0x100:
+        return struct.pack(">BB", 0x58, n)
+    if n < 0x10000:
+        return struct.pack(">BH", 0x59, n)
+    if n < 0x100000000:
+        return struct.pack(">BI", 0x5A, n)
+    return struct.pack(">BQ", 0x5B, n)
 
 
 def publish_frame(topic: str, msg: Any) -> dict[str, Any]:
