@@ -61,14 +61,14 @@ def serve(rate_scale: float) -> int:
         loop = asyncio.get_running_loop()
         reader = asyncio.StreamReader()
         await loop.connect_read_pipe(lambda: asyncio.StreamReaderProtocol(reader), sys.stdin)
-        marks: dict[str, tuple[float, float]] = {}
+        marks: dict[str, tuple[float, float, float]] = {}
         node = server.robot_node
         lags: list[float] = []
         recording = [False]
         probe = asyncio.create_task(_lag_probe(lags, recording))
         frames: dict[str, int] = {}
         while line := (await reader.readline()).decode().strip():
-            marks[line] = (time.process_time(), time.monotonic())
+            marks[line] = (time.process_time(), time.monotonic(), time.thread_time())
             recording[0] = line == "start"
             if line == "start":
                 frames = {t: node.published_counts.get(t, 0) for t in CAMERAS}
@@ -77,11 +77,12 @@ def serve(rate_scale: float) -> int:
         probe.cancel()
         cpu = marks["stop"][0] - marks["start"][0]
         wall = marks["stop"][1] - marks["start"][1]
+        loop_cpu = marks["stop"][2] - marks["start"][2]  # the event loop's own thread
         frames = {t: node.published_counts.get(t, 0) - frames.get(t, 0) for t in CAMERAS}
         renders = {"front": node.front.renders, "rear": node.rear.renders}
         lag_ms = {"p50": _percentile(lags, 50) * 1e3, "p99": _percentile(lags, 99) * 1e3,
                   "max": max(lags, default=float("nan")) * 1e3, "samples": len(lags)}
-        print(json.dumps({"cpu_s": cpu, "wall_s": wall, "renders": renders, "camera_frames": frames,
+        print(json.dumps({"cpu_s": cpu, "loop_cpu_s": loop_cpu, "wall_s": wall, "renders": renders, "camera_frames": frames,
                           "loop_lag_ms": lag_ms}), flush=True)
         await server.stop()
 
@@ -184,7 +185,8 @@ def main(argv: list[str] | None = None) -> int:
     rates = {}
     print(f"sim CPU: {server['cpu_s']:.2f} s process time over {server['wall_s']:.2f} s wall = "
           f"{server['cpu_s'] / server['wall_s'] * 100:.1f}% of one core  (compression {args.compression}, "
-          f"rate_scale {args.rate_scale})")
+          f"rate_scale {args.rate_scale}); the event loop's thread {server['loop_cpu_s']:.2f} s, "
+          f"other threads (camera drawing) {server['cpu_s'] - server['loop_cpu_s']:.2f} s")
     print(f"received {result['bytes'] / wall / 1e6:.1f} MB/s; camera scene renders {server['renders']}")
     camera_frames = sum(server["camera_frames"].values())
     per_frame_ms = server["cpu_s"] / camera_frames * 1e3 if camera_frames else float("nan")
@@ -202,6 +204,7 @@ def main(argv: list[str] | None = None) -> int:
         exp = f"{expected * args.rate_scale:.1f}" if expected else "-"
         print(f"{topic:40s} {exp:>11s} {hz:10.2f}")
     figures = {"cpu_fraction": server["cpu_s"] / server["wall_s"], "cpu_s": server["cpu_s"],
+               "loop_cpu_s": server["loop_cpu_s"],
                "wall_s": server["wall_s"], "mb_per_s": result["bytes"] / wall / 1e6, "rates": rates,
                "compression": args.compression, "rate_scale": args.rate_scale, "renders": server["renders"],
                "camera_frames": server["camera_frames"], "cpu_ms_per_camera_frame": per_frame_ms,
