@@ -1,7 +1,7 @@
 """The robot's ROS node inside the sim: its topics, services and /rosout lines, on a schedule.
 
-Sensor messages are built only while someone subscribes (the cameras especially), so an idle sim costs
-almost nothing. All publish rates are multiplied by the server's ``rate_scale``.
+Sensor messages are built only while someone subscribes (the cameras especially), and a sensor nobody
+subscribes to does not even wake the loop, so an idle sim costs almost nothing. All publish rates are multiplied by the server's ``rate_scale``.
 
 Camera frames are drawn (and JPEG-encoded) in a worker thread from a copy of the vessel's pose, then
 published from the loop: the loop never waits on a picture, so commands (``cmd_vel``) are taken as they
@@ -163,16 +163,20 @@ class RobotNode:
     async def _run(self) -> None:
         now = time.monotonic()
         physics = _Periodic("", 1.0 / PHYSICS_HZ, self._physics, now)
-        entries = [physics, *self._periodic]
         for i, e in enumerate(self._periodic):
             e.next_due = now + (i * 0.0037) % e.period  # spread the first publications
+        graph = {e.topic: self.graph_name(e.topic) for e in self._periodic}
+        has_subscribers = self.server.has_subscribers
         while True:
-            due = min(e.next_due for e in entries)
+            # a sensor nobody subscribes to does not wake the loop: the physics tick (every 20 ms) looks
+            # again, and a sensor wanted after a pause publishes at once, then at its rate
+            active = [physics, *(e for e in self._periodic if has_subscribers(graph[e.topic]))]
+            due = min(e.next_due for e in active)
             delay = due - time.monotonic()
             if delay > 0:
                 await asyncio.sleep(delay)
             now = time.monotonic()
-            for e in entries:
+            for e in active:
                 if e.next_due <= now:
                     e.next_due += e.period
                     if e.next_due < now:  # fell behind: skip, never burst
