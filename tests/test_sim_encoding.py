@@ -1,6 +1,9 @@
-"""The sim's CBOR encoding: long byte strings spliced in after encoding give exactly cbor2's bytes."""
+"""The sim's encodings: long byte strings spliced into CBOR after encoding give exactly cbor2's bytes, and bytes
+that bring their base64 text encode as plain bytes do."""
 
 from __future__ import annotations
+
+import base64
 
 import cbor2
 import numpy as np
@@ -52,3 +55,12 @@ def test_a_byte_string_that_looks_like_the_placeholder_is_encoded_as_it_is() -> 
     msg = {"a": lookalike, "b": pixels(SPLICE_MIN), "c": lookalike}
     out = cbor_dumps(msg)
     assert out == plain(msg) and cbor2.loads(out)["c"] == lookalike
+
+
+@pytest.mark.parametrize("n", [0, 5, SPLICE_MIN * 2])
+def test_bytes_with_their_base64_encode_as_plain_bytes_do(n: int) -> None:
+    data = pixels(n, 5)
+    ahead = encoding.Base64Bytes.of(np.frombuffer(data, dtype=np.uint8))
+    assert ahead == data and ahead.base64 == base64.b64encode(data).decode("ascii")
+    for dumps in (encoding.dumps, cbor_dumps):
+        assert dumps({"msg": {"data": ahead}}) == dumps({"msg": {"data": data}})

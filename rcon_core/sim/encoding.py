@@ -8,7 +8,9 @@ typed arrays in CBOR.
 A camera image's pixels are most of its message (a 640x480 rgb8 frame is 900 KB). ``cbor_dumps`` encodes
 such a message with each long byte string replaced by a short placeholder and splices the bytes in at the
 end, one copy, instead of letting the CBOR encoder copy them through its growing buffer (several times
-slower, and on the sim's event loop). The output is byte for byte what ``cbor2.dumps`` gives.
+slower, and on the sim's event loop). The output is byte for byte what ``cbor2.dumps`` gives. For JSON the
+cost is the base64 text of those bytes; a ``Base64Bytes`` value brings it along, made in the thread that
+drew the picture.
 """
 
 from __future__ import annotations
@@ -39,7 +41,23 @@ _CBOR_TAGS: dict[str, int] = {
 }
 
 
+class Base64Bytes(bytes):
+    """Bytes that carry their own base64 text, made ahead of time: a camera's drawing thread makes it when a
+    JSON (``none``/``png``) subscriber is there, so 900 KB of pixels are not base64-encoded on the loop."""
+
+    base64: str
+
+    @classmethod
+    def of(cls, data: Any) -> Base64Bytes:
+        """A copy of the buffer ``data`` (bytes, a C-contiguous numpy array...) with its base64 text."""
+        out = cls(data)
+        out.base64 = base64.b64encode(out).decode("ascii")
+        return out
+
+
 def _json_default(value: Any) -> Any:
+    if isinstance(value, Base64Bytes):
+        return value.base64
     if isinstance(value, bytes | bytearray | memoryview):
         return base64.b64encode(bytes(value)).decode("ascii")
     if isinstance(value, np.ndarray):
