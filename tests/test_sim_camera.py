@@ -17,7 +17,7 @@ from rcon_core.sim.world import BUOYS
 class ReferenceRenderer(CameraRenderer):
     """The renderer with its background drawn the original way: ``np.where`` over every pixel."""
 
-    def _scene(self, vessel, heading):  # type: ignore[no-untyped-def]
+    def _scene(self, vessel, heading, out):  # type: ignore[no-untyped-def]
         w, h, f = self.width, self.height, self.focal
         sign = 1.0 if self.yaw_offset == 0.0 else -1.0
         pitch = vessel.pitch * sign
@@ -60,7 +60,7 @@ class ReferenceRenderer(CameraRenderer):
                 cv2.circle(img, (cx, cy - 2 * r), max(1, r // 2), (255, 255, 210), -1, cv2.LINE_AA)
         if self.bow is not None:
             self._draw_bow(img, *self.bow)
-        return img
+        out[:] = img
 
 
 def pose(x=0.0, y=0.0, yaw_deg=30.0, roll=0.0, pitch=0.0, lights=False, surge=0.0):  # type: ignore[no-untyped-def]

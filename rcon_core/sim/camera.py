@@ -9,12 +9,19 @@ horizon and the shore's height at that bearing) pick between them. Rows above ev
 are one copy of the sky, rows below every column's first water row one copy of the water, and only the rows
 in between are chosen pixel by pixel, with OpenCV's masked copy. Big copies and OpenCV calls release the GIL,
 so the drawing thread leaves the sim's event loop free.
+
+The scene, the frame with its text and the JPEG encoder's BGR copy are drawn into buffers each camera keeps
+(``render``), not into new ones: a new megabyte costs its page faults every time (about a millisecond a
+buffer in a virtual machine), which was most of a frame once the scene got cheap.
 """
 
 from __future__ import annotations
 
 import math
+import threading
 import time
+from collections.abc import Callable
+from typing import TypeVar
 
 import cv2
 import numpy as np
@@ -25,6 +32,8 @@ from .world import BUOYS
 SHORE_Y = 40.0
 SHORE_HEIGHT = 9.0
 SHORE_COLOUR = (70, 85, 70)
+
+T = TypeVar("T")
 
 
 class CameraRenderer:
@@ -51,7 +60,10 @@ class CameraRenderer:
         self._shore = np.empty_like(self._sky)
         self._shore[:] = SHORE_COLOUR
         self._cache_key: tuple[int, ...] | None = None
-        self._cache: np.ndarray | None = None
+        self._cache = np.empty_like(self._sky)  # the scene without the text, for _cache_key
+        self._work = np.empty_like(self._sky)  # the frame being handed out by render()
+        self._bgr = np.empty_like(self._sky)  # the JPEG encoder's input
+        self._lock = threading.Lock()  # one frame at a time in the buffers above
         self.renders = 0
 
     @staticmethod
@@ -64,15 +76,30 @@ class CameraRenderer:
         return np.ascontiguousarray(np.broadcast_to(gradient[:, None, :], (self.height, self.width, 3)))
 
     def frame(self, vessel: Vessel, stamp: float | None = None) -> np.ndarray:
-        """An RGB uint8 image (height x width x 3) of what the camera sees now."""
+        """An RGB uint8 image (height x width x 3) of what the camera sees now (a new array)."""
+        return self.render(vessel, stamp, np.copy)
+
+    def render(self, vessel: Vessel, stamp: float | None, use: Callable[[np.ndarray], T]) -> T:
+        """Draw the frame into this camera's own buffer and return ``use(frame)``; ``use`` must not keep the
+        array (copy or encode it: ``ndarray.tobytes``, :meth:`jpeg`). One caller at a time draws."""
+        with self._lock:
+            return use(self._draw(vessel, stamp))
+
+    def jpeg(self, rgb: np.ndarray, quality: int = 80) -> bytes:
+        """``rgb`` (a frame of this camera's size) as JPEG, converted to BGR in the camera's own buffer."""
+        return encode_jpeg(rgb, quality, self._bgr)
+
+    def _draw(self, vessel: Vessel, stamp: float | None) -> np.ndarray:
         heading = vessel.yaw + self.yaw_offset
         key = (round(vessel.x * 10), round(vessel.y * 10), round(heading * 200), round(vessel.roll * 300),
                round(vessel.pitch * 300), int(vessel.lights))
-        if key != self._cache_key or self._cache is None:
-            self._cache = self._scene(vessel, heading)
+        if key != self._cache_key:
+            self._cache_key = None  # a scene that fails half-way is drawn again next time
+            self._scene(vessel, heading, self._cache)
             self._cache_key = key
             self.renders += 1
-        img = self._cache.copy()
+        img = self._work
+        np.copyto(img, self._cache)
         stamp = time.time() if stamp is None else stamp
         text = time.strftime("%Y-%m-%d %H:%M:%S", time.gmtime(stamp)) + f".{int(stamp * 10) % 10} UTC"
         camera = f"{self.vessel_name} {self.name}" if self.vessel_name else self.name
@@ -82,7 +109,8 @@ class CameraRenderer:
             cv2.putText(img, line, (10, y), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (255, 255, 255), 1, cv2.LINE_AA)
         return img
 
-    def _scene(self, vessel: Vessel, heading: float) -> np.ndarray:
+    def _scene(self, vessel: Vessel, heading: float, img: np.ndarray) -> None:
+        """Draw what the camera sees, without the text, into ``img``."""
         w, h, f = self.width, self.height, self.focal
         sign = 1.0 if self.yaw_offset == 0.0 else -1.0
         pitch = vessel.pitch * sign
@@ -101,7 +129,6 @@ class CameraRenderer:
         water_from = np.clip(np.ceil(horizon), 0, h).astype(np.intp)
         shore_from = np.where(band > 0.5, np.clip(np.ceil(horizon - band), 0, h).astype(np.intp), water_from)
         top, bottom = int(shore_from.min()), int(water_from.max())
-        img = np.empty_like(self._sky)
         img[:bottom] = self._sky[:bottom]
         img[bottom:] = self._water[bottom:]
         if top < bottom:  # the rows where columns differ: sky, then shore, then water
@@ -134,7 +161,6 @@ class CameraRenderer:
                 cv2.circle(img, (cx, cy - 2 * r), max(1, r // 2), (255, 255, 210), -1, cv2.LINE_AA)
         if self.bow is not None:
             self._draw_bow(img, *self.bow)
-        return img
 
     def _draw_bow(self, img: np.ndarray, colour: tuple[int, int, int], text: str) -> None:
         """The vessel's own bow, in its hull colour with its name painted on, at the bottom centre."""
@@ -149,8 +175,10 @@ class CameraRenderer:
                     cv2.LINE_AA)
 
 
-def encode_jpeg(rgb: np.ndarray, quality: int = 80) -> bytes:
-    ok, buf = cv2.imencode(".jpg", cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR), [cv2.IMWRITE_JPEG_QUALITY, quality])
+def encode_jpeg(rgb: np.ndarray, quality: int = 80, bgr: np.ndarray | None = None) -> bytes:
+    """``rgb`` as JPEG bytes; ``bgr`` (same shape) is a buffer to convert it in, else a new one is made."""
+    bgr = cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR, dst=bgr)
+    ok, buf = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, quality])
     if not ok:
         raise RuntimeError("JPEG encoding failed")
     return buf.tobytes()

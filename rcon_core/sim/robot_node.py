@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from . import world
-from .camera import CameraRenderer, encode_jpeg
+from .camera import CameraRenderer
 from .encoding import Base64Bytes
 from .identity import Identity
 from .rosapi import add_logger_services
@@ -376,7 +376,7 @@ class RobotNode:
                 "data": Base64Bytes.of(img) if text else img.tobytes()}
 
     def _jpeg_image(self, img: np.ndarray, stamp: float, text: bool) -> dict[str, Any]:
-        data = encode_jpeg(img)
+        data = self.rear.jpeg(img)
         return {"header": self.fl.header("camera_rear_optical", stamp), "format": "jpeg",
                 "data": Base64Bytes.of(data) if text else data}
 
@@ -395,7 +395,7 @@ class RobotNode:
         loop = asyncio.get_running_loop()
         self._rendering.add(topic)
         text = self.server.wants_text(self.graph_name(topic))
-        future = self._render_pool.submit(lambda: build(camera.frame(pose, stamp), stamp, text))
+        future = self._render_pool.submit(lambda: camera.render(pose, stamp, lambda img: build(img, stamp, text)))
 
         def done(fut: concurrent.futures.Future[dict[str, Any]]) -> None:
             with contextlib.suppress(RuntimeError):  # the loop is closed: the sim has stopped
