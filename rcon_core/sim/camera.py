@@ -53,7 +53,6 @@ class CameraRenderer:
         self.mount_height = mount_height
         self.focal = (width / 2) / math.tan(math.radians(hfov_deg) / 2)
         self._cols = np.arange(width, dtype=np.float64)
-        self._rows = np.arange(height, dtype=np.float64)[:, None]
         self._col_angles = np.arctan((width / 2 - self._cols) / self.focal)  # left of centre is positive
         self._sky = self._full(self._gradient(sky[0], sky[1], height))
         self._water = self._full(self._gradient((60, 110, 140), (20, 55, 80), height))

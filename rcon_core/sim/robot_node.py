@@ -1,12 +1,14 @@
 """The robot's ROS node inside the sim: its topics, services and /rosout lines, on a schedule.
 
 Sensor messages are built only while someone subscribes (the cameras especially), and a sensor nobody
-subscribes to does not even wake the loop, so an idle sim costs almost nothing. All publish rates are multiplied by the server's ``rate_scale``.
+subscribes to does not even wake the loop, so an idle sim costs almost nothing. All publish rates are
+multiplied by the server's ``rate_scale``.
 
-Camera frames are drawn (and JPEG-encoded, and base64-encoded for JSON subscribers) in a worker thread from a copy of the vessel's pose, then
-published from the loop: the loop never waits on a picture, so commands (``cmd_vel``) are taken as they
-arrive, as on a real robot whose camera drivers are not its rosbridge. A camera whose previous frame is
-still being drawn skips its turn (frames are dropped, never queued).
+Camera frames are drawn (and JPEG-encoded, and given their base64 text when a JSON subscriber is there) in a
+worker thread from a copy of the vessel's pose, then published from the loop: the loop never waits on a
+picture, so commands (``cmd_vel``) are taken as they arrive, as on a real robot whose camera drivers are not
+its rosbridge. A camera whose previous frame is still being drawn skips its turn (frames are dropped, never
+queued).
 """
 
 from __future__ import annotations
