@@ -123,26 +123,27 @@ def cbor_dumps(obj: Any) -> bytes:
     return b"".join(parts)
 
 
-def _lift(obj: Any, spliced: list[bytes | bytearray]) -> Any:
-    """``obj`` with each byte string of SPLICE_MIN bytes or more replaced by a placeholder (appended to
-    ``spliced`` in encoding order); the same object where there is none. Looks inside dicts and lists of
-    dicts (messages and arrays of messages), not inside lists of numbers or strings, which are never bytes."""
-    if isinstance(obj, dict):
-        out = None
-        for key, value in obj.items():
-            new = _lift(value, spliced)
-            if new is not value:
-                if out is None:
-                    out = dict(obj)
-                out[key] = new
-        return obj if out is None else out
-    if isinstance(obj, list | tuple) and obj and isinstance(obj[0], dict):
-        items = [_lift(v, spliced) for v in obj]
-        return obj if all(a is b for a, b in zip(items, obj, strict=True)) else items
-    if isinstance(obj, bytes | bytearray) and len(obj) >= SPLICE_MIN:
-        spliced.append(obj)
-        return SPLICE_TOKEN + (len(spliced) - 1).to_bytes(4, "big")
-    return obj
+def _lift(obj: Any, spliced: list[bytes | bytearray], depth: int = 2) -> Any:
+    """``obj`` with each byte string of SPLICE_MIN bytes or more among its values, or its dict values' values
+    (a publish frame's ``msg``: an image's ``data``, cbor-raw's ``bytes``), replaced by a placeholder
+    (appended to ``spliced`` in encoding order); ``obj`` itself where there is none. Deeper byte strings are
+    left to cbor2: walking a whole message would cost more than it saves on the small ones."""
+    if not isinstance(obj, dict):
+        return obj
+    out = None
+    for key, value in obj.items():
+        if isinstance(value, bytes | bytearray) and len(value) >= SPLICE_MIN:
+            spliced.append(value)
+            new: Any = SPLICE_TOKEN + (len(spliced) - 1).to_bytes(4, "big")
+        elif depth > 1 and isinstance(value, dict):
+            new = _lift(value, spliced, depth - 1)
+        else:
+            continue
+        if new is not value:
+            if out is None:
+                out = dict(obj)
+            out[key] = new
+    return obj if out is None else out
 
 
 def _bytes_head(n: int) -> bytes:
