@@ -15,13 +15,13 @@ async def test_camera_frames_are_drawn_off_the_loop_and_still_arrive_in_order() 
     async with SimServer(rate_scale=2.0) as sim:
         threads: list[threading.Thread] = []
         front = sim.robot_node.front
-        draw = front.frame
+        draw = front.render
 
-        def recording_frame(vessel, stamp=None):  # noqa: ANN001, ANN202 - the renderer's own signature
+        def recording_render(vessel, stamp, use):  # noqa: ANN001, ANN202 - the renderer's own signature
             threads.append(threading.current_thread())
-            return draw(vessel, stamp)
+            return draw(vessel, stamp, use)
 
-        front.frame = recording_frame
+        front.render = recording_render
         async with websockets.connect(sim.url, max_size=None) as ws:
             await ws.send(json.dumps({"op": "subscribe", "topic": "/camera/front/image_raw"}))
             stamps = []

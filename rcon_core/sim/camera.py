@@ -2,12 +2,26 @@
 
 A pinhole camera at ``height`` metres looks along the hull (front) or backwards (rear). The scene without
 the overlay is cached by a quantised pose, so a vessel at rest costs a copy and a line of text per frame.
+
+A new scene is cheap too (the vessel rolls and pitches all the time, so it is the usual case): full-frame sky,
+water and shore images are made once, and each column's first shore row and first water row (from the tilted
+horizon and the shore's height at that bearing) pick between them. Rows above every column's first shore row
+are one copy of the sky, rows below every column's first water row one copy of the water, and only the rows
+in between are chosen pixel by pixel, with OpenCV's masked copy. Big copies and OpenCV calls release the GIL,
+so the drawing thread leaves the sim's event loop free.
+
+The scene, the frame with its text and the JPEG encoder's BGR copy are drawn into buffers each camera keeps
+(``render``), not into new ones: a new megabyte costs its page faults every time (about a millisecond a
+buffer in a virtual machine), which was most of a frame once the scene got cheap.
 """
 
 from __future__ import annotations
 
 import math
+import threading
 import time
+from collections.abc import Callable
+from typing import TypeVar
 
 import cv2
 import numpy as np
@@ -17,6 +31,9 @@ from .world import BUOYS
 
 SHORE_Y = 40.0
 SHORE_HEIGHT = 9.0
+SHORE_COLOUR = (70, 85, 70)
+
+T = TypeVar("T")
 
 
 class CameraRenderer:
@@ -36,12 +53,16 @@ class CameraRenderer:
         self.mount_height = mount_height
         self.focal = (width / 2) / math.tan(math.radians(hfov_deg) / 2)
         self._cols = np.arange(width, dtype=np.float64)
-        self._rows = np.arange(height, dtype=np.float64)[:, None]
         self._col_angles = np.arctan((width / 2 - self._cols) / self.focal)  # left of centre is positive
-        self._sky = self._gradient(sky[0], sky[1], height)
-        self._water = self._gradient((60, 110, 140), (20, 55, 80), height)
+        self._sky = self._full(self._gradient(sky[0], sky[1], height))
+        self._water = self._full(self._gradient((60, 110, 140), (20, 55, 80), height))
+        self._shore = np.empty_like(self._sky)
+        self._shore[:] = SHORE_COLOUR
         self._cache_key: tuple[int, ...] | None = None
-        self._cache: np.ndarray | None = None
+        self._cache = np.empty_like(self._sky)  # the scene without the text, for _cache_key
+        self._work = np.empty_like(self._sky)  # the frame being handed out by render()
+        self._bgr = np.empty_like(self._sky)  # the JPEG encoder's input
+        self._lock = threading.Lock()  # one frame at a time in the buffers above
         self.renders = 0
 
     @staticmethod
@@ -49,16 +70,35 @@ class CameraRenderer:
         t = np.linspace(0.0, 1.0, rows)[:, None]
         return (np.array(top)[None, :] * (1 - t) + np.array(bottom)[None, :] * t).astype(np.uint8)
 
+    def _full(self, gradient: np.ndarray) -> np.ndarray:
+        """A (height x width x 3) image of a per-row ``gradient``: every column the same."""
+        return np.ascontiguousarray(np.broadcast_to(gradient[:, None, :], (self.height, self.width, 3)))
+
     def frame(self, vessel: Vessel, stamp: float | None = None) -> np.ndarray:
-        """An RGB uint8 image (height x width x 3) of what the camera sees now."""
+        """An RGB uint8 image (height x width x 3) of what the camera sees now (a new array)."""
+        return self.render(vessel, stamp, np.copy)
+
+    def render(self, vessel: Vessel, stamp: float | None, use: Callable[[np.ndarray], T]) -> T:
+        """Draw the frame into this camera's own buffer and return ``use(frame)``; ``use`` must not keep the
+        array (copy or encode it: ``ndarray.tobytes``, :meth:`jpeg`). One caller at a time draws."""
+        with self._lock:
+            return use(self._draw(vessel, stamp))
+
+    def jpeg(self, rgb: np.ndarray, quality: int = 80) -> bytes:
+        """``rgb`` (a frame of this camera's size) as JPEG, converted to BGR in the camera's own buffer."""
+        return encode_jpeg(rgb, quality, self._bgr)
+
+    def _draw(self, vessel: Vessel, stamp: float | None) -> np.ndarray:
         heading = vessel.yaw + self.yaw_offset
         key = (round(vessel.x * 10), round(vessel.y * 10), round(heading * 200), round(vessel.roll * 300),
                round(vessel.pitch * 300), int(vessel.lights))
-        if key != self._cache_key or self._cache is None:
-            self._cache = self._scene(vessel, heading)
+        if key != self._cache_key:
+            self._cache_key = None  # a scene that fails half-way is drawn again next time
+            self._scene(vessel, heading, self._cache)
             self._cache_key = key
             self.renders += 1
-        img = self._cache.copy()
+        img = self._work
+        np.copyto(img, self._cache)
         stamp = time.time() if stamp is None else stamp
         text = time.strftime("%Y-%m-%d %H:%M:%S", time.gmtime(stamp)) + f".{int(stamp * 10) % 10} UTC"
         camera = f"{self.vessel_name} {self.name}" if self.vessel_name else self.name
@@ -68,16 +108,14 @@ class CameraRenderer:
             cv2.putText(img, line, (10, y), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (255, 255, 255), 1, cv2.LINE_AA)
         return img
 
-    def _scene(self, vessel: Vessel, heading: float) -> np.ndarray:
+    def _scene(self, vessel: Vessel, heading: float, img: np.ndarray) -> None:
+        """Draw what the camera sees, without the text, into ``img``."""
         w, h, f = self.width, self.height, self.focal
         sign = 1.0 if self.yaw_offset == 0.0 else -1.0
         pitch = vessel.pitch * sign
         roll = vessel.roll * sign
         # horizon row per column, tilted by roll and shifted by pitch
         horizon = h / 2 + f * math.tan(pitch) + (self._cols - w / 2) * math.tan(roll)
-        rows = self._rows
-        below = rows >= horizon[None, :]
-        img = np.where(below[:, :, None], self._water[:, None, :], self._sky[:, None, :]).astype(np.uint8)
         # the shore: a band above the horizon where a column's ray meets the line y = SHORE_Y
         theta = heading + self._col_angles
         s = np.sin(theta)
@@ -85,9 +123,18 @@ class CameraRenderer:
             dist = np.where(s > 1e-3, (SHORE_Y - vessel.y) / s, np.inf)
         dist = np.where(dist > 0.5, dist, np.inf)
         band = np.where(np.isfinite(dist), np.clip(f * SHORE_HEIGHT / np.maximum(dist, 1.0), 0, h), 0.0)
-        shore_top = horizon - band
-        shore = (rows >= shore_top[None, :]) & ~below & (band[None, :] > 0.5)
-        img[shore] = (70, 85, 70)
+        # a row r is water where r >= horizon, shore where horizon - band <= r < horizon (if band > 0.5):
+        # as whole rows, water from ceil(horizon) and shore from ceil(horizon - band)
+        water_from = np.clip(np.ceil(horizon), 0, h).astype(np.intp)
+        shore_from = np.where(band > 0.5, np.clip(np.ceil(horizon - band), 0, h).astype(np.intp), water_from)
+        top, bottom = int(shore_from.min()), int(water_from.max())
+        img[:bottom] = self._sky[:bottom]
+        img[bottom:] = self._water[bottom:]
+        if top < bottom:  # the rows where columns differ: sky, then shore, then water
+            rows = np.arange(top, bottom)[:, None]
+            mixed = img[top:bottom]  # a view: OpenCV's masked copies write into img
+            cv2.copyTo(self._shore[top:bottom], (rows >= shore_from).view(np.uint8), mixed)
+            cv2.copyTo(self._water[top:bottom], (rows >= water_from).view(np.uint8), mixed)
         # buoys, far to near
         items = []
         for b in BUOYS:
@@ -113,7 +160,6 @@ class CameraRenderer:
                 cv2.circle(img, (cx, cy - 2 * r), max(1, r // 2), (255, 255, 210), -1, cv2.LINE_AA)
         if self.bow is not None:
             self._draw_bow(img, *self.bow)
-        return img
 
     def _draw_bow(self, img: np.ndarray, colour: tuple[int, int, int], text: str) -> None:
         """The vessel's own bow, in its hull colour with its name painted on, at the bottom centre."""
@@ -128,8 +174,10 @@ class CameraRenderer:
                     cv2.LINE_AA)
 
 
-def encode_jpeg(rgb: np.ndarray, quality: int = 80) -> bytes:
-    ok, buf = cv2.imencode(".jpg", cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR), [cv2.IMWRITE_JPEG_QUALITY, quality])
+def encode_jpeg(rgb: np.ndarray, quality: int = 80, bgr: np.ndarray | None = None) -> bytes:
+    """``rgb`` as JPEG bytes; ``bgr`` (same shape) is a buffer to convert it in, else a new one is made."""
+    bgr = cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR, dst=bgr)
+    ok, buf = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, quality])
     if not ok:
         raise RuntimeError("JPEG encoding failed")
     return buf.tobytes()

@@ -4,12 +4,20 @@ Messages inside the sim are plain dicts.  ``bytes`` values stand for ``uint8[]``
 arrays for other numeric arrays, so each encoding can render them the way rosbridge does: base64 text and
 plain JSON lists (float32 widened to double, NaN/inf as ``null``) in JSON; byte strings and RFC 8746
 typed arrays in CBOR.
+
+A camera image's pixels are most of its message (a 640x480 rgb8 frame is 900 KB). ``cbor_dumps`` encodes
+such a message with each long byte string replaced by a short placeholder and splices the bytes in at the
+end, one copy, instead of letting the CBOR encoder copy them through its growing buffer (several times
+slower, and on the sim's event loop). The output is byte for byte what ``cbor2.dumps`` gives. For JSON the
+cost is the base64 text of those bytes; a ``Base64Bytes`` value brings it along, made in the thread that
+drew the picture.
 """
 
 from __future__ import annotations
 
 import base64
 import math
+import os
 import struct
 import zlib
 from typing import Any
@@ -33,7 +41,23 @@ _CBOR_TAGS: dict[str, int] = {
 }
 
 
+class Base64Bytes(bytes):
+    """Bytes that carry their own base64 text, made ahead of time: a camera's drawing thread makes it when a
+    JSON (``none``/``png``) subscriber is there, so 900 KB of pixels are not base64-encoded on the loop."""
+
+    base64: str
+
+    @classmethod
+    def of(cls, data: Any) -> Base64Bytes:
+        """A copy of the buffer ``data`` (bytes, a C-contiguous numpy array...) with its base64 text."""
+        out = cls(data)
+        out.base64 = base64.b64encode(out).decode("ascii")
+        return out
+
+
 def _json_default(value: Any) -> Any:
+    if isinstance(value, Base64Bytes):
+        return value.base64
     if isinstance(value, bytes | bytearray | memoryview):
         return base64.b64encode(bytes(value)).decode("ascii")
     if isinstance(value, np.ndarray):
@@ -54,7 +78,8 @@ def loads(text: str | bytes) -> Any:
     return orjson.loads(text)
 
 
-def _cbor_default(encoder: cbor2.CBOREncoder, value: Any) -> None:
+def cbor_default(encoder: cbor2.CBOREncoder, value: Any) -> None:
+    """cbor2's ``default`` hook: numpy arrays as typed arrays, numpy scalars as numbers, buffers as bytes."""
     if isinstance(value, np.ndarray):
         name = value.dtype.name
         tag = _CBOR_TAGS.get(name)
@@ -73,9 +98,65 @@ def _cbor_default(encoder: cbor2.CBOREncoder, value: Any) -> None:
     raise cbor2.CBOREncodeTypeError(f"cannot encode {type(value).__name__} as CBOR")
 
 
+#: byte strings at least this long are spliced into the CBOR output rather than encoded by cbor2
+SPLICE_MIN = 32 * 1024
+SPLICE_TOKEN = b"rcon-splice:" + os.urandom(8)  # never inside a real message (and checked)
+
+
 def cbor_dumps(obj: Any) -> bytes:
     """CBOR bytes: ``bytes`` as byte strings, numeric numpy arrays as typed arrays, floats as doubles."""
-    return cbor2.dumps(obj, default=_cbor_default)
+    spliced: list[bytes | bytearray] = []
+    lifted = _lift(obj, spliced)
+    if not spliced:
+        return cbor2.dumps(obj, default=cbor_default)
+    out = cbor2.dumps(lifted, default=cbor_default)
+    parts: list[bytes | bytearray] = []
+    at = 0
+    for i, value in enumerate(spliced):
+        mark = cbor2.dumps(SPLICE_TOKEN + i.to_bytes(4, "big"))
+        found = out.find(mark, at)
+        if found < 0 or out.find(mark, found + len(mark)) >= 0:  # cannot happen; never splice blindly
+            return cbor2.dumps(obj, default=cbor_default)
+        parts += (out[at:found], _bytes_head(len(value)), value)
+        at = found + len(mark)
+    parts.append(out[at:])
+    return b"".join(parts)
+
+
+def _lift(obj: Any, spliced: list[bytes | bytearray], depth: int = 2) -> Any:
+    """``obj`` with each byte string of SPLICE_MIN bytes or more among its values, or its dict values' values
+    (a publish frame's ``msg``: an image's ``data``, cbor-raw's ``bytes``), replaced by a placeholder
+    (appended to ``spliced`` in encoding order); ``obj`` itself where there is none. Deeper byte strings are
+    left to cbor2: walking a whole message would cost more than it saves on the small ones."""
+    if not isinstance(obj, dict):
+        return obj
+    out = None
+    for key, value in obj.items():
+        if isinstance(value, bytes | bytearray) and len(value) >= SPLICE_MIN:
+            spliced.append(value)
+            new: Any = SPLICE_TOKEN + (len(spliced) - 1).to_bytes(4, "big")
+        elif depth > 1 and isinstance(value, dict):
+            new = _lift(value, spliced, depth - 1)
+        else:
+            continue
+        if new is not value:
+            if out is None:
+                out = dict(obj)
+            out[key] = new
+    return obj if out is None else out
+
+
+def _bytes_head(n: int) -> bytes:
+    """The CBOR head of a byte string of ``n`` bytes (major type 2)."""
+    if n < 24:
+        return bytes([0x40 | n])
+    if n < 0x100:
+        return struct.pack(">BB", 0x58, n)
+    if n < 0x10000:
+        return struct.pack(">BH", 0x59, n)
+    if n < 0x100000000:
+        return struct.pack(">BI", 0x5A, n)
+    return struct.pack(">BQ", 0x5B, n)
 
 
 def publish_frame(topic: str, msg: Any) -> dict[str, Any]:

@@ -41,6 +41,15 @@ def fan_out(topic: Topic, msg: dict[str, Any], flavour: Flavour, types: TypeSour
         conn.send(payload, topic=topic.name, queue_length=sub.queue_length)
 
 
+def wants_text(topic: Topic) -> bool:
+    """Whether a client subscribed to ``topic`` takes it as JSON text (compression ``none`` or ``png``)."""
+    for conn in topic.client_subscribers:
+        sub = conn.subscriptions.get(topic.name)
+        if sub is not None and sub.compression in ("none", "png"):
+            return True
+    return False
+
+
 def encoded(cache: dict[Any, Any], topic: Topic, msg: dict[str, Any], compression: str,
             fragment_size: int | None, flavour: Flavour, types: TypeSource) -> str | bytes | list[str] | None:
     """``msg`` as a publish frame in ``compression`` (fragments if longer than ``fragment_size``), from or

@@ -1,12 +1,14 @@
 """The robot's ROS node inside the sim: its topics, services and /rosout lines, on a schedule.
 
-Sensor messages are built only while someone subscribes (the cameras especially), so an idle sim costs
-almost nothing. All publish rates are multiplied by the server's ``rate_scale``.
+Sensor messages are built only while someone subscribes (the cameras especially), and a sensor nobody
+subscribes to does not even wake the loop, so an idle sim costs almost nothing. All publish rates are
+multiplied by the server's ``rate_scale``.
 
-Camera frames are drawn (and JPEG-encoded) in a worker thread from a copy of the vessel's pose, then
-published from the loop: the loop never waits on a picture, so commands (``cmd_vel``) are taken as they
-arrive, as on a real robot whose camera drivers are not its rosbridge. A camera whose previous frame is
-still being drawn skips its turn (frames are dropped, never queued).
+Camera frames are drawn (and JPEG-encoded, and given their base64 text when a JSON subscriber is there) in a
+worker thread from a copy of the vessel's pose, then published from the loop: the loop never waits on a
+picture, so commands (``cmd_vel``) are taken as they arrive, as on a real robot whose camera drivers are not
+its rosbridge. A camera whose previous frame is still being drawn skips its turn (frames are dropped, never
+queued).
 """
 
 from __future__ import annotations
@@ -28,7 +30,8 @@ import numpy as np
 from rcon_core.priority import lower_this_thread
 
 from . import world
-from .camera import CameraRenderer, encode_jpeg
+from .camera import CameraRenderer
+from .encoding import Base64Bytes
 from .identity import Identity
 from .rosapi import add_logger_services
 from .vessel import Vessel
@@ -165,16 +168,20 @@ class RobotNode:
     async def _run(self) -> None:
         now = time.monotonic()
         physics = _Periodic("", 1.0 / PHYSICS_HZ, self._physics, now)
-        entries = [physics, *self._periodic]
         for i, e in enumerate(self._periodic):
             e.next_due = now + (i * 0.0037) % e.period  # spread the first publications
+        graph = {e.topic: self.graph_name(e.topic) for e in self._periodic}
+        has_subscribers = self.server.has_subscribers
         while True:
-            due = min(e.next_due for e in entries)
+            # a sensor nobody subscribes to does not wake the loop: the physics tick (every 20 ms) looks
+            # again, and a sensor wanted after a pause publishes at once, then at its rate
+            active = [physics, *(e for e in self._periodic if has_subscribers(graph[e.topic]))]
+            due = min(e.next_due for e in active)
             delay = due - time.monotonic()
             if delay > 0:
                 await asyncio.sleep(delay)
             now = time.monotonic()
-            for e in entries:
+            for e in active:
                 if e.next_due <= now:
                     e.next_due += e.period
                     if e.next_due < now:  # fell behind: skip, never burst
@@ -366,19 +373,23 @@ class RobotNode:
         if self._wanted("/camera/rear/image_raw/compressed"):
             self._render("/camera/rear/image_raw/compressed", self.rear, self._jpeg_image)
 
-    def _raw_image(self, img: np.ndarray, stamp: float) -> dict[str, Any]:
+    def _raw_image(self, img: np.ndarray, stamp: float, text: bool) -> dict[str, Any]:
         h, w = img.shape[:2]
         return {"header": self.fl.header("camera_front_optical", stamp),
                 "height": h, "width": w, "encoding": "rgb8", "is_bigendian": 0, "step": w * 3,
-                "data": img.tobytes()}
+                "data": Base64Bytes.of(img) if text else img.tobytes()}
 
-    def _jpeg_image(self, img: np.ndarray, stamp: float) -> dict[str, Any]:
+    def _jpeg_image(self, img: np.ndarray, stamp: float, text: bool) -> dict[str, Any]:
+        data = self.rear.jpeg(img)
         return {"header": self.fl.header("camera_rear_optical", stamp), "format": "jpeg",
-                "data": encode_jpeg(img)}
+                "data": Base64Bytes.of(data) if text else data}
 
     def _render(self, topic: str, camera: CameraRenderer,
-                build: Callable[[np.ndarray, float], dict[str, Any]]) -> None:
-        """Draw one frame of ``camera`` in the worker thread, then publish it on ``topic`` from the loop."""
+                build: Callable[[np.ndarray, float, bool], dict[str, Any]]) -> None:
+        """Draw one frame of ``camera`` in the worker thread, then publish it on ``topic`` from the loop.
+
+        The worker also makes the pixels' base64 text when a JSON subscriber is there now (``text``); the
+        loop then only encodes the rest of the message, for every compression (encoding.py)."""
         if topic in self._rendering:
             return  # the previous frame is still being drawn: skip this one, never queue
         if self._render_pool is None:
@@ -389,7 +400,8 @@ class RobotNode:
         pose = copy.copy(self.vessel)  # the loop goes on moving the vessel while the frame is drawn
         loop = asyncio.get_running_loop()
         self._rendering.add(topic)
-        future = self._render_pool.submit(lambda: build(camera.frame(pose, stamp), stamp))
+        text = self.server.wants_text(self.graph_name(topic))
+        future = self._render_pool.submit(lambda: camera.render(pose, stamp, lambda img: build(img, stamp, text)))
 
         def done(fut: concurrent.futures.Future[dict[str, Any]]) -> None:
             with contextlib.suppress(RuntimeError):  # the loop is closed: the sim has stopped

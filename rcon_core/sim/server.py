@@ -270,6 +270,11 @@ class SimServer:
         topic = self.topics.get(name)
         return topic is not None and topic.has_subscribers()
 
+    def wants_text(self, name: str) -> bool:
+        """Whether a client takes topic ``name`` as JSON text (whose ``bytes`` are then sent as base64)."""
+        topic = self.topics.get(name)
+        return topic is not None and fanout.wants_text(topic)
+
     def publish(self, name: str, msg: dict[str, Any], node: str) -> None:
         """Publish ``msg`` on topic ``name`` as ``node``: latch it, call internal subscribers, fan out."""
         topic = self.topics[name]
