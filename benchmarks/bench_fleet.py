@@ -169,6 +169,8 @@ def run(args: Any) -> dict:
         probe = ba.make_paint_probe(window)
         cams: dict[str, Any] = {}  # widget id -> the newest frame handed to its view, not yet painted
         shown: dict[str, list[tuple[int, int, float, float]]] = {}  # id -> (index, dropped, stamp, painted)
+        # (stamp, received, decoded, painted) of each frame shown, for where a camera frame's time goes
+        stages: dict[str, list[tuple[float, float, float, float]]] = {}
 
         def on_paint(hosted: Any, state: Any) -> None:
             # (the value widgets' views note their own stamps in ba.PENDING)
@@ -185,6 +187,7 @@ def run(args: Any) -> dict:
             now = time.time()
             for wid, frame in list(cams.items()):
                 shown.setdefault(wid, []).append((frame.index, frame.dropped, frame.stamp or now, now))
+                stages.setdefault(wid, []).append((frame.stamp or now, frame.received, frame.decoded, now))
             cams.clear()
 
         hosted = window.host.hosted
@@ -293,6 +296,8 @@ def run(args: Any) -> dict:
         cameras: dict[str, dict] = {}
         cam_latencies: list[float] = []  # header stamp (the sim's capture: before drawing) to painted
         cam_pub_latencies: list[float] = []  # the sim's publish (drawn and encoded) to painted
+        cam_stages: dict[str, list[float]] = {"publish_to_received": [], "received_to_decoded": [],
+                                              "decoded_to_painted": []}
         for k in range(1, n + 1):
             for cam, topic, _type in CAMERAS:
                 wid = f"cam-{k}-{cam}"
@@ -303,6 +308,12 @@ def run(args: Any) -> dict:
                 published_at = {round(st, 4): wall for st, wall in after[k - 1]["camera_published"].get(topic, [])}
                 pub_ms = [(p - published_at[round(s, 4)]) * 1000 for _i, _d, s, p in rows if round(s, 4) in published_at]
                 cam_pub_latencies.extend(pub_ms)
+                for st, rec, dec, painted in stages.get(wid, []):
+                    pub = published_at.get(round(st, 4))
+                    if pub is not None and t_start <= painted <= t_end:
+                        cam_stages["publish_to_received"].append((rec - pub) * 1000)
+                        cam_stages["received_to_decoded"].append((dec - rec) * 1000)
+                        cam_stages["decoded_to_painted"].append((painted - dec) * 1000)
                 first = [(p - s) * 1000 for _i, _d, s, p in rows if p - t_start <= 1.0]
                 last = [(p - s) * 1000 for _i, _d, s, p in rows if t_end - p <= 1.0]
                 # frames that reached the model (decoded or replaced in its latest-wins slot) in the window
@@ -346,6 +357,9 @@ def run(args: Any) -> dict:
             **lat("camera_paint_latency", cam_latencies),
             **lat("camera_publish_to_painted", cam_pub_latencies),
             "camera_frames_matched_to_their_publish": len(cam_pub_latencies),
+            # where a camera frame's time goes: the link and the bridge loop / the decode worker / the GUI
+            "camera_stages_p50_p99_ms": {k: [round(ba.pct(v, 50), 1), round(ba.pct(v, 99), 1)]
+                                         for k, v in cam_stages.items()},
             "paint_pass_p50_ms": round(ba.pct([v * 1000 for v in ba.PASS_TIMES], 50), 2),
             "paint_pass_p95_ms": round(ba.pct([v * 1000 for v in ba.PASS_TIMES], 95), 2),
             "paints": len(ba.PAINTED),

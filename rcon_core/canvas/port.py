@@ -117,7 +117,7 @@ class GuardedPort:
     widget instance's id, the same across rebuilds of its model (a model may leave word for its successor).
     """
 
-    __slots__ = ("_ops", "view_only", "refused", "link", "widget_id")
+    __slots__ = ("_ops", "_notify", "view_only", "refused", "link", "widget_id")
 
     def __init__(
         self,
@@ -133,7 +133,15 @@ class GuardedPort:
         self.widget_id = widget_id
         self.view_only = view_only
         self.refused = 0
+        self._notify = notify
         self._ops = _operations(self, node, notify, view_only, on_refused)
+
+    def changed(self) -> None:
+        """The model has something new to show (any thread): the front end repaints it at once.  Called
+        by ``WidgetModel`` whenever its state moves, so a value made off the loop (an image decoded in a
+        worker) does not wait for the front end's next pass over every widget."""
+        if self._notify is not None:
+            self._notify()
 
     def subscribe(self, topic: str, callback: Callable[[dict[str, Any]], Any], **options: Any) -> Any:
         return self._ops["subscribe"](topic, callback, **options)

@@ -91,7 +91,10 @@ def _is_up(state: ConnectionState | str) -> bool:
 
 
 class _NoPort:
-    """The port of a placeholder: refuses every use."""
+    """The port of a placeholder: refuses every use (but being told its state changed)."""
+
+    def changed(self) -> None:
+        """A placeholder's error text is set once, when it is built; nothing to wake the front end for."""
 
     def __getattr__(self, name: str) -> Any:
         raise RuntimeError("a placeholder widget has no bridge port")

@@ -466,7 +466,8 @@ class WidgetModel:
 
     # -- state (thread-safe) -------------------------------------------------------------------------
     def set_value(self, value: Any, message: Any = None) -> None:
-        """Record a new value (any thread): stamps it, clears the error, bumps ``seq``."""
+        """Record a new value (any thread): stamps it, clears the error, bumps ``seq``; the front end is
+        told at once (:meth:`announce`)."""
         with self._lock:
             self._value = value
             self._message = message
@@ -474,6 +475,14 @@ class WidgetModel:
             self._stamp = self._clock()
             self._error = None
             self._seq += 1
+        self.announce()
+
+    def announce(self) -> None:
+        """Tell the front end this model has something new to show (any thread; the port's ``changed``,
+        when it has one: the app's ports wake the GUI, which repaints within the frame)."""
+        changed = getattr(self.port, "changed", None)
+        if changed is not None:
+            changed()
 
     def replace_value(self, value: Any) -> None:
         """Change what the view shows without counting a new value from the robot (any thread).
@@ -484,13 +493,16 @@ class WidgetModel:
         with self._lock:
             self._value = value
             self._seq += 1
+        self.announce()
 
     def set_error(self, error: str | None) -> None:
         """Record a problem to show on the widget (None clears it)."""
         with self._lock:
-            if error != self._error:
-                self._error = error
-                self._seq += 1
+            if error == self._error:
+                return
+            self._error = error
+            self._seq += 1
+        self.announce()
 
     def set_link(self, up: bool) -> None:
         """The runtime tells the model the bridge connection went down or came back."""
