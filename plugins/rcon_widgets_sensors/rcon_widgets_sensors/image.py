@@ -97,7 +97,8 @@ class Frame:
     ``width``/``height``: the SOURCE picture's size (what the overlay says; the view's zoom and pan work in
     these pixels). ``rgb`` may be smaller than that when the model decoded for a smaller display
     (:meth:`ImageModel.set_display_size`): it covers the whole picture, so the view draws the whole array
-    into the rectangle the source size would fill. ``pixel_width``/``pixel_height``: the array's size.
+    into the rectangle the source size would fill (1:1 when the array is exactly that rectangle in device
+    pixels, see :mod:`.image_view`). ``pixel_width``/``pixel_height``: the array's size.
 
     ``stamp``: the message header's time (epoch seconds) or None; ``received``/``decoded``: wall clock
     when it arrived / was ready. ``fps``: frames decoded per second lately. ``dropped``: frames skipped so
@@ -227,8 +228,9 @@ class ImageModel(WidgetModel):
     def set_display_size(self, width: float, height: float) -> None:
         """The box, in device pixels, the view fits the picture into (its size x device pixel ratio, times
         its zoom when zoomed in). Frames decoded from now on carry no more pixels than a picture fitted
-        there needs; a 0 (or less) = full resolution. Thread-safe, cheap, no Qt: the view calls it on
-        resize and zoom; the next frame comes at the new size."""
+        there needs (a picture bigger than the fitted rectangle is made exactly that rectangle's size:
+        :func:`.viewport.fitted_pixels`); a 0 (or less) = full resolution. Thread-safe, cheap, no Qt: the
+        view calls it on resize and zoom; the next frame comes at the new size."""
         w, h = math.ceil(width), math.ceil(height)
         with self._display_lock:
             self._display = (w, h) if w > 0 and h > 0 else None
