@@ -18,7 +18,9 @@ largest reduction still at least the painted size; anything still more than :dat
 too big (raw images, PNG, a JPEG between two reductions) is shrunk (:func:`shrink`: area-averaged
 halvings, then bilinear for the rest, a factor under 2). Never upscaled; no ``display`` (or a 0 in it) =
 full resolution. The 8-bit raw encodings are shrunk before their colour conversion (a per-pixel
-conversion commutes with the resize), the others (bayer, yuv, 16-bit, depth) after.
+conversion commutes with the resize), the others (bayer, yuv, 16-bit, depth) after. The Image model
+then makes a picture smaller than its fitted size exactly that size (:func:`resize_exactly`), so the
+view draws it 1:1.
 """
 
 from __future__ import annotations
@@ -32,7 +34,8 @@ import numpy as np
 from rcon_core.msgs.values import as_bytes
 
 __all__ = ["DecodeError", "Decoded", "decode_image", "decode_compressed", "decode_compressed_sized",
-           "depth_to_rgb", "message_kind", "paint_scale", "shrink", "jpeg_size", "RAW_ENCODINGS", "SHRINK_ABOVE"]
+           "depth_to_rgb", "message_kind", "paint_scale", "shrink", "resize_exactly",
+           "jpeg_size", "RAW_ENCODINGS", "SHRINK_ABOVE"]
 
 #: a picture more than this many times bigger (per side) than it is painted is shrunk on the decode thread;
 #: a smaller excess costs the painter's smooth scaling less than a resize here
@@ -101,11 +104,29 @@ def shrink(rgb: np.ndarray, scale: float) -> np.ndarray:
         return rgb
     h, w = rgb.shape[:2]
     tw, th = max(1, math.ceil(w * scale - 1e-9)), max(1, math.ceil(h * scale - 1e-9))
+    return _reduce(rgb, tw, th, SHRINK_ABOVE)
+
+
+def resize_exactly(rgb: np.ndarray, width: int, height: int) -> np.ndarray:
+    """``rgb`` (any channel count) made exactly ``width`` x ``height`` pixels, which must be no bigger
+    than it (a picture the view then draws 1:1): ``rgb`` itself when it is that size already, else the
+    same halvings as :func:`shrink`, then one bilinear (area when still 2x or more) resize to the size."""
+    h, w = rgb.shape[:2]
+    if width > w or height > h or width < 1 or height < 1:
+        raise ValueError(f"resize_exactly makes pictures smaller: {w}x{h} cannot become {width}x{height}")
+    if (w, h) == (width, height):
+        return rgb
+    return _reduce(rgb, width, height, 1.0)
+
+
+def _reduce(rgb: np.ndarray, tw: int, th: int, slack: float) -> np.ndarray:
+    """Halvings (area) while the result stays at least ``tw`` x ``th``, then a resize to that size unless
+    what is left is within ``slack`` times it per side."""
     out = _contig(rgb)
     while out.shape[1] % 2 == 0 and out.shape[0] % 2 == 0 and out.shape[1] // 2 >= tw and out.shape[0] // 2 >= th:
         out = cv2.resize(out, (out.shape[1] // 2, out.shape[0] // 2), interpolation=cv2.INTER_AREA)
     ow, oh = out.shape[1], out.shape[0]
-    if ow <= tw * SHRINK_ABOVE + 1e-9 and oh <= th * SHRINK_ABOVE + 1e-9:
+    if ow <= tw * slack + 1e-9 and oh <= th * slack + 1e-9:
         return out
     # odd sides stop the halving early: a rest of 2x or more still needs the area average
     interp = cv2.INTER_AREA if ow >= 2 * tw or oh >= 2 * th else cv2.INTER_LINEAR

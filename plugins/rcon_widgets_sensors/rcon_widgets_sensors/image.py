@@ -5,8 +5,10 @@ through a latest-wins slot (a burst of big frames costs the loop nothing and old
 never queued), and the worker publishes a ready :class:`Frame` with ``set_value``. The view tells the
 model how big it paints (:meth:`ImageModel.set_display_size`: its size in device pixels, grown by its
 zoom) and the worker makes no more pixels than that needs (a reduced JPEG decode, a shrink of raw and
-PNG images: :mod:`.decode`; laser scans and occupancy grids are drawn as before), then lays them out for
-Qt's painter (RGB32) on the same thread; the frame keeps the source picture's size for the overlay and
+PNG images: :mod:`.decode`; laser scans and occupancy grids are drawn as before); a picture bigger than
+that box is made exactly the rectangle it fills there (:func:`.viewport.fitted_pixels`, so a fitted view
+draws it 1:1, no scaling on the GUI thread); then it lays them out for Qt's painter (RGB32) on the same
+thread; the frame keeps the source picture's size for the overlay and
 the zoom arithmetic. The server is asked to send no more than the view can show: ``throttle_rate`` from
 ``max_fps``, ``queue_length`` 1, CBOR (binary data, no base64) when ``compression`` is ``"auto"``.
 """
@@ -28,9 +30,10 @@ from rcon_core.msgs import time as rtime
 from rcon_core.plugins import WidgetModel
 from rcon_core.plugins.paths import PathError, get_path
 
-from .decode import DecodeError, decode_compressed_sized, decode_image, message_kind
+from .decode import DecodeError, decode_compressed_sized, decode_image, message_kind, resize_exactly
 from .scan_render import ScanCounts, render_grid, render_scan
 from .slots import SlotWorker
+from .viewport import fitted_pixels
 
 __all__ = ["ImageSettings", "ImageModel", "Frame"]
 
@@ -94,7 +97,8 @@ class Frame:
     ``width``/``height``: the SOURCE picture's size (what the overlay says; the view's zoom and pan work in
     these pixels). ``rgb`` may be smaller than that when the model decoded for a smaller display
     (:meth:`ImageModel.set_display_size`): it covers the whole picture, so the view draws the whole array
-    into the rectangle the source size would fill. ``pixel_width``/``pixel_height``: the array's size.
+    into the rectangle the source size would fill (1:1 when the array is exactly that rectangle in device
+    pixels, see :mod:`.image_view`). ``pixel_width``/``pixel_height``: the array's size.
 
     ``stamp``: the message header's time (epoch seconds) or None; ``received``/``decoded``: wall clock
     when it arrived / was ready. ``fps``: frames decoded per second lately. ``dropped``: frames skipped so
@@ -133,6 +137,16 @@ class Frame:
     @property
     def pixel_height(self) -> int:
         return int(self.rgb.shape[0])
+
+
+def _fit_exactly(rgb: np.ndarray, display: tuple[int, int], src_w: int, src_h: int) -> np.ndarray:
+    """``rgb`` (a ``src_w`` x ``src_h`` picture, maybe already reduced) made exactly the rectangle it fills
+    fitted into ``display`` (:func:`.viewport.fitted_pixels`: the view then draws it 1:1) when that is no
+    bigger than the source; a picture smaller than its display stays as it is (never upscaled here)."""
+    _x, _y, w, h = fitted_pixels(display, src_w, src_h)
+    if w > src_w or h > src_h or w > rgb.shape[1] or h > rgb.shape[0]:
+        return rgb
+    return resize_exactly(rgb, w, h)
 
 
 def _stamp(msg: dict[str, Any]) -> float | None:
@@ -214,8 +228,9 @@ class ImageModel(WidgetModel):
     def set_display_size(self, width: float, height: float) -> None:
         """The box, in device pixels, the view fits the picture into (its size x device pixel ratio, times
         its zoom when zoomed in). Frames decoded from now on carry no more pixels than a picture fitted
-        there needs; a 0 (or less) = full resolution. Thread-safe, cheap, no Qt: the view calls it on
-        resize and zoom; the next frame comes at the new size."""
+        there needs (a picture bigger than the fitted rectangle is made exactly that rectangle's size:
+        :func:`.viewport.fitted_pixels`); a 0 (or less) = full resolution. Thread-safe, cheap, no Qt: the
+        view calls it on resize and zoom; the next frame comes at the new size."""
         w, h = math.ceil(width), math.ceil(height)
         with self._display_lock:
             self._display = (w, h) if w > 0 and h > 0 else None
@@ -259,6 +274,8 @@ class ImageModel(WidgetModel):
             smooth = False
         else:
             raise DecodeError("this message is not an image, compressed image, laser scan or occupancy grid")
+        if display is not None and kind in ("image", "compressed"):
+            rgb = _fit_exactly(rgb, display, src_w, src_h)
         now = time.time()
         with self._frame_cond:
             self._frames += 1

@@ -8,6 +8,12 @@ Mouse dragging works the same on a desktop.
 A pad the app runs offline on purpose (the add panel's preview, marked PREVIEW ONLY) says "preview: not
 driving the robot" instead of "link down": the app tells by setting ``model.dry_run = True`` (an
 attribute the model need not define; absent means a real widget).
+
+Painting: what stays put while a finger drives (the background, the pad's disc and rings, the axes, the
+axis labels) is painted once into two cached pixmaps at the widget's device pixel ratio and repainted
+only when the size, ratio, ring colour, dead zone, axes, palette or font change; each paint draws
+those, the trail, the knob and the status line (a 300x260 pad held still, offscreen: about 0.26 ms of
+CPU per repaint instead of 0.85 ms).
 """
 
 from __future__ import annotations
@@ -38,6 +44,10 @@ class TeleopView(QtWidgets.QWidget):
         self._trail: list[tuple[float, QtCore.QPointF]] = []
         self._value = TeleopValue()
         self._state: Any = None
+        self._layers: tuple[QtGui.QPixmap, QtGui.QPixmap] | None = None
+        self._layers_key: tuple[Any, ...] | None = None
+        #: how often the cached backdrop and labels were painted (tests, diagnostics)
+        self.layer_builds = 0
         self.setAttribute(QtCore.Qt.WidgetAttribute.WA_AcceptTouchEvents, True)
         self.setFocusPolicy(QtCore.Qt.FocusPolicy.StrongFocus)
         self.setMinimumSize(120, 120)
@@ -161,25 +171,11 @@ class TeleopView(QtWidgets.QWidget):
 
     # -- painting --------------------------------------------------------------------------------------
     def paintEvent(self, _e: QtGui.QPaintEvent) -> None:  # noqa: N802
+        backdrop, labels = self._cached_layers()
         p = QtGui.QPainter(self)
+        p.drawPixmap(QtCore.QPointF(0, 0), backdrop)
         p.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing, True)
-        pal = self.palette()
-        p.fillRect(self.rect(), pal.color(QtGui.QPalette.ColorRole.Window))
         c, r = self.pad()
-        v = self._value
-        active = v.active
-        ring = QtGui.QColor(70, 160, 255) if active else QtGui.QColor(120, 128, 140)
-        p.setPen(QtGui.QPen(ring, 2))
-        p.setBrush(QtGui.QColor(ring.red(), ring.green(), ring.blue(), 28))
-        p.drawEllipse(c, r, r)
-        dz = float(getattr(self.model.settings, "dead_zone", 0.0))
-        if dz > 0:
-            p.setPen(QtGui.QPen(QtGui.QColor(120, 128, 140, 160), 1, QtCore.Qt.PenStyle.DashLine))
-            p.setBrush(QtCore.Qt.BrushStyle.NoBrush)
-            p.drawEllipse(c, r * dz, r * dz)
-        p.setPen(QtGui.QPen(QtGui.QColor(120, 128, 140, 120), 1))
-        p.drawLine(QtCore.QPointF(c.x() - r, c.y()), QtCore.QPointF(c.x() + r, c.y()))
-        p.drawLine(QtCore.QPointF(c.x(), c.y() - r), QtCore.QPointF(c.x(), c.y() + r))
         # trail and knob
         now = time.monotonic()
         for i in range(1, len(self._trail)):
@@ -202,25 +198,82 @@ class TeleopView(QtWidgets.QWidget):
         p.setPen(QtGui.QPen(QtGui.QColor(30, 60, 110), 2))
         p.setBrush(QtGui.QColor(70, 160, 255) if self._finger is not None else QtGui.QColor(150, 158, 170))
         p.drawEllipse(knob, kr, kr)
-        # axis labels (drawn last: never under the knob)
-        h, vert = self.model.axes() if hasattr(self.model, "axes") else ("", "")
-        p.setPen(pal.color(QtGui.QPalette.ColorRole.WindowText))
-        font = p.font()
-        font.setPointSizeF(max(7.0, font.pointSizeF() * 0.8))
-        p.setFont(font)
-        top = QtCore.QRectF(4, 1, self.width() - 8, 16)
-        if vert:
-            p.drawText(top, QtCore.Qt.AlignmentFlag.AlignLeft | QtCore.Qt.AlignmentFlag.AlignVCenter, "↑ " + vert)
-        if h:
-            p.drawText(top, QtCore.Qt.AlignmentFlag.AlignRight | QtCore.Qt.AlignmentFlag.AlignVCenter, h + " →")
+        p.drawPixmap(QtCore.QPointF(0, 0), labels)  # the axis labels over the knob, never under it
         # status line
-        p.setPen(pal.color(QtGui.QPalette.ColorRole.WindowText))
+        font = self._small_font()
+        p.setFont(font)
+        p.setPen(self.palette().color(QtGui.QPalette.ColorRole.WindowText))
         room = QtCore.QRectF(4, self.height() - 20, self.width() - 8, 18)
         # a narrow pad (a fleet tile) shows the line's beginning and "…", never both ends cut off
         self.status_shown = p.fontMetrics().elidedText(self.status_text(), QtCore.Qt.TextElideMode.ElideRight,
                                                        int(room.width()))
         p.drawText(room, QtCore.Qt.AlignmentFlag.AlignCenter, self.status_shown)
         p.end()
+
+    def _small_font(self) -> QtGui.QFont:
+        """The labels' and the status line's font: the widget's, 0.8 times (at least 7 pt)."""
+        font = QtGui.QFont(self.font())
+        font.setPointSizeF(max(7.0, font.pointSizeF() * 0.8))
+        return font
+
+    def _cached_layers(self) -> tuple[QtGui.QPixmap, QtGui.QPixmap]:
+        """The parts that stay put while a finger drives, painted once: the backdrop (background, the pad's
+        disc and ring, dead-zone ring, axes) and the axis labels (transparent, drawn over the knob).
+        Repainted only when what they show changed: the size, the device pixel ratio, the ring's colour
+        (driving or not), the dead zone, the axes, the palette (a theme or style change) or the font."""
+        pal = self.palette()
+        h_axis, v_axis = self.model.axes() if hasattr(self.model, "axes") else ("", "")
+        key = (self.width(), self.height(), self.devicePixelRatioF(), bool(self._value.active),
+               float(getattr(self.model.settings, "dead_zone", 0.0)), h_axis, v_axis, pal.cacheKey(),
+               self.font().key())
+        if self._layers is None or key != self._layers_key:
+            self._layers = (self._paint_backdrop(pal), self._paint_labels(pal, h_axis, v_axis))
+            self._layers_key = key
+            self.layer_builds += 1
+        return self._layers
+
+    def _new_layer(self) -> QtGui.QPixmap:
+        ratio = self.devicePixelRatioF()
+        pm = QtGui.QPixmap(max(1, math.ceil(self.width() * ratio - 1e-6)),
+                           max(1, math.ceil(self.height() * ratio - 1e-6)))
+        pm.setDevicePixelRatio(ratio)
+        return pm
+
+    def _paint_backdrop(self, pal: QtGui.QPalette) -> QtGui.QPixmap:
+        pm = self._new_layer()
+        pm.fill(pal.color(QtGui.QPalette.ColorRole.Window))
+        p = QtGui.QPainter(pm)
+        p.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing, True)
+        c, r = self.pad()
+        ring = QtGui.QColor(70, 160, 255) if self._value.active else QtGui.QColor(120, 128, 140)
+        p.setPen(QtGui.QPen(ring, 2))
+        p.setBrush(QtGui.QColor(ring.red(), ring.green(), ring.blue(), 28))
+        p.drawEllipse(c, r, r)
+        dz = float(getattr(self.model.settings, "dead_zone", 0.0))
+        if dz > 0:
+            p.setPen(QtGui.QPen(QtGui.QColor(120, 128, 140, 160), 1, QtCore.Qt.PenStyle.DashLine))
+            p.setBrush(QtCore.Qt.BrushStyle.NoBrush)
+            p.drawEllipse(c, r * dz, r * dz)
+        p.setPen(QtGui.QPen(QtGui.QColor(120, 128, 140, 120), 1))
+        p.drawLine(QtCore.QPointF(c.x() - r, c.y()), QtCore.QPointF(c.x() + r, c.y()))
+        p.drawLine(QtCore.QPointF(c.x(), c.y() - r), QtCore.QPointF(c.x(), c.y() + r))
+        p.end()
+        return pm
+
+    def _paint_labels(self, pal: QtGui.QPalette, h_axis: str, v_axis: str) -> QtGui.QPixmap:
+        pm = self._new_layer()
+        pm.fill(QtCore.Qt.GlobalColor.transparent)
+        p = QtGui.QPainter(pm)
+        p.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing, True)
+        p.setPen(pal.color(QtGui.QPalette.ColorRole.WindowText))
+        p.setFont(self._small_font())
+        top = QtCore.QRectF(4, 1, self.width() - 8, 16)
+        if v_axis:
+            p.drawText(top, QtCore.Qt.AlignmentFlag.AlignLeft | QtCore.Qt.AlignmentFlag.AlignVCenter, "↑ " + v_axis)
+        if h_axis:
+            p.drawText(top, QtCore.Qt.AlignmentFlag.AlignRight | QtCore.Qt.AlignmentFlag.AlignVCenter, h_axis + " →")
+        p.end()
+        return pm
 
     @property
     def dry_run(self) -> bool:

@@ -3,9 +3,17 @@
 ``zoom`` is relative to "fit" (1 = the whole image fits, letterboxed); ``pan`` is the image centre's
 offset from the widget centre in widget pixels. The image may not be dragged out of sight: at least a
 quarter of the widget stays covered.
+
+**Drawing 1:1.** Fitted (unzoomed), the view draws the frame unscaled when its pixel array is exactly
+the rectangle the picture fills in device pixels; the decode worker makes it that size. Both sides get
+that rectangle from the same arithmetic here: :func:`device_box` (the widget in device pixels, rounded
+up) and :func:`fitted_pixels` (the picture fitted into that box, sides rounded to whole pixels, centred
+on a whole pixel); :func:`unscaled_origin` is the view's choice between the 1:1 draw and the scaled one.
 """
 
 from __future__ import annotations
+
+import math
 
 import attrs
 
@@ -84,3 +92,39 @@ class Viewport:
         lim_y = max(0.0, (h - self.widget_h) / 2) + self.widget_h / 4 * (self.zoom > 1.0)
         self.pan_x = min(lim_x, max(-lim_x, self.pan_x))
         self.pan_y = min(lim_y, max(-lim_y, self.pan_y))
+
+
+def device_box(widget_w: float, widget_h: float, ratio: float, zoom: float = 1.0) -> tuple[int, int]:
+    """The box the picture is fitted into, in device pixels: the widget's size x device pixel ratio x zoom,
+    each side rounded up (what the view hands the model's ``set_display_size``)."""
+    k = ratio * zoom
+    return (max(1, math.ceil(widget_w * k - 1e-6)), max(1, math.ceil(widget_h * k - 1e-6)))
+
+
+def fitted_pixels(box: tuple[int, int], image_w: float, image_h: float) -> tuple[int, int, int, int]:
+    """Where an ``image_w`` x ``image_h`` picture goes when fitted (letterboxed) into ``box`` (device
+    pixels): ``(x, y, w, h)``, all whole device pixels; the sides are rounded to the nearest pixel (at
+    least 1, at most the box), the offsets centre it (rounded down). Upscaling too: this is the drawn
+    rectangle, not the decoded size (the worker never makes more pixels than the source has)."""
+    bw, bh = box
+    if image_w <= 0 or image_h <= 0 or bw <= 0 or bh <= 0:
+        return (0, 0, max(0, bw), max(0, bh))
+    scale = min(bw / image_w, bh / image_h)
+    w = min(bw, max(1, round(image_w * scale)))
+    h = min(bh, max(1, round(image_h * scale)))
+    return ((bw - w) // 2, (bh - h) // 2, w, h)
+
+
+def unscaled_origin(widget_w: float, widget_h: float, ratio: float, image_w: float, image_h: float,
+                    array_w: int, array_h: int, fitted: bool) -> tuple[float, float] | None:
+    """The view's choice of path: the top-left corner (widget pixels) to draw a ``array_w`` x ``array_h``
+    pixel array at, unscaled, with its device pixel ratio set to ``ratio``; or None for the scaled draw.
+    1:1 only when the view is fitted (not zoomed or panned) and the array is exactly the fitted rectangle
+    in device pixels (:func:`fitted_pixels` of :func:`device_box`); else (zoomed, a frame decoded for the
+    size before a resize, a picture smaller than the view, a static image) the scaled draw."""
+    if not fitted or not ratio > 0:
+        return None
+    x, y, w, h = fitted_pixels(device_box(widget_w, widget_h, ratio), image_w, image_h)
+    if (array_w, array_h) != (w, h):
+        return None
+    return (x / ratio, y / ratio)

@@ -103,9 +103,10 @@ def test_a_jpeg_is_decoded_reduced_and_matches_a_resized_full_decode():
     model.set_display_size(50, 50)
     small = model.decode(msg)
     assert small.rgb.shape == (38, 50, 3) and mean_abs_diff(small.rgb, area(full, 50, 38)) < 2.5
-    # between two reductions and less than 1.2x too big: the 1/2 decode as it is, no resize
+    # between two reductions: the 1/2 decode, then resized to exactly the fitted 300x225 (drawn 1:1)
     model.set_display_size(300, 300)
-    assert model.decode(msg).rgb.shape == (240, 320, 3)
+    between = model.decode(msg)
+    assert between.rgb.shape == (225, 300, 3) and mean_abs_diff(between.rgb, area(full, 300, 225)) < 2.5
     model.set_display_size(0, 0)
     assert np.array_equal(model.decode(msg).rgb, full)
 
@@ -142,14 +143,19 @@ def test_a_shrink_to_any_size_is_close_to_an_area_resize(display, odd):
     assert mean_abs_diff(out, area(rgb, out.shape[1], out.shape[0])) < 1.0
 
 
-def test_never_upscaled_and_small_excess_left_alone():
+def test_never_upscaled_and_a_small_excess_made_the_exact_fitted_size():
     rgb = picture()
     model = ImageModel(ImageSettings(), RAW, None)
     model.set_display_size(2000, 1500)
     assert model.decode(raw_msg(rgb)).rgb.shape == (480, 640, 3)
-    model.set_display_size(600, 450)  # 640 is only 1.07x too big: the painter's scaling costs less
-    assert model.decode(raw_msg(rgb)).rgb.shape == (480, 640, 3)
-    model.set_display_size(640, 400)  # exactly 1.2x too big (480 rows into 400): left alone as well
+    # 640 is only 1.07x too big: shrink() leaves it, the model still makes it the fitted 600x450 (drawn 1:1)
+    model.set_display_size(600, 450)
+    assert shrink(rgb, 600 / 640) is rgb
+    near = model.decode(raw_msg(rgb))
+    assert near.rgb.shape == (450, 600, 3) and mean_abs_diff(near.rgb, area(rgb, 600, 450)) < 1.5
+    model.set_display_size(640, 400)  # 480 rows into 400: fitted 533.33 -> 533 x 400
+    assert model.decode(raw_msg(rgb)).rgb.shape == (400, 533, 3)
+    model.set_display_size(640, 480)  # exactly the source's size: the array itself, no resize
     assert model.decode(raw_msg(rgb)).rgb.shape == (480, 640, 3)
     tiny = np.ascontiguousarray(rgb[::10, ::10])  # 64x48 source into a 320x240 box: stays 64x48
     f = model.decode(raw_msg(tiny))
