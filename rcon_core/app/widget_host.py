@@ -16,6 +16,7 @@ from collections.abc import Iterable
 from typing import Any
 
 from rcon_core.app.widget_frame import WidgetFrame
+from rcon_core.bridge.safety import safe_text
 from rcon_core.canvas import WidgetInstance
 from rcon_core.canvas.runtime import BrokenWidgetModel, MissingWidgetModel, UnconfiguredWidgetModel
 from rcon_core.plugins import PluginManager, Role, UnknownWidget
@@ -31,7 +32,7 @@ FRAME_INTERVAL = 1 / 60
 class Hosted:
     """One widget instance on a canvas: its frame, and its model and view while its canvas runs."""
 
-    __slots__ = ("widget", "frame", "model", "view", "painted_seq", "painted_at")
+    __slots__ = ("widget", "frame", "model", "view", "painted_seq", "painted_at", "view_error")
 
     def __init__(self, widget: WidgetInstance, frame: WidgetFrame) -> None:
         self.widget = widget
@@ -40,6 +41,8 @@ class Hosted:
         self.view: Any = None
         self.painted_seq = -1
         self.painted_at = 0.0
+        #: why the view failed to show the last state (its ``refresh`` raised), until one succeeds
+        self.view_error: str | None = None
 
 
 class WidgetHost:
@@ -48,6 +51,9 @@ class WidgetHost:
     def __init__(self, plugins: PluginManager) -> None:
         self.plugins = plugins
         self.hosted: dict[str, Hosted] = {}
+        #: views whose ``refresh`` raised (each counted, logged, shown on its badge; the others go on)
+        self.view_errors = 0
+        self._view_error_counts: dict[str, int] = {}
         self._cursor = 0
         self._link_up = False
         #: several robots: each robot's link, by robot id; a widget's robot is its binding's (``""``:
@@ -170,7 +176,11 @@ class WidgetHost:
             order = [w for w in {*ids, *self._due} if w in self.hosted]
         deadline = time.perf_counter() + FRAME_BUDGET
         for k, widget_id in enumerate(order):
-            self._refresh(self.hosted[widget_id], now)
+            hosted = self.hosted[widget_id]
+            try:  # the widget boundary: one view that fails does not keep the others from repainting
+                self._refresh(hosted, now)
+            except Exception as exc:
+                self._view_failed(hosted, exc)
             if time.perf_counter() > deadline:
                 self._due.update(order[k + 1:])
                 if ids is None:
@@ -199,9 +209,9 @@ class WidgetHost:
             badge.setToolTip(f"{model.view_only}: nothing is sent to the robot")
         elif state.link_down or not self.link_up_for(hosted.widget):
             badge.show_status("down", "LINK DOWN")
-        elif state.error:
+        elif state.error or hosted.view_error:
             badge.show_status("problem", "ERROR")
-            badge.setToolTip(state.error)
+            badge.setToolTip(state.error or hosted.view_error or "")
         elif state.stale:
             badge.show_status("stale", "STALE" if state.count else "NO DATA")
         else:
@@ -220,8 +230,24 @@ class WidgetHost:
             refresh(state)
         elif view is not None:
             view.update()
+        if hosted.view_error is not None:  # it shows again: the next pass clears the badge
+            hosted.view_error = None
         for hook in self.paint_hooks:
             hook(hosted, state)
+
+    def _view_failed(self, hosted: Hosted, exc: Exception) -> None:
+        """A view's ``refresh`` (or the widget's badge) raised: counted, logged with a bounded text (the
+        first 20, then every 1000th), shown on the widget's badge; the pass goes on with the others."""
+        self.view_errors += 1
+        hosted.view_error = f"the view could not show the value: {safe_text(exc)}"
+        n = self._view_error_counts[hosted.widget.id] = self._view_error_counts.get(hosted.widget.id, 0) + 1
+        if n <= 20 or n % 1000 == 0:
+            log.error("widget %s (%s): %s (%d so far)", hosted.widget.id, hosted.widget.kind, hosted.view_error, n)
+        try:
+            hosted.frame.badge.show_status("problem", "ERROR")
+            hosted.frame.badge.setToolTip(hosted.view_error)
+        except Exception:  # noqa: BLE001 - the frame itself is broken: the count and the log say it
+            pass
 
     def topic_counts(self, robot_id: str | None = None) -> dict[str, int]:
         """Values received per subscribed topic (the largest over its widgets), for the topic rates; with
