@@ -234,7 +234,7 @@ def run(args: Any) -> dict:
 
             logging.basicConfig(level=logging.WARNING)
             bt.loop.call_soon_threadsafe(bt.loop.set_debug, True)
-            bt.loop.slow_callback_duration = 0.004
+            bt.loop.slow_callback_duration = float(os.environ.get("BENCH_SLOW_CALLBACKS_S", "0.004"))
         gc_pauses: list[tuple[int, float]] = []  # (generation, ms) of each collection in the window
         gc_started = [0.0]
 
