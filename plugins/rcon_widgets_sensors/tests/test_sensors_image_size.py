@@ -7,7 +7,7 @@ import time
 import cv2
 import numpy as np
 import pytest
-from qtpy import QtCore, QtGui
+from qtpy import QtCore
 from qtpy.QtTest import QTest
 from rcon_widgets_sensors.camera import CameraModel, CameraSettings
 from rcon_widgets_sensors.camera_view import CameraView
@@ -20,7 +20,7 @@ from rcon_widgets_sensors.decode import (
 )
 from rcon_widgets_sensors.image import Frame, ImageModel, ImageSettings
 from rcon_widgets_sensors.image_view import ImageView
-from sensors_helpers import in_thread
+from sensors_helpers import in_thread, wheel
 
 from rcon_core.plugins import Binding
 from rcon_core.sim.camera import CameraRenderer, encode_jpeg
@@ -197,14 +197,6 @@ def feed(view, msg):
     frame = model.wait_frame(before, 5.0)
     view.refresh(model.state)
     return frame
-
-
-def wheel(view, notches):
-    at = QtCore.QPointF(160, 120)
-    ev = QtGui.QWheelEvent(at, view.mapToGlobal(at), QtCore.QPoint(), QtCore.QPoint(0, 120 * notches),
-                           QtCore.Qt.MouseButton.NoButton, QtCore.Qt.KeyboardModifier.NoModifier,
-                           QtCore.Qt.ScrollPhase.NoScrollPhase, False)
-    view.wheelEvent(ev)
 
 
 @pytest.fixture

@@ -19,6 +19,7 @@ from rcon_widgets_sensors.decode import resize_exactly
 from rcon_widgets_sensors.image import Frame, ImageModel, ImageSettings
 from rcon_widgets_sensors.image_view import ImageView
 from rcon_widgets_sensors.viewport import device_box, fitted_pixels, unscaled_origin
+from sensors_helpers import wheel
 
 from rcon_core.plugins import Binding
 from rcon_core.sim.camera import CameraRenderer
@@ -107,14 +108,6 @@ def grab_rgb(view):
     img = view.grab().toImage().convertToFormat(QtGui.QImage.Format.Format_RGB888)
     rows = np.frombuffer(img.constBits(), np.uint8, img.sizeInBytes()).reshape(img.height(), img.bytesPerLine())
     return rows[:, :img.width() * 3].reshape(img.height(), img.width(), 3).copy()
-
-
-def wheel(view, notches):
-    at = QtCore.QPointF(view.width() / 2, view.height() / 2)
-    ev = QtGui.QWheelEvent(at, view.mapToGlobal(at), QtCore.QPoint(), QtCore.QPoint(0, 120 * notches),
-                           QtCore.Qt.MouseButton.NoButton, QtCore.Qt.KeyboardModifier.NoModifier,
-                           QtCore.Qt.ScrollPhase.NoScrollPhase, False)
-    view.wheelEvent(ev)
 
 
 @pytest.fixture
