@@ -6,6 +6,7 @@ back; a narrow map puts its buttons on two rows and keeps the markers clear of t
 from __future__ import annotations
 
 import pytest
+from map_helpers import make_view
 from qtpy import QtCore
 from rcon_widgets_map import mercator
 from rcon_widgets_map.model import MapModel
@@ -53,16 +54,6 @@ def two_fixes(qtbot, sim_thread, threaded_client):
 
     yield model, publish, wait_other
     bt.call(model.stop).result(5)
-
-
-def make_view(qtbot, model, size=(480, 400)):
-    view = MapView(model)
-    qtbot.addWidget(view)
-    view.resize(*size)
-    view.show()
-    qtbot.waitExposed(view)
-    view.refresh(model.state)
-    return view
 
 
 def in_view(view) -> list[bool]:

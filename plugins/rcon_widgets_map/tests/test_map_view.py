@@ -6,11 +6,11 @@ from __future__ import annotations
 import time
 
 import pytest
+from map_helpers import make_view
 from qtpy import QtCore, QtGui
 from rcon_widgets_map import mercator
 from rcon_widgets_map.model import MapModel
 from rcon_widgets_map.settings import MapPluginSettings, MapSettings
-from rcon_widgets_map.view import MapView
 
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding
@@ -35,16 +35,6 @@ def offline_model(**settings):
                  types=TYPES, plugin_settings=MapPluginSettings())
     m.start()
     return m
-
-
-def make_view(qtbot, model, size=(480, 400)):
-    view = MapView(model)
-    qtbot.addWidget(view)
-    view.resize(*size)
-    view.show()
-    qtbot.waitExposed(view)
-    view.refresh(model.state)
-    return view
 
 
 def rgb(img: QtGui.QImage, x: float, y: float) -> tuple[int, int, int]:
