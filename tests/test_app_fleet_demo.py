@@ -88,6 +88,13 @@ def test_fleet_demo_shows_each_vessels_camera_and_drives_only_the_pressed_vessel
                 return [t.label for t in value.tracks if t.has_position] if value is not None else []
 
             qtbot.waitUntil(lambda: labels() == ["boat1", "boat2"], timeout=TIMEOUT_MS)
+            # on this mixed canvas each vessel's frame names its vessel; the map of every vessel names none
+            cam1 = hosted[("sensors.image", "r-1")]
+            qtbot.waitUntil(lambda: fleet_map.frame.property("robotMark") in ("", None), timeout=TIMEOUT_MS)
+            assert window.host.title_of(fleet_map.widget) == fleet_map.widget.title == "Map of every vessel"
+            assert fleet_map.frame.styleSheet() == ""
+            assert window.host.title_of(cam1.widget).startswith("boat1 · ")
+            assert cam1.frame.property("robotMark")
             # a press on vessel 2's pad drives vessel 2 only
             pad = hosted[("sensors.teleop", "r-2")].view
             centre, radius = pad.pad()

@@ -68,6 +68,7 @@ class FleetUi(QtCore.QObject):
         self.catalogs: dict[str, dict[str, list[tuple[str, str]]]] = {}
         self._catalog_dirty = True
         self._marks_dirty = True
+        self._marked_models = -1  # the host's models_version the marks were last applied for
         self._states: dict[str, ConnectionState] = {}
         #: robot id -> why its link is not up (words of rcon_core.bridge.reasons), for its chip
         self.why: dict[str, str] = {}
@@ -269,8 +270,9 @@ class FleetUi(QtCore.QObject):
                                                             if robot.view_only else None)
             self.chips.show_state(robot.id, state, latency,
                                   None if state is ConnectionState.CONNECTED else self.why.get(robot.id) or None, view_only)
-        if self._marks_dirty:
+        if self._marks_dirty or window.host.models_version != self._marked_models:
             self._marks_dirty = False
+            self._marked_models = window.host.models_version
             apply_marks(window.host, window.doc.workspace)
 
     def _take_failure(self, robot_id: str, link: Any) -> None:

@@ -2,7 +2,8 @@
 
 On a canvas whose widgets talk to more than one robot, each frame gets its robot's colour as its edge
 and the robot's name before its title ("Bravo · Front camera"). A canvas of one robot (every one-robot
-layout) shows no mark, as before. The marks are recomputed after every change of the workspace.
+layout) shows no mark, as before. A widget that shows every robot has none either. The marks are
+recomputed after every change of the workspace and whenever the widgets' models are built or replaced.
 """
 
 from __future__ import annotations
@@ -32,8 +33,13 @@ def _frame_style(colour: str) -> str:
 
 
 def apply_marks(host: Any, workspace: Any) -> None:
-    """Give every hosted frame its robot mark (or take it away), title and edge."""
+    """Give every hosted frame its robot mark (or take it away), title and edge. A widget whose model
+    shows every robot (``model.shows_every_robot``: the map of every robot's fix) gets none: its binding
+    names one robot, but what it shows is the fleet's."""
     marks = marks_for(workspace)
+    for widget_id, hosted in host.hosted.items():
+        if getattr(hosted.model, "shows_every_robot", False):
+            marks.pop(widget_id, None)
     host.robot_marks = marks
     for widget_id, hosted in host.hosted.items():
         mark = marks.get(widget_id)

@@ -51,6 +51,9 @@ class WidgetHost:
     def __init__(self, plugins: PluginManager) -> None:
         self.plugins = plugins
         self.hosted: dict[str, Hosted] = {}
+        #: moves whenever a widget's model is attached, replaced or dropped (what depends on the models,
+        #: e.g. the robot marks, looks again)
+        self.models_version = 0
         #: views whose ``refresh`` raised (each counted, logged, shown on its badge; the others go on)
         self.view_errors = 0
         self._view_error_counts: dict[str, int] = {}
@@ -110,6 +113,7 @@ class WidgetHost:
         if hosted is None or model is hosted.model:
             return
         hosted.model, hosted.view, hosted.painted_seq = model, None, -1
+        self.models_version += 1
         frame = hosted.frame
         if model is None:
             frame.set_placeholder("")

@@ -218,6 +218,9 @@ class WidgetModel:
     stale_after: float | None = 5.0
     #: timeout (seconds) for :meth:`call`; None uses the client's default
     call_timeout: float | None = None
+    #: True while the widget shows every robot of the workspace (a model sets it in ``on_fleet`` when it
+    #: took the other robots on): on a canvas that mixes robots its frame then names no single robot
+    shows_every_robot: bool = False
     #: True while the model runs as a preview in the app's add panel: it is offline on purpose and
     #: nothing it sends reaches the robot (a view can say so instead of "link down"). Set by the app.
     dry_run: bool = False

@@ -133,10 +133,12 @@ class MapModel(WidgetModel):
         """The workspace's robots (``RobotPort``: id, name, colour, port), before ``start``. With
         ``every_robot`` each other robot's fix becomes a track of its own, in its colour."""
         self._robot_ports = []
+        self.shows_every_robot = False
         for key in [k for k in self._tracks if k.startswith("@")]:
             del self._tracks[key]
         if not self.settings.every_robot or self.binding.role is not Role.SUBSCRIBE:
             return
+        self.shows_every_robot = True  # the frame on a mixed canvas names no single robot
         trail = self.settings.trail_length
         for robot in robots:
             if robot.port is self.port:
