@@ -7,6 +7,7 @@ import time
 import cv2
 import numpy as np
 import pytest
+from image_helpers import area, feed, grid_picture, jpeg_msg, mean_abs_diff, picture, raw_msg
 from qtpy import QtCore
 from qtpy.QtTest import QTest
 from rcon_widgets_sensors.camera import CameraModel, CameraSettings
@@ -23,41 +24,10 @@ from rcon_widgets_sensors.image_view import ImageView
 from sensors_helpers import in_thread, wheel
 
 from rcon_core.plugins import Binding
-from rcon_core.sim.camera import CameraRenderer, encode_jpeg
-from rcon_core.sim.vessel import Vessel
+from rcon_core.sim.camera import encode_jpeg
 
 RAW = Binding("/camera/front/image_raw", "sensor_msgs/Image", "subscribe")
 JPEG = Binding("/camera/rear/image_raw/compressed", "sensor_msgs/CompressedImage", "subscribe")
-
-
-def picture(name="front"):
-    """A 640x480 RGB picture from the sim's own camera renderer (sky, water, shore, buoys, clock)."""
-    return CameraRenderer(name).frame(Vessel(), time.time())
-
-
-def stamp():
-    now = time.time()
-    return {"stamp": {"secs": int(now), "nsecs": int(now % 1 * 1e9)}, "frame_id": "cam"}
-
-
-def raw_msg(rgb, encoding="rgb8"):
-    h, w = rgb.shape[:2]
-    pix = {"rgb8": rgb, "bgr8": rgb[..., ::-1], "mono8": rgb[..., 1]}[encoding]
-    return {"header": stamp(), "height": h, "width": w, "encoding": encoding, "is_bigendian": 0,
-            "step": w * (1 if pix.ndim == 2 else 3), "data": np.ascontiguousarray(pix).tobytes()}
-
-
-def jpeg_msg(rgb):
-    return {"header": stamp(), "format": "jpeg", "data": encode_jpeg(rgb)}
-
-
-def mean_abs_diff(a, b):
-    assert a.shape == b.shape, (a.shape, b.shape)
-    return float(np.abs(a.astype(np.int16) - b.astype(np.int16)).mean())
-
-
-def area(rgb, w, h):
-    return cv2.resize(rgb, (w, h), interpolation=cv2.INTER_AREA)
 
 
 # -- model, no Qt --------------------------------------------------------------------------------------------
@@ -180,25 +150,6 @@ def test_png_and_broken_jpegs():
 
 
 # -- view ----------------------------------------------------------------------------------------------------
-def grid_picture(w=640, h=480):
-    """A 4 x 4 grid of flat, distinct colours: every cell's centre is checkable after any scaling."""
-    img = np.zeros((h, w, 3), np.uint8)
-    for r in range(4):
-        for c in range(4):
-            img[r * h // 4:(r + 1) * h // 4, c * w // 4:(c + 1) * w // 4] = (40 + 60 * c, 230 - 60 * r,
-                                                                              (70 * (r + c)) % 256)
-    return img
-
-
-def feed(view, msg):
-    model = view.model
-    before = model.state.value.index if isinstance(model.state.value, Frame) else 0
-    model.on_message(msg)
-    frame = model.wait_frame(before, 5.0)
-    view.refresh(model.state)
-    return frame
-
-
 @pytest.fixture
 def view(qtbot):
     v = ImageView(ImageModel(ImageSettings(), RAW, None))

@@ -8,41 +8,22 @@ import json
 import os
 import subprocess
 import sys
-import time
 
 import cv2
 import numpy as np
 import pytest
-from qtpy import QtCore, QtGui
+from image_helpers import feed, grab_rgb, mean_abs_diff, picture, raw_msg
+from qtpy import QtCore
 from qtpy.QtTest import QTest
 from rcon_widgets_sensors.decode import resize_exactly
-from rcon_widgets_sensors.image import Frame, ImageModel, ImageSettings
+from rcon_widgets_sensors.image import ImageModel, ImageSettings
 from rcon_widgets_sensors.image_view import ImageView
 from rcon_widgets_sensors.viewport import device_box, fitted_pixels, unscaled_origin
 from sensors_helpers import wheel
 
 from rcon_core.plugins import Binding
-from rcon_core.sim.camera import CameraRenderer
-from rcon_core.sim.vessel import Vessel
 
 RAW = Binding("/camera/front/image_raw", "sensor_msgs/Image", "subscribe")
-
-
-def picture():
-    """A 640x480 RGB picture from the sim's own camera renderer."""
-    return CameraRenderer("front").frame(Vessel(), time.time())
-
-
-def raw_msg(rgb):
-    h, w = rgb.shape[:2]
-    return {"header": {"stamp": {"secs": int(time.time()), "nsecs": 0}, "frame_id": "cam"}, "height": h,
-            "width": w, "encoding": "rgb8", "is_bigendian": 0, "step": w * 3,
-            "data": np.ascontiguousarray(rgb).tobytes()}
-
-
-def mean_abs_diff(a, b):
-    assert a.shape == b.shape, (a.shape, b.shape)
-    return float(np.abs(a.astype(np.int16) - b.astype(np.int16)).mean())
 
 
 # -- the arithmetic (no Qt), with faked device pixel ratios ---------------------------------------------------
@@ -95,21 +76,6 @@ def test_resize_exactly():
 
 
 # -- the real view offscreen at ratio 1 ---------------------------------------------------------------------
-def feed(view, msg):
-    model = view.model
-    before = model.state.value.index if isinstance(model.state.value, Frame) else 0
-    model.on_message(msg)
-    frame = model.wait_frame(before, 5.0)
-    view.refresh(model.state)
-    return frame
-
-
-def grab_rgb(view):
-    img = view.grab().toImage().convertToFormat(QtGui.QImage.Format.Format_RGB888)
-    rows = np.frombuffer(img.constBits(), np.uint8, img.sizeInBytes()).reshape(img.height(), img.bytesPerLine())
-    return rows[:, :img.width() * 3].reshape(img.height(), img.width(), 3).copy()
-
-
 @pytest.fixture
 def view(qtbot):
     v = ImageView(ImageModel(ImageSettings(show_overlay=False), RAW, None))
