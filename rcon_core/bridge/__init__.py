@@ -12,6 +12,7 @@ from .errors import (
     LinkSettingsError,
     NotConnectedError,
     ProtocolError,
+    RosapiRefusedError,
     ServiceError,
     ServiceTimeoutError,
 )
@@ -23,5 +24,5 @@ __all__ = [
     "ActionError", "ActionGoal", "ActionServer", "ActionTimeoutError", "AuthRefusedError", "BridgeClient",
     "BridgeError", "ConnectionLostError", "ConnectionState", "GoalStatus", "LinkSettingsError", "Node",
     "NotConnectedError", "ParamNotFoundError", "ParamRejectedError", "ProtocolError", "Publisher", "RosInfo",
-    "ServedGoal", "ServiceError", "ServiceServer", "ServiceTimeoutError", "Subscription",
+    "RosapiRefusedError", "ServedGoal", "ServiceError", "ServiceServer", "ServiceTimeoutError", "Subscription",
 ]

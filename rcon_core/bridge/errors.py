@@ -33,6 +33,11 @@ class ServiceTimeoutError(ServiceError, TimeoutError):
     """No answer arrived within the client-side timeout (a missing or hung service)."""
 
 
+class RosapiRefusedError(ServiceError):
+    """RCON did not send this rosapi call: it would kill or wedge the server's rosapi (``rosapi_guard.py``
+    says which calls and why).  Nothing was written; the message names the hazard."""
+
+
 class ConnectionLostError(ServiceError):
     """The connection dropped while a call or action goal was waiting for its answer."""
 
