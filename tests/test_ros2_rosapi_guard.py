@@ -166,3 +166,58 @@ def test_cli_type_prints_the_robots_own_text_without_fake_constants(capsys):
         assert rc == 0 and answer["source"] == "server"
         assert all(td["constnames"] == [] for td in answer["typedefs"])
         assert server.ops("call_service", service="/rosapi/message_details") == []
+
+
+# ------------------------------------------------------------------------------------------ parameters
+
+
+async def test_parameters_never_touch_rosapis_parameter_calls(client, server):
+    """The Parameters panel's calls (``client.params``) go to the nodes' own services: list_parameters,
+    get_parameters and set_parameters, answered here in the recorded shapes (rosapi.jsonl:34-35; a missing
+    name reads back as type 0).  Nothing reaches get_param_names, get_param, has_param, set_param or
+    delete_param, whose 2.1.0 handlers die, hang or lie."""
+    store = {"speed_limit": {"type": 3, "double_value": 1.5}, "robot_name": {"type": 4, "string_value": "peer2"}}
+    recorded_value = ROSAPI[34]["received"]["values"]["values"][0]  # every typed slot present
+    empty = {**recorded_value, "type": 0, "string_value": ""}
+
+    def listing(frame):
+        return {"op": "service_response", "id": frame["id"], "service": frame["service"], "result": True,
+                "values": {"result": {"names": sorted(store), "prefixes": []}}}
+
+    def get(frame):
+        values = [{**empty, **store.get(n, {})} for n in frame["args"]["names"]]
+        return {"op": "service_response", "id": frame["id"], "service": frame["service"], "result": True,
+                "values": {"values": values}}
+
+    def set_(frame):
+        p = frame["args"]["parameters"][0]
+        ok = p["name"] in store and (p["value"]["type"] in (0, store[p["name"]]["type"]))
+        if ok and p["value"]["type"] == 0:
+            del store[p["name"]]
+        elif ok:
+            store[p["name"]] = p["value"]
+        reason = "" if ok else "Wrong parameter type"
+        return {"op": "service_response", "id": frame["id"], "service": frame["service"], "result": True,
+                "values": {"results": [{"successful": ok, "reason": reason}]}}
+
+    server.services.update({"/peer2_node/list_parameters": listing, "/peer2_node/get_parameters": get,
+                            "/peer2_node/set_parameters": set_,
+                            "/rosbridge_websocket/list_parameters": lambda f: listing(f) | {"values": {
+                                "result": {"names": ["port"], "prefixes": []}}}})
+    params = client.params
+    groups = await params.by_owner()
+    assert groups["/peer2_node"] == ["/peer2_node:robot_name", "/peer2_node:speed_limit"]
+    assert groups["/rosapi"] == [f"/rosapi:{n}" for n in sorted(ROSAPI[33]["received"]["values"]["result"]["names"])]
+    assert await params.get("/peer2_node:speed_limit") == 1.5
+    assert await params.get("/peer2_node:no_such_param", default=None) is None
+    assert not await params.has("/peer2_node:no_such_param")
+    await params.set("/peer2_node:speed_limit", 2.5)
+    assert await params.get("/peer2_node:speed_limit") == 2.5
+    from rcon_core.bridge import ParamRejectedError
+
+    with pytest.raises(ParamRejectedError, match="holds float 2.5, so the node refused a string"):
+        await params.set("/peer2_node:speed_limit", "fast")
+    await params.delete("/peer2_node:robot_name")
+    assert "robot_name" not in store
+    for dangerous in ("get_param_names", "get_param", "has_param", "set_param", "delete_param"):
+        assert server.ops("call_service", service=f"/rosapi/{dangerous}") == [], dangerous
