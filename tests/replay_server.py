@@ -66,6 +66,18 @@ class Recorded:
                                  if (r.get("received") or {}).get("id") == sent["id"] and r.get("received_text")),
                                 None)
                 self.answers.setdefault(_key(sent["service"], sent.get("args")), (str(sent["id"]), text))
+        #: ROS 2 goals: (action, action_type, args) -> the frames the real server sent for that goal (ids
+        #: swapped for the caller's when replayed); a goal it never answered (a rejection) has []
+        self.goals: dict[str, tuple[str, list[str]]] = {}
+        if recording != ROS1:
+            lines = load("actions.jsonl", recording)
+            for line in lines:
+                sent = line.get("sent")
+                if isinstance(sent, dict) and sent.get("op") == "send_action_goal" and "action_type" in sent:
+                    replies = [r["received_text"] for r in lines if (r.get("received") or {}).get("id") == sent["id"]
+                               and (r.get("received") or {}).get("op", "").startswith("action_")]
+                    key = json.dumps([sent["action"], sent["action_type"], sent.get("args")], sort_keys=True)
+                    self.goals.setdefault(key, (sent["id"], replies))
         self.frames: dict[tuple[str, str], list[str | bytes]] = {}
         for name, comp in (("publish_json.jsonl", "none"), ("publish_cbor.jsonl", "cbor"),
                            ("publish_cbor_raw.jsonl", "cbor-raw"), ("publish_png.jsonl", "png")):
@@ -78,7 +90,10 @@ class Recorded:
                 elif isinstance(sent, dict) and sent.get("op") == "unsubscribe":
                     topic = None
                 frame = received_frame(line)
-                if topic is not None and frame is not None:
+                own = (line.get("received") or line.get("received_decoded") or {}).get("topic")
+                if frame is not None and (own, comp) in self.frames:  # a frame names its topic
+                    self.frames[(own, comp)].append(frame)
+                elif topic is not None and frame is not None:  # fragments and png frames do not
                     self.frames[(topic, comp)].append(frame)
 
 
@@ -213,6 +228,13 @@ class ScriptedServer:
                     text = text.replace(f'"id":"{rec_id}"', f'"id":{new_id}').replace(f'"id": "{rec_id}"',
                                                                                      f'"id": {new_id}')
                     await ws.send(text)
+        elif op == "send_action_goal" and self.replay:
+            key = json.dumps([frame.get("action"), frame.get("action_type"), frame.get("args")], sort_keys=True)
+            hit = recorded(self.recording).goals.get(key)
+            if hit is not None:
+                rec_id, replies = hit
+                for text in replies:
+                    await ws.send(text.replace(f'"id": "{rec_id}"', f'"id": {json.dumps(frame.get("id"))}'))
         elif op == "subscribe":
             frames: list[str | bytes] = []
             if self.on_subscribe is not None:

@@ -64,6 +64,12 @@ class ActionTimeoutError(ActionError, TimeoutError):
     """No result arrived within the goal's client-side timeout (the client then cancels the goal)."""
 
 
+class ActionNoAnswerError(ActionError, TimeoutError):
+    """Nothing came back for a goal -- no feedback, no result -- within its ``answer_timeout``.  rosbridge 2.1.0
+    answers a goal the action server *rejected* with nothing at all (``rosbridge-ros2-2.1.0/actions.jsonl:14-15``),
+    and a goal to an action nobody serves the same (``:16-17``), so this is the only way to tell."""
+
+
 class ProtocolError(BridgeError):
     """A frame from the server could not be understood (logged, never raised out of the reader)."""
 
