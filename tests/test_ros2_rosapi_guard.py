@@ -86,6 +86,19 @@ async def test_the_app_never_asks_a_2_1_0_server_for_action_type(client, server)
     assert server.ops("call_service", service="/rosapi/action_type") == []
 
 
+async def test_services_rosapi_does_not_list_are_not_asked(client, server):
+    """rosapi.jsonl:62-63: search_param and interfaces do not exist in 2.1.0; asking logs an ERROR into the
+    robot's /rosout.  Not sent at all, and the caller learns why (so does the Action widget's look-up of
+    the action details 2.1.0 lacks)."""
+    for n in (62, 63):
+        frame = ROSAPI[n - 1]["sent"]
+        with pytest.raises(RosapiRefusedError, match="does not list"):
+            await client.call_service(frame["service"], frame["args"])
+        assert server.ops("call_service", service=frame["service"]) == []
+    with pytest.raises(RosapiRefusedError, match="does not list"):
+        await client.call_service("/rosapi/action_goal_details", {"type": "example_interfaces/action/Fibonacci"})
+
+
 async def test_the_listing_is_asked_again_on_a_new_connection(client, server):
     await client.rosapi_profile()
     await server.drop()
@@ -116,7 +129,7 @@ def test_releases_are_told_apart_by_what_rosapi_lists():
     assert refusal("/rosapi/action_type", {"action": "/f"}, v24)  # listed, but crashes in every release
     sim_like = _info("/rosapi/action_goal_details", "/rosapi/action_type")
     assert action_type_works(sim_like) and refusal("/rosapi/action_type", {"action": "/f"}, sim_like) is None
-    ros1 = RosInfo(1, "noetic", "test", ("/rosapi/has_param",))
+    ros1 = RosInfo(1, "noetic", "test", ("/rosapi/has_param", "/rosapi/delete_param"))
     assert refusal("/rosapi/delete_param", has, ros1) is None and refusal("/rosapi/has_param", has, None) is None
 
 

@@ -304,7 +304,7 @@ class BridgeClient:
         """Call a service; returns its ``values``.  Raises ServiceError / ServiceTimeoutError (see
         ``session.py``), and RosapiRefusedError, without sending anything, for a rosapi call that would
         kill the server's rosapi (``rosapi_guard.py``)."""
-        if rosapi_guard.rosapi_name(name) in rosapi_guard.GUARDED:
+        if rosapi_guard.rosapi_name(name) is not None:
             await self._check_rosapi_call(name, args, timeout)
         return await self.session.call_service(name, args, timeout)
 

@@ -40,8 +40,13 @@ Decision: how RCON tells 2.1.0 from a fixed server
     has the broken one) is trusted with nothing; a rosapi listing ``action_type`` without ``interfaces`` is
     not one of those releases (``rcon sim --ros2`` plays such a rosapi), and its ``action_type`` is used.
 
-ROS 1 rosapi (0.11) has none of these hazards; nothing is refused there, nor before the server's ROS is
-known (a call made before ``detect_ros()`` answered waits for it: see ``client.call_service``).
+Decision: a rosapi service the server does not list is not asked
+    Asking for one is not harmless either: rosbridge answers "Service /rosapi/x does not exist" and logs an
+    ERROR into the robot's own ``/rosout`` every time (``rosapi.jsonl:62-63``).  Once ``/rosapi/services``
+    answered on a connection, a ``/rosapi/*`` call it does not list is refused here too, on any ROS.
+
+ROS 1 rosapi (0.11) has none of the other hazards; nothing else is refused there, nor before the server's
+ROS is known (a rosapi call waits for the listing, asked once per connection: ``client.rosapi_profile``).
 """
 
 from __future__ import annotations
@@ -96,7 +101,12 @@ def refusal(service: str, args: Any, info: RosInfo | None, *, node_listed: bool 
     whether a listed service has the type the service details ask about (None: not known; see
     :func:`needs`)."""
     name = rosapi_name(service)
-    if name not in GUARDED or info is None or info.version != 2:
+    if name is None or info is None:
+        return None
+    if info.rosapi_services and service not in info.rosapi_services and f"/rosapi/{name}" not in \
+            info.rosapi_services:
+        return f"the robot's rosapi does not list {service} (asking would only log an error on the robot)"
+    if name not in GUARDED or info.version != 2:
         return None
     args = args if isinstance(args, dict) else {}
     stock = "a rosbridge 2.1.0 rosapi"
