@@ -5,6 +5,7 @@ from .action_server import ActionServer, ServedGoal
 from .client import BridgeClient, ConnectionState
 from .errors import (
     ActionError,
+    ActionNoAnswerError,
     ActionTimeoutError,
     AuthRefusedError,
     BridgeError,
@@ -12,6 +13,7 @@ from .errors import (
     LinkSettingsError,
     NotConnectedError,
     ProtocolError,
+    RosapiRefusedError,
     ServiceError,
     ServiceTimeoutError,
 )
@@ -20,8 +22,8 @@ from .params import ParamNotFoundError, ParamRejectedError
 from .rosinfo import RosInfo
 
 __all__ = [
-    "ActionError", "ActionGoal", "ActionServer", "ActionTimeoutError", "AuthRefusedError", "BridgeClient",
+    "ActionError", "ActionGoal", "ActionNoAnswerError", "ActionServer", "ActionTimeoutError", "AuthRefusedError", "BridgeClient",
     "BridgeError", "ConnectionLostError", "ConnectionState", "GoalStatus", "LinkSettingsError", "Node",
     "NotConnectedError", "ParamNotFoundError", "ParamRejectedError", "ProtocolError", "Publisher", "RosInfo",
-    "ServedGoal", "ServiceError", "ServiceServer", "ServiceTimeoutError", "Subscription",
+    "RosapiRefusedError", "ServedGoal", "ServiceError", "ServiceServer", "ServiceTimeoutError", "Subscription",
 ]

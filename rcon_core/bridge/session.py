@@ -25,8 +25,13 @@ Decision: publishing while the link is down or stalled
     repeated in every publish (``client_publish.jsonl:26-30``: otherwise the topic is re-registered).
 
 Decision: service calls
-    Every call has a client-side timeout (``timeout`` or ``call_timeout``) even though rosbridge 0.11
-    ignores the ``timeout`` field; a missing or hung service raises ``ServiceTimeoutError``.  A call made
+    Every call has a client-side timeout (``timeout`` or ``call_timeout``) even though rosbridge 0.11 and
+    2.1.0 ignore the ``timeout`` field; a missing or hung service raises ``ServiceTimeoutError``, whose text
+    names the op and the service.  rosbridge answers a request it cannot run -- an unknown op, a missing or
+    mistyped field, text that is not JSON -- with silence (``rosbridge-ros2-2.1.0/malformed.jsonl``), and
+    2.1.0 runs one call at a time per connection with no timeout, so one unanswered call holds up every
+    later call on that connection (``services.jsonl:20-25``): a timeout that follows an earlier call still
+    unanswered says so, naming it.  A late answer to a call that timed out is dropped quietly.  A call made
     while reconnecting waits for the link inside the same budget.  Calls waiting when the link drops fail
     with ``ConnectionLostError``.  ``result: false`` raises ``ServiceError`` carrying the server's string.
 
@@ -101,6 +106,9 @@ class Session:
         self.topics: dict[str, TopicEntry] = {}
         self.adverts: dict[str, AdvertEntry] = {}
         self.pending: dict[str, asyncio.Future[Any]] = {}  # service calls waiting for their answer
+        #: calls that timed out and were never answered on this link: id -> service (bounded)
+        self.unanswered: dict[str, str] = {}
+        self._pending_names: dict[str, str] = {}  # id -> service of the calls in self.pending
         self.level: str | None = None
         self.tasks: set[asyncio.Task[Any]] = set()
         self._seq = 0
@@ -182,6 +190,7 @@ class Session:
             if not fut.done():
                 fut.set_exception(ConnectionLostError("connection lost before the answer arrived"))
         self.pending.clear()
+        self.unanswered.clear()
         self.goals.disconnected()
         self.provided_actions.disconnected()
 
@@ -226,7 +235,9 @@ class Session:
         cid = m.get("id")
         fut = self.pending.pop(cid, None) if isinstance(cid, str) else None
         if fut is None:
-            log.debug("service_response for unknown or finished call %r (late answer?)", cid)
+            late = self.unanswered.pop(cid, None) if isinstance(cid, str) else None
+            log.debug("service_response for unknown or finished call %r%s", cid,
+                      f" (a late answer from {late})" if late else "")
             return
         if fut.done():
             return
@@ -372,9 +383,22 @@ class Session:
             async with asyncio.timeout(budget):
                 await self.host.wait_connected()
                 self.pending[cid] = fut
+                self._pending_names[cid] = name
                 self.send(op)
                 return await fut
         except TimeoutError:
-            raise ServiceTimeoutError(f"no answer within {budget:g} s", name) from None
+            before = list(self._pending_names)[: list(self._pending_names).index(cid)] \
+                if cid in self._pending_names else []
+            earlier = list(self.unanswered.values()) + [self._pending_names[c] for c in before]
+            text = f"no answer to call_service within {budget:g} s"
+            if earlier:
+                text += (f"; an earlier call on this connection ({earlier[0]}) is still unanswered, and rosbridge "
+                         "2.1.0 runs calls one at a time")
+            if self.link is not None:
+                self.unanswered[cid] = name
+                while len(self.unanswered) > 32:
+                    self.unanswered.pop(next(iter(self.unanswered)))
+            raise ServiceTimeoutError(text, name) from None
         finally:
             self.pending.pop(cid, None)
+            self._pending_names.pop(cid, None)
