@@ -107,3 +107,14 @@ def test_the_security_dialog_needs_the_pin_while_locked_and_keeps_the_secret(loc
     tap(dialog.ok)
     qtbot.waitUntil(lambda: bar.dialog is not None and bar.dialog.isVisible(), timeout=TIMEOUT_MS)
     bar.dialog.reject()
+
+
+def test_a_connect_that_needs_a_secret_asks_for_the_pin_before_the_security_dialog(locked, qtbot, store, sim_url):
+    win = locked
+    bar = win.connection
+    win.config.set_robot_settings(sim_url, {"auth": True})  # no secret known: the dialog would ask for it
+    bar.connect_clicked()  # as the window's own connect at start (`rcon --locked`) does
+    dialog = pin_dialog(win, qtbot)
+    assert "connection settings" in prompt(dialog) and bar.dialog is None
+    cancel(dialog, qtbot)
+    assert bar.dialog is None and win.operator_lock.engaged

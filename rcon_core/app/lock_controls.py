@@ -84,9 +84,12 @@ def install(window: Any) -> None:
     bar = window.connection
     bar.connect_button.clicked.disconnect()
     bar.connect_button.clicked.connect(lambda: lock.guard("change the robot", bar.toggle))
-    bar.settings_button.clicked.disconnect()
-    bar.settings_button.clicked.connect(
-        lambda: lock.guard("change the robot's connection settings", lambda: bar.open_settings()))
+    open_settings = bar.open_settings  # the Security button, and a Connect that needs a secret first
+
+    def gated_settings(ask_secret: bool = False) -> None:
+        lock.guard("change the robot's connection settings", lambda: open_settings(ask_secret))
+
+    bar.open_settings = gated_settings
     window.params_panel.gate = lock.guard
 
     # ---- the app config's problems
