@@ -161,3 +161,20 @@ def test_the_view_only_action_names_the_side_panels_robot_and_marks_that_one(qtb
         assert "view only" not in chips.chips["r-1"].text()
     finally:
         win.shutdown()
+
+
+def test_a_robot_marked_view_only_in_the_robots_dialog_is_refused_on_its_link(qtbot, tmp_path, sim_thread):
+    sim = sim_thread
+    win = open_window(qtbot, tmp_path, entry_point_plugins(), url=sim.url, wait_connected=True)
+    try:
+        robot = win.doc.workspace.robots[0]
+        dialog = win.fleet_ui.open_robots_dialog()
+        dialog.set_row(0, view_only=True)  # the robot's own box, as ticking it would
+        dialog.accept()
+        assert win.doc.workspace.robots[0].view_only
+        guard = win.link.client.guard
+        assert guard.reason == f"robot “{robot.label}” at {sim.url} is view-only"
+        win.doc.set_robots([Robot(robot.id, robot.name, url=robot.url)])  # unticked (undoable, no PIN here)
+        assert not guard.view_only
+    finally:
+        win.shutdown()
