@@ -295,3 +295,21 @@ def test_a_mark_needs_its_reason_in_words():
     guard = G.LinkGuard("ws://x")
     with pytest.raises(ValueError, match="reason"):
         guard.set_view_only("  ")
+
+
+async def test_a_call_waiting_for_the_link_when_the_mark_is_set_is_refused_not_sent(sim):
+    client = BridgeClient(sim.url, reconnect=True, call_timeout=5)
+    connecting = asyncio.ensure_future(client.connect(timeout=10))
+    try:
+        await asyncio.sleep(0)
+        call = asyncio.ensure_future(client.call_service("/lights/set", {"data": True}))
+        await asyncio.sleep(0)  # checked (not view-only yet), now waiting for the link
+        assert not call.done()
+        client.guard.set_view_only(REASON)
+        await connecting
+        with pytest.raises(ViewOnlyError, match="The call to /lights/set was not sent: robot “Boat”"):
+            await asyncio.wait_for(call, 4)  # at once, not after the call's timeout
+        await all_received(client)
+        assert changing(connection_of(sim, client).ops_received) == {}
+    finally:
+        await client.close()

@@ -54,7 +54,7 @@ from rcon_core.msgs import names
 from .action_server import ProvidedActions
 from .errors import BridgeError, ConnectionLostError, ServiceError, ServiceTimeoutError
 from .goals import Goals
-from .guard import LinkGuard
+from .guard import LinkGuard, ViewOnlyError, describe_call
 from .inbound import BadFrames
 from .protocol import encode
 from .safety import bounded_repr, safe_text
@@ -404,7 +404,8 @@ class Session:
             async with asyncio.timeout(budget):
                 await self.host.wait_connected()
                 self.pending[cid] = fut
-                self.send(op)
+                if not self.send(op) and self.guard.view_only:  # marked while it waited for the link
+                    raise ViewOnlyError(self.guard.sentence(describe_call(name, args)))
                 return await fut
         except TimeoutError:
             raise ServiceTimeoutError(f"no answer within {budget:g} s", name) from None
