@@ -17,13 +17,15 @@ from .errors import (
     ServiceError,
     ServiceTimeoutError,
 )
+from .guard import LinkGuard, ViewOnlyError
 from .nodes import ActionGoal, GoalStatus, Node, Publisher, ServiceServer, Subscription
 from .params import ParamNotFoundError, ParamRejectedError
 from .rosinfo import RosInfo
 
 __all__ = [
-    "ActionError", "ActionGoal", "ActionNoAnswerError", "ActionServer", "ActionTimeoutError", "AuthRefusedError", "BridgeClient",
-    "BridgeError", "ConnectionLostError", "ConnectionState", "GoalStatus", "LinkSettingsError", "Node",
-    "NotConnectedError", "ParamNotFoundError", "ParamRejectedError", "ProtocolError", "Publisher", "RosInfo",
-    "RosapiRefusedError", "ServedGoal", "ServiceError", "ServiceServer", "ServiceTimeoutError", "Subscription",
+    "ActionError", "ActionGoal", "ActionNoAnswerError", "ActionServer", "ActionTimeoutError", "AuthRefusedError",
+    "BridgeClient", "BridgeError", "ConnectionLostError", "ConnectionState", "GoalStatus", "LinkGuard",
+    "LinkSettingsError", "Node", "NotConnectedError", "ParamNotFoundError", "ParamRejectedError", "ProtocolError",
+    "Publisher", "RosInfo", "RosapiRefusedError", "ServedGoal", "ServiceError", "ServiceServer",
+    "ServiceTimeoutError", "Subscription", "ViewOnlyError",
 ]

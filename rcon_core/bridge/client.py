@@ -69,6 +69,7 @@ from . import rosapi_guard
 from .action_server import ProvidedActions
 from .errors import AuthRefusedError, NotConnectedError, RosapiRefusedError, ServiceError
 from .freshness import LinkWatch, watch_link
+from .guard import LinkGuard
 from .inbound import BadFrames, Inbound
 from .nodes import Node
 from .params import Params
@@ -193,6 +194,11 @@ class BridgeClient:
     @property
     def connected(self) -> bool:
         return self.link is not None
+
+    @property
+    def guard(self) -> LinkGuard:
+        """Whether this link is view-only (``guard.set_view_only(reason)``, any thread; see ``guard.py``)."""
+        return self.session.guard
 
     @property
     def provided_actions(self) -> ProvidedActions:

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 from .errors import BridgeError
 from .freshness import AUTO, resolve_max_age
+from .guard import ViewOnlyError
 from .protocol import COMPRESSIONS
 
 if TYPE_CHECKING:
@@ -215,8 +216,10 @@ class ActionGoal:
         return await asyncio.wait_for(asyncio.shield(self._future), timeout)
 
     def cancel(self) -> None:
-        """Ask the server to cancel the goal (the result arrives as usual, with status CANCELED)."""
+        """Ask the server to cancel the goal (the result arrives as usual, with status CANCELED).  Raises
+        ``ViewOnlyError`` when the link was marked view-only since the goal was sent (``guard.py``)."""
         if not self._future.done():
+            self.node.session.guard.check(f"cancelling the goal to {self.action}")
             self.cancel_requested = True
             self.node.session.goals.cancel(self)
 
@@ -344,6 +347,7 @@ class Node:
         if answer_timeout is not None and (isinstance(answer_timeout, bool) or not isinstance(answer_timeout, int | float)
                                            or not answer_timeout > 0):
             raise ValueError(f"answer_timeout must be a positive number of seconds, got {answer_timeout!r}")
+        self.session.guard.check(f"the goal to {action}")  # ViewOnlyError on a view-only link
         goal = self.session.goals.send(self, action, action_type, args, feedback, timeout, check, answer_timeout)
         self.goals.add(goal)
         goal.add_done_callback(self.goals.discard)
@@ -371,6 +375,9 @@ class Node:
         for action in list(self.action_servers):
             action.unadvertise()
         for g in list(self.goals):
-            g.cancel()
+            try:
+                g.cancel()
+            except ViewOnlyError:  # a view-only link sends no cancel either (guard.py)
+                pass
         self.closed = True
         self.session.node_closed(self)

@@ -35,6 +35,12 @@ Decision: service calls
     while reconnecting waits for the link inside the same budget.  Calls waiting when the link drops fail
     with ``ConnectionLostError``.  ``result: false`` raises ``ServiceError`` carrying the server's string.
 
+Decision: a view-only link (``guard.py``)
+    ``self.guard`` (``client.guard``) decides what a view-only link may send: :meth:`publish` and
+    :meth:`call_service` refuse with ``ViewOnlyError`` before anything is written, every frame of
+    :meth:`send` passes ``guard.admit``, and setting or lifting the mark withdraws or offers again this
+    link's advertisements, services and actions (:meth:`_guard_changed`).
+
 What the session needs of its host (the client), by public names only: ``url``, ``call_timeout``,
 ``registry``, ``rosapi``, ``ros_version``, ``stats`` and ``await wait_connected()``.
 """
@@ -53,6 +59,7 @@ from rcon_core.msgs import names
 from .action_server import ProvidedActions
 from .errors import BridgeError, ConnectionLostError, ServiceError, ServiceTimeoutError
 from .goals import Goals
+from .guard import LinkGuard, ViewOnlyError, describe_call
 from .inbound import BadFrames
 from .protocol import encode
 from .safety import bounded_repr, safe_text
@@ -116,6 +123,9 @@ class Session:
         self.goals = Goals(self.send, self.spawn, host)
         self.provided_actions = ProvidedActions(self.send)  # actions this client serves (ROS 2)
         self.subscriber = Subscriber(self, host)
+        #: whether this link is view-only, and what it offered the robot (``guard.py``)
+        self.guard = LinkGuard(host.url)
+        self.guard.add_listener(self._guard_changed)
         self._status_listeners: list[Callable[[dict[str, Any]], None]] = []
         self._ops: dict[str, Callable[[dict[str, Any]], None]] = {
             "publish": self._on_publish, "service_response": self._on_service_response,
@@ -133,7 +143,7 @@ class Session:
     def send(self, op: dict[str, Any]) -> bool:
         """Send one frame on the current link; False when there is none."""
         link = self.link
-        if link is None:
+        if link is None or not self.guard.admit(op):
             return False
         link.write(encode(op))
         return True
@@ -158,15 +168,15 @@ class Session:
     def attached(self, link: Link) -> None:
         """A fresh connection (after the client sent ``auth``): restore everything rosbridge forgot."""
         self.link = link
+        self.guard.attached(asyncio.get_running_loop())
         if self.level is not None:
             self.send({"op": "set_level", "level": self.level})
         for advert in self.adverts.values():
             advert.active = False
-            self.send(advert.advertise_op())
-            advert.active = True
-            if advert.pending is not None:
+            advert.active = self.send(advert.advertise_op())  # not on a view-only link (guard.py)
+            if advert.pending is not None and advert.active:
                 link.write(b"".join((advert.head, _dumps(advert.pending, option=_NUMPY), advert.tail)))
-                advert.pending = None
+            advert.pending = None
         self.services.restore()
         self.provided_actions.restore()
         for topic in self.topics.values():
@@ -193,6 +203,25 @@ class Session:
         self.unanswered.clear()
         self.goals.disconnected()
         self.provided_actions.disconnected()
+
+    def _guard_changed(self, view_only: bool) -> None:
+        """The link was marked view-only (withdraw what it offered the robot) or the mark was lifted
+        (offer it again); on the loop thread."""
+        if self.link is None:
+            return  # the next connection restores under the mark as it is then
+        if view_only:
+            for op in self.guard.withdrawals():
+                self.send(op)
+            for advert in self.adverts.values():
+                advert.active = False
+                advert.pending = None
+            self.provided_actions.disconnected()  # goals being served end (their results are not sent)
+            return
+        for advert in self.adverts.values():
+            if not advert.active:
+                advert.active = self.send(advert.advertise_op())
+        self.services.restore()
+        self.provided_actions.restore()
 
     # ================================================================== events in
 
@@ -317,8 +346,7 @@ class Session:
         entry.pubs.append(pub)
         changed = entry.merge()
         if self.link is not None and (not entry.active or changed):
-            self.send(entry.advertise_op())
-            entry.active = True
+            entry.active = self.send(entry.advertise_op())  # False on a view-only link
 
     def remove_publisher(self, pub: Publisher) -> None:
         entry = self.adverts.get(pub.topic)
@@ -333,7 +361,10 @@ class Session:
         entry.merge()
 
     def publish(self, pub: Publisher, msg: dict[str, Any]) -> bool:
-        """Write one message now, or drop it (counted) -- see "publishing while the link is down"."""
+        """Write one message now, or drop it (counted) -- see "publishing while the link is down".
+        Raises ``ViewOnlyError`` on a view-only link."""
+        if self.guard.reason is not None:
+            raise self.guard.refuse(f"publishing on {pub.topic}")
         entry = self.adverts[pub.topic]
         link = self.link
         if link is not None and entry.active:
@@ -371,6 +402,7 @@ class Session:
             raise ValueError(f"service name must be a non-empty string, got {name!r}")
         if args is not None and not isinstance(args, dict | list):
             raise TypeError(f"args must be a dict or list, got {type(args).__name__}")
+        self.guard.check_call(name, args)  # ViewOnlyError on a view-only link, unless it only reads
         budget = self.host.call_timeout if timeout is None else timeout
         cid = self.next_id("call", name)
         op: dict[str, Any] = {"op": "call_service", "id": cid, "service": name}
@@ -384,7 +416,8 @@ class Session:
                 await self.host.wait_connected()
                 self.pending[cid] = fut
                 self._pending_names[cid] = name
-                self.send(op)
+                if not self.send(op) and self.guard.view_only:  # marked while it waited for the link
+                    raise ViewOnlyError(self.guard.sentence(describe_call(name, args)))
                 return await fut
         except TimeoutError:
             before = list(self._pending_names)[: list(self._pending_names).index(cid)] \

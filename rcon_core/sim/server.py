@@ -395,7 +395,9 @@ class SimServer:
             return
         op = msg["op"]
         target = msg.get("topic") or msg.get("service") or msg.get("action") or ""
-        self.ops_received[(str(op), target if isinstance(target, str) else "")] += 1
+        key = (str(op), target if isinstance(target, str) else "")
+        self.ops_received[key] += 1
+        conn.ops_received[key] += 1
         handler = self._ops().get(op) if isinstance(op, str) else None
         if handler is None:
             log.error("%s [id: %s] Unknown operation: %s.  Allowed operations: %s", conn.label, msg.get("id"),
