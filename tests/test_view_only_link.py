@@ -166,7 +166,7 @@ def connection_of(sim: Any, client: BridgeClient) -> Any:
 def changing(ops: Counter) -> dict[tuple[str, str], int]:
     """The ops in ``ops`` that are not reads (``auth``, ``subscribe``... and read-only rosapi calls)."""
     return {k: n for k, n in ops.items() if n and k[0] not in G.READ_OPS
-            and not (k[0] == "call_service" and k[1] in G.READ_ONLY_SERVICES)}
+            and not (k[0] == "call_service" and G.read_only_service(k[1]))}
 
 
 async def all_received(client: BridgeClient) -> None:
@@ -313,3 +313,18 @@ async def test_a_call_waiting_for_the_link_when_the_mark_is_set_is_refused_not_s
         assert changing(connection_of(sim, client).ops_received) == {}
     finally:
         await client.close()
+
+
+async def test_a_view_only_ros2_link_reads_parameters_through_the_nodes_but_never_sets_one(sim_ros2):
+    """On ROS 2 ``client.params`` reads through each node's ``list_parameters``/``get_parameters`` (never
+    rosapi's parameter calls, which kill rosapi 2.1.0): a view-only robot's Parameters panel still shows its
+    parameters, and ``set_parameters`` stays refused before it is written."""
+    async with _client(sim_ros2, view_only=True) as monitor:
+        assert "/kingfisher:max_speed" in (await monitor.params.by_owner())["/kingfisher"]
+        assert await monitor.params.get("/kingfisher:max_speed") == 2.0
+        with pytest.raises(ViewOnlyError, match="robot “Boat”"):
+            await monitor.params.set("/kingfisher:max_speed", 5.0)
+        await all_received(monitor)
+        assert not changing(connection_of(sim_ros2, monitor).ops_received)
+    async with _client(sim_ros2) as operator:
+        assert await operator.params.get("/kingfisher:max_speed") == 2.0  # the robot kept its value

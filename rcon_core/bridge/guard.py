@@ -11,7 +11,8 @@ Decision: enforced in the bridge, below every user of the link
     its context all end in the same :class:`~rcon_core.bridge.session.Session`, so the rule sits there.
     The public calls refuse at once with :class:`ViewOnlyError` (a ``PermissionError``) carrying the
     sentence: ``publish``, ``call_service`` (except the read-only rosapi queries in
-    :data:`READ_ONLY_SERVICES`, which the app needs to list topics and learn types), ``send_action_goal``
+    :data:`READ_ONLY_SERVICES`, which the app needs to list topics and learn types, and a ROS 2 node's
+    parameter reads, :data:`READ_ONLY_NODE_SERVICES`, through which the Parameters panel shows them), ``send_action_goal``
     and a goal's ``cancel``.  ``advertise``, ``advertise_service`` and ``advertise_action`` are kept by
     the client but not offered to the robot until the mark is lifted.  Under them, every frame the
     session writes passes :meth:`LinkGuard.admit` (the backstop): a frame of a changing op
@@ -39,7 +40,7 @@ from typing import Any
 
 from .errors import BridgeError
 
-__all__ = ["LinkGuard", "ViewOnlyError", "READ_ONLY_SERVICES", "READ_OPS", "WITHDRAW_OPS", "CHANGE_OPS",
+__all__ = ["LinkGuard", "ViewOnlyError", "READ_ONLY_SERVICES", "read_only_service", "READ_OPS", "WITHDRAW_OPS", "CHANGE_OPS",
            "OUTGOING_OPS"]
 
 log = logging.getLogger(__name__)
@@ -56,6 +57,16 @@ READ_ONLY_SERVICES = frozenset(
         "has_param", "search_param", "get_param_names", "get_time", "get_ros_version",
     )
 )
+
+#: the read-only parameter services every ROS 2 node serves (``rcl_interfaces/srv/*``): how ``client.params``
+#: reads a ROS 2 robot's parameters (``params_ros2.py``); ``set_parameters*`` stay refused
+READ_ONLY_NODE_SERVICES = ("/list_parameters", "/get_parameters", "/describe_parameters", "/get_parameter_types")
+
+
+def read_only_service(name: Any) -> bool:
+    """True for a service a view-only link may call: a read-only rosapi query or a node's parameter read."""
+    return isinstance(name, str) and (name in READ_ONLY_SERVICES or name.endswith(READ_ONLY_NODE_SERVICES))
+
 
 #: ops that never change the robot
 READ_OPS = frozenset({"auth", "subscribe", "unsubscribe", "set_level"})
@@ -98,6 +109,12 @@ def describe_call(name: str, args: Any) -> str:
         return f"setting parameter {param}"
     if name == "/rosapi/delete_param" and isinstance(param, str):
         return f"deleting parameter {param}"
+    if name.endswith("/set_parameters") and isinstance(args, dict):  # a ROS 2 node's own (params_ros2.py)
+        items = [p for p in args.get("parameters") or [] if isinstance(p, dict) and isinstance(p.get("name"), str)]
+        if len(items) == 1:
+            value = items[0].get("value")
+            verb = "deleting" if isinstance(value, dict) and value.get("type") == 0 else "setting"
+            return f"{verb} parameter {name[: -len('/set_parameters')]}:{items[0]['name']}"
     return f"the call to {name}"
 
 
@@ -188,7 +205,7 @@ class LinkGuard:
 
     def check_call(self, name: str, args: Any = None) -> None:
         """Raise when calling service ``name`` would change a view-only robot (read-only rosapi passes)."""
-        if self.reason is not None and name not in READ_ONLY_SERVICES:
+        if self.reason is not None and not read_only_service(name):
             raise self.refuse(describe_call(name, args))
 
     def admit(self, op: dict[str, Any]) -> bool:
@@ -211,7 +228,7 @@ class LinkGuard:
             return self.reason is None  # a view-only link offered nothing of that name: nothing to send
         if kind in READ_OPS or self.reason is None:
             return True
-        if kind == "call_service" and op.get("service") in READ_ONLY_SERVICES:
+        if kind == "call_service" and read_only_service(op.get("service")):
             return True
         words = _WORDS.get(kind, "the op {}") if isinstance(kind, str) else "a frame {}"
         self.refuse(words.format(_target(op) or repr(kind)[:40]))

@@ -40,7 +40,7 @@ import logging
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from rcon_core.bridge.guard import READ_ONLY_SERVICES, ViewOnlyError
+from rcon_core.bridge.guard import READ_ONLY_SERVICES, ViewOnlyError, read_only_service
 
 if TYPE_CHECKING:
     from .fleet import BridgeNode
@@ -196,7 +196,7 @@ def _operations(port: GuardedPort, node: BridgeNode, notify: Callable[[], None] 
         return _Publisher(lambda msg: pub.publish(msg), lambda: pub.unadvertise())
 
     async def call_service(name: str, args: Any, timeout: float | None) -> Any:
-        if view_only is not None and name not in READ_ONLY_SERVICES:
+        if view_only is not None and not read_only_service(name):
             raise ViewOnlyError(refuse(f"the call to {name}"))
         try:
             return await node.call_service(name, args, timeout=timeout)
