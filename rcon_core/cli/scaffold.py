@@ -19,10 +19,10 @@ version = "0.1.0"
 description = "RCON widget: {title}"
 readme = "README.md"
 requires-python = ">=3.11"
-dependencies = ["rcon>=0.1"]
+dependencies = ["rcon-core>=0.1"]
 
 [project.optional-dependencies]
-test = ["rcon[test]"]
+test = ["rcon-core[test]"]
 
 [project.entry-points."rcon.widgets"]
 {ep} = "{module}.plugin"
