@@ -251,11 +251,27 @@ class _Handle:
 
 class RecordingPort:
     """A bridge port that reaches no robot: subscriptions stay silent, publishes and calls are recorded
-    (``published``: (topic, msg); ``calls``: (service, args)), so a model can be built for a view test."""
+    (``published``: (topic, msg); ``calls``: (service, args)), so a model can be built for a view test.
+
+    Service calls answer what the test scripts with :meth:`answer` (else ``{}``)::
+
+        port = RecordingPort()
+        port.answer("/pump/set", {"success": True, "message": "on"}, {"success": False, "message": "dry"})
+        port.answer("/pump/set", lambda args: {"success": args["on"], "message": ""})   # computed
+        port.answer("/dock", TimeoutError("no answer"))                                # raised by the call
+    """
 
     def __init__(self) -> None:
         self.published: list[tuple[str, dict[str, Any]]] = []
         self.calls: list[tuple[str, Any]] = []
+        self._answers: dict[str, list[Any]] = {}
+
+    def answer(self, service: str, *answers: Any) -> None:
+        """Script the answers of ``service``, played one per call in order; the last one repeats. An answer
+        is a response dict, a function of the request that returns one, or an exception to raise."""
+        if not answers:
+            raise ValueError("answer() needs at least one answer")
+        self._answers[service] = list(answers)
 
     def subscribe(self, topic: str, callback: Callable[[dict[str, Any]], Any], **options: Any) -> _Handle:
         return _Handle()
@@ -268,7 +284,15 @@ class RecordingPort:
 
     async def call_service(self, name: str, args: Any = None, timeout: float | None = None) -> dict[str, Any]:
         self.calls.append((name, args))
-        return {}
+        queue = self._answers.get(name)
+        if not queue:
+            return {}
+        answer = queue.pop(0) if len(queue) > 1 else queue[0]
+        if isinstance(answer, BaseException):
+            raise answer
+        if callable(answer):
+            answer = answer(args)
+        return dict(answer)
 
     def close(self) -> None:
         pass

@@ -74,6 +74,8 @@ def _plugins(pm: Any, args: argparse.Namespace) -> int:
             print(f"  type {d.name} ({d.kind})")
         for t in info.templates:
             print(f"  template {t.title!r} ({t.path.name})")
+        for problem in info.problems:
+            print(f"  problem: {problem}")
     return status
 
 
@@ -81,6 +83,9 @@ def _check(pm: Any, types: Any) -> int:
     """``--check``: each failed plugin and why on stderr (also a contributed type that does not resolve);
     1 if any failed, else 0."""
     unresolved = pm.type_problems(types)
+    for info in pm.plugins:  # withdrawn parts of a loaded plugin (a template file the wheel lacks)
+        if info.problems:
+            unresolved.setdefault(info.name, []).extend(info.problems)
     for template in pm.canvas_templates():  # a template file must be a usable canvas
         from rcon_core.cli.layout_cmd import check_layout
 
