@@ -80,7 +80,20 @@ def main(argv: list[str] | None = None) -> int:
         print(args.command_unavailable, file=sys.stderr)
         return 2
     module = importlib.import_module(COMMANDS[args.command][0])
-    return int(module.run(args.command, args) or 0)
+    try:
+        return int(module.run(args.command, args) or 0)
+    except BrokenPipeError:  # the reader went away (`rcon type X | head`): stop quietly, as `head` means
+        _silence_stdout()
+        return 0
+
+
+def _silence_stdout() -> None:
+    """Point stdout at the null device, so the interpreter's last flush does not fail again."""
+    import os
+
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    os.close(devnull)
 
 
 if __name__ == "__main__":
