@@ -73,7 +73,26 @@ def test_the_widget_packages_are_found_through_their_entry_points(env):
     kinds = {w["kind"] for p in plugins.values() for w in p["widgets"]}
     assert {"std.button", "sensors.image", "sensors.teleop", "map.gps"} <= kinds
     folder = run(env, "plugins", "folder")  # the frozen app has a plugins folder of its own
-    assert folder.stdout.strip() == str(Path(env["XDG_DATA_HOME"]) / "rcon" / "plugins")
+    if sys.platform.startswith("linux"):
+        assert folder.stdout.strip() == str(Path(env["XDG_DATA_HOME"]) / "rcon" / "plugins")
+    else:  # Windows: %LOCALAPPDATA%\rcon\plugins, found through the shell, not the environment
+        assert Path(folder.stdout.strip()).parts[-2:] == ("rcon", "plugins")
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="X11's xcb libraries are a Linux matter")
+def test_the_x11_platform_plugin_finds_every_library_it_needs():
+    """Qt's xcb platform plugin (a Linux desktop) needs xcb libraries that PyInstaller copies from the
+    build machine: where that machine lacks one (a fresh Debian lacked libxcb-icccm4 and libxcb-keysyms1),
+    the bundle lacks it too and the app cannot open a window on a tablet that lacks it as well."""
+    internal = BUNDLE / "_internal"
+    plugin = next(internal.rglob("platforms/libqxcb.so"))
+    env = dict(os.environ, LD_LIBRARY_PATH=str(internal))
+    missing = []
+    for lib in (plugin, *internal.rglob("libQt6XcbQpa.so*")):
+        out = subprocess.run(["ldd", str(lib)], capture_output=True, text=True, env=env, timeout=60).stdout
+        missing += [line.split()[0] for line in out.splitlines() if "not found" in line]
+    assert not missing, (f"the xcb platform plugin lacks {sorted(set(missing))}: install them on the build "
+                         "machine (apt install libxcb-icccm4 libxcb-keysyms1) and build again")
 
 
 def test_the_demo_opens_and_draws(env, tmp_path):
@@ -97,6 +116,7 @@ def test_a_labs_wheel_goes_into_the_plugins_folder_and_its_template_opens(env, t
                             str(tmp_path / "wheels"), str(source)], capture_output=True, text=True, timeout=300)
     assert built.returncode == 0, built.stderr
     [wheel] = (tmp_path / "wheels").glob("*.whl")
+    env["RCON_PLUGINS_DIR"] = str(tmp_path / "plugins")  # not the machine user's folder
     done = run(env, "plugins", "install", str(wheel))
     assert done.returncode == 0, done.stderr
     assert "installed rcon-example-lab 0.3.1 into" in done.stdout and "lab.gripper" in done.stdout
