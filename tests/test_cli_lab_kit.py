@@ -83,11 +83,10 @@ def test_type_recursive_writes_nested_fields_out(sim_url, capsys):
         assert rc == 0
         lines = out.splitlines()
         at = lines.index("geometry_msgs/Quaternion orientation")
-        # the field type's spelling is the source's (float64, or a ROS 2 robot's double)
-        assert [line.split()[-1] for line in lines[at + 1:at + 5]] == ["x", "y", "z", "w"]
+        # the field type's spelling is the source's: this ROS 1 robot's float64, as local ROS 1 text
+        assert lines[at + 1:at + 5] == ["  float64 x", "  float64 y", "  float64 z", "  float64 w"]
         assert all(line.startswith("  ") and not line.startswith("   ") for line in lines[at + 1:at + 5])
         assert "MSG:" not in out
-    assert lines[at + 1:at + 5] == ["  float64 x", "  float64 y", "  float64 z", "  float64 w"]
     rc, out, _ = run(capsys, "type", "std_srvs/SetBool", "-r", "--url", "ws://127.0.0.1:9")
     assert (rc, out) == (0, "bool data\n---\nbool success\nstring message\n")
     rc, out, _ = run(capsys, "type", "geometry_msgs/Twist", "--url", "ws://127.0.0.1:9")  # without: as before
@@ -138,3 +137,14 @@ def test_layout_validate_checks_type_fit_and_field_paths(tmp_path, capsys):
     [srv] = about(srv_field)
     assert srv.startswith("field 'request.dat': ")
     assert len(problems) == 5
+
+
+def test_type_json_from_a_ros1_robot_keeps_its_spelling(sim_url, capsys):
+    """Found merging the ROS 2 work: the robot's .msg text was read into a ROS 2 registry whenever the quick
+    rosapi profile could not tell the ROS (it cannot on rosapi 0.11), so a ROS 1 robot's typedefs came out
+    as ``double`` and ``builtin_interfaces/Time``."""
+    rc, out, _ = run(capsys, "type", "sensor_msgs/NavSatFix", "--json", "--url", sim_url)
+    assert rc == 0
+    typedefs = {td["type"]: td for td in json.loads(out)["typedefs"]}
+    assert typedefs["sensor_msgs/NavSatFix"]["fieldtypes"][2:5] == ["float64"] * 3
+    assert "time" in typedefs["std_msgs/Header"]["fieldtypes"]
