@@ -46,6 +46,7 @@ import orjson
 from rcon_core.msgs import names
 
 from .action_server import ProvidedActions
+from .envelope import Envelope, enforce
 from .errors import BridgeError, ConnectionLostError, ServiceError, ServiceTimeoutError
 from .goals import Goals
 from .inbound import BadFrames
@@ -102,6 +103,8 @@ class Session:
         self.adverts: dict[str, AdvertEntry] = {}
         self.pending: dict[str, asyncio.Future[Any]] = {}  # service calls waiting for their answer
         self.level: str | None = None
+        #: the robot's safety envelope (``envelope.py``): every publish is held to it (``client.envelope``)
+        self.envelope: Envelope | None = None
         self.tasks: set[asyncio.Task[Any]] = set()
         self._seq = 0
         self.services = ProvidedServices(self.send, self.spawn, host)
@@ -322,8 +325,10 @@ class Session:
         entry.merge()
 
     def publish(self, pub: Publisher, msg: dict[str, Any]) -> bool:
-        """Write one message now, or drop it (counted) -- see "publishing while the link is down"."""
+        """Write one message now, or drop it (counted) -- see "publishing while the link is down". A motion
+        command is first held to the safety envelope (``envelope.py``; raises ``EnvelopeRefused``)."""
         entry = self.adverts[pub.topic]
+        msg = enforce(self.envelope, entry.type, msg, self.stats)
         link = self.link
         if link is not None and entry.active:
             data = b"".join((entry.head, _dumps(msg, option=_NUMPY), entry.tail))
