@@ -50,7 +50,7 @@ from rcon_core.plugins.paths import PathError, get_path, parse_path, set_path, s
 
 from .base import StdModel
 from .button import CallStatus, describe_response
-from .common import RateLimiter, field_at
+from .common import RateLimiter, field_at, held_to_envelope
 
 __all__ = ["ChildSpec", "CompoundSettings", "CompoundModel", "Child", "CompoundValue", "find_spec"]
 
@@ -219,6 +219,11 @@ class ChildPort:
     def __init__(self, compound: CompoundModel, child: Child | None = None) -> None:
         self.compound = compound
         self.child = child
+
+    @property
+    def envelope(self) -> Any:
+        """The robot's safety envelope, as the compound's own port tells it (a child's range follows it)."""
+        return getattr(self.compound.port, "envelope", None)
 
     def advertise(self, topic: str, type: str, **options: Any) -> _Captured:
         assert self.child is not None
@@ -434,8 +439,13 @@ class CompoundModel(StdModel):
                 self.set_error(f"not {verb}: " + "; ".join(blocked))
                 return
         if role is Role.PUBLISH:
-            if self.publish(self.composed()):
-                self._status = CallStatus("ok", self.binding.name, "published", time.time(), 0.0)
+            msg, note = held_to_envelope(self.port, self.binding.type, self.composed())
+            if msg is None:  # NaN or infinity in a motion command: never sent
+                self.set_error(note)
+                return
+            if self.publish(msg):
+                self._status = CallStatus("ok", self.binding.name, f"published, {note}" if note else "published",
+                                          time.time(), 0.0)
                 self._show_state()
         elif role is Role.CALL:
             self._status = CallStatus("busy", self.binding.name, "", time.time())

@@ -48,6 +48,11 @@ class StepperModel(NumericModel):
     def shown_number(self) -> float | int:
         return self.current
 
+    @property
+    def in_compound(self) -> bool:
+        """A Compound's child: it shows the number the compound will send (the start value until stepped)."""
+        return bool(getattr(self.port, "composes", False))
+
     def up(self) -> float | int:
         return self.set_to(self.current + self.range.step)
 
