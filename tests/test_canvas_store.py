@@ -308,7 +308,7 @@ def test_version_2_files_of_this_build_load_and_the_current_format_round_trips(t
     ('[{"name": "no id"}]', "required field missing at robots[0].id"),
     ('"r-1"', "robots"),
     ('[{"id": "a", "envelope": {"max_linear": 999999999999}}]',
-     "the maximum linear speed must be more than 0 and at most 100 m/s, not 1.000e+12 at robots[0].envelope"),
+     "the maximum linear speed must be more than 0 and at most 100 m/s, not 1e+12 at robots[0].envelope"),
     ('[{"id": "a", "envelope": {"max_linear": -1}}]', "more than 0"),
     ('[{"id": "a", "envelope": {"max_angular": "fast"}}]', "must be a number"),
     ('[{"id": "a", "envelope": {"speed": 1}}]', "unknown keys speed"),

@@ -35,6 +35,7 @@ from rcon_core.app.frame_clock import FrameClock, Waker
 from rcon_core.app.layout_file import LayoutFile
 from rcon_core.app.link import Link
 from rcon_core.app.live import LiveCanvas
+from rcon_core.app.envelope_dialog import install as install_envelope
 from rcon_core.app.lock_controls import install as install_lock_controls
 from rcon_core.app.notice_bar import NoticeBar
 from rcon_core.app.operator_lock import OperatorLock
@@ -255,6 +256,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if isinstance(app, QtGui.QGuiApplication):
             app.applicationStateChanged.connect(self._app_state_changed)
         install_lock_controls(self)  # the operator lock's and the view-only controls
+        install_envelope(self)  # Canvas ▾ → Safety envelope… (the PIN first while locked)
         self.resize(self.initial_size())
 
     # ------------------------------------------------------------------------------------ workspace

@@ -73,7 +73,7 @@ def motion_path(type_name: str, path: str) -> tuple[str, str] | None:
 
 
 def _fmt(v: float) -> str:
-    return f"{v:.3g}" if abs(v) < 1e6 else f"{v:.3e}"
+    return f"{v:.3g}"
 
 
 @attrs.frozen

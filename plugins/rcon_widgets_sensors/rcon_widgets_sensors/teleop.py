@@ -148,7 +148,7 @@ class TeleopValue:
     sent: int = 0
     reason: str = ""
     #: what holds the command at the pad's edge below the pad's own maximum ("" when nothing does):
-    #: "safety envelope 1 m/s", "speed limit 0.5 m/s"
+    #: "≤ 1 m/s, 0.5 rad/s (safety envelope)", "≤ 0.5 m/s (speed limit)"
     held: str = ""
     #: nobody subscribes to the pad's topic: what the pad says instead of pretending to drive ("" otherwise)
     unheard: str = ""
@@ -291,25 +291,29 @@ class TeleopModel(WidgetModel):
 
     def limits(self) -> tuple[float, float, str]:
         """(linear, angular, what holds them) at the pad's edge: the pad's own maximum, lowered to the
-        robot's safety envelope and, for linear, to the robot's speed limit; the words say which holds
-        ("" when the pad's own maximum does)."""
+        robot's safety envelope and, for linear, to the robot's speed limit. The words say what holds,
+        compactly ("≤ 1 m/s, 0.5 rad/s (safety envelope)"; "" when the pad's own maximum does)."""
         s = self.settings
-        linear, angular, held = float(s.max_linear), float(s.max_angular), []
+        linear, angular = float(s.max_linear), float(s.max_angular)
+        lin_by = ang_by = ""
         env = getattr(self.port, "envelope", None)
         if env is not None:
             lin_env = getattr(env, "max_linear", None)
             ang_env = getattr(env, "max_angular", None)
             if lin_env is not None and lin_env < linear:
-                linear = float(lin_env)
-                held.append(f"safety envelope {lin_env:g} m/s")
+                linear, lin_by = float(lin_env), "safety envelope"
             if ang_env is not None and ang_env < angular:
-                angular = float(ang_env)
-                held.append(f"safety envelope {ang_env:g} rad/s")
+                angular, ang_by = float(ang_env), "safety envelope"
         limit = self._speed_limit
         if limit is not None and limit < linear:
-            linear = limit
-            held = [h for h in held if "m/s" not in h] + [f"speed limit {limit:g} m/s"]
-        return linear, angular, ", ".join(held)
+            linear, lin_by = limit, "speed limit"
+        groups: dict[str, list[str]] = {}
+        if lin_by:
+            groups.setdefault(lin_by, []).append(f"{linear:g} m/s")
+        if ang_by:
+            groups.setdefault(ang_by, []).append(f"{angular:g} rad/s")
+        held = ", ".join(f"{', '.join(parts)} ({by})" for by, parts in groups.items())
+        return linear, angular, f"≤ {held}" if held else ""
 
     def command_for(self, x: float, y: float) -> dict[str, float]:
         """Field path -> value for a finger at (x, y) (raw pad coordinates, -1..1, y up): what is sent."""

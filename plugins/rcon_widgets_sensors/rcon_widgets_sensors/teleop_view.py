@@ -338,5 +338,7 @@ class TeleopView(QtWidgets.QWidget):
             parts = [f"{path.rsplit('.', 2)[-2] + '.' if '.' in path else ''}{path.rsplit('.', 1)[-1]} "
                      f"{val:+.2f}" for path, val in v.command]
             return ("  ".join(parts) or "driving") + held
+        if v.held:  # the limit matters more than the rate on a narrow pad
+            return f"touch to drive {v.held}"
         rate = getattr(self.model.settings, "rate_hz", 0)
-        return f"idle · touch to drive ({rate:g} Hz){held}"
+        return f"idle · touch to drive ({rate:g} Hz)"

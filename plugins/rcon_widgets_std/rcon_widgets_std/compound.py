@@ -98,6 +98,25 @@ class CompoundSettings:
             out.append("columns must be between 1 and 6")
         return out
 
+    def commands(self, binding: Binding) -> list[tuple[str, float]]:
+        """What the input children may send, each at its path in the compound's message (a slider child on
+        ``linear.x`` up to 5: ``("linear.x", 5.0)``): checked against the robot's safety envelope."""
+        if binding.role is not Role.PUBLISH:
+            return []
+        out: list[tuple[str, float]] = []
+        for c in self.children:
+            spec = _spec_or_none(c.kind)
+            if spec is None:
+                continue
+            try:
+                settings = spec.make_settings(c.settings)
+                commands = getattr(settings, "commands", None)
+                if callable(commands):
+                    out += commands(Binding(binding.name, binding.type, Role.PUBLISH, (c.field_path,)))
+            except Exception:  # a child's bad settings are its own problem, said elsewhere
+                continue
+        return out
+
     def preferred_size(self) -> tuple[float, float]:
         """The size (w, h) a new Compound with these children should be placed at, so that no child is
         squeezed: the children in ``columns`` columns, each as large as its own kind's default size (a

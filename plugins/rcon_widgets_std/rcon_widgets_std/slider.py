@@ -59,6 +59,22 @@ class SliderSettings:
             else [f"publish must be {PUBLISH_ON_RELEASE!r} or {PUBLISH_CONTINUOUS!r}, not {self.publish_mode!r}"]
         )
 
+    def commands(self, binding: Any) -> list[tuple[str, float]]:
+        """(field path, the largest value it may send there): checked against the robot's safety envelope."""
+        return numeric_commands(self, binding)
+
+
+def numeric_commands(settings: Any, binding: Any) -> list[tuple[str, float]]:
+    """A Slider's or Stepper's ``commands(binding)``: the largest number it may send on its field (what the
+    app compares with the robot's safety envelope before saving the settings)."""
+    if getattr(binding, "role", None) not in (Role.PUBLISH, "publish"):
+        return []
+    try:
+        top = max(abs(float(settings.minimum)), abs(float(settings.maximum)))
+    except (TypeError, ValueError):
+        return []
+    return [(binding.field_path, top)]
+
 
 def range_problems(minimum: float, maximum: float, step: float, rate_hz: float) -> list[str]:
     out = []

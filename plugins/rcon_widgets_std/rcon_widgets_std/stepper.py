@@ -7,7 +7,7 @@ from typing import Any
 
 import attrs
 
-from .slider import NumericModel, range_problems
+from .slider import NumericModel, numeric_commands, range_problems
 
 __all__ = ["StepperSettings", "StepperModel"]
 
@@ -28,6 +28,10 @@ class StepperSettings:
         if not out and not self.minimum <= self.initial <= self.maximum:
             out.append(f"start value {self.initial:g} is outside {self.minimum:g}..{self.maximum:g}")
         return out
+
+    def commands(self, binding: Any) -> list[tuple[str, float]]:
+        """(field path, the largest value it may send there): checked against the robot's safety envelope."""
+        return numeric_commands(self, binding)
 
 
 class StepperModel(NumericModel):
