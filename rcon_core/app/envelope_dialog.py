@@ -88,6 +88,10 @@ class EnvelopeDialog(QtWidgets.QDialog):
             head.setProperty("role", "heading")
             self.grid.addWidget(head, 0, c)
         self.fields: list[tuple[QtWidgets.QLineEdit, QtWidgets.QLineEdit]] = []
+        self.problem = QtWidgets.QLabel()
+        self.problem.setObjectName("envelopeProblem")
+        self.problem.setProperty("role", "problem")
+        self.problem.setWordWrap(True)
         for r, robot in enumerate(self._robots, start=1):
             self.grid.addWidget(QtWidgets.QLabel(robot.label), r, 0)
             env = robot.envelope or Envelope()
@@ -101,10 +105,6 @@ class EnvelopeDialog(QtWidgets.QDialog):
                 self.grid.addWidget(edit, r, c)
                 pair.append(edit)
             self.fields.append((pair[0], pair[1]))
-        self.problem = QtWidgets.QLabel()
-        self.problem.setObjectName("envelopeProblem")
-        self.problem.setProperty("role", "problem")
-        self.problem.setWordWrap(True)
         buttons = QtWidgets.QDialogButtonBox(
             QtWidgets.QDialogButtonBox.StandardButton.Ok | QtWidgets.QDialogButtonBox.StandardButton.Cancel)
         buttons.accepted.connect(self._ok)

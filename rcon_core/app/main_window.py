@@ -29,13 +29,13 @@ from rcon_core.app.config import AppConfig
 from rcon_core.app.configure_dialog import WidgetConfigurer
 from rcon_core.app.connection_bar import ConnectionBar
 from rcon_core.app.draft import Candidate, Target, rank_widgets, targets_for
+from rcon_core.app.envelope_dialog import install as install_envelope
 from rcon_core.app.fleet_ui import FleetUi
 from rcon_core.app.focus import focus_into, has_focus_inside
 from rcon_core.app.frame_clock import FrameClock, Waker
 from rcon_core.app.layout_file import LayoutFile
 from rcon_core.app.link import Link
 from rcon_core.app.live import LiveCanvas
-from rcon_core.app.envelope_dialog import install as install_envelope
 from rcon_core.app.lock_controls import install as install_lock_controls
 from rcon_core.app.notice_bar import NoticeBar
 from rcon_core.app.operator_lock import OperatorLock
