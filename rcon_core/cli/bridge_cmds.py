@@ -381,9 +381,8 @@ async def _pub(url: str, args: argparse.Namespace) -> int:
     if args.rate is not None and args.rate <= 0:
         _err("--rate must be positive")
         return 2
-    from rcon_core.cli.refusals import StatusErrors, type_refusal
-
     from rcon_core.bridge.envelope import NO_LIMITS, EnvelopeRefused
+    from rcon_core.cli.refusals import StatusErrors, type_refusal
 
     verdict = (envelope or NO_LIMITS).judge(args.msg_type, msg)
     if verdict.msg is None:
