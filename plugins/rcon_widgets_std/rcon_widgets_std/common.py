@@ -143,7 +143,8 @@ def held_to_envelope(port: Any, type_name: str, msg: dict[str, Any]) -> tuple[di
 
 
 def format_number(value: float, decimals: int = -1) -> str:
-    """``decimals`` < 0: as it came (ints stay ints, floats in short form)."""
+    """``decimals`` < 0: as it came -- ints stay ints, floats with every digit they carry (15 significant
+    digits: 43.6532117 stays 43.6532117, never rounded to 6; a whole float without its ".0")."""
     if value is None:
         return "NaN"  # NaN/Inf arrive as None on the JSON wire
     if isinstance(value, bool):
@@ -152,7 +153,7 @@ def format_number(value: float, decimals: int = -1) -> str:
         return str(value) if decimals < 0 else f"{value:.{decimals}f}"
     if not math.isfinite(value):
         return str(value)
-    text = f"{value:.6g}" if decimals < 0 else f"{value:.{decimals}f}"
+    text = f"{value:.15g}" if decimals < 0 else f"{value:.{decimals}f}"
     if text.startswith("-") and float(text) == 0.0:
         return text[1:]  # -0.001 at 2 decimals, or -0.0 itself: "0.00", never "-0.00"
     return text
