@@ -258,3 +258,68 @@ def test_a_compound_slider_child_of_999999999999_is_refused_in_configure(window,
     assert dialog.isVisible()
     child = window.controller.canvas.widget(wid).settings["children"][0]
     assert child["settings"]["maximum"] == 1.0
+
+
+def test_a_widget_placed_beyond_the_envelope_is_kept_only_when_the_operator_says(window, qtbot):
+    from app_helpers import choose_kind, tap_topic
+
+    set_envelope(window, LIMITS)
+    for answer, kept in (("beyondEnvelopeCancel", 0), ("beyondEnvelopeSave", 1)):
+        tap_topic(window, "/cmd_vel")
+        panel = choose_kind(window, Role.PUBLISH, "std.slider")
+        panel.choose_field("linear.x")
+        panel.form.editor("maximum").setValue(5.0)
+        before = len(window.controller.canvas.widgets)
+        tap(panel.place_button)
+        qtbot.waitUntil(lambda: getattr(window, "beyond_dialog", None) is not None
+                        and window.beyond_dialog.isVisible(), timeout=TIMEOUT_MS)
+        box = window.beyond_dialog
+        assert "linear.x up to 5 m/s: the safety envelope holds it to 1 m/s" in box.informativeText()
+        assert len(window.controller.canvas.widgets) == before + 1
+        [button] = [b for b in box.buttons() if b.objectName() == answer]
+        tap(button)
+        qtbot.waitUntil(lambda box=box: not box.isVisible(), timeout=TIMEOUT_MS)
+        assert len(window.controller.canvas.widgets) == before + kept
+
+
+def test_in_the_demo_the_speed_limit_slider_and_the_pad_agree_on_what_is_sent(qtbot, tmp_path, sim_thread, plugins,
+                                                                              monkeypatch):
+    """The pad read +1.67 while the boat was held at 0.47 m/s: now the pad follows the robot's speed limit
+    (and the demo's envelope) and shows what it sends."""
+    from app_helpers import open_window
+    from rcon_widgets_std import slider as slider_mod
+
+    from rcon_core.app.demo import DEMO_ENVELOPE, demo_workspace
+
+    monkeypatch.setattr(slider_mod, "_LAST_VALUES", {})
+    window = open_window(qtbot, tmp_path / "config", plugins, url=sim_thread.url,
+                         demo=lambda: demo_workspace(plugins), wait_connected=True)
+    try:
+        assert window.doc.workspace.robots[0].envelope == DEMO_ENVELOPE
+        qtbot.waitUntil(lambda: window.link.client.envelope == DEMO_ENVELOPE, timeout=TIMEOUT_MS)
+        by_title = {w.title: window.host.hosted[w.id] for w in window.controller.canvas.widgets}
+        limit_view = by_title["Speed limit"]
+        pad_hosted = by_title["Drive"]
+        qtbot.waitUntil(lambda: limit_view.view is not None and pad_hosted.view is not None
+                        and pad_hosted.view.isVisible() and limit_view.view.isVisible(), timeout=TIMEOUT_MS)
+        pad = pad_hosted.view
+        qtbot.waitUntil(lambda: pad.status_text() == "touch to drive ≤ 1.5 m/s (safety envelope)",
+                        timeout=TIMEOUT_MS)
+        track = limit_view.view.slider
+        tap(track, QtCore.QPoint(track.width() // 3, track.height() // 2))  # about a third of 0..1.5 m/s
+        qtbot.waitUntil(lambda: sim_thread.robot.speed_limit is not None, timeout=TIMEOUT_MS)
+        limit = sim_thread.robot.speed_limit
+        assert 0.2 < limit < 1.0
+        qtbot.waitUntil(lambda: f"≤ {limit:g} m/s (speed limit)" in pad.status_text(), timeout=TIMEOUT_MS)
+        centre, radius = pad.pad()
+        c = centre.toPoint()
+        QTest.mousePress(pad, QtCore.Qt.MouseButton.LeftButton, pos=c)
+        QTest.mouseMove(pad, c - QtCore.QPoint(0, int(radius * 1.5)))  # past the edge
+        got = sim_thread.wait_for_published_sync("/cmd_vel", lambda m: m["linear"]["x"] > 0.1, timeout=10)
+        assert got["linear"]["x"] == pytest.approx(limit)  # sent: the robot's own limit, not the pad's 2 m/s
+        qtbot.waitUntil(lambda: f"linear.x +{limit:.2f}" in pad.status_text(), timeout=TIMEOUT_MS)
+        snap(window, "demo-pad-speed-limit")
+        QTest.mouseRelease(pad, QtCore.Qt.MouseButton.LeftButton, pos=c)
+        sim_thread.wait_for_published_sync("/cmd_vel", lambda m: m["linear"]["x"] == 0.0, timeout=10)
+    finally:
+        window.shutdown()

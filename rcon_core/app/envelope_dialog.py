@@ -8,7 +8,8 @@ robots in one undo step (``Document.set_robots``): the envelope is saved with th
 robot's link applies it at once (``FleetLinks.sync``). While the operator lock is engaged the dialog opens
 only after the PIN (:func:`install` gates the action).
 
-:func:`beyond_envelope` is what the Configure dialog asks before saving a widget whose settings could
+:func:`beyond_envelope` is what the Configure dialog asks before saving (and :func:`check_placed` right after a
+widget is placed from the add panel: Cancel takes it away again) a widget whose settings could
 command more than its robot's envelope allows (a slider on ``/cmd_vel`` ``linear.x`` up to 5 m/s with an
 envelope of 1 m/s): the widget's settings say what they may send through the optional
 ``settings.commands(binding) -> [(field path, largest value)]`` (the std Slider, Stepper and Compound and
@@ -27,7 +28,7 @@ from qtpy import QtGui, QtWidgets
 from rcon_core.bridge.envelope import MAX_ANGULAR, MAX_LINEAR, Envelope
 from rcon_core.canvas.robots import Robot
 
-__all__ = ["EnvelopeDialog", "beyond_envelope", "install", "parse_limit"]
+__all__ = ["EnvelopeDialog", "beyond_envelope", "check_placed", "install", "parse_limit"]
 
 COLUMNS = ("Robot", "Max linear (m/s)", "Max angular (rad/s)")
 
@@ -188,22 +189,49 @@ def open_dialog(window: Any) -> EnvelopeDialog:
     return dialog
 
 
-def ask_beyond(parent: QtWidgets.QWidget, problems: list[str], then: Any) -> QtWidgets.QMessageBox:
-    """Ask before saving settings that could command more than the envelope (``then`` runs on Save)."""
+def check_placed(window: Any, draft: Any) -> QtWidgets.QMessageBox | None:
+    """After a widget from the add panel was placed: when its settings could command more than its robot's
+    safety envelope, ask whether to keep it (Cancel takes it away again, one undo). None when nothing is
+    beyond (nothing asked)."""
+    if draft is None:
+        return None
+    try:
+        envelope = window.doc.workspace.robot(draft.robot).envelope
+    except KeyError:
+        return None
+    beyond = beyond_envelope(envelope, draft.binding, draft.settings)
+    if not beyond:
+        return None
+    box = ask_beyond(window, beyond, lambda: None, otherwise=window.doc.undo, save="Keep it")
+    window.beyond_dialog = box
+    return box
+
+
+def ask_beyond(parent: QtWidgets.QWidget, problems: list[str], then: Any, otherwise: Any = None,
+               save: str = "Save anyway") -> QtWidgets.QMessageBox:
+    """Ask before saving settings that could command more than the envelope (``then`` runs on Save,
+    ``otherwise`` on Cancel)."""
     box = QtWidgets.QMessageBox(parent)
     box.setObjectName("beyondEnvelopeDialog")
     box.setIcon(QtWidgets.QMessageBox.Icon.Warning)
     box.setWindowTitle("Beyond the safety envelope")
     box.setText("These settings ask for more than the robot's safety envelope allows.")
     box.setInformativeText("\n".join(problems) + "\n\nThe robot is never sent more than its envelope. Save anyway?")
-    save = box.addButton("Save anyway", QtWidgets.QMessageBox.ButtonRole.AcceptRole)
-    save.setObjectName("beyondEnvelopeSave")
+    keep = box.addButton(save, QtWidgets.QMessageBox.ButtonRole.AcceptRole)
+    keep.setObjectName("beyondEnvelopeSave")
     cancel = box.addButton(QtWidgets.QMessageBox.StandardButton.Cancel)
     cancel.setObjectName("beyondEnvelopeCancel")
     box.setDefaultButton(cancel)
-    for b in (save, cancel):
+    for b in (keep, cancel):
         b.setMinimumWidth(max(b.sizeHint().width(), 160))
-    box.buttonClicked.connect(lambda b: then() if b is save else None)
+
+    def answered(button: Any) -> None:
+        if button is keep:
+            then()
+        elif otherwise is not None:
+            otherwise()
+
+    box.buttonClicked.connect(answered)
     box.finished.connect(lambda _r: box.deleteLater())
     box.open()
     return box

@@ -334,9 +334,12 @@ class TeleopView(QtWidgets.QWidget):
         if v.unheard:  # nothing moves: never animate as if the robot drove
             return f"⚠ {v.unheard}"
         held = f" · {v.held}" if v.held else ""  # what holds the command below the pad's own maximum
-        if v.active:  # what is sent, after the envelope and the speed limit
+        if v.active:  # what is sent, after the envelope and the speed limit; the vertical axis (forward) first
+            axes = self.model.axes() if hasattr(self.model, "axes") else ("", "")
+            up = axes[1].lstrip("-")
+            command = sorted(v.command, key=lambda pv: not (up and pv[0].endswith(up)))
             parts = [f"{path.rsplit('.', 2)[-2] + '.' if '.' in path else ''}{path.rsplit('.', 1)[-1]} "
-                     f"{val:+.2f}" for path, val in v.command]
+                     f"{val:+.2f}" for path, val in command]
             return ("  ".join(parts) or "driving") + held
         if v.held:  # the limit matters more than the rate on a narrow pad
             return f"touch to drive {v.held}"
