@@ -62,6 +62,14 @@ def place(window, qtbot, kind, binding, rect, settings, title="w"):
     return inst.id
 
 
+def pad_says(qtbot, pad, ok) -> None:
+    """Wait until the pad's status line passes ``ok``; on a timeout say what it read."""
+    try:
+        qtbot.waitUntil(lambda: ok(pad.status_text()), timeout=TIMEOUT_MS)
+    except Exception:
+        raise AssertionError(f"the pad says {pad.status_text()!r} ({pad.model.state})") from None
+
+
 def hosted_view(window, qtbot, wid):
     hosted = window.host.hosted[wid]
     qtbot.waitUntil(lambda: hosted.view is not None and hosted.view.isVisible(), timeout=TIMEOUT_MS)
@@ -110,7 +118,10 @@ def test_while_the_operator_lock_is_on_the_envelope_needs_the_pin(window, qtbot)
 
 # --------------------------------------------------------------------- nothing beyond reaches the robot
 def test_no_publisher_gets_a_command_beyond_the_envelope_to_the_robot_and_each_says_what_was_sent(
-        window, qtbot, sim_thread):
+        window, qtbot, sim_thread, monkeypatch):
+    from rcon_widgets_std import slider as slider_mod
+
+    monkeypatch.setattr(slider_mod, "_LAST_VALUES", {})  # nothing sent in this session (other tests send some)
     sim = sim_thread
     set_envelope(window, LIMITS)
     qtbot.waitUntil(lambda: window.link.client.envelope == LIMITS, timeout=TIMEOUT_MS)
@@ -136,14 +147,13 @@ def test_no_publisher_gets_a_command_beyond_the_envelope_to_the_robot_and_each_s
         return sim.wait_for_published_sync("/cmd_vel", pred, timeout=10)
 
     # the pad: pushed past its edge it would send 2 m/s; it sends (and says) 1
-    qtbot.waitUntil(lambda: pad.status_text() == "touch to drive ≤ 1 m/s, 0.5 rad/s (safety envelope)",
-                    timeout=TIMEOUT_MS)
+    pad_says(qtbot, pad, lambda text: text == "touch to drive ≤ 1 m/s, 0.5 rad/s (safety envelope)")
     centre, radius = pad.pad()
     c = centre.toPoint()
     QTest.mousePress(pad, QtCore.Qt.MouseButton.LeftButton, pos=c)
     QTest.mouseMove(pad, c - QtCore.QPoint(0, int(radius * 1.5)))
     received(lambda m: m["linear"]["x"] == 1.0)
-    qtbot.waitUntil(lambda: "linear.x +1.00" in pad.status_text(), timeout=TIMEOUT_MS)
+    pad_says(qtbot, pad, lambda text: "linear.x +1.00" in text)
     snap(window, "envelope-pad")
     QTest.mouseRelease(pad, QtCore.Qt.MouseButton.LeftButton, pos=c)
     received(lambda m: m["linear"]["x"] == 0.0)
@@ -303,21 +313,20 @@ def test_in_the_demo_the_speed_limit_slider_and_the_pad_agree_on_what_is_sent(qt
         qtbot.waitUntil(lambda: limit_view.view is not None and pad_hosted.view is not None
                         and pad_hosted.view.isVisible() and limit_view.view.isVisible(), timeout=TIMEOUT_MS)
         pad = pad_hosted.view
-        qtbot.waitUntil(lambda: pad.status_text() == "touch to drive ≤ 1.5 m/s (safety envelope)",
-                        timeout=TIMEOUT_MS)
+        pad_says(qtbot, pad, lambda text: text == "touch to drive ≤ 1.5 m/s (safety envelope)")
         track = limit_view.view.slider
         tap(track, QtCore.QPoint(track.width() // 3, track.height() // 2))  # about a third of 0..1.5 m/s
         qtbot.waitUntil(lambda: sim_thread.robot.speed_limit is not None, timeout=TIMEOUT_MS)
         limit = sim_thread.robot.speed_limit
         assert 0.2 < limit < 1.0
-        qtbot.waitUntil(lambda: f"≤ {limit:g} m/s (speed limit)" in pad.status_text(), timeout=TIMEOUT_MS)
+        pad_says(qtbot, pad, lambda text: f"≤ {limit:g} m/s (speed limit)" in text)
         centre, radius = pad.pad()
         c = centre.toPoint()
         QTest.mousePress(pad, QtCore.Qt.MouseButton.LeftButton, pos=c)
         QTest.mouseMove(pad, c - QtCore.QPoint(0, int(radius * 1.5)))  # past the edge
         got = sim_thread.wait_for_published_sync("/cmd_vel", lambda m: m["linear"]["x"] > 0.1, timeout=10)
         assert got["linear"]["x"] == pytest.approx(limit)  # sent: the robot's own limit, not the pad's 2 m/s
-        qtbot.waitUntil(lambda: f"linear.x +{limit:.2f}" in pad.status_text(), timeout=TIMEOUT_MS)
+        pad_says(qtbot, pad, lambda text: f"linear.x +{limit:.2f}" in text)
         snap(window, "demo-pad-speed-limit")
         QTest.mouseRelease(pad, QtCore.Qt.MouseButton.LeftButton, pos=c)
         sim_thread.wait_for_published_sync("/cmd_vel", lambda m: m["linear"]["x"] == 0.0, timeout=10)
