@@ -155,6 +155,7 @@ def test_the_goal_form_starts_empty_marks_what_is_required_and_sends_nothing_unt
     tap(view.send_button)
     qtbot.waitUntil(lambda: fb(view) >= 1, timeout=TIMEOUT_MS)
     assert sim2.ops_received[("send_action_goal", NAV)] == 1
+    qtbot.waitUntil(view.cancel_button.isEnabled, timeout=TIMEOUT_MS)
     tap(view.cancel_button)
 
 

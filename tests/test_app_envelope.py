@@ -310,8 +310,10 @@ def test_in_the_demo_the_speed_limit_slider_and_the_pad_agree_on_what_is_sent(qt
         by_title = {w.title: window.host.hosted[w.id] for w in window.controller.canvas.widgets}
         limit_view = by_title["Speed limit"]
         pad_hosted = by_title["Drive"]
-        qtbot.waitUntil(lambda: limit_view.view is not None and pad_hosted.view is not None
-                        and pad_hosted.view.isVisible() and limit_view.view.isVisible(), timeout=TIMEOUT_MS)
+        # the demo's widgets run once the link is up (a model built before is replaced): wait for those
+        qtbot.waitUntil(lambda: all(h.model is not None and h.model.running and not h.model.state.link_down
+                                    and h.view is not None and h.view.isVisible() and h.view.model is h.model
+                                    for h in (limit_view, pad_hosted)), timeout=TIMEOUT_MS)
         pad = pad_hosted.view
         pad_says(qtbot, pad, lambda text: text == "touch to drive ≤ 1.5 m/s (safety envelope)")
         track = limit_view.view.slider
