@@ -84,6 +84,12 @@ def test_a_twist_whose_vector_is_not_a_mapping_is_refused():
         ENV.apply("geometry_msgs/TwistStamped", {"twist": 5})
 
 
+def test_numpy_numbers_are_numbers():
+    np = pytest.importorskip("numpy")
+    sent = ENV.apply("geometry_msgs/Twist", {"linear": {"x": np.float32(3.0), "y": np.int64(0)}})
+    assert sent["linear"] == {"x": 1.0, "y": 0}
+
+
 def test_missing_fields_are_left_to_rosbridge():
     assert ENV.apply("geometry_msgs/Twist", {"linear": {"x": 3}}) == {"linear": {"x": 1.0}}
     assert ENV.apply("geometry_msgs/Twist", {}) == {}

@@ -30,6 +30,7 @@ What :func:`enforce` counts: ``stats["envelope_clamped"]`` and ``stats["envelope
 from __future__ import annotations
 
 import math
+import numbers
 from typing import Any
 
 import attrs
@@ -189,7 +190,7 @@ class Envelope:
             limit = self.limit(part)
             for axis, value in vector.items():
                 path = f"{prefix}{part}.{axis}"
-                if isinstance(value, bool) or not isinstance(value, int | float):
+                if isinstance(value, bool) or not isinstance(value, numbers.Real):  # numpy scalars are Real
                     what = "null (NaN or infinity)" if value is None else _bounded(value)
                     return Verdict(None, refused=f"not sent: {path} is {what}, not a number")
                 if not math.isfinite(value):
