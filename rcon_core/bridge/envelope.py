@@ -193,14 +193,15 @@ class Envelope:
                 if isinstance(value, bool) or not isinstance(value, numbers.Real):  # numpy scalars are Real
                     what = "null (NaN or infinity)" if value is None else _bounded(value)
                     return Verdict(None, refused=f"not sent: {path} is {what}, not a number")
-                if not math.isfinite(value):
-                    return Verdict(None, refused=f"not sent: {path} is {value}, not a finite number")
-                if limit is not None and abs(value) > limit:
-                    sent = math.copysign(float(limit), value)
+                number = float(value)
+                if not math.isfinite(number):
+                    return Verdict(None, refused=f"not sent: {path} is {number}, not a finite number")
+                if limit is not None and abs(number) > limit:
+                    sent = math.copysign(float(limit), number)
                     if out is None:
                         out = _copy_twist(msg, base)
                     (out[base] if base else out)[part][axis] = sent
-                    clamped.append((path, float(value), sent))
+                    clamped.append((path, number, sent))
         return Verdict(msg if out is None else out, tuple(clamped))
 
     def apply(self, type_name: str, msg: dict[str, Any]) -> dict[str, Any]:
