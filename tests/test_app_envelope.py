@@ -84,7 +84,9 @@ def test_the_envelope_is_set_in_its_dialog_refuses_absurd_limits_and_is_saved_an
     linear, angular = dialog.fields[0]
     type_into(linear, "999999999999")
     tap(dialog.ok_button)
-    assert dialog.isVisible() and "at most 100" in dialog.problem.text()  # refused, said, nothing changed
+    assert dialog.isVisible() and dialog.problem.text() == (  # refused, said, nothing changed
+        f"{robot.label}, maximum linear speed: 999999999999 is more than 100 m/s, the most an envelope may allow "
+        "(a slip of a finger?)")
     assert window.doc.workspace.robots[0].envelope is None
     snap_with(window, dialog, "envelope-refused")
     type_into(linear, "1")

@@ -33,7 +33,7 @@ __all__ = ["EnvelopeDialog", "beyond_envelope", "check_placed", "install", "pars
 COLUMNS = ("Robot", "Max linear (m/s)", "Max angular (rad/s)")
 
 
-def parse_limit(text: str, what: str, top: float) -> float | None:
+def parse_limit(text: str, what: str, top: float, units: str = "") -> float | None:
     """A limit typed by the operator: None for an empty field, else a number in (0, ``top``]; ValueError
     with a sentence otherwise."""
     text = text.strip()
@@ -43,8 +43,11 @@ def parse_limit(text: str, what: str, top: float) -> float | None:
         value = float(text)
     except ValueError:
         raise ValueError(f"{what}: {text!r} is not a number") from None
-    if not math.isfinite(value) or not 0 < value <= top:
-        raise ValueError(f"{what}: {text} is not more than 0 and at most {top:g} (a slip of a finger?)")
+    if not math.isfinite(value) or value > top:
+        raise ValueError(f"{what}: {text} is more than {top:g} {units}, the most an envelope may allow "
+                         "(a slip of a finger?)".replace(" ,", ","))
+    if value <= 0:
+        raise ValueError(f"{what}: it must be more than 0 (empty: no limit)")
     return value
 
 
@@ -118,7 +121,10 @@ class EnvelopeDialog(QtWidgets.QDialog):
         col.addWidget(self.problem)
         col.addStretch(1)
         col.addWidget(buttons)
-        self.resize(640, 120 + 56 * len(self._robots))
+        self.grid.setHorizontalSpacing(16)
+        self.grid.setVerticalSpacing(10)
+        self.setMinimumWidth(600)
+        self.adjustSize()  # every row at its touch size: the layout decides the height
 
     def set_limits(self, robot_id: str, linear: str | None = None, angular: str | None = None) -> None:
         """Type into a robot's fields (tests, as a person would)."""
@@ -133,8 +139,8 @@ class EnvelopeDialog(QtWidgets.QDialog):
         """The robots with their envelopes as typed; ValueError naming the robot and the field otherwise."""
         out = []
         for robot, (lin, ang) in zip(self._robots, self.fields, strict=True):
-            linear = parse_limit(lin.text(), f"{robot.label}, maximum linear speed", MAX_LINEAR)
-            angular = parse_limit(ang.text(), f"{robot.label}, maximum angular speed", MAX_ANGULAR)
+            linear = parse_limit(lin.text(), f"{robot.label}, maximum linear speed", MAX_LINEAR, "m/s")
+            angular = parse_limit(ang.text(), f"{robot.label}, maximum angular speed", MAX_ANGULAR, "rad/s")
             env = Envelope(linear, angular)
             out.append(attrs.evolve(robot, envelope=env if env.limited else None))
         return out
