@@ -190,7 +190,9 @@ class Envelope:
             limit = self.limit(part)
             for axis, value in vector.items():
                 path = f"{prefix}{part}.{axis}"
-                if isinstance(value, bool) or not isinstance(value, numbers.Real):  # numpy scalars are Real
+                kind = type(value)
+                if kind is not float and kind is not int and (  # the common case first: the ABC check is slow
+                        isinstance(value, bool) or not isinstance(value, numbers.Real)):  # numpy scalars are Real
                     what = "null (NaN or infinity)" if value is None else _bounded(value)
                     return Verdict(None, refused=f"not sent: {path} is {what}, not a number")
                 number = float(value)
