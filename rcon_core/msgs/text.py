@@ -293,7 +293,14 @@ def _yaml_classes() -> tuple[Any, Any]:
         import yaml
 
         class Loader(yaml.SafeLoader):
-            pass
+            def construct_mapping(self, node: Any, deep: bool = False) -> dict[Any, Any]:
+                # a key is a field name: YAML 1.1 would read `on`, `off`, `yes`, `no`, `null` or `1` as a
+                # bool, None or int ({on: true} became {True: True}); a plain key stays the text written
+                for key_node, _ in node.value:
+                    if isinstance(key_node, yaml.ScalarNode) and key_node.style is None and \
+                            key_node.tag != "tag:yaml.org,2002:merge":
+                        key_node.tag = "tag:yaml.org,2002:str"
+                return super().construct_mapping(node, deep=deep)
 
         class Dumper(yaml.SafeDumper):
             pass
@@ -327,7 +334,7 @@ def parse_text(text: str) -> Any:
     """YAML (a superset of JSON) -> Python value; raises :class:`MessageTextError` on a syntax error and for
     a number too large to be one (``1.0e+400`` would silently become infinity; ``.inf`` is infinity).
     Numbers read as a person types them: ``1e5`` and ``1E-3`` are floats (YAML 1.1 alone reads them as
-    strings)."""
+    strings). Mapping keys stay text (``{on: true, 1: x}`` -> ``{"on": True, "1": "x"}``): they name fields."""
     import yaml
 
     if not text or not text.strip():
