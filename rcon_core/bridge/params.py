@@ -165,14 +165,24 @@ class Params:
         ros2 = await self.ros2()
         if ros2:
             split(name, True)
-        await self._call("set_param", {"name": name, "value": json.dumps(value)})
-        if not verify:
-            return
-        now = await self.get(name, default=MISSING if not ros2 else None)
-        if now != value or kind(now) != kind(value):
-            reason = "the parameter is not declared by the node" if now is None else \
-                f"it holds {kind(now)} {now!r}, so the node refused a {kind(value)}"
-            raise ParamRejectedError(f"{name} was not set to {value!r}: {reason}")
+        tap = getattr(getattr(self._client, "session", None), "tap", None)  # the operator tap (tap.py)
+        try:
+            await self._call("set_param", {"name": name, "value": json.dumps(value)})
+            if not verify:
+                if tap is not None and tap.listeners:
+                    tap.emit("param", "params", name, "", value, "sent")
+                return
+            now = await self.get(name, default=MISSING if not ros2 else None)
+            if now != value or kind(now) != kind(value):
+                reason = "the parameter is not declared by the node" if now is None else \
+                    f"it holds {kind(now)} {now!r}, so the node refused a {kind(value)}"
+                raise ParamRejectedError(f"{name} was not set to {value!r}: {reason}")
+        except Exception as exc:
+            if tap is not None and tap.listeners:
+                tap.emit("param", "params", name, "", value, f"error: {exc}")
+            raise
+        if tap is not None and tap.listeners:
+            tap.emit("param", "params", name, "", value, "ok")
 
     async def delete(self, name: str) -> None:
         if await self.ros2():

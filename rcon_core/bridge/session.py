@@ -53,6 +53,7 @@ from .protocol import encode
 from .safety import bounded_repr, safe_text
 from .services import ProvidedServices
 from .subscribe import Subscriber
+from .tap import OperatorTap
 from .topics import AdvertEntry, TopicEntry
 
 if TYPE_CHECKING:
@@ -108,6 +109,8 @@ class Session:
         self.goals = Goals(self.send, self.spawn, host)
         self.provided_actions = ProvidedActions(self.send)  # actions this client serves (ROS 2)
         self.subscriber = Subscriber(self, host)
+        #: what the nodes send, told to listeners (the flight recorder): ``tap.py``
+        self.tap = OperatorTap()
         self._status_listeners: list[Callable[[dict[str, Any]], None]] = []
         self._ops: dict[str, Callable[[dict[str, Any]], None]] = {
             "publish": self._on_publish, "service_response": self._on_service_response,

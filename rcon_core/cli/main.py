@@ -24,6 +24,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "plugins": ("rcon_core.cli.plugin_cmds", "list installed widget packages and their widgets"),
     "match": ("rcon_core.cli.plugin_cmds", "list the widgets that fit a type and role, ranked"),
     "new-widget": ("rcon_core.cli.new_widget", "write a new widget package (pyproject, plugin, model, view, tests)"),
+    "record": ("rcon_core.cli.record_cmd", "record a robot's topics to an MCAP file (or mend one cut short)"),
     "layout": ("rcon_core.cli.layout_cmd", "check a layout file (rcon layout validate FILE) or print its schema"),
 }
 
