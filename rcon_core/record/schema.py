@@ -150,3 +150,20 @@ def stamp_reader(type_name: str, registry: TypeRegistry, ros2: bool) -> Any:
         return sec * 1_000_000_000 + nsec
 
     return read
+
+
+def truncated(registry: TypeRegistry, type_name: str, text: str) -> bool:
+    """Whether a file's definition of a type ``registry`` knows has only some of its fields (seen in real
+    rosbag2 files, whose ``message_definitions`` table can hold a placeholder such as ``uint8 level`` for
+    ``rcl_interfaces/msg/Log``): such a text would decode garbage, the known definition is used instead."""
+    if not registry.has(type_name):
+        return False
+    from rcon_core.msgs.parse import parse_interface
+
+    root = split_full_text(type_name, text)[0][1]
+    try:
+        mine = {f.name for f in parse_interface(names.normalize(type_name), root)[0].fields}
+    except Exception:  # noqa: BLE001 - text that cannot be read is not to be trusted either
+        return True
+    known = {f.name for f in registry.fields(type_name)}
+    return mine < known
