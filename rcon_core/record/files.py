@@ -130,6 +130,16 @@ def open_recording(path: str | os.PathLike[str]) -> Recording:
     raise RecordingError(f"{p}: not a recording RCON can play (an .mcap file, a .bag file or a rosbag2 folder)")
 
 
+def _ends_whole(p: Path) -> bool:
+    """An MCAP file that was closed ends with the magic bytes after its footer."""
+    try:
+        with open(p, "rb") as f:
+            f.seek(-8, os.SEEK_END)
+            return f.read(8) == b"\x89MCAP0\r\n"
+    except OSError:
+        return False
+
+
 def _is_mcap(p: Path) -> bool:
     try:
         with open(p, "rb") as f:
@@ -148,6 +158,9 @@ class McapRecording(Recording):
         from mcap.reader import make_reader
 
         self.path = str(path)
+        if _is_mcap(path) and not _ends_whole(path):
+            raise RecordingError(f"{path}: the file stops short, without its summary (was the recorder killed?); "
+                                 f"mend it with rcon record --recover {path}")
         self._file = open(path, "rb")  # noqa: SIM115 - kept open while playing
         try:
             self._reader = make_reader(self._file)
