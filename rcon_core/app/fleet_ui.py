@@ -108,6 +108,9 @@ class FleetUi(QtCore.QObject):
 
     def config_view_only(self, robot_id: str) -> str | None:
         url = self.robot_url(robot_id)
+        replay = getattr(self.window, "replay", None)  # a recording played as the robot (replay_bar.py)
+        if replay is not None and url == replay.url:
+            return replay.reason
         return f"robot {url} is view-only" if url and self.window.config.is_view_only(url) else None
 
     def side_fleet(self) -> Fleet:

@@ -45,6 +45,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="with --demo: replace the saved demo layout by a fresh one")
     parser.add_argument("--locked", action="store_true",
                         help="kiosk: start full screen with the operator lock on (needs an operator PIN)")
+    parser.add_argument("--play", metavar="FILE",
+                        help="open a recording as the robot (an .mcap file, a rosbag1 .bag or a rosbag2 folder), "
+                        "with a timeline to play, pause, change speed and seek; commands go nowhere")
     parser.add_argument("--screenshot", metavar="PATH", help="write a PNG of the window, then exit")
     parser.add_argument("--quit-after", type=float, metavar="SECONDS", help="quit after this many seconds")
     from rcon_core.cli.link_options import add_link_options

@@ -31,10 +31,12 @@ from __future__ import annotations
 
 import asyncio
 import collections
+import contextlib
 import logging
 import queue
 import threading
 import time
+from collections.abc import Iterator
 from typing import TYPE_CHECKING, Any
 
 import orjson
@@ -53,6 +55,7 @@ log = logging.getLogger("rcon.sim.playback")
 __all__ = ["Player", "RecordedMessage", "PLAYER_NODE"]
 
 PLAYER_NODE = "/rcon_player"
+SEEK_NODE = "/rcon_player/seek"  # the state at a seek point, kept for subscribers that come right after
 PREFETCH = 64
 
 
@@ -311,7 +314,7 @@ class Player:
             topic, t, data = item
             if topic == "snapshot":
                 for name, (_lt, payload) in sorted(data.items(), key=lambda kv: kv[1][0]):
-                    self._release(name, payload)
+                    self._release(name, payload, seek=True)
                 self._reanchor()
                 continue
             if topic == "end":
@@ -344,14 +347,18 @@ class Player:
                 except TimeoutError:
                     pass
 
-    def _release(self, topic: str, data: bytes) -> None:
+    def _release(self, topic: str, data: bytes, seek: bool = False) -> None:
+        """Send one recorded message. ``seek``: it is the state at a seek point, which a subscriber that
+        comes right after (the app restarts its widgets on a seek) gets too, until the topic's next message."""
         t = self.server.topics.get(topic)
         decode = self._decoders.get(topic)
         if t is None or decode is None:
             return
-        if not (t.latched or t.client_subscribers or t.internal_subscribers):
+        if not seek:
+            t.latched_msgs.pop(SEEK_NODE, None)
+        if not (t.latched or seek or t.client_subscribers or t.internal_subscribers):
             return
-        needs_dict = (t.latched or bool(t.internal_subscribers) or self.recording.ros2 != self.server.ros2
+        needs_dict = (t.latched or seek or bool(t.internal_subscribers) or self.recording.ros2 != self.server.ros2
                       or any((sub := conn.subscriptions.get(topic)) is not None and sub.compression != "cbor-raw"
                              for conn in t.client_subscribers))
         try:
@@ -364,6 +371,8 @@ class Player:
         self.released += 1
         if t.latched:
             t.latched_msgs[PLAYER_NODE] = msg
+        elif seek:
+            t.latched_msgs[SEEK_NODE] = msg
         for callbacks in list(t.internal_subscribers.values()):
             for cb in list(callbacks):
                 try:
@@ -411,3 +420,28 @@ async def serve_recording(path: str, *, host: str = "127.0.0.1", port: int = 0, 
         await server.stop()
         raise
     return server, player
+
+
+@contextlib.contextmanager
+def played_in_thread(path: str, **options: Any) -> Iterator[tuple[SimServer, Player]]:
+    """``serve_recording`` on its own event loop in a daemon thread (the app's ``rcon --play``)."""
+    loop = asyncio.new_event_loop()
+    thread = threading.Thread(target=loop.run_forever, name="rcon-player", daemon=True)
+    thread.start()
+    try:
+        server, player = asyncio.run_coroutine_threadsafe(serve_recording(path, **options), loop).result(60)
+    except BaseException:
+        loop.call_soon_threadsafe(loop.stop)
+        raise
+    try:
+        yield server, player
+    finally:
+        async def stop() -> None:
+            await player.stop()
+            await server.stop()
+
+        with contextlib.suppress(Exception):
+            asyncio.run_coroutine_threadsafe(stop(), loop).result(10)
+        player.recording.close()
+        loop.call_soon_threadsafe(loop.stop)
+        thread.join(timeout=10)
