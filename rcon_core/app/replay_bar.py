@@ -147,6 +147,8 @@ def install_replay_bar(window: Any, server: Any, player: Any) -> ReplayBar:
     window.replay = bar
     window.clock.add(bar.poll)
     window.connect_to(server.url, remember=False)
+    # widgets already running are rebuilt on ports that refuse to send (the view-only mark is per port)
+    window.apply_view_only()
     return bar
 
 
