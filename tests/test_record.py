@@ -207,3 +207,22 @@ def test_split_size_starts_new_files_each_with_every_channel(tmp_path: Path) -> 
         assert [c.topic for c in summary.channels.values()] == ["/blob"]
         total += len(messages)
     assert total == 350
+
+
+async def test_follow_session_records_what_the_apps_other_consumers_subscribe_to(sim: SimServer,
+                                                                                  tmp_path: Path) -> None:
+    """A widget reading a topic beside its binding (a button showing /lights/state): the app's recorder
+    follows the client's subscriptions, so that topic is in the file too."""
+    path = tmp_path / "follow.mcap"
+    async with connected(sim.url) as client:
+        sink = McapSink(str(path), "ros1")
+        rec = RobotRecorder(client, sink, ros2=False, topics=["/battery"], follow_session=True, discover_every=0.1)
+        await rec.start()
+        client.node("lights-button").subscribe("/lights/state", lambda _m: None)
+        await until(lambda: "/lights/state" in rec.topics, what="the followed topic")
+        await client.node("op").call_service("/lights/set", {"data": True})
+        await until(lambda: sink.stats.per_topic.get("/lights/state"), what="the lights recorded")
+        rec.stop()
+    sink.close()
+    _h, summary, _m = read_mcap(path)
+    assert {"/battery", "/lights/state"} <= {c.topic for c in summary.channels.values()}

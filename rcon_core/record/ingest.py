@@ -12,8 +12,9 @@ Runs on the bridge loop thread (``start``/``stop``/callbacks); writing is the si
   message's own header stamp when it has one, else ``log_time``.
 * **Definitions** come from the robot first (``schema.py``); a topic whose type has none is recorded as
   JSON and said in ``problems``.
-* **Which topics.** A list, or every topic the robot has (``all_topics``, minus ``exclude``), looked for
-  again every ``discover_every`` seconds so a topic that appears later is recorded too.
+* **Which topics.** A list, or every topic the robot has (``all_topics``, minus ``exclude``), or
+  (``follow_session``) every topic the client's other consumers subscribe to, looked for again every
+  ``discover_every`` seconds so a topic that appears later is recorded too.
 * **The operator.** The client's operator tap (``bridge/tap.py``) is written on ``/rcon/operator/<kind>``
   as ``rcon_msgs/OperatorEvent`` (robot, widget, name, type, outcome and the data as JSON); the app's own
   read-only rosapi queries (``canvas.port.READ_ONLY_SERVICES``) are not the operator's and are left out.
@@ -88,7 +89,8 @@ class RobotRecorder:
 
     def __init__(self, client: Any, sink: McapSink, *, ros2: bool, robot: str = "", topics: list[str] | None = None,
                  types: dict[str, str] | None = None, all_topics: bool = False, exclude: str | None = None,
-                 operator: bool = True, discover_every: float = 2.0, registry: TypeRegistry | None = None) -> None:
+                 operator: bool = True, discover_every: float = 2.0, registry: TypeRegistry | None = None,
+                 follow_session: bool = False) -> None:
         self.client = client
         self.sink = sink
         self.ros2 = ros2
@@ -99,6 +101,9 @@ class RobotRecorder:
         self.exclude = re.compile(exclude) if exclude else None
         self.operator = operator
         self.discover_every = discover_every
+        #: also record every topic the client's other nodes subscribe to (the app: what its widgets
+        #: receive, the topics they read beside their binding included), looked for every discover_every s
+        self.follow_session = follow_session
         self.registry = registry if registry is not None else operator_registry(ros2)
         if not self.registry.has(OPERATOR_TYPE):
             self.registry.add_msg_text(OPERATOR_TYPE, OPERATOR_DEFINITION)
@@ -125,7 +130,7 @@ class RobotRecorder:
         if self.operator:
             self._undo.append(self.client.session.tap.add(self._on_operator))
         await self.discover()
-        if self.all_topics and self.discover_every > 0:
+        if (self.all_topics or self.follow_session) and self.discover_every > 0:
             self._task = asyncio.get_running_loop().create_task(self._rediscover())
 
     def stop(self) -> None:
@@ -162,6 +167,8 @@ class RobotRecorder:
 
     async def discover(self) -> None:
         """Find the topics to record, their types and definitions, and subscribe to the new ones."""
+        if self.follow_session:
+            self._follow_session()
         listing = await self._listing()
         chosen: dict[str, str] = {}
         if self.all_topics:
@@ -183,6 +190,19 @@ class RobotRecorder:
         for name, type_name in chosen.items():
             if name not in self.topics and self._node is not None:
                 await self._add_topic(name, type_name)
+
+    def _follow_session(self) -> None:
+        mine = self._node.id if self._node is not None else None
+        for name, entry in list(self.client.session.topics.items()):
+            if name in self.topics or name in self.wanted or OWN_TOPICS.match(name):
+                continue
+            subs = [s for s in entry.subs if s.node.id != mine]
+            if not subs:
+                continue
+            self.wanted.append(name)
+            type_name = next((s.type for s in subs if s.type), "")
+            if type_name:
+                self.known_types.setdefault(name, type_name)
 
     async def _listing(self) -> dict[str, str]:
         """``{topic: type}`` of the robot, learning full definitions where rosapi gives them."""

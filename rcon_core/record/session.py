@@ -1,7 +1,9 @@
 """``AppRecording``: the app's Record control, without Qt -- every robot of the workspace into its own file.
 
 What is recorded, per robot: the topics the canvases' widgets show (``topics_of``: every canvas, not only
-the one on screen, so switching canvases never leaves a hole) and everything the operator sent to it
+the one on screen, so switching canvases never leaves a hole), every other topic the app subscribes to on
+that robot (what widgets read beside their binding, such as a button's state topic: ``follow_session``)
+and everything the operator sent to it
 through any widget or panel (the client's operator tap, ``bridge/tap.py``). One MCAP file per robot,
 ``<dir>/rcon-<time>-<robot>.mcap``, so each opens on its own in Foxglove, Lichtblick or ``rcon sim --play``.
 
@@ -108,7 +110,8 @@ class AppRecording:
                         on_problem=self.problems.append)
         rec = None
         if client is not None and hasattr(client, "session"):
-            rec = RobotRecorder(client, sink, ros2=ros2, robot=name, topics=list(topics), types=topics)
+            rec = RobotRecorder(client, sink, ros2=ros2, robot=name, topics=list(topics), types=topics,
+                                follow_session=True)
             await rec.start()
         self.robots[robot_id] = (client, rec, sink)
         self._topics[robot_id] = (name, dict(topics))
@@ -128,7 +131,7 @@ class AppRecording:
         new = None
         if client is not None and hasattr(client, "session") and not sink.stopped:
             new = RobotRecorder(client, sink, ros2=sink.profile == "ros2", robot=name, topics=list(topics),
-                                types=topics)
+                                types=topics, follow_session=True)
             await new.start()
         self.robots[robot_id] = (client, new, sink)
 
