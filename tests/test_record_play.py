@@ -170,3 +170,16 @@ async def test_player_plays_in_order_and_ends() -> None:
         await asyncio.sleep(0)
     seqs = [m["header"]["seq"] for m in got]
     assert seqs == sorted(seqs) and len(seqs) >= 10
+
+
+async def test_loop_starts_again_at_the_start() -> None:
+    async with playing(DEMO_BAG, rate=8.0, loop=True, start=8.0) as (server, player), connected(server.url) as client:
+        got: list[dict[str, Any]] = []
+        client.node("t").subscribe("/battery", got.append)
+        await until(lambda: player.seeks >= 2, timeout=20, what="two rounds")
+        assert not player.ended
+    # started 8 s in: the battery of 7 s (the state there), 8 s and 9 s, then again from 8 s on
+    volts = [round(m["voltage"], 2) for m in got]
+    assert set(volts) <= {23.3, 23.2, 23.1}
+    last = volts.index(23.1)
+    assert any(v > 23.1 for v in volts[last + 1:]), volts  # it went back

@@ -23,7 +23,7 @@ import logging
 from pathlib import Path
 from typing import Any
 
-from qtpy import QtWidgets
+from qtpy import QtGui, QtWidgets
 
 from rcon_core.app.theme import repolish
 from rcon_core.record.session import DEFAULT_BUDGET, AppRecording, topics_of
@@ -159,7 +159,12 @@ def install_record_control(window: Any) -> RecordControl:
     if menu is not None:
         from rcon_core.app.replay_bar import open_replay_dialog
 
-        action = menu.addAction("Replay a recording…")
+        action = QtGui.QAction("Replay a recording…", menu)
         action.setObjectName("replay_recording")
+        export = getattr(window, "canvas_actions", {}).get("export")
+        if export is not None:  # beside the other file actions, before Export / Import
+            menu.insertAction(export, action)
+        else:
+            menu.addAction(action)
         action.triggered.connect(lambda: open_replay_dialog(window))
     return control
