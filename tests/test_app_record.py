@@ -115,3 +115,22 @@ def test_rcon_play_rejects_a_file_that_is_not_a_recording(tmp_path: Path, capsys
     bad.write_text("not mcap")
     assert main(["--play", str(bad)]) == 2
     assert "cannot play" in capsys.readouterr().err
+
+
+def test_a_narrow_window_keeps_the_bar_no_wider_with_the_record_control(qtbot, tmp_path, plugins, sim_thread):
+    """Below 1000 px the button leaves the bar (Canvas ▾ → Record every robot starts and stops) and the
+    short indicator takes the round-trip time's place while recording; at 1280 px the button is back."""
+    win = next(window_session(qtbot, tmp_path / "cfg", plugins, url=sim_thread.url, wait_connected=True,
+                              size=(1280, 800)))
+    control = win.record_control
+    control.directory = tmp_path / "rec"
+    qtbot.waitUntil(lambda: not control.compact and control.button.isVisible(), timeout=5_000)
+    win.resize(900, 700)
+    qtbot.waitUntil(lambda: control.compact and not control.button.isVisible(), timeout=5_000)
+    control.action.trigger()  # Canvas ▾ → ● Record every robot
+    assert control.recording.active and control.action.text() == "■ Stop recording"
+    qtbot.waitUntil(lambda: control.indicator.text().startswith("REC 00:0"), timeout=5_000)
+    assert "MB" not in control.indicator.text() and "MB" in control.indicator.toolTip()
+    assert not win.connection.latency_label.isVisible()
+    control.action.trigger()
+    assert not control.recording.active and win.connection.latency_label.isVisible()

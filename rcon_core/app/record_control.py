@@ -1,7 +1,10 @@
 """The Record control on the connection bar: record every robot of the workspace and what the operator did.
 
-A button ("● Rec") and, while recording, an indicator: ``REC 01:23 · 45.6 MB`` (red), the time and the
-size on disk of every file, updated once a second from the frame clock. Each robot gets its own MCAP file
+A button ("● Rec"; also Canvas ▾ → Record every robot) and, while recording, an indicator:
+``REC 01:23 · 45.6 MB`` (red), the time and the size on disk of every file, updated once a second from the
+frame clock. In a window narrower than 1000 px (on a screen that narrow, from the start) the bar has no
+room for more: the button is left out (the menu starts and stops), and the indicator, ``REC 01:23`` (the
+size in its tooltip), takes the round-trip time's place while recording. Each robot gets its own MCAP file
 in the recordings folder (``AppConfig.dir / "recordings"`` unless ``window.record_control.directory`` is
 set): the topics every canvas's widgets show, and on ``/rcon/operator/...`` every publish, call and
 answer, action goal, feedback, result and cancel, and parameter set that left the app for it, with the
@@ -23,14 +26,17 @@ import logging
 from pathlib import Path
 from typing import Any
 
-from qtpy import QtGui, QtWidgets
+from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app.theme import repolish
 from rcon_core.record.session import DEFAULT_BUDGET, AppRecording, topics_of
 
 log = logging.getLogger(__name__)
 
-__all__ = ["RecordControl", "install_record_control"]
+__all__ = ["RecordControl", "install_record_control", "COMPACT_BELOW"]
+
+#: a window narrower than this gets the compact control (a 1024x600 tablet has room for the button)
+COMPACT_BELOW = 1000
 
 
 def _clock(seconds: float) -> str:
@@ -41,8 +47,12 @@ def _clock(seconds: float) -> str:
 class RecordControl(QtWidgets.QWidget):
     """The button and the indicator (see the module docstring)."""
 
-    def __init__(self, window: Any, parent: QtWidgets.QWidget | None = None) -> None:
+    def __init__(self, window: Any, parent: QtWidgets.QWidget | None = None, *, compact: bool = False) -> None:
         super().__init__(parent)
+        #: a small screen: no button on the bar (Canvas ▾ → Record every robot), and while recording a
+        #: short indicator in the place of the round-trip time, so the bar is no wider than without it
+        self.compact = compact
+        self.action: QtGui.QAction | None = None
         self.main = window
         self.directory = Path(window.config.dir) / "recordings"
         self.budget: int | None = DEFAULT_BUDGET
@@ -64,6 +74,22 @@ class RecordControl(QtWidgets.QWidget):
         row.setSpacing(6)
         row.addWidget(self.button)
         row.addWidget(self.indicator)
+        self.button.setVisible(not compact)
+
+    def set_compact(self, compact: bool) -> None:
+        """The bar is narrower than ``COMPACT_BELOW`` (or no longer): the button goes (or comes back)."""
+        if compact == self.compact:
+            return
+        self.compact = compact
+        self.button.setVisible(not compact)
+        recording = self.recording is not None and self.recording.active
+        self.main.connection.latency_label.setVisible(not (compact and recording))
+        self._show()
+
+    def eventFilter(self, obj: QtCore.QObject, event: QtCore.QEvent) -> bool:  # noqa: N802 - Qt's name
+        if event.type() == QtCore.QEvent.Type.Resize and isinstance(obj, QtWidgets.QWidget):
+            self.set_compact(obj.width() < COMPACT_BELOW)
+        return False
 
     # ------------------------------------------------------------------ start and stop
 
@@ -96,6 +122,10 @@ class RecordControl(QtWidgets.QWidget):
         self._said.clear()
         self.button.setChecked(True)
         self.button.setText("■ Stop")
+        if self.action is not None:
+            self.action.setText("■ Stop recording")
+        if self.compact:
+            self.main.connection.latency_label.hide()
         self.indicator.show()
         self._show(force=True)
 
@@ -107,7 +137,11 @@ class RecordControl(QtWidgets.QWidget):
         status = rec.status()
         self.button.setChecked(False)
         self.button.setText("● Rec")
+        if self.action is not None:
+            self.action.setText("● Record every robot")
         self.indicator.hide()
+        if self.compact:
+            self.main.connection.latency_label.show()
         files = ", ".join(Path(f).name for f in status.files)
         self.main.notice.show_notice(f"ℹ Recorded {_clock(status.seconds)}, {status.size / 1e6:.1f} MB: {files} "
                                        f"in {self.directory}", kind="info")
@@ -134,8 +168,9 @@ class RecordControl(QtWidgets.QWidget):
         if rec is None:
             return
         st = rec.status()
-        self.indicator.setText(f"REC {_clock(st.seconds)} · {st.size / 1e6:.1f} MB")
-        self.indicator.setToolTip(f"{st.messages} messages, {st.events} operator events"
+        self.indicator.setText(f"REC {_clock(st.seconds)}" if self.compact else
+                               f"REC {_clock(st.seconds)} · {st.size / 1e6:.1f} MB")
+        self.indicator.setToolTip(f"{st.size / 1e6:.1f} MB, {st.messages} messages, {st.events} operator events"
                                   + (f", {st.dropped} dropped" if st.dropped else "") + " · " + ", ".join(st.files))
         self.indicator.setProperty("role", "problem" if st.recording else "muted")
         repolish(self.indicator)
@@ -148,23 +183,32 @@ class RecordControl(QtWidgets.QWidget):
 
 
 def install_record_control(window: Any) -> RecordControl:
-    """Put the Record control on the connection bar, before the link state, and on the frame clock."""
-    control = RecordControl(window)
+    """Put the Record control on the connection bar, before the link state, and on the frame clock; and
+    Canvas ▾ → Record every robot / Replay a recording…"""
+    screen = window.screen() or QtGui.QGuiApplication.primaryScreen()
+    compact = screen is not None and screen.availableGeometry().width() < COMPACT_BELOW
+    control = RecordControl(window, compact=compact)
     row = window.connection.layout()
     if isinstance(row, QtWidgets.QBoxLayout):
         row.insertWidget(max(0, row.indexOf(window.connection.state_label)), control)
+    window.installEventFilter(control)  # compact or not as the window's width goes
     window.clock.add(control.poll)
     window.record_control = control  # MainWindow.shutdown closes its files before the links go
     menu = getattr(getattr(window, "canvas_bar", None), "menu", None)
     if menu is not None:
         from rcon_core.app.replay_bar import open_replay_dialog
 
+        record = QtGui.QAction("● Record every robot", menu)
+        record.setObjectName("record")
+        record.triggered.connect(control.toggle)
+        control.action = record
         action = QtGui.QAction("Replay a recording…", menu)
         action.setObjectName("replay_recording")
         export = getattr(window, "canvas_actions", {}).get("export")
-        if export is not None:  # beside the other file actions, before Export / Import
-            menu.insertAction(export, action)
-        else:
-            menu.addAction(action)
+        for a in (record, action):
+            if export is not None:  # beside the other file actions, before Export / Import
+                menu.insertAction(export, a)
+            else:
+                menu.addAction(a)
         action.triggered.connect(lambda: open_replay_dialog(window))
     return control
