@@ -65,6 +65,7 @@ def main(argv: list[str] | None = None) -> int:
             wait_until(lambda: win.connection.state is ConnectionState.CONNECTED, "the demo robot")
             settle(2000)
             control = win.record_control
+            control.set_compact(False)  # the offscreen screen is 800 px wide; the picture is of a wide one
             control.directory = Path(tmp) / "rec"
             control.button.click()
             pad = next((h for h in win.host.hosted.values() if h.model.binding.name.endswith("cmd_vel")

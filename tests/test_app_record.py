@@ -7,7 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from app_helpers import entry_point_plugins, window_session
+from app_helpers import entry_point_plugins, settle, window_session
 from mcap.reader import make_reader
 from record_helpers import DEMO_BAG
 from rogue_widget import CMD, RoguePlugin
@@ -117,20 +117,27 @@ def test_rcon_play_rejects_a_file_that_is_not_a_recording(tmp_path: Path, capsys
     assert "cannot play" in capsys.readouterr().err
 
 
-def test_a_narrow_window_keeps_the_bar_no_wider_with_the_record_control(qtbot, tmp_path, plugins, sim_thread):
-    """Below 1000 px the button leaves the bar (Canvas ▾ → Record every robot starts and stops) and the
-    short indicator takes the round-trip time's place while recording; at 1280 px the button is back."""
+def test_the_compact_control_of_a_small_screen_keeps_the_bar_no_wider(qtbot, tmp_path, plugins, sim_thread):
+    """On a screen below 1000 px the button is left out (Canvas ▾ → Record every robot starts and stops)
+    and the short indicator takes the round-trip time's place while recording."""
     win = next(window_session(qtbot, tmp_path / "cfg", plugins, url=sim_thread.url, wait_connected=True,
                               size=(1280, 800)))
     control = win.record_control
     control.directory = tmp_path / "rec"
-    qtbot.waitUntil(lambda: not control.compact and control.button.isVisible(), timeout=5_000)
-    win.resize(900, 700)
-    qtbot.waitUntil(lambda: control.compact and not control.button.isVisible(), timeout=5_000)
+    control.set_compact(False)
+    qtbot.waitUntil(lambda: control.button.isVisible(), timeout=5_000)
+    settle(100)
+    wide = win.connection.minimumSizeHint().width()
+    control.set_compact(True)
+    qtbot.waitUntil(lambda: win.connection.minimumSizeHint().width() < wide, timeout=5_000)
+    assert not control.button.isVisible()
+    narrow = win.connection.minimumSizeHint().width()
     control.action.trigger()  # Canvas ▾ → ● Record every robot
     assert control.recording.active and control.action.text() == "■ Stop recording"
     qtbot.waitUntil(lambda: control.indicator.text().startswith("REC 00:0"), timeout=5_000)
     assert "MB" not in control.indicator.text() and "MB" in control.indicator.toolTip()
     assert not win.connection.latency_label.isVisible()
+    settle(100)
+    assert win.connection.minimumSizeHint().width() <= narrow + 40
     control.action.trigger()
     assert not control.recording.active and win.connection.latency_label.isVisible()

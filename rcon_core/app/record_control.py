@@ -2,9 +2,9 @@
 
 A button ("● Rec"; also Canvas ▾ → Record every robot) and, while recording, an indicator:
 ``REC 01:23 · 45.6 MB`` (red), the time and the size on disk of every file, updated once a second from the
-frame clock. In a window narrower than 1000 px (on a screen that narrow, from the start) the bar has no
-room for more: the button is left out (the menu starts and stops), and the indicator, ``REC 01:23`` (the
-size in its tooltip), takes the round-trip time's place while recording. Each robot gets its own MCAP file
+frame clock. On a screen narrower than 1000 px the bar has no room for more: the button is left out (the
+menu starts and stops), and the indicator, ``REC 01:23`` (the size in its tooltip), takes the round-trip
+time's place while recording. Each robot gets its own MCAP file
 in the recordings folder (``AppConfig.dir / "recordings"`` unless ``window.record_control.directory`` is
 set): the topics every canvas's widgets show, and on ``/rcon/operator/...`` every publish, call and
 answer, action goal, feedback, result and cancel, and parameter set that left the app for it, with the
@@ -26,7 +26,7 @@ import logging
 from pathlib import Path
 from typing import Any
 
-from qtpy import QtCore, QtGui, QtWidgets
+from qtpy import QtGui, QtWidgets
 
 from rcon_core.app.theme import repolish
 from rcon_core.record.session import DEFAULT_BUDGET, AppRecording, topics_of
@@ -35,7 +35,7 @@ log = logging.getLogger(__name__)
 
 __all__ = ["RecordControl", "install_record_control", "COMPACT_BELOW"]
 
-#: a window narrower than this gets the compact control (a 1024x600 tablet has room for the button)
+#: a screen narrower than this gets the compact control (a 1024x600 tablet has room for the button)
 COMPACT_BELOW = 1000
 
 
@@ -77,7 +77,9 @@ class RecordControl(QtWidgets.QWidget):
         self.button.setVisible(not compact)
 
     def set_compact(self, compact: bool) -> None:
-        """The bar is narrower than ``COMPACT_BELOW`` (or no longer): the button goes (or comes back)."""
+        """Leave the button out (or put it back). Decided once, from the screen, by the installer: a
+        control that came and went with the window's width would change the bar's minimum width, which
+        stays the same in every state (``connection_bar.py``)."""
         if compact == self.compact:
             return
         self.compact = compact
@@ -85,11 +87,6 @@ class RecordControl(QtWidgets.QWidget):
         recording = self.recording is not None and self.recording.active
         self.main.connection.latency_label.setVisible(not (compact and recording))
         self._show()
-
-    def eventFilter(self, obj: QtCore.QObject, event: QtCore.QEvent) -> bool:  # noqa: N802 - Qt's name
-        if event.type() == QtCore.QEvent.Type.Resize and isinstance(obj, QtWidgets.QWidget):
-            self.set_compact(obj.width() < COMPACT_BELOW)
-        return False
 
     # ------------------------------------------------------------------ start and stop
 
@@ -191,7 +188,6 @@ def install_record_control(window: Any) -> RecordControl:
     row = window.connection.layout()
     if isinstance(row, QtWidgets.QBoxLayout):
         row.insertWidget(max(0, row.indexOf(window.connection.state_label)), control)
-    window.installEventFilter(control)  # compact or not as the window's width goes
     window.clock.add(control.poll)
     window.record_control = control  # MainWindow.shutdown closes its files before the links go
     menu = getattr(getattr(window, "canvas_bar", None), "menu", None)
