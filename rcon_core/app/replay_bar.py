@@ -8,9 +8,10 @@ the current time and the length, and the words "REPLAY ... commands go nowhere".
 Seeking sends each topic's latest message before that time (the player) and restarts the canvas's widgets,
 so each shows the state at that time, not a trail from before (the map's track starts again there).
 
-Commands go nowhere, twice over: the recording's robot is view-only in the app (``window.replay.reason``
-is its view-only reason, read by ``fleet_ui``: control widgets show it and send nothing), and the player
-absorbs whatever reaches it (``Player.absorbed``).
+Commands go nowhere, three times over: the recording's robot is view-only in the app
+(``window.replay.reason`` is its view-only reason, ``view_only.reason``): its link refuses every command
+(``bridge/guard.py``) and its control widgets show the sentence and send nothing; and the player absorbs
+whatever reaches it anyway (``Player.absorbed``).
 """
 
 from __future__ import annotations
@@ -147,7 +148,7 @@ def install_replay_bar(window: Any, server: Any, player: Any) -> ReplayBar:
     window.replay = bar
     window.clock.add(bar.poll)
     window.connect_to(server.url, remember=False)
-    # widgets already running are rebuilt on ports that refuse to send (the view-only mark is per port)
+    # the link refuses to send (bridge/guard.py), and widgets already running are rebuilt on ports that say so
     window.apply_view_only()
     return bar
 

@@ -27,7 +27,7 @@ from websockets.exceptions import ConnectionClosed
 
 from rcon_core.msgs.names import pkg_type
 
-from . import assembly, fanout, gate
+from . import assembly, fanout, gate, ros2_clients
 from .connection import Connection, SubOptions, TopicSubscription
 from .convert import ConversionError
 from .flavour import Flavour
@@ -133,6 +133,7 @@ class SimServer:
         if not self.ros2:
             self.advertise_internal("/rosout_agg", self.flavour.msg("rosgraph_msgs", "Log"), ROSOUT_NODE)
         self.advertise_internal("/client_count", self.flavour.msg("std_msgs", "Int32"), BRIDGE_NODE, latched=True)
+        ros2_clients.advertise(self)
         assembly.furnish(self)
         limits: dict[str, Any] = {"max_size": self.max_frame}
         if self.auth_secret is not None:  # the first message is small; the gate raises the limit after it
@@ -350,6 +351,7 @@ class SimServer:
         self.connections.add(conn)
         self.log(BRIDGE_NODE, "info", f"Client connected.  {len(self.connections)} clients total.")
         self.publish("/client_count", {"data": len(self.connections)}, BRIDGE_NODE)
+        ros2_clients.publish(self)
         try:
             async for message in ws:
                 try:
@@ -367,6 +369,7 @@ class SimServer:
             self.log(BRIDGE_NODE, "info", f"Client disconnected. {len(self.connections)} clients total.")
             if "/client_count" in self.topics:
                 self.publish("/client_count", {"data": len(self.connections)}, BRIDGE_NODE)
+            ros2_clients.publish(self)
 
     def _cleanup(self, conn: Connection) -> None:
         for name in list(conn.subscriptions):
@@ -395,7 +398,9 @@ class SimServer:
             return
         op = msg["op"]
         target = msg.get("topic") or msg.get("service") or msg.get("action") or ""
-        self.ops_received[(str(op), target if isinstance(target, str) else "")] += 1
+        key = (str(op), target if isinstance(target, str) else "")
+        self.ops_received[key] += 1
+        conn.ops_received[key] += 1
         handler = self._ops().get(op) if isinstance(op, str) else None
         if handler is None:
             log.error("%s [id: %s] Unknown operation: %s.  Allowed operations: %s", conn.label, msg.get("id"),
