@@ -59,6 +59,13 @@ SEEK_NODE = "/rcon_player/seek"  # the state at a seek point, kept for subscribe
 PREFETCH = 64
 
 
+def _get(q: queue.Queue[Any]) -> Any:
+    try:
+        return q.get(timeout=0.25)
+    except queue.Empty:
+        return None
+
+
 class RecordedMessage(dict):  # type: ignore[type-arg]
     """A message as decoded for JSON/CBOR subscribers, carrying its recorded bytes for cbor-raw ones."""
 
@@ -296,11 +303,17 @@ class Player:
 
     async def _next(self) -> Any:
         q = self._reader.out
+        loop = asyncio.get_running_loop()
         while True:
             try:
                 gen, item = q.get_nowait()
             except queue.Empty:
-                gen, item = await asyncio.get_running_loop().run_in_executor(None, q.get)
+                # waited for in a worker thread, a short while at a time: a worker blocked for good would
+                # hold up the loop's shutdown (asyncio.run waits for its executor)
+                got = await loop.run_in_executor(None, _get, q)
+                if got is None:
+                    continue
+                gen, item = got
             if gen == self._reader.generation:
                 return item
 
