@@ -226,3 +226,34 @@ async def test_follow_session_records_what_the_apps_other_consumers_subscribe_to
     sink.close()
     _h, summary, _m = read_mcap(path)
     assert {"/battery", "/lights/state"} <= {c.topic for c in summary.channels.values()}
+
+
+async def test_action_goals_feedback_results_and_cancels_are_recorded(sim_ros2: SimServer, tmp_path: Path) -> None:
+    """ROS 2: a goal, its feedback and its result, and a cancelled goal, on /rcon/operator/goal, feedback,
+    result and cancel, with the node that sent them."""
+    path = tmp_path / "goals.mcap"
+
+    async def act(client: Any) -> None:
+        node = client.node("action-3")
+        goal = node.send_action_goal("/fibonacci", "action_tutorials_interfaces/action/Fibonacci", {"order": 3},
+                                     feedback=lambda _v: None)
+        await goal.result(timeout=20)
+        other = node.send_action_goal("/fibonacci", "action_tutorials_interfaces/action/Fibonacci", {"order": 40},
+                                      feedback=lambda _v: None)
+        await until(lambda: other.last_feedback is not None, what="the second goal running")
+        other.cancel()
+        await other.result(timeout=20)
+
+    rec = await record(sim_ros2, path, topics=["/battery"], until_messages=1, act=act)
+    _h, _summary, messages = read_mcap(path)
+    reg = TypeRegistry.standard(ros2=True)
+    reg.add_msg_text("rcon_msgs/msg/OperatorEvent", OPERATOR_DEFINITION)
+    events = [(c.topic.rsplit("/", 1)[-1], reg.deserialize_cdr("rcon_msgs/msg/OperatorEvent", m.data))
+              for _s, c, m in messages if c.topic.startswith(OPERATOR_PREFIX)]
+    kinds = [k for k, _e in events]
+    assert kinds.count("goal") == 2 and kinds.count("result") == 2 and kinds.count("cancel") == 1
+    assert kinds.count("feedback") >= 2
+    results = [e for k, e in events if k == "result"]
+    assert [e["outcome"] for e in results] == ["succeeded", "canceled"]
+    assert all(e["widget"] == "action-3" and e["name"] == "/fibonacci" for _k, e in events)
+    assert rec.events == len(events)
