@@ -159,6 +159,7 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
     windows: list[Any] = []
     stack.enter_context(closing_on_signals(windows))
     demo_factory = None
+    replay: Any = None  # (server, player) of --play FILE
     fleet_urls: list[str] = []
     if demo and robots is not None:
         from rcon_core.app.fleet_demo import connect_fleet, fleet_sims, fleet_workspace
@@ -170,6 +171,18 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
         def demo_factory() -> Any:
             return fleet_workspace(robots, plugins)
 
+    elif getattr(args, "play", None):
+        if demo:
+            print("rcon: --play opens a recording as the robot; it does not go with --demo", file=sys.stderr)
+            return 2
+        from rcon_core.record.files import RecordingError
+        from rcon_core.sim.playback import played_in_thread
+
+        try:
+            replay = stack.enter_context(played_in_thread(args.play))
+        except (RecordingError, OSError) as exc:
+            print(f"rcon: cannot play {exc}", file=sys.stderr)
+            return 2
     elif demo:
         from rcon_core.app.demo import demo_workspace
         from rcon_core.sim import SimServer
@@ -209,6 +222,10 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
     # URLs (window.fleet_ui)
     if fleet_urls:  # the demo's vessels: run-time URLs, never saved
         connect_fleet(window, fleet_urls)
+    elif replay is not None:  # the recording's robot: view-only, its timeline under the connection bar
+        from rcon_core.app.replay_bar import install_replay_bar
+
+        install_replay_bar(window, *replay)
     else:
         window.connect_to(url or window.fleet_ui.first_url() or config.last_url, remember=not demo)
     if getattr(args, "screenshot", None):

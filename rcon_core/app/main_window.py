@@ -43,6 +43,7 @@ from rcon_core.app.operator_lock import OperatorLock
 from rcon_core.app.palette_panel import PalettePanel
 from rcon_core.app.params_panel import ParamsPanel
 from rcon_core.app.preview import PreviewHost
+from rcon_core.app.record_control import install_record_control
 from rcon_core.app.side_panel import PANEL_MIN, SIDE_MIN, SidePanelPolicy
 from rcon_core.app.template_menu import add_template_menu
 from rcon_core.app.widget_host import RateMeter, WidgetHost
@@ -260,6 +261,11 @@ class MainWindow(QtWidgets.QMainWindow):
             app.applicationStateChanged.connect(self._app_state_changed)
         install_lock_controls(self)  # the operator lock's and the view-only controls
         install_envelope(self)  # Canvas ▾ → Safety envelope… (the PIN first while locked)
+        #: the Record control on the connection bar (the flight recorder: record_control.py)
+        self.record_control: Any = install_record_control(self)
+        #: the timeline of a recording played as the robot (replay_bar.py), or None
+        self.replay: Any = None
+        self.replay_stack: Any = None  # what plays a recording opened from the menu (closed at shutdown)
         self.resize(self.initial_size())
 
     # ------------------------------------------------------------------------------------ workspace
@@ -606,6 +612,9 @@ class MainWindow(QtWidgets.QMainWindow):
             except (RuntimeError, TypeError):
                 pass
         self.add_panel.cancel()
+        self.record_control.close_files()  # closed properly before the links go
+        if self.replay_stack is not None:
+            self.replay_stack.close()  # a recording opened from the menu stops playing
         self.controller.shutdown()
         self.preview_live.stop()
         self.fleet_ui.shutdown()

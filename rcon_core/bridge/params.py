@@ -168,6 +168,17 @@ class Params:
     async def set(self, name: str, value: Any, verify: bool = True) -> None:
         """Set ``name`` to ``value``; with ``verify`` read it back and raise :class:`ParamRejectedError`
         when the node did not take it (ROS 2 nodes refuse undeclared names and other types silently)."""
+        tap = getattr(getattr(self._client, "session", None), "tap", None)  # the operator tap (tap.py)
+        if tap is None or not tap.listeners:
+            return await self._set(name, value, verify)
+        try:
+            await self._set(name, value, verify)
+        except Exception as exc:
+            tap.emit("param", "params", name, "", value, f"error: {exc}")
+            raise
+        tap.emit("param", "params", name, "", value, "ok" if verify else "sent")
+
+    async def _set(self, name: str, value: Any, verify: bool) -> None:
         ros2 = await self.ros2()
         if ros2:
             node, param = split(name, True)

@@ -66,6 +66,7 @@ from .protocol import encode
 from .safety import bounded_repr, safe_text
 from .services import ProvidedServices
 from .subscribe import Subscriber
+from .tap import OperatorTap
 from .topics import AdvertEntry, TopicEntry
 
 if TYPE_CHECKING:
@@ -126,6 +127,8 @@ class Session:
         self.goals = Goals(self.send, self.spawn, host)
         self.provided_actions = ProvidedActions(self.send)  # actions this client serves (ROS 2)
         self.subscriber = Subscriber(self, host)
+        #: what the nodes send, told to listeners (the flight recorder): ``tap.py``
+        self.tap = OperatorTap()
         #: whether this link is view-only, and what it offered the robot (``guard.py``)
         self.guard = LinkGuard(host.url)
         self.guard.add_listener(self._guard_changed)

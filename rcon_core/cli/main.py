@@ -24,6 +24,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "plugins": ("rcon_core.cli.plugin_cmds", "list installed widget packages and their widgets"),
     "match": ("rcon_core.cli.plugin_cmds", "list the widgets that fit a type and role, ranked"),
     "new-widget": ("rcon_core.cli.new_widget", "write a new widget package (pyproject, plugin, model, view, tests)"),
+    "record": ("rcon_core.cli.record_cmd", "record a robot's topics to an MCAP file (or mend one cut short)"),
     "layout": ("rcon_core.cli.layout_cmd", "check a layout file (rcon layout validate FILE) or print its schema"),
 }
 
@@ -47,6 +48,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--canvas", metavar="FILE|TEMPLATE",
                         help="open this canvas file (rcon-canvas, as Export canvas writes it) or an installed "
                         "plugin's template by its title, in a workspace of its own (nothing is saved)")
+    parser.add_argument("--play", metavar="FILE",
+                        help="open a recording as the robot (an .mcap file, a rosbag1 .bag or a rosbag2 folder), "
+                        "with a timeline to play, pause, change speed and seek; commands go nowhere")
     parser.add_argument("--screenshot", metavar="PATH", help="write a PNG of the window, then exit")
     parser.add_argument("--window-size", metavar="WxH", help="the window's size, e.g. 1024x600 (with --screenshot: "
                         "the picture's size)")
