@@ -5,7 +5,8 @@ The message says why a link is not up, in the words of :mod:`rcon_core.bridge.re
 refused · retrying in 3 s", "certificate not trusted (self-signed? pass the CA file)"), within a frame of
 the failed attempt; a fatal failure (TLS, refused authentication) ends the link, a retried one counts down.
 No text changes the window's width or the bar's height: the message takes a second line where the bar
-has the height, then is elided, the whole of it in its tooltip.  A URL enters
+has the height, then is elided, the whole of it in its tooltip.  Enter connects to exactly what the URL
+field holds: the history is offered as the field's list, never completed inline.  A URL enters
 the history once its link has come up, or, with rosauth, once its robot answered a call after the auth
 op (a robot refusing the secret opens the link and then closes it).
 """
@@ -23,6 +24,7 @@ from rcon_core.app.link import BadUrl, Link, LinkSettings, check_url
 from rcon_core.app.link_settings import LinkSettingsDialog
 from rcon_core.app.secret_store import SecretStore
 from rcon_core.app.theme import repolish
+from rcon_core.app.url_field import UrlLineEdit
 from rcon_core.bridge import ConnectionState
 
 
@@ -73,7 +75,13 @@ class ConnectionBar(QtWidgets.QFrame):
         self.url = QtWidgets.QComboBox()
         self.url.setObjectName("urlField")
         self.url.setEditable(True)
+        # a long URL shows its scheme and its port, "…" in the middle (url_field.py)
+        self.url.setLineEdit(UrlLineEdit())
+        # Enter connects to exactly what is typed: the history is the list to pick from, never completed
+        # inline (an inline completion turned ":91" into the history's ":9191", another robot)
+        self.url.setCompleter(None)
         self.url.setInsertPolicy(QtWidgets.QComboBox.InsertPolicy.NoInsert)
+        self.url.setAccessibleName("Robot URL")
         # an 800 px window keeps its side panel toggle, the lock and the state
         self.url.setMinimumWidth(200)
         # a long URL in the history never widens the bar (and so the window)
