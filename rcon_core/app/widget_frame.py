@@ -31,7 +31,9 @@ def frame_min_size() -> QtCore.QSize:
 
 
 class Badge(QtWidgets.QLabel):
-    """A small status pill at the right end of the frame's title bar."""
+    """A small status pill at the right end of the frame's title bar. Its tooltip is the reason (hover);
+    a tap shows the reason on the frame, on one line under the title (:class:`ReasonLine`), and a second
+    tap hides it."""
 
     COLOURS = {"stale": "#a85400", "down": "#b00000", "problem": "#b00000", "ok": "#006b1b",
                "view-only": "#3a3a3a"}
@@ -40,29 +42,81 @@ class Badge(QtWidgets.QLabel):
         super().__init__(parent)
         self.setObjectName("frameBadge")
         self.kind = ""
-        self.setAttribute(QtCore.Qt.WidgetAttribute.WA_TransparentForMouseEvents)
+        self.reason = ""
+        self.setCursor(QtCore.Qt.CursorShape.PointingHandCursor)
         self.hide()
 
-    def show_status(self, kind: str, text: str) -> None:
-        if kind == self.kind and text == self.text():
+    def show_status(self, kind: str, text: str, reason: str = "") -> None:
+        """Show ``text`` in ``kind``'s colour (``""``: hide); ``reason`` is the sentence behind it, shown on
+        hover (the tooltip) and on a tap (the frame's reason line)."""
+        if kind == self.kind and text == self.text() and reason == self.reason:
             return
-        self.kind = kind
+        self.kind, self.reason = kind, reason
+        self.setToolTip(reason)
+        self.setAccessibleName(f"status: {text}" if kind else "")
+        self.setAccessibleDescription(reason)
         frame = self.parentWidget()
         if not kind:
             self.hide()
+        else:
+            colour = self.COLOURS.get(kind, "#000000")
+            self.setStyleSheet(
+                f"background:{colour}; color:#ffffff; font-weight:bold; border-radius:4px; padding:2px 8px;"
+            )
+            self.setText(text)
+            self.adjustSize()
+            self.show()
+            self.raise_()
+        if isinstance(frame, WidgetFrame):
+            frame.layout_overlays()  # hidden: the title gets its full width back
+            frame.reason_line.follow(self)
+
+    def mouseReleaseEvent(self, event: QtGui.QMouseEvent) -> None:  # noqa: N802 - Qt's name
+        if event.button() == QtCore.Qt.MouseButton.LeftButton and self.rect().contains(event.position().toPoint()):
+            frame = self.parentWidget()
             if isinstance(frame, WidgetFrame):
-                frame.layout_overlays()  # the title gets its full width back
+                frame.reason_line.toggle(self)
+        super().mouseReleaseEvent(event)
+
+
+class ReasonLine(OneLineLabel):
+    """The badge's reason on one line across the top of the frame's body, cut with "…" when it is too
+    long (the whole sentence in its tooltip); shown by a tap on the badge, hidden by another tap on either."""
+
+    def __init__(self, parent: QtWidgets.QWidget) -> None:
+        super().__init__(parent)
+        self.setObjectName("frameReason")
+        self.full = ""
+        self.setStyleSheet("background:#ffffff; color:#000000; border:2px solid #b00000; padding:1px 4px;")
+        self.hide()
+
+    def toggle(self, badge: Badge) -> None:
+        if self.isVisible() or not badge.reason:
+            self.hide()
             return
-        colour = self.COLOURS.get(kind, "#000000")
-        self.setStyleSheet(
-            f"background:{colour}; color:#ffffff; font-weight:bold; border-radius:4px; padding:2px 8px;"
-        )
-        self.setText(text)
-        self.adjustSize()
+        self.full = ""
+        self.follow(badge)
         self.show()
         self.raise_()
-        if isinstance(frame, WidgetFrame):
-            frame.layout_overlays()
+
+    def follow(self, badge: Badge) -> None:
+        """The badge changed: the line says its new reason, or goes away with it."""
+        if not badge.isVisible() or not badge.reason:
+            self.hide()
+            return
+        if badge.reason != self.full:
+            self.full = badge.reason
+            self.setToolTip(badge.reason)
+            self.setAccessibleName(badge.reason)
+            self._elide()
+
+    def _elide(self) -> None:
+        room = self.contentsRect().width()
+        self.setText(self.fontMetrics().elidedText(self.full, QtCore.Qt.TextElideMode.ElideRight, max(0, room)))
+
+    def mouseReleaseEvent(self, event: QtGui.QMouseEvent) -> None:  # noqa: N802 - Qt's name
+        self.hide()
+        super().mouseReleaseEvent(event)
 
 
 class FrameTitle(OneLineLabel):
@@ -180,6 +234,12 @@ class Shield(QtWidgets.QWidget):
         if t == QtCore.QEvent.Type.TouchCancel:
             self._end(commit=False)
             return True
+        if t == QtCore.QEvent.Type.ToolTip:  # over the badge: its reason, as in Operate mode
+            badge = self.frame.badge
+            pos = event.pos()  # type: ignore[attr-defined]
+            if badge.isVisible() and badge.reason and badge.geometry().contains(pos):
+                QtWidgets.QToolTip.showText(event.globalPos(), badge.reason, self)  # type: ignore[attr-defined]
+                return True
         return super().event(event)
 
     def _touch(self, event: QtGui.QTouchEvent) -> None:
@@ -348,6 +408,7 @@ class WidgetFrame(QtWidgets.QFrame):
         col.addWidget(self.body, 1)
         self.problems = ProblemOverlay(self)
         self.badge = Badge(self)
+        self.reason_line = ReasonLine(self)
         self.shield = Shield(self)
         self.marks = [CornerMark(corner, self) for corner in CORNERS]
         self._pinch_start = QtCore.QRect()
@@ -541,7 +602,11 @@ class WidgetFrame(QtWidgets.QFrame):
             self.title.set_reserve(max(0, self.badge.width() + 6 - self.title.contentsMargins().right()))
         else:
             self.title.set_reserve(0)
+        title = self.title.geometry()
+        line = self.reason_line.sizeHint().height()
+        self.reason_line.setGeometry(title.left(), title.bottom() + 1, title.width(), line)
         self.problems.raise_()
+        self.reason_line.raise_()
         self.badge.raise_()
         if self.editable:
             self.shield.raise_()

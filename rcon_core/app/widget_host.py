@@ -206,18 +206,17 @@ class WidgetHost:
         state = model.state
         badge = hosted.frame.badge
         if hosted.widget.id in self.dry_run:
-            badge.show_status("ok", "PREVIEW ONLY")
-            badge.setToolTip("not sent to the robot until the widget is placed")
+            badge.show_status("ok", "PREVIEW ONLY", "not sent to the robot until the widget is placed")
         elif view_only_control(hosted.widget, model):
-            badge.show_status("view-only", "VIEW ONLY")
-            badge.setToolTip(f"{model.view_only}: nothing is sent to the robot")
+            badge.show_status("view-only", "VIEW ONLY", f"{model.view_only}: nothing is sent to the robot")
         elif state.link_down or not self.link_up_for(hosted.widget):
-            badge.show_status("down", "LINK DOWN")
+            badge.show_status("down", "LINK DOWN", "the link to this widget's robot is down: nothing arrives, "
+                                                   "nothing is sent")
         elif state.error or hosted.view_error:
-            badge.show_status("problem", "ERROR")
-            badge.setToolTip(state.error or hosted.view_error or "")
+            badge.show_status("problem", "ERROR", state.error or hosted.view_error or "")
         elif state.stale:
-            badge.show_status("stale", "STALE" if state.count else "NO DATA")
+            badge.show_status("stale", "STALE" if state.count else "NO DATA",
+                              "no new value for a while" if state.count else "nothing has arrived yet")
         else:
             badge.show_status("", "")
         if state.seq == hosted.painted_seq:
@@ -248,8 +247,7 @@ class WidgetHost:
         if n <= 20 or n % 1000 == 0:
             log.error("widget %s (%s): %s (%d so far)", hosted.widget.id, hosted.widget.kind, hosted.view_error, n)
         try:
-            hosted.frame.badge.show_status("problem", "ERROR")
-            hosted.frame.badge.setToolTip(hosted.view_error)
+            hosted.frame.badge.show_status("problem", "ERROR", hosted.view_error)
         except Exception:  # noqa: BLE001 - the frame itself is broken: the count and the log say it
             pass
 
