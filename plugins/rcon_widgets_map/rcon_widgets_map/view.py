@@ -447,8 +447,14 @@ class MapView(QtWidgets.QWidget):
         pen.setJoinStyle(Qt.PenJoinStyle.RoundJoin)
         p.setPen(pen)
         p.setBrush(Qt.BrushStyle.NoBrush)
+        for line in self.trail_lines(track):
+            p.drawPolyline(line)
+
+    def trail_lines(self, track: Track) -> list[QtGui.QPolygonF]:
+        """The trail on screen: one line per unbroken piece (never a line across a jump or a lost link)."""
         to_screen = self.viewport.to_screen
-        p.drawPolyline(QtGui.QPolygonF([QtCore.QPointF(*to_screen(lat, lon)) for lat, lon in track.points]))
+        return [QtGui.QPolygonF([QtCore.QPointF(*to_screen(lat, lon)) for lat, lon in piece])
+                for piece in track.segments() if len(piece) >= 2]
 
     def _paint_marker(self, p: QtGui.QPainter, track: Track, labelled: bool) -> None:
         if not track.has_position:
