@@ -135,6 +135,13 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
     # a layout file that cannot be read is reported in the window (and never overwritten)
     layout = Path(args.layout) if getattr(args, "layout", None) else None
     existing = QtWidgets.QApplication.instance()
+    if existing is None:  # Qt aborts the process when its platform plugin cannot load: look first
+        from rcon_core.app.platform_check import xcb_problem
+
+        problem = xcb_problem()
+        if problem:
+            print(problem, file=sys.stderr)
+            return 1
     app = existing if isinstance(existing, QtWidgets.QApplication) else QtWidgets.QApplication(sys.argv[:1])
     app.setApplicationName("RCON")
     theme.apply(app)
