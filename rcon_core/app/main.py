@@ -156,15 +156,20 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
     stack.enter_context(closing_on_signals(windows))
     demo_factory = None
     fleet_urls: list[str] = []
+    refit = False  # the fleet demo's layout is new: fill the window's canvas once it is shown
     if demo and robots is not None:
-        from rcon_core.app.fleet_demo import connect_fleet, fleet_sims, fleet_workspace
+        from rcon_core.app.fleet_demo import connect_fleet, fleet_room, fleet_sims, fleet_workspace
 
         fleet_urls = [s.url for s in stack.enter_context(fleet_sims(robots))]
         if layout is None:
             layout = config.dir / f"demo-fleet{robots}-workspace.json"
+        refit = not layout.exists() or bool(getattr(args, "reset_layout", False))
 
         def demo_factory() -> Any:
-            return fleet_workspace(robots, plugins)
+            if not windows:  # built with the window: a tablet's room, laid out again once it is shown
+                return fleet_workspace(robots, plugins)
+            room, bar = fleet_room(windows[0])  # "Reset demo layout…": the room the window has now
+            return fleet_workspace(robots, plugins, room, bar)
 
     elif demo:
         from rcon_core.app.demo import demo_workspace
@@ -191,6 +196,8 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
         window.showFullScreen()
     else:
         window.show()
+    if refit:
+        window.reset_demo_layout()  # the Fleet canvas fills the screen it opens on
     # the embedded robot's URL is not put in the history: its port is gone after this run. The first robot:
     # --url, else its URL in the layout, else the newest in the history; the others connect to their own
     # URLs (window.fleet_ui)

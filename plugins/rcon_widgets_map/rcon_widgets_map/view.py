@@ -100,22 +100,27 @@ class MapView(QtWidgets.QWidget):
 
         self.follow_button = QtWidgets.QToolButton(self)
         self.follow_button.setObjectName("mapFollow")
-        self.follow_button.setText("Follow")
         self.follow_button.setCheckable(True)
         self.follow_button.setChecked(bool(self.settings.follow))
-        self.follow_button.setToolTip("Keep the robot in the middle (dragging the map turns this off)")
+        self.follow_button.setToolTip("Follow: keep the robot in the middle (dragging the map turns this off)")
+        self.follow_button.setAccessibleName("Follow the robot")
         self.follow_button.toggled.connect(self._follow_toggled)
         self.zoom_in = QtWidgets.QToolButton(self)
         self.zoom_in.setObjectName("mapZoomIn")
         self.zoom_in.setText("+")
+        self.zoom_in.setToolTip("Zoom in")
+        self.zoom_in.setAccessibleName("Zoom in")
         self.zoom_in.clicked.connect(lambda: self.zoom_by(1.0))
         self.zoom_out = QtWidgets.QToolButton(self)
         self.zoom_out.setObjectName("mapZoomOut")
         self.zoom_out.setText("\u2212")
+        self.zoom_out.setToolTip("Zoom out")
+        self.zoom_out.setAccessibleName("Zoom out")
         self.zoom_out.clicked.connect(lambda: self.zoom_by(-1.0))
         self.bubble = _Bubble(self)
         self.nav = NavigateControls(self)
         self.fit = FitControls(self)
+        self._paint_icons()
         if self.fit.fitting:  # every marker in view, not one robot in the middle
             self.follow_button.setChecked(False)
         self.bubble.send.clicked.connect(lambda: self.nav.confirm() if self.nav.pending else self.confirm_goal())
@@ -236,24 +241,71 @@ class MapView(QtWidgets.QWidget):
         super().resizeEvent(event)
 
     def control_buttons(self) -> list[QtWidgets.QToolButton]:
-        """The buttons at the top right, right to left."""
-        return [self.zoom_out, self.zoom_in, self.follow_button, self.fit.button]
+        """The buttons in the top right corner: zoom in and out (right column), follow and fit (left)."""
+        return [self.zoom_in, self.zoom_out, self.follow_button, self.fit.button]
+
+    def button_side(self) -> int:
+        """The buttons' side, one symbol each: the app's touch size (RCON sets it on the application), else
+        what the style asks for; taller when the text is larger."""
+        app = QtWidgets.QApplication.instance()
+        touch = app.property("rcon_touch_px") if app is not None else None
+        text = self.zoom_in.fontMetrics().height() + 16
+        if touch:
+            return max(int(touch), text)
+        return max(max(b.minimumSizeHint().height(), 32) for b in self.control_buttons())
 
     def place_controls(self) -> None:
-        """Right to left along the top; on a narrow map the ones that do not fit go on a row below."""
-        m = 8
-        x, y, row_h = self.width() - m, m, 0
-        for b in self.control_buttons():
-            if not b.isVisibleTo(self):
-                continue
-            b.adjustSize()
-            if x - b.width() < m and x < self.width() - m:
-                x, y, row_h = self.width() - m, y + row_h + 6, 0
-            x -= b.width()
-            b.move(x, y)
-            row_h = max(row_h, b.height())
-            x -= 6
+        """A compact 2x2 block in the top right corner: + and − on the right, Follow and Fit left of them;
+        the map keeps the rest (the markers are fitted beside or below the block)."""
+        m, gap = 8, 6
+        side = self.button_side()
+        right_col, left_col = [self.zoom_in, self.zoom_out], [self.follow_button, self.fit.button]
+        for col, buttons in enumerate((right_col, left_col)):
+            x = self.width() - m - side - col * (side + gap)
+            row = 0
+            for b in buttons:
+                b.setFixedSize(side, side)
+                if not b.isVisibleTo(self):
+                    continue
+                b.move(x, m + row * (side + gap))
+                row += 1
         self.nav.place()
+
+    def controls_rect(self) -> QtCore.QRect:
+        """The corner the buttons take (empty when none shows)."""
+        out = QtCore.QRect()
+        for b in self.control_buttons():
+            if b.isVisibleTo(self):
+                out = out.united(b.geometry())
+        return out
+
+    def _paint_icons(self) -> None:
+        """Follow (a crosshair) and Fit (four corners) drawn in the button's text colour (white when on), so
+        they follow the theme; + and − are text."""
+        side = max(16, round(self.button_side() * 0.55))
+        for button, draw in ((self.follow_button, _draw_follow), (self.fit.button, _draw_fit)):
+            icon = QtGui.QIcon()
+            for state, colour in ((QtGui.QIcon.State.Off, button.palette().color(QtGui.QPalette.ColorRole.ButtonText)),
+                                  (QtGui.QIcon.State.On, QtGui.QColor("#ffffff"))):
+                pm = QtGui.QPixmap(side * 2, side * 2)
+                pm.setDevicePixelRatio(2.0)
+                pm.fill(Qt.GlobalColor.transparent)
+                p = QtGui.QPainter(pm)
+                p.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing)
+                p.setPen(QtGui.QPen(colour, max(2.0, side / 9), Qt.PenStyle.SolidLine, Qt.PenCapStyle.RoundCap))
+                draw(p, float(side))
+                p.end()
+                icon.addPixmap(pm, QtGui.QIcon.Mode.Normal, state)
+            button.setIcon(icon)
+            button.setIconSize(QtCore.QSize(side, side))
+            button.setText("")
+
+    def changeEvent(self, event: QtCore.QEvent) -> None:  # noqa: N802 - Qt API
+        super().changeEvent(event)
+        if event.type() in (QtCore.QEvent.Type.StyleChange, QtCore.QEvent.Type.PaletteChange,
+                            QtCore.QEvent.Type.FontChange):
+            self._paint_icons()  # another theme or text size
+            self.place_controls()
 
     # -- goals ----------------------------------------------------------------------------------------
     def tap(self, pos: QtCore.QPointF) -> None:
@@ -520,7 +572,13 @@ class MapView(QtWidgets.QWidget):
         p.setFont(font)
         chip = self.status_text()
         if chip is not None:
-            _chip(p, QtCore.QPointF(8, 8), chip[0], chip[1])
+            fm_bold = QtGui.QFontMetricsF(font)
+            at = QtCore.QPointF(8, 8)
+            room = QtCore.QRectF(at.x(), at.y(), fm_bold.horizontalAdvance(chip[0]) + 20, fm_bold.height() + 10)
+            block = QtCore.QRectF(self.controls_rect())
+            if room.intersects(block):  # a narrow map: the chip goes below the buttons' corner
+                at = QtCore.QPointF(8, block.bottom() + 8)
+            _chip(p, at, chip[0], chip[1])
         main = self._follow_target()
         y = self.height() - 8
         lines = []
@@ -553,6 +611,24 @@ class MapView(QtWidgets.QWidget):
         p.drawLine(QtCore.QPointF(x0, y0 - 6), QtCore.QPointF(x0, y0))
         p.drawLine(QtCore.QPointF(x0 + px, y0 - 6), QtCore.QPointF(x0 + px, y0))
         _label(p, QtCore.QPointF(x0, y0 - 10), text, QtGui.QColor("#000000"))
+
+
+def _draw_follow(p: QtGui.QPainter, side: float) -> None:
+    """A crosshair: "keep the robot in the middle"."""
+    c, r = side / 2, side * 0.3
+    p.drawEllipse(QtCore.QPointF(c, c), r, r)
+    for a, b in (((c, 0.5), (c, c - r * 0.5)), ((c, side - 0.5), (c, c + r * 0.5)),
+                 ((0.5, c), (c - r * 0.5, c)), ((side - 0.5, c), (c + r * 0.5, c))):
+        p.drawLine(QtCore.QPointF(*a), QtCore.QPointF(*b))
+
+
+def _draw_fit(p: QtGui.QPainter, side: float) -> None:
+    """Four corners: "every marker in view"."""
+    e, arm = 1.5, side * 0.32
+    for x, dx in ((e, 1), (side - e, -1)):
+        for y, dy in ((e, 1), (side - e, -1)):
+            p.drawLine(QtCore.QPointF(x, y), QtCore.QPointF(x + dx * arm, y))
+            p.drawLine(QtCore.QPointF(x, y), QtCore.QPointF(x, y + dy * arm))
 
 
 def _draw_clipped(p: QtGui.QPainter, img: QtGui.QImage, target: QtCore.QRectF, src: QtCore.QRectF,
