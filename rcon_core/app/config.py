@@ -152,6 +152,23 @@ class AppConfig:
         self._data["view_only_urls"] = [*urls, url] if view_only else urls
         self.save()
 
+    @property
+    def theme(self) -> str:
+        """The display theme the operator chose ("sunlight" or "night"; see ``theme.py``)."""
+        value = self._data.get("theme")
+        return value if isinstance(value, str) else "sunlight"
+
+    @property
+    def text_size(self) -> int:
+        """The text size the operator chose, in percent (100 to 200)."""
+        value = self._data.get("text_size")
+        return value if isinstance(value, int) and not isinstance(value, bool) else 100
+
+    def set_display(self, theme: str, text_size: int) -> None:
+        """Save the display theme and text size."""
+        self._data["theme"], self._data["text_size"] = str(theme), int(text_size)
+        self.save()
+
     def save(self) -> None:
         tmp = self._file.with_suffix(".tmp")
         tmp.write_text(json.dumps(self._data, indent=2), encoding="utf-8")

@@ -82,8 +82,9 @@ class ConnectionBar(QtWidgets.QFrame):
         self.url.setCompleter(None)
         self.url.setInsertPolicy(QtWidgets.QComboBox.InsertPolicy.NoInsert)
         self.url.setAccessibleName("Robot URL")
-        # an 800 px window keeps its side panel toggle, the lock and the state
-        self.url.setMinimumWidth(200)
+        # an 800 px window keeps its side panel toggle, the lock and the state, also with large text (the
+        # field then shows the URL's two ends: "ws://…:9090")
+        self.url.setMinimumWidth(140)
         # a long URL in the history never widens the bar (and so the window)
         self.url.setSizeAdjustPolicy(QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
         self.url.setMinimumContentsLength(16)

@@ -20,6 +20,7 @@ from typing import Any
 from qtpy import QtCore, QtGui
 
 from rcon_core.app.operator_lock import lock_tooltip
+from rcon_core.app.theme import colour as theme_colour
 
 #: canvas menu actions that change the layout: the PIN first while the lock is engaged
 GATED_ACTIONS = {
@@ -107,12 +108,12 @@ def show(window: Any) -> None:
 
 
 def padlock_icon() -> QtGui.QIcon:
-    """A closed padlock drawn in black (no font needed: the theme's font has no emoji)."""
+    """A closed padlock drawn in the theme's text colour (no font needed: the theme's font has no emoji)."""
     pix = QtGui.QPixmap(56, 56)
     pix.fill(QtCore.Qt.GlobalColor.transparent)
     p = QtGui.QPainter(pix)
     p.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing)
-    colour = QtGui.QColor("#000000")
+    colour = theme_colour("TEXT")
     p.setPen(QtGui.QPen(colour, 6))
     shackle = QtCore.QRectF(16, 6, 24, 28)
     p.drawArc(shackle, 0, 180 * 16)

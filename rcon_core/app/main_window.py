@@ -28,6 +28,7 @@ from rcon_core.app.children_editor import link_learner
 from rcon_core.app.config import AppConfig
 from rcon_core.app.configure_dialog import WidgetConfigurer
 from rcon_core.app.connection_bar import ConnectionBar
+from rcon_core.app.display_settings import install as install_display
 from rcon_core.app.draft import Candidate, Target, rank_widgets, targets_for
 from rcon_core.app.fleet_ui import FleetUi
 from rcon_core.app.focus import focus_into, has_focus_inside
@@ -80,8 +81,8 @@ class MainWindow(QtWidgets.QMainWindow):
     ) -> None:
         super().__init__()
         app = QtWidgets.QApplication.instance()
-        if isinstance(app, QtWidgets.QApplication) and not app.property("rcon_touch_px"):
-            theme.apply(app)  # the touch-sized high-contrast theme, also for embedders and tests
+        if isinstance(app, QtWidgets.QApplication):  # the touch-sized theme the operator chose (display_settings)
+            theme.apply(app, config.theme, config.text_size)
         self.setAttribute(QtCore.Qt.WidgetAttribute.WA_AcceptTouchEvents)
         self.setWindowTitle("RCON")
         self.config = config
@@ -255,6 +256,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if isinstance(app, QtGui.QGuiApplication):
             app.applicationStateChanged.connect(self._app_state_changed)
         install_lock_controls(self)  # the operator lock's and the view-only controls
+        install_display(self)  # Canvas ▾ → Display…: theme and text size
         self.resize(self.initial_size())
 
     # ------------------------------------------------------------------------------------ workspace

@@ -42,6 +42,14 @@ class SidePanelPolicy(QtCore.QObject):
         self.update()
 
     def centre_min(self) -> int:
+        """The canvas column's minimum width as it is now. A box that holds a layout (the mode switch)
+        tells its parent's layout its new minimum only once its own pending layout request is handled;
+        told now, so a mode or text size that just widened the canvas bar's buttons is counted (else the
+        side panel showed and the window grew past the screen)."""
+        for bar in self.center.findChildren(QtWidgets.QFrame, "modeBar"):  # the canvas bar's boxes
+            for widget in (bar, *bar.findChildren(QtWidgets.QWidget)):
+                if widget.layout() is not None:
+                    widget.updateGeometry()
         return self.center.minimumSizeHint().width()
 
     def room_for_side(self) -> bool:

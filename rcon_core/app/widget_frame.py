@@ -18,10 +18,14 @@ from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app.elided_label import OneLineLabel
 from rcon_core.app.geometry import GRID, fit_rect, scaled_about_center, snap_rect, snap_up
-from rcon_core.app.theme import current_touch_px, repolish
+from rcon_core.app.theme import colour as theme_colour
+from rcon_core.app.theme import current_text_size, current_touch_px, font_px, repolish
 
 LONG_PRESS_MS = 600
 DRAG_SLOP = 12
+#: a widget's frame holds at least this many lines of its text: a larger text size grows the text in a
+#: widget as far as the widget's box allows (its title and its view), never past it
+FRAME_LINES = 5
 
 
 def frame_min_size() -> QtCore.QSize:
@@ -86,8 +90,7 @@ class ReasonLine(OneLineLabel):
     def __init__(self, parent: QtWidgets.QWidget) -> None:
         super().__init__(parent)
         self.setObjectName("frameReason")
-        self.full = ""
-        self.setStyleSheet("background:#ffffff; color:#000000; border:2px solid #b00000; padding:1px 4px;")
+        self.full = ""  # its look: QLabel#frameReason in theme.qss
         self.hide()
 
     def toggle(self, badge: Badge) -> None:
@@ -302,7 +305,7 @@ class Shield(QtWidgets.QWidget):
 
 CORNERS = ("tl", "tr", "bl", "br")
 MARK_INSET = 4
-_MARK_CACHE: dict[tuple[str, bool, int, float], QtGui.QPixmap] = {}
+_MARK_CACHE: dict[tuple[str, bool, int, float, str], QtGui.QPixmap] = {}
 
 
 def mark_geometry(selected: bool, handle: int) -> tuple[int, int]:
@@ -310,10 +313,10 @@ def mark_geometry(selected: bool, handle: int) -> tuple[int, int]:
     return (8, round(handle * 0.6)) if selected else (5, max(14, handle // 3))
 
 
-def mark_pixmap(corner: str, selected: bool, handle: int, dpr: float = 1.0) -> QtGui.QPixmap:
+def mark_pixmap(corner: str, selected: bool, handle: int, dpr: float = 1.0, colour: str = "#0040a0") -> QtGui.QPixmap:
     """The L at ``corner`` ("tl", "tr", "bl", "br") in a transparent square pixmap whose outer corner is
     the frame's corner: thick and blue on the selected frame, "drag here to resize"."""
-    key = (corner, selected, handle, dpr)
+    key = (corner, selected, handle, dpr, colour)
     pix = _MARK_CACHE.get(key)
     if pix is not None:
         return pix
@@ -324,7 +327,7 @@ def mark_pixmap(corner: str, selected: bool, handle: int, dpr: float = 1.0) -> Q
     pix.fill(QtCore.Qt.GlobalColor.transparent)
     p = QtGui.QPainter(pix)
     p.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing)
-    pen = QtGui.QPen(QtGui.QColor("#0040a0"), width)
+    pen = QtGui.QPen(QtGui.QColor(colour), width)
     pen.setCapStyle(QtCore.Qt.PenCapStyle.FlatCap)
     p.setPen(pen)
     x, dx = (MARK_INSET, 1) if corner[1] == "l" else (side - MARK_INSET, -1)
@@ -347,7 +350,8 @@ class CornerMark(QtWidgets.QLabel):
 
     def show_mark(self, selected: bool, handle: int) -> None:
         screen = self.screen()
-        pix = mark_pixmap(self.corner, selected, handle, screen.devicePixelRatio() if screen else 1.0)
+        pix = mark_pixmap(self.corner, selected, handle, screen.devicePixelRatio() if screen else 1.0,
+                          theme_colour("FOCUS").name())
         self.setPixmap(pix)
         side = round(pix.width() / pix.devicePixelRatio())
         frame = self.parentWidget()
@@ -427,7 +431,6 @@ class WidgetFrame(QtWidgets.QFrame):
         label.setObjectName("placeholder")
         label.setWordWrap(True)
         label.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
-        label.setStyleSheet("background:#f0f0f0; border:3px dashed #707070; color:#000000; font-weight:bold;")
         self.set_view(label)
         return label
 
@@ -581,14 +584,39 @@ class WidgetFrame(QtWidgets.QFrame):
         menu.popup(global_pos)
         return menu
 
+    # text size ----------------------------------------------------------------------------------------
+    def text_px(self) -> int:
+        """The font size of this widget's title and view: the app's (theme.py), but no more than
+        :data:`FRAME_LINES` lines fill the frame's height (never below the standard size)."""
+        base = font_px(current_touch_px(), current_text_size())
+        room = max(1, self.height() - 6) // FRAME_LINES
+        return max(min(base, room), min(base, font_px(current_touch_px(), 100)))
+
+    def fit_text(self) -> None:
+        """Give the title and the view :meth:`text_px` (through style sheets: the theme's would win over a
+        font); nothing when it is the app's own size."""
+        px = self.text_px()
+        sheet = "" if px == font_px(current_touch_px(), current_text_size()) else f"font-size: {px}px;"
+        for part in (self.title, self.body):
+            if part.styleSheet() != sheet:
+                part.setStyleSheet(sheet)
+
     # overlays ---------------------------------------------------------------------------------------
     def resizeEvent(self, event: QtGui.QResizeEvent) -> None:
         super().resizeEvent(event)
+        self.fit_text()
         self.layout_overlays()
 
     def showEvent(self, event: QtGui.QShowEvent) -> None:
         super().showEvent(event)
         self.body.ensure_opaque()
+
+    def changeEvent(self, event: QtCore.QEvent) -> None:  # noqa: N802 - Qt's name
+        super().changeEvent(event)
+        if event.type() == QtCore.QEvent.Type.PaletteChange and self.editable:
+            self.layout_overlays()  # another theme: the corner marks in its colour
+        if event.type() in (QtCore.QEvent.Type.StyleChange, QtCore.QEvent.Type.FontChange):
+            self.fit_text()  # another text size
 
     def layout_overlays(self) -> None:
         self.shield.setGeometry(self.rect())
