@@ -23,7 +23,8 @@ from rcon_core.app.elided_label import ElidedLabel
 from rcon_core.app.link import BadUrl, Link, LinkSettings, check_url
 from rcon_core.app.link_settings import LinkSettingsDialog
 from rcon_core.app.secret_store import SecretStore
-from rcon_core.app.theme import repolish
+from rcon_core.app.theme import colour as theme_colour
+from rcon_core.app.theme import repolish, tinted_icon
 from rcon_core.app.url_field import UrlLineEdit
 from rcon_core.bridge import ConnectionState
 
@@ -111,7 +112,7 @@ class ConnectionBar(QtWidgets.QFrame):
         self.settings_button = QtWidgets.QPushButton()
         self.settings_button.setObjectName("linkSettingsButton")
         self.settings_button.setProperty("square", True)
-        self.settings_button.setIcon(QtGui.QIcon(str(resources.files("rcon_core.app") / "link-settings.svg")))
+        self._tint_icon()
         self.settings_button.setIconSize(QtCore.QSize(22, 22))
         self.settings_button.setAccessibleName("Security")
         self.settings_button.setToolTip("Security: this robot's connection settings (CA file, client "
@@ -270,6 +271,16 @@ class ConnectionBar(QtWidgets.QFrame):
             widths.append(label.sizeHint().width())
         label.setText(shown)
         label.setMinimumWidth(max(widths))
+
+    def _tint_icon(self) -> None:
+        """The padlock in the theme's text colour (black on light, light grey at night)."""
+        self.settings_button.setIcon(tinted_icon(str(resources.files("rcon_core.app") / "link-settings.svg"),
+                                                 theme_colour("TEXT")))
+
+    def changeEvent(self, event: QtCore.QEvent) -> None:  # noqa: N802 - Qt's name
+        super().changeEvent(event)
+        if event.type() == QtCore.QEvent.Type.PaletteChange:
+            self._tint_icon()  # another theme
 
     def showEvent(self, event: QtGui.QShowEvent) -> None:  # noqa: N802 - Qt's name
         super().showEvent(event)

@@ -164,6 +164,16 @@ def current_text_size() -> int:
     return check_text_size(app.property("rcon_text_size") if app is not None else 100)
 
 
+def tinted_icon(path: str, colour: QtGui.QColor, size: int = 44) -> QtGui.QIcon:
+    """A one-colour icon file (an SVG drawn in black) drawn in ``colour`` instead: the theme's text."""
+    pixmap = QtGui.QIcon(path).pixmap(size, size)
+    painter = QtGui.QPainter(pixmap)
+    painter.setCompositionMode(QtGui.QPainter.CompositionMode.CompositionMode_SourceIn)
+    painter.fillRect(pixmap.rect(), colour)
+    painter.end()
+    return QtGui.QIcon(pixmap)
+
+
 def is_dark(widget: QtWidgets.QWidget) -> bool:
     """Whether ``widget`` sits on a dark background (its palette's window colour)."""
     return widget.palette().color(QtGui.QPalette.ColorRole.Window).lightness() < 128

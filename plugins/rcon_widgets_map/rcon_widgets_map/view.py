@@ -31,6 +31,9 @@ Qt = QtCore.Qt
 TAP_SLOP_PX = 8
 BACKGROUND = QtGui.QColor("#dfe6ea")
 GRID_COLOUR = QtGui.QColor(90, 110, 125, 110)
+#: the same on a dark palette (the app's night theme): a dim chart that does not dazzle
+NIGHT_BACKGROUND = QtGui.QColor("#1b242b")
+NIGHT_GRID_COLOUR = QtGui.QColor(150, 170, 185, 90)
 STALE_COLOUR = QtGui.QColor("#7a7a7a")
 NO_FIX_COLOUR = QtGui.QColor("#c00000")
 
@@ -51,8 +54,8 @@ class _Bubble(QtWidgets.QFrame):
         self.setObjectName("mapGoalBubble")
         self.setAutoFillBackground(True)
         self.setFrameShape(QtWidgets.QFrame.Shape.Box)
-        self.setStyleSheet(
-            "#mapGoalBubble { background: #ffffff; border: 3px solid #000000; border-radius: 8px; }"
+        self.setStyleSheet(  # the palette's colours: the app's theme, light or dark
+            "#mapGoalBubble { background: palette(base); border: 3px solid palette(window-text); border-radius: 8px; }"
         )
         layout = QtWidgets.QVBoxLayout(self)
         layout.setContentsMargins(10, 8, 10, 8)
@@ -300,6 +303,20 @@ class MapView(QtWidgets.QWidget):
             button.setIconSize(QtCore.QSize(side, side))
             button.setText("")
 
+    def night(self) -> bool:
+        """Whether the map sits on a dark palette (the app's night theme): a dim chart, light ink."""
+        return self.palette().color(QtGui.QPalette.ColorRole.Window).lightness() < 128
+
+    def ink(self) -> QtGui.QColor:
+        """The colour of the map's own writing (coordinates, the scale bar): the palette's text."""
+        return self.palette().color(QtGui.QPalette.ColorRole.WindowText)
+
+    def halo(self) -> QtGui.QColor:
+        """The halo around writing on the map: the palette's background, nearly opaque."""
+        colour = QtGui.QColor(self.palette().color(QtGui.QPalette.ColorRole.Window))
+        colour.setAlpha(230)
+        return colour
+
     def changeEvent(self, event: QtCore.QEvent) -> None:  # noqa: N802 - Qt API
         super().changeEvent(event)
         if event.type() in (QtCore.QEvent.Type.StyleChange, QtCore.QEvent.Type.PaletteChange,
@@ -418,7 +435,7 @@ class MapView(QtWidgets.QWidget):
         vp.width, vp.height = max(1, self.width()), max(1, self.height())
         p = QtGui.QPainter(self)
         p.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing)
-        p.fillRect(self.rect(), BACKGROUND)
+        p.fillRect(self.rect(), NIGHT_BACKGROUND if self.night() else BACKGROUND)
         self.tiles_drawn = self._paint_tiles(p) if self.loader is not None else 0
         if self.tiles_drawn == 0:
             self._paint_grid(p)
@@ -465,7 +482,7 @@ class MapView(QtWidgets.QWidget):
         if east < west:  # across the antimeridian: keep it simple, draw latitude lines only
             east = west
         step = scale.grid_step(max(north - south, east - west, 1e-9), target_lines=4)
-        pen = QtGui.QPen(GRID_COLOUR, 1)
+        pen = QtGui.QPen(NIGHT_GRID_COLOUR if self.night() else GRID_COLOUR, 1)
         p.setPen(pen)
         font = p.font()
         font.setPointSizeF(max(7.0, font.pointSizeF() * 0.8))
@@ -535,11 +552,11 @@ class MapView(QtWidgets.QWidget):
             p.drawEllipse(QtCore.QPointF(x, y), 8, 8)
         if labelled or track.no_fix:
             text = track.label + ("  NO FIX" if track.no_fix else "")
-            _label(p, QtCore.QPointF(x + 14, y + 4), text, colour)
+            _label(p, QtCore.QPointF(x + 14, y + 4), text, colour, self.halo())
 
     def _paint_goal(self, p: QtGui.QPainter, lat: float, lon: float, sent: bool) -> None:
         x, y = self.viewport.to_screen(lat, lon)
-        colour = QtGui.QColor("#000000") if sent else QtGui.QColor("#c05000")
+        colour = self.ink() if sent else QtGui.QColor("#c05000")
         p.setPen(QtGui.QPen(colour, 3))
         p.setBrush(Qt.BrushStyle.NoBrush)
         p.drawEllipse(QtCore.QPointF(x, y), 10, 10)
@@ -595,7 +612,7 @@ class MapView(QtWidgets.QWidget):
         fm = QtGui.QFontMetricsF(font)
         for line in reversed(lines):
             _label(p, QtCore.QPointF(self.width() - fm.horizontalAdvance(line) - 12, y - 4), line,
-                   QtGui.QColor("#000000"))
+                   self.ink(), self.halo())
             y -= fm.height() + 6
 
     def _paint_scale(self, p: QtGui.QPainter) -> None:
@@ -604,13 +621,13 @@ class MapView(QtWidgets.QWidget):
         except ValueError:
             return
         x0, y0 = 10.0, self.height() - 12.0
-        p.setPen(QtGui.QPen(QtGui.QColor("#ffffff"), 6))
+        p.setPen(QtGui.QPen(self.halo(), 6))
         p.drawLine(QtCore.QPointF(x0, y0), QtCore.QPointF(x0 + px, y0))
-        p.setPen(QtGui.QPen(QtGui.QColor("#000000"), 3))
+        p.setPen(QtGui.QPen(self.ink(), 3))
         p.drawLine(QtCore.QPointF(x0, y0), QtCore.QPointF(x0 + px, y0))
         p.drawLine(QtCore.QPointF(x0, y0 - 6), QtCore.QPointF(x0, y0))
         p.drawLine(QtCore.QPointF(x0 + px, y0 - 6), QtCore.QPointF(x0 + px, y0))
-        _label(p, QtCore.QPointF(x0, y0 - 10), text, QtGui.QColor("#000000"))
+        _label(p, QtCore.QPointF(x0, y0 - 10), text, self.ink(), self.halo())
 
 
 def _draw_follow(p: QtGui.QPainter, side: float) -> None:
@@ -647,12 +664,13 @@ def _draw_clipped(p: QtGui.QPainter, img: QtGui.QImage, target: QtCore.QRectF, s
     p.drawImage(visible, img, cut)
 
 
-def _label(p: QtGui.QPainter, at: QtCore.QPointF, text: str, colour: QtGui.QColor) -> None:
-    """Text with a white halo so it reads on any tile."""
+def _label(p: QtGui.QPainter, at: QtCore.QPointF, text: str, colour: QtGui.QColor,
+           halo: QtGui.QColor | None = None) -> None:
+    """Text with a halo (white, or the night's dark) so it reads on any tile."""
     path = QtGui.QPainterPath()
     path.addText(at, p.font(), text)
-    p.setPen(QtGui.QPen(QtGui.QColor(255, 255, 255, 230), 4, Qt.PenStyle.SolidLine, Qt.PenCapStyle.RoundCap,
-                        Qt.PenJoinStyle.RoundJoin))
+    p.setPen(QtGui.QPen(halo if halo is not None else QtGui.QColor(255, 255, 255, 230), 4, Qt.PenStyle.SolidLine,
+                        Qt.PenCapStyle.RoundCap, Qt.PenJoinStyle.RoundJoin))
     p.setBrush(Qt.BrushStyle.NoBrush)
     p.drawPath(path)
     p.setPen(Qt.PenStyle.NoPen)

@@ -56,7 +56,8 @@ class TeleopView(QtWidgets.QWidget):
     # -- geometry -----------------------------------------------------------------------------------------
     def pad(self) -> tuple[QtCore.QPointF, float]:
         """Centre and radius of the pad (leaving room for the labels)."""
-        top, bottom = 18, 22  # room for the axis labels and the status line
+        line = QtGui.QFontMetrics(self._small_font()).height()
+        top, bottom = line + 2, line + 6  # room for the axis labels and the status line (the text size's)
         r = max(10.0, min(self.width() - 8, self.height() - top - bottom) / 2 - 4)
         return QtCore.QPointF(self.width() / 2, top + (self.height() - top - bottom) / 2), r
 
@@ -203,7 +204,8 @@ class TeleopView(QtWidgets.QWidget):
         font = self._small_font()
         p.setFont(font)
         p.setPen(self.palette().color(QtGui.QPalette.ColorRole.WindowText))
-        room = QtCore.QRectF(4, self.height() - 20, self.width() - 8, 18)
+        line = p.fontMetrics().height()
+        room = QtCore.QRectF(4, self.height() - line - 2, self.width() - 8, line)
         # a narrow pad (a fleet tile) shows the line's beginning and "…", never both ends cut off
         self.status_shown = p.fontMetrics().elidedText(self.status_text(), QtCore.Qt.TextElideMode.ElideRight,
                                                        int(room.width()))
@@ -211,9 +213,11 @@ class TeleopView(QtWidgets.QWidget):
         p.end()
 
     def _small_font(self) -> QtGui.QFont:
-        """The labels' and the status line's font: the widget's, 0.8 times (at least 7 pt)."""
+        """The labels' and the status line's font: the widget's, 0.8 times (at least 10 px), so it follows
+        the app's text size (the theme gives the font in pixels: its point size reads -1)."""
         font = QtGui.QFont(self.font())
-        font.setPointSizeF(max(7.0, font.pointSizeF() * 0.8))
+        px = font.pixelSize() if font.pixelSize() > 0 else QtGui.QFontInfo(font).pixelSize()
+        font.setPixelSize(max(10, round(px * 0.8)))
         return font
 
     def _cached_layers(self) -> tuple[QtGui.QPixmap, QtGui.QPixmap]:
@@ -267,7 +271,7 @@ class TeleopView(QtWidgets.QWidget):
         p.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing, True)
         p.setPen(pal.color(QtGui.QPalette.ColorRole.WindowText))
         p.setFont(self._small_font())
-        top = QtCore.QRectF(4, 1, self.width() - 8, 16)
+        top = QtCore.QRectF(4, 1, self.width() - 8, p.fontMetrics().height())
         if v_axis:
             p.drawText(top, QtCore.Qt.AlignmentFlag.AlignLeft | QtCore.Qt.AlignmentFlag.AlignVCenter, "↑ " + v_axis)
         if h_axis:
