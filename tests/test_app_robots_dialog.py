@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 from app_helpers import TIMEOUT_MS, entry_point_plugins, open_window, tap
-from qtpy import QtCore, QtWidgets
+from qtpy import QtWidgets
 from qtpy.QtTest import QTest
 from test_app_fleet import fleet_layout
 

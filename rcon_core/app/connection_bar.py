@@ -80,7 +80,7 @@ class ConnectionBar(QtWidgets.QFrame):
         self.url.setLineEdit(UrlLineEdit())
         # Enter connects to exactly what is typed: the history is the list to pick from, never completed
         # inline (an inline completion turned ":91" into the history's ":9191", another robot)
-        self.url.setCompleter(None)
+        self.url.setCompleter(None)  # type: ignore[arg-type]  # Qt takes None: no completer
         self.url.setInsertPolicy(QtWidgets.QComboBox.InsertPolicy.NoInsert)
         self.url.setAccessibleName("Robot URL")
         # an 800 px window keeps its side panel toggle, the lock and the state, also with large text (the

@@ -19,6 +19,8 @@ from typing import Any
 from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app import theme
+from rcon_core.app.accessibility import install as install_accessibility
+from rcon_core.app.accessibility import name_side_panel
 from rcon_core.app.add_panel import AddPanel
 from rcon_core.app.canvas_bar import COMPACT_BELOW, CanvasBar
 from rcon_core.app.canvas_controller import CanvasController
@@ -257,6 +259,8 @@ class MainWindow(QtWidgets.QMainWindow):
             app.applicationStateChanged.connect(self._app_state_changed)
         install_lock_controls(self)  # the operator lock's and the view-only controls
         install_display(self)  # Canvas ▾ → Display…: theme and text size
+        install_accessibility()  # the roles of the widgets that paint themselves
+        name_side_panel(self.side)
         self.resize(self.initial_size())
 
     # ------------------------------------------------------------------------------------ workspace

@@ -415,6 +415,9 @@ class WidgetFrame(QtWidgets.QFrame):
         self.reason_line = ReasonLine(self)
         self.shield = Shield(self)
         self.marks = [CornerMark(corner, self) for corner in CORNERS]
+        self.setProperty("accessibleRole", "Grouping")  # a widget on the canvas: its title names it
+        self.shield.setProperty("accessibleRole", "Grip")  # Edit mode: drag to move, corners to resize
+        self._name_parts(title)
         self._pinch_start = QtCore.QRect()
 
     # content ----------------------------------------------------------------------------------------
@@ -436,6 +439,11 @@ class WidgetFrame(QtWidgets.QFrame):
 
     def set_title(self, title: str) -> None:
         self.title.set_title(title)
+        self._name_parts(title)
+
+    def _name_parts(self, title: str) -> None:
+        self.setAccessibleName(title)
+        self.shield.setAccessibleName(f"Move or resize {title}")
 
     # modes ------------------------------------------------------------------------------------------
     def set_editable(self, editable: bool) -> None:

@@ -15,6 +15,7 @@ import time
 from collections.abc import Iterable
 from typing import Any
 
+from rcon_core.app.accessibility import name_parts
 from rcon_core.app.widget_frame import WidgetFrame
 from rcon_core.bridge.safety import safe_text
 from rcon_core.canvas import WidgetInstance
@@ -144,6 +145,10 @@ class WidgetHost:
             frame.set_placeholder(f"{hosted.widget.title or hosted.widget.kind} could not be shown:\n{exc}")
             return
         frame.set_view(hosted.view)
+        try:  # what the view leaves nameless is named after the widget (accessibility.py)
+            name_parts(hosted.view, hosted.widget.title or self.plugins.widget(hosted.widget.kind).title)
+        except Exception as exc:  # noqa: BLE001 - a view that fails here still shows
+            log.warning("naming the parts of %s failed: %s", widget_id, exc)
         frame.problems.set_problems(list(model.problems()))
         reason = view_only_control(hosted.widget, model)
         if reason:  # the port refuses anyway (rcon_core.canvas.port); the controls say so

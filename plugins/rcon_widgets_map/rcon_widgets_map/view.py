@@ -90,6 +90,7 @@ class MapView(QtWidgets.QWidget):
         self.setAttribute(Qt.WidgetAttribute.WA_OpaquePaintEvent)
         self.setAttribute(Qt.WidgetAttribute.WA_AcceptTouchEvents)
         self.grabGesture(Qt.GestureType.PinchGesture)
+        self.setProperty("accessibleRole", "Canvas")  # a chart to pan, zoom and tap (the app names it)
         self.viewport = Viewport(zoom=self.settings.zoom, width=max(1, self.width()), height=max(1, self.height()))
         self.value: MapValue | None = None
         self.state: Any = None

@@ -49,6 +49,9 @@ class TeleopView(QtWidgets.QWidget):
         #: how often the cached backdrop and labels were painted (tests, diagnostics)
         self.layer_builds = 0
         self.setAttribute(QtCore.Qt.WidgetAttribute.WA_AcceptTouchEvents, True)
+        # for assistive technology: an area to drag in (the app names it after the widget's title)
+        self.setProperty("accessibleRole", "Canvas")
+        self.setAccessibleDescription(f"drag to drive {getattr(model.binding, 'name', '')}; lift to stop")
         self.setFocusPolicy(QtCore.Qt.FocusPolicy.StrongFocus)
         self.setMinimumSize(120, 120)
         self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Expanding, QtWidgets.QSizePolicy.Policy.Expanding)

@@ -65,6 +65,8 @@ class SliderView(QtWidgets.QWidget):
         layout.addWidget(self.value)
         self.slider = TapSlider(QtCore.Qt.Orientation.Horizontal)
         self.slider.setEnabled(self.publishing)
+        self.slider.setAccessibleDescription(f"{model.binding.name}: slide to set" if self.publishing
+                                             else f"{model.binding.name}, as the robot reports it")
         self.slider.setMinimumHeight(32)
         layout.addWidget(self.slider)
         ends = QtWidgets.QHBoxLayout()
