@@ -78,7 +78,7 @@ def every_widget(plugins, catalog) -> Workspace:
 
     types = plugins.type_registry()
     canvas = Canvas(new_id("c"), "Every widget", locked=True)
-    placed, x, y = set(), 16, 16
+    placed, x, y, row = set(), 16, 16, 0
     for role in Role:
         for name, type_name in catalog.get(f"{role.noun}s", []):
             for candidate in rank_widgets(type_name, role, types, plugins):
@@ -86,13 +86,14 @@ def every_widget(plugins, catalog) -> Workspace:
                 if kind in placed or not kind.startswith(("std.", "sensors.", "map.")):
                     continue
                 placed.add(kind)
-                w, h = candidate.spec.default_size
+                w, h = (max(int(v) // 16 * 16, m) for v, m in zip(candidate.spec.default_size, (192, 128),
+                                                                   strict=True))
+                if x + w > 1360:  # shelves: the next row below the tallest of this one
+                    x, y, row = 16, y + row + 16, 0
                 canvas.widgets.append(WidgetInstance(new_id("w"), kind, Binding(name, type_name, role,
                                                                                 candidate.field_paths),
-                                                     Geometry(x, y, max(w, 192), max(h, 128)), {}, ""))
-                x += 336
-                if x > 1000:
-                    x, y = 16, y + 272
+                                                     Geometry(x, y, w, h), {}, ""))
+                x, row = x + w + 16, max(row, h)
     return Workspace([canvas], canvas.id)
 
 

@@ -50,7 +50,7 @@ class DisplayDialog(QtWidgets.QDialog):
         heading.setProperty("role", "heading")
         col.addWidget(heading)
         self.theme_buttons: dict[str, QtWidgets.QPushButton] = {}
-        themes = QtWidgets.QHBoxLayout()
+        themes = QtWidgets.QVBoxLayout()  # one above the other: whole names at any text size
         group = QtWidgets.QButtonGroup(self)
         for name in theme.THEMES:
             button = QtWidgets.QPushButton(theme.THEME_NAMES[name])
@@ -78,7 +78,7 @@ class DisplayDialog(QtWidgets.QDialog):
             sizes.addWidget(button, k // 3, k % 3)
             self.size_buttons[size] = button
         col.addLayout(sizes)
-        hint = QtWidgets.QLabel("Applies at once and is kept for the next start. Nothing is sent to a robot.")
+        hint = QtWidgets.QLabel("Applies at once, kept for the next start.")
         hint.setProperty("role", "hint")
         hint.setWordWrap(True)
         col.addWidget(hint)

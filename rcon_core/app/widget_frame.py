@@ -25,7 +25,7 @@ LONG_PRESS_MS = 600
 DRAG_SLOP = 12
 #: a widget's frame holds at least this many lines of its text: a larger text size grows the text in a
 #: widget as far as the widget's box allows (its title and its view), never past it
-FRAME_LINES = 5
+FRAME_LINES = 6
 
 
 def frame_min_size() -> QtCore.QSize:
@@ -47,6 +47,7 @@ class Badge(QtWidgets.QLabel):
         self.setObjectName("frameBadge")
         self.kind = ""
         self.reason = ""
+        self.font_sheet = ""  #: the frame's text size for it (WidgetFrame.fit_text), "" for the app's
         self.setCursor(QtCore.Qt.CursorShape.PointingHandCursor)
         self.hide()
 
@@ -63,17 +64,23 @@ class Badge(QtWidgets.QLabel):
         if not kind:
             self.hide()
         else:
-            colour = self.COLOURS.get(kind, "#000000")
-            self.setStyleSheet(
-                f"background:{colour}; color:#ffffff; font-weight:bold; border-radius:4px; padding:2px 8px;"
-            )
             self.setText(text)
+            self.restyle()
             self.adjustSize()
             self.show()
             self.raise_()
         if isinstance(frame, WidgetFrame):
             frame.layout_overlays()  # hidden: the title gets its full width back
             frame.reason_line.follow(self)
+
+    def restyle(self) -> None:
+        """Its colour for its kind, at its frame's text size (a style sheet only when it changed)."""
+        colour = self.COLOURS.get(self.kind, "#000000")
+        sheet = (f"background:{colour}; color:#ffffff; font-weight:bold; border-radius:4px; padding:2px 8px;"
+                 f"{self.font_sheet}")
+        if sheet != self.styleSheet():
+            self.setStyleSheet(sheet)
+            self.adjustSize()
 
     def mouseReleaseEvent(self, event: QtGui.QMouseEvent) -> None:  # noqa: N802 - Qt's name
         if event.button() == QtCore.Qt.MouseButton.LeftButton and self.rect().contains(event.position().toPoint()):
@@ -169,11 +176,15 @@ class ProblemOverlay(QtWidgets.QLabel):
         self.setWordWrap(True)
         self.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
         self.setAttribute(QtCore.Qt.WidgetAttribute.WA_TransparentForMouseEvents)
-        self.setStyleSheet(
-            "background: rgba(255, 236, 179, 235); color: #000000; border: 3px dashed #b00000;"
-            " font-weight: bold; padding: 6px;"
-        )
+        self.set_font_sheet("")
         self.hide()
+
+    def set_font_sheet(self, font_sheet: str) -> None:
+        """Its look, at its frame's text size (``font_sheet``: "" for the app's)."""
+        sheet = ("background: rgba(255, 236, 179, 235); color: #000000; border: 3px dashed #b00000;"
+                 f" font-weight: bold; padding: 6px;{font_sheet}")
+        if sheet != self.styleSheet():
+            self.setStyleSheet(sheet)
 
     def set_problems(self, problems: list[str]) -> None:
         if problems:
@@ -605,9 +616,15 @@ class WidgetFrame(QtWidgets.QFrame):
         font); nothing when it is the app's own size."""
         px = self.text_px()
         sheet = "" if px == font_px(current_touch_px(), current_text_size()) else f"font-size: {px}px;"
-        for part in (self.title, self.body):
+        for part in (self.title, self.body, self.reason_line):
             if part.styleSheet() != sheet:
                 part.setStyleSheet(sheet)
+        self.problems.set_font_sheet(f" {sheet}" if sheet else "")
+        if self.badge.font_sheet != sheet:
+            self.badge.font_sheet = sheet
+            if self.badge.kind:
+                self.badge.restyle()
+                self.layout_overlays()
 
     # overlays ---------------------------------------------------------------------------------------
     def resizeEvent(self, event: QtGui.QResizeEvent) -> None:

@@ -485,8 +485,9 @@ class MapView(QtWidgets.QWidget):
         step = scale.grid_step(max(north - south, east - west, 1e-9), target_lines=4)
         pen = QtGui.QPen(NIGHT_GRID_COLOUR if self.night() else GRID_COLOUR, 1)
         p.setPen(pen)
-        font = p.font()
-        font.setPointSizeF(max(7.0, font.pointSizeF() * 0.8))
+        font = p.font()  # the grid's labels: 0.8 times the widget's font (it follows the app's text size)
+        px = font.pixelSize() if font.pixelSize() > 0 else QtGui.QFontInfo(font).pixelSize()
+        font.setPixelSize(max(10, round(px * 0.8)))
         p.setFont(font)
         try:
             lats = scale.grid_lines(south, north, step)
