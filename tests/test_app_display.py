@@ -6,7 +6,7 @@ label or button cut (in Operate and Edit mode, connected and not)."""
 from __future__ import annotations
 
 import pytest
-from app_helpers import TIMEOUT_MS, open_window, settle, snap, tap
+from app_helpers import TIMEOUT_MS, choose_kind, open_window, settle, snap, tap, tap_topic
 from fit_check import problems
 from qtpy import QtCore, QtGui, QtWidgets
 from test_app_accessibility import every_widget
@@ -15,6 +15,7 @@ from rcon_core.app import theme
 from rcon_core.app.config import AppConfig
 from rcon_core.app.demo import demo_workspace
 from rcon_core.bridge import ConnectionState
+from rcon_core.plugins import Role
 from rcon_core.sim.server import SimServer
 
 pytestmark = pytest.mark.usefixtures("qapp")
@@ -118,11 +119,11 @@ def test_every_bundled_widget_follows_the_theme(qtbot, tmp_path, bundled):
             window.shutdown()
 
 
-@pytest.mark.parametrize("size", [150, 200])
+@pytest.mark.parametrize("size", [125, 150, 200])
 def test_the_whole_window_follows_the_text_size_without_a_cut_at_1024x600(qtbot, tmp_path, bundled, size):
     with SimServer.in_thread(port=0) as robot:
         window = open_window(qtbot, tmp_path / "config", bundled, demo=lambda: demo_workspace(bundled),
-                             url=robot.url, wait_connected=True, size=(1024, 600))
+                             url=robot.url, wait_connected=True, size=(1024, 600), topics=("/battery",))
         try:
             before = window.connection.connect_button.font().pixelSize()
             display(window, qtbot, f"text-{size}")
@@ -138,6 +139,25 @@ def test_the_whole_window_follows_the_text_size_without_a_cut_at_1024x600(qtbot,
             settle(300)
             assert window.size() == QtCore.QSize(1024, 600) and problems(window) == []
             snap(window, f"text-{size}-edit")
+            if not window.side.isVisible():  # no room beside the canvas: ▶ shows it in the canvas's place
+                assert window.side_toggle.isEnabled() and "in place of the canvas" in window.side_toggle.toolTip()
+                tap(window.side_toggle)
+                settle(300)
+                assert window.side.isVisible() and not window.center.isVisible()
+                assert window.size() == QtCore.QSize(1024, 600) and problems(window) == []
+                snap(window, f"text-{size}-side")
+            tap_topic(window, "/battery")  # adding a widget: the add panel beside the canvas, nothing cut
+            choose_kind(window, Role.SUBSCRIBE, "std.label")
+            qtbot.waitUntil(lambda: window.add_panel.preview_frame is not None, timeout=TIMEOUT_MS)
+            settle(300)
+            # beside the canvas, or in its place when the two do not fit side by side
+            assert window.add_panel.isVisible() and window.center.isVisible() != window.side_policy.panel_alone
+            assert window.size() == QtCore.QSize(1024, 600) and problems(window) == []
+            snap(window, f"text-{size}-adding")
+            tap(window.add_panel.place_button)
+            settle(300)
+            assert window.center.isVisible() and len(window.controller.canvas.widgets) > 0
+            assert window.size() == QtCore.QSize(1024, 600) and problems(window) == []
             tap(window.connection.connect_button)  # disconnected: the longest state word
             qtbot.waitUntil(lambda: window.connection.state is ConnectionState.CLOSED, timeout=TIMEOUT_MS)
             settle(200)
