@@ -422,7 +422,8 @@ def display(out: Path) -> list[Path]:
                 set_display(win, look, text_size)
                 win.connect_to(robot.url, remember=False)
                 wait_until(lambda: win.connection.state is ConnectionState.CONNECTED, "the connection")
-                hosted = list(win.host.hosted.values())
+                shown = {w.id for w in win.controller.canvas.widgets}
+                hosted = [h for h in win.host.hosted.values() if h.widget.id in shown]
                 wait_until(lambda: all(h.model is not None and h.model.state.count > 0 for h in hosted
                                        if h.widget.binding.role.value == "subscribe"), "live data")
                 settle(1500)
@@ -441,7 +442,8 @@ def display(out: Path) -> list[Path]:
             try:
                 fit_fleet(win, 3, plugins)
                 connect_fleet(win, [s.url for s in sims])
-                hosted = list(win.host.hosted.values())
+                shown = {w.id for w in win.controller.canvas.widgets}
+                hosted = [h for h in win.host.hosted.values() if h.widget.id in shown]
                 wait_until(lambda: all(h.model is not None and h.model.state.count > 0 for h in hosted
                                        if h.widget.binding.role.value == "subscribe"), "every vessel's data")
                 wait_until(lambda: all(not h.frame.badge.isVisible() for h in hosted), "no badge left")

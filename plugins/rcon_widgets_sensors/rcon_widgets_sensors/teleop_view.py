@@ -274,11 +274,17 @@ class TeleopView(QtWidgets.QWidget):
         p.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing, True)
         p.setPen(pal.color(QtGui.QPalette.ColorRole.WindowText))
         p.setFont(self._small_font())
-        top = QtCore.QRectF(4, 1, self.width() - 8, p.fontMetrics().height())
+        fm = p.fontMetrics()
+        top = QtCore.QRectF(4, 1, self.width() - 8, fm.height())
+        # each label in its half of the row (a large text size or a narrow pad): "…" rather than overlap
+        half = int(top.width() / 2) - 4 if v_axis and h_axis else int(top.width())
+        elide = QtCore.Qt.TextElideMode.ElideRight
         if v_axis:
-            p.drawText(top, QtCore.Qt.AlignmentFlag.AlignLeft | QtCore.Qt.AlignmentFlag.AlignVCenter, "↑ " + v_axis)
+            p.drawText(top, QtCore.Qt.AlignmentFlag.AlignLeft | QtCore.Qt.AlignmentFlag.AlignVCenter,
+                       fm.elidedText("↑ " + v_axis, elide, half))
         if h_axis:
-            p.drawText(top, QtCore.Qt.AlignmentFlag.AlignRight | QtCore.Qt.AlignmentFlag.AlignVCenter, h_axis + " →")
+            p.drawText(top, QtCore.Qt.AlignmentFlag.AlignRight | QtCore.Qt.AlignmentFlag.AlignVCenter,
+                       fm.elidedText(h_axis + " →", elide, half))
         p.end()
         return pm
 
