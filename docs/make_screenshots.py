@@ -421,11 +421,11 @@ def display(out: Path) -> list[Path]:
             try:
                 set_display(win, look, text_size)
                 win.connect_to(robot.url, remember=False)
-                wait_until(lambda: win.connection.state is ConnectionState.CONNECTED, "the connection")
+                wait_until(lambda win=win: win.connection.state is ConnectionState.CONNECTED, "the connection")
                 shown = {w.id for w in win.controller.canvas.widgets}
                 hosted = [h for h in win.host.hosted.values() if h.widget.id in shown]
-                wait_until(lambda: all(h.model is not None and h.model.state.count > 0 for h in hosted
-                                       if h.widget.binding.role.value == "subscribe"), "live data")
+                wait_until(lambda hosted=hosted: all(h.model is not None and h.model.state.count > 0 for h in hosted
+                                                     if h.widget.binding.role.value == "subscribe"), "live data")
                 settle(1500)
                 saved.append(save_window(win, out / f"{name}.png", size))
             finally:
@@ -444,9 +444,10 @@ def display(out: Path) -> list[Path]:
                 connect_fleet(win, [s.url for s in sims])
                 shown = {w.id for w in win.controller.canvas.widgets}
                 hosted = [h for h in win.host.hosted.values() if h.widget.id in shown]
-                wait_until(lambda: all(h.model is not None and h.model.state.count > 0 for h in hosted
-                                       if h.widget.binding.role.value == "subscribe"), "every vessel's data")
-                wait_until(lambda: all(not h.frame.badge.isVisible() for h in hosted), "no badge left")
+                wait_until(lambda hosted=hosted: all(h.model is not None and h.model.state.count > 0 for h in hosted
+                                                     if h.widget.binding.role.value == "subscribe"),
+                           "every vessel's data")
+                wait_until(lambda hosted=hosted: all(not h.frame.badge.isVisible() for h in hosted), "no badge left")
                 settle(1500)
                 saved.append(save_window(win, out / f"fleet-3-{size[0]}x{size[1]}.png", size))
             finally:
