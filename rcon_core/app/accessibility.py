@@ -93,11 +93,12 @@ def name_parts(view: QtWidgets.QWidget, title: str) -> None:
     title; a field by its placeholder ("Log: filter"); a read-only text area, or the view's only slider,
     as the widget; a button without words by its tooltip. Whatever has nothing to go by stays nameless
     (the accessibility test finds it)."""
-    if not name_of(view) and title:
+    # plain property reads only (no accessibility interface is made here: views are built often)
+    if not view.accessibleName() and title:
         view.setAccessibleName(title)
     sliders = [s for s in view.findChildren(QtWidgets.QAbstractSlider) if not _qt_part(s)]
     for widget in view.findChildren(QtWidgets.QWidget):
-        if not is_control(widget) or _qt_part(widget) or widget.accessibleName() or name_of(widget):
+        if widget.accessibleName() or not is_control(widget) or _qt_part(widget):
             continue
         name = ""
         if isinstance(widget, QtWidgets.QLineEdit) and widget.placeholderText():
@@ -106,7 +107,7 @@ def name_parts(view: QtWidgets.QWidget, title: str) -> None:
             name = title
         elif isinstance(widget, QtWidgets.QAbstractSlider) and sliders == [widget]:
             name = title
-        elif isinstance(widget, QtWidgets.QAbstractButton) and widget.toolTip():
+        elif isinstance(widget, QtWidgets.QAbstractButton) and not widget.text() and widget.toolTip():
             name = widget.toolTip()
         if name:
             widget.setAccessibleName(name)
