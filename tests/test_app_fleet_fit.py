@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import pytest
 from app_helpers import TIMEOUT_MS, open_window, settle, snap, tap
+from fit_check import problems
 from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
@@ -79,6 +80,7 @@ def test_the_fleet_canvas_fills_the_screen_with_finger_sized_tiles(qtbot, tmp_pa
             assert pad.frame.height() <= viewport.height()
             camera = hosted[("sensors.image", f"r-{k}")].frame.geometry()
             assert camera.right() < pad.frame.geometry().left() and camera.top() == pad.frame.geometry().top()
+        assert problems(window) == [], problems(window)  # no text cut (the robots' chips: six on 1024 px)
         # every button in the window (the map's too) is a finger's size
         for b in tap_targets(window):
             assert b.width() >= TOUCH and b.height() >= TOUCH, (b.objectName(), b.accessibleName(), b.size())
