@@ -61,7 +61,8 @@ class RobotChip(QtWidgets.QPushButton):
             return
         self._shown = key
         self.full_text = text
-        self._fit()
+        self.setText(text)  # whole: the bar lays the chips out for it; cut once it has (a chip too narrow)
+        QtCore.QTimer.singleShot(0, self._fit)
         self.setToolTip(f"{self.name}: {STATE_TEXT[state]}" + (f", round trip {lat}" if lat else "")
                         + (f" ({why})" if why else "")
                         + (f"; {self.view_only}: nothing is sent to it" if self.view_only else "")
@@ -83,10 +84,12 @@ class RobotChip(QtWidgets.QPushButton):
     def _fit(self) -> None:
         """The text as far as the chip's width allows: its name first, the state cut with "…" (six robots
         on a 1280 px window), never clipped at both ends."""
-        room = self.width() - self.CHROME_PX
+        fm = self.fontMetrics()
+        chrome = QtWidgets.QPushButton.sizeHint(self).width() - fm.horizontalAdvance(self.text())  # as styled
+        room = self.width() - max(chrome, 0)
         shown = self.full_text
-        if room > 0 and self.fontMetrics().horizontalAdvance(shown) > room:
-            shown = self.fontMetrics().elidedText(shown, QtCore.Qt.TextElideMode.ElideRight, room)
+        if room > 0 and fm.horizontalAdvance(shown) > room:
+            shown = fm.elidedText(shown, QtCore.Qt.TextElideMode.ElideRight, room)
         if shown != self.text():
             self.setText(shown)
 
