@@ -63,6 +63,7 @@ class ImageView(QtWidgets.QWidget):
         self.drawn_unscaled = False
         self.setAttribute(QtCore.Qt.WidgetAttribute.WA_AcceptTouchEvents, True)
         self.setAttribute(QtCore.Qt.WidgetAttribute.WA_OpaquePaintEvent, True)
+        self.setProperty("accessibleRole", "Canvas")  # a picture to zoom and pan (the app names it)
         self.setMinimumSize(80, 60)
         self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Expanding, QtWidgets.QSizePolicy.Policy.Expanding)
         #: where the overlay was last painted (the stale ticker repaints only this, grown to the new text)
