@@ -10,10 +10,27 @@ from __future__ import annotations
 
 from qtpy import QtCore, QtGui, QtWidgets
 
-__all__ = ["UrlLineEdit"]
+__all__ = ["UrlLineEdit", "elide_url"]
 
 #: QLineEdit's own horizontal text margin (qlineedit_p.h's horizontalMargin)
 TEXT_MARGIN = 2
+
+
+def elide_url(fm: QtGui.QFontMetrics, url: str, width: int) -> str:
+    """``url`` made to fit ``width`` pixels: the scheme (``wss://``) and the port and path (``:9090``) kept
+    whole and the host's middle elided, so a narrow field still tells ``ws://`` from ``wss://`` and one
+    port from another; a field too narrow even for those two ends gets Qt's middle elision."""
+    if fm.horizontalAdvance(url) <= width:
+        return url
+    scheme_end = url.find("://")
+    head = url[: scheme_end + 3] if scheme_end >= 0 else ""
+    rest = url[len(head):]
+    cut = min((i for i in (rest.rfind(":"), rest.find("/")) if i > 0), default=len(rest))
+    host, tail = rest[:cut], rest[cut:]
+    room = width - fm.horizontalAdvance(head) - fm.horizontalAdvance(tail)
+    if head and host and room >= fm.horizontalAdvance("…"):
+        return head + fm.elidedText(host, QtCore.Qt.TextElideMode.ElideMiddle, room) + tail
+    return fm.elidedText(url, QtCore.Qt.TextElideMode.ElideMiddle, width)
 
 
 class UrlLineEdit(QtWidgets.QLineEdit):
@@ -35,7 +52,7 @@ class UrlLineEdit(QtWidgets.QLineEdit):
         text = self.text()
         if self.hasFocus() or not text:
             return text
-        return self.fontMetrics().elidedText(text, QtCore.Qt.TextElideMode.ElideMiddle, self._text_rect().width())
+        return elide_url(self.fontMetrics(), text, self._text_rect().width())
 
     def paintEvent(self, event: QtGui.QPaintEvent) -> None:  # noqa: N802 - Qt's name
         shown = self.shown_text()
