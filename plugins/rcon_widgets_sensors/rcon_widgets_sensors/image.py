@@ -39,7 +39,7 @@ from rcon_core.plugins import WidgetModel
 from rcon_core.plugins.paths import PathError, get_path
 
 from .decode import DecodeError, decode_compressed_sized, decode_image, message_kind, resize_exactly
-from .rates import RateMeter, human_bits, human_rate
+from .rates import RateMeter
 from .scan_render import ScanCounts, render_grid, render_scan
 from .slots import QueueWorker, SlotWorker
 from .video import (
@@ -131,7 +131,8 @@ class Frame:
 
     ``stamp``: the message header's time (epoch seconds) or None; ``received``/``decoded``: wall clock
     when it arrived / was ready. ``fps``: frames decoded per second lately. ``dropped``: frames skipped so
-    far because a newer one came first. ``kind``: image, compressed, scan or grid; ``info``: for people.
+    far because a newer one came first. ``kind``: image, compressed, video, scan or grid; ``info``: for
+    people (size and encoding; the codec for video).
     """
 
     rgb: np.ndarray
@@ -145,6 +146,8 @@ class Frame:
     dropped: int = 0
     smooth: bool = True
     counts: ScanCounts | None = None
+    #: bytes per second the topic's messages brought lately (their ``data``: what the stream costs the link)
+    byte_rate: float = 0.0
     source_width: int = attrs.field(default=attrs.Factory(lambda self: int(self.rgb.shape[1]), takes_self=True))
     source_height: int = attrs.field(default=attrs.Factory(lambda self: int(self.rgb.shape[0]), takes_self=True))
     rgb32: np.ndarray = attrs.field(default=attrs.Factory(lambda self: to_rgb32(self.rgb), takes_self=True))
@@ -358,8 +361,7 @@ class ImageModel(WidgetModel):
         rgb = picture_rgb(picture, w, h)
         decoder = self._video_decoder
         title = decoder.info.title if decoder is not None else pkt.codec
-        byte_rate, _n = self.meter.rates()
-        info = f"{title} {src_w}×{src_h} · {human_bits(byte_rate)}"
+        info = f"{title} {src_w}×{src_h}"
         frame = self._make_frame(rgb, "video", info, pkt.stamp, pkt.received, src_w, src_h, self.settings.smooth)
         self.set_value(frame, message=None)
 
@@ -375,6 +377,7 @@ class ImageModel(WidgetModel):
                 fps = (len(self._times) - 1) / (self._times[-1] - self._times[0])
         return Frame(rgb=rgb, kind=kind, info=info, stamp=stamp, received=received, decoded=now,
                      index=index, fps=fps, dropped=self.dropped, smooth=smooth, counts=counts,
+                     byte_rate=self.meter.rates()[0],
                      source_width=src_w or int(rgb.shape[1]), source_height=src_h or int(rgb.shape[0]))
 
     def decode(self, msg: dict[str, Any], received: float | None = None) -> Frame:
@@ -410,10 +413,6 @@ class ImageModel(WidgetModel):
             raise DecodeError("this message is not an image, compressed image, laser scan or occupancy grid")
         if display is not None and kind in ("image", "compressed"):
             rgb = _fit_exactly(rgb, display, src_w, src_h)
-        if kind in ("image", "compressed"):
-            byte_rate, _n = self.meter.rates()
-            if byte_rate > 0:
-                info += f" · {human_rate(byte_rate)}"
         return self._make_frame(rgb, kind, info, _stamp(body), received, src_w, src_h, smooth, counts)
 
     def _decode(self, item: tuple[dict[str, Any], float]) -> None:

@@ -140,6 +140,25 @@ def packet_of(body: dict[str, Any], received: float) -> Packet:
     return Packet(data, codec, key, stamp, received, pts if isinstance(pts, int) else None)
 
 
+#: FFmpeg decoders to try per codec, best first. FFmpeg's own "av1" decodes only through a GPU
+#: (software: "Function not implemented"), so AV1 takes dav1d.
+DECODERS: dict[str, tuple[str, ...]] = {"h264": ("h264",), "hevc": ("hevc",), "vp9": ("vp9", "libvpx-vp9"),
+                                        "av1": ("libdav1d", "libaom-av1")}
+#: per decoder: no frames held back (dav1d keeps frames in flight for its frame threads by default)
+_DECODER_OPTIONS: dict[str, dict[str, str]] = {"libdav1d": {"max_frame_delay": "1"}}
+
+
+def _decoder_name(av: Any, codec: str) -> str | None:
+    """The first of :data:`DECODERS` for ``codec`` that this PyAV has (a codec not listed: its own name)."""
+    for name in DECODERS.get(codec, (codec,)):
+        try:
+            av.codec.Codec(name, "r")
+        except Exception:  # noqa: BLE001 - PyAV raises its own errors for an unknown codec
+            continue
+        return name
+    return None
+
+
 def _decoder_threads() -> int:
     return max(1, min(4, os.cpu_count() or 1))
 
@@ -156,13 +175,12 @@ class VideoStream:
     def __init__(self, codec: str, *, threads: int | None = None) -> None:
         self.av = load_av()
         self.codec = codec
-        try:
-            self.av.codec.Codec(codec, "r")
-        except Exception:  # noqa: BLE001 - PyAV raises its own errors for an unknown codec
+        self.decoder = _decoder_name(self.av, codec)
+        if self.decoder is None:
             title = CODEC_TITLES.get(codec, codec)
             raise VideoUnavailable(f"this PyAV {getattr(self.av, '__version__', '')} has no {title} decoder "
                                    f"({codec}); install a build that has one ({INSTALL_HINT} --upgrade, or "
-                                   f"PyAV built against an FFmpeg with {codec})") from None
+                                   f"PyAV built against an FFmpeg with {codec})")
         self.threads = threads or _decoder_threads()
         self.waiting: str | None = "joined"
         self.order = H264Order() if codec == "h264" else None
@@ -171,9 +189,11 @@ class VideoStream:
         self.decoded = self.skipped = self.losses = self.errors = 0
 
     def _open(self) -> Any:
-        ctx = self.av.CodecContext.create(self.codec, "r")
+        ctx = self.av.CodecContext.create(self.decoder, "r")
         ctx.thread_type = "SLICE"  # never FRAME: frames of delay, and it hung on a mid-GOP join
         ctx.thread_count = self.threads
+        if self.decoder in _DECODER_OPTIONS:
+            ctx.options = dict(_DECODER_OPTIONS[self.decoder])
         flags = self.av.codec.context.Flags
         ctx.flags = ctx.flags | flags.low_delay
         return ctx
