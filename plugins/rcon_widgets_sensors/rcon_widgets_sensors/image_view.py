@@ -70,6 +70,8 @@ class ImageView(QtWidgets.QWidget):
         self.overlay_rect = QtCore.QRect()
         #: the overlay's text as last painted (tests, accessibility)
         self.overlay_text: list[str] = []
+        #: the sentence painted in the middle while there is no picture ("waiting for a keyframe…"), else ""
+        self.center_text = ""
         # the overlay's age is computed when painting, and a view repaints on new frames: with the link
         # down nothing would repaint and the age would freeze. A cheap ticker ages a stale overlay.
         self._ticker = QtCore.QTimer(self)
@@ -176,10 +178,12 @@ class ImageView(QtWidgets.QWidget):
                 text = "not running"
             elif notice:
                 text = notice + "…"
+            self.center_text = text
             p.setPen(QtGui.QColor(170, 180, 195))
             p.drawText(self.rect().adjusted(8, 8, -8, -8),
                        QtCore.Qt.AlignmentFlag.AlignCenter | QtCore.Qt.TextFlag.TextWordWrap, text)
             return
+        self.center_text = ""
         lines, bg = self._overlay_lines()
         self.overlay_text = lines
         if not lines:
