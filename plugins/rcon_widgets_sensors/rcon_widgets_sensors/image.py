@@ -22,6 +22,7 @@ keyframe, :attr:`ImageModel.notice` says so. Every message's bytes are counted a
 
 from __future__ import annotations
 
+import asyncio
 import collections
 import math
 import sys
@@ -42,6 +43,7 @@ from .decode import DecodeError, decode_compressed_sized, decode_image, message_
 from .rates import RateMeter
 from .scan_render import ScanCounts, render_grid, render_scan
 from .slots import QueueWorker, SlotWorker
+from .transport import Choice, pick
 from .video import (
     MAX_BACKLOG,
     VIDEO_TYPES,
@@ -58,6 +60,8 @@ from .viewport import fitted_pixels
 __all__ = ["ImageSettings", "ImageModel", "Frame"]
 
 COMPRESSIONS = ("auto", "none", "cbor", "png")
+#: "bound": the topic as bound; "best": the lightest transport the robot offers for the same camera
+TRANSPORT_CHOICES = ("bound", "best")
 #: the server's queue for a video subscription: a short burst of packets waits instead of being dropped
 #: (a dropped packet costs the pictures up to the next keyframe); more would let a slow link's delay grow
 VIDEO_QUEUE_LENGTH = 10
@@ -79,6 +83,10 @@ class ImageSettings:
 
     max_fps: float = 30.0
     compression: str = "auto"
+    transport: str = attrs.field(
+        default="bound", metadata={"label": "Transport", "choices": list(TRANSPORT_CHOICES),
+                                   "help": "best: the lightest stream the robot offers for this camera "
+                                           "(video, then /compressed, then raw); the overlay says which"})
     depth_min: float = 0.0
     depth_max: float = 0.0
     scan_range: float = 0.0
@@ -94,6 +102,8 @@ class ImageSettings:
             out.append(f"the maximum frame rate must be between 0 (no limit) and 120, not {self.max_fps:g}")
         if self.compression not in COMPRESSIONS:
             out.append(f"compression must be one of {', '.join(COMPRESSIONS)}, not {self.compression!r}")
+        if self.transport not in TRANSPORT_CHOICES:
+            out.append(f"transport must be one of {', '.join(TRANSPORT_CHOICES)}, not {self.transport!r}")
         if self.depth_min < 0 or self.depth_max < 0:
             out.append("the depth range cannot be negative")
         elif (self.depth_min or self.depth_max) and self.depth_max <= self.depth_min:
@@ -218,14 +228,23 @@ class ImageModel(WidgetModel):
         self._video_decoder: VideoDecoder | None = None
         self._video_broken: str | None = None  # why video cannot be shown here (PyAV or a codec missing)
         self._notice: str | None = None
+        #: with ``transport = "best"``: the transport picked (None until the robot answered)
+        self.transport: Choice | None = None
+        #: what the overlay says of the transport ("via video: /cam/image_raw/foxglove (offered: ...)")
+        self.transport_note: str | None = None
         #: bytes and messages per second as they arrive (the overlay's link cost)
         self.meter = RateMeter()
 
     # -- server options ---------------------------------------------------------------------------------
     def subscribe_options(self) -> dict[str, Any]:
+        return self.options_for(self.binding.type)
+
+    def options_for(self, type_name: str) -> dict[str, Any]:
+        """What the server is asked for a topic of ``type_name``: video every packet with a short queue;
+        images at most ``max_fps`` with a queue of one (a slow link gets the latest frame, not a queue)."""
         s = self.settings
         comp = s.compression
-        if is_video_type(self.binding.type):
+        if is_video_type(type_name):
             # never throttled: a skipped packet would break the chain up to the next keyframe
             return {"queue_length": VIDEO_QUEUE_LENGTH, "compression": "cbor" if comp == "auto" else comp}
         opts: dict[str, Any] = {"queue_length": 1}
@@ -238,6 +257,37 @@ class ImageModel(WidgetModel):
     # -- lifecycle ------------------------------------------------------------------------------------
     def on_start(self) -> None:
         self._ensure_worker()
+        self.transport_note = None
+        if self.settings.transport == "best" and not self.binding.problems():
+            try:
+                loop = asyncio.get_running_loop()
+            except RuntimeError:  # started off the bridge loop (a bare test): the topic as bound
+                self.transport_note = "as bound (no robot link to ask for the camera's transports)"
+                return
+            task = loop.create_task(self._pick_transport(), name="image-transport")
+            self._tasks.add(task)
+            task.add_done_callback(self._tasks.discard)
+
+    async def _pick_transport(self) -> None:
+        """Ask the robot's topic list and move the subscription to the camera's best transport (loop)."""
+        b = self.binding
+        try:
+            answer = await self.port.call_service("/rosapi/topics", {})
+            topics = dict(zip(answer.get("topics") or [], answer.get("types") or [], strict=False))
+        except Exception as exc:  # noqa: BLE001 - no list: the topic as bound, and the overlay says why
+            self.transport_note = f"as bound (the robot's topic list: {type(exc).__name__}: {exc})"[:160]
+            self.announce()
+            return
+        choice = pick(b.name, b.type, topics)
+        self.transport = choice
+        self.transport_note = choice.note()
+        if choice.topic != b.name and self.running:
+            old, self._sub = self._sub, None
+            if old is not None:
+                old.unsubscribe()
+            self._sub = self.port.subscribe(choice.topic, self._receive, type=choice.type_name,
+                                            **self.options_for(choice.type_name))
+        self.replace_value(self.state.value)
 
     def on_stop(self) -> None:
         with self._worker_lock:
