@@ -78,6 +78,7 @@ from .rosinfo import RosInfo
 from .rosinfo import detect as detect_ros
 from .secure import ssl_context
 from .session import LOG_LEVELS, Session
+from .traffic import Traffic
 from .wslink import Link
 
 log = logging.getLogger(__name__)
@@ -193,6 +194,11 @@ class BridgeClient:
     @property
     def connected(self) -> bool:
         return self.link is not None
+
+    @property
+    def traffic(self) -> Traffic:
+        """Bytes received by topic since this client was made (``traffic.py``; any thread may snapshot it)."""
+        return self.inbound.traffic
 
     @property
     def provided_actions(self) -> ProvidedActions:
