@@ -59,6 +59,8 @@ class BandwidthButton(QtWidgets.QToolButton):
         self.details = ""
         self.popup: QtWidgets.QLabel | None = None
         self.setText("↓ —")
+        # the row's height, never more: the readout must not make the bar (and so the canvas) change size
+        self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Fixed, QtWidgets.QSizePolicy.Policy.Ignored)
         self.clicked.connect(self.show_details)
 
     def showEvent(self, event: QtGui.QShowEvent) -> None:  # noqa: N802 - Qt's name
