@@ -329,6 +329,11 @@ class ImageModel(WidgetModel):
             return self._video_worker
 
     @property
+    def video_worker(self) -> QueueWorker | None:
+        """The video decoding thread's worker once a video packet came (None before, and once stopped)."""
+        return self._video_worker
+
+    @property
     def video(self) -> VideoDecoder | None:
         """The video decoder once a video packet came (its ``stream`` and ``info``: tests, the overlay)."""
         return self._video_decoder
