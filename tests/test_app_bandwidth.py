@@ -39,8 +39,9 @@ def test_bytes_in_by_topic_in_the_bar_and_its_details(qtbot, window):
     QTest.mouseClick(button, QtCore.Qt.MouseButton.LeftButton)
     qtbot.waitUntil(lambda: button.popup is not None and button.popup.isVisible(), timeout=3000)
     lines = button.popup.text().splitlines()
-    assert lines[0] == "Bytes per second in, by topic:"
-    assert lines[1].split()[-1] == "/camera/rear/image_raw/compressed"  # the biggest first
+    assert lines[0] == "Bytes per second in, by topic:" and lines[1].startswith("in all: ")
+    assert lines[2].split()[-1] == "/camera/rear/image_raw/compressed"  # the biggest first
+    assert button.popup.width() >= button.popup.sizeHint().width()  # nothing cut
     button.popup.close()
     window.connection.toggle()  # disconnect
     qtbot.waitUntil(lambda: button.text() == "↓ —", timeout=TIMEOUT_MS)

@@ -29,10 +29,10 @@ def details_text(rows: list[tuple[str, TrafficRates]]) -> str:
     """The details: per robot (``name``: "" for a one-robot window) its total, then its topics."""
     lines = ["Bytes per second in, by topic:"]
     for name, rates in rows:
-        if name or len(rows) > 1:
-            lines.append(f"{name or 'robot'}: {rate_text(rates.total)}")
-        elif not rates.topics:
-            lines.append("nothing received")
+        lines.append(f"{name or 'robot'}: {rate_text(rates.total)} in all" if name or len(rows) > 1
+                     else f"in all: {rate_text(rates.total)}")
+        if not rates.topics:
+            lines.append("  nothing received")
         for topic, nbytes, msgs in rates.topics[:TOP_TOPICS]:
             lines.append(f"  {rate_text(nbytes):>10}  {msgs:5.1f}/s  {topic}")
         if len(rates.topics) > TOP_TOPICS:
@@ -65,9 +65,16 @@ class BandwidthButton(QtWidgets.QToolButton):
 
     def showEvent(self, event: QtGui.QShowEvent) -> None:  # noqa: N802 - Qt's name
         super().showEvent(event)
-        # wide enough for the widest reading, so no reading ever changes what the bar needs
-        fm = self.fontMetrics()
-        self.setFixedWidth(fm.horizontalAdvance("↓ 888 kB/s") + 16)
+        # wide enough for the widest reading (measured as styled: the theme's font and padding are in
+        # force by now), so no reading ever changes what the bar needs
+        self.ensurePolished()
+        shown = self.text()
+        self.setMinimumWidth(0)
+        self.setMaximumWidth(16_777_215)
+        self.setText("↓ 888 kB/s")
+        width = self.sizeHint().width()
+        self.setText(shown)
+        self.setFixedWidth(width)
 
     def poll(self, _now: float = 0.0) -> None:
         """Called every frame by the connection bar; reads the counters every :data:`REFRESH_S`."""
@@ -94,6 +101,7 @@ class BandwidthButton(QtWidgets.QToolButton):
         self.setToolTip(self.details)
         if self.popup is not None and self.popup.isVisible():
             self.popup.setText(self.details)
+            self.popup.resize(self.popup.sizeHint())  # adjustSize would cap it at 2/3 of the screen
 
     def show_details(self) -> None:
         """The details under the button (a popup: a tap anywhere else closes it)."""
@@ -107,6 +115,11 @@ class BandwidthButton(QtWidgets.QToolButton):
         self._next = 0.0
         self.poll()
         self.popup.setText(self.details)
-        self.popup.adjustSize()
-        self.popup.move(self.mapToGlobal(QtCore.QPoint(0, self.height())))
+        self.popup.ensurePolished()
+        self.popup.resize(self.popup.sizeHint())  # adjustSize would cap it at 2/3 of the screen
+        # under the button, kept on the window's screen: its right edge at the window's right at most
+        at = self.mapToGlobal(QtCore.QPoint(0, self.height()))
+        right = self.window().mapToGlobal(QtCore.QPoint(self.window().width(), 0)).x()
+        self.popup.move(min(at.x(), right - self.popup.width()), at.y())
         self.popup.show()
+        self.popup.resize(self.popup.sizeHint())  # adjustSize would cap it at 2/3 of the screen
