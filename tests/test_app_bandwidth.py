@@ -33,7 +33,7 @@ def test_bytes_in_by_topic_in_the_bar_and_its_details(qtbot, window):
     window.link.thread.call(lambda: client.node("bw").subscribe("/camera/rear/image_raw/compressed",
                                                                 lambda m: None, compression="cbor")).result(5)
     qtbot.waitUntil(lambda: button.total > 20_000, timeout=TIMEOUT_MS)
-    assert button.text().startswith("↓ ") and button.text().endswith("B/s")
+    assert button.text() == button.reading and button.reading.startswith("↓ ") and button.reading.endswith("B/s")
     assert "/camera/rear/image_raw/compressed" in button.details and button.toolTip() == button.details
     assert button.width() == width  # a reading never changes what the bar needs
     QTest.mouseClick(button, QtCore.Qt.MouseButton.LeftButton)
@@ -45,3 +45,16 @@ def test_bytes_in_by_topic_in_the_bar_and_its_details(qtbot, window):
     button.popup.close()
     window.connection.toggle()  # disconnect
     qtbot.waitUntil(lambda: button.text() == "↓ —", timeout=TIMEOUT_MS)
+
+
+def test_a_narrow_window_squeezes_the_readout_not_the_window(qtbot, tmp_path, robot):
+    made = window_session(qtbot, tmp_path, PluginManager(environ={}), size=(800, 600), url=robot.url,
+                          wait_connected=True)
+    window = next(made)
+    try:
+        button = window.connection.bandwidth
+        qtbot.waitUntil(lambda: button.reading.endswith("B/s"), timeout=TIMEOUT_MS)
+        assert window.width() == 800 and button.width() < button.sizeHint().width()
+        assert button.text() in ("↓", "") and button.toolTip().startswith("Bytes per second in")
+    finally:
+        next(made, None)

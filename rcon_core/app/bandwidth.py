@@ -58,9 +58,13 @@ class BandwidthButton(QtWidgets.QToolButton):
         self.total = 0.0
         self.details = ""
         self.popup: QtWidgets.QLabel | None = None
-        self.setText("↓ —")
-        # the row's height, never more: the readout must not make the bar (and so the canvas) change size
-        self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Fixed, QtWidgets.QSizePolicy.Policy.Ignored)
+        self.reading = "↓ —"
+        self.setText(self.reading)
+        # the row's height, never more, and no width the bar must keep: the readout never makes the bar (and
+        # so the window or the canvas) bigger; where the bar has no room for it, it shrinks to the arrow (or
+        # nothing), its reading still in the tooltip and the details a tap away
+        self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Preferred, QtWidgets.QSizePolicy.Policy.Ignored)
+        self._full_width = 0
         self.clicked.connect(self.show_details)
 
     def showEvent(self, event: QtGui.QShowEvent) -> None:  # noqa: N802 - Qt's name
@@ -68,13 +72,41 @@ class BandwidthButton(QtWidgets.QToolButton):
         # wide enough for the widest reading (measured as styled: the theme's font and padding are in
         # force by now), so no reading ever changes what the bar needs
         self.ensurePolished()
-        shown = self.text()
-        self.setMinimumWidth(0)
         self.setMaximumWidth(16_777_215)
         self.setText("↓ 888 kB/s")
-        width = self.sizeHint().width()
-        self.setText(shown)
-        self.setFixedWidth(width)
+        self._full_width = self.sizeHint().width()
+        self.setMaximumWidth(self._full_width)
+        self.updateGeometry()
+        self._show_reading()
+
+    def event(self, e: QtCore.QEvent) -> bool:
+        handled = super().event(e)
+        if e.type() in (QtCore.QEvent.Type.Polish, QtCore.QEvent.Type.StyleChange) and self.minimumWidth():
+            self.setMinimumWidth(0)  # a theme's touch-size min-width would widen the bar: squeezed instead
+        return handled
+
+    def sizeHint(self) -> QtCore.QSize:  # noqa: N802 - Qt's name
+        hint = super().sizeHint()
+        return QtCore.QSize(self._full_width or hint.width(), hint.height())
+
+    def minimumSizeHint(self) -> QtCore.QSize:  # noqa: N802 - Qt's name
+        return QtCore.QSize(0, super().minimumSizeHint().height())
+
+    def resizeEvent(self, event: QtGui.QResizeEvent) -> None:  # noqa: N802 - Qt's name
+        super().resizeEvent(event)
+        self._show_reading()
+
+    def _show_reading(self) -> None:
+        """The reading when the button has its width, the arrow alone when squeezed, nothing when tiny."""
+        full = self._full_width
+        if not full or self.width() >= full:
+            text = self.reading
+        elif self.width() >= 28:
+            text = "↓"
+        else:
+            text = ""
+        if text != self.text():
+            self.setText(text)
 
     def poll(self, _now: float = 0.0) -> None:
         """Called every frame by the connection bar; reads the counters every :data:`REFRESH_S`."""
@@ -96,7 +128,8 @@ class BandwidthButton(QtWidgets.QToolButton):
             del self._rates[gone]
         self.total = sum(r.total for _n, r in rows)
         connected = any(getattr(link, "client", None) is not None for _n, link in self.sources())
-        self.setText(f"↓ {rate_text(self.total)}" if connected else "↓ —")
+        self.reading = f"↓ {rate_text(self.total)}" if connected else "↓ —"
+        self._show_reading()
         self.details = details_text(rows)
         self.setToolTip(self.details)
         if self.popup is not None and self.popup.isVisible():
