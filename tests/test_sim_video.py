@@ -103,3 +103,25 @@ def test_without_pyav_the_sim_has_no_video_topics_and_says_why():
     assert done.returncode == 0, done.stderr[-2000:]
     assert "TOPICS ['/camera/front/image_raw', '/camera/rear/image_raw/compressed']" in done.stdout
     assert "WHY PyAV is not installed (pip install av): the sim publishes no video topics" in done.stdout
+
+
+def test_the_definitions_ship_for_both_flavours():
+    from rcon_core.msgs import TypeRegistry
+
+    for ros2 in (False, True):
+        reg = TypeRegistry.standard(ros2=ros2)
+        assert [f.name for f in reg.fields("foxglove_msgs/CompressedVideo")] == ["timestamp", "frame_id", "data",
+                                                                                 "format"]
+        assert [f.name for f in reg.fields("ffmpeg_image_transport_msgs/msg/FFMPEGPacket")] == [
+            "header", "width", "height", "encoding", "pts", "flags", "is_bigendian", "data"]
+        assert "uint64 pts" in reg.definition_text("ffmpeg_image_transport_msgs/FFMPEGPacket")
+
+
+async def test_the_sims_rosapi_knows_the_video_types(sim, client):
+    answer = await client.call_service("/rosapi/topics", {})
+    listed = dict(zip(answer["topics"], answer["types"], strict=True))
+    assert listed[FOXGLOVE_TOPIC] == "foxglove_msgs/CompressedVideo"
+    assert listed[FFMPEG_TOPIC] == "ffmpeg_image_transport_msgs/FFMPEGPacket"
+    details = await client.call_service("/rosapi/message_details", {"type": "foxglove_msgs/CompressedVideo"})
+    assert [t["fieldnames"] for t in details["typedefs"] if t["type"] == "foxglove_msgs/CompressedVideo"] == [
+        ["timestamp", "frame_id", "data", "format"]]
