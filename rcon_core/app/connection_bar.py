@@ -18,6 +18,7 @@ from typing import Any
 
 from qtpy import QtCore, QtGui, QtWidgets
 
+from rcon_core.app.bandwidth import BandwidthButton
 from rcon_core.app.config import AppConfig
 from rcon_core.app.elided_label import ElidedLabel
 from rcon_core.app.link import BadUrl, Link, LinkSettings, check_url
@@ -126,6 +127,8 @@ class ConnectionBar(QtWidgets.QFrame):
         self.latency_label = QtWidgets.QLabel("—")
         self.latency_label.setObjectName("latency")
         self.latency_label.setToolTip("round-trip time to the robot")
+        #: bytes per second in, per robot and by topic (a tap shows the details)
+        self.bandwidth = BandwidthButton(link)
         self.message = ElidedLabel()
         self.message.setObjectName("linkMessage")
         self.message.setProperty("role", "problem")
@@ -138,6 +141,7 @@ class ConnectionBar(QtWidgets.QFrame):
         row.addWidget(self.settings_button)
         row.addWidget(self.state_label)
         row.addWidget(self.latency_label)
+        row.addWidget(self.bandwidth)
         row.addWidget(self.message, 2)  # the message gets the room: the reason comes first, then the countdown
         self._show_state(ConnectionState.CLOSED)
 
@@ -313,6 +317,7 @@ class ConnectionBar(QtWidgets.QFrame):
         if text != self._last_latency_text:
             self._last_latency_text = text
             self.latency_label.setText(text)
+        self.bandwidth.poll()
 
     def _show_state(self, state: ConnectionState) -> None:
         self.state = state

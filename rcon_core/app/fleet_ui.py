@@ -51,6 +51,8 @@ class FleetUi(QtCore.QObject):
         self.window = window
         self.links = FleetLinks(window.link, secret_for=window.connection.secrets.get,
                                 overrides=lambda: window.connection.overrides)
+        # the bandwidth readout lists every robot's link (named when there are several)
+        window.connection.bandwidth.sources = self._bandwidth_sources
         self.chips = RobotChips()
         self.chips.picked.connect(self.pick_side_robot)
         root = window.centralWidget()
@@ -271,6 +273,11 @@ class FleetUi(QtCore.QObject):
             return None
         self._catalog_dirty = False
         return self.catalogs.get(self.side_robot, EMPTY_CATALOG)
+
+    def _bandwidth_sources(self) -> list[tuple[str, Any]]:
+        """Each robot's link for the bandwidth readout, named when there are several."""
+        pairs = self.links.items()
+        return [(robot.label if len(pairs) > 1 else "", link) for robot, link in pairs]
 
     # ------------------------------------------------------------------------------------- polling
     def poll(self, _now: float = 0.0) -> None:

@@ -82,6 +82,7 @@ from .rosinfo import RosInfo
 from .rosinfo import detect as detect_ros
 from .secure import ssl_context
 from .session import LOG_LEVELS, Session
+from .traffic import Traffic
 from .wslink import Link
 
 log = logging.getLogger(__name__)
@@ -202,6 +203,11 @@ class BridgeClient:
     def guard(self) -> LinkGuard:
         """Whether this link is view-only (``guard.set_view_only(reason)``, any thread; see ``guard.py``)."""
         return self.session.guard
+
+    @property
+    def traffic(self) -> Traffic:
+        """Bytes received by topic since this client was made (``traffic.py``; any thread may snapshot it)."""
+        return self.inbound.traffic
 
     @property
     def provided_actions(self) -> ProvidedActions:

@@ -39,6 +39,12 @@ def configure(name: str, parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-plugin-types", action="store_true",
                         help="do not load the message types installed widget plugins contribute (the sim then "
                         "refuses them, like a robot without the lab's package)")
+    parser.add_argument("--video-bitrate", type=float, metavar="KBIT", default=None,
+                        help="the front camera's H.264 stream (/camera/front/image_raw/foxglove and /ffmpeg): "
+                        "bits per second asked of the encoder, in kbit/s (default 600)")
+    parser.add_argument("--video-keyframe-interval", type=float, metavar="S", default=None,
+                        help="seconds between the H.264 stream's keyframes: what a viewer joining mid-stream "
+                        "waits at most (default 1)")
     parser.add_argument("--tls-cert", metavar="FILE", help="serve wss:// with this certificate (PEM)")
     parser.add_argument("--tls-key", metavar="FILE", help="the certificate's private key (PEM)")
     parser.add_argument("-v", "--verbose", action="store_true", help="log every client op")
@@ -78,6 +84,11 @@ def run(name: str, args: argparse.Namespace) -> int:
         except ValueError as exc:
             print(f"rcon sim: --name: {exc}", file=sys.stderr)
             return 2
+    video = _video_params(args)
+    if isinstance(video, str):
+        print(f"rcon sim: {video}", file=sys.stderr)
+        return 2
+    args.video_params = video
     if bool(args.tls_cert) != bool(args.tls_key):
         print("rcon sim: --tls-cert and --tls-key go together", file=sys.stderr)
         return 2
@@ -94,6 +105,22 @@ def run(name: str, args: argparse.Namespace) -> int:
         return asyncio.run(_serve(args, tls))
     except KeyboardInterrupt:
         return 0
+
+
+def _video_params(args: argparse.Namespace) -> dict[str, float] | str:
+    """The robot node's ``video/*`` parameters the options ask for, or what is wrong with them."""
+    from rcon_core.sim.video import VideoSettings
+
+    params: dict[str, float] = {}
+    if args.video_bitrate is not None:
+        params["bitrate"] = int(args.video_bitrate * 1000)
+    if args.video_keyframe_interval is not None:
+        params["keyframe_interval"] = args.video_keyframe_interval
+    base = VideoSettings()
+    settings = VideoSettings(keyframe_interval=params.get("keyframe_interval", base.keyframe_interval),
+                             bitrate=int(params.get("bitrate", base.bitrate)))
+    problems = settings.problems()
+    return "; ".join(problems) if problems else params
 
 
 def _loopback(host: str) -> bool:
@@ -132,6 +159,12 @@ async def _serve(args: argparse.Namespace, tls: ssl.SSLContext | None = None) ->
     except OSError as exc:
         print(f"rcon sim: cannot listen on {args.host}:{args.port}: {exc.strerror or exc}")
         return 1
+    video = getattr(server.robot_node, "video", None)
+    if video is not None:
+        if video.unavailable:
+            print(f"rcon sim: no video: {video.unavailable}", flush=True)
+        for key, value in getattr(args, "video_params", {}).items():  # checked in run()
+            server.params_tree.set(f"{server.robot_node.node}/video/{key}", value)
     if recording is not None:
         return await _play(server, recording, args)
     flavour = "ROS 2" if args.ros2 else "ROS 1"
