@@ -184,3 +184,24 @@ class FoxPeer:
 
     def stop(self) -> None:
         self.server.stop()
+
+
+# ------------------------------------------------------------------------------ fixtures (import them)
+import pytest  # noqa: E402
+
+
+@pytest.fixture
+def fox():
+    peer = FoxPeer()
+    yield peer
+    peer.stop()
+
+
+@pytest.fixture
+async def fox_client(fox):
+    from rcon_core.foxglove import FoxgloveClient
+
+    client = FoxgloveClient(fox.url, backoff_min=0.05, backoff_max=0.3, call_timeout=5)
+    await client.connect(timeout=10)
+    yield client
+    await client.close()
