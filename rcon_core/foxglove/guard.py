@@ -19,8 +19,7 @@ from typing import Any
 from rcon_core.bridge.guard import LinkGuard
 
 READ_OPS = frozenset({"subscribe", "unsubscribe", "getParameters", "subscribeParameterUpdates",
-                      "unsubscribeParameterUpdates", "subscribeConnectionGraph", "unsubscribeConnectionGraph",
-                      "fetchAsset"})
+                      "unsubscribeParameterUpdates", "subscribeConnectionGraph", "unsubscribeConnectionGraph"})
 OFFER_OPS = frozenset({"advertise"})
 WITHDRAW_OPS = frozenset({"unadvertise"})
 CHANGE_OPS = frozenset({"setParameters", "publish", "call_service"})
