@@ -89,10 +89,21 @@ class FoxgloveCatalog:
         return reg.typedefs(name)
 
     async def service_request_details(self, type_name: str) -> list[dict[str, Any]]:
-        return self._s.codecs.ros2.service_typedefs(type_names.normalize(type_name), "Request")
+        return self._service_details(type_name, "Request")
 
     async def service_response_details(self, type_name: str, timeout: float | None = None) -> list[dict[str, Any]]:
-        return self._s.codecs.ros2.service_typedefs(type_names.normalize(type_name), "Response")
+        return self._service_details(type_name, "Response")
+
+    def _service_details(self, type_name: str, part: str) -> list[dict[str, Any]]:
+        """The typedefs of one half of a ROS service type; [] for a type no schema or standard type defines
+        (a JSON service: the request is sent as typed)."""
+        try:
+            pkg, _kind, short = type_names.split(type_name)
+            name = f"{pkg}/srv/{short}_{part}"
+            reg = self._s.codecs.ros2
+            return reg.typedefs(name) if reg.has(name) else []
+        except (ValueError, KeyError):
+            return []
 
     async def nodes(self) -> list[str]:
         await self._ready()
