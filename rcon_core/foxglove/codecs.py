@@ -27,7 +27,7 @@ from typing import Any
 
 import orjson
 
-from rcon_core.msgs import TypeRegistry, names
+from rcon_core.msgs import TypeRegistry, foreign, names
 from rcon_core.msgs.parse import parse_msg, split_full_text
 
 Decode = Callable[[Any], dict[str, Any]]
@@ -39,12 +39,15 @@ class CodecError(ValueError):
 
 
 def type_name(schema_name: str, schema_encoding: str) -> str:
-    """The type as RCON names it: ROS schemas in the canonical ``pkg/msg/Type`` spelling; others as sent."""
+    """The type as RCON names it: ROS schemas in the canonical ``pkg/msg/Type`` spelling; a JSON channel's
+    as ``rcon_core.msgs.foreign.json_type_name`` says; others (protobuf full names) as sent."""
     if schema_encoding in ("ros2msg", "ros1msg", "ros2idl") and schema_name:
         try:
             return names.normalize(schema_name)
         except ValueError:
             return schema_name
+    if schema_encoding in ("jsonschema", ""):
+        return foreign.json_type_name(schema_name)
     return schema_name
 
 
@@ -92,6 +95,8 @@ class Codecs:
             return lambda data: reg1.deserialize_ros1(name, data)
         if encoding == "protobuf" and schema_encoding in ("protobuf", ""):
             cls = self._proto_class(schema_name, schema)
+            if foreign.ros_equivalent(schema_name) is not None:  # matched as a ROS type: give its header too
+                return lambda data: with_header(proto_to_dict(cls.FromString(bytes(data))))
             return lambda data: proto_to_dict(cls.FromString(bytes(data)))
         raise CodecError(f"RCON cannot read {encoding!r} messages with a {schema_encoding or 'missing'!r} schema "
                          f"({schema_name or 'no schema name'})")
@@ -181,6 +186,14 @@ def proto_to_dict(msg: Any) -> dict[str, Any]:
         else:
             out[field.name] = value
     return out
+
+
+def with_header(msg: dict[str, Any]) -> dict[str, Any]:
+    """A Foxglove message with the ROS ``header`` its ROS equivalent has (from ``timestamp``, ``frame_id``)."""
+    stamp = msg.get("timestamp") or {}
+    msg["header"] = {"stamp": {"sec": stamp.get("sec", 0), "nanosec": stamp.get("nsec", 0)},
+                     "frame_id": msg.get("frame_id", "")}
+    return msg
 
 
 def _repeated(field: Any) -> bool:
