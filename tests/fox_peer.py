@@ -176,6 +176,29 @@ class FoxPeer:
 
         self.gps.log(LocationFix(latitude=lat, longitude=lon, altitude=1.0))
 
+    def start_talking(self, period: float = 0.05) -> None:
+        """Log on every channel every ``period`` s from a thread (a live robot), until :meth:`stop`."""
+        import cv2
+        import numpy as np
+
+        frame = np.zeros((48, 64, 3), np.uint8)
+        frame[:, :32] = (0, 0, 255)
+        jpeg = cv2.imencode(".jpg", frame)[1].tobytes()
+        self._talking = threading.Event()
+
+        def talk() -> None:
+            n = 0
+            while not self._talking.wait(period):
+                n += 1
+                self.say(f"hello {n}")
+                self.log_string(f"string {n}")
+                self.log_pose(float(n))
+                self.log_image(jpeg)
+                self.log_fix(57.70 + n * 1e-6, 11.97)
+
+        self._talker = threading.Thread(target=talk, daemon=True)
+        self._talker.start()
+
     def set_param(self, name: str, value: Any) -> None:
         with self.lock:
             self.params[name] = Parameter(name, value=value)
@@ -183,6 +206,10 @@ class FoxPeer:
         self.server.publish_parameter_values([p])
 
     def stop(self) -> None:
+        talking = getattr(self, "_talking", None)
+        if talking is not None:
+            talking.set()
+            self._talker.join()
         self.server.stop()
 
 

@@ -158,8 +158,9 @@ class Link:
             return
         url = self.url
         self._client = None
+        self._generation += 1  # the rosbridge client's late events (its CLOSED) are not this link's any more
         self.thread.run(self._close(current))
-        self._start(url, settings, protocol, gen)
+        self._start(url, settings, protocol, self._generation)
 
     def _start(self, url: str, settings: LinkSettings | None, protocol: str, gen: int) -> None:
         from rcon_core.link import make_client

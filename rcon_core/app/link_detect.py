@@ -86,8 +86,10 @@ class ProtocolFinder:
             return
 
     def take(self) -> None:
-        """Start the client of a protocol found meanwhile (on the thread that called ``find`` only)."""
-        if threading.get_ident() == self._owner and self._ready:
+        """Without a Qt application (no wake can be posted): start the client of a protocol found meanwhile,
+        on the thread that called ``find`` only.  With one, only the wake does (never in the middle of
+        whatever code happened to look at ``link.client``)."""
+        if self._waker is None and threading.get_ident() == self._owner and self._ready:
             self._deliver()
 
     def _deliver(self) -> None:
