@@ -12,7 +12,7 @@ Decision: the catalogue from advertisements and the graph, not from rosapi
 Decision: parameters
     :class:`FoxgloveParams` has ``client.params``' interface over ``getParameters``/``setParameters``:
     names are the server's own (foxglove_bridge: ``/node.param``), grouped by the part before the first
-    ``.``; ``set`` sends the value (a whole float with the ``float64`` type hint) and, with ``verify``,
+    ``.`` (or by namespace, for ROS 1 names such as ``/kingfisher/max_speed``); ``set`` sends the value (a whole float with the ``float64`` type hint) and, with ``verify``,
     compares the value the server answers with, raising ``ParamRejectedError`` when it did not take it;
     ``watch(names, fn)`` subscribes to updates (restored after a reconnect).
 """
@@ -24,7 +24,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from rcon_core.bridge.errors import BridgeError, ServiceTimeoutError
-from rcon_core.bridge.params import MISSING, ParamNotFoundError, ParamRejectedError, kind
+from rcon_core.bridge.params import MISSING, ParamNotFoundError, ParamRejectedError, kind, split
 from rcon_core.msgs import names as type_names
 
 from .session import CANNOT
@@ -188,7 +188,7 @@ class FoxgloveParams:
     async def by_owner(self) -> dict[str, list[str]]:
         groups: dict[str, list[str]] = {}
         for name in await self.names():
-            owner = name.split(".", 1)[0] if "." in name else "/"
+            owner = name.split(".", 1)[0] if "." in name else split(name, False)[0]
             groups.setdefault(owner, []).append(name)
         return {k: sorted(v) for k, v in sorted(groups.items())}
 

@@ -68,7 +68,7 @@ class Codecs:
             return known
         name = type_name(schema_name, schema_encoding)
         reg = self.ros2 if schema_encoding == "ros2msg" else self.ros1
-        if schema.strip():
+        if schema.strip() or not reg.has(name):  # an empty text is an empty message, unless RCON knows the type
             try:
                 for part, text in split_full_text(name, schema):
                     reg.add(parse_msg(names.normalize(part), text))  # every block is a message (or a service half)
