@@ -233,3 +233,18 @@ async def test_calls_waiting_when_the_link_drops_fail_at_once(fox):
             await asyncio.wait_for(client.call_service("/add", {"a": 1, "b": 1}), 3)
     finally:
         await client.close()
+
+
+async def test_the_safety_envelope_holds_motion_commands_on_this_link_too(fox, fox_client):
+    from rcon_core.bridge.envelope import Envelope, EnvelopeRefused
+
+    fox_client.envelope = Envelope(max_linear=0.5, max_angular=0.2)
+    pub = fox_client.node("pad").advertise("/cmd_vel", "geometry_msgs/msg/Twist")
+    await until(lambda: fox.advertised, what="the advertisement")
+    assert pub.publish({"linear": {"x": 3.0}, "angular": {"z": -1.0}})
+    await until(lambda: fox.received, what="the clamped command")
+    twist = REG.deserialize_cdr("geometry_msgs/msg/Twist", fox.received[0][2])
+    assert twist["linear"]["x"] == 0.5 and twist["angular"]["z"] == -0.2
+    with pytest.raises(EnvelopeRefused):
+        pub.publish({"linear": {"x": float("nan")}})
+    assert fox_client.stats["envelope_clamped"] == 1 and fox_client.stats["envelope_refused"] == 1

@@ -8,6 +8,7 @@ from importlib.resources import files
 
 import pytest
 
+from rcon_core.bridge.envelope import Envelope
 from rcon_core.canvas import Binding, Document, Workspace, WorkspaceStore, export_canvas
 from rcon_core.canvas.store import workspace_to_dict
 from rcon_core.cli.main import main
@@ -99,7 +100,9 @@ def test_the_shipped_schema_describes_what_the_store_writes(capsys):
     schema = json.loads(text)
     rc, out, _ = run(capsys, "layout", "schema")
     assert rc == 0 and json.loads(out) == schema
-    data = workspace_to_dict(workspace().workspace)
+    ws = workspace().workspace
+    ws.robots[0].envelope = Envelope(1.0, 0.5)  # written only when set: set here so the schema meets it
+    data = workspace_to_dict(ws)
     canvas = data["canvases"][0]
     widget = canvas["widgets"][0]
     assert _schema_keys(schema, "workspaceFile") == set(data)
@@ -108,6 +111,7 @@ def test_the_shipped_schema_describes_what_the_store_writes(capsys):
     assert _schema_keys(schema, "binding") == set(widget["binding"])
     assert _schema_keys(schema, "geometry") == set(widget["geometry"])
     assert _schema_keys(schema, "robot") == set(data["robots"][0])
+    assert _schema_keys(schema, "envelope") == set(data["robots"][0]["envelope"])
     assert set(schema["$defs"]["binding"]["properties"]["role"]["enum"]) == {"subscribe", "publish", "call", "serve"}
 
 

@@ -29,6 +29,8 @@ from rcon_core.app.config import AppConfig
 from rcon_core.app.configure_dialog import WidgetConfigurer
 from rcon_core.app.connection_bar import ConnectionBar
 from rcon_core.app.draft import Candidate, Target, rank_widgets, targets_for
+from rcon_core.app.envelope_dialog import check_placed
+from rcon_core.app.envelope_dialog import install as install_envelope
 from rcon_core.app.fleet_ui import FleetUi
 from rcon_core.app.focus import focus_into, has_focus_inside
 from rcon_core.app.frame_clock import FrameClock, Waker
@@ -257,6 +259,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if isinstance(app, QtGui.QGuiApplication):
             app.applicationStateChanged.connect(self._app_state_changed)
         install_lock_controls(self)  # the operator lock's and the view-only controls
+        install_envelope(self)  # Canvas ▾ → Safety envelope… (the PIN first while locked)
         self.resize(self.initial_size())
 
     # ------------------------------------------------------------------------------------ workspace
@@ -445,6 +448,8 @@ class MainWindow(QtWidgets.QMainWindow):
                 self.controller.add_draft(draft)
             except ValueError as exc:
                 self.notice.show_notice(f"⚠ {exc}")
+                return
+            check_placed(self, draft)  # beyond the robot's safety envelope: kept only when the operator says
 
     def _settle_layout(self) -> None:
         """Apply pending layout changes now (the add panel just closed, the side panel may be back), so
@@ -461,6 +466,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.side_policy.keep_hidden()
         if draft is not None:
             self.controller.add_draft(draft, point)
+            check_placed(self, draft)  # beyond the robot's safety envelope: kept only when the operator says
 
     def child_context(self, binding: Callable[[], Binding | None]) -> ChildContext:
         """What a settings form's children editor needs: types, widgets, the parent's binding, and a way to

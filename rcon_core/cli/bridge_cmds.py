@@ -6,7 +6,9 @@ for the robot; ``echo`` waits for ever unless given one) and the secure-link opt
 line on stderr (the server's own message where it sent one) and exit non-zero: 1 for a failed call,
 connection or refusal, 2 for bad input.  ``pub`` and ``echo`` of a type that is not standard first ask the
 robot whether it knows it (rosbridge 0.11 refuses such a type only in its log; see
-:mod:`rcon_core.bridge.typecheck`).
+:mod:`rcon_core.bridge.typecheck`). ``pub --envelope [LAYOUT]`` holds what it publishes to a robot's safety
+envelope saved in a workspace file (``--robot`` picks the robot): a motion command beyond it is clamped and
+says so on stderr; NaN or infinity in one is refused (exit 1), with or without ``--envelope``.
 """
 
 from __future__ import annotations
@@ -50,6 +52,12 @@ def configure(name: str, parser: argparse.ArgumentParser) -> None:
         parser.add_argument("--once", action="store_true", help="publish once and exit (the default without --rate)")
         parser.add_argument("--count", type=int, default=0, metavar="N", help="with --rate: stop after N messages")
         parser.add_argument("--latch", action="store_true", help="advertise the topic as latched")
+        parser.add_argument("--envelope", nargs="?", const="", default=None, metavar="LAYOUT",
+                            help="hold the message to a robot's safety envelope saved in a workspace file "
+                                 "(default: the app's workspace); motion commands beyond it are clamped")
+        parser.add_argument("--robot", metavar="ROBOT",
+                            help="with --envelope: the robot (its name or id; default: the one whose URL is "
+                                 "--url, else the first)")
     elif name == "call":
         parser.add_argument("service", metavar="SERVICE")
         parser.add_argument("args", nargs="?", default=None, metavar="ARGS",
@@ -336,7 +344,47 @@ async def _until_closed(client: Any) -> None:
         await asyncio.sleep(0.2)
 
 
+def saved_envelope(layout: str, robot: str | None, url: str) -> tuple[Any, str]:
+    """(the safety envelope, the robot's name) saved in the workspace file ``layout`` (``""``: the app's)
+    for ``robot`` (a name or id; None: the robot whose URL is ``url``, else the first). ValueError with a
+    sentence when the file cannot be read, the robot is not in it or it has no envelope: a command that
+    asked to be held to an envelope is never sent without one."""
+    from pathlib import Path
+
+    from rcon_core.canvas.store import WorkspaceFileError, default_path, loads_workspace
+
+    path = Path(layout) if layout else default_path()
+    try:
+        ws = loads_workspace(path.read_bytes(), path)
+    except OSError as exc:
+        raise ValueError(f"--envelope: cannot read {path}: {exc.strerror or exc}") from None
+    except WorkspaceFileError as exc:
+        raise ValueError(f"--envelope: {exc}") from None
+    if robot:
+        found = [r for r in ws.robots if robot in (r.id, r.name)]
+        if not found:
+            names = ", ".join(r.label for r in ws.robots)
+            raise ValueError(f"--envelope: no robot {robot!r} in {path} (it has {names})")
+    else:
+        found = [r for r in ws.robots if r.url == url] or ws.robots[:1]
+    chosen = found[0]
+    if chosen.envelope is None:
+        raise ValueError(f"--envelope: robot {chosen.label!r} in {path} has no safety envelope "
+                         "(set one in the app: Canvas ▾ → Safety envelope…)")
+    return chosen.envelope, chosen.label
+
+
 async def _pub(url: str, args: argparse.Namespace) -> int:
+    envelope, robot_name = None, ""
+    if getattr(args, "envelope", None) is not None:
+        try:
+            envelope, robot_name = saved_envelope(args.envelope, args.robot, url)
+        except ValueError as exc:
+            _err(str(exc))
+            return 2
+    elif getattr(args, "robot", None):
+        _err("--robot goes with --envelope")
+        return 2
     reg = _registry()
     if reg is not None and reg.has(args.msg_type):
         from rcon_core.msgs import MessageTextError
@@ -358,11 +406,19 @@ async def _pub(url: str, args: argparse.Namespace) -> int:
     if args.rate is not None and args.rate <= 0:
         _err("--rate must be positive")
         return 2
+    from rcon_core.bridge.envelope import NO_LIMITS, EnvelopeRefused
     from rcon_core.cli.refusals import StatusErrors, type_refusal
 
+    verdict = (envelope or NO_LIMITS).judge(args.msg_type, msg)
+    if verdict.msg is None:
+        _err(verdict.refused)
+        return 1
+    if verdict.clamped:
+        _err(f"{verdict.sentence} ({robot_name}: {envelope.describe() if envelope else ''})")
     client = await _connect(url, args)
     if client is None:
         return 1
+    client.envelope = envelope  # the client holds every publish to it too
     status = StatusErrors(client, args.topic)
     try:
         refusal = await type_refusal(client, args.msg_type, args.timeout)
@@ -370,6 +426,7 @@ async def _pub(url: str, args: argparse.Namespace) -> int:
             _err(refusal)
             return 1
         pub = client.node("rcon-pub").advertise(args.topic, args.msg_type, latch=args.latch)
+        msg = verdict.msg
         if args.rate is None or args.once:
             pub.publish(msg)
             await asyncio.sleep(0.3)  # let the frame leave before the socket closes (and hear a refusal)
@@ -388,6 +445,9 @@ async def _pub(url: str, args: argparse.Namespace) -> int:
             _err(f"connection to {url} lost")
             return 1
         return 0
+    except EnvelopeRefused as exc:  # judged above already: only a changed message could get here
+        _err(str(exc))
+        return 1
     finally:
         status.close()
         await client.close()

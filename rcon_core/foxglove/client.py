@@ -36,6 +36,7 @@ from collections.abc import Callable
 from typing import Any
 
 from rcon_core.bridge.client import ConnectionState
+from rcon_core.bridge.envelope import Envelope
 from rcon_core.bridge.errors import BridgeError, ConnectionLostError, NotConnectedError, ServiceError, ServiceTimeoutError
 from rcon_core.bridge.freshness import LinkWatch, watch_link
 from rcon_core.bridge.guard import LinkGuard
@@ -92,7 +93,8 @@ class FoxgloveClient:
         self.failure: Failure | None = None
         self.stats: dict[str, int] = {"connects": 0, "bad_frames": 0, "frame_errors": 0, "dropped_while_down": 0,
                                       "dropped_on_disconnect": 0, "stale_dropped": 0, "degraded": 0,
-                                      "stall_cuts": 0, "undecodable": 0, "unknown_subscription": 0}
+                                      "stall_cuts": 0, "undecodable": 0, "unknown_subscription": 0,
+                                      "envelope_clamped": 0, "envelope_refused": 0}
         self._state = ConnectionState.CLOSED
         self._state_listeners: list[Callable[[ConnectionState], None]] = []
         self._failure_listeners: list[Callable[[Failure], None]] = []
@@ -124,6 +126,17 @@ class FoxgloveClient:
     @property
     def guard(self) -> LinkGuard:
         return self.session.guard
+
+    @property
+    def envelope(self) -> Envelope | None:
+        """The robot's safety envelope (``rcon_core/bridge/envelope.py``), as on the rosbridge link."""
+        return self.session.envelope
+
+    @envelope.setter
+    def envelope(self, value: Envelope | None) -> None:
+        if value is not None and not isinstance(value, Envelope):
+            raise TypeError(f"envelope must be an Envelope or None, not {type(value).__name__}")
+        self.session.envelope = value
 
     @property
     def registry(self) -> Any:

@@ -25,8 +25,9 @@ Decision: after every (re)connect
 
 Decision: publishing and stale commands
     As on the rosbridge link (``rcon_core/bridge/session.py``): nothing is queued while down except a latched
-    topic's latest value, a publish past its ``max_age`` is dropped and counted, and a view-only link
-    refuses with ``ViewOnlyError`` before anything is encoded.  The client's channel uses the encoding
+    topic's latest value, a publish past its ``max_age`` is dropped and counted, a view-only link refuses
+    with ``ViewOnlyError`` before anything is encoded, and a motion command is held to the robot's safety
+    envelope (``rcon_core/bridge/envelope.py``: clamped, or ``EnvelopeRefused``).  The client's channel uses the encoding
     ``codecs.py`` picks from the server's ``supportedEncodings``; a server without ``clientPublish``
     refuses the publish in words (``BridgeError``).
 
@@ -48,6 +49,7 @@ import logging
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
+from rcon_core.bridge.envelope import Envelope, enforce
 from rcon_core.bridge.errors import ActionError, BridgeError
 from rcon_core.bridge.inbound import BadFrames
 from rcon_core.bridge.safety import bounded_repr, safe_text
@@ -154,6 +156,8 @@ class FoxgloveSession:
         self.services_provided = _NoServices()
         self.services: Any = self.services_provided  # what Node.advertise_service reaches
         self.goals = self.provided_actions = _NoActions()
+        #: the robot's safety envelope: every motion command is held to it, as on the rosbridge link
+        self.envelope: Envelope | None = None
         # the connection
         self._write: Write | None = None
         self._command: Command | None = None
@@ -519,6 +523,7 @@ class FoxgloveSession:
             raise BridgeError(f"publishing on {pub.topic}: this Foxglove server does not accept messages from "
                               "clients (no clientPublish capability)")
         adv = self.adverts[pub.topic]
+        msg = enforce(self.envelope, adv.type, msg, self.stats)  # the robot's safety envelope (envelope.py)
         if self._write is not None and adv.active:
             data = self._write_message(adv, msg, pub)
             if data is None:

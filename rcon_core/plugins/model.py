@@ -139,8 +139,10 @@ class BridgePort(Protocol):
     """The slice of a bridge client node (``client.node(id)``) a model may use. Tests may pass a fake or a
     node; in the app it is a ``rcon_core.canvas.port.GuardedPort`` (sealed; refuses to send when view-only).
 
-    Besides these methods the app's port carries three plain attributes a model may read with
+    Besides these methods the app's port carries plain attributes a model may read with
     ``getattr(port, name, None)`` (a fake may lack them): ``view_only`` (None or why nothing may be sent),
+    ``envelope`` (the robot's safety envelope, ``rcon_core.bridge.envelope.Envelope``, or None; read it at
+    each use: it may change while the widget runs),
     ``link`` (an opaque key, the same for every widget on one robot; to share per-robot objects use
     ``WidgetContext.shared``, which is keyed by it) and
     ``widget_id`` (the widget instance's id, the same across rebuilds of its model)."""

@@ -4,7 +4,8 @@ A :class:`SendGuard` sits on the control's push button as an event filter. With 
 does nothing (the control works as before). Otherwise it takes the button's presses itself:
 
 - **hold to send**: the button must be held for :data:`HOLD_S` (1 s); a bar along the button's bottom
-  edge fills while it is held. Let go earlier and nothing is sent (the face says "hold 1 s to send");
+  edge fills while it is held. Let go earlier and nothing is sent (the face says "✗ hold 1 s", short
+  enough for the smallest control: "hold 1 s to send" was cut to "✗ hold 1…");
   the keyboard cannot hold, so Space/Enter send nothing either.
 - **ask before sending**: a confirm dialog names exactly what goes to the robot: the service (or topic),
   its type and the request (or message) as YAML. Cancel sends nothing. With both settings the dialog
@@ -32,6 +33,8 @@ from rcon_core.plugins.send_guard import HOLD_S, Outcome, SendGate, describe_sen
 __all__ = ["HOLD_S", "SendGate", "SendGuard", "describe_send"]
 
 TICK_MS = 30
+#: what the face flashes after a press too short to send (the tooltip says it in full)
+HOLD_FACE = f"hold {HOLD_S:g} s"
 
 
 class SendGuard(QtCore.QObject):
@@ -122,8 +125,8 @@ class SendGuard(QtCore.QObject):
         if outcome is Outcome.CONFIRM:
             self._confirm()
         elif outcome is Outcome.TOO_SHORT:
-            if self.face is not None:
-                self.face.answer(False, f"hold {HOLD_S:g} s to send")
+            if self.face is not None:  # short enough for the face of the smallest control, never cut
+                self.face.answer(False, HOLD_FACE)
         elif outcome is Outcome.HELD and not self.ask and self.release is not None:
             self.release()
 
