@@ -6,7 +6,6 @@ subscription id; a service call gets the recorded answer under its own call id."
 
 from __future__ import annotations
 
-import asyncio
 import base64
 import json
 import struct

@@ -1,4 +1,4 @@
-"""The app on a Foxglove robot (the foxglove-sdk peer, ``tests/fox_peer.py``), driven as a person would,
+"""The app on a Foxglove robot (the foxglove-sdk peer, ``rcon_core/foxglove/testing.py``), driven as a person would,
 offscreen: the URL alone connects (the protocol found by subprotocol), the connection bar names the server,
 the side panel lists its topics, each of the three ways to add a widget works (a topic first, a widget from
 the palette then its topic, a new topic to publish on), the Parameters panel lists and sets its parameters,
@@ -13,13 +13,13 @@ from pathlib import Path
 
 import pytest
 from app_helpers import TIMEOUT_MS, choose_kind, entry_point_plugins, open_window, tap, tap_item, tap_topic
-from fox_peer import FoxPeer
 from qtpy import QtWidgets
 from qtpy.QtTest import QTest
 
 from rcon_core.bridge import ConnectionState
 from rcon_core.canvas import Binding, Document, Geometry, Workspace, WorkspaceStore
 from rcon_core.canvas.robots import Robot
+from rcon_core.foxglove.testing import FoxPeer
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Role
 

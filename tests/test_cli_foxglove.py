@@ -1,4 +1,4 @@
-"""``rcon topics|services|echo|pub|call|info`` against the foxglove-sdk peer (``tests/fox_peer.py``): the
+"""``rcon topics|services|echo|pub|call|info`` against the foxglove-sdk peer (``rcon_core/foxglove/testing.py``): the
 protocol is detected from the URL (or forced with ``--protocol``), and each command does what it does on a
 rosbridge robot."""
 
@@ -8,9 +8,9 @@ import json
 import threading
 
 import pytest
-from fox_peer import FoxPeer
 
 from rcon_core.cli.main import main
+from rcon_core.foxglove.testing import FoxPeer
 from rcon_core.msgs import TypeRegistry
 
 REG = TypeRegistry.standard(ros2=True)

@@ -1,4 +1,4 @@
-"""The Foxglove link against a real peer: the foxglove-sdk server (``tests/fox_peer.py``, the server core of
+"""The Foxglove link against a real peer: the foxglove-sdk server (``rcon_core/foxglove/testing.py``, the server core of
 foxglove_bridge) on a free loopback port.  Library level: detection, the catalogue with schemas, binary
 message data in each encoding, client publish, services, parameters, the graph, status, time, reconnect,
 what the protocol cannot do."""
@@ -6,13 +6,22 @@ what the protocol cannot do."""
 from __future__ import annotations
 
 import asyncio
+import ssl
 
 import pytest
-from fox_peer import FoxPeer, fox, fox_client  # noqa: F401 - fixtures
 
-from rcon_core.bridge import ActionError, BridgeClient, BridgeError, ConnectionState, ServiceError
+from rcon_core.bridge import (
+    ActionError,
+    BridgeClient,
+    BridgeError,
+    ConnectionLostError,
+    ConnectionState,
+    NotConnectedError,
+    ServiceError,
+)
 from rcon_core.bridge.params import ParamNotFoundError, ParamRejectedError
 from rcon_core.foxglove import CANNOT, FoxgloveClient, NotFoxgloveError
+from rcon_core.foxglove.testing import FoxPeer
 from rcon_core.link import RobotLink, detect, open_client
 from rcon_core.msgs import TypeRegistry
 from rcon_core.testing import until
@@ -214,7 +223,7 @@ async def test_a_wss_link_with_ca_file(tmp_path):
         assert client.describe()["server"] == "fox-peer"
         await client.close()
         untrusted = FoxgloveClient(peer.url, reconnect=False)
-        with pytest.raises(Exception):
+        with pytest.raises(ssl.SSLError):
             await untrusted.connect(timeout=10)
         assert untrusted.failure is not None and untrusted.failure.fatal
         assert "certificate" in untrusted.failure.reason
@@ -223,14 +232,17 @@ async def test_a_wss_link_with_ca_file(tmp_path):
 
 
 async def test_calls_waiting_when_the_link_drops_fail_at_once(fox):
-    client = FoxgloveClient(fox.url, reconnect=False, call_timeout=5)
+    client = FoxgloveClient(fox.url, reconnect=False, call_timeout=30)
     await client.connect(timeout=10)
     try:
-        await client.call_service("/add", {"a": 1, "b": 1})
-        fox.stop()
-        await until(lambda: not client.connected, what="the link dropped")
-        with pytest.raises(Exception):
-            await asyncio.wait_for(client.call_service("/add", {"a": 1, "b": 1}), 3)
+        waiting = asyncio.ensure_future(client.call_service("/slow", {}))
+        await until(lambda: any(name == "/slow" for name, _ in fox.calls), what="the call reached the robot")
+        fox.release.set()  # the robot answers only after the link is gone
+        await client.link.close()
+        with pytest.raises(ConnectionLostError):
+            await asyncio.wait_for(waiting, 5)
+        with pytest.raises(NotConnectedError):
+            await client.call_service("/add", {"a": 1, "b": 1})
     finally:
         await client.close()
 

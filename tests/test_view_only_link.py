@@ -357,9 +357,8 @@ def test_every_op_the_foxglove_link_writes_is_classified_by_its_guard():
 
 
 async def test_a_view_only_foxglove_link_sends_nothing_that_changes_the_robot():
-    from fox_peer import FoxPeer
-
     from rcon_core.foxglove import FoxgloveClient
+    from rcon_core.foxglove.testing import FoxPeer
 
     peer = FoxPeer()
     ordinary = FoxgloveClient(peer.url, call_timeout=3)

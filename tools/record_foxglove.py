@@ -1,4 +1,4 @@
-"""Record real frames from a foxglove-sdk server (the test peer, ``tests/fox_peer.py``) into
+"""Record real frames from a foxglove-sdk server (the test peer, ``rcon_core/foxglove/testing.py``) into
 ``tests/recordings/foxglove-sdk-0.30.3/session.jsonl``: one line per frame, ``{"dir": "in"|"out",
 "text": ...}`` or ``{"dir": ..., "b64": ...}`` for binary frames, in the order they crossed the link.
 
@@ -12,19 +12,16 @@ import asyncio
 import base64
 import json
 import struct
-import sys
 from pathlib import Path
 
 import websockets
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "tests"))
 OUT = ROOT / "tests" / "recordings" / "foxglove-sdk-0.30.3" / "session.jsonl"
 
 
 async def main() -> None:
-    from fox_peer import FoxPeer
-
+    from rcon_core.foxglove.testing import FoxPeer
     from rcon_core.msgs import TypeRegistry
 
     reg = TypeRegistry.standard(ros2=True)

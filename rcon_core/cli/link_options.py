@@ -76,7 +76,7 @@ async def open_client(url: str, args: argparse.Namespace, *, call_timeout: float
                            wss_without_cert=url.startswith("wss:") and not settings["client_cert"])
             _say(quiet, f"cannot connect to {url}: {why.reason}")
             return None
-        client = make_client(url, protocol, reconnect=False, call_timeout=call_timeout, **settings)
+        client = make_client(url, str(protocol), reconnect=False, call_timeout=call_timeout, **settings)
     if client.protocol == "foxglove":
         return await _open_foxglove(client, url, settings, quiet)
     bridge_log = logging.getLogger("rcon_core.bridge.client")

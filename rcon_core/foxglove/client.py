@@ -37,14 +37,19 @@ from typing import Any
 
 from rcon_core.bridge.client import ConnectionState
 from rcon_core.bridge.envelope import Envelope
-from rcon_core.bridge.errors import BridgeError, ConnectionLostError, NotConnectedError, ServiceError, ServiceTimeoutError
+from rcon_core.bridge.errors import (
+    BridgeError,
+    ConnectionLostError,
+    NotConnectedError,
+    ServiceError,
+    ServiceTimeoutError,
+)
 from rcon_core.bridge.freshness import LinkWatch, watch_link
-from rcon_core.bridge.guard import LinkGuard
+from rcon_core.bridge.guard import LinkGuard, ViewOnlyError
 from rcon_core.bridge.inbound import BadFrames
 from rcon_core.bridge.nodes import Node
 from rcon_core.bridge.reasons import Failure, describe
 from rcon_core.bridge.rosinfo import RosInfo
-from rcon_core.bridge.safety import safe_text
 from rcon_core.bridge.secure import ssl_context
 
 from . import wire
@@ -238,7 +243,7 @@ class FoxgloveClient:
         except TimeoutError:
             raise ServiceTimeoutError(f"no answer to the service call within {budget:g} s", name) from None
         except BridgeError as exc:
-            if isinstance(exc, ServiceError | ConnectionLostError) or type(exc).__name__ == "ViewOnlyError":
+            if isinstance(exc, ServiceError | ConnectionLostError | NotConnectedError | ViewOnlyError):
                 raise
             raise ServiceError(str(exc), name) from None
         finally:
@@ -432,7 +437,7 @@ class FoxgloveClient:
             if final:
                 self._set_state(ConnectionState.CLOSED)
         if not self._closing:
-            log.warning("connection to %s lost (%s)", self.url, safe_text(link.close_reason))
+            log.warning("connection to %s lost (%s)", self.url, link.close_reason[:200])
 
     async def _pinger(self, link: FrameLink) -> None:
         if self.stall_timeout is not None:

@@ -22,7 +22,6 @@ Decision: the rest of the protocol
 
 from __future__ import annotations
 
-import asyncio
 import logging
 import threading
 import time
@@ -75,6 +74,9 @@ class _Listener:
 
     def on_connection_graph_unsubscribe(self) -> None:
         pass
+
+    def on_playback_control_request(self, request: Any) -> None:
+        return None  # a live robot: no playback
 
 
 class FoxgloveGateway:

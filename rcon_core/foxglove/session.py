@@ -422,9 +422,9 @@ class FoxgloveSession:
             pending = self.calls.pop(cid, None)
             if pending is None:
                 return  # a late answer to a call that timed out
-            srv, done, decode = pending
+            srv, done, answer = pending
             try:
-                values = decode(payload) if decode is not None else {"raw": payload, "encoding": encoding}
+                values = answer(payload) if answer is not None else {"raw": payload, "encoding": encoding}
             except Exception as exc:
                 from rcon_core.bridge.errors import ServiceError
 

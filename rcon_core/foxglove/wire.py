@@ -151,7 +151,7 @@ def service_schemas(s: dict[str, Any], encodings: list[str]) -> dict[str, dict[s
         if isinstance(legacy, str) and legacy:
             enc = encodings[0] if encodings else ""
             schema_encoding = {"ros1": "ros1msg", "cdr": "ros2msg", "json": "jsonschema"}.get(enc, "")
-            stype = s.get("type") if isinstance(s.get("type"), str) else ""
+            stype = str(s.get("type")) if isinstance(s.get("type"), str) else ""
             name = f"{stype}_{part.capitalize()}" if "/srv/" in stype else f"{stype}{part.capitalize()}" if stype else ""
             out[part] = {"encoding": enc, "schemaName": name, "schemaEncoding": schema_encoding, "schema": legacy}
         else:

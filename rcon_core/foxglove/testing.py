@@ -1,11 +1,12 @@
-"""A real Foxglove WebSocket server for the tests: the ``foxglove-sdk`` package's server (the same core as
+"""A real Foxglove WebSocket server for tests: the ``foxglove-sdk`` package's server (the same core as
 ``foxglove_bridge``) on a free loopback port, with its own SDK context (channels of one peer never leak
-into another's).
+into another's).  The fixtures ``fox`` (a :class:`FoxPeer`) and ``fox_client`` (a connected
+``FoxgloveClient``) are loaded by the root conftest, as ``rcon_core.testing``'s are.
 
 Channels: ``/chatter`` (jsonschema/json), ``/rosout_str`` (ros2msg/cdr ``std_msgs/msg/String``),
 ``/pose`` (ros2msg/cdr ``geometry_msgs/msg/Pose``), ``/camera/compressed`` and ``/gps`` (protobuf, Foxglove's
 own ``foxglove.CompressedImage``/``foxglove.LocationFix``).  Services: ``/reset`` (ros2msg/cdr
-``std_srvs/srv/Trigger``), ``/add`` (json), ``/fail`` (a handler that raises).  Parameters: ``/boat.max_speed``
+``std_srvs/srv/Trigger``), ``/add`` (json), ``/fail`` (a handler that raises), ``/slow`` (answers once ``peer.release`` is set).  Parameters: ``/boat.max_speed``
 (float), ``/boat.name`` (string), ``/boat.enabled`` (bool).  Capabilities: clientPublish, parameters,
 services, connectionGraph, time.  What clients publish is kept in ``peer.received`` (topic, bytes).
 """
@@ -17,6 +18,7 @@ from typing import Any
 
 import foxglove
 import orjson
+import pytest
 from foxglove import Channel, Schema
 from foxglove.websocket import (
     Capability,
@@ -84,6 +86,9 @@ class Listener:
     def on_connection_graph_unsubscribe(self) -> None:
         self.peer.graph_subscribed = False
 
+    def on_playback_control_request(self, request: Any) -> None:
+        return None
+
 
 class FoxPeer:
     """One foxglove-sdk server (see the module docstring); ``stop()`` ends it."""
@@ -99,6 +104,7 @@ class FoxPeer:
         self.graph_subscribed = False
         self.read_only = {"/boat.name"}
         self.calls: list[tuple[str, bytes]] = []
+        self.release = threading.Event()  # ``/slow`` answers once this is set
         self.params = {"/boat.max_speed": Parameter("/boat.max_speed", value=2.5),
                        "/boat.name": Parameter("/boat.name", value="kingfisher"),
                        "/boat.enabled": Parameter("/boat.enabled", value=True)}
@@ -113,7 +119,8 @@ class FoxPeer:
             name="AddRequest", encoding="jsonschema", data=b'{"type":"object"}')))
         services = [Service("/reset", schema=trigger, handler=self._reset),
                     Service("/add", schema=add, handler=self._add),
-                    Service("/fail", schema=add, handler=self._fail)]
+                    Service("/fail", schema=add, handler=self._fail),
+                    Service("/slow", schema=add, handler=self._slow)]
         kwargs: dict[str, Any] = {}
         if tls is not None:
             kwargs.update(tls_cert=tls[0], tls_key=tls[1])
@@ -151,6 +158,11 @@ class FoxPeer:
         self.calls.append(("/add", bytes(req.payload)))
         args = orjson.loads(req.payload)
         return orjson.dumps({"sum": args["a"] + args["b"]})
+
+    def _slow(self, req: Any) -> bytes:
+        self.calls.append(("/slow", bytes(req.payload)))
+        self.release.wait(10)
+        return b"{}"
 
     def _fail(self, req: Any) -> bytes:
         raise RuntimeError("the pump is jammed")
@@ -213,8 +225,7 @@ class FoxPeer:
         self.server.stop()
 
 
-# ------------------------------------------------------------------------------ fixtures (import them)
-import pytest  # noqa: E402
+# ------------------------------------------------------------------------------ fixtures
 
 
 @pytest.fixture
