@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import asyncio
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from rcon_core.bridge.errors import BridgeError, ServiceTimeoutError
 from rcon_core.bridge.params import MISSING, ParamNotFoundError, ParamRejectedError, kind, split
@@ -29,14 +29,15 @@ from rcon_core.msgs import names as type_names
 
 from .session import CANNOT
 
-if TYPE_CHECKING:
-    from .client import FoxgloveClient
+#: what the catalogue and the parameters need of their client (``client.py``'s ``FoxgloveClient``, not imported:
+#: no cycle even for annotations): ``session``, ``call_timeout``, ``server_time``, ``await wait_connected()``
+FoxgloveHost = Any
 
 
 class FoxgloveCatalog:
     """The robot's topics, services, types and graph (see the module docstring); coroutines on the loop."""
 
-    def __init__(self, client: FoxgloveClient) -> None:
+    def __init__(self, client: FoxgloveHost) -> None:
         self._client = client
 
     @property
@@ -153,7 +154,7 @@ def _wire_value(value: Any) -> dict[str, Any]:
 class FoxgloveParams:
     """``client.params`` over the Foxglove protocol (see the module docstring)."""
 
-    def __init__(self, client: FoxgloveClient) -> None:
+    def __init__(self, client: FoxgloveHost) -> None:
         self._client = client
 
     async def ros2(self) -> bool:
