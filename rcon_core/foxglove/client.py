@@ -46,7 +46,7 @@ from rcon_core.bridge.errors import (
 )
 from rcon_core.bridge.freshness import LinkWatch, watch_link
 from rcon_core.bridge.guard import LinkGuard, ViewOnlyError
-from rcon_core.bridge.inbound import BadFrames
+from rcon_core.bridge.inbound import YIELD_EVERY, BadFrames
 from rcon_core.bridge.nodes import Node
 from rcon_core.bridge.reasons import Failure, describe
 from rcon_core.bridge.rosinfo import RosInfo
@@ -407,13 +407,19 @@ class FoxgloveClient:
         session.guard.attached(asyncio.get_running_loop())
         try:
             recv = link.recv
+            receive = session.receive
+            n = 0
             while True:
                 frame = await recv()
+                n += 1
+                if n >= YIELD_EVERY:  # a flood on this link never starves the loop's other links and timers
+                    n = 0
+                    await asyncio.sleep(0)
                 try:
-                    session.receive(frame)
+                    receive(frame)
                 except Exception as exc:  # the boundary: one frame never ends the link
                     self.bad.failed(exc)
-                if not self._connected.is_set() and session.server is not None:
+                if session.server is not None and not self._connected.is_set():
                     self._up_at = _monotonic()
                     self._connected.set()
                     self.failure = None

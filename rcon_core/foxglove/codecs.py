@@ -28,6 +28,7 @@ from typing import Any
 import orjson
 
 from rcon_core.msgs import TypeRegistry, foreign, names
+from rcon_core.msgs.cdr import frame_reader
 from rcon_core.msgs.parse import parse_msg, split_full_text
 
 Decode = Callable[[Any], dict[str, Any]]
@@ -77,16 +78,28 @@ class Codecs:
         self._learned[key] = name
         return name
 
-    def decoder(self, encoding: str, schema_name: str, schema_encoding: str, schema: str) -> Decode:
-        """``decode(payload) -> dict`` for one channel; raises :class:`CodecError` for what RCON cannot read."""
-        if encoding == "json":
-            return _json_decode
+    def decoder(self, encoding: str, schema_name: str, schema_encoding: str, schema: str, offset: int = 0) -> Decode:
+        """``decode(data) -> dict`` for one channel, of the message that starts ``offset`` bytes into
+        ``data`` (the session passes whole MessageData frames: 13); raises :class:`CodecError` for what RCON
+        cannot read."""
         if encoding == "cdr" and schema_encoding in ("ros2msg", ""):
             name = self.learn(schema_name, "ros2msg", schema)
             reg2 = self.ros2
             if not reg2.has(name):
                 raise CodecError(f"{schema_name}: no ros2msg definition was sent and RCON does not know the type")
-            return lambda data: reg2.deserialize_cdr(name, data)
+            return frame_reader(reg2.cdr_codec(), reg2.resolve(name), offset)  # the hot path: compiled once
+        payload = self._payload_decoder(encoding, schema_name, schema_encoding, schema)
+        if offset == 0:
+            return payload
+        if encoding == "json":
+            return lambda data: _json_decode(memoryview(data)[offset:])
+        return lambda data: payload(data[offset:])
+
+    def _payload_decoder(self, encoding: str, schema_name: str, schema_encoding: str, schema: str) -> Decode:
+        if encoding == "json":
+            return _json_decode
+        if encoding == "cdr" and schema_encoding in ("ros2msg", ""):
+            return self.decoder(encoding, schema_name, schema_encoding, schema)
         if encoding == "ros1" and schema_encoding in ("ros1msg", ""):
             name = self.learn(schema_name, "ros1msg", schema)
             reg1 = self.ros1
@@ -156,7 +169,7 @@ class Codecs:
 
 
 def _json_decode(data: Any) -> dict[str, Any]:
-    value = orjson.loads(bytes(data))
+    value = orjson.loads(data)
     if not isinstance(value, dict):
         raise ValueError(f"a JSON message must be an object, got a JSON {type(value).__name__}")
     return value

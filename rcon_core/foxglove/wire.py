@@ -66,7 +66,7 @@ def parse_text(text: str | bytes) -> dict[str, Any]:
 
 
 def parse_binary(data: bytes | bytearray | memoryview) -> tuple[Any, ...]:
-    """One binary frame: ``("message", sub_id, time_ns, payload)``, ``("time", ns)``,
+    """One binary frame: ``("message", sub_id, time_ns, payload, frame)``, ``("time", ns)``,
     ``("service_response", service_id, call_id, encoding, payload)`` or ``("asset", ...)``."""
     n = len(data)
     if n == 0:
@@ -76,7 +76,7 @@ def parse_binary(data: bytes | bytearray | memoryview) -> tuple[Any, ...]:
         if n < _MSG_HEAD.size:
             raise WireError(f"message data frame of {n} bytes is shorter than its 13-byte header")
         _, sub, stamp = _MSG_HEAD.unpack_from(data)
-        return ("message", sub, stamp, memoryview(data)[_MSG_HEAD.size:])
+        return ("message", sub, stamp, memoryview(data)[_MSG_HEAD.size:], data)
     if op == TIME:
         if n < _TIME.size:
             raise WireError(f"time frame of {n} bytes (needs 9)")
