@@ -65,11 +65,16 @@ def hosted_state(window, wid: str):
     return model.state if model is not None else None
 
 
-def test_the_url_alone_connects_and_the_bar_names_the_foxglove_server(window, peer):
+def test_the_url_alone_connects_and_the_bar_names_the_foxglove_server(window, peer, qtbot):
     assert window.link.client.protocol == "foxglove"
     text = window.connection.message.text()
     assert text.startswith("Foxglove WebSocket · fox-peer · cdr, json") and "no actions" in text
     assert window.services.item("/reset") is not None
+    # what the protocol cannot do is said where the operator looks for it
+    window.side.setCurrentWidget(window.actions_list)
+    qtbot.waitUntil(lambda: window.actions_list.empty.text().startswith("The Foxglove WebSocket protocol has no "
+                                                                         "actions"), timeout=TIMEOUT_MS)
+    assert window.actions_list.empty.isVisible()
     snap(window, "foxglove-connected")
 
 

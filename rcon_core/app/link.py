@@ -323,14 +323,21 @@ class Link:
         self.thread.run(once())
 
 
-async def fetch_catalog(client: BridgeClient) -> dict[str, list[tuple[str, str]]]:
-    """``{"topics": [(name, type)], "services": [(name, type)], "actions": [(name, type)]}`` from rosapi
-    (actions only from a ROS 2 robot: ``/rosapi/action_servers``)."""
+async def fetch_catalog(client: BridgeClient) -> dict[str, Any]:
+    """``{"topics": [(name, type)], "services": [(name, type)], "actions": [(name, type)]}`` from the link's
+    catalogue (rosapi on rosbridge; actions only from a ROS 2 robot: ``/rosapi/action_servers``), and for a
+    Foxglove robot ``"notes"``: what its protocol cannot do (``{"actions": sentence}``), shown in the list."""
     api = client.rosapi
     topics = _pairs(await api.topics())
     with_types = getattr(api, "services_with_types", None)
     services = _pairs(await (with_types() if with_types is not None else api.services()))
-    return {"topics": sorted(topics), "services": sorted(services), "actions": sorted(await _actions(client))}
+    catalog: dict[str, Any] = {"topics": sorted(topics), "services": sorted(services),
+                               "actions": sorted(await _actions(client))}
+    if getattr(client, "protocol", "rosbridge") == "foxglove":  # what the protocol cannot do, where one looks
+        from rcon_core.foxglove import CANNOT
+
+        catalog["notes"] = {"actions": CANNOT["actions"][:1].upper() + CANNOT["actions"][1:] + "."}
+    return catalog
 
 
 async def _actions(client: BridgeClient) -> list[tuple[str, str]]:
