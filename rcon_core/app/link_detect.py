@@ -17,6 +17,7 @@ import asyncio
 import logging
 import random
 import threading
+import weakref
 from collections.abc import Callable
 from typing import Any
 
@@ -26,6 +27,33 @@ log = logging.getLogger(__name__)
 
 #: backoff between handshakes while the robot does not answer (s)
 BACKOFF = (0.25, 5.0)
+
+
+#: the finders the GUI wake delivers to (weak: a finder goes with its Link)
+_FINDERS: weakref.WeakSet[ProtocolFinder] = weakref.WeakSet()
+_WAKER: Any = None
+
+
+def _deliver_all(_keys: set[str]) -> None:
+    for finder in list(_FINDERS):
+        finder._deliver()
+
+
+def _gui_waker() -> Any:
+    """The one wake of the process, made on the GUI thread and owned by the application (parented to it:
+    never deleted by Python's collector from another thread while an event is posted to it); None without a
+    Qt application (a headless user of ``Link``)."""
+    global _WAKER
+    if _WAKER is None:
+        from qtpy import QtCore
+
+        app = QtCore.QCoreApplication.instance()
+        if app is None:
+            return None
+        from rcon_core.app.frame_clock import Waker
+
+        _WAKER = Waker(_deliver_all, app, min_gap=0.0)
+    return _WAKER
 
 
 class ProtocolFinder:
@@ -48,12 +76,9 @@ class ProtocolFinder:
         self._adopt = adopt
         self._owner = threading.get_ident()
         if self._waker is None:
-            from qtpy import QtCore
-
-            if QtCore.QCoreApplication.instance() is not None:
-                from rcon_core.app.frame_clock import Waker
-
-                self._waker = Waker(lambda _keys: self._deliver(), min_gap=0.0)
+            self._waker = _gui_waker()
+            if self._waker is not None:
+                _FINDERS.add(self)
         self.thread.run(self._find(url, options, gen, current, settings))
 
     async def _find(self, url: str, options: dict[str, Any], gen: int, current: Callable[[], int],
