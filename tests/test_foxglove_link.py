@@ -260,3 +260,36 @@ async def test_the_safety_envelope_holds_motion_commands_on_this_link_too(fox, f
     with pytest.raises(EnvelopeRefused):
         pub.publish({"linear": {"x": float("nan")}})
     assert fox_client.stats["envelope_clamped"] == 1 and fox_client.stats["envelope_refused"] == 1
+
+
+async def test_a_silent_stall_is_degraded_and_a_command_is_never_delivered_late(fox):
+    """The rosbridge link's stall rules on this link (``bridge/freshness.py``): a stall with no FIN or RST
+    is DEGRADED within 1.5 s, a command published meanwhile is dropped (counted), the link recovers on the
+    same connection."""
+    import time
+
+    from rcon_core.loopback import StallProxy
+
+    async with StallProxy("127.0.0.1", fox.port) as proxy:
+        client = FoxgloveClient(proxy.url, backoff_min=0.05, backoff_max=0.2, call_timeout=5)
+        states: list = []
+        client.add_state_listener(lambda st: states.append((time.monotonic(), st)))
+        await client.connect(timeout=10)
+        try:
+            pub = client.node("pad").advertise("/cmd_vel", "geometry_msgs/msg/Twist")
+            await until(lambda: fox.advertised, what="the advertisement")
+            await asyncio.sleep(0.3)
+            stalled_at = time.monotonic()
+            proxy.stall()
+            await until(lambda: client.state is ConnectionState.DEGRADED, 3, what="DEGRADED")
+            degraded_at = next(t for t, st in states if st is ConnectionState.DEGRADED)
+            assert degraded_at - stalled_at <= 1.5 and client.connected
+            assert pub.publish({"linear": {"x": 1.0}}) is False and pub.dropped == 1
+            assert client.stats["stale_dropped"] == 1
+            proxy.resume()
+            await until(lambda: client.state is ConnectionState.CONNECTED, 3, what="recovered")
+            assert client.stats["connects"] == 1 and client.stats["degraded"] == 1
+            await asyncio.sleep(0.3)
+            assert fox.received == []  # the command of the stall never reached the robot
+        finally:
+            await client.close()
