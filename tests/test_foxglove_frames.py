@@ -38,7 +38,7 @@ def test_every_recorded_server_frame_is_understood_without_a_bad_frame():
     channel_of = {s["id"]: s["channelId"] for s in recorded_sub["subscriptions"]}
     for frame in frames[2:]:
         if isinstance(frame, bytes) and frame[0] == wire.MESSAGE_DATA:
-            _, sub, stamp, payload = wire.parse_binary(frame)
+            _, sub, stamp, payload, _whole = wire.parse_binary(frame)
             frame = wire.message_frame(subs[channel_of[sub]], stamp, bytes(payload))
         session.receive(frame)
     assert client.stats["bad_frames"] == 0

@@ -237,10 +237,10 @@ async def test_calls_waiting_when_the_link_drops_fail_at_once(fox):
     try:
         waiting = asyncio.ensure_future(client.call_service("/slow", {}))
         await until(lambda: any(name == "/slow" for name, _ in fox.calls), what="the call reached the robot")
-        fox.release.set()  # the robot answers only after the link is gone
-        await client.link.close()
+        await client.link.close()  # the robot has not answered yet (it answers once released)
         with pytest.raises(ConnectionLostError):
             await asyncio.wait_for(waiting, 5)
+        fox.release.set()
         with pytest.raises(NotConnectedError):
             await client.call_service("/add", {"a": 1, "b": 1})
     finally:
