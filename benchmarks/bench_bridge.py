@@ -21,7 +21,10 @@ The ``foxglove`` client is RCON's Foxglove link (``rcon_core.foxglove``): the se
 channels with ``ros2msg`` schemas, binary MessageData frames carrying CDR (the same Float64 and 640x480
 Image), the round trip as a client channel echoed on a subscription.  Its image row is CDR (binary, like
 CBOR), so it runs the ``image_cbor`` phase; the issue's targets compare it with the rosbridge link's best
-encoding (``foxglove`` targets below).
+encoding (``foxglove`` targets below).  Read the image row with this in mind: the rcon client's CBOR phase
+runs after its JSON phase in the same process, whose larger allocations raise glibc's dynamic mmap threshold,
+so its 0.9 MB frames then come from the heap; the foxglove client has no JSON phase and pays about 200 page
+faults per frame (``ru_minflt``) for the same buffers -- a difference of the run's order, not of the links.
 
 Two kinds of figure.  *Wall* figures (messages/s, frames/s, round-trip ms) are what a user sees, but on a
 shared machine they swing with whatever else runs.  *CPU* figures -- the client process's own user+sys
