@@ -349,7 +349,7 @@ class ConnectionBar(QtWidgets.QFrame):
             self.message.setMinimumWidth(self.latency_label.minimumSizeHint().width() + spacing)
         if connected:
             self.failure, self.note = None, ""
-            self._say("")
+            self._say(self.link.protocol_text())  # "" on rosbridge; a Foxglove link says so
             if self._remember is not None and self._remember == self.link.url and not self._remember_on_answer:
                 self._keep_url()
         self.state_changed.emit(state)
