@@ -135,6 +135,22 @@ def plugins() -> Any:
     return pm
 
 
+def widget_catalog(*plugins: Any, names: list[str] | None = None) -> Any:
+    """A widget catalog (a ``PluginManager``) holding only ``plugins`` (plugin modules or objects with
+    ``rcon_*`` hooks), no entry point: a unit test sees exactly what it registered, as npe2's test manager
+    does. Give it to a model as ``context=WidgetContext(widget_catalog(my_plugin))``::
+
+        from rcon_widgets_std import plugin as std
+        catalog = widget_catalog(std)                  # only the standard kinds
+    """
+    from rcon_core.plugins import PluginManager
+
+    pm = PluginManager(environ={})
+    for i, plugin in enumerate(plugins):
+        pm.register(plugin, name=names[i] if names else None)
+    return pm
+
+
 @asynccontextmanager
 async def connected(url: str, *, timeout: float = 10.0, **options: Any) -> AsyncIterator[BridgeClient]:
     """``async with connected(sim.url, call_timeout=5) as client:`` a :class:`BridgeClient` on ``url``
@@ -266,9 +282,20 @@ class RecordingPort:
         port.answer("/dock", TimeoutError("no answer"))                                # raised by the call
     """
 
+    #: a complete port (``rcon_core.plugins.api.Port``): a test may set these to play the app's port
+    view_only: str | None = None
+    envelope: Any = None
+    widget_id: str | None = None
+    composes = False
+
     def __init__(self) -> None:
         self.published: list[tuple[str, dict[str, Any]]] = []
         self.calls: list[tuple[str, Any]] = []
+        #: action goals the model tried to send: (action, type, goal)
+        self.goals: list[tuple[str, str, Any]] = []
+        #: how often the model said it has something new to show (``changed()``)
+        self.changes = 0
+        self.link: Any = id(self)
         self._answers: dict[str, list[Any]] = {}
         self._subscribers: dict[str, list[Callable[[dict[str, Any]], Any]]] = {}
 
@@ -308,6 +335,15 @@ class RecordingPort:
             answer = answer(args)
         return dict(answer)
 
+    def send_action_goal(self, action: str, action_type: str, args: Any = None, feedback: Any = None,
+                         **options: Any) -> Any:
+        """Recorded in :attr:`goals`; no robot answers, so it raises after recording."""
+        self.goals.append((action, action_type, args))
+        raise RuntimeError("a RecordingPort sends no action goals (it reaches no robot)")
+
+    def changed(self) -> None:
+        self.changes += 1
+
     def close(self) -> None:
         pass
 
@@ -331,9 +367,10 @@ def build_view(view_cls: Any, model: Any, state: Any = None, *, size: tuple[int,
         QtWidgets.QApplication([])
     view = view_cls(model)
     view.resize(*size)
-    refresh = getattr(view, "refresh", None)
-    if refresh is not None:
-        refresh(state if state is not None else model.state)
+    from rcon_core.plugins.api import WidgetView
+
+    if isinstance(view, WidgetView):  # a view without refresh() reads model.state when it paints
+        view.refresh(state if state is not None else model.state)
     return view
 
 

@@ -30,7 +30,14 @@ import attrs
 import pluggy
 
 from . import hookspecs
-from .registry import CanvasTemplate, TemplateRegistry, TypeContributions, TypeDefinition, WidgetRegistry
+from .registry import (
+    CanvasTemplate,
+    TemplateRegistry,
+    TypeContributions,
+    TypeDefinition,
+    TypeKind,
+    WidgetRegistry,
+)
 from .spec import WidgetSpec
 
 if TYPE_CHECKING:
@@ -327,7 +334,7 @@ class PluginManager:
             mine: list[str] = []
             try:
                 for d in info.types:
-                    if d.kind == "typedefs":
+                    if d.kind is TypeKind.TYPEDEFS:
                         mine += types.add_typedefs(list(d.typedefs))
                     else:
                         mine += types.add_msg_text(_interface_name(d.name, d.kind), d.text)
@@ -348,10 +355,10 @@ class PluginManager:
                 continue
             for d in info.types:
                 try:
-                    if d.kind == "srv":
+                    if d.kind is TypeKind.SRV:
                         for part in ("request", "response"):
                             types.service_typedefs(_interface_name(d.name, d.kind), part)
-                    elif d.kind == "msg":
+                    elif d.kind is TypeKind.MSG:
                         types.typedefs(d.name)
                 except Exception as exc:
                     out.setdefault(info.name, []).append(f"type {d.name}: {exc}")

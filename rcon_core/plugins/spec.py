@@ -318,7 +318,10 @@ class WidgetSpec:
     ``"module:attr"`` string or the object itself; ``view`` must be a ``"module:attr"`` string (it
     imports Qt). ``package`` is filled in by the plugin manager from the distribution name; leave it empty.
     ``default_size`` is (w, h) in canvas units (device-independent pixels). Higher ``priority`` wins ties
-    in the matcher between widgets of the same rank.
+    in the matcher between widgets of the same rank. ``api_version``: the widget API the package was
+    written against (``rcon_core.plugins.api.API_VERSION`` at the time, written out: ``"1.1"``); the plugin
+    manager refuses a package built for another major version. Empty: written before the version existed
+    (1.0).
     """
 
     kind: str = attrs.field(validator=_check_kind)
@@ -335,6 +338,7 @@ class WidgetSpec:
     default_size: tuple[float, float] = (160.0, 80.0)
     priority: int = 0
     package: str = ""
+    api_version: str = ""
 
     @view.validator
     def _view_is_lazy(self, _attr: Any, value: Any) -> None:

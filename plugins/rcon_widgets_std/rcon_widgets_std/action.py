@@ -192,7 +192,7 @@ class ActionModel(StdModel):
         self._goal: Any = None
         self._first_remaining: float | None = None
         self._status = ActionStatus("idle")
-        widget_id = getattr(self.port, "widget_id", None)  # the instance's id, the same across rebuilds
+        widget_id = self.port.widget_id  # the instance's id, the same across rebuilds
         self._key = widget_id if isinstance(widget_id, str) else None
         with _LEFT_LOCK:
             left = _LEFT_BEHIND.pop(self._key, None) if isinstance(self._key, str) else None

@@ -1,6 +1,8 @@
 """Compound's Qt view: each child's own view under a small title (its field), in a grid; a Publish or
 Call button and the result underneath. Child views are built from their specs, like the app builds any
-widget view, and refreshed when their model's ``seq`` moves.
+widget view, and refreshed when their model's ``seq`` moves: a child's change wakes the front end through
+the compound (its ``seq`` moves too), so the host's ``refresh`` reaches them within the frame; the view
+keeps no clock of its own.
 
 A child is never painted below its minimum size: the grid sits in a scroll area, which never makes it
 smaller than its minimum (each child's own), so a frame smaller than the children scrolls (the button
@@ -14,7 +16,7 @@ from typing import Any
 
 from qtpy import QtCore, QtWidgets
 
-from rcon_core.plugins import Role
+from rcon_core.plugins import CallPhase, Role, WidgetView
 
 from .view_common import BAD, MUTED, OK, Caption, vbox
 
@@ -50,10 +52,6 @@ class CompoundView(QtWidgets.QWidget):
         self.child_boxes: list[QtWidgets.QGroupBox] = []
         self._version = -1
         self._painted: dict[int, int] = {}
-        self._timer = QtCore.QTimer(self)  # children's own changes (a display child ageing, ...)
-        self._timer.setInterval(100)
-        self._timer.timeout.connect(self._refresh_children)
-        self._timer.start()
         self._build()
 
     def _build(self) -> None:
@@ -116,9 +114,10 @@ class CompoundView(QtWidgets.QWidget):
             if self._painted.get(child.index) == st.seq:
                 continue
             self._painted[child.index] = st.seq
-            refresh = getattr(view, "refresh", None)
-            if refresh is not None:
-                refresh(st)
+            if isinstance(view, WidgetView):
+                view.refresh(st)
+            else:
+                view.update()
 
     def refresh(self, state: Any) -> None:
         self._build()
@@ -132,7 +131,7 @@ class CompoundView(QtWidgets.QWidget):
             self.status.show_text("; ".join(problems) if problems else "", BAD if problems else MUTED)
         elif st.busy:
             self.status.show_text(f"calling {st.target}…", MUTED)
-        elif st.phase == "failed":
+        elif st.phase is CallPhase.FAILED:
             self.status.show_text(f"✗ {st.text}", BAD)
         else:
             self.status.show_text(f"✓ {st.text}", OK)

@@ -18,13 +18,13 @@ from rcon_widgets_std.slider_view import SliderView
 from rcon_widgets_std.switch import SwitchModel, SwitchSettings, SwitchValue
 from rcon_widgets_std.switch_view import SwitchView
 from std_qtkit import LiveBridge, wait_until
-from std_testkit import build
+from std_testkit import STD, build
 
 from rcon_core.app.geometry import on_grid
 from rcon_core.app.theme import stylesheet
 from rcon_core.app.widget_frame import WidgetFrame, frame_min_size
 from rcon_core.msgs import TypeRegistry
-from rcon_core.plugins import Binding
+from rcon_core.plugins import Binding, WidgetContext
 
 SPECS = {spec.kind: spec for spec in specs()}
 
@@ -241,7 +241,7 @@ def test_label_default_size_fits_a_typical_title(qtbot, title):
 def _compound(children, columns=1):
     settings = CompoundSettings(columns=columns, children=children)
     m = CompoundModel(settings, Binding("/cmd_vel", "geometry_msgs/Twist", "publish"), None,
-                      types=TypeRegistry.standard())
+                      types=TypeRegistry.standard(), context=WidgetContext(STD))
     m.build_children()
     return m
 
