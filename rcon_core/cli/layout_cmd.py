@@ -118,7 +118,7 @@ def _widget_problems(w: Any, pm: Any, types: Any) -> list[str]:
     if not w.binding.problems() and w.binding.role in spec.roles:
         out += _type_problems(w.binding, spec, pm, types)
     try:
-        out += spec.settings_problems(w.settings)
+        out += spec.settings_problems(w.settings, pm)
     except Exception as exc:  # a plugin's problems() that raises is reported, not fatal
         out.append(f"settings could not be checked: {type(exc).__name__}: {exc}")
     return out

@@ -32,11 +32,14 @@ from __future__ import annotations
 import enum
 import importlib
 from collections.abc import Callable, Iterable, Mapping
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import attrs
 
 from rcon_core.msgs.names import pkg_type
+
+if TYPE_CHECKING:
+    from .context import WidgetCatalog
 
 __all__ = [
     "Role",
@@ -380,15 +383,16 @@ class WidgetSpec:
         """Same as :meth:`make_settings` for the per-kind shared settings."""
         return _structure(self.load_plugin_settings_class(), data, self.kind)
 
-    def settings_problems(self, data: Mapping[str, Any] | None = None) -> list[str]:
-        """Everything wrong with these stored settings, as sentences; ``[]`` means configured."""
+    def settings_problems(self, data: Mapping[str, Any] | None = None, catalog: WidgetCatalog | None = None) -> list[str]:
+        """Everything wrong with these stored settings, as sentences; ``[]`` means configured. ``catalog``:
+        the enabled kinds, for settings whose checks need them (a Compound's children)."""
+        from .api import settings_problems
+
         try:
             obj = self.make_settings(data)
         except SettingsError as exc:
             return list(exc.problems)
-        if obj is None or not hasattr(obj, "problems"):
-            return []
-        return list(obj.problems())
+        return settings_problems(obj, catalog)
 
     def settings_to_dict(self, settings: Any) -> dict[str, Any]:
         """The dict stored in a layout for a settings object."""

@@ -516,7 +516,7 @@ class MapView(QtWidgets.QWidget):
         if chip is not None:
             _chip(p, QtCore.QPointF(8, 8), chip[0], chip[1])
         main = self._follow_target()
-        y = self.height() - 8
+        y = float(self.height() - 8)
         lines = []
         if main is not None:
             lines.append(f"{main.lat:.6f}, {main.lon:.6f}"

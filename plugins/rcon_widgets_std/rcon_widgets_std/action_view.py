@@ -130,8 +130,9 @@ class ActionView(QtWidgets.QWidget):
 
     def missing(self) -> list[str]:
         """The required entries still empty (Send waits for them)."""
-        return [f.path for f in self._fields if f.required and isinstance(self.editors.get(f.path), QtWidgets.QLineEdit)
-                and not self.editors[f.path].text().strip()]
+        return [f.path for f in self._fields if f.required and isinstance(editor := self.editors.get(f.path),
+                                                                          QtWidgets.QLineEdit)
+                and not editor.text().strip()]
 
     def _update_send(self, *_: Any) -> None:
         """Send only once every required entry is filled; the button says what it waits for."""

@@ -143,7 +143,7 @@ def held_to_envelope(port: Port, type_name: str, msg: dict[str, Any]) -> tuple[d
     return verdict.msg, verdict.sentence
 
 
-def format_number(value: float, decimals: int = -1) -> str:
+def format_number(value: float | None, decimals: int = -1) -> str:
     """``decimals`` < 0: as it came -- ints stay ints, floats with every digit they carry (15 significant
     digits: 43.6532117 stays 43.6532117, never rounded to 6; a whole float without its ".0")."""
     if value is None:

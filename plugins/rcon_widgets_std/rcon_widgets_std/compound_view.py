@@ -31,12 +31,12 @@ class CompoundView(QtWidgets.QWidget):
         self.grid = QtWidgets.QGridLayout(self.content)
         self.grid.setContentsMargins(0, 0, 0, 0)
         self.grid.setSpacing(6)
-        self.scroll = QtWidgets.QScrollArea()
-        self.scroll.setWidgetResizable(True)
-        self.scroll.setFrameShape(QtWidgets.QFrame.Shape.NoFrame)
-        self.scroll.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAsNeeded)
-        self.scroll.setWidget(self.content)
-        layout.addWidget(self.scroll, 1)
+        self.scroll_area = QtWidgets.QScrollArea()
+        self.scroll_area.setWidgetResizable(True)
+        self.scroll_area.setFrameShape(QtWidgets.QFrame.Shape.NoFrame)
+        self.scroll_area.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAsNeeded)
+        self.scroll_area.setWidget(self.content)
+        layout.addWidget(self.scroll_area, 1)
         role = model.binding.role
         self.button = None
         if role is not Role.SERVE:
@@ -88,6 +88,7 @@ class CompoundView(QtWidgets.QWidget):
     def _chrome(self) -> QtCore.QSize:
         """What the view needs besides the children: margins, the button and the status line."""
         layout = self.layout()
+        assert layout is not None  # vbox(self) in __init__
         m = layout.contentsMargins()
         h = m.top() + m.bottom()
         for w in (self.button, self.status):
@@ -98,14 +99,14 @@ class CompoundView(QtWidgets.QWidget):
     def sizeHint(self) -> QtCore.QSize:  # noqa: N802 - Qt override
         """Every child at its preferred size, the button and the status line: nothing scrolls."""
         chrome, content = self._chrome(), self.content.sizeHint()
-        bar = self.scroll.verticalScrollBar().sizeHint().width()
+        bar = self.scroll_area.verticalScrollBar().sizeHint().width()
         return QtCore.QSize(max(content.width() + bar, 160) + chrome.width(), content.height() + chrome.height())
 
     def minimumSizeHint(self) -> QtCore.QSize:  # noqa: N802 - Qt override
         """The smallest child and the button: anything more scrolls."""
         chrome = self._chrome()
         low = [b.minimumSizeHint() for b in self.child_boxes] or [QtCore.QSize(120, 40)]
-        w = max(q.width() for q in low) + self.scroll.verticalScrollBar().sizeHint().width()
+        w = max(q.width() for q in low) + self.scroll_area.verticalScrollBar().sizeHint().width()
         return QtCore.QSize(w + chrome.width(), min(q.height() for q in low) + chrome.height())
 
     def _refresh_children(self) -> None:

@@ -252,7 +252,7 @@ THREE = [*TWO, ChildSpec("std.textfield", "linear.y"), ChildSpec("std.slider", "
 
 def _fits_without_scrolling(view: CompoundView, what: str) -> None:
     """Every child at least its minimum and all of them inside the scroll area's viewport."""
-    port = view.scroll.viewport()
+    port = view.scroll_area.viewport()
     for box in view.child_boxes:
         corner = box.mapTo(port, QtCore.QPoint(box.width(), box.height()))
         assert corner.x() <= port.width() and corner.y() <= port.height(), f"{what}: a child needs scrolling"
@@ -266,13 +266,13 @@ def test_compound_in_a_small_frame_keeps_children_at_their_minimum_and_scrolls(q
     for box in view.child_boxes:
         need = box.minimumSizeHint()
         assert box.height() >= need.height() and box.width() >= need.width(), "a child squeezed below its minimum"
-    bar = view.scroll.verticalScrollBar()
+    bar = view.scroll_area.verticalScrollBar()
     assert bar.maximum() > 0, "what does not fit scrolls"
     bar.setValue(bar.maximum())
     QtWidgets.QApplication.processEvents()
     last = view.child_boxes[-1]
-    bottom = last.mapTo(view.scroll.viewport(), QtCore.QPoint(0, last.height()))
-    assert bottom.y() <= view.scroll.viewport().height(), "the last child can be scrolled into view"
+    bottom = last.mapTo(view.scroll_area.viewport(), QtCore.QPoint(0, last.height()))
+    assert bottom.y() <= view.scroll_area.viewport().height(), "the last child can be scrolled into view"
     assert view.button.isVisible() and frame.isVisible()
 
 
