@@ -31,7 +31,7 @@ from rcon_core.app.robot_chips import RobotChips, RobotPicker
 from rcon_core.app.robot_marks import apply_marks
 from rcon_core.app.widget_host import RateMeter
 from rcon_core.bridge import ConnectionState
-from rcon_core.canvas import Change, EditError
+from rcon_core.canvas import Change, ChangeKind, EditError
 from rcon_core.canvas.fleet import Fleet
 from rcon_core.canvas.retarget import plan_retarget, setting_names
 from rcon_core.canvas.robots import robot_colour
@@ -130,9 +130,9 @@ class FleetUi(QtCore.QObject):
 
     # ------------------------------------------------------------------------------------ robots
     def _doc_changed(self, change: Change) -> None:
-        if change.what in ("robots-changed", "workspace-replaced"):
+        if change.what in (ChangeKind.ROBOTS_CHANGED, ChangeKind.WORKSPACE_REPLACED):
             new = self._sync_robots()
-            if change.what == "robots-changed":  # the controller restarts on workspace-replaced itself
+            if change.what is ChangeKind.ROBOTS_CHANGED:  # the controller restarts on workspace-replaced itself
                 self.window.controller.run_current()
             # once the runtime runs on the new robots (the controller hears this change after us)
             QtCore.QTimer.singleShot(0, lambda: self._connect(new))

@@ -15,6 +15,7 @@ import time
 from collections.abc import Iterable
 from typing import Any
 
+from rcon_core.app.live import Reset, Update
 from rcon_core.app.widget_frame import WidgetFrame
 from rcon_core.bridge.safety import safe_text
 from rcon_core.canvas import WidgetInstance
@@ -101,14 +102,14 @@ class WidgetHost:
         self._due.discard(widget_id)
 
     # -------------------------------------------------------------------------------------- models
-    def apply(self, updates: Iterable[tuple[str, Any]]) -> None:
+    def apply(self, updates: Iterable[Update]) -> None:
         """Take the runtime's updates (see :class:`rcon_core.app.live.LiveCanvas`), in order."""
-        for kind, payload in updates:
-            if kind == "reset":
-                for widget_id, model in payload.items():
+        for update in updates:
+            if isinstance(update, Reset):
+                for widget_id, model in update.models.items():
                     self.attach(widget_id, model)
             else:
-                self.attach(*payload)
+                self.attach(update.widget_id, update.model)
 
     def attach(self, widget_id: str, model: HostedModel | None) -> None:
         """Show ``model`` in its widget's frame (None: the widget stopped)."""

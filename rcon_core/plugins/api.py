@@ -35,7 +35,7 @@ The contract, in the order a widget meets it:
 from __future__ import annotations
 
 import enum
-from collections.abc import Awaitable, Callable, Hashable, Sequence
+from collections.abc import Awaitable, Callable, Hashable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import attrs
@@ -43,7 +43,7 @@ import attrs
 from rcon_core.msgs.names import normalize
 
 from .context import WidgetCatalog
-from .spec import Role, SpecError
+from .spec import Role, SettingsError, SpecError, WidgetSettings, WidgetSpec
 
 if TYPE_CHECKING:
     from rcon_core.bridge.envelope import Envelope
@@ -72,6 +72,7 @@ __all__ = [
     "StaleAfterSettings",
     "CatalogSettings",
     "settings_problems",
+    "stored_settings_problems",
     "settings_commands",
     "settings_size",
     "CAPABILITIES",
@@ -434,14 +435,6 @@ ViewFactory = Callable[[Any], Any]
 
 # ------------------------------------------------------------------------------------------ settings
 @runtime_checkable
-class WidgetSettings(Protocol):
-    """Per-instance settings: ``problems()`` lists what keeps the widget from working, one sentence each
-    (``[]``: configured); the frame shows them as the "not configured" warning."""
-
-    def problems(self) -> list[str]: ...
-
-
-@runtime_checkable
 class CommandBounds(Protocol):
     """Settings that bound what the widget may send: ``commands(binding)`` -> ``[(field path, largest
     value)]``. The Configure dialog asks before saving a limit beyond the robot's safety envelope."""
@@ -494,6 +487,17 @@ def settings_problems(settings: Any, catalog: WidgetCatalog | None = None) -> li
         return [str(p) for p in found]
     except Exception as exc:
         return [f"settings check failed: {exc}"]
+
+
+def stored_settings_problems(spec: WidgetSpec, data: Mapping[str, Any] | None,
+                             catalog: WidgetCatalog | None = None) -> list[str]:
+    """Everything wrong with a widget's stored settings (a layout's dict), as sentences: values of the wrong
+    type (``SettingsError``), then the settings' own checks against ``catalog``."""
+    try:
+        obj = spec.make_settings(data)
+    except SettingsError as exc:
+        return list(exc.problems)
+    return settings_problems(obj, catalog)
 
 
 def settings_commands(settings: Any, binding: Binding,

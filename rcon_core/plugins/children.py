@@ -27,6 +27,7 @@ import attrs
 from rcon_core.matcher import Match, Rank, match
 from rcon_core.msgs import names, walk_fields
 from rcon_core.plugins.api import settings_problems as api_settings_problems
+from rcon_core.plugins.api import stored_settings_problems
 from rcon_core.plugins.context import WidgetCatalog
 from rcon_core.plugins.model import Binding
 from rcon_core.plugins.model_types import ModelTypes
@@ -255,7 +256,7 @@ class ChildCatalog:
 
     def settings_problems(self, item: Any) -> list[str]:
         spec = self.spec_of(item.kind)
-        return spec.settings_problems(item.settings, self.plugins) if spec is not None else []
+        return stored_settings_problems(spec, item.settings, self.plugins) if spec is not None else []
 
     def child_binding(self, index: int, item: Any) -> Binding | None:
         """The binding the child's model gets (part type, child role, path inside the part)."""

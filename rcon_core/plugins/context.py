@@ -29,6 +29,8 @@ import threading
 from collections.abc import Callable, Hashable, Mapping
 from typing import TYPE_CHECKING, Any, Protocol, TypeVar, runtime_checkable
 
+from .spec import UnknownWidget
+
 if TYPE_CHECKING:
     from .spec import WidgetSpec
 
@@ -148,8 +150,6 @@ class WidgetContext:
         """The spec of ``kind`` from the catalog; ``KeyError`` (``UnknownWidget``) when no enabled plugin
         offers it, or when there is no catalog."""
         if self.catalog is None:
-            from .manager import UnknownWidget
-
             raise UnknownWidget(f"no widget catalog: {kind!r} is unknown here (build the model with "
                                 "context=WidgetContext(catalog) to let it find other kinds; in a test, "
                                 "rcon_core.testing.widget_catalog(...))")

@@ -38,7 +38,7 @@ from .registry import (
     TypeKind,
     WidgetRegistry,
 )
-from .spec import WidgetSpec
+from .spec import UnknownWidget, WidgetSpec
 
 if TYPE_CHECKING:
     from rcon_core.msgs import TypeRegistry
@@ -52,13 +52,6 @@ ENTRY_POINT_GROUP = "rcon.widgets"
 DISABLE_ENV = "RCON_DISABLE_PLUGINS"
 
 log = logging.getLogger(__name__)
-
-
-class UnknownWidget(KeyError):
-    """No installed (and enabled) plugin offers this widget kind."""
-
-    def __str__(self) -> str:  # KeyError quotes its argument; we want a sentence
-        return str(self.args[0]) if self.args else "unknown widget"
 
 
 class PluginStatus(enum.StrEnum):

@@ -32,14 +32,11 @@ from __future__ import annotations
 import enum
 import importlib
 from collections.abc import Callable, Iterable, Mapping
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import Any, Protocol, runtime_checkable
 
 import attrs
 
 from rcon_core.msgs.names import pkg_type
-
-if TYPE_CHECKING:
-    from .context import WidgetCatalog
 
 __all__ = [
     "Role",
@@ -50,6 +47,8 @@ __all__ = [
     "MESSAGE_PREDICATES",
     "SpecError",
     "SettingsError",
+    "UnknownWidget",
+    "WidgetSettings",
     "resolve",
     "NUMERIC_BASES",
     "ACTION_PARTS",
@@ -60,6 +59,21 @@ __all__ = [
 
 class SpecError(ValueError):
     """A widget spec is malformed (bad kind, unknown predicate name, bad reference...)."""
+
+
+class UnknownWidget(KeyError):
+    """No installed (and enabled) plugin offers this widget kind."""
+
+    def __str__(self) -> str:  # KeyError quotes its argument; we want a sentence
+        return str(self.args[0]) if self.args else "unknown widget"
+
+
+@runtime_checkable
+class WidgetSettings(Protocol):
+    """Per-instance settings: ``problems()`` lists what keeps the widget from working, one sentence each
+    (``[]``: configured); the frame shows them as the "not configured" warning."""
+
+    def problems(self) -> list[str]: ...
 
 
 class SettingsError(ValueError):
@@ -383,16 +397,17 @@ class WidgetSpec:
         """Same as :meth:`make_settings` for the per-kind shared settings."""
         return _structure(self.load_plugin_settings_class(), data, self.kind)
 
-    def settings_problems(self, data: Mapping[str, Any] | None = None, catalog: WidgetCatalog | None = None) -> list[str]:
-        """Everything wrong with these stored settings, as sentences; ``[]`` means configured. ``catalog``:
-        the enabled kinds, for settings whose checks need them (a Compound's children)."""
-        from .api import settings_problems
-
+    def settings_problems(self, data: Mapping[str, Any] | None = None) -> list[str]:
+        """Everything wrong with these stored settings, as sentences; ``[]`` means configured. (Settings whose
+        checks need the other installed kinds, a Compound's, get them through
+        ``rcon_core.plugins.api.stored_settings_problems(spec, data, catalog)``.)"""
         try:
             obj = self.make_settings(data)
         except SettingsError as exc:
             return list(exc.problems)
-        return settings_problems(obj, catalog)
+        if not isinstance(obj, WidgetSettings):
+            return []
+        return list(obj.problems())
 
     def settings_to_dict(self, settings: Any) -> dict[str, Any]:
         """The dict stored in a layout for a settings object."""
