@@ -348,6 +348,53 @@ class RecordingPort:
         pass
 
 
+def check_conformance(spec: Any, *, catalog: Any = None, types: Any = None, view: bool = True) -> None:
+    """Check one widget kind against the widget API (``rcon_core.plugins.api``), as
+    ``tests/test_plugin_conformance.py`` checks every installed kind: raises ``AssertionError`` saying what
+    does not conform. For each role: the model is a ``WidgetModel`` built as the runtime builds it, unbound
+    (it must say what it lacks, start, stop and take focus loss and link state without a robot); the
+    settings round-trip through a layout's dict; the view (``view=True``, needs a QApplication) builds
+    offscreen as ``View(model)`` and takes ``refresh(state)``. A lab's package runs it in its own tests::
+
+        from rcon_core.testing import check_conformance
+        def test_conforms(qapp):
+            check_conformance(plugin.SPEC)
+    """
+    from rcon_core.msgs import TypeRegistry
+    from rcon_core.plugins import Binding, WidgetContext, WidgetModel
+    from rcon_core.plugins.api import Port, WidgetView, check_api_version
+
+    check_api_version(spec.api_version, spec.kind, spec.package)
+    model_cls = spec.load_model()
+    assert isinstance(model_cls, type) and issubclass(model_cls, WidgetModel), (
+        f"{spec.kind}: the model {model_cls!r} is not a WidgetModel")
+    settings = spec.make_settings({})
+    stored = spec.settings_to_dict(settings)
+    assert spec.settings_to_dict(spec.make_settings(stored)) == stored, f"{spec.kind}: settings do not round-trip"
+    types = types if types is not None else TypeRegistry.standard()
+    for role in sorted(spec.roles):
+        model = model_cls(spec.make_settings({}), Binding("", "", role), RecordingPort(), types=types,
+                          context=WidgetContext(catalog))
+        assert isinstance(model.port, Port)
+        problems = model.problems()
+        assert problems and all(isinstance(p, str) and p for p in problems), (
+            f"{spec.kind} ({role}): an unbound widget must say what it lacks, got {problems!r}")
+        model.start()
+        model.on_focus_lost()
+        model.set_link(False)
+        assert model.state.running and model.state.link_down, f"{spec.kind} ({role}): start/set_link"
+        if view:
+            built = build_view(spec.load_view(), model)
+            try:
+                refreshes: WidgetView = built
+                assert isinstance(refreshes, WidgetView), f"{spec.kind}: its view has no refresh(state)"
+                refreshes.refresh(widget_state(None, seq=model.state.seq + 1))
+            finally:
+                built.deleteLater()  # a QWidget (build_view returns Any)
+        model.stop()
+        assert not model.state.running, f"{spec.kind} ({role}): stop"
+
+
 def widget_state(value: Any = None, **fields: Any) -> Any:
     """A :class:`~rcon_core.plugins.WidgetState` as a running model with one value would give it."""
     from rcon_core.plugins import WidgetState

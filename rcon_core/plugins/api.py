@@ -10,8 +10,8 @@ The contract, in the order a widget meets it:
   The plugin manager refuses a package built for another major version (:func:`check_api_version`), with
   one sentence saying which versions meet.
 * **The model** is built as ``Model(settings, binding, port, types=..., plugin_settings=..., dispatch=...,
-  clock=..., context=...)`` (:class:`~rcon_core.plugins.model.WidgetModel`, the base class every model
-  derives from). It gets a :class:`Binding`, a complete :class:`Port` and a
+  clock=..., context=...)`` (``rcon_core.plugins.WidgetModel``, the base class every model derives from;
+  it lives in ``model.py``, which imports this module, and implements :class:`HostedModel`). It gets a :class:`Binding`, a complete :class:`Port` and a
   :class:`~rcon_core.plugins.context.WidgetContext`; it hands the front end frozen :class:`WidgetState`
   snapshots. What the runtime and the front end read from a model is :class:`HostedModel`.
 * **Optional capabilities** of a model are declared once, in :class:`ModelHooks`, and ``WidgetModel``
@@ -42,13 +42,24 @@ import attrs
 
 from rcon_core.msgs.names import normalize
 
-from .context import WidgetCatalog
-from .spec import Role, SettingsError, SpecError, WidgetSettings, WidgetSpec
+from .context import SharedResources, WidgetCatalog, WidgetContext
+from .spec import Accepts, Role, SettingsError, SpecError, UnknownWidget, WidgetSettings, WidgetSpec
 
 if TYPE_CHECKING:
     from rcon_core.bridge.envelope import Envelope
 
 __all__ = [
+    # declared in the modules they belong to, stated here with the rest of the contract
+    "WidgetSpec",
+    "Accepts",
+    "Role",
+    "SpecError",
+    "SettingsError",
+    "UnknownWidget",
+    "WidgetContext",
+    "WidgetCatalog",
+    "SharedResources",
+    # declared here
     "API_VERSION",
     "ApiVersionError",
     "check_api_version",
@@ -427,10 +438,6 @@ class WidgetView(Protocol):
     ``update()`` instead and it reads ``model.state`` in ``paintEvent``.)"""
 
     def refresh(self, state: WidgetState) -> None: ...
-
-
-#: how a view is built: ``View(model)``
-ViewFactory = Callable[[Any], Any]
 
 
 # ------------------------------------------------------------------------------------------ settings
