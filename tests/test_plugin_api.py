@@ -53,8 +53,9 @@ def capability_lookups(roots: list[Path]) -> list[str]:
 
 
 def test_no_capability_is_looked_up_by_its_name():
-    """Figure: run-time getattr lookups of hook names in rcon_core and the three packages (6 before: the
-    runtime's on_focus_lost, on_fleet, on_robot_link, dry_run; the host's refresh; ...; 0 now)."""
+    """Figure: run-time ``getattr``/``hasattr`` lookups of a capability's name in rcon_core and the three
+    packages: 31 before issue 24 (the runtime's on_focus_lost, on_fleet, on_robot_link, dry_run; the host's
+    refresh; the ports' envelope, composes, widget_id; settings' problems, commands...), 0 now."""
     assert capability_lookups([ROOT / "rcon_core", *PACKAGES]) == []
 
 

@@ -82,10 +82,10 @@ class _Goal:
     __slots__ = ("result", "cancel", "_status", "_done")
 
     def __init__(self, goal: Any) -> None:
-        self.result = lambda timeout=None: goal.result(timeout)
-        self.cancel = lambda: goal.cancel()
-        self._status = lambda: goal.status
-        self._done = lambda: goal.done
+        self.result: Callable[..., Any] = lambda timeout=None: goal.result(timeout)
+        self.cancel: Callable[[], Any] = lambda: goal.cancel()
+        self._status: Callable[[], Any] = lambda: goal.status
+        self._done: Callable[[], Any] = lambda: goal.done
 
     @property
     def status(self) -> Any:
@@ -138,7 +138,8 @@ class GuardedPort:
     @property
     def envelope(self) -> Envelope | None:
         """The robot's safety envelope now (an ``Envelope``, or None: no limit); read it at each use."""
-        return self._ops["envelope"]()
+        envelope: Envelope | None = self._ops["envelope"]()
+        return envelope
 
     def changed(self) -> None:
         """The model has something new to show (any thread): the front end repaints it at once.  Called

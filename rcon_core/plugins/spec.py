@@ -370,13 +370,15 @@ class WidgetSpec:
     # -- lazy loading ------------------------------------------------------------------------------
     def load_model(self) -> type:
         """The model class (imports the model module; never Qt)."""
-        return resolve(self.model)
+        model: type = resolve(self.model)
+        return model
 
     def load_view(self) -> type:
         """The Qt view class (imports Qt). Only the front end calls this."""
         if self.view is None:
             raise SpecError(f"widget {self.kind!r} has no view")
-        return resolve(self.view)
+        view: type = resolve(self.view)
+        return view
 
     def load_settings_class(self) -> type | None:
         return resolve(self.settings) if self.settings is not None else None
@@ -413,7 +415,8 @@ class WidgetSpec:
         """The dict stored in a layout for a settings object."""
         if settings is None:
             return {}
-        return _converter().unstructure(settings)
+        stored: dict[str, Any] = _converter().unstructure(settings)
+        return stored
 
 
 _CONVERTER: Any = None
