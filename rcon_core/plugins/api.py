@@ -11,9 +11,9 @@ The contract, in the order a widget meets it:
   one sentence saying which versions meet.
 * **The model** is built as ``Model(settings, binding, port, types=..., plugin_settings=..., dispatch=...,
   clock=..., context=...)`` (``rcon_core.plugins.WidgetModel``, the base class every model derives from;
-  it lives in ``model.py``, which imports this module, and implements :class:`HostedModel`). It gets a :class:`Binding`, a complete :class:`Port` and a
-  :class:`~rcon_core.plugins.context.WidgetContext`; it hands the front end frozen :class:`WidgetState`
-  snapshots. What the runtime and the front end read from a model is :class:`HostedModel`.
+  it lives in ``model.py``, which imports this module). It gets a :class:`Binding`, a complete
+  :class:`Port` and a :class:`WidgetContext`; it hands the front end frozen :class:`WidgetState` snapshots.
+  What the runtime and the front end read from a model is :class:`HostedModel`.
 * **Optional capabilities** of a model are declared once, in :class:`ModelHooks`, and ``WidgetModel``
   implements each as a documented no-op: ``on_focus_lost()``, ``on_fleet(robots)`` (a model that overrides
   it is *fleet-wide*), ``on_robot_link(robot_id, up)``, ``shown_message()`` (what a Compound's child
@@ -43,7 +43,18 @@ import attrs
 from rcon_core.msgs.names import normalize
 
 from .context import SharedResources, WidgetCatalog, WidgetContext
-from .spec import Accepts, Role, SettingsError, SpecError, UnknownWidget, WidgetSettings, WidgetSpec
+from .spec import (
+    API_VERSION,
+    Accepts,
+    ApiVersionError,
+    Role,
+    SettingsError,
+    SpecError,
+    UnknownWidget,
+    WidgetSettings,
+    WidgetSpec,
+    check_api_version,
+)
 
 if TYPE_CHECKING:
     from rcon_core.bridge.envelope import Envelope
@@ -59,10 +70,10 @@ __all__ = [
     "WidgetContext",
     "WidgetCatalog",
     "SharedResources",
-    # declared here
     "API_VERSION",
     "ApiVersionError",
     "check_api_version",
+    # declared here
     "Binding",
     "WidgetState",
     "Subscription",
@@ -91,39 +102,6 @@ __all__ = [
     "CallPhase",
     "GoalPhase",
 ]
-
-#: the version of this contract: a package built for another *major* version is refused; a newer minor
-#: version only adds (a package built for 1.0 runs on 1.1)
-API_VERSION = "1.1"
-
-
-class ApiVersionError(SpecError):
-    """A widget package was built for a widget API this RCON does not offer (another major version)."""
-
-
-def _parse_version(text: str) -> tuple[int, int] | None:
-    parts = text.strip().split(".")
-    if not 1 <= len(parts) <= 2 or not all(p.isdigit() for p in parts):
-        return None
-    return int(parts[0]), int(parts[1]) if len(parts) == 2 else 0
-
-
-def check_api_version(declared: str, kind: str, package: str = "") -> None:
-    """Refuse (:class:`ApiVersionError`, one sentence) a widget built for another major version of this
-    API, or one whose ``api_version`` is not a version. ``""``: written before the version existed (1.0)."""
-    if not declared:
-        return
-    who = f"{kind!r}" + (f" (package {package})" if package else "")
-    version = _parse_version(declared)
-    if version is None:
-        raise ApiVersionError(f"widget {who} declares api_version {declared!r}, which is not a version "
-                              f"such as {API_VERSION!r}")
-    major = _parse_version(API_VERSION)[0]  # type: ignore[index]
-    if version[0] != major:
-        raise ApiVersionError(
-            f"widget {who} was built for RCON's widget API {declared}, but this RCON offers API "
-            f"{API_VERSION}: install a version of the package built for API {major}.x"
-            + (", or a newer rcon-core" if version[0] > major else ""))
 
 
 # ------------------------------------------------------------------------------------------ binding

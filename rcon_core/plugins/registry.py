@@ -9,8 +9,7 @@ from typing import Any
 
 import attrs
 
-from .api import check_api_version
-from .spec import SpecError, WidgetSpec
+from .spec import SpecError, WidgetSpec, check_api_version
 
 __all__ = ["WidgetRegistry", "TypeContributions", "TypeDefinition", "TypeKind", "DuplicateWidget", "TemplateRegistry",
            "CanvasTemplate"]

@@ -48,6 +48,9 @@ __all__ = [
     "SpecError",
     "SettingsError",
     "UnknownWidget",
+    "API_VERSION",
+    "ApiVersionError",
+    "check_api_version",
     "WidgetSettings",
     "resolve",
     "NUMERIC_BASES",
@@ -59,6 +62,40 @@ __all__ = [
 
 class SpecError(ValueError):
     """A widget spec is malformed (bad kind, unknown predicate name, bad reference...)."""
+
+
+#: the version of this contract: a package built for another *major* version is refused; a newer minor
+#: version only adds (a package built for 1.0 runs on 1.1)
+API_VERSION = "1.1"
+
+
+class ApiVersionError(SpecError):
+    """A widget package was built for a widget API this RCON does not offer (another major version)."""
+
+
+def _parse_version(text: str) -> tuple[int, int] | None:
+    parts = text.strip().split(".")
+    if not 1 <= len(parts) <= 2 or not all(p.isdigit() for p in parts):
+        return None
+    return int(parts[0]), int(parts[1]) if len(parts) == 2 else 0
+
+
+def check_api_version(declared: str, kind: str, package: str = "") -> None:
+    """Refuse (:class:`ApiVersionError`, one sentence) a widget built for another major version of this
+    API, or one whose ``api_version`` is not a version. ``""``: written before the version existed (1.0)."""
+    if not declared:
+        return
+    who = f"{kind!r}" + (f" (package {package})" if package else "")
+    version = _parse_version(declared)
+    if version is None:
+        raise ApiVersionError(f"widget {who} declares api_version {declared!r}, which is not a version "
+                              f"such as {API_VERSION!r}")
+    major = _parse_version(API_VERSION)[0]  # type: ignore[index]
+    if version[0] != major:
+        raise ApiVersionError(
+            f"widget {who} was built for RCON's widget API {declared}, but this RCON offers API "
+            f"{API_VERSION}: install a version of the package built for API {major}.x"
+            + (", or a newer rcon-core" if version[0] > major else ""))
 
 
 class UnknownWidget(KeyError):
