@@ -18,7 +18,7 @@ def test_a_child_wakes_the_front_end_and_is_repainted_without_a_clock(qtbot):
     port = RecordingPort()
     settings = CompoundSettings(children=[ChildSpec("std.slider", "linear.x", {"minimum": -1, "maximum": 1, "step": 0.1}),
                                           ChildSpec("std.stepper", "angular.z")])
-    m = CompoundModel(settings, Binding("/cmd_vel", "geometry_msgs/Twist", "publish"), port,
+    m = CompoundModel(settings, Binding("/rcon_test/wake", "geometry_msgs/Twist", "publish"), port,  # a topic of its own: a slider remembers its last value per topic
                       types=TypeRegistry.standard(), context=WidgetContext(STD))
     m.start()  # the type is known: the children are built and started
     assert len(m.children) == 2
