@@ -38,7 +38,7 @@ def apply_marks(host: Any, workspace: Any) -> None:
     names one robot, but what it shows is the fleet's."""
     marks = marks_for(workspace)
     for widget_id, hosted in host.hosted.items():
-        if getattr(hosted.model, "shows_every_robot", False):
+        if hosted.model is not None and hosted.model.shows_every_robot:
             marks.pop(widget_id, None)
     host.robot_marks = marks
     for widget_id, hosted in host.hosted.items():

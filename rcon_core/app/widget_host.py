@@ -16,11 +16,13 @@ from collections.abc import Iterable
 from typing import Any
 
 from rcon_core.app.accessibility import name_parts
+from rcon_core.app.live import Reset, Update
 from rcon_core.app.widget_frame import WidgetFrame
 from rcon_core.bridge.safety import safe_text
 from rcon_core.canvas import WidgetInstance
 from rcon_core.canvas.runtime import BrokenWidgetModel, MissingWidgetModel, UnconfiguredWidgetModel
 from rcon_core.plugins import PluginManager, Role, UnknownWidget
+from rcon_core.plugins.api import HostedModel, WidgetView
 
 log = logging.getLogger(__name__)
 
@@ -33,13 +35,15 @@ FRAME_INTERVAL = 1 / 60
 class Hosted:
     """One widget instance on a canvas: its frame, and its model and view while its canvas runs."""
 
-    __slots__ = ("widget", "frame", "model", "view", "painted_seq", "painted_at", "view_error")
+    __slots__ = ("widget", "frame", "model", "view", "refreshes", "painted_seq", "painted_at", "view_error")
 
     def __init__(self, widget: WidgetInstance, frame: WidgetFrame) -> None:
         self.widget = widget
         self.frame = frame
-        self.model: Any = None
+        self.model: HostedModel | None = None
         self.view: Any = None
+        #: the view has ``refresh(state)`` (the ``WidgetView`` protocol); else the host calls its ``update()``
+        self.refreshes = False
         self.painted_seq = -1
         self.painted_at = 0.0
         #: why the view failed to show the last state (its ``refresh`` raised), until one succeeds
@@ -99,21 +103,21 @@ class WidgetHost:
         self._due.discard(widget_id)
 
     # -------------------------------------------------------------------------------------- models
-    def apply(self, updates: Iterable[tuple[str, Any]]) -> None:
+    def apply(self, updates: Iterable[Update]) -> None:
         """Take the runtime's updates (see :class:`rcon_core.app.live.LiveCanvas`), in order."""
-        for kind, payload in updates:
-            if kind == "reset":
-                for widget_id, model in payload.items():
+        for update in updates:
+            if isinstance(update, Reset):
+                for widget_id, model in update.models.items():
                     self.attach(widget_id, model)
             else:
-                self.attach(*payload)
+                self.attach(update.widget_id, update.model)
 
-    def attach(self, widget_id: str, model: Any) -> None:
+    def attach(self, widget_id: str, model: HostedModel | None) -> None:
         """Show ``model`` in its widget's frame (None: the widget stopped)."""
         hosted = self.hosted.get(widget_id)
         if hosted is None or model is hosted.model:
             return
-        hosted.model, hosted.view, hosted.painted_seq = model, None, -1
+        hosted.model, hosted.view, hosted.refreshes, hosted.painted_seq = model, None, False, -1
         self.models_version += 1
         frame = hosted.frame
         if model is None:
@@ -135,11 +139,13 @@ class WidgetHost:
         try:
             view_cls = self.plugins.widget(hosted.widget.kind).load_view()
             if widget_id in self.dry_run:
-                try:
-                    model.dry_run = True  # a preview: offline on purpose (see the view contract)
-                except AttributeError:  # a model with __slots__ may refuse; the badge still says it
-                    pass
+                for m in (model, *model.child_models()):  # a preview: offline on purpose (the view contract)
+                    try:
+                        m.dry_run = True
+                    except AttributeError:  # a model with __slots__ may refuse; the badge still says it
+                        pass
             hosted.view = view_cls(model)
+            hosted.refreshes = isinstance(hosted.view, WidgetView)
         except (UnknownWidget, Exception) as exc:  # a broken view must not break the app
             log.warning("view of %s (%s) failed: %s", widget_id, hosted.widget.kind, exc)
             frame.set_placeholder(f"{hosted.widget.title or hosted.widget.kind} could not be shown:\n{exc}")
@@ -236,9 +242,8 @@ class WidgetHost:
         self._due.discard(hosted.widget.id)
         hosted.painted_seq, hosted.painted_at = state.seq, now
         view = hosted.view
-        refresh = getattr(view, "refresh", None)
-        if refresh is not None:
-            refresh(state)
+        if hosted.refreshes:
+            view.refresh(state)
         elif view is not None:
             view.update()
         if hosted.view_error is not None:  # it shows again: the next pass clears the badge
@@ -272,9 +277,9 @@ class WidgetHost:
         return out
 
 
-def view_only_control(widget: WidgetInstance, model: Any) -> str | None:
+def view_only_control(widget: WidgetInstance, model: HostedModel) -> str | None:
     """Why ``widget`` (a publishing, calling or serving one) runs view-only, or None."""
-    reason = getattr(model, "view_only", None)
+    reason = model.view_only
     if reason and widget.binding.role.value != "subscribe":
         return str(reason)
     return None

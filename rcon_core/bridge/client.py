@@ -71,7 +71,7 @@ from . import rosapi_guard
 from .action_server import ProvidedActions
 from .envelope import Envelope
 from .errors import AuthRefusedError, NotConnectedError, RosapiRefusedError, ServiceError
-from .freshness import LinkWatch, watch_link
+from .freshness import LinkEvent, LinkWatch, watch_link
 from .guard import LinkGuard
 from .inbound import BadFrames, Inbound
 from .nodes import Node
@@ -82,6 +82,7 @@ from .rosinfo import RosInfo
 from .rosinfo import detect as detect_ros
 from .secure import ssl_context
 from .session import LOG_LEVELS, Session
+from .stats import BridgeStats
 from .traffic import Traffic
 from .wslink import Link
 
@@ -163,11 +164,8 @@ class BridgeClient:
         self.last_error: BaseException | None = None
         self.failure: Failure | None = None
         self._failure_listeners: list[Callable[[Failure], None]] = []
-        self.stats: dict[str, int] = {"connects": 0, "bad_frames": 0, "dropped_while_down": 0,
-                                      "dropped_on_disconnect": 0, "oversize_frames": 0, "frame_errors": 0,
-                                      "png_refused": 0, "non_object_msgs": 0, "big_frames": 0,
-                                      "stale_dropped": 0, "degraded": 0, "stall_cuts": 0,
-                                      "stale_skipped": 0, "envelope_clamped": 0, "envelope_refused": 0}
+        #: what the client counts (``stats.py``)
+        self.stats = BridgeStats()
         self._state = ConnectionState.CLOSED
         self._state_listeners: list[Callable[[ConnectionState], None]] = []
         #: the current connection (None while down); see ``wslink.py``
@@ -503,7 +501,7 @@ class BridgeClient:
 
     async def _serve_once(self, ws: ClientConnection, final: bool = True) -> None:
         link = self.link = Link(ws, self.session.stale_in_queue)
-        self.stats["connects"] += 1
+        self.stats.connects += 1
         writer = asyncio.create_task(link.run_writer())
         pinger = asyncio.create_task(self._pinger(link))
         try:
@@ -557,22 +555,22 @@ class BridgeClient:
         except ConnectionClosed:
             pass
 
-    def _link_event(self, event: str, detail: Any) -> bool:
+    def _link_event(self, event: LinkEvent, detail: Any) -> bool:
         """What the watchdog (``freshness.watch_link``) reports; True when a stall counts (CONNECTED)."""
-        if event == "latency":
+        if event is LinkEvent.LATENCY:
             self.latency = detail
-        elif event == "stalled":
+        elif event is LinkEvent.STALLED:
             if self._state is not ConnectionState.CONNECTED:
                 return False
-            self.stats["degraded"] += 1
+            self.stats.degraded += 1
             log.warning("link to %s is degraded: %s", self.url, detail)
             self._set_state(ConnectionState.DEGRADED)
-        elif event == "recovered":
+        elif event is LinkEvent.RECOVERED:
             log.info("link to %s has recovered", self.url)
             if self._state is ConnectionState.DEGRADED:
                 self._set_state(ConnectionState.CONNECTED)
-        elif event == "cut":
-            self.stats["stall_cuts"] += 1
+        elif event is LinkEvent.CUT:
+            self.stats.stall_cuts += 1
             log.warning("link to %s stalled (%s) with commands in flight; cut it so they are never delivered "
                         "late; reconnecting", self.url, detail)
         else:

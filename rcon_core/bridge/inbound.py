@@ -19,11 +19,11 @@ Decision: sharing the loop
 
 Decision: bad input from the server
     No exception raised while handling one frame ends the read loop: the loop body and the slow path
-    catch everything at the frame boundary (``stats["frame_errors"]``).  Invalid JSON, unknown ops,
+    catch everything at the frame boundary (``stats.frame_errors``).  Invalid JSON, unknown ops,
     missing or mistyped fields, JSON nested too deep to format, broken fragments, ``png`` data that is no
     image, PNGs whose header declares more pixel bytes than ``max_size`` (refused before decoding,
-    ``stats["png_refused"]``), publish frames whose ``msg`` is not an object
-    (``stats["non_object_msgs"]``) and frames above ``max_size`` are logged (rate limited by
+    ``stats.png_refused``), publish frames whose ``msg`` is not an object
+    (``stats.non_object_msgs``) and frames above ``max_size`` are logged (rate limited by
     :class:`BadFrames`, with a bounded repr from ``safety.py``: never ``str()`` of an untrusted value),
     counted in ``client.stats`` and dropped; the connection, the process and other subscriptions carry on.
     A callback that raises is logged and does not affect other callbacks (``topics.py``).
@@ -46,6 +46,7 @@ from .latest import LatestOnly, topic_of
 from .offload import BigFrames, decode_big
 from .protocol import FragmentAssembler, RefusedFrame, decode_binary, decode_png, loads_text
 from .safety import safe_text
+from .stats import BridgeStats
 from .traffic import Traffic
 
 log = logging.getLogger(__name__)
@@ -59,13 +60,13 @@ YIELD_EVERY = 64
 class BadFrames:
     """Counts bad frames from the server and logs them: the first 20 of each kind, then every 1000th."""
 
-    def __init__(self, url: str, stats: dict[str, int]) -> None:
+    def __init__(self, url: str, stats: BridgeStats) -> None:
         self.url = url
         self.stats = stats
         self.counts: dict[str, int] = {}
 
     def report(self, kind: str, message: str) -> None:
-        self.stats["bad_frames"] += 1
+        self.stats.bad_frames += 1
         n = self.counts[kind] = self.counts.get(kind, 0) + 1
         if n <= 20 or n % 1000 == 0:
             log.warning("bad frame from %s: %s", self.url, message)
@@ -75,14 +76,14 @@ class BadFrames:
 
     def failed(self, exc: BaseException) -> None:
         """A frame whose handling raised: counted, logged with a bounded text, dropped; the loop goes on."""
-        self.stats["frame_errors"] += 1
+        self.stats.frame_errors += 1
         self.report("error", f"handling a frame failed, dropped it ({safe_text(exc)})")
 
 
 class Inbound:
     """Turns what the socket delivers into messages for the session's topics and ops for the session."""
 
-    def __init__(self, session: Any, bad: BadFrames, stats: dict[str, int], *, typed_arrays: str,
+    def __init__(self, session: Any, bad: BadFrames, stats: BridgeStats, *, typed_arrays: str,
                  max_size: int, big_frame: int, fragment_timeout: float) -> None:
         self.session = session
         self.bad = bad
@@ -172,18 +173,18 @@ class Inbound:
     async def decode_big(self, raw: str | bytes) -> Any:
         """Decode a frame above ``big_frame`` in the worker thread (see ``offload.py``); None when dropped."""
         if len(raw) > self.max_size:
-            self.stats["oversize_frames"] += 1
+            self.stats.oversize_frames += 1
             self.bad.report("size", f"frame of {len(raw)} bytes exceeds max_message_size={self.max_size}; dropped")
             return None
         return await self._offloaded(decode_big, raw, self.typed_arrays, self.max_size)
 
     async def _offloaded(self, fn: Callable[..., Any], *args: Any) -> Any:
-        self.stats["big_frames"] += 1
+        self.stats.big_frames += 1
         try:
             return await self.big.run(fn, *args)
         except ProtocolError as exc:
             if isinstance(exc, RefusedFrame):
-                self.stats["png_refused"] += 1
+                self.stats.png_refused += 1
             self.bad.report("big", f"big frame dropped: {exc}")
             return None
 
@@ -256,7 +257,7 @@ class Inbound:
             inner = decode_png(data, self.max_size)
         except ProtocolError as exc:
             if isinstance(exc, RefusedFrame):
-                self.stats["png_refused"] += 1
+                self.stats.png_refused += 1
             self.bad.report("png", str(exc))
             return
         self.other(inner)

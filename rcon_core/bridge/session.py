@@ -17,10 +17,10 @@ Decision: after every (re)connect
 Decision: publishing while the link is down or stalled
     Nothing is queued for later, so a robot never receives a burst of stale commands.  For a **latched**
     topic only the latest value is kept and sent right after the advertisement is restored; every other
-    publish made while down is dropped and counted (``Publisher.dropped``, ``stats["dropped_while_down"]``).
-    Frames still in the outgoing queue when the link drops are dropped too (``stats["dropped_on_disconnect"]``).
+    publish made while down is dropped and counted (``Publisher.dropped``, ``stats.dropped_while_down``).
+    Frames still in the outgoing queue when the link drops are dropped too (``stats.dropped_on_disconnect``).
     A publisher's ``max_age`` (0.25 s by default for non-latched topics) is its freshness limit: a publish
-    is never written after it (``wslink.Link.send_command``, ``freshness.py``; ``stats["stale_dropped"]``).
+    is never written after it (``wslink.Link.send_command``, ``freshness.py``; ``stats.stale_dropped``).
     The frame around a message is encoded once per advertisement (``AdvertEntry.head``); ``latch`` is
     repeated in every publish (``client_publish.jsonl:26-30``: otherwise the topic is re-registered).
 
@@ -65,6 +65,7 @@ from .inbound import BadFrames
 from .protocol import encode
 from .safety import bounded_repr, safe_text
 from .services import ProvidedServices
+from .stats import BridgeStats
 from .subscribe import Subscriber
 from .tap import OperatorTap
 from .topics import AdvertEntry, TopicEntry
@@ -85,7 +86,7 @@ class Host(Protocol):
     call_timeout: float
     registry: Any
     rosapi: Any
-    stats: dict[str, int]
+    stats: BridgeStats
 
     @property
     def ros_version(self) -> int | None: ...
@@ -196,7 +197,7 @@ class Session:
         if link is not None:
             dropped = link.drop_queue()
             if dropped:
-                self.stats["dropped_on_disconnect"] += dropped
+                self.stats.dropped_on_disconnect += dropped
         for advert in self.adverts.values():
             advert.active = False
         for topic in self.topics.values():
@@ -260,7 +261,7 @@ class Session:
             return
         msg = m["msg"]
         if not isinstance(msg, dict):
-            self.stats["non_object_msgs"] += 1
+            self.stats.non_object_msgs += 1
             self.bad.report("msg", f"publish on {topic}: 'msg' is a JSON {type(msg).__name__}, not an object; "
                                    "dropped")
             return
@@ -389,7 +390,7 @@ class Session:
             return True
         pub.dropped += 1
         entry.dropped += 1
-        self.stats["dropped_while_down"] += 1
+        self.stats.dropped_while_down += 1
         return False
 
     def drop_stale(self, pub: Publisher, counted_sent: bool = False) -> None:
@@ -397,7 +398,7 @@ class Session:
         if counted_sent:
             pub.sent -= 1
         pub.dropped += 1
-        self.stats["stale_dropped"] += 1
+        self.stats.stale_dropped += 1
 
     def stale_in_queue(self, pub: Publisher) -> None:
         """A queued command passed its deadline (the link's writer drops it)."""

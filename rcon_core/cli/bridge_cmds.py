@@ -376,7 +376,7 @@ def saved_envelope(layout: str, robot: str | None, url: str) -> tuple[Any, str]:
 
 async def _pub(url: str, args: argparse.Namespace) -> int:
     envelope, robot_name = None, ""
-    if getattr(args, "envelope", None) is not None:
+    if vars(args).get("envelope") is not None:  # only `rcon pub` has the option
         try:
             envelope, robot_name = saved_envelope(args.envelope, args.robot, url)
         except ValueError as exc:

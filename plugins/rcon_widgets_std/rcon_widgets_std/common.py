@@ -10,6 +10,7 @@ from collections.abc import Callable
 from typing import Any
 
 from rcon_core.msgs import FieldDef
+from rcon_core.plugins import Port
 from rcon_core.plugins.paths import PathError, parse_path, split_service_path
 
 __all__ = [
@@ -118,31 +119,31 @@ def sane_limits(base: str, type_name: str = "", path: str = "") -> tuple[float, 
     return lo, hi, f"is sane (±{SANE_LIMIT:g})"
 
 
-def envelope_limit(port: Any, type_name: str, path: str) -> float | None:
-    """The robot's safety envelope on the field at ``path`` of ``type_name`` as ``port`` tells it (the
-    app's port carries ``envelope``; a fake or a bare node has none): None when nothing limits it."""
-    env = getattr(port, "envelope", None)
+def envelope_limit(port: Port, type_name: str, path: str) -> float | None:
+    """The robot's safety envelope on the field at ``path`` of ``type_name`` as ``port`` tells it (None
+    outside a canvas): None when nothing limits it."""
+    env = port.envelope
     if env is None:
         return None
     try:
-        return env.limit_for(type_name, path)  # type: ignore[no-any-return]
+        return env.limit_for(type_name, path)
     except Exception:  # a port's odd envelope never stops a widget: the bridge still holds the robot
         return None
 
 
-def held_to_envelope(port: Any, type_name: str, msg: dict[str, Any]) -> tuple[dict[str, Any] | None, str]:
+def held_to_envelope(port: Port, type_name: str, msg: dict[str, Any]) -> tuple[dict[str, Any] | None, str]:
     """(the message that will actually be sent, a sentence) for ``msg`` under the robot's safety envelope:
     the message clamped ("held to the safety envelope: linear.x 5 → 1"), or None with why it is refused
     (NaN, infinity). The bridge holds every command to the same envelope; a widget calls this to *say*
     what is sent. A motion command is judged even without an envelope (non-numbers are never sent)."""
     from rcon_core.bridge.envelope import NO_LIMITS, Envelope
 
-    env = getattr(port, "envelope", None)
+    env = port.envelope
     verdict = (env if isinstance(env, Envelope) else NO_LIMITS).judge(type_name, msg)
     return verdict.msg, verdict.sentence
 
 
-def format_number(value: float, decimals: int = -1) -> str:
+def format_number(value: float | None, decimals: int = -1) -> str:
     """``decimals`` < 0: as it came -- ints stay ints, floats with every digit they carry (15 significant
     digits: 43.6532117 stays 43.6532117, never rounded to 6; a whole float without its ".0")."""
     if value is None:

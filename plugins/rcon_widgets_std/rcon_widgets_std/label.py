@@ -13,7 +13,6 @@ from typing import Any
 import attrs
 
 from rcon_core.msgs.names import pkg_type
-from rcon_core.plugins.paths import PathError, get_path
 
 from .base import StdModel
 from .common import format_value
@@ -73,14 +72,8 @@ class LabelModel(StdModel):
         #: the bound field is a fraction of 1 (BatteryState.percentage): shown in % (see the module docstring)
         self.fraction = (pkg_type(b.type), b.field_path) in FRACTIONS if b.type else False
 
-    def on_message(self, msg: dict[str, Any]) -> None:
-        path = self.binding.field_path
-        try:
-            value = get_path(msg, path) if path else msg
-        except PathError as exc:
-            self.set_error(str(exc))
-            return
-        self.set_value(self.make_value(value), message=msg)
+    def to_value(self, field_value: Any, msg: dict[str, Any]) -> LabelValue:
+        return self.make_value(field_value)
 
     def make_value(self, value: Any) -> LabelValue:
         s = self.settings

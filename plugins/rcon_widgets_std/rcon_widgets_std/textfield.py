@@ -18,7 +18,7 @@ import attrs
 from rcon_core.msgs import MessageTextError
 from rcon_core.msgs.text import parse_text
 from rcon_core.plugins import Role
-from rcon_core.plugins.paths import PathError, get_path, set_path
+from rcon_core.plugins.paths import PathError, set_path
 
 from .base import StdModel
 from .common import field_at, format_value, held_to_envelope
@@ -66,20 +66,14 @@ class TextFieldModel(StdModel):
     @property
     def in_compound(self) -> bool:
         """True when this is a Compound's child: what it publishes is composed, not sent to the robot."""
-        return bool(getattr(self.port, "composes", False))
+        return self.port.composes
 
     @property
     def needs_types(self) -> bool:  # type: ignore[override]
         return self.binding.role is Role.PUBLISH
 
-    def on_message(self, msg: dict[str, Any]) -> None:
-        path = self.binding.field_path
-        try:
-            value = get_path(msg, path) if path else msg
-        except PathError as exc:
-            self.set_error(str(exc))
-            return
-        self.set_value(TextValue(format_value(value, self.settings.decimals)), message=msg)
+    def to_value(self, field_value: Any, msg: dict[str, Any]) -> TextValue:
+        return TextValue(format_value(field_value, self.settings.decimals))
 
     # -- typed text -> message -----------------------------------------------------------------------
     def _is_string_field(self) -> bool:

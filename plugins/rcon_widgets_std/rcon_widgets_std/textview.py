@@ -140,7 +140,7 @@ class TextViewModel(StdModel):
                     self._n -= 1
                     return
                 self._seen[key] = None
-                while len(self._seen) > self._all.maxlen:
+                while len(self._seen) > (self._all.maxlen or 0):
                     self._seen.popitem(last=False)
                 if self._is_replay(line):
                     line = attrs.evolve(line, replayed=True)
