@@ -30,6 +30,7 @@ from rcon_core.msgs import time as rtime
 from rcon_core.plugins import Role
 
 from .base import StdModel
+from .common import shorten_text
 
 __all__ = ["TextViewSettings", "TextViewModel", "Line", "History", "Ring", "LEVELS", "level_name", "display_text"]
 
@@ -116,13 +117,7 @@ def display_text(text: str) -> tuple[str, int | None]:
     """``text`` as a line shows it: at most ``DISPLAY_CHARS`` characters and ``DISPLAY_ROWS`` rows; and
     the whole length when it was shortened (else None). Costs at most ``DISPLAY_CHARS``, whatever the
     length of ``text``."""
-    head = text[:DISPLAY_CHARS]
-    if "\r" in head:
-        head = head.replace("\r\n", "\n").replace("\r", "\n")
-    rows = head.split("\n", DISPLAY_ROWS)
-    if len(rows) > DISPLAY_ROWS:
-        return "\n".join(rows[:DISPLAY_ROWS]), len(text)
-    return head, (len(text) if len(text) > DISPLAY_CHARS else None)
+    return shorten_text(text, DISPLAY_CHARS, DISPLAY_ROWS)
 
 
 class Ring:
