@@ -28,14 +28,21 @@ Decision: bad input from the server
     counted in ``client.stats`` and dropped; the connection, the process and other subscriptions carry on.
     A callback that raises is logged and does not affect other callbacks (``topics.py``).
 
+Decision: unfinished fragmented messages
+    Bounded per message (``max_size``), in all (twice that), by age (``fragment_timeout``, also when no
+    fragment comes any more: a timer sweeps them) and by connection (a lost link drops them all): 256 MB
+    of unfinished messages used to stay for good, and up to 2 GB could (``protocol.FragmentAssembler``).
+
 Test hooks (public): ``inbound.fragments`` and ``inbound.png_fragments`` (the assemblers: ``len()`` is the
-number of messages in progress, ``completed`` counts the finished ones).
+number of messages in progress, ``buffered_bytes`` what they hold, ``completed`` counts the finished
+ones).
 """
 
 from __future__ import annotations
 
 import asyncio
 import logging
+import time
 from collections.abc import Awaitable, Callable, Iterable
 from typing import Any
 
@@ -96,6 +103,7 @@ class Inbound:
         self.png_fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_size, warn=warn)
         #: a big message completed by fragments or a big png: the read loop awaits it (order is kept)
         self.deferred: Callable[[], Awaitable[Any]] | None = None
+        self._sweeper: asyncio.TimerHandle | None = None  # expires unfinished messages without new fragments
 
     async def read(self, recv: Callable[[], Awaitable[str | bytes]],
                    waiting: Callable[[], Iterable[bytes]] | None = None) -> None:
@@ -155,10 +163,41 @@ class Inbound:
                 failed(exc)
 
     def disconnected(self) -> None:
-        self.deferred = None  # a big message of the lost connection is not delivered on the next one
+        """The connection is gone: nothing it started is finished on the next one (a big message waiting
+        to be decoded, unfinished fragmented messages)."""
+        self.deferred = None
+        self.fragments.clear()
+        self.png_fragments.clear()
+        self._stop_sweeping()
 
     def close(self) -> None:
+        self._stop_sweeping()
         self.big.close()
+
+    # -- unfinished fragmented messages expire by age, also when no fragment comes any more -------------
+
+    def _sweep_later(self) -> None:
+        if self._sweeper is not None or not (len(self.fragments) or len(self.png_fragments)):
+            return
+        try:
+            loop = asyncio.get_running_loop()
+        except RuntimeError:  # called off the loop (a test feeding frames by hand): expiry on the next add
+            return
+        oldest = min(t for t in (self.fragments.oldest_update(), self.png_fragments.oldest_update())
+                     if t is not None)
+        delay = max(0.01, oldest + self.fragments.timeout - time.monotonic() + 0.01)
+        self._sweeper = loop.call_later(delay, self._sweep)
+
+    def _sweep(self) -> None:
+        self._sweeper = None
+        self.fragments.expire()
+        self.png_fragments.expire()
+        self._sweep_later()
+
+    def _stop_sweeping(self) -> None:
+        sweeper, self._sweeper = self._sweeper, None
+        if sweeper is not None:
+            sweeper.cancel()
 
     # -- decoding -------------------------------------------------------------------------------------
 
@@ -220,6 +259,8 @@ class Inbound:
         except ProtocolError as exc:
             self.bad.report("fragment", str(exc))
             return
+        finally:
+            self._sweep_later()
         if text is not None and len(text) > self.big_frame:
             self.deferred = lambda: self.decode_big(text)
         elif text is not None:
@@ -230,6 +271,7 @@ class Inbound:
             data = m["data"]
             if "num" in m and "total" in m:
                 data = self.png_fragments.add(m)
+                self._sweep_later()
                 if data is None:
                     return
             if not isinstance(data, str):

@@ -18,8 +18,11 @@ Decisions (the recordings in ``shared/rosbridge-ros1`` are the ground truth):
 * ``fragment`` frames: ``total`` may be a float (rosbridge 0.11 computes it that way); the number of
   fragments is ``floor(total)``, ``num`` runs from 0.  ``id`` is 0 for every message, so fragments are
   reassembled by arrival order per id: a ``num == 0`` starts a new message and drops any unfinished
-  one.  Unfinished messages older than ``timeout`` are dropped, and a message may not exceed
-  ``max_bytes`` nor ``max_fragments``.
+  one.  Unfinished messages not added to for ``timeout`` are dropped (the client also sweeps them on a
+  timer, so they go without new fragments too), a message may not exceed ``max_bytes`` nor
+  ``max_fragments``, all unfinished messages together may not exceed ``max_total`` bytes (the oldest
+  are dropped first; 64 unfinished 32 MB messages held 2 GB), and a lost connection drops them all
+  (``clear``: the next connection never completes a message the last one started).
 """
 
 from __future__ import annotations
@@ -192,10 +195,14 @@ class FragmentAssembler:
     """
 
     def __init__(self, timeout: float = 10.0, max_bytes: int = 64 << 20, max_fragments: int = 100_000,
-                 max_partials: int = 64, warn: Callable[[str], None] | None = None) -> None:
+                 max_partials: int = 64, warn: Callable[[str], None] | None = None,
+                 max_total: int | None = None) -> None:
         self.warn = warn or log.warning
         self.timeout = timeout
         self.max_bytes = max_bytes
+        #: bytes of every unfinished message together (default: twice ``max_bytes``)
+        self.max_total = 2 * max_bytes if max_total is None else max_total
+        self._total = 0
         self.max_fragments = max_fragments
         self.max_partials = max_partials
         self._partials: dict[Any, _Partial] = {}
@@ -207,14 +214,31 @@ class FragmentAssembler:
 
     @property
     def buffered_bytes(self) -> int:
-        return sum(p.size for p in self._partials.values())
+        return self._total
+
+    def _drop(self, fid: Any) -> _Partial:
+        part = self._partials.pop(fid)
+        self._total -= part.size
+        return part
+
+    def clear(self) -> int:
+        """Drop every unfinished message (the connection they came on is gone); returns how many."""
+        n = len(self._partials)
+        self._partials.clear()
+        self._total = 0
+        self.dropped += n
+        return n
+
+    def oldest_update(self) -> float | None:
+        """``time.monotonic()`` of the least recently added-to unfinished message, or None."""
+        return min((p.updated for p in self._partials.values()), default=None)
 
     def expire(self, now: float | None = None) -> int:
         """Drop unfinished messages not updated for ``timeout`` seconds; returns how many were dropped."""
         now = time.monotonic() if now is None else now
         stale = [k for k, p in self._partials.items() if now - p.updated > self.timeout]
         for k in stale:
-            del self._partials[k]
+            self._drop(k)
         self.dropped += len(stale)
         if stale:
             self.warn(f"dropped {len(stale)} unfinished fragmented message(s) after {self.timeout:g} s "
@@ -246,31 +270,39 @@ class FragmentAssembler:
         part = self._partials.get(fid)
         if num == 0:
             if part is not None:
+                self._drop(fid)
                 self.dropped += 1
                 self.warn(f"fragment id={fid!r}: a new message started before the previous one was complete "
                           f"({len(part.parts)} of {part.count} fragments); dropped the incomplete one")
-            if len(self._partials) >= self.max_partials and fid not in self._partials:
+            if len(self._partials) >= self.max_partials:
                 oldest = min(self._partials, key=lambda k: self._partials[k].updated)
-                del self._partials[oldest]
+                self._drop(oldest)
                 self.dropped += 1
                 self.warn(f"too many unfinished fragmented messages; dropped the oldest (id={oldest!r})")
             part = self._partials[fid] = _Partial(count, now)
         elif part is None:
             raise ProtocolError(f"fragment id={fid!r} num={num}: no message was started (num 0 missing); ignored")
         elif num != len(part.parts) or count != part.count:
-            del self._partials[fid]
+            self._drop(fid)
             self.dropped += 1
             raise ProtocolError(f"fragment id={fid!r}: expected num {len(part.parts)} of {part.count}, got "
                                 f"num {num} of {count}; dropped the incomplete message")
-        part.size += len(data)
-        if part.size > self.max_bytes:
-            del self._partials[fid]
+        if part.size + len(data) > self.max_bytes:
+            self._drop(fid)
             self.dropped += 1
             raise ProtocolError(f"fragment id={fid!r}: message exceeds {self.max_bytes} bytes; dropped")
+        while self._total + len(data) > self.max_total and len(self._partials) > 1:
+            oldest = min((k for k in self._partials if k != fid), key=lambda k: self._partials[k].updated)
+            self._drop(oldest)
+            self.dropped += 1
+            self.warn(f"unfinished fragmented messages hold more than {self.max_total} bytes; dropped the "
+                      f"oldest (id={oldest!r})")
+        part.size += len(data)
+        self._total += len(data)
         part.parts.append(data)
         part.updated = now
         if len(part.parts) == part.count:
-            del self._partials[fid]
+            self._drop(fid)
             self.completed += 1
             return "".join(part.parts)
         return None
