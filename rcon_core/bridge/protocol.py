@@ -134,7 +134,14 @@ class RefusedFrame(ProtocolError):
 
 
 def png_to_text(data_b64: str, max_bytes: int = 64 << 20) -> bytes:
-    """The JSON bytes hidden in a ``png`` frame's ``data`` (base64 PNG of the text's bytes as RGB pixels).
+    """The JSON bytes hidden in a ``png`` frame's ``data`` (base64 PNG of the text's bytes as RGB pixels);
+    see :func:`png_view`."""
+    return bytes(png_view(data_b64, max_bytes))
+
+
+def png_view(data_b64: str, max_bytes: int = 64 << 20) -> memoryview:
+    """The JSON bytes hidden in a ``png`` frame's ``data``, as a view onto the decoded image (one copy of
+    the pixels in all, where there were four).
 
     The trailing ``\\n`` padding is stripped.  Raises ProtocolError when the data is not a PNG, or when its
     header declares pixels of more than ``max_bytes`` (checked before decoding: a PNG bomb is refused).
@@ -155,17 +162,35 @@ def png_to_text(data_b64: str, max_bytes: int = 64 << 20) -> bytes:
         raise ProtocolError(f"png frame: OpenCV cannot decode the image ({safe_text(exc, 120)})") from None
     if img is None:
         raise ProtocolError("png frame: data is not a PNG image")
-    if img.ndim == 3 and img.shape[2] == 3:
-        img = img[:, :, ::-1]  # OpenCV gives BGR; the payload bytes are in RGB order
-    elif img.ndim == 3 and img.shape[2] == 4:
-        img = img[:, :, [2, 1, 0, 3]]
-    return np.ascontiguousarray(img).tobytes().rstrip(b"\n\x00")
+    # OpenCV gives BGR(A); the payload bytes are in RGB(A) order: swapped in place, no copy of the image
+    if img.ndim == 3 and img.shape[2] == 3 and img.dtype == np.uint8:
+        cv2.cvtColor(img, cv2.COLOR_BGR2RGB, dst=img)
+    elif img.ndim == 3 and img.shape[2] == 4 and img.dtype == np.uint8:
+        cv2.cvtColor(img, cv2.COLOR_BGRA2RGBA, dst=img)
+    elif img.ndim == 3:
+        img = img[:, :, [2, 1, 0, 3][: img.shape[2]]] if img.shape[2] in (3, 4) else img
+    flat = np.ascontiguousarray(img).reshape(-1).view(np.uint8)
+    return memoryview(flat)[: _text_end(flat)]
+
+
+def _text_end(flat: np.ndarray) -> int:
+    """Where the text ends in the decoded bytes: before the trailing ``\\n`` / NUL padding (looked for
+    from the end, a chunk at a time, without a copy of the whole image)."""
+    end = len(flat)
+    step = 1 << 16
+    while end > 0:
+        tail = flat[max(0, end - step):end]
+        keep = np.flatnonzero((tail != 10) & (tail != 0))
+        if len(keep):
+            return end - len(tail) + int(keep[-1]) + 1
+        end -= len(tail)
+    return 0
 
 
 def decode_png(data_b64: str, max_bytes: int = 64 << 20) -> Any:
     """Decode a (complete) ``png`` frame's payload into the frame it carries (``max_bytes``: see
     :func:`png_to_text`)."""
-    text = png_to_text(data_b64, max_bytes)
+    text = png_view(data_b64, max_bytes)
     try:
         return loads(text)
     except orjson.JSONDecodeError as exc:

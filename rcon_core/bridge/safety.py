@@ -9,8 +9,10 @@ Decisions:
 * :func:`safe_text` turns an exception into at most ``limit`` characters the same way (an exception's
   message may itself hold untrusted data, e.g. a ``KeyError`` of a deep list).
 * A ``png`` frame is checked before it is decoded: :func:`png_decoded_size` reads the IHDR chunk (the
-  first 33 bytes) and the frame is refused when its pixels would need more than the largest frame the
-  client accepts (``max_size``) -- a 114-byte PNG may declare 16000 x 16000 pixels (1.2 GB).
+  first 33 bytes; and the chunk headers before the image data, for ``tRNS``) and the frame is refused
+  when its pixels, as OpenCV decodes them (a palette as 3 or 4 channels, sub-byte samples as bytes),
+  would need more than the largest frame the client accepts (``max_size``) -- a 114-byte PNG may declare
+  16000 x 16000 pixels (1.2 GB), a 5.6 KB 1-bit palette PNG 94 MB of BGR.
 """
 
 from __future__ import annotations
@@ -93,8 +95,11 @@ class PngTooLarge(PngRefused):
 
 
 def png_decoded_size(png: bytes) -> int:
-    """Bytes the decoded pixels of ``png`` need (width x height x samples x bytes per sample), from its
-    IHDR chunk alone.  Raises :class:`PngRefused` when ``png`` does not start like a PNG."""
+    """Bytes the decoded pixels of ``png`` need as OpenCV gives them (``IMREAD_UNCHANGED``), from its
+    header alone: width x height x channels x bytes per sample, where a palette image becomes 3 channels
+    (4 with a ``tRNS`` chunk), colour with ``tRNS`` 4, grey+alpha 4, and samples of 1, 2 or 4 bits
+    become bytes (16 bits: 2 bytes). A 5.6 KB 1-bit palette PNG passed the old one-channel-per-pixel
+    check and decoded to hundreds of MB. Raises :class:`PngRefused` when ``png`` does not start like a PNG."""
     if len(png) < len(PNG_SIGNATURE) + _IHDR.size:
         raise PngRefused(f"data is not a PNG image ({len(png)} bytes, too short for a PNG header)")
     if not png.startswith(PNG_SIGNATURE):
@@ -105,7 +110,28 @@ def png_decoded_size(png: bytes) -> int:
         raise PngRefused("data is not a PNG image (broken IHDR header)")
     if width == 0 or height == 0:
         raise PngRefused(f"PNG image is {width} x {height} pixels (empty)")
-    return width * height * channels * max(bit_depth // 8, 1)
+    if color_type == 3:
+        channels = 3  # the palette's colours
+    if color_type in (2, 3) and _has_chunk_before_data(png, b"tRNS"):
+        channels = 4  # transparency becomes an alpha channel (OpenCV keeps grey with tRNS one channel)
+    elif color_type == 4:
+        channels = 4  # grey+alpha comes out as BGRA
+    return width * height * channels * (2 if bit_depth == 16 else 1)
+
+
+def _has_chunk_before_data(png: bytes, kind: bytes, most: int = 64) -> bool:
+    """Whether a chunk ``kind`` comes before the first ``IDAT`` (looks at the chunk headers only)."""
+    at = len(PNG_SIGNATURE)
+    for _ in range(most):
+        if at + 8 > len(png):
+            return False
+        length, name = struct.unpack_from(">I4s", png, at)
+        if name == kind:
+            return True
+        if name == b"IDAT":
+            return False
+        at += 12 + length
+    return True  # too many chunks to look through: assume the worst
 
 
 def check_png(png: bytes, max_bytes: int) -> None:
