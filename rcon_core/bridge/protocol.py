@@ -170,7 +170,7 @@ def png_view(data_b64: str, max_bytes: int = 64 << 20) -> memoryview:
     elif img.ndim == 3:
         img = img[:, :, [2, 1, 0, 3][: img.shape[2]]] if img.shape[2] in (3, 4) else img
     flat = np.ascontiguousarray(img).reshape(-1).view(np.uint8)
-    return memoryview(flat)[: _text_end(flat)]
+    return memoryview(flat.data)[: _text_end(flat)]
 
 
 def _text_end(flat: np.ndarray) -> int:
