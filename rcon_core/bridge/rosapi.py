@@ -12,6 +12,7 @@ import json
 from typing import TYPE_CHECKING, Any
 
 from .errors import ServiceError
+from .safety import bounded_repr, json_text_value
 
 if TYPE_CHECKING:
     from .host import ServiceCaller
@@ -32,12 +33,13 @@ class Rosapi:
     async def topics(self) -> dict[str, str]:
         """``{topic: type}`` for every topic the server knows."""
         v = await self._call("topics")
-        topics = v.get("topics", [])
-        types = v.get("types") or [""] * len(topics)
-        return dict(zip(topics, types, strict=False))
+        topics = _listed(v.get("topics"))
+        types = _listed(v.get("types")) or [""] * len(topics)
+        return {t: (ty if isinstance(ty, str) else "") for t, ty in zip(topics, types, strict=False)
+                if isinstance(t, str)}
 
     async def services(self) -> list[str]:
-        return list((await self._call("services")).get("services", []))
+        return [s for s in _listed((await self._call("services")).get("services")) if isinstance(s, str)]
 
     async def services_with_types(self) -> dict[str, str]:
         """``{service: type}``; types are asked for concurrently (rosapi has no combined call)."""
@@ -121,9 +123,10 @@ class Rosapi:
             args["default"] = json.dumps(default)
         text = (await self._call("get_param", args)).get("value", "null")
         try:
-            value = json.loads(text) if text else None
-        except ValueError:
-            raise ServiceError(f"parameter {name} is not valid JSON text: {text[:80]!r}", "/rosapi/get_param") from None
+            value = json_text_value(text) if text else None
+        except ValueError as exc:
+            raise ServiceError(f"parameter {name} is not valid JSON text ({exc}): {bounded_repr(text, 80)}",
+                               "/rosapi/get_param") from None
         return default if value is None else value
 
     async def set_param(self, name: str, value: Any) -> None:
@@ -137,3 +140,9 @@ class Rosapi:
 
     async def param_names(self) -> list[str]:
         return list((await self._call("get_param_names")).get("names", []))
+
+
+def _listed(value: Any) -> list[Any]:
+    """A list the server sent, or an empty one when it sent something else (names are checked by the
+    caller: a server's answer is never trusted to have the documented shape)."""
+    return value if isinstance(value, list) else []

@@ -6,6 +6,9 @@ Decisions:
   nested 1000 deep (orjson accepts up to 1024 levels) makes those recurse past Python's limit, and a large
   one costs its whole size in time and memory for a log line.  :func:`bounded_repr` walks at most
   ``depth`` levels and ``limit`` characters, never recurses further and never raises.
+* A service's answer nested deeper than ``MAX_ANSWER_DEPTH`` (100) levels fails the call
+  (:func:`nested_deeper`, in ``session.py``), so nothing that walks an answer -- the library, the CLI's
+  printing, the app -- ever recurses past Python's limit on one.
 * :func:`safe_text` turns an exception into at most ``limit`` characters the same way (an exception's
   message may itself hold untrusted data, e.g. a ``KeyError`` of a deep list).
 * A ``png`` frame is checked before it is decoded: :func:`png_decoded_size` reads the IHDR chunk (the
@@ -18,6 +21,7 @@ Decisions:
 from __future__ import annotations
 
 import struct
+from collections.abc import Iterable
 from typing import Any
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -73,6 +77,53 @@ def bounded_repr(value: Any, limit: int = 120, depth: int = 4) -> str:
         return f"<{type(value).__name__}>"
     text = "".join(out)
     return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+#: how deep a server's answer may nest: a ROS message nests a dozen levels; past about 250, str(), YAML,
+#: deepcopy and orjson's encoder fail (a 2 KB answer nested 1000 deep raised RecursionError)
+MAX_ANSWER_DEPTH = 100
+_LEAVES = frozenset({str, int, float, bool, type(None), bytes, bytearray})
+
+
+def nested_deeper(value: Any, limit: int = MAX_ANSWER_DEPTH) -> bool:
+    """Whether ``value`` (dicts and lists from a parsed frame) nests deeper than ``limit`` levels. No
+    recursion; a list or dict of plain values is looked at in one C-speed pass over its items' types."""
+    stack = [(value, 0)]
+    pop, push = stack.pop, stack.append
+    while stack:
+        v, depth = pop()
+        items: Iterable[Any]
+        if isinstance(v, dict):
+            items = v.values()
+        elif isinstance(v, list | tuple):
+            items = v
+        else:
+            continue
+        if depth >= limit:
+            return True
+        if set(map(type, items)) <= _LEAVES:
+            continue
+        for item in items:
+            if item.__class__ not in _LEAVES:
+                push((item, depth + 1))
+    return False
+
+
+def json_text_value(text: Any) -> Any:
+    """The value of JSON text a server sent inside a string (rosapi's parameter values): ValueError when
+    it is not text, not JSON, or nested deeper than ``MAX_ANSWER_DEPTH`` (the standard parser recurses:
+    2 KB of ``[`` raised RecursionError)."""
+    import json
+
+    if not isinstance(text, str):
+        raise ValueError(f"expected JSON text, got {type(text).__name__}")
+    try:
+        value = json.loads(text)
+    except RecursionError:
+        raise ValueError(f"JSON text nested deeper than {MAX_ANSWER_DEPTH} levels") from None
+    if nested_deeper(value):
+        raise ValueError(f"JSON text nested deeper than {MAX_ANSWER_DEPTH} levels")
+    return value
 
 
 def safe_text(exc: BaseException, limit: int = 200) -> str:

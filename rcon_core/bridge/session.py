@@ -50,7 +50,7 @@ from .errors import BridgeError, ConnectionLostError, ServiceError, ServiceTimeo
 from .goals import Goals
 from .inbound import BadFrames
 from .protocol import encode
-from .safety import bounded_repr, safe_text
+from .safety import MAX_ANSWER_DEPTH, bounded_repr, nested_deeper, safe_text
 from .services import ProvidedServices
 from .subscribe import Subscriber
 from .topics import AdvertEntry, TopicEntry
@@ -231,8 +231,14 @@ class Session:
         if fut.done():
             return
         values = m.get("values")
-        if m.get("result", True) is False:
-            fut.set_exception(ServiceError(_failure_text(values), m.get("service")))
+        service = m.get("service") if isinstance(m.get("service"), str) else None
+        if nested_deeper(values):  # bounded for everything that walks an answer (see safety.py)
+            self.bad.report("depth", f"answer of {bounded_repr(service, 80)} nested deeper than "
+                                     f"{MAX_ANSWER_DEPTH} levels; the call failed")
+            fut.set_exception(ServiceError(f"the answer is nested deeper than {MAX_ANSWER_DEPTH} levels; refused",
+                                           service))
+        elif m.get("result", True) is False:
+            fut.set_exception(ServiceError(_failure_text(values), service))
         else:
             fut.set_result({} if values is None else values)
 
