@@ -144,7 +144,7 @@ class BridgeClient:
                                       "dropped_on_disconnect": 0, "oversize_frames": 0, "frame_errors": 0,
                                       "png_refused": 0, "non_object_msgs": 0, "big_frames": 0,
                                       "stale_dropped": 0, "degraded": 0, "stall_cuts": 0,
-                                      "stale_skipped": 0}
+                                      "stale_skipped": 0, "status_not_logged": 0}
         self._state = ConnectionState.CLOSED
         self._state_listeners: list[Callable[[ConnectionState], None]] = []
         #: the current connection (None while down); see ``wslink.py``

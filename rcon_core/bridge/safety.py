@@ -126,6 +126,44 @@ def json_text_value(text: Any) -> Any:
     return value
 
 
+class LogBudget:
+    """At most ``burst`` log lines at once and ``per_second`` after that (a token bucket); what it holds
+    back is counted and said with the next line let through. For lines a server can cause at will (its
+    ``status`` messages: 200 MB of log in 8 s)."""
+
+    def __init__(self, per_second: float = 5.0, burst: int = 20, clock: Any = None) -> None:
+        import time
+
+        self.per_second = per_second
+        self.burst = burst
+        self.clock = clock or time.monotonic
+        self._tokens = float(burst)
+        self._at = self.clock()
+        #: lines held back since the last one let through, and in all
+        self.held = 0
+        self.held_total = 0
+
+    def take(self) -> int | None:
+        """None when a line must be held back now; else how many were held back before it (then reset)."""
+        now = self.clock()
+        self._tokens = min(float(self.burst), self._tokens + (now - self._at) * self.per_second)
+        self._at = now
+        if self._tokens < 1.0:
+            self.held += 1
+            self.held_total += 1
+            return None
+        self._tokens -= 1.0
+        held, self.held = self.held, 0
+        return held
+
+
+def clip(text: str, limit: int) -> str:
+    """``text`` cut to ``limit`` characters, saying how long it was."""
+    if len(text) <= limit:
+        return text
+    return f"{text[:limit]}… ({len(text):,} characters)"
+
+
 def safe_text(exc: BaseException, limit: int = 200) -> str:
     """``"Type: message"`` of an exception, at most ``limit`` characters; never raises."""
     try:
