@@ -46,14 +46,17 @@ class DeepRosapi(HostileServer):
     async def answer(self) -> None:
         seen = 0
         while True:
-            await self.wait(lambda: len(self.ops("call_service")) > seen, timeout=1e9)
+            done = seen
+            await self.wait(lambda: len(self.ops("call_service")) > done, timeout=1e9)
             for op in self.ops("call_service")[seen:]:
                 if op["service"] == "/rosapi/get_param":
                     values = orjson.dumps({"value": DEEP_TEXT}).decode()
                 else:
-                    values = '{"topics":%s,"types":%s,"type":%s,"version":%s,"value":%s}' % ((DEEP_TEXT,) * 5)
-                await self.send('{"op":"service_response","id":%s,"service":%s,"result":true,"values":%s}' % (
-                    orjson.dumps(op["id"]).decode(), orjson.dumps(op["service"]).decode(), values))
+                    values = "{" + ",".join(f'"{k}":{DEEP_TEXT}' for k in ("topics", "types", "type", "version",
+                                                                           "value")) + "}"
+                ident, service = orjson.dumps(op["id"]).decode(), orjson.dumps(op["service"]).decode()
+                await self.send(f'{{"op":"service_response","id":{ident},"service":{service},"result":true,'
+                                f'"values":{values}}}')
             seen = len(self.ops("call_service"))
 
 
