@@ -46,8 +46,7 @@ class DeepRosapi(HostileServer):
     async def answer(self) -> None:
         seen = 0
         while True:
-            done = seen
-            await self.wait(lambda: len(self.ops("call_service")) > done, timeout=1e9)
+            await self.wait(lambda done=seen: len(self.ops("call_service")) > done, timeout=1e9)
             for op in self.ops("call_service")[seen:]:
                 if op["service"] == "/rosapi/get_param":
                     values = orjson.dumps({"value": DEEP_TEXT}).decode()
