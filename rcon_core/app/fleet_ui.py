@@ -244,6 +244,13 @@ class FleetUi(QtCore.QObject):
         self._catalog_dirty = False
         return self.catalogs.get(self.side_robot, EMPTY_CATALOG)
 
+    def catalog_state(self) -> str:
+        """What the side robot's lists wait for (``Link.catalog_state``: "connecting", "listing", "lost"...)."""
+        try:
+            return str(self.links.link(self.side_robot).catalog_state)
+        except KeyError:
+            return "offline"
+
     # ------------------------------------------------------------------------------------- polling
     def poll(self, _now: float = 0.0) -> None:
         """Once per frame: each robot's link state on its chip and its widgets; the marks."""

@@ -6,7 +6,17 @@ bridge client lacks, so the app compares and stores that enum, never its words) 
 and service catalogue in another mailbox, and why the last attempt failed (a
 :class:`rcon_core.bridge.reasons.Failure`, None once connected) in a third.  Nothing here blocks the GUI
 thread.  Connecting to another robot, or disconnecting, empties the catalogue at once: the previous
-robot's topics never stay on screen as if they were the new one's.
+robot's topics never stay on screen as if they were the new one's; so does losing the link (the list
+comes back when the robot does), and ``catalog_state`` says which of these the (empty) lists are in.
+
+Decision: the catalogue loop diffs, batches and paces
+    Every ``CATALOG_PERIOD`` (or, for a big graph, ``CATALOG_SHARE`` times what the last listing took,
+    whichever is longer) the loop asks ``/rosapi/topics`` and ``/rosapi/services`` once each and asks the
+    type of only the services it has not seen on this connection (``Rosapi.services_with_types(known)``,
+    a few calls in flight at a time). A listing that takes long is published as it goes (names first,
+    types as they come), and a catalogue equal to the last one is not published again: the GUI does
+    nothing when nothing changed. 10^5 services were asked all at once every 5 s (a 22 s stall, the
+    link cut by the watchdog).
 """
 
 from __future__ import annotations
@@ -28,6 +38,10 @@ log = logging.getLogger(__name__)
 
 #: how often the catalogue is fetched from rosapi while connected (s)
 CATALOG_PERIOD = 5.0
+#: ... and at least this many times what the last listing took, apart (a big graph is listed less often)
+CATALOG_SHARE = 4.0
+#: a listing that takes longer is published as it goes, this often (s)
+CATALOG_PROGRESS_EVERY = 2.0
 
 
 class BadUrl(ValueError):
@@ -53,8 +67,10 @@ def check_url(url: str) -> str:
     return url
 
 
+#: what the side panel lists: {"topics" | "services" | "actions": [(name, type)]}
+Catalog = dict[str, list[tuple[str, str]]]
 _LABEL = re.compile(r"^[A-Za-z0-9_]([A-Za-z0-9_-]{0,61}[A-Za-z0-9_])?$")
-EMPTY_CATALOG: dict[str, list[tuple[str, str]]] = {"topics": [], "services": []}
+EMPTY_CATALOG: Catalog = {"topics": [], "services": []}
 
 
 def _host_ok(host: str) -> bool:
@@ -103,6 +119,11 @@ class Link:
         #: the URL of a link whose robot answered a call (so it goes into the URL history)
         self.answered_box = LatestValue()
         self._catalog_task: asyncio.Task | None = None
+        self._catalog_wake: asyncio.Event | None = None
+        #: what the catalogue lists are waiting for, for their empty text (written on the bridge thread):
+        #: "offline" (no robot), "connecting", "listing" (connected, first listing under way), "listed",
+        #: "lost" (the link dropped; reconnecting)
+        self.catalog_state = "offline"
         self._generation = 0
         self._listeners: list[Callable[[BridgeClient | None], None]] = []
         self.state_box.put(ConnectionState.CLOSED)
@@ -120,6 +141,7 @@ class Link:
         gen = self._generation
         client = BridgeClient(url, reconnect=True, **(settings or LinkSettings()).client_options(url))
         self.client, self.url = client, url
+        self.catalog_state = "connecting"
         self.state_box.put(ConnectionState.CONNECTING)
         self.thread.call(self._wire, client, gen)
         for fn in self._listeners:
@@ -131,6 +153,7 @@ class Link:
         self._generation += 1
         self.failure_box.put(None)
         self.catalog_box.put(EMPTY_CATALOG)
+        self.catalog_state = "offline"
         if client is None:
             return
         for fn in self._listeners:
@@ -160,10 +183,17 @@ class Link:
     def _wire(self, client: BridgeClient, gen: int) -> None:
         def on_state(state: Any) -> None:
             if gen == self._generation:
-                self.state_box.put(as_state(state))
-                if as_state(state) is ConnectionState.CONNECTED:
+                state = as_state(state)
+                self.state_box.put(state)
+                if state is ConnectionState.CONNECTED:
                     self.failure_box.put(None)
+                    if self.catalog_state != "listed":
+                        self.catalog_state = "listing"
                     self._start_catalog(client, gen)
+                elif state in (ConnectionState.RECONNECTING, ConnectionState.CLOSED):
+                    # the robot's topics are no longer known to be there: the lists empty until it is back
+                    self.catalog_state = "lost"
+                    self.catalog_box.put(EMPTY_CATALOG)
 
         def on_failure(failure: Any) -> None:
             if gen == self._generation:
@@ -192,19 +222,53 @@ class Link:
 
     def _start_catalog(self, client: BridgeClient, gen: int) -> None:
         if self._catalog_task is not None and not self._catalog_task.done():
+            if self._catalog_wake is not None:
+                self._catalog_wake.set()  # (re)connected: list now, not at the end of the pause
             return
-        self._catalog_task = asyncio.ensure_future(self._catalog_loop(client, gen))
+        self._catalog_wake = asyncio.Event()
+        self._catalog_task = asyncio.ensure_future(self._catalog_loop(client, gen, self._catalog_wake))
 
-    async def _catalog_loop(self, client: BridgeClient, gen: int) -> None:
+    async def _catalog_loop(self, client: BridgeClient, gen: int, wake: asyncio.Event) -> None:
+        """List the robot now and then (see the module docstring); service types learned on one connection
+        are kept until it drops."""
+        loop = asyncio.get_running_loop()
+        known: dict[str, str] = {}
+        connects = -1
+        last: Catalog | None = None
         while gen == self._generation:
+            started = loop.time()
+            wake.clear()
             if client.state is ConnectionState.CONNECTED:
+                if client.stats["connects"] != connects:  # another connection: learn the types again
+                    connects, last = client.stats["connects"], None
+                    known.clear()
                 try:
-                    catalog = await fetch_catalog(client)
-                    if gen == self._generation:
-                        self.catalog_box.put(catalog)
+                    catalog = await fetch_catalog(client, known, self._progress(client, gen))
+                    if gen == self._generation and client.state is ConnectionState.CONNECTED:
+                        self.catalog_state = "listed"
+                        if catalog != last:
+                            last = catalog
+                            self.catalog_box.put(catalog)
                 except Exception as exc:
                     log.debug("catalogue refresh failed: %s", exc)
-            await asyncio.sleep(CATALOG_PERIOD)
+            pause = max(CATALOG_PERIOD, CATALOG_SHARE * (loop.time() - started))
+            try:
+                await asyncio.wait_for(wake.wait(), pause)
+            except TimeoutError:
+                pass
+
+    def _progress(self, client: BridgeClient, gen: int) -> Callable[[Callable[[], Catalog]], None]:
+        """Publishes a long listing as it goes, at most every ``CATALOG_PROGRESS_EVERY`` seconds."""
+        last = [asyncio.get_running_loop().time()]
+
+        def progress(make: Callable[[], Catalog]) -> None:
+            now = asyncio.get_running_loop().time()
+            if now - last[0] >= CATALOG_PROGRESS_EVERY and gen == self._generation \
+                    and client.state is ConnectionState.CONNECTED:
+                last[0] = now
+                self.catalog_box.put(make())
+
+        return progress
 
     async def _close(self, client: BridgeClient) -> None:
         if self._catalog_task is not None:
@@ -233,14 +297,28 @@ class Link:
         self.thread.run(once())
 
 
-async def fetch_catalog(client: BridgeClient) -> dict[str, list[tuple[str, str]]]:
+async def fetch_catalog(client: BridgeClient, known: dict[str, str] | None = None,
+                        progress: Callable[[Callable[[], Catalog]], None] | None = None) -> Catalog:
     """``{"topics": [(name, type)], "services": [(name, type)], "actions": [(name, type)]}`` from rosapi
-    (actions only from a ROS 2 robot: ``/rosapi/action_servers``)."""
+    (actions only from a ROS 2 robot: ``/rosapi/action_servers``). ``known``: service types learned before
+    (only new services are asked; updated in place); ``progress(make)``: called while a long list of
+    service types is being asked, ``make()`` makes the catalogue of the moment."""
     api = client.rosapi
-    topics = _pairs(await api.topics())
+    topics = sorted(_pairs(await api.topics()))
+    await asyncio.sleep(0)  # a long list: timers and other links get a turn between the steps
     with_types = getattr(api, "services_with_types", None)
-    services = _pairs(await (with_types() if with_types is not None else api.services()))
-    return {"topics": sorted(topics), "services": sorted(services), "actions": sorted(await _actions(client))}
+    if with_types is None:
+        services = sorted(_pairs(await api.services()))
+    elif known is None:
+        services = sorted(_pairs(await with_types()))
+    else:
+        def partial(so_far: Callable[[], dict[str, str]]) -> None:
+            if progress is not None:
+                progress(lambda: {"topics": topics, "services": list(so_far().items()), "actions": []})
+
+        services = list((await with_types(known, partial)).items())  # names and types are str, in order
+    await asyncio.sleep(0)
+    return {"topics": topics, "services": services, "actions": sorted(await _actions(client))}
 
 
 async def _actions(client: BridgeClient) -> list[tuple[str, str]]:

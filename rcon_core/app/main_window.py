@@ -554,6 +554,9 @@ class MainWindow(QtWidgets.QMainWindow):
             self.topics.set_entries(catalog["topics"])
             self.services.set_entries(catalog["services"])
             self.actions_list.set_entries(catalog.get("actions", []))
+        status = self.fleet_ui.catalog_state()  # what the (empty) lists wait for: listing, lost...
+        for listing in (self.topics, self.services, self.actions_list):
+            listing.set_status(status)
         if now - self._last_rate_sample >= 1.0:
             self._last_rate_sample = now
             self.topics.set_rates(self.rates.sample(self.host.topic_counts(self.fleet_ui.side_robot), now))

@@ -3,26 +3,49 @@
 Quirks handled (``rosapi.jsonl:47-49``): parameter values travel as JSON text inside strings (``get_param``
 returns ``"7"``, ``"\\"hi\\""``; ``set_param`` needs JSON text); unknown names give empty results, not
 failures (``topic_type`` of an unknown topic is ``""``, returned here as ``None``).
+
+Decision: asking a type per service, in bounded batches
+    rosapi has no call that lists services with their types, so :meth:`Rosapi.services_with_types` asks
+    ``service_type`` once per name. A robot with 10^5 services got 10^5 calls at once (a 22 s stall of the
+    loop, the link cut by the stall watchdog): now at most ``TYPE_CALLS_IN_FLIGHT`` are in flight and
+    ``TYPE_CALLS_PER_S`` start per second, and with ``known`` (the types learned before, kept by the
+    caller between refreshes) only the names not seen yet are asked. ``calls`` counts the calls made, by
+    rosapi service.
 """
 
 from __future__ import annotations
 
 import asyncio
 import json
+import logging
+from collections import Counter
+from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, Any
 
-from .errors import ServiceError
+from .errors import BridgeError, ConnectionLostError, ServiceError
 from .safety import bounded_repr, json_text_value
 
 if TYPE_CHECKING:
     from .host import ServiceCaller
 
 
+log = logging.getLogger(__name__)
+
+#: ``service_type`` calls in flight at once, and started per second, while listing services' types
+TYPE_CALLS_IN_FLIGHT = 8
+TYPE_CALLS_PER_S = 2000.0
+#: a long listing reports its progress after every this many answers
+PROGRESS_EVERY = 1000
+
+
 class Rosapi:
     def __init__(self, client: ServiceCaller) -> None:
         self._client = client
+        #: calls made, by rosapi service name (``"service_type"``...)
+        self.calls: Counter[str] = Counter()
 
     async def _call(self, name: str, args: dict[str, Any] | None = None, timeout: float | None = None) -> Any:
+        self.calls[name] += 1
         values = await self._client.call_service(f"/rosapi/{name}", args or {}, timeout=timeout)
         if not isinstance(values, dict):
             raise ServiceError(f"unexpected answer {values!r}", f"/rosapi/{name}")
@@ -41,11 +64,71 @@ class Rosapi:
     async def services(self) -> list[str]:
         return [s for s in _listed((await self._call("services")).get("services")) if isinstance(s, str)]
 
-    async def services_with_types(self) -> dict[str, str]:
-        """``{service: type}``; types are asked for concurrently (rosapi has no combined call)."""
-        names = await self.services()
-        types = await asyncio.gather(*(self.service_type(n) for n in names), return_exceptions=True)
-        return {n: (t if isinstance(t, str) else "") for n, t in zip(names, types, strict=True)}
+    async def services_with_types(self, known: dict[str, str] | None = None,
+                                  progress: Callable[[Callable[[], dict[str, str]]], None] | None = None,
+                                  ) -> dict[str, str]:
+        """``{service: type}`` (``""`` where the type could not be had). rosapi has no combined call: one
+        ``service_type`` per name, in bounded batches (see the module docstring). ``known``: types learned
+        before, by name; only the other names are asked, and it is updated in place with the answers (names
+        no longer listed are dropped from it). ``progress(so_far)`` is called now and then while a long
+        list is being asked; ``so_far()`` makes the ``{service: type}`` of the moment (every name). The
+        names come in sorted order."""
+        names = sorted(await self.services())
+        known = {} if known is None else known
+        listed = set(names)
+        for gone in [n for n in known if n not in listed]:
+            del known[gone]
+        kept = known
+
+        def so_far() -> dict[str, str]:
+            return {n: kept.get(n, "") for n in names}
+
+        report = None if progress is None else (lambda _into: progress(so_far))
+        await self.ask_each([n for n in names if n not in known], self.service_type, known, report)
+        return so_far()
+
+    async def ask_each(self, names: Iterable[str], ask: Callable[[str], Any], into: dict[str, str],
+                       progress: Callable[[dict[str, str]], None] | None = None) -> None:
+        """``into[name] = await ask(name)`` for every name, ``TYPE_CALLS_IN_FLIGHT`` at a time and at most
+        ``TYPE_CALLS_PER_S`` started per second; a name whose call fails (``ServiceError``) is left out
+        (asked again next time); a lost link ends it all (raised). ``progress(into)`` every
+        ``PROGRESS_EVERY`` answers."""
+        names = list(names)
+        if not names:
+            return
+        loop = asyncio.get_running_loop()
+        todo = iter(names)
+        gap = 1.0 / TYPE_CALLS_PER_S
+        pace = {"next": loop.time(), "done": 0}
+        failed: list[BaseException] = []
+
+        async def worker() -> None:
+            for name in todo:
+                if failed:
+                    return
+                now = loop.time()
+                wait, pace["next"] = pace["next"] - now, max(now, pace["next"]) + gap
+                if wait > 0:
+                    await asyncio.sleep(wait)
+                try:
+                    answer = await ask(name)
+                except ConnectionLostError as exc:
+                    failed.append(exc)
+                    return
+                except ServiceError as exc:  # this name only: asked again at the next refresh
+                    log.debug("type of %s not known: %s", name, exc)
+                    continue
+                except BridgeError as exc:  # not connected: nothing more can be asked
+                    failed.append(exc)
+                    return
+                into[name] = answer if isinstance(answer, str) else ""
+                pace["done"] += 1
+                if progress is not None and pace["done"] % PROGRESS_EVERY == 0:
+                    progress(into)
+
+        await asyncio.gather(*(worker() for _ in range(min(TYPE_CALLS_IN_FLIGHT, len(names)))))
+        if failed:
+            raise failed[0]
 
     async def topic_type(self, topic: str) -> str | None:
         return (await self._call("topic_type", {"topic": topic})).get("type") or None
