@@ -72,6 +72,7 @@ from .params import Params
 from .protocol import encode
 from .reasons import Failure, describe, refused_auth
 from .rosinfo import RosInfo
+from .safety import without_traceback
 from .rosinfo import detect as detect_ros
 from .secure import ssl_context
 from .session import LOG_LEVELS, Session
@@ -285,7 +286,7 @@ class BridgeClient:
             delay = min(delay * 2, self.backoff_max)
 
     def _process_exception(self, exc: Exception) -> Exception | None:
-        self.last_error = exc
+        self.last_error = without_traceback(exc)
         if describe(exc).fatal:
             return exc  # retrying cannot fix a certificate problem, a bad URL...
         if self._state is not ConnectionState.CLOSED:
@@ -389,7 +390,7 @@ class BridgeClient:
             self._set_state(ConnectionState.CONNECTED)
             await self.inbound.read(link.recv, link.waiting)
         except ConnectionClosed as exc:
-            self.last_error = exc
+            self.last_error = without_traceback(exc)
         finally:
             self.link = None
             self._connected.clear()
@@ -397,6 +398,7 @@ class BridgeClient:
             pinger.cancel()
             self.inbound.disconnected()
             self.session.detached()
+            link.release()  # its buffers go now, not at the collector's next full pass (wslink.py)
             if final:
                 self._set_state(ConnectionState.CLOSED)
         if not self._closing:

@@ -164,6 +164,19 @@ def clip(text: str, limit: int) -> str:
     return f"{text[:limit]}… ({len(text):,} characters)"
 
 
+def without_traceback(exc: BaseException, most: int = 8) -> BaseException:
+    """``exc`` (and the exceptions it was raised from) with no traceback, to be kept: a kept traceback
+    holds the frames it went through and their locals (a connection, its buffers, the last frame read)
+    in reference cycles, which the app's collector policy may freeze for good (``gcpolicy.py``)."""
+    seen: set[int] = set()
+    e: BaseException | None = exc
+    while e is not None and id(e) not in seen and len(seen) < most:
+        seen.add(id(e))
+        e.__traceback__ = None
+        e = e.__cause__ or e.__context__
+    return exc
+
+
 def safe_text(exc: BaseException, limit: int = 200) -> str:
     """``"Type: message"`` of an exception, at most ``limit`` characters; never raises."""
     try:
