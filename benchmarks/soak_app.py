@@ -273,7 +273,7 @@ def part_reconnect(quick: bool, period: float = 3.0) -> dict[str, Any]:
     plugins.load_entry_points()
     robot = Robot(proxy_period=period)
     window = _window(demo_workspace(plugins), plugins, collector=CollectorPolicy())  # as `rcon` runs
-    cycles = 14 if quick else 60
+    cycles = 12 if quick else 60
     warm = 4
     samples: list[tuple[int, float]] = []
     try:
@@ -338,7 +338,10 @@ def main(argv: list[str] | None = None) -> int:
     import logging
 
     logging.basicConfig(level=logging.ERROR)  # the cuts are the point here: no warning per reconnect
-    result = part_gui(args.quick) if args.part == "gui" else part_reconnect(args.quick)
+    if args.part == "gui":
+        result = part_gui(args.quick)
+    else:
+        result = part_reconnect(args.quick, period=2.0 if args.quick else 3.0)
     print(json.dumps(result), flush=True)
     if args.out:
         args.out.write_text(json.dumps(result, indent=2))

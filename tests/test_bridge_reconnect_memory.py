@@ -44,8 +44,9 @@ async def test_a_dropped_connection_frozen_while_alive_is_freed(sim, frozen_coll
             await until(lambda: client.stats["connects"] == 2 and client.state is ConnectionState.CONNECTED,
                         what="the reconnect")
             await until(lambda: len(got) >= 6, what="messages on the second connection")
-            assert connection() is None, "the dropped connection is still held"
-            assert protocol() is None, "the dropped connection's protocol (its buffers) is still held"
+            # its last tasks may still be ending (a loaded machine): freed within moments, or never
+            await until(lambda: connection() is None, what="the dropped connection freed")
+            await until(lambda: protocol() is None, what="its protocol (its buffers) freed")
             assert client.last_error is not None and client.last_error.__traceback__ is None
         finally:
             await client.close()

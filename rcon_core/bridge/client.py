@@ -72,8 +72,8 @@ from .params import Params
 from .protocol import encode
 from .reasons import Failure, describe, refused_auth
 from .rosinfo import RosInfo
-from .safety import without_traceback
 from .rosinfo import detect as detect_ros
+from .safety import without_traceback
 from .secure import ssl_context
 from .session import LOG_LEVELS, Session
 from .wslink import Link
@@ -112,7 +112,7 @@ class BridgeClient:
                  open_timeout: float = 10.0, max_size: int = 32 << 20, max_message_size: int | None = None,
                  max_frame_size: int | None = None, fragment_timeout: float = 10.0, big_frame: int = 1 << 20,
                  stall_timeout: float | None = 1.0, client_cert: str | None = None,
-                 client_key: str | None = None) -> None:
+                 client_key: str | None = None, max_decoded: int | None = None) -> None:
         if not isinstance(url, str) or not url.startswith(("ws://", "wss://")):
             raise ValueError(f"url must start with ws:// or wss://, got {url!r}")
         if typed_arrays not in ("list", "numpy"):
@@ -136,6 +136,8 @@ class BridgeClient:
         self.max_size = self.max_message_size = max_size if max_message_size is None else max_message_size
         self.max_frame_size = max_frame_size or max(2 * self.max_message_size, self.max_message_size + (1 << 20))
         self.big_frame = min(big_frame, self.max_message_size)
+        #: the bytes of Python objects one (big) frame may decode to; a frame over it is refused (offload.py)
+        self.max_decoded = 4 * self.max_message_size if max_decoded is None else max_decoded
         self.stall_timeout = stall_timeout
         self.latency: float | None = None
         self.last_error: BaseException | None = None
@@ -145,7 +147,7 @@ class BridgeClient:
                                       "dropped_on_disconnect": 0, "oversize_frames": 0, "frame_errors": 0,
                                       "png_refused": 0, "non_object_msgs": 0, "big_frames": 0,
                                       "stale_dropped": 0, "degraded": 0, "stall_cuts": 0,
-                                      "stale_skipped": 0, "status_not_logged": 0}
+                                      "stale_skipped": 0, "status_not_logged": 0, "decode_refused": 0}
         self._state = ConnectionState.CLOSED
         self._state_listeners: list[Callable[[ConnectionState], None]] = []
         #: the current connection (None while down); see ``wslink.py``
@@ -164,7 +166,7 @@ class BridgeClient:
         #: frames in (``inbound.py``)
         self.inbound = Inbound(self.session, bad, self.stats, typed_arrays=typed_arrays,
                                max_size=self.max_message_size, big_frame=self.big_frame,
-                               fragment_timeout=fragment_timeout)
+                               fragment_timeout=fragment_timeout, max_decoded=self.max_decoded)
 
     # ================================================================== state
 

@@ -52,7 +52,7 @@ import orjson
 from .errors import ProtocolError
 from .latest import LatestOnly
 from .offload import BigFrames, decode_big
-from .protocol import FragmentAssembler, RefusedFrame, decode_binary, decode_png
+from .protocol import DecodedTooBig, FragmentAssembler, RefusedFrame, decode_binary, decode_png
 from .safety import safe_text
 
 log = logging.getLogger(__name__)
@@ -90,14 +90,16 @@ class Inbound:
     """Turns what the socket delivers into messages for the session's topics and ops for the session."""
 
     def __init__(self, session: Any, bad: BadFrames, stats: dict[str, int], *, typed_arrays: str,
-                 max_size: int, big_frame: int, fragment_timeout: float) -> None:
+                 max_size: int, big_frame: int, fragment_timeout: float, max_decoded: int | None = None) -> None:
         self.session = session
         self.bad = bad
         self.stats = stats
         self.typed_arrays = typed_arrays
         self.max_size = max_size
         self.big_frame = big_frame
-        self.big = BigFrames(typed_arrays, max_size)
+        #: the bytes of objects one frame may decode to (big frames; see offload.py)
+        self.max_decoded = max_decoded
+        self.big = BigFrames(typed_arrays, max_size, max_decoded)
         self.latest = LatestOnly(session.topics, stats)
         warn = self._fragment_warning
         self.fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_size, warn=warn)
@@ -208,14 +210,16 @@ class Inbound:
             self.stats["oversize_frames"] += 1
             self.bad.report("size", f"frame of {len(raw)} bytes exceeds max_message_size={self.max_size}; dropped")
             return None
-        return await self._offloaded(decode_big, raw, self.typed_arrays, self.max_size)
+        return await self._offloaded(decode_big, raw, self.typed_arrays, self.max_size, self.max_decoded)
 
     async def _offloaded(self, fn: Callable[..., Any], *args: Any) -> Any:
         self.stats["big_frames"] += 1
         try:
             return await self.big.run(fn, *args)
         except ProtocolError as exc:
-            if isinstance(exc, RefusedFrame):
+            if isinstance(exc, DecodedTooBig):
+                self.stats["decode_refused"] = self.stats.get("decode_refused", 0) + 1
+            elif isinstance(exc, RefusedFrame):
                 self.stats["png_refused"] += 1
             self.bad.report("big", f"big frame dropped: {exc}")
             return None

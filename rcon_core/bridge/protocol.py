@@ -103,24 +103,83 @@ def _tag_hook_numpy(a: Any, b: Any) -> Any:
     return np.frombuffer(tag.value, dtype=dtype)
 
 
-def decode_cbor(data: bytes, typed_arrays: str = "list") -> Any:
-    """Decode one CBOR frame; typed arrays become lists (or numpy arrays with ``typed_arrays="numpy"``)."""
+def decode_cbor(data: bytes, typed_arrays: str = "list", budget: int | None = None) -> Any:
+    """Decode one CBOR frame; typed arrays become lists (or numpy arrays with ``typed_arrays="numpy"``).
+    ``budget``: the bytes of Python objects the decoded frame may take; the typed arrays made lists and
+    the maps are counted as they are decoded, and going over raises :class:`RefusedFrame`."""
     hook = _tag_hook_numpy if typed_arrays == "numpy" else _tag_hook_list
-    return cbor2.loads(data, tag_hook=hook)
+    if budget is None:
+        return cbor2.loads(data, tag_hook=hook)
+    spent = [len(data)]
+
+    def spend(n: int) -> None:
+        spent[0] += n
+        if spent[0] > budget:
+            raise DecodedTooBig(f"CBOR frame of {len(data)} bytes decodes to more than the {budget >> 20} MB of "
+                               "objects the client allows for one frame; refused")
+
+    def counted_tag(a: Any, b: Any) -> Any:
+        tag = a if a.__class__ is cbor2.CBORTag else b
+        dtype = typed_array_dtype(tag.tag)
+        if typed_arrays != "numpy" and dtype is not None and isinstance(tag.value, bytes | bytearray) \
+                and tag.tag not in (64, 68):
+            spend(len(tag.value) // dtype.itemsize * (32 if dtype.kind == "f" else 36))
+        return hook(a, b)
+
+    def counted_map(a: Any, b: Any) -> Any:  # cbor2 5.x: (decoder, value); 6.x: (value, immutable)
+        value = b if isinstance(b, dict) else a
+        spend(100 + 16 * len(value))
+        return value
+
+    try:
+        return cbor2.loads(data, tag_hook=counted_tag, object_hook=counted_map)
+    except cbor2.CBORDecodeError as exc:
+        if isinstance(exc.__cause__, RefusedFrame):
+            raise exc.__cause__ from None
+        raise
 
 
-def decode_binary(data: bytes, typed_arrays: str = "list") -> Any:
-    """Decode a binary frame: CBOR, or JSON text sent in a binary frame.  Raises ProtocolError."""
+def json_decoded_size(raw: str | bytes) -> int:
+    """About how many bytes of Python objects a JSON frame decodes to, counted in its text before
+    parsing: its length, plus a slot per ``,``, a float per ``.`` or exponent, a dict per ``{``, a list
+    per ``[``, a string object per pair of ``"``. An upper estimate but for integers above 256 (each
+    counted as a slot, 8 bytes, where it takes 36): a frame of big integers may take up to about four
+    times the estimate."""
+    if isinstance(raw, str):
+        c = raw.count
+        exps = c("e-") + c("e+") + c("E-") + c("E+")
+        return (len(raw) + 8 * c(",") + 24 * (c(".") + exps) + 200 * c("{") + 56 * c("[") + 25 * c('"'))
+    b = raw.count
+    exps = b(b"e-") + b(b"e+") + b(b"E-") + b(b"E+")
+    return (len(raw) + 8 * b(b",") + 24 * (b(b".") + exps) + 200 * b(b"{") + 56 * b(b"[") + 25 * b(b'"'))
+
+
+def check_json_size(raw: str | bytes, budget: int | None) -> None:
+    """Refuse (:class:`RefusedFrame`) a JSON frame whose objects would take more than ``budget`` bytes."""
+    if budget is None:
+        return
+    size = json_decoded_size(raw)
+    if size > budget:
+        raise DecodedTooBig(f"JSON frame of {len(raw)} bytes would decode to about {size >> 20} MB of objects, "
+                           f"more than the {budget >> 20} MB the client allows for one frame; refused")
+
+
+def decode_binary(data: bytes, typed_arrays: str = "list", budget: int | None = None) -> Any:
+    """Decode a binary frame: CBOR, or JSON text sent in a binary frame.  Raises ProtocolError
+    (:class:`RefusedFrame` when the decoded objects would take more than ``budget`` bytes)."""
     if not data:
         raise ProtocolError("empty binary frame")
     first = data[0]
     if first in (0x7B, 0x5B):  # '{' or '[': JSON text in a binary frame (a CBOR map never starts so)
+        check_json_size(data, budget)
         try:
             return loads(data)
         except orjson.JSONDecodeError:
             pass
     try:
-        return decode_cbor(data, typed_arrays)
+        return decode_cbor(data, typed_arrays, budget)
+    except RefusedFrame:
+        raise
     except Exception as exc:  # cbor2 raises several types (CBORDecodeError, ValueError, ...)
         raise ProtocolError(f"binary frame is neither CBOR nor JSON ({exc})") from None
 
@@ -130,6 +189,10 @@ def decode_binary(data: bytes, typed_arrays: str = "list") -> Any:
 
 class RefusedFrame(ProtocolError):
     """A frame refused because it would need more memory than the client accepts (e.g. a PNG bomb)."""
+
+
+class DecodedTooBig(RefusedFrame):
+    """A frame whose decoded objects would take more than the client's decoded-size budget."""
 
 
 
