@@ -202,11 +202,14 @@ class TextViewView(QtWidgets.QWidget):
         cursor.beginEditBlock()
         cursor.movePosition(QtGui.QTextCursor.MoveOperation.Start)
         empty = doc.isEmpty()
+        top = doc.firstBlock().userState()  # the first line's number: a split leaves it on the first half
         for i, line in enumerate(lines):
             cursor.insertText(self.line_text(line), self._format(line))
             cursor.block().setUserState(line.n & 0x7FFFFFFF)
             if i < len(lines) - 1 or not empty:
                 cursor.insertBlock()
+        if not empty:
+            cursor.block().setUserState(top)  # the line that was first, now after the new ones
         cursor.endEditBlock()
         self.painted += len(lines)
 

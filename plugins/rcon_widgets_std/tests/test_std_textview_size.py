@@ -129,6 +129,10 @@ def test_a_filter_change_paints_the_newest_first_then_the_rest(qtbot):
     assert view.history.toPlainText().splitlines()[-1] == "odd 1999"
     qtbot.waitUntil(lambda: view.history.document().blockCount() == 1000, timeout=10_000)
     assert view.history.toPlainText().splitlines() == [f"odd {i}" for i in range(1, 2000, 2)]
+    # each block still knows its line (the whole text on demand), also where the older lines were put above
+    doc = view.history.document()
+    states = [doc.findBlockByNumber(k).userState() for k in range(doc.blockCount())]
+    assert states == [n + 1 for n in range(1, 2000, 2)]  # line numbers n start at 1
 
 
 def test_the_context_menu_finds_the_line_under_the_finger(qtbot):
