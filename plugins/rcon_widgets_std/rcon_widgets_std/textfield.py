@@ -21,7 +21,7 @@ from rcon_core.plugins import Role
 from rcon_core.plugins.paths import PathError, get_path, set_path
 
 from .base import StdModel
-from .common import field_at, format_value
+from .common import field_at, format_value, shorten_text
 
 __all__ = ["TextFieldSettings", "TextFieldModel", "TextValue"]
 
@@ -77,7 +77,8 @@ class TextFieldModel(StdModel):
         except PathError as exc:
             self.set_error(str(exc))
             return
-        self.set_value(TextValue(format_value(value, self.settings.decimals)), message=msg)
+        # shown at most SHOW_CHARS / SHOW_ROWS: Qt lays out a megabyte-long line for seconds (issue 22.1)
+        self.set_value(TextValue(shorten_text(format_value(value, self.settings.decimals))[0]), message=msg)
 
     # -- typed text -> message -----------------------------------------------------------------------
     def _is_string_field(self) -> bool:

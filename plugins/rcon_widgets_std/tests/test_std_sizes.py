@@ -85,3 +85,17 @@ def test_a_serving_compound_copies_a_1e6_array_request_once_for_all_its_display_
     assert shown[0]["data"] == request["data"]
     assert m.state.message is m.state.value.message  # one copy for the value and the message
     assert all(len(c.model.state.value.text) <= SHOW_CHARS for c in m.children if not c.is_input)
+
+
+def test_a_text_field_showing_what_arrives_shows_a_5_mb_string_shortened(qtbot):
+    """The Text Field bound to subscribe put the whole text in its box (Qt lays out a 5 MB line for
+    seconds, like the Text View did)."""
+    from rcon_widgets_std.textfield import TextFieldModel, TextFieldSettings
+    from rcon_widgets_std.textfield_view import TextFieldView
+
+    m = build(TextFieldModel, TextFieldSettings(), "/chat", "std_msgs/String", "subscribe", ("data",))
+    m.on_message({"data": "q" * 5_000_000})
+    view = TextFieldView(m)
+    qtbot.addWidget(view)
+    view.refresh(m.state)
+    assert len(view.text.toPlainText()) == SHOW_CHARS
