@@ -99,3 +99,10 @@ def test_a_text_field_showing_what_arrives_shows_a_5_mb_string_shortened(qtbot):
     qtbot.addWidget(view)
     view.refresh(m.state)
     assert len(view.text.toPlainText()) == SHOW_CHARS
+
+
+def test_a_service_answer_of_5_mb_makes_a_bounded_status_line():
+    from rcon_widgets_std.button import describe_response
+
+    assert len(describe_response({"success": True, "message": "m" * 5_000_000})) == SHOW_CHARS
+    assert len(describe_response({"data": list(range(1_000_000))})) <= SHOW_CHARS
