@@ -4,7 +4,8 @@ coloured history, and (publish role) an input line underneath.
 Decision: a pass costs the same whatever arrives
     One ``QPlainTextEdit.appendHtml`` per message froze the window for minutes on a 5 MB String and for
     seconds at 10,000 messages a second. Now each refresh inserts the new lines in one edit block, through a
-    text cursor (no HTML to parse), at most ``PASS_LINES`` of them; lines still waiting are painted by the
+    text cursor (no HTML to parse), at most ``PASS_LINES`` of them and for at most ``PASS_BUDGET`` seconds;
+    lines still waiting are painted by the
     next passes, a frame apart (``_more``), and lines that could no longer be on screen (beyond the
     document's cap) are skipped. Each line is already short (the model keeps a display text of at most
     ``DISPLAY_CHARS`` characters and ``DISPLAY_ROWS`` rows); a shortened line ends with a note, and its
@@ -16,6 +17,7 @@ Decision: a pass costs the same whatever arrives
 from __future__ import annotations
 
 import datetime
+import time
 from typing import Any
 
 from qtpy import QtCore, QtGui, QtWidgets
@@ -25,8 +27,10 @@ from rcon_core.plugins import Role
 from .textview import LEVELS, Line
 from .view_common import BAD, LEVEL_COLOURS, Caption, vbox
 
-#: lines inserted into the document per pass at most (the rest in the next passes, a frame apart)
+#: lines inserted into the document per pass at most, and the time that may take (the rest in the next
+#: passes, a frame apart)
 PASS_LINES = 200
+PASS_BUDGET = 0.008
 #: blocks the document keeps at most (the model may keep more lines: the filter looks at all of them)
 DOC_LINES = 10_000
 #: characters of a whole message the "Show the whole message" dialog shows (Copy takes all of it)
@@ -158,11 +162,13 @@ class TextViewView(QtWidgets.QWidget):
         bar = self.history.verticalScrollBar()
         at_bottom = bar.value() >= bar.maximum() - 4
         budget = PASS_LINES
+        deadline = time.perf_counter() + PASS_BUDGET
         first = max(self._next, h.end - h.ring.capacity)
         last = min(h.end, first + budget)
         if last > first:
-            self._append([x for x in map(h.ring.get, range(first, last)) if x is not None])
-            budget -= last - first
+            done = self._append(h, first, last, deadline)
+            budget -= done - first
+            last = done
         self._next = max(self._next, last)
         oldest = max(self._floor, h.end - h.ring.capacity)
         if budget > 0 and self._top > oldest:
@@ -174,20 +180,30 @@ class TextViewView(QtWidgets.QWidget):
         if (self._next < h.end or self._top > oldest) and not self._more.isActive():
             self._more.start()
 
-    def _append(self, lines: list[Line]) -> None:
+    def _append(self, h: Any, first: int, last: int, deadline: float) -> int:
+        """Append the visible lines ``first .. last - 1`` of ``h`` (those still there), until ``deadline``;
+        returns the index after the last one appended."""
         doc = self.history.document()
         cursor = QtGui.QTextCursor(doc)
         cursor.beginEditBlock()
         cursor.movePosition(QtGui.QTextCursor.MoveOperation.End)
-        first = doc.isEmpty()
-        for line in lines:
-            if not first:
+        empty = doc.isEmpty()
+        k = first
+        while k < last:
+            line = h.ring.get(k)
+            k += 1
+            if line is None:  # fell off the history meanwhile
+                continue
+            if not empty:
                 cursor.insertBlock()
-            first = False
+            empty = False
             cursor.insertText(self.line_text(line), self._format(line))
             cursor.block().setUserState(line.n & 0x7FFFFFFF)
+            self.painted += 1
+            if k % 16 == 0 and time.perf_counter() > deadline:
+                break
         cursor.endEditBlock()
-        self.painted += len(lines)
+        return k
 
     def _prepend(self, lines: list[Line]) -> None:
         if not lines:
