@@ -11,7 +11,7 @@ import time
 import pytest
 
 from rcon_core.app import link as link_mod
-from rcon_core.app.link import Link, fetch_catalog
+from rcon_core.app.link import Link
 from rcon_core.bridge import rosapi as rosapi_mod
 from rcon_core.bridge.rosapi import Rosapi
 from rcon_core.testing import connected
@@ -104,13 +104,26 @@ def test_the_link_lists_again_without_asking_again_and_publishes_only_changes(si
         link.shutdown()
 
 
-async def test_fetch_catalog_reports_a_long_listing_as_it_goes(sim, monkeypatch):
-    monkeypatch.setattr(rosapi_mod, "TYPE_CALLS_PER_S", 500.0)
-    monkeypatch.setattr(rosapi_mod, "PROGRESS_EVERY", 100)
-    add_services(sim, 600)
-    async with connected(sim.url) as client:
-        seen: list[int] = []
-        catalog = await fetch_catalog(client, {}, lambda make: seen.append(sum(1 for _n, t in
-                                                                                 make()["services"] if t)))
-        assert seen and all(0 < k < 600 + 50 for k in seen)  # partial catalogues, every name in them
-        assert sum(1 for n, _t in catalog["services"] if n.startswith("/many/")) == 600
+def test_a_long_listing_is_published_as_it_goes(sim_thread, monkeypatch):
+    """The names first (types unknown), then the types as they come, then the whole catalogue."""
+    monkeypatch.setattr(rosapi_mod, "TYPE_CALLS_PER_S", 300.0)  # 1500 types: about 5 s
+    monkeypatch.setattr(link_mod, "CATALOG_PROGRESS_EVERY", 0.5)
+    sim_thread.run_sync(lambda: add_services(sim_thread))
+    link = Link()
+    try:
+        link.connect_to(sim_thread.url)
+        known_counts: list[int] = []
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:
+            ok, got = link.catalog_box.take()
+            if ok and got["services"]:
+                mine = [t for n, t in got["services"] if n.startswith("/many/")]
+                assert len(mine) == SERVICES  # every name, from the first partial catalogue on
+                known_counts.append(sum(1 for t in mine if t))
+                if known_counts[-1] == SERVICES:
+                    break
+            time.sleep(0.02)
+        assert known_counts[-1] == SERVICES and len(known_counts) >= 3
+        assert known_counts[0] < SERVICES and known_counts == sorted(known_counts)
+    finally:
+        link.shutdown()

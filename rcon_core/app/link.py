@@ -242,8 +242,10 @@ class Link:
                 if client.stats["connects"] != connects:  # another connection: learn the types again
                     connects, last = client.stats["connects"], None
                     known.clear()
+                shown = _Partial(known)
+                publisher = asyncio.ensure_future(self._publish_partial(client, gen, shown))
                 try:
-                    catalog = await fetch_catalog(client, known, self._progress(client, gen))
+                    catalog = await fetch_catalog(client, known, shown.listed)
                     if gen == self._generation and client.state is ConnectionState.CONNECTED:
                         self.catalog_state = "listed"
                         if catalog != last:
@@ -251,24 +253,28 @@ class Link:
                             self.catalog_box.put(catalog)
                 except Exception as exc:
                     log.debug("catalogue refresh failed: %s", exc)
+                finally:
+                    publisher.cancel()
             pause = max(CATALOG_PERIOD, CATALOG_SHARE * (loop.time() - started))
             try:
                 await asyncio.wait_for(wake.wait(), pause)
             except TimeoutError:
                 pass
 
-    def _progress(self, client: BridgeClient, gen: int) -> Callable[[Callable[[], Catalog]], None]:
-        """Publishes a long listing as it goes, at most every ``CATALOG_PROGRESS_EVERY`` seconds."""
-        last = [asyncio.get_running_loop().time()]
-
-        def progress(make: Callable[[], Catalog]) -> None:
-            now = asyncio.get_running_loop().time()
-            if now - last[0] >= CATALOG_PROGRESS_EVERY and gen == self._generation \
-                    and client.state is ConnectionState.CONNECTED:
-                last[0] = now
-                self.catalog_box.put(make())
-
-        return progress
+    async def _publish_partial(self, client: BridgeClient, gen: int, shown: _Partial) -> None:
+        """While a long listing goes on, publish what it has every ``CATALOG_PROGRESS_EVERY`` seconds (the
+        names, with the types known so far), made a slice at a time so the loop keeps turning."""
+        while True:
+            await asyncio.sleep(CATALOG_PROGRESS_EVERY)
+            if shown.names is None:
+                continue
+            services: list[tuple[str, str]] = []
+            names, known = shown.names, shown.known
+            for i in range(0, len(names), 10_000):
+                services += [(n, known.get(n, "")) for n in names[i:i + 10_000]]
+                await asyncio.sleep(0)
+            if gen == self._generation and client.state is ConnectionState.CONNECTED:
+                self.catalog_box.put({"topics": shown.topics, "services": services, "actions": []})
 
     async def _close(self, client: BridgeClient) -> None:
         if self._catalog_task is not None:
@@ -298,27 +304,41 @@ class Link:
 
 
 async def fetch_catalog(client: BridgeClient, known: dict[str, str] | None = None,
-                        progress: Callable[[Callable[[], Catalog]], None] | None = None) -> Catalog:
+                        listed: Callable[[list[tuple[str, str]], list[str]], None] | None = None) -> Catalog:
     """``{"topics": [(name, type)], "services": [(name, type)], "actions": [(name, type)]}`` from rosapi
     (actions only from a ROS 2 robot: ``/rosapi/action_servers``). ``known``: service types learned before
-    (only new services are asked; updated in place); ``progress(make)``: called while a long list of
-    service types is being asked, ``make()`` makes the catalogue of the moment."""
+    (only new services are asked; updated in place as the answers come); ``listed(topics, service names)``:
+    called once both lists are known, before the services' types are asked."""
     api = client.rosapi
-    topics = sorted(_pairs(await api.topics()))
+    pairs = _pairs(await api.topics())
     await asyncio.sleep(0)  # a long list: timers and other links get a turn between the steps
+    topics = sorted(pairs)
+    await asyncio.sleep(0)
     with_types = getattr(api, "services_with_types", None)
     if with_types is None:
         services = sorted(_pairs(await api.services()))
     elif known is None:
         services = sorted(_pairs(await with_types()))
     else:
-        def partial(so_far: Callable[[], dict[str, str]]) -> None:
-            if progress is not None:
-                progress(lambda: {"topics": topics, "services": list(so_far().items()), "actions": []})
+        def names_known(names: list[str]) -> None:
+            if listed is not None:
+                listed(topics, names)
 
-        services = list((await with_types(known, partial)).items())  # names and types are str, in order
+        services = list((await with_types(known, names_known)).items())  # str to str, in name order
     await asyncio.sleep(0)
     return {"topics": topics, "services": services, "actions": sorted(await _actions(client))}
+
+
+class _Partial:
+    """What a listing under way knows: the topics and service names once listed, the types as they come."""
+
+    def __init__(self, known: dict[str, str]) -> None:
+        self.known = known
+        self.topics: list[tuple[str, str]] = []
+        self.names: list[str] | None = None
+
+    def listed(self, topics: list[tuple[str, str]], names: list[str]) -> None:
+        self.topics, self.names = topics, names
 
 
 async def _actions(client: BridgeClient) -> list[tuple[str, str]]:
@@ -343,7 +363,10 @@ def _pairs(answer: Any) -> list[tuple[str, str]]:
             names = answer.get("topics") or answer.get("services") or []
             types = answer.get("types") or [""] * len(names)
             return list(zip(names, types, strict=False))
-        return [(str(k), str(v)) for k, v in answer.items()]
+        pairs = list(answer.items())  # Rosapi's mappings are str to str already: no copy per item
+        if all(type(k) is str and type(v) is str for k, v in pairs):
+            return pairs
+        return [(str(k), str(v)) for k, v in pairs]
     out = []
     for item in answer or []:
         if isinstance(item, str):

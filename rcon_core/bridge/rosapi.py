@@ -34,8 +34,6 @@ log = logging.getLogger(__name__)
 #: ``service_type`` calls in flight at once, and started per second, while listing services' types
 TYPE_CALLS_IN_FLIGHT = 8
 TYPE_CALLS_PER_S = 2000.0
-#: a long listing reports its progress after every this many answers
-PROGRESS_EVERY = 1000
 
 
 class Rosapi:
@@ -65,41 +63,37 @@ class Rosapi:
         return [s for s in _listed((await self._call("services")).get("services")) if isinstance(s, str)]
 
     async def services_with_types(self, known: dict[str, str] | None = None,
-                                  progress: Callable[[Callable[[], dict[str, str]]], None] | None = None,
-                                  ) -> dict[str, str]:
-        """``{service: type}`` (``""`` where the type could not be had). rosapi has no combined call: one
-        ``service_type`` per name, in bounded batches (see the module docstring). ``known``: types learned
-        before, by name; only the other names are asked, and it is updated in place with the answers (names
-        no longer listed are dropped from it). ``progress(so_far)`` is called now and then while a long
-        list is being asked; ``so_far()`` makes the ``{service: type}`` of the moment (every name). The
-        names come in sorted order."""
+                                  listed: Callable[[list[str]], None] | None = None) -> dict[str, str]:
+        """``{service: type}`` in name order (``""`` where the type could not be had). rosapi has no combined
+        call: one ``service_type`` per name, in bounded batches (see the module docstring). ``known``: types
+        learned before, by name; only the other names are asked, and it is updated in place with the
+        answers as they come (names no longer listed are dropped from it). ``listed(names)`` is called once
+        the names are known, before their types are asked (a caller may show them meanwhile)."""
         names = sorted(await self.services())
+        await asyncio.sleep(0)  # a long list: every step of it gives the loop a turn
         known = {} if known is None else known
-        listed = set(names)
-        for gone in [n for n in known if n not in listed]:
+        present = set(names)
+        for gone in [n for n in known if n not in present]:
             del known[gone]
-        kept = known
+        await asyncio.sleep(0)
+        todo = [n for n in names if n not in known]
+        if listed is not None:
+            listed(names)
+        await asyncio.sleep(0)
+        await self.ask_each(todo, self.service_type, known)
+        return {n: known.get(n, "") for n in names}
 
-        def so_far() -> dict[str, str]:
-            return {n: kept.get(n, "") for n in names}
-
-        report = None if progress is None else (lambda _into: progress(so_far))
-        await self.ask_each([n for n in names if n not in known], self.service_type, known, report)
-        return so_far()
-
-    async def ask_each(self, names: Iterable[str], ask: Callable[[str], Any], into: dict[str, str],
-                       progress: Callable[[dict[str, str]], None] | None = None) -> None:
+    async def ask_each(self, names: Iterable[str], ask: Callable[[str], Any], into: dict[str, str]) -> None:
         """``into[name] = await ask(name)`` for every name, ``TYPE_CALLS_IN_FLIGHT`` at a time and at most
         ``TYPE_CALLS_PER_S`` started per second; a name whose call fails (``ServiceError``) is left out
-        (asked again next time); a lost link ends it all (raised). ``progress(into)`` every
-        ``PROGRESS_EVERY`` answers."""
+        (asked again next time); a lost link ends it all (raised)."""
         names = list(names)
         if not names:
             return
         loop = asyncio.get_running_loop()
         todo = iter(names)
         gap = 1.0 / TYPE_CALLS_PER_S
-        pace = {"next": loop.time(), "done": 0}
+        pace = {"next": loop.time()}
         failed: list[BaseException] = []
 
         async def worker() -> None:
@@ -122,9 +116,6 @@ class Rosapi:
                     failed.append(exc)
                     return
                 into[name] = answer if isinstance(answer, str) else ""
-                pace["done"] += 1
-                if progress is not None and pace["done"] % PROGRESS_EVERY == 0:
-                    progress(into)
 
         await asyncio.gather(*(worker() for _ in range(min(TYPE_CALLS_IN_FLIGHT, len(names)))))
         if failed:
