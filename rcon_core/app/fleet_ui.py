@@ -23,6 +23,7 @@ from typing import Any
 
 from qtpy import QtCore, QtGui, QtWidgets
 
+from rcon_core.app import view_only
 from rcon_core.app.connection_bar import LIVE_STATES
 from rcon_core.app.fleet_links import FleetLinks
 from rcon_core.app.link import EMPTY_CATALOG, OFFLINE, BadUrl, as_state
@@ -32,6 +33,7 @@ from rcon_core.app.widget_host import RateMeter
 from rcon_core.bridge import ConnectionState
 from rcon_core.canvas import Change, EditError
 from rcon_core.canvas.fleet import Fleet
+from rcon_core.canvas.retarget import plan_retarget, setting_names
 from rcon_core.canvas.robots import robot_colour
 
 log = logging.getLogger(__name__)
@@ -70,6 +72,8 @@ class FleetUi(QtCore.QObject):
         self._marks_dirty = True
         self._marked_models = -1  # the host's models_version the marks were last applied for
         self._states: dict[str, ConnectionState] = {}
+        #: the plan of the last "Duplicate for robot" (names mapped and missing; tests)
+        self.retarget_plan: Any = None
         #: robot id -> why its link is not up (words of rcon_core.bridge.reasons), for its chip
         self.why: dict[str, str] = {}
         self._remove = window.doc.add_listener(self._doc_changed)
@@ -107,8 +111,12 @@ class FleetUi(QtCore.QObject):
         return self.links.url_of(robot_id)
 
     def config_view_only(self, robot_id: str) -> str | None:
-        url = self.robot_url(robot_id)
-        return f"robot {url} is view-only" if url and self.window.config.is_view_only(url) else None
+        """Why the robot may not be commanded, naming it (its URL's mark or its own flag; view_only.py)."""
+        return view_only.reason(self, robot_id)
+
+    def apply_guards(self) -> None:
+        """Each robot's link takes its view-only mark (rcon_core.bridge.guard; view_only.py)."""
+        view_only.guard_links(self)
 
     def side_fleet(self) -> Fleet:
         """The same, the side panel's robot first (a preview's binding names no robot or that one)."""
@@ -134,6 +142,7 @@ class FleetUi(QtCore.QObject):
         """Links, chips, pickers and menus for the workspace's robots; returns the robots to connect."""
         robots = self.robots
         new = self.links.sync(robots)
+        self.apply_guards()  # a robot's own view-only flag may have changed, a new link needs its mark
         self.window.host.first_robot = robots[0].id
         controller = getattr(self.window, "controller", None)
         if controller is not None:
@@ -273,10 +282,9 @@ class FleetUi(QtCore.QObject):
                 if state is ConnectionState.CONNECTED and robot.id != first:
                     window.link_came_up()
             latency = link.latency if state in LIVE_STATES else None
-            view_only = self.config_view_only(robot.id) or (f"robot “{robot.label}” is view-only"
-                                                            if robot.view_only else None)
+            mark = self.config_view_only(robot.id)  # its URL's mark or its own flag, naming it
             self.chips.show_state(robot.id, state, latency,
-                                  None if state is ConnectionState.CONNECTED else self.why.get(robot.id) or None, view_only)
+                                  None if state is ConnectionState.CONNECTED else self.why.get(robot.id) or None, mark)
         if self._marks_dirty or window.host.models_version != self._marked_models:
             self._marks_dirty = False
             self._marked_models = window.host.models_version
@@ -331,11 +339,31 @@ class FleetUi(QtCore.QObject):
             action.setObjectName(f"retarget-{robot.id}")
             action.triggered.connect(lambda _c=False, rid=robot.id: self.retarget_current(rid))
 
-    def retarget_current(self, robot_id: str) -> None:
-        """Duplicate the current canvas for ``robot_id`` and show the copy (one undo step)."""
-        controller = self.window.controller
+    def retarget_current(self, robot_id: str) -> Any:
+        """Duplicate the current canvas for ``robot_id`` and show the copy (one undo step). The names its
+        widgets use are mapped into the robot's namespace and checked against the robot's topics, services
+        and actions (``rcon_core.canvas.retarget``); when a name changes or the robot lacks one, the
+        operator is told which before the copy is made (returns that question's dialog)."""
+        canvas = self.window.controller.canvas
+        label = next((r.label for r in self.robots if r.id == robot_id), robot_id)
+        names = [n for w in canvas.widgets for n in (w.binding.name, *setting_names(w.settings))]
+        catalog = self.catalogs.get(robot_id)
+        known = None if catalog is None else {n for part in ("topics", "services", "actions")
+                                              for n, _t in catalog.get(part, [])}
+        plan = plan_retarget(names, known)
+        self.retarget_plan = plan
+        if plan.quiet or robot_id not in [r.id for r in self.robots]:
+            return self._duplicate(canvas.id, robot_id, {})
+        if not plan.renames and not plan.missing:  # not connected: nothing to check, said, copied as it is
+            self._duplicate(canvas.id, robot_id, {})
+            self.window.notice.show_notice(f"⚠ {plan.describe(label)}")
+            return None
+        return self.window.confirm(f"Duplicate “{canvas.name}” for {label}?", plan.describe(label), "Duplicate",
+                                   lambda: self._duplicate(canvas.id, robot_id, plan.renames))
+
+    def _duplicate(self, canvas_id: str, robot_id: str, renames: dict[str, str]) -> None:
         try:
-            dup = self.window.doc.duplicate_for_robot(controller.canvas.id, robot_id)
+            dup = self.window.doc.duplicate_for_robot(canvas_id, robot_id, renames=renames)
         except EditError as exc:
             self.window.notice.show_notice(f"⚠ {exc}")
             return

@@ -31,6 +31,7 @@ from typing import Any
 from urllib.parse import urlparse
 
 from rcon_core.bridge import BridgeClient, ConnectionState
+from rcon_core.bridge.envelope import Envelope
 from rcon_core.bridge.secure import confirm_auth, rosauth
 from rcon_core.bridge.threaded import BridgeThread, LatestValue
 
@@ -126,9 +127,21 @@ class Link:
         self.catalog_state = "offline"
         self._generation = 0
         self._listeners: list[Callable[[BridgeClient | None], None]] = []
+        #: the robot's safety envelope, given to every client this link makes (``set_envelope``)
+        self.envelope: Envelope | None = None
+        #: why a robot at a URL may be sent nothing (its view-only mark, worded by the window: see
+        #: ``view_only.py``), asked for each new client before it connects and by :meth:`apply_guard`
+        self.guard_for: Callable[[str], str | None] | None = None
         self.state_box.put(ConnectionState.CLOSED)
 
     # ------------------------------------------------------------------------------------- GUI side
+    def set_envelope(self, envelope: Envelope | None) -> None:
+        """Hold every motion command of this link to ``envelope`` (the robot's; None: no limit), now and on
+        every later client (``rcon_core/bridge/envelope.py``)."""
+        self.envelope = envelope
+        if self.client is not None:
+            self.client.envelope = envelope
+
     def on_client_changed(self, fn: Callable[[BridgeClient | None], None]) -> None:
         """``fn(client)`` is called (on the GUI thread, from :meth:`connect_to`) when the client changes."""
         self._listeners.append(fn)
@@ -140,6 +153,8 @@ class Link:
         self._generation += 1
         gen = self._generation
         client = BridgeClient(url, reconnect=True, **(settings or LinkSettings()).client_options(url))
+        client.envelope = self.envelope  # before anything can publish through it
+        self._guard(client, url)  # a view-only robot's link refuses from its first frame on
         self.client, self.url = client, url
         self.catalog_state = "connecting"
         self.state_box.put(ConnectionState.CONNECTING)
@@ -160,6 +175,22 @@ class Link:
             fn(None)
         self.thread.run(self._close(client))
         self.state_box.put(ConnectionState.CLOSED)
+
+    def apply_guard(self) -> None:
+        """The robot's view-only mark changed: its current client refuses (or stops refusing) at once."""
+        client = self.client
+        if client is not None and self.url is not None:
+            self._guard(client, self.url)
+
+    def _guard(self, client: BridgeClient, url: str) -> None:
+        why: str | None = None
+        if self.guard_for is not None:
+            try:
+                why = self.guard_for(url)
+            except Exception:  # noqa: BLE001 - the mark's wording failed: refuse rather than send
+                log.exception("view-only mark of %s could not be read; the link sends nothing", url)
+                why = f"the view-only mark of {url} could not be read"
+        client.guard.set_view_only(why)
 
     @property
     def latency(self) -> float | None:

@@ -13,7 +13,11 @@ link; frames are read by ``inbound.py`` and written through the one adapter over
 * restore after a reconnect, publishing while down, service calls: ``session.py``; shared subscriptions:
   ``topics.py``, ``subscribe.py``; services this client provides: ``services.py``; ROS 2 action goals:
   ``goals.py``; actions this client provides: ``action_server.py``;
-* ROS 1 or ROS 2: ``rosinfo.py`` (``detect_ros()``), ``params.py`` (``client.params``), ``cdrdecode.py``.
+* the safety envelope every motion command is held to (``client.envelope``): ``envelope.py``, applied in
+  ``Session.publish``;
+* ROS 1 or ROS 2: ``rosinfo.py`` (``detect_ros()``, once per connection), ``params.py`` (``client.params``),
+  ``cdrdecode.py``; which rosapi calls may be sent at all: ``rosapi_guard.py`` (checked here, in
+  :meth:`BridgeClient.call_service`, for every caller: widgets, the CLI, discovery, type lookups).
 
 Test hooks (public, documented): ``client.session`` (``session.topics``, ``session.pending``...),
 ``client.inbound`` (``inbound.fragments``), ``client.link`` (the current ``wslink.Link`` or None: ``queued``,
@@ -63,9 +67,12 @@ from typing import Any
 from websockets.asyncio.client import ClientConnection, connect
 from websockets.exceptions import ConnectionClosed
 
+from . import rosapi_guard
 from .action_server import ProvidedActions
-from .errors import AuthRefusedError, NotConnectedError
+from .envelope import Envelope
+from .errors import AuthRefusedError, NotConnectedError, RosapiRefusedError, ServiceError
 from .freshness import LinkWatch, watch_link
+from .guard import LinkGuard
 from .inbound import BadFrames, Inbound
 from .nodes import Node
 from .params import Params
@@ -100,6 +107,18 @@ def _check_auth(auth: dict[str, Any]) -> dict[str, Any]:
     if missing:
         raise ValueError(f"auth is missing rosauth field(s): {', '.join(missing)}")
     return {"op": "auth", **{f: auth[f] for f in AUTH_FIELDS}}
+
+
+class _Unguarded:
+    """The client's calls without the rosapi guard: what ``detect_ros`` itself asks (``rosinfo.detect``)."""
+
+    def __init__(self, client: BridgeClient) -> None:
+        self.call_timeout = client.call_timeout
+        self._session = client.session
+
+    async def call_service(self, name: str, args: dict[str, Any] | list | None = None,
+                           timeout: float | None = None) -> Any:
+        return await self._session.call_service(name, args, timeout)
 
 
 class BridgeClient:
@@ -147,7 +166,8 @@ class BridgeClient:
                                       "dropped_on_disconnect": 0, "oversize_frames": 0, "frame_errors": 0,
                                       "png_refused": 0, "non_object_msgs": 0, "big_frames": 0,
                                       "stale_dropped": 0, "degraded": 0, "stall_cuts": 0,
-                                      "stale_skipped": 0, "status_not_logged": 0, "decode_refused": 0}
+                                      "stale_skipped": 0, "envelope_clamped": 0, "envelope_refused": 0,
+                                      "status_not_logged": 0, "decode_refused": 0}
         self._state = ConnectionState.CLOSED
         self._state_listeners: list[Callable[[ConnectionState], None]] = []
         #: the current connection (None while down); see ``wslink.py``
@@ -159,6 +179,10 @@ class BridgeClient:
 
         self.rosapi = Rosapi(self)
         self.ros_info: RosInfo | None = None  # set by detect_ros(); see rosinfo.py
+        self._info_link: Link | None = None  # the connection ros_info was learned on
+        self._detecting: dict[bool, asyncio.Future[RosInfo]] = {}  # quick / full detection in flight
+        self._profile: RosInfo | None = None  # the quick one (rosapi listing + get_ros_version)
+        self._profile_link: Link | None = None
         self.params = Params(self)  # ROS 1 and ROS 2 parameters; see params.py
         bad = BadFrames(url, self.stats)
         #: the protocol state: nodes, topics, advertisements, services, calls, goals (``session.py``)
@@ -179,9 +203,27 @@ class BridgeClient:
         return self.link is not None
 
     @property
+    def guard(self) -> LinkGuard:
+        """Whether this link is view-only (``guard.set_view_only(reason)``, any thread; see ``guard.py``)."""
+        return self.session.guard
+
+    @property
     def provided_actions(self) -> ProvidedActions:
         """Actions this client serves (``node.advertise_action``; see ``action_server.py``)."""
         return self.session.provided_actions
+
+    @property
+    def envelope(self) -> Envelope | None:
+        """The robot's safety envelope: every motion command published through this client is held to it
+        (clamped, or refused when not a number; see ``envelope.py``). None: no speed limit. Any thread may
+        set it (one attribute; the loop reads it at each publish)."""
+        return self.session.envelope
+
+    @envelope.setter
+    def envelope(self, value: Envelope | None) -> None:
+        if value is not None and not isinstance(value, Envelope):
+            raise TypeError(f"envelope must be an Envelope or None, not {type(value).__name__}")
+        self.session.envelope = value
 
     @property
     def ros_version(self) -> int | None:
@@ -189,10 +231,46 @@ class BridgeClient:
         return self.ros_info.version if self.ros_info is not None else None
 
     async def detect_ros(self, refresh: bool = False) -> RosInfo:
-        """Which ROS the server runs (asked once; ``refresh`` asks again).  See ``rosinfo.py``."""
-        if self.ros_info is None or refresh:
-            self.ros_info = await detect_ros(self)
-        return self.ros_info
+        """Which ROS the server runs and which rosapi services it lists: asked once per connection (the
+        server behind a URL may have been restarted with another release) and by one caller at a time;
+        ``refresh`` asks again.  See ``rosinfo.py``."""
+        if self.ros_info is not None and not refresh and (self.link is None or self._info_link is self.link):
+            return self.ros_info
+        profile = None if refresh else await self.rosapi_profile()
+        if profile is not None and profile.version is not None:
+            info = profile
+        else:
+            info = await self._detect(quick=False)
+        self.ros_info, self._info_link = info, self._profile_link if info is profile else self.link
+        return info
+
+    async def rosapi_profile(self) -> RosInfo:
+        """The rosapi services the server lists and, where rosapi 2.x tells, its ROS and distro: asked once
+        per connection (``rosinfo.detect(quick=True)``); what ``rosapi_guard`` and ``rosapi.py`` go by."""
+        if self.ros_info is not None and self._info_link is self.link and self.link is not None:
+            return self.ros_info
+        if self._profile is not None and (self.link is None or self._profile_link is self.link):
+            return self._profile
+        link = self.link
+        info = await self._detect(quick=True)
+        self._profile, self._profile_link = info, link
+        return info
+
+    async def _detect(self, quick: bool) -> RosInfo:
+        """One detection at a time per kind; concurrent callers share it."""
+        running = self._detecting.get(quick)
+        if running is not None and not running.done():
+            return await asyncio.shield(running)
+        future: asyncio.Future[RosInfo] = asyncio.get_running_loop().create_future()
+        self._detecting[quick] = future
+        try:
+            info = await detect_ros(_Unguarded(self), quick=quick)
+        except BaseException as exc:
+            future.set_exception(exc)
+            future.exception()
+            raise
+        future.set_result(info)
+        return info
 
     def add_state_listener(self, fn: Callable[[ConnectionState], None]) -> Callable[[], None]:
         """Call ``fn(state)`` on every change; returns a function that removes the listener."""
@@ -250,8 +328,35 @@ class BridgeClient:
     async def call_service(self, name: str, args: dict[str, Any] | list | None = None,
                            timeout: float | None = None) -> Any:
         """Call a service; returns its ``values``.  Raises ServiceError / ServiceTimeoutError (see
-        ``session.py``)."""
+        ``session.py``), and RosapiRefusedError, without sending anything, for a rosapi call that would
+        kill the server's rosapi (``rosapi_guard.py``)."""
+        if rosapi_guard.rosapi_name(name) is not None:
+            await self._check_rosapi_call(name, args, timeout)
         return await self.session.call_service(name, args, timeout)
+
+    async def _check_rosapi_call(self, name: str, args: Any, timeout: float | None) -> None:
+        """Refuse a rosapi call the server's release cannot survive (``rosapi_guard.refusal``); a lookup
+        the judgement needs (is the node listed? has a listed service that type?) is made only when the
+        arguments alone do not settle it."""
+        info = await self.rosapi_profile()
+        reason = rosapi_guard.refusal(name, args, info)
+        need = rosapi_guard.needs(name, info)
+        what = args.get("node" if need == "node" else "type") if isinstance(args, dict) else None
+        if reason is None and need is not None and isinstance(what, str):
+            try:
+                if need == "node":
+                    found = await self.session.call_service("/rosapi/nodes", {}, timeout)
+                    listed = what in (found or {}).get("nodes", [])
+                else:
+                    found = await self.session.call_service("/rosapi/services_for_type", {"type": what}, timeout)
+                    listed = bool((found or {}).get("services"))
+            except ServiceError as exc:
+                raise RosapiRefusedError(f"not sent: could not check it is safe for this rosapi ({exc.message})",
+                                         name) from None
+            reason = rosapi_guard.refusal(name, args, info, node_listed=listed, type_listed=listed)
+        if reason is not None:
+            log.info("not sending %s to %s: %s", name, self.url, reason)
+            raise RosapiRefusedError(f"not sent: {reason}", name)
 
     async def typedefs(self, type_name: str) -> list[dict[str, Any]]:
         """rosapi typedefs of a message type, from the server (cached), else from the local registry."""

@@ -68,6 +68,8 @@ class Connection:
         self.incoming_fragments: dict[Any, dict[int, str]] = {}
         self.subscriptions: dict[str, TopicSubscription] = {}
         self.advertised: dict[str, str] = {}  # topic -> type
+        #: every op this client sent, by (op, topic/service/action name): what tests check reached the sim
+        self.ops_received: collections.Counter[tuple[str, str]] = collections.Counter()
         self.max_frames = max_frames
         self.max_bytes = max_bytes
         self.dropped = 0

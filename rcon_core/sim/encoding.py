@@ -185,10 +185,12 @@ def png_frame(text: str) -> str:
     return dumps({"op": "png", "data": base64.b64encode(png).decode("ascii")})
 
 
-def fragments(text: str, size: int) -> list[str]:
+def fragments(text: str, size: int, fid: Any = 0) -> list[str]:
     """Split a JSON text into rosbridge ``fragment`` frames.
 
-    Like rosbridge 0.11, ``id`` is 0 and ``total`` is a float whose floor is the number of fragments.
+    Like rosbridge, ``total`` is a float whose floor is the number of fragments, and ``id`` is ``fid``: 0
+    for a publish (which has no id), the request's id for a reply
+    (``rosbridge-ros2-2.1.0/subscribe_options.jsonl:22-35``).
     """
     count = max(1, -(-len(text) // size))
     rest = len(text) % size
@@ -196,6 +198,6 @@ def fragments(text: str, size: int) -> list[str]:
     if total >= count + 1:  # rounding up to the next whole number would mislead floor(total)
         total = count + 0.99
     return [
-        dumps({"op": "fragment", "id": 0, "data": text[i * size : (i + 1) * size], "num": i, "total": total})
+        dumps({"op": "fragment", "id": fid, "data": text[i * size : (i + 1) * size], "num": i, "total": total})
         for i in range(count)
     ]

@@ -52,6 +52,6 @@ def send_frame(conn: Connection, frame: dict[str, Any]) -> None:
     """Send a non-publish frame (a reply or a request), fragmented if the connection asked for it."""
     text = encoding.dumps(frame)
     if conn.fragment_size and len(text) > conn.fragment_size:
-        conn.send(encoding.fragments(text, conn.fragment_size))
+        conn.send(encoding.fragments(text, conn.fragment_size, frame.get("id", 0)))
     else:
         conn.send(text)

@@ -27,7 +27,7 @@ from websockets.exceptions import ConnectionClosed
 
 from rcon_core.msgs.names import pkg_type
 
-from . import assembly, fanout, gate
+from . import assembly, fanout, gate, ros2_clients
 from .connection import Connection, SubOptions, TopicSubscription
 from .convert import ConversionError
 from .flavour import Flavour
@@ -95,6 +95,9 @@ class SimServer:
         self._published_lock = threading.Lock()
         self._published_event: asyncio.Event | None = None
         self._tasks: set[asyncio.Task[Any]] = set()
+        #: ``absorb(conn, topic, msg) -> bool``: when set and it answers True, a client's publish goes no
+        #: further than this (a recording played as a robot takes commands nowhere: ``playback.py``)
+        self.absorb: Callable[[Connection, str, dict[str, Any]], bool] | None = None
         #: every operation clients sent, by (op, topic/service/action name): what tests check reached it
         self.ops_received: collections.Counter[tuple[str, str]] = collections.Counter()
 
@@ -130,6 +133,7 @@ class SimServer:
         if not self.ros2:
             self.advertise_internal("/rosout_agg", self.flavour.msg("rosgraph_msgs", "Log"), ROSOUT_NODE)
         self.advertise_internal("/client_count", self.flavour.msg("std_msgs", "Int32"), BRIDGE_NODE, latched=True)
+        ros2_clients.advertise(self)
         assembly.furnish(self)
         limits: dict[str, Any] = {"max_size": self.max_frame}
         if self.auth_secret is not None:  # the first message is small; the gate raises the limit after it
@@ -347,6 +351,7 @@ class SimServer:
         self.connections.add(conn)
         self.log(BRIDGE_NODE, "info", f"Client connected.  {len(self.connections)} clients total.")
         self.publish("/client_count", {"data": len(self.connections)}, BRIDGE_NODE)
+        ros2_clients.publish(self)
         try:
             async for message in ws:
                 try:
@@ -364,6 +369,7 @@ class SimServer:
             self.log(BRIDGE_NODE, "info", f"Client disconnected. {len(self.connections)} clients total.")
             if "/client_count" in self.topics:
                 self.publish("/client_count", {"data": len(self.connections)}, BRIDGE_NODE)
+            ros2_clients.publish(self)
 
     def _cleanup(self, conn: Connection) -> None:
         for name in list(conn.subscriptions):
@@ -392,7 +398,9 @@ class SimServer:
             return
         op = msg["op"]
         target = msg.get("topic") or msg.get("service") or msg.get("action") or ""
-        self.ops_received[(str(op), target if isinstance(target, str) else "")] += 1
+        key = (str(op), target if isinstance(target, str) else "")
+        self.ops_received[key] += 1
+        conn.ops_received[key] += 1
         handler = self._ops().get(op) if isinstance(op, str) else None
         if handler is None:
             log.error("%s [id: %s] Unknown operation: %s.  Allowed operations: %s", conn.label, msg.get("id"),
@@ -484,6 +492,8 @@ class SimServer:
             self._published.setdefault(name, collections.deque(maxlen=PUBLISHED_KEEP)).append(body)
         assert self._published_event is not None
         self._published_event.set()
+        if self.absorb is not None and self.absorb(conn, name, body):
+            return
         self.publish(name, body, BRIDGE_NODE)
 
     def _op_subscribe(self, conn: Connection, msg: dict[str, Any]) -> None:
