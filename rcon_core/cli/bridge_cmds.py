@@ -88,6 +88,8 @@ def run(name: str, args: argparse.Namespace) -> int:
         return asyncio.run(handler(url, args))
     except KeyboardInterrupt:
         return 0
+    except BrokenPipeError:  # the reader went away (`| head`): the entry point stops quietly (main.py)
+        raise
     except Exception as exc:  # the boundary: an answer the command could not use is one line, not a traceback
         from rcon_core.bridge.safety import safe_text
 
