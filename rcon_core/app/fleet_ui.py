@@ -279,6 +279,13 @@ class FleetUi(QtCore.QObject):
         pairs = self.links.items()
         return [(robot.label if len(pairs) > 1 else "", link) for robot, link in pairs]
 
+    def catalog_state(self) -> str:
+        """What the side robot's lists wait for (``Link.catalog_state``: "connecting", "listing", "lost"...)."""
+        try:
+            return str(self.links.link(self.side_robot).catalog_state)
+        except KeyError:
+            return "offline"
+
     # ------------------------------------------------------------------------------------- polling
     def poll(self, _now: float = 0.0) -> None:
         """Once per frame: each robot's link state on its chip and its widgets; the marks."""

@@ -577,7 +577,10 @@ class MainWindow(QtWidgets.QMainWindow):
             self.services.set_entries(catalog["services"])
             self.actions_list.set_entries(catalog.get("actions", []))
             notes: Any = catalog.get("notes") or {}  # what a Foxglove robot's protocol cannot do (link.py)
-            self.actions_list.empty.setText(notes.get("actions") or ACTIONS_EMPTY)
+            self.actions_list.set_listed_hint(notes.get("actions") or ACTIONS_EMPTY)
+        status = self.fleet_ui.catalog_state()  # what the (empty) lists wait for: listing, lost...
+        for listing in (self.topics, self.services, self.actions_list):
+            listing.set_status(status)
         if now - self._last_rate_sample >= 1.0:
             self._last_rate_sample = now
             self.topics.set_rates(self.rates.sample(self.host.topic_counts(self.fleet_ui.side_robot), now))

@@ -80,6 +80,7 @@ from .protocol import encode
 from .reasons import Failure, describe, refused_auth
 from .rosinfo import RosInfo
 from .rosinfo import detect as detect_ros
+from .safety import without_traceback
 from .secure import ssl_context
 from .session import LOG_LEVELS, Session
 from .stats import BridgeStats
@@ -135,7 +136,7 @@ class BridgeClient:
                  open_timeout: float = 10.0, max_size: int = 32 << 20, max_message_size: int | None = None,
                  max_frame_size: int | None = None, fragment_timeout: float = 10.0, big_frame: int = 1 << 20,
                  stall_timeout: float | None = 1.0, client_cert: str | None = None,
-                 client_key: str | None = None) -> None:
+                 client_key: str | None = None, max_decoded: int | None = None) -> None:
         if not isinstance(url, str) or not url.startswith(("ws://", "wss://")):
             raise ValueError(f"url must start with ws:// or wss://, got {url!r}")
         if typed_arrays not in ("list", "numpy"):
@@ -159,6 +160,8 @@ class BridgeClient:
         self.max_size = self.max_message_size = max_size if max_message_size is None else max_message_size
         self.max_frame_size = max_frame_size or max(2 * self.max_message_size, self.max_message_size + (1 << 20))
         self.big_frame = min(big_frame, self.max_message_size)
+        #: the bytes of Python objects one (big) frame may decode to; a frame over it is refused (offload.py)
+        self.max_decoded = 4 * self.max_message_size if max_decoded is None else max_decoded
         self.stall_timeout = stall_timeout
         self.latency: float | None = None
         self.last_error: BaseException | None = None
@@ -188,7 +191,7 @@ class BridgeClient:
         #: frames in (``inbound.py``)
         self.inbound = Inbound(self.session, bad, self.stats, typed_arrays=typed_arrays,
                                max_size=self.max_message_size, big_frame=self.big_frame,
-                               fragment_timeout=fragment_timeout)
+                               fragment_timeout=fragment_timeout, max_decoded=self.max_decoded)
 
     # ================================================================== state
 
@@ -407,7 +410,7 @@ class BridgeClient:
             delay = min(delay * 2, self.backoff_max)
 
     def _process_exception(self, exc: Exception) -> Exception | None:
-        self.last_error = exc
+        self.last_error = without_traceback(exc)
         if describe(exc).fatal:
             return exc  # retrying cannot fix a certificate problem, a bad URL...
         if self._state is not ConnectionState.CLOSED:
@@ -511,7 +514,7 @@ class BridgeClient:
             self._set_state(ConnectionState.CONNECTED)
             await self.inbound.read(link.recv, link.waiting)
         except ConnectionClosed as exc:
-            self.last_error = exc
+            self.last_error = without_traceback(exc)
         finally:
             self.link = None
             self._connected.clear()
@@ -519,6 +522,7 @@ class BridgeClient:
             pinger.cancel()
             self.inbound.disconnected()
             self.session.detached()
+            link.release()  # its buffers go now, not at the collector's next full pass (wslink.py)
             if final:
                 self._set_state(ConnectionState.CLOSED)
         if not self._closing:

@@ -63,7 +63,7 @@ from .goals import Goals
 from .guard import LinkGuard, ViewOnlyError, describe_call
 from .inbound import BadFrames
 from .protocol import encode
-from .safety import bounded_repr, safe_text
+from .safety import MAX_ANSWER_DEPTH, LogBudget, bounded_repr, clip, nested_deeper, safe_text
 from .services import ProvidedServices
 from .stats import BridgeStats
 from .subscribe import Subscriber
@@ -75,6 +75,8 @@ if TYPE_CHECKING:
     from .wslink import Link
 
 log = logging.getLogger(__name__)
+#: characters of a server's ``status`` text that are logged and shown (a server sent 10 MB lines)
+STATUS_TEXT = 500
 
 _dumps = orjson.dumps
 _NUMPY = orjson.OPT_SERIALIZE_NUMPY
@@ -134,6 +136,8 @@ class Session:
         self.guard = LinkGuard(host.url)
         self.guard.add_listener(self._guard_changed)
         self._status_listeners: list[Callable[[dict[str, Any]], None]] = []
+        #: the rate at which the server's ``status`` messages are logged (see ``_on_status``)
+        self.status_log = LogBudget()
         self._ops: dict[str, Callable[[dict[str, Any]], None]] = {
             "publish": self._on_publish, "service_response": self._on_service_response,
             "call_service": self.services.on_call, "status": self._on_status,
@@ -278,8 +282,14 @@ class Session:
         if fut.done():
             return
         values = m.get("values")
-        if m.get("result", True) is False:
-            fut.set_exception(ServiceError(_failure_text(values), m.get("service")))
+        service = m.get("service") if isinstance(m.get("service"), str) else None
+        if nested_deeper(values):  # bounded for everything that walks an answer (see safety.py)
+            self.bad.report("depth", f"answer of {bounded_repr(service, 80)} nested deeper than "
+                                     f"{MAX_ANSWER_DEPTH} levels; the call failed")
+            fut.set_exception(ServiceError(f"the answer is nested deeper than {MAX_ANSWER_DEPTH} levels; refused",
+                                           service))
+        elif m.get("result", True) is False:
+            fut.set_exception(ServiceError(_failure_text(values), service))
         else:
             fut.set_result({} if values is None else values)
 
@@ -288,20 +298,28 @@ class Session:
         return lambda: self._status_listeners.remove(fn) if fn in self._status_listeners else None
 
     def _on_status(self, m: dict[str, Any]) -> None:
+        """A ``status`` op: logged cut to ``STATUS_TEXT`` characters and at most ``status_log``'s rate (the
+        rest counted in ``stats["status_not_logged"]`` and said with the next line); an error naming a call
+        or goal fails it with the same cut text."""
         level = m.get("level", "info")
         text = m.get("msg", "")
         sid = m.get("id")
         if not isinstance(level, str):
             level = bounded_repr(level, 40)
-        if not isinstance(text, str):
-            text = bounded_repr(text, 200)
-        pylevel = {"error": logging.ERROR, "warning": logging.WARNING}.get(level, logging.INFO)
-        log.log(pylevel, "server status (%s)%s: %s", level, f" for {bounded_repr(sid, 80)}" if sid else "", text)
+        text = clip(text, STATUS_TEXT) if isinstance(text, str) else bounded_repr(text, 200)
+        held = self.status_log.take()
+        if held is None:
+            self.stats.status_not_logged += 1
+        else:
+            pylevel = {"error": logging.ERROR, "warning": logging.WARNING}.get(clip(level, 20), logging.INFO)
+            more = f" ({held} more status messages were not logged)" if held else ""
+            log.log(pylevel, "server status (%s)%s: %s%s", clip(level, 20),
+                    f" for {bounded_repr(sid, 80)}" if sid else "", text, more)
         if level == "error" and isinstance(sid, str):
             fut = self.pending.pop(sid, None)
             if fut is not None and not fut.done():
-                fut.set_exception(ServiceError(str(text)))
-            self.goals.on_error_status(sid, str(text))
+                fut.set_exception(ServiceError(text))
+            self.goals.on_error_status(sid, text)
         for fn in list(self._status_listeners):
             try:
                 fn(m)

@@ -32,6 +32,8 @@ class BridgeStats:
     stale_skipped: int = 0  #: queued frames of a latest-only topic skipped for a newer one
     envelope_clamped: int = 0  #: motion commands held to the safety envelope
     envelope_refused: int = 0  #: motion commands refused (NaN, infinity)
+    status_not_logged: int = 0  #: server status lines counted but not logged (rate limit)
+    decode_refused: int = 0  #: frames refused for what they would decode to (``max_decoded``)
 
     # -- read like a mapping (compatibility: ``stats["connects"]``, ``dict(stats)``) ---------------------
     def keys(self) -> list[str]:

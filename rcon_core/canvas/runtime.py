@@ -52,6 +52,7 @@ from collections.abc import Callable
 from typing import Any
 
 from rcon_core.bridge.client import ConnectionState
+from rcon_core.bridge.safety import safe_text
 from rcon_core.bridge.typecheck import TypeChecker, status_failure
 from rcon_core.plugins.api import Binding, HostedModel, Port, RobotPort
 from rcon_core.plugins.context import SharedResources, WidgetContext
@@ -128,6 +129,8 @@ class CanvasRuntime:
         self.shared = SharedResources()
         self._checkers: dict[str, TypeChecker] = {}
         self._checks: set[asyncio.Task[Any]] = set()
+        #: hooks of the widgets' models that raised (logged once per widget and text; the others went on)
+        self.hook_errors = 0
 
     @property
     def client(self) -> RobotClient:
@@ -291,16 +294,25 @@ class CanvasRuntime:
         self._nodes[inst.id] = [node]
         self._robot_of[inst.id] = rid
         self.models[inst.id] = model
-        model.set_link(self._link_up.get(rid, True))
-        try:
+        self._hook(inst.id, "set_link", model.set_link, self._link_up.get(rid, True))
+        try:  # the widget boundary: every hook of a plugin's model may raise (see _hook)
             self._give_fleet(inst.id, model, rid, port, built)
             model.start()
         except Exception as exc:
-            log.warning("widget %s (%s) failed to start: %s", inst.id, inst.kind, exc)
-            model.set_error(f"could not start: {exc}")
+            log.warning("widget %s (%s) failed to start: %s", inst.id, inst.kind, safe_text(exc))
+            self._hook(inst.id, "set_error", model.set_error, f"could not start: {safe_text(exc)}")
             return model
-        self._check_type(inst.id, model)
+        self._hook(inst.id, "the type check", self._check_type, inst.id, model)
         return model
+
+    def _hook(self, widget_id: str, what: str, fn: Callable[..., Any], *args: Any) -> None:
+        """Call one hook of one widget's model; what it raises is logged (bounded) and counted in
+        ``hook_errors``, and the caller goes on with the other widgets."""
+        try:
+            fn(*args)
+        except Exception as exc:
+            self.hook_errors += 1
+            _log_once(logging.WARNING, "widget %s failed in %s: %s", widget_id, what, safe_text(exc))
 
     def _give_fleet(self, widget_id: str, model: HostedModel, own: str, own_port: Port,
                     built: list[HostedModel]) -> None:
@@ -364,8 +376,9 @@ class CanvasRuntime:
         for widget_id, model in list(self.models.items()):
             if self._robot_of.get(widget_id) != robot_id:
                 continue
-            if model.binding.name == topic and not model.binding.role.is_service:
-                model.set_error(f"the robot refused {topic}: {text}")
+            b = model.binding
+            if b.name == topic and not b.role.is_service:
+                self._hook(widget_id, "set_error", model.set_error, f"the robot refused {topic}: {text}")
                 self._notify(widget_id)
 
     def _notify(self, widget_id: str) -> None:
@@ -424,7 +437,7 @@ class CanvasRuntime:
         for widget_id, model in list(self.models.items()):
             if self._robot_of.get(widget_id) == robot_id:
                 for m in (model, *model.child_models()):
-                    m.set_link(up)
+                    self._hook(widget_id, "set_link", m.set_link, up)
             if widget_id in self._fleet_wide:
                 self._tell_robot_link(model, robot_id)
 

@@ -15,7 +15,7 @@ from rcon_core.msgs.text import parse_text, to_text
 from rcon_core.plugins import CallPhase, Role
 
 from .base import StdModel
-from .common import format_value, learn_type, types_part_name
+from .common import format_value, learn_type, shorten_text, types_part_name
 
 __all__ = ["ButtonSettings", "ButtonModel", "CallStatus"]
 
@@ -205,5 +205,5 @@ def describe_response(resp: Any) -> str:
     if not isinstance(resp, dict) or not resp:
         return "done"
     if isinstance(resp.get("message"), str) and resp["message"]:
-        return resp["message"]
-    return format_value(resp)
+        return shorten_text(resp["message"])[0]  # a status line never holds a megabyte (issue 22.1)
+    return shorten_text(format_value(resp))[0]

@@ -68,7 +68,7 @@ from rcon_core.plugins.paths import PathError, get_path, parse_path, set_path, s
 
 from .base import StdModel
 from .button import CallStatus, describe_response
-from .common import RateLimiter, field_at, held_to_envelope
+from .common import RateLimiter, copy_message, field_at, held_to_envelope
 
 __all__ = ["ChildSpec", "CompoundSettings", "CompoundModel", "Child", "CompoundValue", "find_spec"]
 
@@ -448,11 +448,13 @@ class CompoundModel(StdModel):
     def composed(self) -> dict[str, Any]:
         """A copy of the composed message (services: ``{"request", "response"}``)."""
         with self._lock:
-            return copy.deepcopy(self._composed)
+            return copy_message(self._composed)
 
     def _show_state(self) -> None:
-        """Set the value the views show (composed message, status); sends nothing (:meth:`send` does)."""
-        self.set_value(CompoundValue(self.composed(), self._status, self._served), message=self.composed())
+        """Set the value the views show (composed message, status); sends nothing (:meth:`send` does).
+        One copy serves as both (the state is read, never changed)."""
+        composed = self.composed()
+        self.set_value(CompoundValue(composed, self._status, self._served), message=composed)
 
     # -- sending -------------------------------------------------------------------------------------
     def send(self) -> None:
@@ -538,9 +540,14 @@ class CompoundModel(StdModel):
             self.set_error(f"{self.binding.name}: {text}")
 
     def _feed_display(self, part: str, msg: dict[str, Any]) -> None:
+        """One copy of ``msg`` for every display child (they share it, as the consumers of one topic share
+        a message), not one per child."""
+        shared = None
         for child in self.children:
             if not child.is_input and child.part == part and child.feed is not None:
-                child.feed(copy.deepcopy(msg))
+                if shared is None:
+                    shared = copy_message(msg)
+                child.feed(shared)
 
     # -- serving -------------------------------------------------------------------------------------
     def handle_request(self, request: dict[str, Any]) -> dict[str, Any]:
@@ -555,7 +562,7 @@ class CompoundModel(StdModel):
             self.set_error(f"not answered: {problem}")
             raise ValueError(problem)
         with self._lock:
-            self._composed["request"] = copy.deepcopy(request)
+            self._composed["request"] = copy_message(request)
             response = copy.deepcopy(self._composed.get("response", {}))
             self._served += 1
         try:

@@ -15,7 +15,7 @@ import attrs
 from rcon_core.msgs.names import pkg_type
 
 from .base import StdModel
-from .common import format_value
+from .common import format_value, shorten_text
 
 __all__ = ["LabelSettings", "LabelModel", "LabelValue"]
 
@@ -84,4 +84,7 @@ class LabelModel(StdModel):
             return LabelValue(format_value(percent, decimals, "%"), percent, True)
         if numeric and s.scale != 1.0:
             value = value * s.scale
-        return LabelValue(format_value(value, s.decimals, s.units), value, numeric)
+        # a value of any size shows at most SHOW_CHARS / SHOW_ROWS (a 1 MB String took the GUI 1 s to
+        # measure per value); "Copy value" still copies a whole string (``raw``)
+        text, _whole = shorten_text(format_value(value, s.decimals, s.units))
+        return LabelValue(text, value, numeric)

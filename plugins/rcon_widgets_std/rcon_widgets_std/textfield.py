@@ -21,7 +21,7 @@ from rcon_core.plugins import Role
 from rcon_core.plugins.paths import PathError, set_path
 
 from .base import StdModel
-from .common import field_at, format_value, held_to_envelope
+from .common import field_at, format_value, held_to_envelope, shorten_text
 
 __all__ = ["TextFieldSettings", "TextFieldModel", "TextValue"]
 
@@ -73,7 +73,8 @@ class TextFieldModel(StdModel):
         return self.binding.role is Role.PUBLISH
 
     def to_value(self, field_value: Any, msg: dict[str, Any]) -> TextValue:
-        return TextValue(format_value(field_value, self.settings.decimals))
+        # shown at most SHOW_CHARS / SHOW_ROWS: Qt lays out a megabyte-long line for seconds (issue 22.1)
+        return TextValue(shorten_text(format_value(field_value, self.settings.decimals))[0])
 
     # -- typed text -> message -----------------------------------------------------------------------
     def _is_string_field(self) -> bool:
