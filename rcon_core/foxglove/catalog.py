@@ -55,9 +55,18 @@ class FoxgloveCatalog:
         await self._ready()
         return sorted(self._s.service_by_name)
 
-    async def services_with_types(self) -> dict[str, str]:
+    async def services_with_types(self, known: dict[str, str] | None = None,
+                                  listed: Callable[[list[str]], None] | None = None) -> dict[str, str]:
+        """As ``Rosapi.services_with_types``: the advertisements carry every type, so nothing is asked;
+        ``known`` is updated in place and ``listed(names)`` told, as the side panel's discovery expects."""
         await self._ready()
-        return {name: srv.type for name, srv in sorted(self._s.service_by_name.items())}
+        found = {name: srv.type for name, srv in sorted(self._s.service_by_name.items())}
+        if known is not None:
+            known.clear()
+            known.update(found)
+        if listed is not None:
+            listed(list(found))
+        return found
 
     async def topic_type(self, topic: str) -> str | None:
         await self._ready()

@@ -574,6 +574,8 @@ PUBLIC_API: dict[str, frozenset[str] | str] = {
     "rcon_core.bridge": "*",
     "rcon_core.bridge.errors": "*",
     "rcon_core.bridge.envelope": frozenset({"Envelope", "NO_LIMITS", "MAX_LINEAR", "MAX_ANGULAR", "motion_path"}),
+    # a bounded text of any value, for logs and error lines ("log it with a bounded repr")
+    "rcon_core.bridge.safety": frozenset({"bounded_repr", "safe_text"}),
     "rcon_core.priority": frozenset({"lower_this_thread"}),
     # tests only
     "rcon_core.testing": "*",
