@@ -16,6 +16,8 @@ from rcon_core.loopback import HostileServer, png_data
 from rcon_core.sim.encoding import fragments, png_frame
 from rcon_core.testing import connected, until
 
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
+
 DEEP = "[" * 1000 + "]" * 1000  # orjson accepts it (its limit is 1024 levels); repr() of it recurses too deep
 
 

@@ -7,11 +7,14 @@ from __future__ import annotations
 import time
 
 import orjson
+import pytest
 
 from rcon_core.bridge import BridgeClient
 from rcon_core.bridge.latest import topic_of
 from rcon_core.sim import encoding
 from rcon_core.testing import until
+
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
 
 PAYLOAD = "x" * 40_000  # above latest.MIN_SIZE: big enough to be worth skipping
 BURST = 6

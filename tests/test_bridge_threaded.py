@@ -11,6 +11,8 @@ from replay_server import ScriptedServer
 from rcon_core.bridge import BridgeClient
 from rcon_core.bridge.threaded import BridgeThread, LatestValue
 
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
+
 
 def test_run_and_call_cross_threads():
     bt = BridgeThread().start()

@@ -94,7 +94,7 @@ class LatestOnly:
         self.stats = stats
         self.min_size = min_size
 
-    async def stale(self, raw: str | bytes, waiting: Callable[[], Iterable[bytes]]) -> bool:
+    async def stale(self, raw: str | bytes, waiting: Callable[[], Iterable[bytes | str]]) -> bool:
         """True (and counted) when ``raw`` is a frame of a latest-only topic and a later complete frame of
         the same topic is in ``waiting()``; the caller then drops ``raw`` without decoding it.  Before it
         decides, it gives the event loop up to ``READ_AHEAD`` turns, so what the kernel already holds is
@@ -114,6 +114,6 @@ class LatestOnly:
                 await _sleep(0)
         return False
 
-    def _newer_waiting(self, topic: str, waiting: Callable[[], Iterable[bytes]]) -> bool:
+    def _newer_waiting(self, topic: str, waiting: Callable[[], Iterable[bytes | str]]) -> bool:
         size = self.min_size
         return any(len(later) >= size and topic_of(later) == topic for later in waiting())

@@ -68,8 +68,8 @@ from .subscribe import Subscriber
 from .topics import AdvertEntry, TopicEntry
 
 if TYPE_CHECKING:
+    from .linkbase import Link
     from .nodes import Node, Publisher, Subscription
-    from .wslink import Link
 
 log = logging.getLogger(__name__)
 

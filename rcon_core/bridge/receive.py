@@ -1,0 +1,172 @@
+"""Messages in from a transport adapter (``pwlink.py``, ``wslink.py``), in order, on the event loop.
+
+Decision: messages are pushed, and most are finished in the callback that brought them
+    An adapter calls :meth:`Receiver.message` for every whole message as its parser finds it (a view into
+    the read buffer for picows, valid during the call only) and says when a read's last message came
+    (``last``).  The Receiver hands it to :meth:`Inbound.take <rcon_core.bridge.inbound.Inbound.take>`,
+    which parses and delivers a small publish at once.  What needs to wait -- a frame decoded in the
+    worker thread (``offload.py``), a frame of a latest-only topic looking for a newer one
+    (``latest.py``), a big message completed by fragments -- comes back as an awaitable: the Receiver
+    runs it in a task and *holds* (copies) every message that arrives meanwhile, so delivery keeps the
+    order of arrival.  While more than :data:`HOLD_MAX` messages are held, the transport stops reading
+    (``pause_reading``): the kernel's buffers and then TCP push back on the server.  The held messages
+    are what :meth:`waiting` lists for ``latest.py`` (the receive queue).
+
+Decision: sharing the loop (the read loop's rule, kept)
+    A read of 256 kB holds hundreds of small messages and a link that fell behind holds several camera
+    frames.  So after :data:`~rcon_core.bridge.inbound.YIELD_EVERY` (64) messages in one turn, and
+    before a message of 32 kB or more that is not the first of its turn, the Receiver holds the rest and
+    gives the event loop a turn (``await asyncio.sleep(0)`` in its task) -- due timers (a teleop pad's
+    20 Hz command), writes and the other robots' links on the same loop wait for at most that much work.
+    A new read is a new turn: the loop ran in between.
+
+Decision: a text message that is not UTF-8 closes the link
+    As the WebSocket rule says (and websockets' own reader did): the link is failed with code 1007 and
+    the client reconnects; the messages still held are dropped with it.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from collections import deque
+from collections.abc import Awaitable, Callable
+from typing import Any
+
+from .inbound import YIELD_EVERY, NotUtf8
+from .safety import safe_text
+
+log = logging.getLogger(__name__)
+
+#: held messages above which the transport stops reading (websockets' own receive queue held 16 frames)
+HOLD_MAX = 16
+_sleep = asyncio.sleep
+
+
+class Receiver:
+    """One connection's messages in (see the module docstring).  ``take(raw, text)`` and
+    ``heavy`` come from the client's ``Inbound``; the adapter sets ``pause``, ``resume`` and ``fail``."""
+
+    __slots__ = ("take", "finish", "failed", "heavy", "held", "busy", "n", "paused", "pause", "resume", "fail",
+                 "task", "closed")
+
+    def __init__(self, inbound: Any) -> None:
+        self.take: Callable[[Any, bool], Awaitable[None] | None] = inbound.take
+        self.failed: Callable[[BaseException], None] = inbound.bad.failed
+        self.heavy: int = inbound.latest.min_size
+        self.held: deque[tuple[bytes | str, bool]] = deque()
+        self.busy = False
+        self.n = 0  # messages handled in this turn of the loop
+        self.paused = False
+        self.pause: Callable[[], None] = _nothing
+        self.resume: Callable[[], None] = _nothing
+        self.fail: Callable[[int, str], None] = _fail_nothing
+        self.task: asyncio.Task[None] | None = None
+        self.closed = False
+
+    def message(self, raw: Any, text: bool, last: bool) -> None:
+        """One whole message (``raw``: bytes-like, a text message's UTF-8 bytes unchecked; valid only during
+        this call); ``last``: the last one of this read."""
+        if self.busy:
+            self._hold(raw, text)
+        else:
+            n = self.n = self.n + 1
+            if n > YIELD_EVERY or (n > 1 and len(raw) >= self.heavy):
+                self._hold(raw, text)
+                self._start(None)
+            else:
+                try:
+                    job = self.take(raw, text)
+                except NotUtf8 as exc:
+                    self._not_utf8(exc)
+                    return
+                if job is not None:
+                    self._start(job)
+        if last:
+            self.n = 0
+
+    def waiting(self) -> list[bytes | str]:
+        """The messages held (received, not handled yet), oldest first: the receive queue ``latest.py``
+        looks into."""
+        return [raw for raw, _text in self.held]
+
+    def lost(self) -> None:
+        """The connection is gone: nothing more comes; what is held is still handled in order."""
+        self.closed = True
+
+    def cancel(self) -> None:
+        """Stop now (the client is closing): held messages are dropped."""
+        self.held.clear()
+        task, self.task = self.task, None
+        if task is not None:
+            task.cancel()
+
+    # -- holding -------------------------------------------------------------------------------------
+
+    def _hold(self, raw: Any, text: bool) -> None:
+        held = self.held
+        held.append((raw if raw.__class__ is bytes else bytes(raw), text))
+        if len(held) > HOLD_MAX and not self.paused and not self.closed:
+            self.paused = True
+            self.pause()
+
+    def _start(self, job: Awaitable[None] | None) -> None:
+        self.busy = True
+        self.task = asyncio.ensure_future(self._drain(job))
+
+    async def _drain(self, job: Awaitable[None] | None) -> None:
+        held = self.held
+        take = self.take
+        heavy = self.heavy
+        try:
+            if job is None:
+                await _sleep(0)  # the turn's budget is spent: let the loop run first
+            else:
+                await self._run(job)
+            n = 0
+            while held:
+                raw, text = held.popleft()
+                if self.paused and len(held) <= HOLD_MAX // 2:
+                    self.paused = False
+                    self.resume()
+                n += 1
+                if n > YIELD_EVERY or (n > 1 and len(raw) >= heavy):
+                    n = 1
+                    await _sleep(0)
+                try:
+                    job = take(raw, text)
+                except NotUtf8 as exc:
+                    self._not_utf8(exc)
+                    return
+                if job is not None:
+                    await self._run(job)
+                    n = 0
+        finally:
+            self.busy = False
+            self.task = None
+            if self.paused:
+                self.paused = False
+                self.resume()
+
+    async def _run(self, job: Awaitable[None]) -> None:
+        try:
+            await job
+        except NotUtf8 as exc:
+            self._not_utf8(exc)
+        except asyncio.CancelledError:
+            raise
+        except Exception as exc:  # the frame boundary: nothing raised while handling one frame ends the link
+            self.failed(exc)
+
+    def _not_utf8(self, exc: NotUtf8) -> None:
+        self.held.clear()
+        log.warning("the server sent a text message that is not UTF-8 (%s); closing the link (1007)", safe_text(exc))
+        self.fail(1007, "invalid UTF-8 in a text message")
+
+
+def _nothing() -> None:
+    pass
+
+
+def _fail_nothing(code: int, reason: str) -> None:
+    pass
