@@ -4,8 +4,8 @@ Decisions:
 
 * A frame larger than the client's ``big_frame`` threshold (1 MB by default; a 640x480 rgb8 image in JSON
   is about 1.2 MB) is decoded in one worker thread (``run_in_executor``) instead of on the event loop:
-  JSON or CBOR, and for a complete ``png`` frame also the PNG and the JSON inside it.  The read loop
-  awaits the result before it reads the next frame, so delivery keeps the order of arrival (per topic and
+  JSON or CBOR, and for a complete ``png`` frame also the PNG and the JSON inside it.  The next
+  messages wait for the result (``receive.Receiver`` holds them), so delivery keeps the order of arrival (per topic and
   overall) while the loop goes on serving pings, writes, timers and other tasks.  The same holds for a big
   message completed by ``fragment`` frames and for the base64 data of a ``png`` frame assembled from
   pieces.  Small frames never come here: their path is one length comparison longer than before.
