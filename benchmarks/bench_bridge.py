@@ -4,11 +4,12 @@ bare websockets+orjson and picows+orjson loops, against ONE loopback server.
 Usage: ``python benchmarks/bench_bridge.py [--out PATH] [--quick] [--rounds N] [--batch N] [--clients K ...]``.
 
 Clients (columns): ``bare`` (websockets ``recv`` + orjson, the old floor), ``bare_picows`` (a picows listener +
-orjson: the floor of the picows transport), ``rcon`` (RCON's client on picows, the default transport),
-``rcon_ws`` (RCON's client on websockets), ``roslibpy``, ``roslibjs`` (npm ``roslib``) and ``foxglove``
+orjson: the floor of the picows transport), ``rcon`` (RCON's client on picows, the default transport, on the app's event loop),
+``rcon_ws`` (RCON's client on websockets, on the same loop), ``roslibpy``, ``roslibjs`` (npm ``roslib``) and ``foxglove``
 (npm ``@foxglove/roslibjs``), the last two in Node 20 over ``ws`` (``benchmarks/node``: installed with
 ``npm ci`` on first use when ``node`` and ``npm`` are on the PATH, else their columns are left out with a
-sentence), and ``rcon_uv`` on request (RCON on picows with uvloop as the event loop).
+sentence), and ``rcon_asyncio`` on request (RCON on picows on asyncio's own event loop: ``rcon`` runs on
+the loop the app's bridge thread runs, uvloop where installed, see ``rcon_core/bridge/threaded.py``).
 
 The flood server lives in this module (websockets, in a thread of the parent process).  Each client runs in
 its own subprocess for the whole run, connected and idle until the driver sends it a command on stdin
@@ -62,7 +63,7 @@ import orjson
 HERE = Path(__file__).resolve().parent
 WIDTH, HEIGHT = 640, 480
 CLIENTS = ("bare", "bare_picows", "rcon", "rcon_ws", "roslibpy", "roslibjs", "foxglove")
-OPTIONAL = ("rcon_uv",)
+OPTIONAL = ("rcon_asyncio",)
 NODE = {"roslibjs": "roslib", "foxglove": "foxglove"}
 NODE_DIR = HERE / "node"
 
@@ -547,14 +548,20 @@ def client_roslibpy(url: str, n: dict[str, int]) -> None:
 
 
 def run_client(kind: str, url: str, n: dict[str, int]) -> None:
-    if kind == "rcon":
-        asyncio.run(client_rcon(url, n, "picows"))
-    elif kind == "rcon_ws":
-        asyncio.run(client_rcon(url, n, "websockets"))
-    elif kind == "rcon_uv":
-        import uvloop
+    if kind == "rcon":  # on the event loop the app's bridge thread runs (uvloop where installed)
+        sys.path.insert(0, str(HERE.parent))
+        from rcon_core.bridge.threaded import new_event_loop
 
-        uvloop.run(client_rcon(url, n, "picows"))
+        with asyncio.Runner(loop_factory=new_event_loop) as runner:
+            runner.run(client_rcon(url, n, "picows"))
+    elif kind == "rcon_ws":
+        sys.path.insert(0, str(HERE.parent))
+        from rcon_core.bridge.threaded import new_event_loop
+
+        with asyncio.Runner(loop_factory=new_event_loop) as runner:
+            runner.run(client_rcon(url, n, "websockets"))
+    elif kind == "rcon_asyncio":
+        asyncio.run(client_rcon(url, n, "picows"))
     elif kind == "bare_picows":
         asyncio.run(client_bare_picows(url, n))
     elif kind == "bare":
@@ -659,7 +666,7 @@ def summarize(rounds: list[dict[str, dict[str, float]]], pooled: dict[str, dict[
 
     json_for_cbor = {"image_cbor_rate": "image_json_rate", "image_cbor_cpu_us": "image_json_cpu_us"}
     out: dict[str, Any] = {"clients": per_kind}
-    for subject in ("rcon", "rcon_ws", "rcon_uv"):
+    for subject in ("rcon", "rcon_ws", "rcon_asyncio"):
         if subject not in kinds:
             continue
         tag = "" if subject == "rcon" else f"{subject}_"

@@ -10,7 +10,7 @@ Decision: the hot path
     the next messages wait, so the event loop keeps serving and the order of delivery is kept
     (``offload.py``).  A frame of a latest-only topic (every consumer asked for ``queue_length`` 1) is
     skipped before decoding when a newer frame of the same topic already waits (``latest.py``).
-    Sharing the loop (a turn never holds more than ``YIELD_EVERY`` messages) is ``receive.py``'s rule.
+    Sharing the loop (a turn of the loop holds about 1 ms of messages) is ``receive.py``'s rule.
 
 Decision: bad input from the server
     No exception raised while handling one frame ends the link: the hot path, :meth:`Inbound.one` and the slow path
@@ -133,6 +133,18 @@ class Inbound:
                 m = self.decode_binary(raw if raw.__class__ is bytes else bytes(raw))
                 if m is None:
                     return None
+        except NotUtf8:
+            raise
+        except Exception as exc:
+            self.bad.failed(exc)
+            return None
+        return self.deliver(m)
+
+    def deliver(self, m: Any) -> Awaitable[None] | None:
+        """A decoded message: the fast path (a publish of a subscribed topic whose ``msg`` is an object goes
+        to the topic's ``fast`` function), else the slow path; an awaitable when a big message completed by
+        fragments waits to be decoded off the loop (see :meth:`take`).  Never raises."""
+        try:
             try:
                 entry = self.topics[m["topic"]] if m["op"] == "publish" else None
                 msg = m["msg"]
@@ -147,8 +159,6 @@ class Inbound:
             self.other(m)
             if self.deferred is not None:
                 return self._deferred()
-        except NotUtf8:
-            raise
         except Exception as exc:
             self.bad.failed(exc)
         return None

@@ -11,6 +11,16 @@ Decision: picows' core frame API, where it pays
     answer :meth:`PicowsLink.ping`; a close frame is answered and the connection closed.
     Reading pauses through the asyncio transport's ``pause_reading`` while the Receiver holds too much.
 
+Decision: reads of a flood are capped
+    picows reads into its own buffer as much as it has room for, and its buffer grows (never shrinks)
+    while reads fill it: a flood of small messages grows it to megabytes, and one read then holds tens of
+    thousands of messages, far more than one turn of the loop may take (``receive.py``): the Receiver
+    would copy all but the first millisecond of them to hold them for later turns, doubling their cost.
+    So while the last read brought 64 messages or more (``Receiver.flood``), one read takes at most
+    :data:`READ_CAP` (32 kB, about 0.5 ms of small messages): the transport's protocol is wrapped
+    (``transport.set_protocol``, asyncio's public API) to hand picows a shorter view of its buffer.
+    A camera frame, arriving alone, is read with the whole buffer.
+
 Decision: which socket layer
     picows' default, ``aiofastnet`` (its own socket transport), for ``ws://``; the event loop's own TLS
     for ``wss://``, so certificate errors are the ``ssl`` module's (``reasons.py`` names them) and the
@@ -33,6 +43,8 @@ _TEXT, _BINARY, _CONT = WSMsgType.TEXT, WSMsgType.BINARY, WSMsgType.CONTINUATION
 _PONG, _CLOSE = WSMsgType.PONG, WSMsgType.CLOSE
 #: the transport's write buffer high-water mark (as the websockets transport)
 WRITE_LIMIT = 32 << 10
+#: the most one read takes while small messages arrive as a flood (about 0.5 ms of them)
+READ_CAP = 32 << 10
 CLOSE_TIMEOUT = 2.0
 
 
@@ -69,6 +81,37 @@ class _Listener(WSListener):  # type: ignore[misc]
         self.link.drain.resume()
 
 
+class _CappedReads(asyncio.BufferedProtocol):
+    """picows' protocol as the asyncio transport sees it, with one change: while messages arrive as a flood
+    of small ones (``Receiver.flood``), one read takes at most :data:`READ_CAP` bytes (see the module
+    docstring).  Everything else is passed through as it is."""
+
+    def __init__(self, inner: Any, receiver: Any) -> None:
+        self.inner = inner
+        self.receiver = receiver
+
+    def get_buffer(self, sizehint: int) -> Any:
+        buf = self.inner.get_buffer(sizehint)
+        if self.receiver.flood and len(buf) > READ_CAP:
+            return buf[:READ_CAP]
+        return buf
+
+    def buffer_updated(self, nbytes: int) -> None:
+        self.inner.buffer_updated(nbytes)
+
+    def eof_received(self) -> bool | None:
+        return self.inner.eof_received()  # type: ignore[no-any-return]
+
+    def connection_lost(self, exc: Exception | None) -> None:
+        self.inner.connection_lost(exc)
+
+    def pause_writing(self) -> None:
+        self.inner.pause_writing()
+
+    def resume_writing(self) -> None:
+        self.inner.resume_writing()
+
+
 class PicowsLink(Link):
     """One connection over picows."""
 
@@ -93,6 +136,7 @@ class PicowsLink(Link):
         self.ws = ws
         transport = self.transport = ws.underlying_transport
         transport.set_write_buffer_limits(high=WRITE_LIMIT)
+        transport.set_protocol(_CappedReads(transport.get_protocol(), self.receiver))
         self.receiver.pause = transport.pause_reading
         self.receiver.resume = transport.resume_reading
 
