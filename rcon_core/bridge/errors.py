@@ -74,6 +74,10 @@ class ProtocolError(BridgeError):
     """A frame from the server could not be understood (logged, never raised out of the reader)."""
 
 
+class NotUtf8(BridgeError):
+    """A text message that is not UTF-8: the transport closes the link (code 1007, the WebSocket rule)."""
+
+
 class AuthRefusedError(BridgeError):
     """The robot closed the link right after the ``auth`` op: it refused the rosauth credentials (a wrong
     secret, or a clock too far from the robot's).  Fatal: the client does not retry."""

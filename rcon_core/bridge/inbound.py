@@ -35,7 +35,7 @@ from typing import Any
 
 import orjson
 
-from .errors import ProtocolError
+from .errors import NotUtf8, ProtocolError
 from .latest import LatestOnly, topic_of
 from .offload import BigFrames, decode_big
 from .protocol import FragmentAssembler, RefusedFrame, decode_binary, decode_png, loads_text
@@ -46,10 +46,6 @@ log = logging.getLogger(__name__)
 _loads = orjson.loads
 #: the event loop gets a turn after this many messages in a row (and before each big one; ``receive.py``)
 YIELD_EVERY = 64
-
-
-class NotUtf8(Exception):
-    """A text message that is not UTF-8: the transport closes the link (code 1007, the WebSocket rule)."""
 
 
 class BadFrames:
@@ -108,15 +104,7 @@ class Inbound:
         returned as an awaitable the caller must await before the next message.  Raises :class:`NotUtf8`
         for a text message that is not UTF-8 (the transport then closes the link)."""
         if len(raw) >= self.heavy and (len(raw) > self.big_frame or self._latest_only(raw)):
-            if text:
-                try:
-                    raw = str(raw, "utf-8")
-                except UnicodeDecodeError as exc:
-                    raise NotUtf8(exc) from None
-                return self.one(raw)
-            if raw.__class__ is not bytes:
-                raw = bytes(raw)
-            return self.one(raw)
+            return self.one(raw if raw.__class__ is bytes else bytes(raw), text)
         try:  # the frame boundary: nothing raised while handling one frame ends the link
             if text:
                 try:
@@ -171,22 +159,27 @@ class Inbound:
         entry = self.topics.get(topic_of(raw))  # type: ignore[arg-type]
         return entry is not None and entry.latest_only
 
-    async def one(self, raw: str | bytes) -> None:
-        """A message of ``heavy`` size or more (text already decoded): skipped when stale (latest-only),
-        decoded in the worker when above ``big_frame``, then delivered."""
+    async def one(self, raw: bytes, text: bool) -> None:
+        """A message of ``heavy`` size or more (a copy; a text message's UTF-8 unchecked): skipped when stale
+        (latest-only), decoded in the worker when above ``big_frame``, then delivered.  Raises
+        :class:`NotUtf8` for a text message that is not UTF-8."""
         try:
             waiting = self.waiting
             if waiting is not None and await self.latest.stale(raw, waiting):
                 return
             if len(raw) > self.big_frame:
-                m = await self.decode_big(raw)
+                m = await self.decode_big(raw, text)
                 if m is None:
                     return
-            elif isinstance(raw, str):
+            elif text:
                 try:
                     m = _loads(raw)
                 except orjson.JSONDecodeError:
-                    m = self.lenient(raw)
+                    try:
+                        decoded = str(raw, "utf-8")
+                    except UnicodeDecodeError as exc:
+                        raise NotUtf8(exc) from None
+                    m = self.lenient(decoded)
                     if m is None:
                         return
             else:
@@ -206,6 +199,8 @@ class Inbound:
                 return
             self.other(m)
             await self._deferred()
+        except NotUtf8:
+            raise
         except Exception as exc:
             self.bad.failed(exc)
 
@@ -224,13 +219,14 @@ class Inbound:
 
     # -- decoding -------------------------------------------------------------------------------------
 
-    async def decode_big(self, raw: str | bytes) -> Any:
-        """Decode a frame above ``big_frame`` in the worker thread (see ``offload.py``); None when dropped."""
+    async def decode_big(self, raw: str | bytes, text: bool = False) -> Any:
+        """Decode a frame above ``big_frame`` in the worker thread (see ``offload.py``; ``text``: bytes of a
+        text frame); None when dropped.  Raises :class:`NotUtf8` for a text frame that is not UTF-8."""
         if len(raw) > self.max_size:
             self.stats["oversize_frames"] += 1
             self.bad.report("size", f"frame of {len(raw)} bytes exceeds max_message_size={self.max_size}; dropped")
             return None
-        return await self._offloaded(decode_big, raw, self.typed_arrays, self.max_size)
+        return await self._offloaded(decode_big, raw, self.typed_arrays, self.max_size, text)
 
     async def _offloaded(self, fn: Callable[..., Any], *args: Any) -> Any:
         self.stats["big_frames"] += 1

@@ -22,17 +22,23 @@ import asyncio
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
-from .errors import ProtocolError
+from .errors import NotUtf8, ProtocolError
 from .protocol import decode_binary, decode_png, loads_text
 from .safety import safe_text
 
 
-def decode_big(raw: str | bytes, typed_arrays: str, max_bytes: int) -> Any:
-    """Decode one frame completely (runs in the worker thread)."""
-    if isinstance(raw, str):
+def decode_big(raw: str | bytes, typed_arrays: str, max_bytes: int, text: bool = False) -> Any:
+    """Decode one frame completely (runs in the worker thread): ``raw`` a ``str``, the bytes of a text frame
+    (``text``: orjson checks their UTF-8; :class:`NotUtf8` when they are not) or of a binary frame."""
+    if isinstance(raw, str) or text:
         try:
             m = loads_text(raw)
         except ProtocolError as exc:
+            if isinstance(raw, bytes):
+                try:
+                    raw.decode("utf-8")
+                except UnicodeDecodeError as bad:
+                    raise NotUtf8(bad) from None
             raise ProtocolError(f"text frame of {len(raw)} bytes is {exc}") from None
     else:
         m = decode_binary(raw, typed_arrays)
@@ -63,7 +69,7 @@ class BigFrames:
         loop = asyncio.get_running_loop()
         try:
             return await loop.run_in_executor(self._pool, fn, *args)
-        except ProtocolError:
+        except (ProtocolError, NotUtf8):
             raise
         except (MemoryError, RecursionError, ValueError, TypeError) as exc:
             raise ProtocolError(f"a big frame cannot be decoded ({safe_text(exc)})") from None

@@ -43,7 +43,8 @@ from typing import Any
 from orjson import JSONDecodeError
 from orjson import loads as _loads
 
-from .inbound import YIELD_EVERY, NotUtf8
+from .errors import NotUtf8
+from .inbound import YIELD_EVERY
 from .safety import safe_text
 
 log = logging.getLogger(__name__)
