@@ -95,13 +95,19 @@ class WebsocketsLink(Link):
             self.transport.close()
 
     def eof(self) -> None:
-        self.protocol.receive_eof()
+        try:
+            self.protocol.receive_eof()
+        except EOFError:
+            return
         self._flush()
 
     def connection_lost(self, exc: BaseException | None) -> None:
         protocol = self.protocol
         if protocol.state is not State.CLOSED:
-            protocol.receive_eof()
+            try:
+                protocol.receive_eof()
+            except EOFError:  # eof_received came first
+                pass
         self.drain.lost()
         self.receiver.lost()
         if not self.opened.done():
