@@ -185,7 +185,7 @@ class PicowsLink(Link):
     # -- Link --------------------------------------------------------------------------------------
 
     def write_now(self, data: bytes) -> bool:
-        if self.drain.paused or self.is_closed:
+        if self.drain.paused or self.is_closed or self.ws.is_close_frame_sent:
             return False
         self.ws.send(_TEXT, data)
         return True
