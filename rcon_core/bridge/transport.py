@@ -37,6 +37,7 @@ The link itself (``linkbase.Link``) and its test hooks: ``linkbase.py``.
 
 from __future__ import annotations
 
+import importlib.util
 import os
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
@@ -53,13 +54,7 @@ TRANSPORTS = ("auto", "picows", "websockets")
 
 def available() -> list[str]:
     """The transports that import here, preferred first."""
-    out = []
-    try:
-        import picows  # noqa: F401
-    except ImportError:
-        pass
-    else:
-        out.append("picows")
+    out = ["picows"] if importlib.util.find_spec("picows") is not None else []
     out.append("websockets")
     return out
 
