@@ -8,7 +8,9 @@ orjson: the floor of the picows transport), ``rcon`` (RCON's client on picows, t
 ``rcon_ws`` (RCON's client on websockets, on the same loop), ``roslibpy``, ``roslibjs`` (npm ``roslib``) and ``foxglove``
 (npm ``@foxglove/roslibjs``), the last two in Node 20 over ``ws`` (``benchmarks/node``: installed with
 ``npm ci`` on first use when ``node`` and ``npm`` are on the PATH, else their columns are left out with a
-sentence), and ``rcon_asyncio`` on request (RCON on picows on asyncio's own event loop: ``rcon`` runs on
+sentence), ``rcon_base`` with ``--base TREE`` (RCON's client from another source tree, e.g. a checkout of
+before this change, on asyncio's loop: "today's figures" in the same interleaved rounds), and ``rcon_asyncio`` on
+request (RCON on picows on asyncio's own event loop: ``rcon`` runs on
 the loop the app's bridge thread runs, uvloop where installed, see ``rcon_core/bridge/threaded.py``).
 
 The flood server lives in this module (websockets, in a thread of the parent process).  Each client runs in
@@ -63,7 +65,9 @@ import orjson
 HERE = Path(__file__).resolve().parent
 WIDTH, HEIGHT = 640, 480
 CLIENTS = ("bare", "bare_picows", "rcon", "rcon_ws", "roslibpy", "roslibjs", "foxglove")
-OPTIONAL = ("rcon_asyncio",)
+OPTIONAL = ("rcon_asyncio", "rcon_base")
+#: the source tree ``rcon_base`` runs (``--base TREE``): RCON as it was, for figures side by side
+BASE_ENV = "RCON_BENCH_BASE"
 NODE = {"roslibjs": "roslib", "foxglove": "foxglove"}
 NODE_DIR = HERE / "node"
 
@@ -294,11 +298,12 @@ def _serve_commands_sync(commands: dict[str, Any]) -> None:
         _say(commands[words[0]](*map(int, words[1:])))
 
 
-async def client_rcon(url: str, n: dict[str, int], transport: str = "picows") -> None:
-    sys.path.insert(0, str(HERE.parent))
+async def client_rcon(url: str, n: dict[str, int], transport: str | None = "picows") -> None:
+    sys.path.insert(0, os.environ.get(BASE_ENV) if transport is None else str(HERE.parent))
     from rcon_core.bridge import BridgeClient
 
-    c = BridgeClient(url, latency_interval=3600, transport=transport)
+    options = {} if transport is None else {"transport": transport}  # None: a tree of before the transports
+    c = BridgeClient(url, latency_interval=3600, **options)
     await c.connect(timeout=10)
     loop = asyncio.get_running_loop()
     perf, cpu = time.perf_counter, time.process_time
@@ -560,6 +565,8 @@ def run_client(kind: str, url: str, n: dict[str, int]) -> None:
 
         with asyncio.Runner(loop_factory=new_event_loop) as runner:
             runner.run(client_rcon(url, n, "websockets"))
+    elif kind == "rcon_base":
+        asyncio.run(client_rcon(url, n, None))
     elif kind == "rcon_asyncio":
         asyncio.run(client_rcon(url, n, "picows"))
     elif kind == "bare_picows":
@@ -666,7 +673,7 @@ def summarize(rounds: list[dict[str, dict[str, float]]], pooled: dict[str, dict[
 
     json_for_cbor = {"image_cbor_rate": "image_json_rate", "image_cbor_cpu_us": "image_json_cpu_us"}
     out: dict[str, Any] = {"clients": per_kind}
-    for subject in ("rcon", "rcon_ws", "rcon_asyncio"):
+    for subject in ("rcon", "rcon_ws", "rcon_asyncio", "rcon_base"):
         if subject not in kinds:
             continue
         tag = "" if subject == "rcon" else f"{subject}_"
@@ -883,6 +890,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--clients", nargs="*", default=list(CLIENTS))
     parser.add_argument("--rounds", type=int, default=7, help="interleaved rounds (default 7)")
     parser.add_argument("--batch", type=int, default=64, help="small frames per server write (default 64)")
+    parser.add_argument("--base", type=Path, help="source tree for the rcon_base column (RCON as it was)")
     parser.add_argument("--client", help=argparse.SUPPRESS)  # internal: run one client in this process
     parser.add_argument("--url", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
@@ -894,6 +902,11 @@ def main(argv: list[str] | None = None) -> int:
     if unknown:
         parser.error(f"unknown client(s) {', '.join(unknown)}; choose from {', '.join(CLIENTS + OPTIONAL)}")
     kinds = list(args.clients)
+    if args.base is not None:
+        os.environ[BASE_ENV] = str(args.base.resolve())
+        kinds += [] if "rcon_base" in kinds else ["rcon_base"]
+    elif "rcon_base" in kinds:
+        parser.error("the rcon_base column needs --base TREE")
     if any(k in NODE for k in kinds):
         why = node_ready()
         if why is not None:
