@@ -9,7 +9,7 @@ link; messages come in through ``receive.py`` to ``inbound.py`` and frames go ou
 * reconnect, state, latency and stall detection: here (and ``freshness.py``, ``reasons.py``, ``secure.py``);
 * the transport, direct writes and command freshness on the wire: ``transport.py`` (adapters ``pwlink.py``,
   ``wslink.py``); messages in, in order, sharing the loop: ``receive.py``;
-* the read loop (the hot path), big frames, fragments, png and bad input from the server: ``inbound.py``,
+* the hot path, big frames, fragments, png and bad input from the server: ``inbound.py``,
   ``offload.py``, ``safety.py``;
 * restore after a reconnect, publishing while down, service calls: ``session.py``; shared subscriptions:
   ``topics.py``, ``subscribe.py``; services this client provides: ``services.py``; ROS 2 action goals:
@@ -166,7 +166,7 @@ class BridgeClient:
                                       "stale_skipped": 0}
         self._state = ConnectionState.CLOSED
         self._state_listeners: list[Callable[[ConnectionState], None]] = []
-        #: the current connection (None while down); see ``wslink.py``
+        #: the current connection (None while down); see ``linkbase.py``
         self.link: Link | None = None
         self._task: asyncio.Task[None] | None = None
         self._connected = asyncio.Event()
