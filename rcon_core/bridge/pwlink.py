@@ -17,9 +17,11 @@ Decision: reads of a flood are capped
     thousands of messages, far more than one turn of the loop may take (``receive.py``): the Receiver
     would copy all but the first millisecond of them to hold them for later turns, doubling their cost.
     So while the last read brought 64 messages or more (``Receiver.flood``), one read takes at most
-    :data:`READ_CAP` (32 kB, about 0.5 ms of small messages): the transport's protocol is wrapped
-    (``transport.set_protocol``, asyncio's public API) to hand picows a shorter view of its buffer.
-    A camera frame, arriving alone, is read with the whole buffer.
+    :data:`READ_CAP` (32 kB, about 0.5 ms of small messages), and otherwise :data:`BIG_READ_CAP` (256 kB:
+    five reads for a 640x480 camera frame); the transport's protocol is wrapped (``transport.set_protocol``,
+    asyncio's public API) to hand picows a shorter view of its buffer.  The cap also bounds the buffer:
+    a camera stream that fell behind grew it to tens of megabytes (reads as large as the kernel's backlog),
+    kept for the connection's life; it now stays near twice the largest message.
 
 Decision: which socket layer
     picows' default, ``aiofastnet`` (its own socket transport), for ``ws://``; the event loop's own TLS
@@ -45,6 +47,8 @@ _PONG, _CLOSE = WSMsgType.PONG, WSMsgType.CLOSE
 WRITE_LIMIT = 32 << 10
 #: the most one read takes while small messages arrive as a flood (about 0.5 ms of them)
 READ_CAP = 32 << 10
+#: the most one read takes otherwise (picows' buffer then grows to about twice the largest message only)
+BIG_READ_CAP = 256 << 10
 CLOSE_TIMEOUT = 2.0
 
 
@@ -82,9 +86,9 @@ class _Listener(WSListener):  # type: ignore[misc]
 
 
 class _CappedReads(asyncio.BufferedProtocol):
-    """picows' protocol as the asyncio transport sees it, with one change: while messages arrive as a flood
-    of small ones (``Receiver.flood``), one read takes at most :data:`READ_CAP` bytes (see the module
-    docstring).  Everything else is passed through as it is."""
+    """picows' protocol as the asyncio transport sees it, with one change: one read takes at most
+    :data:`BIG_READ_CAP` bytes, and :data:`READ_CAP` while messages arrive as a flood of small ones
+    (``Receiver.flood``; see the module docstring).  Everything else is passed through as it is."""
 
     def __init__(self, inner: Any, receiver: Any) -> None:
         self.inner = inner
@@ -92,9 +96,8 @@ class _CappedReads(asyncio.BufferedProtocol):
 
     def get_buffer(self, sizehint: int) -> Any:
         buf = self.inner.get_buffer(sizehint)
-        if self.receiver.flood and len(buf) > READ_CAP:
-            return buf[:READ_CAP]
-        return buf
+        cap = READ_CAP if self.receiver.flood else BIG_READ_CAP
+        return buf[:cap] if len(buf) > cap else buf
 
     def buffer_updated(self, nbytes: int) -> None:
         self.inner.buffer_updated(nbytes)
