@@ -97,7 +97,6 @@ class Receiver:
                 self.pause()
         else:
             n = self.n = self.n + 1
-            job = None
             if len(raw) < self.heavy:
                 if n > self.check and self._spent():
                     self._yield(raw, text)
@@ -105,9 +104,7 @@ class Receiver:
                     try:
                         m = _loads(raw)
                     except JSONDecodeError:
-                        m = None
-                    if m is None:
-                        job = self._take(raw, text)
+                        self._start(self._take(raw, text))
                     else:
                         try:
                             entry = self.topics[m["topic"]] if m["op"] == "publish" else None
@@ -120,15 +117,13 @@ class Receiver:
                             except Exception:
                                 entry.callback_failed()
                         else:
-                            job = self.deliver(m)
+                            self._start(self.deliver(m))
                 else:
-                    job = self._take(raw, text)
+                    self._start(self._take(raw, text))
             elif n > 1:
                 self._yield(raw, text)
             else:
-                job = self._take(raw, text)
-            if job is not None:
-                self._start(job)
+                self._start(self._take(raw, text))
         if last:
             self.flood = self.n >= YIELD_EVERY or self.busy
             self.n = 0
@@ -177,8 +172,10 @@ class Receiver:
     # -- holding -------------------------------------------------------------------------------------
 
     def _start(self, job: Awaitable[None] | None) -> None:
-        self.busy = True
-        self.task = asyncio.ensure_future(self._drain(job))
+        """Run ``job`` (when there is one) before the next message."""
+        if job is not None:
+            self.busy = True
+            self.task = asyncio.ensure_future(self._drain(job))
 
     async def _drain(self, job: Awaitable[None] | None) -> None:
         held = self.held
