@@ -33,6 +33,7 @@ from rcon_core.app.widget_host import RateMeter
 from rcon_core.bridge import ConnectionState
 from rcon_core.canvas import Change, EditError
 from rcon_core.canvas.fleet import Fleet
+from rcon_core.canvas.retarget import plan_retarget, setting_names
 from rcon_core.canvas.robots import robot_colour
 
 log = logging.getLogger(__name__)
@@ -50,6 +51,8 @@ class FleetUi(QtCore.QObject):
         self.window = window
         self.links = FleetLinks(window.link, secret_for=window.connection.secrets.get,
                                 overrides=lambda: window.connection.overrides)
+        # the bandwidth readout lists every robot's link (named when there are several)
+        window.connection.bandwidth.sources = self._bandwidth_sources
         self.chips = RobotChips()
         self.chips.picked.connect(self.pick_side_robot)
         root = window.centralWidget()
@@ -71,6 +74,8 @@ class FleetUi(QtCore.QObject):
         self._marks_dirty = True
         self._marked_models = -1  # the host's models_version the marks were last applied for
         self._states: dict[str, ConnectionState] = {}
+        #: the plan of the last "Duplicate for robot" (names mapped and missing; tests)
+        self.retarget_plan: Any = None
         #: robot id -> why its link is not up (words of rcon_core.bridge.reasons), for its chip
         self.why: dict[str, str] = {}
         self._remove = window.doc.add_listener(self._doc_changed)
@@ -128,16 +133,35 @@ class FleetUi(QtCore.QObject):
     # ------------------------------------------------------------------------------------ robots
     def _doc_changed(self, change: Change) -> None:
         if change.what in ("robots-changed", "workspace-replaced"):
-            new = self._sync_robots()
+            before = self._seen
+            new = self._sync_robots()  # _seen is now the new robots
             if change.what == "robots-changed":  # the controller restarts on workspace-replaced itself
-                self.window.controller.run_current()
+                self._rerun(before)
             # once the runtime runs on the new robots (the controller hears this change after us)
             QtCore.QTimer.singleShot(0, lambda: self._connect(new))
         self._marks_dirty = True
 
+    def _rerun(self, before: list[tuple[str, str, bool]]) -> None:
+        """The robots were edited (Robots… OK, undo, redo): rebuild only the running widgets that change.
+        Another robot list or view-only mark: every widget (its port, its robot); only names: the widgets
+        that show every robot (their tracks carry the names); a new URL or connection setting: nothing here
+        (that robot reconnects, and its own widgets are rebuilt on the new link, see _client_changed). OK
+        with nothing changed keeps every form, trail and value as it was."""
+        now = self._seen
+        if [(rid, vo) for rid, _n, vo in before] != [(rid, vo) for rid, _n, vo in now]:
+            self.window.controller.run_current()
+        elif before != now:
+            host, live = self.window.host, self.window.live
+            for widget in self.window.controller.canvas.widgets:
+                hosted = host.hosted.get(widget.id)
+                if hosted is not None and getattr(hosted.model, "shows_every_robot", False):
+                    live.restart(widget)
+
     def _sync_robots(self) -> list[str]:
         """Links, chips, pickers and menus for the workspace's robots; returns the robots to connect."""
         robots = self.robots
+        #: what of the robots the running widgets depend on: id, name and view-only mark, in order
+        self._seen: list[tuple[str, str, bool]] = [(r.id, r.label, bool(r.view_only)) for r in robots]
         new = self.links.sync(robots)
         self.apply_guards()  # a robot's own view-only flag may have changed, a new link needs its mark
         self.window.host.first_robot = robots[0].id
@@ -250,6 +274,11 @@ class FleetUi(QtCore.QObject):
         self._catalog_dirty = False
         return self.catalogs.get(self.side_robot, EMPTY_CATALOG)
 
+    def _bandwidth_sources(self) -> list[tuple[str, Any]]:
+        """Each robot's link for the bandwidth readout, named when there are several."""
+        pairs = self.links.items()
+        return [(robot.label if len(pairs) > 1 else "", link) for robot, link in pairs]
+
     # ------------------------------------------------------------------------------------- polling
     def poll(self, _now: float = 0.0) -> None:
         """Once per frame: each robot's link state on its chip and its widgets; the marks."""
@@ -329,11 +358,31 @@ class FleetUi(QtCore.QObject):
             action.setObjectName(f"retarget-{robot.id}")
             action.triggered.connect(lambda _c=False, rid=robot.id: self.retarget_current(rid))
 
-    def retarget_current(self, robot_id: str) -> None:
-        """Duplicate the current canvas for ``robot_id`` and show the copy (one undo step)."""
-        controller = self.window.controller
+    def retarget_current(self, robot_id: str) -> Any:
+        """Duplicate the current canvas for ``robot_id`` and show the copy (one undo step). The names its
+        widgets use are mapped into the robot's namespace and checked against the robot's topics, services
+        and actions (``rcon_core.canvas.retarget``); when a name changes or the robot lacks one, the
+        operator is told which before the copy is made (returns that question's dialog)."""
+        canvas = self.window.controller.canvas
+        label = next((r.label for r in self.robots if r.id == robot_id), robot_id)
+        names = [n for w in canvas.widgets for n in (w.binding.name, *setting_names(w.settings))]
+        catalog = self.catalogs.get(robot_id)
+        known = None if catalog is None else {n for part in ("topics", "services", "actions")
+                                              for n, _t in catalog.get(part, [])}
+        plan = plan_retarget(names, known)
+        self.retarget_plan = plan
+        if plan.quiet or robot_id not in [r.id for r in self.robots]:
+            return self._duplicate(canvas.id, robot_id, {})
+        if not plan.renames and not plan.missing:  # not connected: nothing to check, said, copied as it is
+            self._duplicate(canvas.id, robot_id, {})
+            self.window.notice.show_notice(f"⚠ {plan.describe(label)}")
+            return None
+        return self.window.confirm(f"Duplicate “{canvas.name}” for {label}?", plan.describe(label), "Duplicate",
+                                   lambda: self._duplicate(canvas.id, robot_id, plan.renames))
+
+    def _duplicate(self, canvas_id: str, robot_id: str, renames: dict[str, str]) -> None:
         try:
-            dup = self.window.doc.duplicate_for_robot(controller.canvas.id, robot_id)
+            dup = self.window.doc.duplicate_for_robot(canvas_id, robot_id, renames=renames)
         except EditError as exc:
             self.window.notice.show_notice(f"⚠ {exc}")
             return

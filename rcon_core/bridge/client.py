@@ -14,6 +14,8 @@ link; messages come in through ``receive.py`` to ``inbound.py`` and frames go ou
 * restore after a reconnect, publishing while down, service calls: ``session.py``; shared subscriptions:
   ``topics.py``, ``subscribe.py``; services this client provides: ``services.py``; ROS 2 action goals:
   ``goals.py``; actions this client provides: ``action_server.py``;
+* the safety envelope every motion command is held to (``client.envelope``): ``envelope.py``, applied in
+  ``Session.publish``;
 * ROS 1 or ROS 2: ``rosinfo.py`` (``detect_ros()``, once per connection), ``params.py`` (``client.params``),
   ``cdrdecode.py``; which rosapi calls may be sent at all: ``rosapi_guard.py`` (checked here, in
   :meth:`BridgeClient.call_service`, for every caller: widgets, the CLI, discovery, type lookups).
@@ -66,6 +68,7 @@ from typing import Any
 
 from . import rosapi_guard
 from .action_server import ProvidedActions
+from .envelope import Envelope
 from .errors import AuthRefusedError, LinkClosedError, NotConnectedError, RosapiRefusedError, ServiceError
 from .freshness import LinkWatch, watch_link
 from .guard import LinkGuard
@@ -80,6 +83,7 @@ from .rosinfo import RosInfo
 from .rosinfo import detect as detect_ros
 from .secure import ssl_context
 from .session import LOG_LEVELS, Session
+from .traffic import Traffic
 from .transport import choose, open_link
 
 log = logging.getLogger(__name__)
@@ -163,7 +167,7 @@ class BridgeClient:
                                       "dropped_on_disconnect": 0, "oversize_frames": 0, "frame_errors": 0,
                                       "png_refused": 0, "non_object_msgs": 0, "big_frames": 0,
                                       "stale_dropped": 0, "degraded": 0, "stall_cuts": 0,
-                                      "stale_skipped": 0}
+                                      "stale_skipped": 0, "envelope_clamped": 0, "envelope_refused": 0}
         self._state = ConnectionState.CLOSED
         self._state_listeners: list[Callable[[ConnectionState], None]] = []
         #: the current connection (None while down); see ``linkbase.py``
@@ -204,9 +208,27 @@ class BridgeClient:
         return self.session.guard
 
     @property
+    def traffic(self) -> Traffic:
+        """Bytes received by topic since this client was made (``traffic.py``; any thread may snapshot it)."""
+        return self.inbound.traffic
+
+    @property
     def provided_actions(self) -> ProvidedActions:
         """Actions this client serves (``node.advertise_action``; see ``action_server.py``)."""
         return self.session.provided_actions
+
+    @property
+    def envelope(self) -> Envelope | None:
+        """The robot's safety envelope: every motion command published through this client is held to it
+        (clamped, or refused when not a number; see ``envelope.py``). None: no speed limit. Any thread may
+        set it (one attribute; the loop reads it at each publish)."""
+        return self.session.envelope
+
+    @envelope.setter
+    def envelope(self, value: Envelope | None) -> None:
+        if value is not None and not isinstance(value, Envelope):
+            raise TypeError(f"envelope must be an Envelope or None, not {type(value).__name__}")
+        self.session.envelope = value
 
     @property
     def ros_version(self) -> int | None:

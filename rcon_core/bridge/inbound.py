@@ -40,6 +40,7 @@ from .latest import LatestOnly, topic_of
 from .offload import BigFrames, decode_big
 from .protocol import FragmentAssembler, RefusedFrame, decode_binary, decode_png, loads_text
 from .safety import safe_text
+from .traffic import Traffic
 
 log = logging.getLogger(__name__)
 
@@ -84,6 +85,8 @@ class Inbound:
         self.big_frame = big_frame
         self.big = BigFrames(typed_arrays, max_size)
         self.latest = LatestOnly(session.topics, stats)
+        #: bytes in by topic (``traffic.py``): the connection bar's bandwidth readout
+        self.traffic = Traffic()
         warn = self._fragment_warning
         self.fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_size, warn=warn)
         self.png_fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_size, warn=warn)
@@ -121,6 +124,7 @@ class Inbound:
                 m = self.decode_binary(raw if raw.__class__ is bytes else bytes(raw))
                 if m is None:
                     return None
+            self.traffic.count(m, len(raw))
         except NotUtf8:
             raise
         except Exception as exc:
@@ -166,6 +170,7 @@ class Inbound:
         try:
             waiting = self.waiting
             if waiting is not None and await self.latest.stale(raw, waiting):
+                self.traffic.count_name(topic_of(raw), len(raw))  # skipped, but it crossed the link
                 return
             if len(raw) > self.big_frame:
                 m = await self.decode_big(raw, text)
@@ -186,6 +191,7 @@ class Inbound:
                 m = self.decode_binary(raw)
                 if m is None:
                     return
+            self.traffic.count(m, len(raw))
             try:
                 entry = self.topics[m["topic"]] if m["op"] == "publish" else None
                 msg = m["msg"]

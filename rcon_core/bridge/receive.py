@@ -61,13 +61,15 @@ class Receiver:
     """One connection's messages in (see the module docstring).  ``take(raw, text)`` and
     ``heavy`` come from the client's ``Inbound``; the adapter sets ``pause``, ``resume`` and ``fail``."""
 
-    __slots__ = ("take", "deliver", "topics", "failed", "heavy", "held", "busy", "n", "started", "check", "paused",
+    __slots__ = ("take", "deliver", "topics", "traffic", "counts", "failed", "heavy", "held", "busy", "n", "started", "check", "paused",
                  "pause", "resume", "fail", "task", "closed", "flood")
 
     def __init__(self, inbound: Any) -> None:
         self.take: Callable[[Any, bool], Awaitable[None] | None] = inbound.take
         self.deliver: Callable[[Any], Awaitable[None] | None] = inbound.deliver
         self.topics: dict[str, Any] = inbound.topics
+        self.traffic = inbound.traffic  # bytes in by topic (``traffic.py``), counted here on the hot path
+        self.counts: dict[str, list[int]] = inbound.traffic.counts
         self.failed: Callable[[BaseException], None] = inbound.bad.failed
         self.heavy: int = inbound.heavy
         self.held: deque[tuple[bytes | str, bool]] = deque()
@@ -97,7 +99,8 @@ class Receiver:
                 self.pause()
         else:
             n = self.n = self.n + 1
-            if len(raw) < self.heavy:
+            size = len(raw)
+            if size < self.heavy:
                 if n > self.check and self._spent():
                     self._yield(raw, text)
                 elif text:
@@ -107,17 +110,27 @@ class Receiver:
                         self._start(self._take(raw, text))
                     else:
                         try:
-                            entry = self.topics[m["topic"]] if m["op"] == "publish" else None
+                            topic = m["topic"] if m["op"] == "publish" else None
+                            entry = self.topics[topic] if topic is not None else None
                             msg = m["msg"]
                         except (KeyError, TypeError):
                             entry = None
                         if entry is not None and msg.__class__ is dict:
+                            c = self.counts.get(topic)  # type: ignore[arg-type]  # Traffic.count_name inlined
+                            if c is None:
+                                self.traffic.count_name(topic, size)
+                            else:
+                                c[0] += size
+                                c[1] += 1
+                                traffic = self.traffic
+                                traffic.total_bytes += size
+                                traffic.total_frames += 1
                             try:
                                 entry.fast(msg)
                             except Exception:
                                 entry.callback_failed()
                         else:
-                            self._start(self.deliver(m))
+                            self._slow(m, size)
                 else:
                     self._start(self._take(raw, text))
             elif n > 1:
@@ -129,6 +142,15 @@ class Receiver:
             self.n = 0
             self.check = YIELD_EVERY
             self.started = 0.0
+
+    def _slow(self, m: Any, size: int) -> None:
+        """A parsed message that is not a publish of a subscribed topic: counted, then ``Inbound.deliver``."""
+        try:  # the frame boundary: nothing raised while handling one frame ends the link
+            self.traffic.count(m, size)
+        except Exception as exc:
+            self.failed(exc)
+            return
+        self._start(self.deliver(m))
 
     def _yield(self, raw: Any, text: bool) -> None:
         """This turn is over: hold ``raw`` and the rest, and go on after the loop had a turn."""

@@ -5,7 +5,7 @@ nodes, topics and their shared subscriptions (``topics.py``), advertisements, se
 (``services.py``), service calls waiting for their answer, action goals (``goals.py``) and actions this
 client provides (``action_server.py``) -- and none of the connection: events in (:meth:`Session.handle` for
 each op from the server, :meth:`attached` / :meth:`detached` when a link comes and goes), frames out through
-the :class:`~rcon_core.bridge.wslink.Link` the client attached (nothing is written while there is none),
+the :class:`~rcon_core.bridge.linkbase.Link` the client attached (nothing is written while there is none),
 and public methods for the nodes.  ``BridgeClient`` (``client.py``) keeps connect, reconnect, ping, stall
 watch and writing; ``inbound.py`` reads.
 
@@ -20,7 +20,7 @@ Decision: publishing while the link is down or stalled
     publish made while down is dropped and counted (``Publisher.dropped``, ``stats["dropped_while_down"]``).
     Frames still in the outgoing queue when the link drops are dropped too (``stats["dropped_on_disconnect"]``).
     A publisher's ``max_age`` (0.25 s by default for non-latched topics) is its freshness limit: a publish
-    is never written after it (``wslink.Link.send_command``, ``freshness.py``; ``stats["stale_dropped"]``).
+    is never written after it (``linkbase.Link.send_command``, ``freshness.py``; ``stats["stale_dropped"]``).
     The frame around a message is encoded once per advertisement (``AdvertEntry.head``); ``latch`` is
     repeated in every publish (``client_publish.jsonl:26-30``: otherwise the topic is re-registered).
 
@@ -57,6 +57,7 @@ import orjson
 from rcon_core.msgs import names
 
 from .action_server import ProvidedActions
+from .envelope import Envelope, enforce
 from .errors import BridgeError, ConnectionLostError, ServiceError, ServiceTimeoutError
 from .goals import Goals
 from .guard import LinkGuard, ViewOnlyError, describe_call
@@ -65,6 +66,7 @@ from .protocol import encode
 from .safety import bounded_repr, safe_text
 from .services import ProvidedServices
 from .subscribe import Subscriber
+from .tap import OperatorTap
 from .topics import AdvertEntry, TopicEntry
 
 if TYPE_CHECKING:
@@ -117,12 +119,16 @@ class Session:
         self.unanswered: dict[str, str] = {}
         self._pending_names: dict[str, str] = {}  # id -> service of the calls in self.pending
         self.level: str | None = None
+        #: the robot's safety envelope (``envelope.py``): every publish is held to it (``client.envelope``)
+        self.envelope: Envelope | None = None
         self.tasks: set[asyncio.Task[Any]] = set()
         self._seq = 0
         self.services = ProvidedServices(self.send, self.spawn, host)
         self.goals = Goals(self.send, self.spawn, host)
         self.provided_actions = ProvidedActions(self.send)  # actions this client serves (ROS 2)
         self.subscriber = Subscriber(self, host)
+        #: what the nodes send, told to listeners (the flight recorder): ``tap.py``
+        self.tap = OperatorTap()
         #: whether this link is view-only, and what it offered the robot (``guard.py``)
         self.guard = LinkGuard(host.url)
         self.guard.add_listener(self._guard_changed)
@@ -362,10 +368,12 @@ class Session:
 
     def publish(self, pub: Publisher, msg: dict[str, Any]) -> bool:
         """Write one message now, or drop it (counted) -- see "publishing while the link is down".
-        Raises ``ViewOnlyError`` on a view-only link."""
+        Raises ``ViewOnlyError`` on a view-only link. A motion command is first held to the safety envelope
+        (``envelope.py``; raises ``EnvelopeRefused``)."""
         if self.guard.reason is not None:
             raise self.guard.refuse(f"publishing on {pub.topic}")
         entry = self.adverts[pub.topic]
+        msg = enforce(self.envelope, entry.type, msg, self.stats)
         link = self.link
         if link is not None and entry.active:
             data = b"".join((entry.head, _dumps(msg, option=_NUMPY), entry.tail))

@@ -95,6 +95,9 @@ class SimServer:
         self._published_lock = threading.Lock()
         self._published_event: asyncio.Event | None = None
         self._tasks: set[asyncio.Task[Any]] = set()
+        #: ``absorb(conn, topic, msg) -> bool``: when set and it answers True, a client's publish goes no
+        #: further than this (a recording played as a robot takes commands nowhere: ``playback.py``)
+        self.absorb: Callable[[Connection, str, dict[str, Any]], bool] | None = None
         #: every operation clients sent, by (op, topic/service/action name): what tests check reached it
         self.ops_received: collections.Counter[tuple[str, str]] = collections.Counter()
 
@@ -489,6 +492,8 @@ class SimServer:
             self._published.setdefault(name, collections.deque(maxlen=PUBLISHED_KEEP)).append(body)
         assert self._published_event is not None
         self._published_event.set()
+        if self.absorb is not None and self.absorb(conn, name, body):
+            return
         self.publish(name, body, BRIDGE_NODE)
 
     def _op_subscribe(self, conn: Connection, msg: dict[str, Any]) -> None:

@@ -65,6 +65,8 @@ class SliderView(QtWidgets.QWidget):
         layout.addWidget(self.value)
         self.slider = TapSlider(QtCore.Qt.Orientation.Horizontal)
         self.slider.setEnabled(self.publishing)
+        self.slider.setAccessibleDescription(f"{model.binding.name}: slide to set" if self.publishing
+                                             else f"{model.binding.name}, as the robot reports it")
         self.slider.setMinimumHeight(32)
         layout.addWidget(self.slider)
         ends = QtWidgets.QHBoxLayout()
@@ -85,6 +87,24 @@ class SliderView(QtWidgets.QWidget):
         self.slider.valueChanged.connect(self._moved)
         self.slider.sliderReleased.connect(self._released)
 
+    def resizeEvent(self, event: QtGui.QResizeEvent) -> None:  # noqa: N802 - Qt override
+        """The range's ends show only when the value, the slider and they all fit (large text, a short
+        frame): never squeezed over one another; the slider's tooltip then says the range."""
+        super().resizeEvent(event)
+        layout = self.layout()
+        if layout is None:
+            return
+        m, spacing = layout.contentsMargins(), max(0, layout.spacing())
+        need = (self.value.sizeHint().height() + self.slider.minimumHeight() + self.low.sizeHint().height()
+                + 2 * spacing + m.top() + m.bottom())
+        show = self.height() >= need
+        for end in (self.low, self.high):
+            if end.isHidden() == show:
+                end.setVisible(show)
+        tip = "" if show else f"{self.low.text()} … {self.high.text()}"
+        if self.slider.toolTip() != tip:
+            self.slider.setToolTip(tip)
+
     # -- range <-> positions ------------------------------------------------------------------------
     def _apply_range(self) -> None:
         r = self.model.range
@@ -96,9 +116,10 @@ class SliderView(QtWidgets.QWidget):
         self.slider.blockSignals(False)
         units = getattr(self.model.settings, "units", "")
         self.low.show_text(f"{self._fmt(r.minimum)} {units}".strip())
-        self.high.show_text(f"{self._fmt(r.maximum)} {units}".strip())
-        if r.clamped:
-            self.high.setToolTip(f"limited to what a {r.base} holds")
+        held = "envelope" in getattr(r, "why", "")
+        # a range the robot's safety envelope holds in says so at its ends: what the slider can send
+        self.high.show_text(f"{self._fmt(r.maximum)} {units}".strip() + (" · envelope" if held else ""),
+                            tooltip=f"limited to {r.why}" if r.clamped else "")
 
     def _fmt(self, v: float) -> str:
         return format_number(v, -1 if self._range and self._range.integer else self.model.settings.decimals)
@@ -134,7 +155,12 @@ class SliderView(QtWidgets.QWidget):
             self.value.setToolTip("")
 
     def _show_unset(self) -> None:
-        """Nothing was sent or heard on the topic: no number that could pass for the robot's setting."""
+        """Nothing was sent or heard on the topic: no number that could pass for the robot's setting.
+        Inside a Compound the number the compound will send (the start value), said as such."""
+        if getattr(self.model, "in_compound", False):
+            self._show(self.model.resting)
+            self.value.setToolTip("the compound sends this value (the start value) until you move the slider")
+            return
         if self.value.text() != NOT_SET:
             self.value.setText(NOT_SET)
             self.value.setToolTip(f"nothing sent or heard on {self.model.binding.name} yet; "
