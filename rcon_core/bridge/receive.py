@@ -122,9 +122,6 @@ class Receiver:
                             else:
                                 c[0] += size
                                 c[1] += 1
-                                traffic = self.traffic
-                                traffic.total_bytes += size
-                                traffic.total_frames += 1
                             try:
                                 entry.fast(msg)
                             except Exception:
