@@ -144,6 +144,7 @@ class ConnectionBar(QtWidgets.QFrame):
         row.addWidget(self.bandwidth)
         row.addWidget(self.message, 2)  # the message gets the room: the reason comes first, then the countdown
         self._show_state(ConnectionState.CLOSED)
+        self._say(self.message.text())
 
     # ---------------------------------------------------------------------------------------- actions
     def robot_url(self) -> str:
@@ -162,7 +163,7 @@ class ConnectionBar(QtWidgets.QFrame):
         else:
             self.link.disconnect()
             self.failure, self.note = None, ""
-            self.message.clear()
+            self._say("")
             self._show_state(ConnectionState.CLOSED)
 
     def _return_pressed(self) -> None:
@@ -185,7 +186,7 @@ class ConnectionBar(QtWidgets.QFrame):
             return
         settings = self.settings_for(text)
         if settings is None:  # the robot checks a secret and none is known in this run
-            self.message.setText("this robot checks a secret: enter it in Security (the lock)")
+            self._say("this robot checks a secret: enter it in Security (the lock)")
             self.open_settings(ask_secret=True)
             return
         self.failure, self.note = None, ""
@@ -206,7 +207,7 @@ class ConnectionBar(QtWidgets.QFrame):
             self.note = f"{exc} · {verb} {active}"
         else:
             self.note = str(exc)
-        self.message.setText(self.note if self.failure is None else f"{self.note}: {self.failure.text()}")
+        self._say(self.note if self.failure is None else f"{self.note}: {self.failure.text()}")
 
     def settings_for(self, url: str) -> LinkSettings | None:
         """How to connect to ``url``: its saved settings under this run's command-line ones; None when it
@@ -297,7 +298,7 @@ class ConnectionBar(QtWidgets.QFrame):
             self._show_state(state)
         ok, error = self.link.error_box.take()
         if ok and self.link.client is not None:
-            self.message.setText(str(error))
+            self._say(str(error))
         ok, failure = self.link.failure_box.take()
         if ok and (failure is not None or not getattr(self.failure, "fatal", False)):
             self.failure = failure
@@ -305,19 +306,28 @@ class ConnectionBar(QtWidgets.QFrame):
                 self.link.disconnect()  # retrying cannot help: the operator changes a setting first
                 self._show_state(ConnectionState.CLOSED)
             elif failure is None and self.state is not ConnectionState.CONNECTED:
-                self.message.clear()
+                self._say("")
         ok, answered = self.link.answered_box.take()
         if ok and answered is not None and answered == self._remember == self.link.url:
             self._keep_url()
         if self.failure is not None:
             why = self.failure.text()
-            self.message.setText(f"{self.note}: {why}" if self.note else why)
+            self._say(f"{self.note}: {why}" if self.note else why)
         latency = self.link.latency if self.state in LIVE_STATES else None
         text = "—" if latency is None else ("<1 ms" if latency < 0.0005 else f"{latency * 1000:.0f} ms")
         if text != self._last_latency_text:
             self._last_latency_text = text
             self.latency_label.setText(text)
         self.bandwidth.poll()
+
+    def _say(self, text: str) -> None:
+        """The one-line message; while it is empty its room goes to the URL field (at 1024 px the field was
+        squeezed to "ws:…847" beside an empty message that held two thirds of the free width)."""
+        self.message.setText(text)
+        layout = self.layout()
+        if isinstance(layout, QtWidgets.QBoxLayout):
+            layout.setStretchFactor(self.message, 2 if text else 0)
+            layout.setStretchFactor(self.url, 1 if text else 3)
 
     def _show_state(self, state: ConnectionState) -> None:
         self.state = state
@@ -339,7 +349,7 @@ class ConnectionBar(QtWidgets.QFrame):
             self.message.setMinimumWidth(self.latency_label.minimumSizeHint().width() + spacing)
         if connected:
             self.failure, self.note = None, ""
-            self.message.clear()
+            self._say(self.link.protocol_text())  # "" on rosbridge; a Foxglove link says so
             if self._remember is not None and self._remember == self.link.url and not self._remember_on_answer:
                 self._keep_url()
         self.state_changed.emit(state)

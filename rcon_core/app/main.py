@@ -203,6 +203,10 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
         # (--canvas its template) is shown on its own type
         server = stack.enter_context(SimServer.in_thread(port=0, plugin_types=True))
         url = server.url
+        if getattr(args, "protocol", None) == "foxglove":  # the same vessel over the Foxglove protocol
+            from rcon_core.foxglove.gateway import FoxgloveGateway
+
+            url = stack.enter_context(FoxgloveGateway(server.url, name="rcon-demo")).url
         if layout is None:
             layout = config.dir / "demo-workspace.json"
 
@@ -216,6 +220,7 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
                         collector=CollectorPolicy())
     windows.append(window)
     window.connection.overrides = overrides
+    window.link.protocol = getattr(args, "protocol", None)  # --protocol: forced; else found per URL
     if config.read_only_reason:  # one writer per config folder: this one saves nothing (the window says so too)
         print(f"rcon: {config.read_only_reason}: this window opens read-only, nothing changed in it is saved; "
               "set RCON_CONFIG_DIR to another folder to keep separate settings", file=sys.stderr)

@@ -576,6 +576,8 @@ class MainWindow(QtWidgets.QMainWindow):
             self.topics.set_entries(catalog["topics"])
             self.services.set_entries(catalog["services"])
             self.actions_list.set_entries(catalog.get("actions", []))
+            notes: Any = catalog.get("notes") or {}  # what a Foxglove robot's protocol cannot do (link.py)
+            self.actions_list.empty.setText(notes.get("actions") or ACTIONS_EMPTY)
         if now - self._last_rate_sample >= 1.0:
             self._last_rate_sample = now
             self.topics.set_rates(self.rates.sample(self.host.topic_counts(self.fleet_ui.side_robot), now))
