@@ -125,7 +125,7 @@ class WebsocketsLink(Link):
         if exc is None:
             self.opened.set_result(None)
             return
-        self.opened.set_exception(_handshake_error(exc))
+        self.opened.set_exception(handshake_error(exc))
         self.transport.close()
 
     def _flush(self) -> None:
@@ -212,7 +212,12 @@ class _Protocol(asyncio.Protocol):
         self.link.drain.resume()
 
 
-def _handshake_error(exc: BaseException) -> BaseException:
+def handshake_error(exc: BaseException) -> BaseException:
+    """RCON's own error for what websockets raised opening a connection (``reasons.describe`` words RCON's
+    errors only): ``HandshakeError`` (its ``__cause__`` the TLS error behind it, if any) or ``BadUrlError``;
+    anything else as it is.  Also used by the Foxglove link's seam (``rcon_core/foxglove/ws.py``)."""
+    if isinstance(exc, InvalidURI):
+        return BadUrlError(f"not a valid rosbridge URL: {exc}")
     if isinstance(exc, InvalidStatus):
         error = HandshakeError(f"HTTP {exc.response.status_code}", status=exc.response.status_code)
     elif isinstance(exc, InvalidMessage):
@@ -221,7 +226,7 @@ def _handshake_error(exc: BaseException) -> BaseException:
         error = HandshakeError(str(exc))
     else:
         return exc
-    error.__cause__ = exc
+    error.__cause__ = exc.__cause__ if isinstance(exc.__cause__, _ssl.SSLError) else exc
     return error
 
 
@@ -250,4 +255,4 @@ async def open_websockets(url: str, receiver: Any, on_stale: Any, *, ssl: _ssl.S
     return link
 
 
-__all__ = ["LinkClosedError", "WebsocketsLink", "open_websockets"]
+__all__ = ["LinkClosedError", "WebsocketsLink", "handshake_error", "open_websockets"]
