@@ -1,7 +1,18 @@
-"""Bridge benchmark: RCON's client vs roslibpy vs a bare websockets+orjson loop, against ONE loopback server;
-and RCON's Foxglove link (column ``foxglove``) against the same server speaking the Foxglove protocol.
+"""Bridge benchmark: RCON's client (on each transport) vs roslibpy, roslibjs and @foxglove/roslibjs (in Node) and
+bare websockets+orjson and picows+orjson loops, against ONE loopback server; and RCON's Foxglove link (column
+``foxglove``) against the same server speaking the Foxglove protocol.
 
-Usage: ``python benchmarks/bench_bridge.py [--out PATH] [--quick] [--rounds N] [--batch N]``.
+Usage: ``python benchmarks/bench_bridge.py [--out PATH] [--quick] [--rounds N] [--batch N] [--clients K ...]``.
+
+Clients (columns): ``bare`` (websockets ``recv`` + orjson, the old floor), ``bare_picows`` (a picows listener +
+orjson: the floor of the picows transport), ``rcon`` (RCON's client on picows, the default transport, on the app's event loop),
+``rcon_ws`` (RCON's client on websockets, on the same loop), ``roslibpy``, ``roslibjs`` (npm ``roslib``) and
+``foxglove_js`` (npm ``@foxglove/roslibjs``, a rosbridge client despite its name), the last two in Node 20 over ``ws`` (``benchmarks/node``: installed with
+``npm ci`` on first use when ``node`` and ``npm`` are on the PATH, else their columns are left out with a
+sentence), ``rcon_base`` with ``--base TREE`` (RCON's client from another source tree, e.g. a checkout of
+before this change, on asyncio's loop: "today's figures" in the same interleaved rounds), and ``rcon_asyncio`` on
+request (RCON on picows on asyncio's own event loop: ``rcon`` runs on
+the loop the app's bridge thread runs, uvloop where installed, see ``rcon_core/bridge/threaded.py``).
 
 The flood server lives in this module (websockets, in a thread of the parent process).  Each client runs in
 its own subprocess for the whole run, connected and idle until the driver sends it a command on stdin
@@ -49,6 +60,7 @@ import json
 import os
 import resource
 import select
+import shutil
 import statistics
 import struct
 import subprocess
@@ -63,7 +75,13 @@ import orjson
 
 HERE = Path(__file__).resolve().parent
 WIDTH, HEIGHT = 640, 480
-CLIENTS = ("bare", "rcon", "roslibpy", "foxglove")
+CLIENTS = ("bare", "bare_picows", "rcon", "rcon_ws", "roslibpy", "roslibjs", "foxglove_js", "foxglove")
+OPTIONAL = ("rcon_asyncio", "rcon_base")
+#: the source tree ``rcon_base`` runs (``--base TREE``): RCON as it was, for figures side by side
+BASE_ENV = "RCON_BENCH_BASE"
+#: the Node clients (column -> ``--lib`` of benchmarks/node/bench_client.mjs)
+NODE = {"roslibjs": "roslib", "foxglove_js": "foxglove"}
+NODE_DIR = HERE / "node"
 FOX_SUBPROTOCOL = "foxglove.sdk.v1"
 
 
@@ -357,11 +375,12 @@ def _serve_commands_sync(commands: dict[str, Any]) -> None:
         _say(commands[words[0]](*map(int, words[1:])))
 
 
-async def client_rcon(url: str, n: dict[str, int]) -> None:
-    sys.path.insert(0, str(HERE.parent))
+async def client_rcon(url: str, n: dict[str, int], transport: str | None = "picows") -> None:
+    sys.path.insert(0, os.environ.get(BASE_ENV) if transport is None else str(HERE.parent))
     from rcon_core.bridge import BridgeClient
 
-    c = BridgeClient(url, latency_interval=3600)
+    options = {} if transport is None else {"transport": transport}  # None: a tree of before the transports
+    c = BridgeClient(url, latency_interval=3600, **options)
     await c.connect(timeout=10)
     loop = asyncio.get_running_loop()
     perf, cpu = time.perf_counter, time.process_time
@@ -527,6 +546,87 @@ async def client_bare(url: str, n: dict[str, int]) -> None:
             "rtt": rtt})
 
 
+async def client_bare_picows(url: str, n: dict[str, int]) -> None:
+    """The floor of the picows transport: a listener that parses each data frame with orjson (CBOR with
+    cbor2) straight from picows' buffer and checks op and topic, nothing else."""
+    import picows
+
+    perf, cpu, loads, cbor_loads = time.perf_counter, time.process_time, orjson.loads, cbor2.loads
+    TEXT, BINARY = picows.WSMsgType.TEXT, picows.WSMsgType.BINARY
+    loop = asyncio.get_running_loop()
+
+    class Listener(picows.WSListener):  # type: ignore[misc]
+        def __init__(self) -> None:
+            super().__init__()
+            self.on: Any = None
+
+        def on_ws_frame(self, transport: Any, frame: Any) -> None:
+            t = frame.msg_type
+            if t is TEXT:
+                m = loads(frame.get_payload_as_memoryview())
+            elif t is BINARY:
+                m = cbor_loads(frame.get_payload_as_bytes())
+            else:
+                return
+            if self.on is not None:
+                self.on(m)
+
+    ws, listener = await picows.ws_connect(Listener, url, max_frame_size=64 << 20)
+
+    def send(op: dict[str, Any]) -> None:
+        ws.send(picows.WSMsgType.TEXT, orjson.dumps(op))
+
+    async def ingest(topic: str, count: int, compression: str = "none") -> dict[str, float]:
+        done = loop.create_future()
+        st = _Stamps(count)
+
+        def on(m: Any) -> None:
+            if m["op"] == "publish" and m["topic"] == topic:
+                k = st.k = st.k + 1
+                if k == 1:
+                    st.t0, st.c0 = perf(), cpu()
+                elif k == count:
+                    st.t1, st.c1 = perf(), cpu()
+                    done.set_result(None)
+
+        listener.on = on
+        send({"op": "subscribe", "topic": topic, "compression": compression})
+        await asyncio.wait_for(done, 120)
+        listener.on = None
+        send({"op": "unsubscribe", "topic": topic})
+        return st.result()
+
+    send({"op": "advertise", "topic": "/bench/ping", "type": "std_msgs/Float64"})
+    send({"op": "subscribe", "topic": "/bench/pong"})
+    await asyncio.sleep(0.3)
+    waiter: list[Any] = [None, -1.0]
+
+    def on_pong(m: Any) -> None:
+        if m.get("topic") == "/bench/pong" and m["msg"]["data"] == waiter[1]:
+            waiter[0].set_result(perf())
+
+    async def trip(seq: int) -> float:
+        f = waiter[0] = loop.create_future()
+        waiter[1] = float(seq)
+        listener.on = on_pong
+        t0 = perf()
+        send({"op": "publish", "topic": "/bench/ping", "msg": {"data": float(seq)}})
+        return (await f) - t0
+
+    trips = _Trips()
+    await trips.block(trip, 0, n["rtt_warmup"])
+
+    async def rtt(count: int) -> dict[str, Any]:
+        return await trips.block(trip, count)
+
+    await _serve_commands({
+        "small": lambda: ingest("/bench/f64", n["small"]),
+        "image_json": lambda: ingest("/bench/image", n["image_json"]),
+        "image_cbor": lambda: ingest("/bench/image", n["image_cbor"], "cbor"),
+        "rtt": rtt})
+    ws.disconnect()
+
+
 def client_roslibpy(url: str, n: dict[str, int]) -> None:
     import logging
 
@@ -589,8 +689,24 @@ def client_roslibpy(url: str, n: dict[str, int]) -> None:
 
 
 def run_client(kind: str, url: str, n: dict[str, int]) -> None:
-    if kind == "rcon":
-        asyncio.run(client_rcon(url, n))
+    if kind == "rcon":  # on the event loop the app's bridge thread runs (uvloop where installed)
+        sys.path.insert(0, str(HERE.parent))
+        from rcon_core.bridge.threaded import new_event_loop
+
+        with asyncio.Runner(loop_factory=new_event_loop) as runner:
+            runner.run(client_rcon(url, n, "picows"))
+    elif kind == "rcon_ws":
+        sys.path.insert(0, str(HERE.parent))
+        from rcon_core.bridge.threaded import new_event_loop
+
+        with asyncio.Runner(loop_factory=new_event_loop) as runner:
+            runner.run(client_rcon(url, n, "websockets"))
+    elif kind == "rcon_base":
+        asyncio.run(client_rcon(url, n, None))
+    elif kind == "rcon_asyncio":
+        asyncio.run(client_rcon(url, n, "picows"))
+    elif kind == "bare_picows":
+        asyncio.run(client_bare_picows(url, n))
     elif kind == "bare":
         asyncio.run(client_bare(url, n))
     elif kind == "foxglove":
@@ -631,13 +747,13 @@ def _ratio(a: float | None, b: float | None, higher: bool) -> float | None:
     return a / b if higher else b / a
 
 
-def ratios(rounds: list[dict[str, dict[str, float]]], other: str, key_map: dict[str, str] | None = None
-           ) -> dict[str, list[float]]:
-    """Per-round ratios rcon vs ``other`` (> 1: rcon better).  ``key_map`` compares a rcon figure with a
-    different figure of the other client (CBOR image vs roslibpy's JSON image)."""
+def ratios(rounds: list[dict[str, dict[str, float]]], other: str, key_map: dict[str, str] | None = None,
+           subject: str = "rcon") -> dict[str, list[float]]:
+    """Per-round ratios ``subject`` (an RCON column) vs ``other`` (> 1: RCON better).  ``key_map`` compares a
+    figure with a different figure of the other client (CBOR image vs roslibpy's JSON image)."""
     out: dict[str, list[float]] = {}
     for rnd in rounds:
-        rc, ot = rnd.get("rcon", {}), rnd.get(other, {})
+        rc, ot = rnd.get(subject, {}), rnd.get(other, {})
         for key, higher in RATIO_KEYS.items():
             r = _ratio(rc.get(key), ot.get((key_map or {}).get(key, key)), higher)
             if r is not None:
@@ -684,18 +800,28 @@ def summarize(rounds: list[dict[str, dict[str, float]]], pooled: dict[str, dict[
             if key in pooled.get(kind, {}):
                 per_kind[kind][key]["pooled"] = pooled[kind][key]
 
-    def rat(other: str, key_map: dict[str, str] | None = None) -> dict[str, Any]:
+    def rat(other: str, key_map: dict[str, str] | None = None, subject: str = "rcon") -> dict[str, Any]:
         out: dict[str, Any] = {}
-        for key, vals in ratios(rounds, other, key_map).items():
+        for key, vals in ratios(rounds, other, key_map, subject).items():
             out[key] = {"median": _med(vals), "rounds": vals}
-            r = _ratio(pooled.get("rcon", {}).get(key), pooled.get(other, {}).get(key), RATIO_KEYS[key])
+            r = _ratio(pooled.get(subject, {}).get(key), pooled.get(other, {}).get(key), RATIO_KEYS[key])
             if r is not None:
                 out[key]["pooled"] = r
         return out
 
-    cbor = rat("roslibpy", {"image_cbor_rate": "image_json_rate", "image_cbor_cpu_us": "image_json_cpu_us"})
-    return {"clients": per_kind, "vs_bare": rat("bare"), "vs_roslibpy": rat("roslibpy"),
-            "image_cbor_vs_roslibpy_json": {k: v for k, v in cbor.items() if k.startswith("image_cbor")}}
+    json_for_cbor = {"image_cbor_rate": "image_json_rate", "image_cbor_cpu_us": "image_json_cpu_us"}
+    out: dict[str, Any] = {"clients": per_kind}
+    for subject in ("rcon", "rcon_ws", "rcon_asyncio", "rcon_base"):
+        if subject not in kinds:
+            continue
+        tag = "" if subject == "rcon" else f"{subject}_"
+        for other in ("bare", "bare_picows", "roslibpy", "roslibjs", "foxglove_js", "rcon"):
+            if other in kinds and other != subject:
+                out[f"{tag}vs_{other}"] = rat(other, None, subject)
+        if "roslibpy" in kinds:
+            cbor = rat("roslibpy", json_for_cbor, subject)
+            out[f"{tag}image_cbor_vs_roslibpy_json"] = {k: v for k, v in cbor.items() if k.startswith("image_cbor")}
+    return out
 
 
 def _headline(e: dict[str, Any]) -> float:
@@ -703,28 +829,45 @@ def _headline(e: dict[str, Any]) -> float:
 
 
 def targets(summary: dict[str, Any]) -> list[tuple[str, float, float, str, bool]]:
-    """(what, value, threshold, spread, met) for each target of the issue.  Ingest is judged on CPU per
-    message (wall rates depend on what else runs); round trip on the pooled, interleaved percentiles."""
-    vb, vr, vc = summary["vs_bare"], summary["vs_roslibpy"], summary["image_cbor_vs_roslibpy_json"]
+    """(what, value, threshold, spread, met) for each target: the bridge targets of before (issue 11) for
+    each RCON transport, and issue 29's against roslibjs and @foxglove/roslibjs for the default transport.
+    Ingest is judged on CPU per message (wall rates depend on what else runs); round trip on the pooled,
+    interleaved percentiles (and on CPU per trip against roslibjs)."""
 
-    def get(d: dict[str, Any], key: str) -> tuple[float, str]:
-        e = d.get(key)
+    def get(d: dict[str, Any] | None, key: str) -> tuple[float, str]:
+        e = (d or {}).get(key)
         return (_headline(e), _spread(e["rounds"])) if e else (float("nan"), "")
 
     out = []
+    for subject, tag in (("rcon", ""), ("rcon_ws", "rcon_ws_")):
+        vb, vr = summary.get(f"{tag}vs_bare"), summary.get(f"{tag}vs_roslibpy")
+        if vb is None or vr is None:
+            continue
+        name = {"rcon": "rcon (picows)", "rcon_ws": "rcon_ws (websockets)"}[subject]
+        for what, d, key, threshold in [
+            ("small ingest efficiency vs bare websockets (CPU: bare_us/rcon_us) >= 0.85", vb, "small_cpu_us", 0.85),
+            ("small ingest vs roslibpy (CPU: roslibpy_us/rcon_us) >= 1.3", vr, "small_cpu_us", 1.3),
+            ("round trip p99 no worse than roslibpy (roslibpy_p99/rcon_p99) >= 1.0", vr, "rtt_p99_ms", 1.0),
+            ("image JSON vs roslibpy (CPU per frame) >= 2", vr, "image_json_cpu_us", 2.0),
+            ("image JSON vs roslibpy (frames/s) >= 2", vr, "image_json_rate", 2.0),
+        ]:
+            value, spread = get(d, key)
+            out.append((f"{name}: {what}", value, threshold, spread, value >= threshold))
+        json_ratio, _ = get(vr, "image_json_cpu_us")
+        cbor_ratio, spread = get(summary.get(f"{tag}image_cbor_vs_roslibpy_json"), "image_cbor_cpu_us")
+        out.append((f"{name}: image CBOR vs roslibpy JSON (CPU per frame) > the JSON ratio", cbor_ratio, json_ratio,
+                    spread, cbor_ratio > json_ratio))
+    js, fox = summary.get("vs_roslibjs"), summary.get("vs_foxglove_js")
     for what, d, key, threshold in [
-        ("small ingest efficiency vs bare (CPU: bare_us/rcon_us) >= 0.85", vb, "small_cpu_us", 0.85),
-        ("small ingest vs roslibpy (CPU: roslibpy_us/rcon_us) >= 1.3", vr, "small_cpu_us", 1.3),
-        ("round trip p99 no worse than roslibpy (roslibpy_p99/rcon_p99) >= 1.0", vr, "rtt_p99_ms", 1.0),
-        ("image JSON vs roslibpy (CPU per frame) >= 2", vr, "image_json_cpu_us", 2.0),
-        ("image JSON vs roslibpy (frames/s) >= 2", vr, "image_json_rate", 2.0),
+        ("rcon: small ingest CPU <= 0.8x roslibjs (roslibjs_us/rcon_us) >= 1.25", js, "small_cpu_us", 1.25),
+        ("rcon: image JSON CPU <= 0.5x roslibjs (roslibjs_ms/rcon_ms) >= 2", js, "image_json_cpu_us", 2.0),
+        ("rcon: image CBOR CPU <= @foxglove/roslibjs (foxglove_ms/rcon_ms) >= 1", fox, "image_cbor_cpu_us", 1.0),
+        ("rcon: round trip CPU <= roslibjs (roslibjs_us/rcon_us per trip) >= 1", js, "rtt_cpu_us", 1.0),
     ]:
+        if d is None:
+            continue
         value, spread = get(d, key)
         out.append((what, value, threshold, spread, value >= threshold))
-    json_ratio, _ = get(vr, "image_json_cpu_us")
-    cbor_ratio, spread = get(vc, "image_cbor_cpu_us")
-    out.append(("image CBOR vs roslibpy JSON (CPU per frame) > the JSON ratio", cbor_ratio, json_ratio, spread,
-                cbor_ratio > json_ratio))
     return out
 
 
@@ -750,8 +893,10 @@ def foxglove_targets(rounds: list[dict[str, dict[str, float]]]) -> list[tuple[st
 
 def print_report(summary: dict[str, Any], kinds: list[str]) -> None:
     cl = summary["clients"]
-    w = 17
-    print(f"{'':30}" + "".join(f"{k:>{w}}" for k in kinds) + f"{'rcon vs bare':>21}{'rcon vs roslibpy':>21}")
+    w = 14
+    versus = [k for k in ("bare", "bare_picows", "roslibpy", "roslibjs", "foxglove_js") if k in kinds and "rcon" in kinds]
+    head = f"{'':29}" + "".join(f"{k:>{w}}" for k in kinds) + "".join(f"{'rcon/' + k:>{w + 4}}" for k in versus)
+    print(head)
     for label, key, fmt, *scale in ROWS:
         s = scale[0] if scale else 1.0
         cells = []
@@ -760,23 +905,18 @@ def print_report(summary: dict[str, Any], kinds: list[str]) -> None:
             if e is None:
                 cells.append(f"{'-':>{w}}")
                 continue
-            head = _headline(e)
-            rel = (e["max"] - e["min"]) / 2 / head if head and len(e["rounds"]) > 1 else 0.0
-            cell = fmt.format(head * s) + (f" ±{rel:.0%}" if rel >= 0.005 else "")
+            head_value = _headline(e)
+            rel = (e["max"] - e["min"]) / 2 / head_value if head_value and len(e["rounds"]) > 1 else 0.0
+            cell = fmt.format(head_value * s) + (f" ±{rel:.0%}" if rel >= 0.005 else "")
             cells.append(f"{cell:>{w}}")
         rat = []
-        for d in (summary["vs_bare"], summary["vs_roslibpy"]):
-            e = d.get(key)
-            rat.append(f"{_headline(e):.2f}x {_spread(e['rounds'])}" if e else "-")
-        print(f"{label:30}" + "".join(cells) + f"{rat[0]:>21}{rat[1]:>21}")
-    cb = summary["image_cbor_vs_roslibpy_json"].get("image_cbor_cpu_us")
-    if cb:
-        print(f"{'image CBOR CPU vs roslibpy JSON':30}{'':>{w * len(kinds) + 21}}"
-              f"{cb['median']:.2f}x {_spread(cb['rounds'])}".rstrip())
-    print("cells: median over rounds ±half the range over rounds (round trip: percentiles of all samples pooled, "
-          "± over per-round percentiles);\n"
-          "ratios > 1 mean rcon is better (faster or cheaper), [min-max] over "
-          "rounds; CPU = the client process's user+sys time (all threads) over the receive window")
+        for k in versus:
+            e = summary.get(f"vs_{k}", {}).get(key)
+            rat.append(f"{_headline(e):.2f}x" if e else "-")
+        print(f"{label:29}" + "".join(cells) + "".join(f"{r:>{w + 4}}" for r in rat))
+    print("cells: median over rounds ±half the range over rounds (round trip: percentiles of all samples pooled);\n"
+          "rcon/K: RCON (picows) against client K, > 1 means RCON is better (faster or cheaper); CPU = the client\n"
+          "process's user+sys time (all threads) over the receive window")
     bare = cl.get("bare", {})
     if {"server_small_cpu_us", "small_cpu_us", "server_small_rate", "small_rate"} <= set(bare):
         srv, floor = bare["server_small_cpu_us"]["median"], bare["small_cpu_us"]["median"]
@@ -791,8 +931,25 @@ def print_report(summary: dict[str, Any], kinds: list[str]) -> None:
 # =============================================================================================== driver
 
 #: what each client can do (roslibpy has no CBOR decoding)
-PHASES = {"bare": ("small", "rtt", "image_json", "image_cbor"), "rcon": ("small", "rtt", "image_json", "image_cbor"),
-          "roslibpy": ("small", "rtt", "image_json"), "foxglove": ("small", "rtt", "image_cbor")}
+ALL_PHASES = ("small", "rtt", "image_json", "image_cbor")
+PHASES = {k: ALL_PHASES for k in CLIENTS + OPTIONAL} | {"roslibpy": ("small", "rtt", "image_json"),
+                                                         "foxglove": ("small", "rtt", "image_cbor")}
+
+
+def node_ready() -> str | None:
+    """None when the Node clients can run (``node_modules`` installed now with ``npm ci`` if missing), else
+    the sentence saying why their columns are left out."""
+    node, npm = shutil.which("node"), shutil.which("npm")
+    if node is None:
+        return "node is not on the PATH: the roslibjs and foxglove_js columns are left out"
+    if not (NODE_DIR / "node_modules" / "roslib").is_dir() or not (NODE_DIR / "node_modules" / "@foxglove").is_dir():
+        if npm is None:
+            return "npm is not on the PATH (needed once to install roslib): the roslibjs and foxglove_js columns are left out"
+        print("installing the Node clients (npm ci in benchmarks/node) ...", file=sys.stderr, flush=True)
+        rc = subprocess.call([npm, "ci", "--no-audit", "--no-fund"], cwd=NODE_DIR, stdout=sys.stderr)
+        if rc:
+            return f"npm ci failed in {NODE_DIR} (exit {rc}): the roslibjs and foxglove_js columns are left out"
+    return None
 
 
 class ClientProcess:
@@ -800,8 +957,13 @@ class ClientProcess:
 
     def __init__(self, kind: str, url: str, quick: bool) -> None:
         self.kind = kind
-        cmd = [sys.executable, str(Path(__file__).resolve()), "--client", kind, "--url", url]
-        self.proc = subprocess.Popen(cmd + (["--quick"] if quick else []), stdin=subprocess.PIPE,
+        if kind in NODE:
+            cmd = ["node", str(NODE_DIR / "bench_client.mjs"), "--lib", NODE[kind], "--url", url,
+                   "--sizes", json.dumps(sizes(quick))]
+        else:
+            cmd = [sys.executable, str(Path(__file__).resolve()), "--client", kind, "--url", url]
+            cmd += ["--quick"] if quick else []
+        self.proc = subprocess.Popen(cmd, stdin=subprocess.PIPE,
                                      stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                      env=dict(os.environ, PYTHONWARNINGS="ignore"))
 
@@ -887,6 +1049,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--clients", nargs="*", default=list(CLIENTS))
     parser.add_argument("--rounds", type=int, default=7, help="interleaved rounds (default 7)")
     parser.add_argument("--batch", type=int, default=64, help="small frames per server write (default 64)")
+    parser.add_argument("--base", type=Path, help="source tree for the rcon_base column (RCON as it was)")
     parser.add_argument("--client", help=argparse.SUPPRESS)  # internal: run one client in this process
     parser.add_argument("--url", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
@@ -894,10 +1057,20 @@ def main(argv: list[str] | None = None) -> int:
     if args.client:
         run_client(args.client, args.url, n)
         return 0
-    unknown = [k for k in args.clients if k not in CLIENTS]
+    unknown = [k for k in args.clients if k not in CLIENTS + OPTIONAL]
     if unknown:
-        parser.error(f"unknown client(s) {', '.join(unknown)}; choose from {', '.join(CLIENTS)}")
+        parser.error(f"unknown client(s) {', '.join(unknown)}; choose from {', '.join(CLIENTS + OPTIONAL)}")
     kinds = list(args.clients)
+    if args.base is not None:
+        os.environ[BASE_ENV] = str(args.base.resolve())
+        kinds += [] if "rcon_base" in kinds else ["rcon_base"]
+    elif "rcon_base" in kinds:
+        parser.error("the rcon_base column needs --base TREE")
+    if any(k in NODE for k in kinds):
+        why = node_ready()
+        if why is not None:
+            print(f"note: {why}")
+            kinds = [k for k in kinds if k not in NODE]
     n_rounds = 2 if args.quick else max(1, args.rounds)
     started = time.perf_counter()
     load_before = os.getloadavg()
@@ -910,7 +1083,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"bridge benchmark: {n_rounds} interleaved round(s); sizes {n}; server batch {args.batch}; "
           f"load average before {load_before[0]:.2f}, after {os.getloadavg()[0]:.2f}")
     print_report(summary, kinds)
-    checks = targets(summary) if {"bare", "rcon", "roslibpy"} <= set(kinds) else []
+    checks = targets(summary)
     if {"rcon", "foxglove"} <= set(kinds):
         checks += foxglove_targets(rounds)
     if checks:

@@ -7,6 +7,9 @@
 - ``threaded_client``: a client on its own loop thread, connected to ``sim_thread`` (for Qt tests).
 - ``sim_thread``: a SimServer running on its own loop in a daemon thread, for sync code (roslibpy, Qt).
 - ``sim_url``: the ``ws://`` URL of a threaded sim (usable from sync and async tests alike).
+- ``transport``: runs a test once per WebSocket transport the client has (``picows``, ``websockets``): every
+  ``BridgeClient`` the test makes uses it (``RCON_TRANSPORT``); a module opts in with
+  ``pytestmark = pytest.mark.usefixtures("transport")``.
 - ``sim_fleet``: several robots (one workspace, several links): ``sims = await sim_fleet(3)`` gives
   started SimServers on the test's loop, each on its own free loopback port; ``sim_fleet_threads(3)``
   the same running in threads, for sync code (Qt).
@@ -112,6 +115,21 @@ class _ManualCall:
 
     def cancel(self) -> None:
         self.cancelled = True
+
+def _have_picows() -> bool:
+    from rcon_core.bridge.transport import available
+
+    return "picows" in available()
+
+
+@pytest.fixture(params=[pytest.param("picows", marks=pytest.mark.skipif(not _have_picows(),
+                                                                        reason="picows is not installed")),
+                        "websockets"])
+def transport(request: Any, monkeypatch: Any) -> str:
+    """The transport every ``BridgeClient`` of this test uses (``RCON_TRANSPORT``), once per transport."""
+    monkeypatch.setenv("RCON_TRANSPORT", request.param)
+    return str(request.param)
+
 
 @pytest_asyncio.fixture
 async def sim() -> AsyncIterator[SimServer]:

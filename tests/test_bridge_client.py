@@ -25,6 +25,8 @@ from rcon_core.bridge import (
 from rcon_core.bridge.protocol import png_to_text
 from rcon_core.msgs.values import as_bytes
 
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
+
 pytestmark = pytest.mark.recordings
 
 

@@ -22,6 +22,8 @@ from rcon_core.bridge import BridgeClient
 from rcon_core.msgs.values import as_bytes
 from rcon_core.sim import SimServer
 
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
+
 TOPICS = {
     "/odom": "nav_msgs/Odometry",
     "/gps/fix": "sensor_msgs/NavSatFix",

@@ -7,6 +7,8 @@ import pytest
 from rcon_core.bridge.defaults import default_from_typedefs
 from rcon_core.msgs import TypeRegistry
 
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
+
 TYPES = ["sensor_msgs/msg/Imu", "sensor_msgs/msg/Image", "sensor_msgs/msg/CameraInfo", "nav_msgs/msg/OccupancyGrid",
          "nav_msgs/msg/Odometry", "sensor_msgs/msg/NavSatFix", "std_msgs/msg/Empty", "diagnostic_msgs/msg/DiagnosticArray"]
 

@@ -12,6 +12,8 @@ from rcon_core.bridge import BridgeClient, ConnectionState
 from rcon_core.fuzz import FuzzRun, fuzz_frames
 from rcon_core.loopback import HostileServer
 
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
+
 SEEDS = (11, 2026)
 FRAMES = 2500
 

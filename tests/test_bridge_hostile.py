@@ -16,6 +16,8 @@ from rcon_core.loopback import HostileServer, png_data
 from rcon_core.sim.encoding import fragments, png_frame
 from rcon_core.testing import connected, until
 
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
+
 DEEP = "[" * 1000 + "]" * 1000  # orjson accepts it (its limit is 1024 levels); repr() of it recurses too deep
 
 
@@ -187,3 +189,21 @@ async def test_publish_whose_msg_is_not_an_object_is_dropped_and_counted(hostile
     await hostile.send(cbor2.dumps({"op": "publish", "topic": "/t", "msg": msg}), text=False)
     await still_serving(hostile, client, got)
     assert got == [{"i": 1}] and client.stats["non_object_msgs"] == 2
+
+
+# ------------------------------------------------------------------------------ invalid UTF-8, any size
+
+
+@pytest.mark.parametrize("size", [100, 40_000, 1_500_000], ids=["small", "heavy", "big"])
+async def test_a_text_message_that_is_not_utf8_closes_the_link_whatever_its_size(hostile, client, size):
+    """The WebSocket rule (1007), on each transport: the small ones are parsed in the transport's callback,
+    the heavy ones (32 kB or more) after a copy, the big ones (over 1 MB) in the worker thread."""
+    got = await subscribe(hostile, client)
+    pad = "x" * size
+    frame = b'{"op":"publish","topic":"/t","msg":{"s":"\xff\xfe' + pad.encode() + b'"}}'
+    await hostile.send(frame, text=True)
+    await until(lambda: client.stats["connects"] == 2 and client.state is ConnectionState.CONNECTED, 10)
+    await hostile.wait_for("subscribe", topic="/t", count=2)
+    await hostile.send({"op": "publish", "topic": "/t", "msg": {"i": 1}})
+    await until(lambda: got == [{"i": 1}])
+    assert client.stats["bad_frames"] == 0

@@ -11,6 +11,8 @@ import pytest
 
 from rcon_core.bridge import BridgeClient
 
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
+
 
 async def until(pred, timeout: float = 10.0) -> None:
     async def poll():
@@ -71,3 +73,7 @@ async def test_a_raising_callback_of_the_only_consumer_is_logged_and_delivery_go
         await until(lambda: len(calls) >= 3)
     assert "callback for /imu/data raised" in caplog.text and "widget bug" in caplog.text
     assert client.stats["bad_frames"] == 0 and client.connected
+
+
+async def test_the_link_runs_on_the_transport_the_test_chose(client, transport):
+    assert client.transport == transport and client.link.name == transport

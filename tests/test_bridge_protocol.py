@@ -22,6 +22,8 @@ from rcon_core.bridge.protocol import (
 )
 from rcon_core.bridge.rawdecode import RawDecoder, has_fixed_arrays
 
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
+
 pytestmark = pytest.mark.recordings
 
 ALL = ["client_publish.jsonl", "client_service.jsonl", "malformed.jsonl", "publish_json.jsonl", "publish_png.jsonl", "reconnect.jsonl", "rosapi.jsonl",

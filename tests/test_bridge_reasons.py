@@ -8,14 +8,16 @@ import ssl
 import time
 
 import pytest
-from websockets.exceptions import InvalidMessage
 
 from rcon_core.bridge import AuthRefusedError, BridgeClient, ConnectionState, LinkSettingsError, reasons
+from rcon_core.bridge.errors import HandshakeError
 from rcon_core.bridge.secure import confirm_auth, read_secret, rosauth
 from rcon_core.sim import SimServer
 
 pytest.importorskip("cryptography")
 from tls_certs import make_pki  # noqa: E402
+
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
 
 SECRET = "robot-secret-1"
 
@@ -163,7 +165,7 @@ async def test_client_certificate_when_the_robot_asks_for_one(pki):
         assert "time" in await client.call_service("/rosapi/get_time")
         await client.close()
         without = BridgeClient(server.url, ca_file=str(pki.ca), reconnect=False)
-        with pytest.raises(InvalidMessage):
+        with pytest.raises(HandshakeError):
             await without.connect()
             await without.call_service("/rosapi/get_time", timeout=2)
         assert without.failure is not None and "client certificate" in without.failure.reason

@@ -14,6 +14,8 @@ from rcon_core.bridge import ActionError, BridgeClient, GoalStatus
 from rcon_core.sim import SimServer
 from rcon_core.testing import connected
 
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
+
 ACTION = "/navigate_to_fix"
 ACTION_TYPE = "rcon_sim/action/NavigateToFix"
 

@@ -12,6 +12,8 @@ from rcon_core.bridge.params import parse_like, split
 from rcon_core.sim import SimServer
 from rcon_core.testing import connected
 
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
+
 
 @pytest_asyncio.fixture
 async def client2(sim_ros2: SimServer) -> AsyncIterator[BridgeClient]:

@@ -11,6 +11,8 @@ import pytest
 from rcon_core.bridge import BridgeClient, ServiceError
 from rcon_core.testing import connected, until
 
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
+
 
 @pytest.fixture
 async def client(sim):

@@ -16,6 +16,8 @@ from rcon_core.bridge.freshness import DEFAULT_MAX_AGE, LinkWatch, resolve_max_a
 from rcon_core.loopback import StallProxy
 from rcon_core.testing import until
 
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
+
 #: arrival later than the freshness limit plus this is "stale" (room for a loaded test machine; a command
 #: held through the stall arrives seconds late)
 SLACK = 0.5

@@ -11,6 +11,8 @@ from replay_server import ScriptedServer
 from rcon_core.bridge import BridgeClient
 from rcon_core.bridge.threaded import BridgeThread, LatestValue
 
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
+
 
 def test_run_and_call_cross_threads():
     bt = BridgeThread().start()
@@ -116,3 +118,14 @@ def test_client_on_the_thread_feeds_a_mailbox_decoded():
         assert threads == {"rcon-bridge"}
         bt.run(client.close()).result(5)
         bt.run(server.stop()).result(5)
+
+
+def test_the_bridge_thread_runs_uvloop_where_installed_and_asyncio_when_told(monkeypatch):
+    import sys
+
+    fast = pytest.importorskip("winloop" if sys.platform == "win32" else "uvloop")
+    with BridgeThread() as bt:
+        assert isinstance(bt.loop, fast.Loop)
+    monkeypatch.setenv("RCON_EVENT_LOOP", "asyncio")
+    with BridgeThread() as bt:
+        assert type(bt.loop).__module__.startswith("asyncio")

@@ -11,6 +11,8 @@ from replay_server import ScriptedServer
 
 from rcon_core.bridge import BridgeClient, ConnectionState
 
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
+
 cryptography = pytest.importorskip("cryptography")
 
 

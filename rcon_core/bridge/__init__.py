@@ -1,5 +1,5 @@
-"""RCON's rosbridge v2 client (asyncio + websockets).  No Qt.  ``client.py`` says where each behaviour is decided
-(the connection there, the protocol state in ``session.py``, the websockets adapter in ``wslink.py``...)."""
+"""RCON's rosbridge v2 client (asyncio over picows or websockets).  No Qt.  ``client.py`` says where each behaviour
+is decided (the connection there, the protocol state in ``session.py``, the transports in ``transport.py``...)."""
 
 from .action_server import ActionServer, ServedGoal
 from .client import BridgeClient, ConnectionState

@@ -3,12 +3,13 @@
 The client is the connection: connect, reconnect, auth, ping, stall watch and the writer task.  What the
 protocol is about -- nodes, topics, advertisements, services, calls, goals, provided actions -- is the
 :class:`~rcon_core.bridge.session.Session` (``client.session``), which the client attaches to each fresh
-link; frames are read by ``inbound.py`` and written through the one adapter over ``websockets``
-(``wslink.py``).  Where each behaviour is decided:
+link; messages come in through ``receive.py`` to ``inbound.py`` and frames go out through the link
+(``transport.py``), over picows (``pwlink.py``) or websockets (``wslink.py``).  Where each behaviour is decided:
 
 * reconnect, state, latency and stall detection: here (and ``freshness.py``, ``reasons.py``, ``secure.py``);
-* direct writes and command freshness on the wire: ``wslink.py``;
-* the read loop (the hot path), big frames, fragments, png and bad input from the server: ``inbound.py``,
+* the transport, direct writes and command freshness on the wire: ``transport.py`` (adapters ``pwlink.py``,
+  ``wslink.py``); messages in, in order, sharing the loop: ``receive.py``;
+* the hot path, big frames, fragments, png and bad input from the server: ``inbound.py``,
   ``offload.py``, ``safety.py``;
 * restore after a reconnect, publishing while down, service calls: ``session.py``; shared subscriptions:
   ``topics.py``, ``subscribe.py``; services this client provides: ``services.py``; ROS 2 action goals:
@@ -20,12 +21,13 @@ link; frames are read by ``inbound.py`` and written through the one adapter over
   :meth:`BridgeClient.call_service`, for every caller: widgets, the CLI, discovery, type lookups).
 
 Test hooks (public, documented): ``client.session`` (``session.topics``, ``session.pending``...),
-``client.inbound`` (``inbound.fragments``), ``client.link`` (the current ``wslink.Link`` or None: ``queued``,
-``buffered()``, ``socket``).
+``client.inbound`` (``inbound.fragments``), ``client.link`` (the current ``transport.Link`` or None: ``queued``,
+``buffered()``, ``socket``, ``name``), ``client.transport`` (``picows`` or ``websockets``).
 
 Reconnect
-    ``async for ws in websockets.asyncio.client.connect(...)`` with our own ``reconnect_delays``: capped
-    exponential backoff (``backoff_min`` doubling up to ``backoff_max``) with full jitter.  After every
+    One attempt at a time through the chosen transport (``transport.open_link``: picows or websockets, see
+    ``transport.py``), with our own ``_delays``: capped exponential backoff (``backoff_min`` doubling up to
+    ``backoff_max``) with full jitter.  After every
     (re)connect the client sends, in order: ``auth`` (when configured), ``set_level`` (when set), every
     advertisement, every advertised service and action, then every subscription -- rosbridge forgets all
     of them with the connection (``reconnect.jsonl:8``; ``session.py``).  TLS certificate errors and a refused
@@ -48,8 +50,8 @@ Latency and stall detection
     ``latency_interval`` (2 s) only.  ``client.latency`` is the ping/pong round trip.  It needs no rosapi and
     works on any server; a pong missing for ``pong_timeout`` seconds drops the link (then it reconnects).
 
-Frames above the hard ``max_frame_size`` (by default twice ``max_size``) make the websockets library close
-the link, which then reconnects.
+Frames and messages above the hard ``max_frame_size`` (by default twice ``max_size``) make the transport
+close the link (1009), which then reconnects.
 """
 
 from __future__ import annotations
@@ -64,20 +66,19 @@ import time
 from collections.abc import Callable, Generator
 from typing import Any
 
-from websockets.asyncio.client import ClientConnection, connect
-from websockets.exceptions import ConnectionClosed
-
 from . import rosapi_guard
 from .action_server import ProvidedActions
 from .envelope import Envelope
-from .errors import AuthRefusedError, NotConnectedError, RosapiRefusedError, ServiceError
+from .errors import AuthRefusedError, LinkClosedError, NotConnectedError, RosapiRefusedError, ServiceError
 from .freshness import LinkEvent, LinkWatch, watch_link
 from .guard import LinkGuard
 from .inbound import BadFrames, Inbound
+from .linkbase import Link
 from .nodes import Node
 from .params import Params
 from .protocol import encode
 from .reasons import Failure, describe, refused_auth
+from .receive import Receiver
 from .rosinfo import RosInfo
 from .rosinfo import detect as detect_ros
 from .safety import without_traceback
@@ -85,7 +86,7 @@ from .secure import ssl_context
 from .session import LOG_LEVELS, Session
 from .stats import BridgeStats
 from .traffic import Traffic
-from .wslink import Link
+from .transport import choose, open_link
 
 log = logging.getLogger(__name__)
 
@@ -136,7 +137,8 @@ class BridgeClient:
                  open_timeout: float = 10.0, max_size: int = 32 << 20, max_message_size: int | None = None,
                  max_frame_size: int | None = None, fragment_timeout: float = 10.0, big_frame: int = 1 << 20,
                  stall_timeout: float | None = 1.0, client_cert: str | None = None,
-                 client_key: str | None = None, max_decoded: int | None = None) -> None:
+                 client_key: str | None = None, max_decoded: int | None = None,
+                 transport: str | None = None) -> None:
         if not isinstance(url, str) or not url.startswith(("ws://", "wss://")):
             raise ValueError(f"url must start with ws:// or wss://, got {url!r}")
         if typed_arrays not in ("list", "numpy"):
@@ -144,6 +146,8 @@ class BridgeClient:
         if isinstance(auth, dict):
             _check_auth(auth)
         self.url = url
+        #: the WebSocket library carrying the link: ``picows`` or ``websockets`` (``transport.choose``)
+        self.transport = choose(transport)
         self.reconnect = reconnect
         self.ca_file = ca_file
         self.client_cert, self.client_key = client_cert, client_key
@@ -171,7 +175,7 @@ class BridgeClient:
         self.stats = BridgeStats()
         self._state = ConnectionState.CLOSED
         self._state_listeners: list[Callable[[ConnectionState], None]] = []
-        #: the current connection (None while down); see ``wslink.py``
+        #: the current connection (None while down); see ``linkbase.py``
         self.link: Link | None = None
         self._task: asyncio.Task[None] | None = None
         self._connected = asyncio.Event()
@@ -409,19 +413,13 @@ class BridgeClient:
             yield wait
             delay = min(delay * 2, self.backoff_max)
 
-    def _process_exception(self, exc: Exception) -> Exception | None:
-        self.last_error = without_traceback(exc)
-        if describe(exc).fatal:
-            return exc  # retrying cannot fix a certificate problem, a bad URL...
-        if self._state is not ConnectionState.CLOSED:
-            log.info("connecting to %s failed: %s", self.url, exc)
-        return None
-
-    def _connector(self) -> connect:
-        return connect(self.url, ssl=self._ssl_context(), compression=None, ping_interval=None,
-                       open_timeout=self.open_timeout, max_size=self.max_frame_size,
-                       process_exception=self._process_exception, reconnect_delays=self._delays,
-                       close_timeout=2)
+    async def _open(self) -> Link:
+        """One connection attempt with the chosen transport (``transport.open_link``)."""
+        receiver = Receiver(self.inbound)
+        link = await open_link(self.transport, self.url, receiver, self.session.stale_in_queue,
+                               ssl=self._ssl_context(), open_timeout=self.open_timeout, max_size=self.max_frame_size)
+        link.receiver = receiver
+        return link
 
     async def connect(self, timeout: float | None = None) -> None:
         """Connect; returns once connected.  With ``reconnect=False`` the first failure is raised; with
@@ -433,14 +431,14 @@ class BridgeClient:
             self._set_state(ConnectionState.CONNECTING)
             if not self.reconnect:
                 try:
-                    ws = await self._connector()
+                    link = await self._open()
                 except BaseException as exc:
                     self.last_error = exc
                     if isinstance(exc, Exception):
                         self._report(self._why(exc))
                     self._set_state(ConnectionState.CLOSED)
                     raise
-                self._task = asyncio.create_task(self._serve_once(ws))
+                self._task = asyncio.create_task(self._serve_once(link))
             else:
                 self._task = asyncio.create_task(self._run())
         waiter = asyncio.ensure_future(self._connected.wait())
@@ -481,13 +479,28 @@ class BridgeClient:
         await self.close()
 
     async def _run(self) -> None:
+        """Connect, serve, reconnect: a failed attempt is retried after ``_delays()`` unless it is fatal
+        (``reasons.describe``); a lost link is reconnected after a short random pause."""
+        delays: Generator[float] | None = None
         try:
-            async for ws in self._connector():
+            while True:
+                try:
+                    link = await self._open()
+                except Exception as exc:
+                    self.last_error = exc
+                    if describe(exc).fatal:
+                        raise  # retrying cannot fix a certificate problem, a bad URL...
+                    if self._state is not ConnectionState.CLOSED:
+                        log.info("connecting to %s failed: %s", self.url, exc)
+                    delays = delays or self._delays()
+                    await asyncio.sleep(next(delays))
+                    continue
+                delays = None
                 opened = time.monotonic()
-                await self._serve_once(ws, final=False)
+                await self._serve_once(link, final=False)
                 if self._closing:
                     break
-                if refused_auth(ws.close_code, ws.close_reason, auth_sent=self.auth is not None,
+                if refused_auth(link.close_code, link.close_reason, auth_sent=self.auth is not None,
                                 seconds_open=time.monotonic() - opened):
                     raise AuthRefusedError(f"{self.url} closed the link after the auth op")
                 self._set_state(ConnectionState.RECONNECTING)
@@ -502,8 +515,10 @@ class BridgeClient:
         finally:
             self._set_state(ConnectionState.CLOSED)
 
-    async def _serve_once(self, ws: ClientConnection, final: bool = True) -> None:
-        link = self.link = Link(ws, self.session.stale_in_queue)
+    async def _serve_once(self, link: Link, final: bool = True) -> None:
+        self.link = link
+        receiver: Receiver = link.receiver
+        self.inbound.waiting = receiver.waiting
         self.stats.connects += 1
         writer = asyncio.create_task(link.run_writer())
         pinger = asyncio.create_task(self._pinger(link))
@@ -512,21 +527,26 @@ class BridgeClient:
             self.session.attached(link)
             self._connected.set()
             self._set_state(ConnectionState.CONNECTED)
-            await self.inbound.read(link.recv, link.waiting)
-        except ConnectionClosed as exc:
-            self.last_error = without_traceback(exc)
+            await link.wait_closed()
+            closed = link.closed_error()
+            # kept without its traceback: the frames it holds keep the dead connection's buffers alive
+            self.last_error = without_traceback(closed) if closed is not None else None
+            if receiver.task is not None:  # messages that arrived before the close are still delivered
+                await asyncio.shield(receiver.task)
         finally:
+            receiver.cancel()
             self.link = None
             self._connected.clear()
             writer.cancel()
             pinger.cancel()
             self.inbound.disconnected()
+            self.inbound.waiting = None
             self.session.detached()
             link.release()  # its buffers go now, not at the collector's next full pass (wslink.py)
             if final:
                 self._set_state(ConnectionState.CLOSED)
         if not self._closing:
-            log.warning("connection to %s lost (%s)", self.url, ws.close_reason or ws.close_code or "no close frame")
+            log.warning("connection to %s lost (%s)", self.url, link.close_reason or link.close_code or "no close frame")
 
     async def _send_auth(self, link: Link) -> None:
         """The ``auth`` op first on a fresh connection (when configured); the session restores the rest."""
@@ -556,7 +576,7 @@ class BridgeClient:
                     link.abort()
                     return
                 await asyncio.sleep(self.latency_interval)
-        except ConnectionClosed:
+        except LinkClosedError:
             pass
 
     def _link_event(self, event: LinkEvent, detail: Any) -> bool:

@@ -74,6 +74,10 @@ class ProtocolError(BridgeError):
     """A frame from the server could not be understood (logged, never raised out of the reader)."""
 
 
+class NotUtf8(BridgeError):
+    """A text message that is not UTF-8: the transport closes the link (code 1007, the WebSocket rule)."""
+
+
 class AuthRefusedError(BridgeError):
     """The robot closed the link right after the ``auth`` op: it refused the rosauth credentials (a wrong
     secret, or a clock too far from the robot's).  Fatal: the client does not retry."""
@@ -82,3 +86,28 @@ class AuthRefusedError(BridgeError):
 class LinkSettingsError(BridgeError, ValueError):
     """A CA file, client certificate, key or auth secret that cannot be used; the message says which and
     why.  Fatal: nothing is retried with settings that cannot work."""
+
+
+class LinkClosedError(BridgeError):
+    """The WebSocket connection closed (what every transport adapter raises from its reads, writes and pings
+    once the link is gone): ``code`` and ``reason`` of the close frame, ``code`` 1006 when none came."""
+
+    def __init__(self, code: int = 1006, reason: str = "") -> None:
+        super().__init__(f"link closed ({code}{': ' + reason if reason else ''})")
+        self.code = code
+        self.reason = reason
+
+
+class HandshakeError(BridgeError):
+    """The server did not open a WebSocket: it answered HTTP with another ``status`` (None when its answer
+    was no HTTP at all), or ``closed`` the connection during the handshake.  The library's own exception,
+    when there was one, is the ``__cause__``."""
+
+    def __init__(self, message: str, status: int | None = None, closed: bool = False) -> None:
+        super().__init__(message)
+        self.status = status
+        self.closed = closed
+
+
+class BadUrlError(BridgeError, ValueError):
+    """A URL no transport can use (the message says why).  Fatal."""

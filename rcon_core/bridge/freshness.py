@@ -46,6 +46,8 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from .errors import LinkClosedError
+
 #: default freshness limit of a non-latched publisher (seconds)
 DEFAULT_MAX_AGE = 0.25
 
@@ -167,7 +169,7 @@ Report = Callable[[LinkEvent, Any], bool]
 
 
 async def watch_link(link: Any, watch: LinkWatch, pong_timeout: float, report: Report) -> None:
-    """Probe one connection (a ``wslink.Link``) until it closes: pings, stall and recovery reports, the cut
+    """Probe one connection (a ``transport.Link``) until it closes: pings, stall and recovery reports, the cut
     and the timeout."""
     probes: set[asyncio.Task[None]] = set()
     try:
@@ -201,12 +203,10 @@ async def watch_link(link: Any, watch: LinkWatch, pong_timeout: float, report: R
 
 
 async def _probe(link: Any, watch: LinkWatch, sent: float, report: Report) -> None:
-    from websockets.exceptions import ConnectionClosed
-
     try:
         waiter = await link.ping()
         latency = await waiter
-    except ConnectionClosed:
+    except LinkClosedError:
         return
     watch.answered(sent)
     report(LinkEvent.LATENCY, latency)

@@ -1,25 +1,20 @@
-"""Frames in: the read loop (the hot path), frame decoding, fragments, ``png`` frames and bad-frame accounting.
+"""Frames in: the hot path, frame decoding, fragments, ``png`` frames and bad-frame accounting.
 
-Decision: the read loop
-    Per message: one ``recv``, one ``orjson.loads`` (CBOR for binary frames), a few dict lookups and a
-    direct call of the topic's ``fast`` function -- for a topic with one consumer, its callback.
+Decision: the hot path
+    Per message: one ``orjson.loads`` straight from the transport's buffer (CBOR for binary frames), a few
+    dict lookups and a direct call of the topic's ``fast`` function -- for a topic with one consumer, its
+    callback -- all inside the transport's callback (:meth:`Inbound.take`, fed by ``receive.py``).
     Everything unusual (other ops, unknown topics, malformed frames) takes the slow path
     (:meth:`Inbound.other`), which unwraps ``fragment`` and ``png`` frames and hands every op to the
     session (``session.handle``).  Frames above ``big_frame`` (1 MB), and every ``png`` frame whatever its
-    size (its pixels may be far larger than the frame), are decoded in a worker thread while the read
-    loop waits for them, so the event loop keeps serving and the order of delivery is kept
+    size (its pixels may be far larger than the frame), are decoded in a worker thread while the next
+    messages wait, so the event loop keeps serving and the order of delivery is kept
     (``offload.py``).  A frame of a latest-only topic (every consumer asked for ``queue_length`` 1) is
     skipped before decoding when a newer frame of the same topic already waits (``latest.py``).
-
-Decision: sharing the loop
-    ``await recv()`` does not give the event loop a turn while websockets already holds received frames: a
-    256 kB read holds hundreds of small frames, and a link that fell behind holds several camera frames.
-    The read loop therefore yields (``await asyncio.sleep(0)``) every ``YIELD_EVERY`` (64) frames and
-    before each frame of 32 kB or more, so due timers (a teleop pad's 20 Hz command), writes and the other
-    robots' links on the same loop wait for at most that much work, not for the whole backlog.
+    Sharing the loop (a turn of the loop holds about 1 ms of messages) is ``receive.py``'s rule.
 
 Decision: bad input from the server
-    No exception raised while handling one frame ends the read loop: the loop body and the slow path
+    No exception raised while handling one frame ends the link: the hot path, :meth:`Inbound.one` and the slow path
     catch everything at the frame boundary (``stats.frame_errors``).  Invalid JSON, unknown ops,
     missing or mistyped fields, JSON nested too deep to format, broken fragments, ``png`` data that is no
     image, PNGs whose header declares more pixel bytes than ``max_size`` (refused before decoding,
@@ -49,7 +44,7 @@ from typing import Any
 
 import orjson
 
-from .errors import ProtocolError
+from .errors import NotUtf8, ProtocolError
 from .latest import LatestOnly, topic_of
 from .offload import BigFrames, decode_big
 from .protocol import DecodedTooBig, FragmentAssembler, RefusedFrame, decode_binary, decode_png, loads_text
@@ -60,8 +55,7 @@ from .traffic import Traffic
 log = logging.getLogger(__name__)
 
 _loads = orjson.loads
-_sleep = asyncio.sleep
-#: the read loop hands the event loop back after this many frames in a row (and before each big one)
+#: the event loop gets a turn after this many messages in a row (and before each big one; ``receive.py``)
 YIELD_EVERY = 64
 
 
@@ -111,67 +105,130 @@ class Inbound:
         #: a big message completed by fragments or a big png: the read loop awaits it (order is kept)
         self.deferred: Callable[[], Awaitable[Any]] | None = None
         self._sweeper: asyncio.TimerHandle | None = None  # expires unfinished messages without new fragments
+        self.topics = session.topics
+        #: messages of ``heavy`` bytes or more take the awaitable path (:meth:`one`)
+        self.heavy = min(self.latest.min_size, big_frame)
+        #: the transport's receive queue (``Receiver.waiting``), for skipping stale latest-only frames
+        self.waiting: Callable[[], Iterable[bytes | str]] | None = None
 
-    async def read(self, recv: Callable[[], Awaitable[str | bytes]],
-                   waiting: Callable[[], Iterable[bytes]] | None = None) -> None:
-        """Read frames until ``recv`` raises (the connection closed).  ``waiting()``: the frames received
-        and not read yet (``Link.waiting``); with it, stale frames of latest-only topics are skipped."""
-        loads = _loads
-        topics = self.session.topics
-        big = self.big_frame
-        other = self.other
-        failed = self.bad.failed
-        latest = self.latest
-        skip_size = latest.min_size if waiting is not None else 1 << 62
-        heavy = latest.min_size
-        burst = YIELD_EVERY
-        count = self.traffic.count
-        n = 0
-        while True:
-            raw = await recv()
-            n += 1
-            if n >= burst or len(raw) >= heavy:  # let timers and other links run (see "sharing the loop")
-                n = 0
-                await _sleep(0)
-            try:  # the frame boundary: nothing raised while handling one frame ends the loop
-                if len(raw) >= skip_size and await latest.stale(raw, waiting):  # type: ignore[arg-type]
-                    self.traffic.count_name(topic_of(raw), len(raw))  # skipped, but it crossed the link
-                    continue
-                if len(raw) > big:
-                    m = await self.decode_big(raw)
-                    if m is None:
-                        continue
-                elif isinstance(raw, str):
-                    try:
-                        m = loads(raw)
-                    except orjson.JSONDecodeError:
-                        m = self.lenient(raw)  # rosbridge 2.x's bare NaN tokens (protocol.loads_text)
-                        if m is None:
-                            continue
-                else:
-                    m = self.decode_binary(raw)
-                    if m is None:
-                        continue
-                count(m, len(raw))
+    def take(self, raw: Any, text: bool) -> Awaitable[None] | None:
+        """One whole message from the transport (``receive.Receiver``): ``raw`` is bytes-like and valid only
+        during this call (a view into the transport's read buffer), ``text`` says it came in a text frame
+        (its UTF-8 is checked here: orjson parses only valid UTF-8, and text it refuses is decoded to say
+        which).  A small message is handled now and None returned; one that must wait (a big frame decoded
+        in the worker, a frame of a latest-only topic, a big message completed by fragments) is copied and
+        returned as an awaitable the caller must await before the next message.  Raises :class:`NotUtf8`
+        for a text message that is not UTF-8 (the transport then closes the link)."""
+        if len(raw) >= self.heavy and (len(raw) > self.big_frame or self._latest_only(raw)):
+            return self.one(raw if raw.__class__ is bytes else bytes(raw), text)
+        try:  # the frame boundary: nothing raised while handling one frame ends the link
+            if text:
                 try:
-                    entry = topics[m["topic"]] if m["op"] == "publish" else None
-                    msg = m["msg"]
-                except (KeyError, TypeError):  # not a publish of a subscribed topic, or malformed: slow path
-                    entry = None
-                if entry is not None and msg.__class__ is dict:
+                    m = _loads(raw)
+                except orjson.JSONDecodeError:
                     try:
-                        entry.fast(msg)
-                    except Exception:
-                        entry.callback_failed()
-                    continue
-                other(m)
-                while self.deferred is not None:  # a big message completed by fragments: decoded off the loop
-                    job, self.deferred = self.deferred, None
-                    inner = await job()
-                    if inner is not None:
-                        other(inner)
-            except Exception as exc:
-                failed(exc)
+                        raw = str(raw, "utf-8")
+                    except UnicodeDecodeError as exc:
+                        raise NotUtf8(exc) from None
+                    m = self.lenient(raw)  # rosbridge 2.x's bare NaN tokens (protocol.loads_text)
+                    if m is None:
+                        return None
+            else:
+                m = self.decode_binary(raw if raw.__class__ is bytes else bytes(raw))
+                if m is None:
+                    return None
+            self.traffic.count(m, len(raw))
+        except NotUtf8:
+            raise
+        except Exception as exc:
+            self.bad.failed(exc)
+            return None
+        return self.deliver(m)
+
+    def deliver(self, m: Any) -> Awaitable[None] | None:
+        """A decoded message: the fast path (a publish of a subscribed topic whose ``msg`` is an object goes
+        to the topic's ``fast`` function), else the slow path; an awaitable when a big message completed by
+        fragments waits to be decoded off the loop (see :meth:`take`).  Never raises."""
+        try:
+            try:
+                entry = self.topics[m["topic"]] if m["op"] == "publish" else None
+                msg = m["msg"]
+            except (KeyError, TypeError):  # not a publish of a subscribed topic, or malformed: slow path
+                entry = None
+            if entry is not None and msg.__class__ is dict:
+                try:
+                    entry.fast(msg)
+                except Exception:
+                    entry.callback_failed()
+                return None
+            self.other(m)
+            if self.deferred is not None:
+                return self._deferred()
+        except Exception as exc:
+            self.bad.failed(exc)
+        return None
+
+    def _latest_only(self, raw: Any) -> bool:
+        """Whether a frame names a latest-only topic in its head (``latest.topic_of``), while a receive queue
+        can be looked into."""
+        if self.waiting is None:
+            return False
+        entry = self.topics.get(topic_of(raw))  # type: ignore[arg-type]
+        return entry is not None and entry.latest_only
+
+    async def one(self, raw: bytes, text: bool) -> None:
+        """A message of ``heavy`` size or more (a copy; a text message's UTF-8 unchecked): skipped when stale
+        (latest-only), decoded in the worker when above ``big_frame``, then delivered.  Raises
+        :class:`NotUtf8` for a text message that is not UTF-8."""
+        try:
+            waiting = self.waiting
+            if waiting is not None and await self.latest.stale(raw, waiting):
+                self.traffic.count_name(topic_of(raw), len(raw))  # skipped, but it crossed the link
+                return
+            if len(raw) > self.big_frame:
+                m = await self.decode_big(raw, text)
+                if m is None:
+                    return
+            elif text:
+                try:
+                    m = _loads(raw)
+                except orjson.JSONDecodeError:
+                    try:
+                        decoded = str(raw, "utf-8")
+                    except UnicodeDecodeError as exc:
+                        raise NotUtf8(exc) from None
+                    m = self.lenient(decoded)
+                    if m is None:
+                        return
+            else:
+                m = self.decode_binary(raw)
+                if m is None:
+                    return
+            self.traffic.count(m, len(raw))
+            try:
+                entry = self.topics[m["topic"]] if m["op"] == "publish" else None
+                msg = m["msg"]
+            except (KeyError, TypeError):
+                entry = None
+            if entry is not None and msg.__class__ is dict:
+                try:
+                    entry.fast(msg)
+                except Exception:
+                    entry.callback_failed()
+                return
+            self.other(m)
+            await self._deferred()
+        except NotUtf8:
+            raise
+        except Exception as exc:
+            self.bad.failed(exc)
+
+    async def _deferred(self) -> None:
+        while self.deferred is not None:  # a big message completed by fragments: decoded off the loop
+            job, self.deferred = self.deferred, None
+            inner = await job()
+            if inner is not None:
+                self.other(inner)
 
     def disconnected(self) -> None:
         """The connection is gone: nothing it started is finished on the next one (a big message waiting
@@ -212,13 +269,14 @@ class Inbound:
 
     # -- decoding -------------------------------------------------------------------------------------
 
-    async def decode_big(self, raw: str | bytes) -> Any:
-        """Decode a frame above ``big_frame`` in the worker thread (see ``offload.py``); None when dropped."""
+    async def decode_big(self, raw: str | bytes, text: bool = False) -> Any:
+        """Decode a frame above ``big_frame`` in the worker thread (see ``offload.py``; ``text``: bytes of a
+        text frame); None when dropped.  Raises :class:`NotUtf8` for a text frame that is not UTF-8."""
         if len(raw) > self.max_size:
             self.stats.oversize_frames += 1
             self.bad.report("size", f"frame of {len(raw)} bytes exceeds max_message_size={self.max_size}; dropped")
             return None
-        return await self._offloaded(decode_big, raw, self.typed_arrays, self.max_size, self.max_decoded)
+        return await self._offloaded(decode_big, raw, self.typed_arrays, self.max_size, text, self.max_decoded)
 
     async def _offloaded(self, fn: Callable[..., Any], *args: Any) -> Any:
         self.stats.big_frames += 1

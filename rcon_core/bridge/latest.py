@@ -3,14 +3,14 @@
 Decision: where a camera backlog builds and how the client ends it
     A subscription with ``queue_length: 1`` asks the server to keep only the newest message of a topic
     (rosbridge and the sim drop the oldest).  Frames the server has already written still wait downstream:
-    in the kernel's socket buffers and in the ``websockets`` receive queue (up to 16 frames: 15 MB of rgb8
-    at 640x480).  When the client's loop is slower than the stream (a busy CPU), every one of them would be
+    in the kernel's socket buffers and in the client's receive queue (the messages the ``receive.Receiver``
+    holds: above 16 it stops reading).  When the client's loop is slower than the stream (a busy CPU), every one of them would be
     decoded and delivered in turn and the latency of what is shown would grow.
 
-    So for a topic whose every consumer asked for ``queue_length: 1`` (:meth:`TopicEntry.wanted`), the read
-    loop skips a frame of at least ``min_size`` bytes when a later complete frame of the *same* topic is
-    already in the receive queue (:meth:`~rcon_core.bridge.wslink.Link.waiting`).  A backlog mostly sits in
-    the kernel's buffers, which the loop reads 256 kB per turn, so before deciding the read loop gives the
+    So for a topic whose every consumer asked for ``queue_length: 1`` (:meth:`TopicEntry.wanted`), the client
+    skips a frame of at least ``min_size`` bytes when a later complete frame of the *same* topic is
+    already in the receive queue (:meth:`~rcon_core.bridge.receive.Receiver.waiting`).  A backlog mostly sits in
+    the kernel's buffers, which the loop reads 256 kB per turn, so before deciding the client gives the
     event loop up to ``READ_AHEAD`` (4) turns to read what the kernel already holds (about one more
     640x480 rgb8 frame; it stops as soon as a newer frame shows up).  A stale frame is not decoded
     and not delivered, and it is counted (``stats.stale_skipped`` and the entry's ``skipped``) as
@@ -87,7 +87,7 @@ def _cbor_topic(head: bytes) -> str | None:
 
 
 class LatestOnly:
-    """The read loop's check: is this frame stale, a newer one of its topic already waiting?"""
+    """The client's check: is this frame stale, a newer one of its topic already waiting?"""
 
     __slots__ = ("topics", "stats", "min_size")
 
@@ -96,7 +96,7 @@ class LatestOnly:
         self.stats = stats
         self.min_size = min_size
 
-    async def stale(self, raw: str | bytes, waiting: Callable[[], Iterable[bytes]]) -> bool:
+    async def stale(self, raw: str | bytes, waiting: Callable[[], Iterable[bytes | str]]) -> bool:
         """True (and counted) when ``raw`` is a frame of a latest-only topic and a later complete frame of
         the same topic is in ``waiting()``; the caller then drops ``raw`` without decoding it.  Before it
         decides, it gives the event loop up to ``READ_AHEAD`` turns, so what the kernel already holds is
@@ -116,6 +116,6 @@ class LatestOnly:
                 await _sleep(0)
         return False
 
-    def _newer_waiting(self, topic: str, waiting: Callable[[], Iterable[bytes]]) -> bool:
+    def _newer_waiting(self, topic: str, waiting: Callable[[], Iterable[bytes | str]]) -> bool:
         size = self.min_size
         return any(len(later) >= size and topic_of(later) == topic for later in waiting())

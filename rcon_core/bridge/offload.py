@@ -4,8 +4,8 @@ Decisions:
 
 * A frame larger than the client's ``big_frame`` threshold (1 MB by default; a 640x480 rgb8 image in JSON
   is about 1.2 MB) is decoded in one worker thread (``run_in_executor``) instead of on the event loop:
-  JSON or CBOR, and for a complete ``png`` frame also the PNG and the JSON inside it.  The read loop
-  awaits the result before it reads the next frame, so delivery keeps the order of arrival (per topic and
+  JSON or CBOR, and for a complete ``png`` frame also the PNG and the JSON inside it.  The next
+  messages wait for the result (``receive.Receiver`` holds them), so delivery keeps the order of arrival (per topic and
   overall) while the loop goes on serving pings, writes, timers and other tasks.  The same holds for a big
   message completed by ``fragment`` frames and for the base64 data of a ``png`` frame assembled from
   pieces.  Small frames never come here: their path is one length comparison longer than before.
@@ -28,19 +28,27 @@ import asyncio
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
-from .errors import ProtocolError
+from .errors import NotUtf8, ProtocolError
 from .protocol import check_json_size, decode_binary, decode_png, loads_text
 from .safety import safe_text
 
 
-def decode_big(raw: str | bytes, typed_arrays: str, max_bytes: int, max_decoded: int | None = None) -> Any:
-    """Decode one frame completely (runs in the worker thread). ``max_decoded``: the bytes of Python
-    objects the frame may decode to (see the module docstring); over it the frame is refused."""
-    if isinstance(raw, str):
+def decode_big(raw: str | bytes, typed_arrays: str, max_bytes: int, text: bool = False,
+               max_decoded: int | None = None) -> Any:
+    """Decode one frame completely (runs in the worker thread): ``raw`` a ``str``, the bytes of a text frame
+    (``text``: orjson checks their UTF-8; :class:`NotUtf8` when they are not) or of a binary frame.
+    ``max_decoded``: the bytes of Python objects the frame may decode to (see the module docstring); over
+    it the frame is refused."""
+    if isinstance(raw, str) or text:
         check_json_size(raw, max_decoded)
         try:
             m = loads_text(raw)
         except ProtocolError as exc:
+            if isinstance(raw, bytes):
+                try:
+                    raw.decode("utf-8")
+                except UnicodeDecodeError as bad:
+                    raise NotUtf8(bad) from None
             raise ProtocolError(f"text frame of {len(raw)} bytes is {exc}") from None
     else:
         m = decode_binary(raw, typed_arrays, max_decoded)
@@ -72,7 +80,7 @@ class BigFrames:
         loop = asyncio.get_running_loop()
         try:
             return await loop.run_in_executor(self._pool, fn, *args)
-        except ProtocolError:
+        except (ProtocolError, NotUtf8):
             raise
         except (MemoryError, RecursionError, ValueError, TypeError) as exc:
             raise ProtocolError(f"a big frame cannot be decoded ({safe_text(exc)})") from None

@@ -32,15 +32,7 @@ import ssl
 import time
 from dataclasses import dataclass, replace
 
-from websockets.exceptions import (
-    ConnectionClosed,
-    InvalidHandshake,
-    InvalidMessage,
-    InvalidStatus,
-    InvalidURI,
-)
-
-from .errors import AuthRefusedError, LinkSettingsError
+from .errors import AuthRefusedError, BadUrlError, HandshakeError, LinkClosedError, LinkSettingsError
 
 #: seconds after opening within which a close frame on an authenticating link counts as a refusal
 AUTH_WINDOW = 3.0
@@ -120,7 +112,7 @@ def _classify(exc: BaseException, ca_file: str | None) -> tuple[str, bool]:
         return _certificate(exc, ca_file), True
     if isinstance(exc, ssl.SSLError):
         return _tls(exc)
-    if isinstance(exc, InvalidMessage) and isinstance(exc.__cause__, ssl.SSLError):
+    if isinstance(exc, HandshakeError) and isinstance(exc.__cause__, ssl.SSLError):
         return _classify(exc.__cause__, ca_file)
     if isinstance(exc, ConnectionRefusedError):
         return REFUSED, False
@@ -138,17 +130,15 @@ def _classify(exc: BaseException, ca_file: str | None) -> tuple[str, bool]:
         if exc.errno == errno.ENETUNREACH:
             return "network unreachable", False
         return f"network error: {exc.strerror or exc}", False
-    if isinstance(exc, InvalidURI):
+    if isinstance(exc, BadUrlError):
         return "not a valid rosbridge URL", True
-    if isinstance(exc, InvalidStatus):
-        return f"{NOT_WEBSOCKET} (HTTP {exc.response.status_code})", False
-    if isinstance(exc, InvalidMessage):
-        if isinstance(exc.__cause__, EOFError):
+    if isinstance(exc, HandshakeError):
+        if exc.status is not None:
+            return f"{NOT_WEBSOCKET} (HTTP {exc.status})", False
+        if exc.closed:
             return CLOSED_IN_HANDSHAKE, False
-        return NOT_WEBSOCKET, False
-    if isinstance(exc, InvalidHandshake):
         return f"{NOT_WEBSOCKET} ({_bounded(str(exc))})", False
-    if isinstance(exc, ConnectionClosed):
+    if isinstance(exc, LinkClosedError):
         return "link lost", False
     return _bounded(f"{type(exc).__name__}: {exc}"), True
 

@@ -5,7 +5,7 @@ nodes, topics and their shared subscriptions (``topics.py``), advertisements, se
 (``services.py``), service calls waiting for their answer, action goals (``goals.py``) and actions this
 client provides (``action_server.py``) -- and none of the connection: events in (:meth:`Session.handle` for
 each op from the server, :meth:`attached` / :meth:`detached` when a link comes and goes), frames out through
-the :class:`~rcon_core.bridge.wslink.Link` the client attached (nothing is written while there is none),
+the :class:`~rcon_core.bridge.linkbase.Link` the client attached (nothing is written while there is none),
 and public methods for the nodes.  ``BridgeClient`` (``client.py``) keeps connect, reconnect, ping, stall
 watch and writing; ``inbound.py`` reads.
 
@@ -20,7 +20,7 @@ Decision: publishing while the link is down or stalled
     publish made while down is dropped and counted (``Publisher.dropped``, ``stats.dropped_while_down``).
     Frames still in the outgoing queue when the link drops are dropped too (``stats.dropped_on_disconnect``).
     A publisher's ``max_age`` (0.25 s by default for non-latched topics) is its freshness limit: a publish
-    is never written after it (``wslink.Link.send_command``, ``freshness.py``; ``stats.stale_dropped``).
+    is never written after it (``linkbase.Link.send_command``, ``freshness.py``; ``stats.stale_dropped``).
     The frame around a message is encoded once per advertisement (``AdvertEntry.head``); ``latch`` is
     repeated in every publish (``client_publish.jsonl:26-30``: otherwise the topic is re-registered).
 
@@ -71,8 +71,8 @@ from .tap import OperatorTap
 from .topics import AdvertEntry, TopicEntry
 
 if TYPE_CHECKING:
+    from .linkbase import Link
     from .nodes import Node, Publisher, Subscription
-    from .wslink import Link
 
 log = logging.getLogger(__name__)
 #: characters of a server's ``status`` text that are logged and shown (a server sent 10 MB lines)

@@ -1,9 +1,9 @@
 """Bytes in, by topic: what each subscription costs the link (no Qt).
 
-Decision: counted in the read loop, read by anyone
-    :class:`Traffic` is written only by the connection's read loop (``inbound.py``): per frame one call, a
-    dict lookup and two additions, by the frame's size as it came off the socket (JSON text or CBOR, before
-    decoding; a frame skipped as stale is counted too: it crossed the link). Publishes count under their
+Decision: counted where messages come in, read by anyone
+    :class:`Traffic` is written only on the bridge's loop as messages come in (``receive.py``,
+    ``inbound.py``; on the hot path the count is inlined: a dict lookup and two additions), by the frame's
+    size as it came off the socket (JSON text or CBOR, before decoding; a frame skipped as stale is counted too: it crossed the link). Publishes count under their
     topic, everything else under its op in brackets (``(fragment)``, ``(service_response)``...). At most
     :data:`MAX_KEYS` names are kept; the rest add up under ``(other topics)``, so a server inventing topic
     names cannot grow it. Readers on other threads take :meth:`Traffic.snapshot` (copies made under the GIL,
@@ -27,25 +27,31 @@ OTHER = "(other topics)"
 class Traffic:
     """Bytes and frames received per topic (cumulative, since the connection object was made)."""
 
-    __slots__ = ("counts", "total_bytes", "total_frames")
+    __slots__ = ("counts",)
 
     def __init__(self) -> None:
-        #: name -> [bytes, frames]
+        #: name -> [bytes, frames]; every frame counts under exactly one name, so the totals are its sums
+        #: (summed when read: two additions fewer per message on the hot path)
         self.counts: dict[str, list[int]] = {}
-        self.total_bytes = 0
-        self.total_frames = 0
+
+    @property
+    def total_bytes(self) -> int:
+        return sum(v[0] for v in list(self.counts.values()))
+
+    @property
+    def total_frames(self) -> int:
+        return sum(v[1] for v in list(self.counts.values()))
 
     def count(self, m: Any, size: int) -> None:
         """A decoded frame ``m`` of ``size`` bytes (the read loop; never raises)."""
         try:
-            key = m["topic"] if m["op"] == "publish" else f"({m['op']})"
+            op = m["op"]
+            key = m["topic"] if op == "publish" else f"({op})" if isinstance(op, str) else "(other)"
         except (KeyError, TypeError, IndexError):
             key = "(other)"
         self.count_name(key if isinstance(key, str) else "(other)", size)
 
     def count_name(self, key: str | None, size: int) -> None:
-        self.total_bytes += size
-        self.total_frames += 1
         entry = self.counts.get(key or "(other)")
         if entry is None:
             if len(self.counts) >= MAX_KEYS:
@@ -56,8 +62,8 @@ class Traffic:
 
     def snapshot(self) -> tuple[int, dict[str, tuple[int, int]]]:
         """``(total bytes, {name: (bytes, frames)})`` now (any thread)."""
-        counts = dict(self.counts)  # one C-level copy: atomic under the GIL
-        return self.total_bytes, {k: (v[0], v[1]) for k, v in counts.items()}
+        counts = {k: (v[0], v[1]) for k, v in dict(self.counts).items()}  # one C-level copy: atomic under the GIL
+        return sum(v[0] for v in counts.values()), counts
 
 
 class TrafficRates:

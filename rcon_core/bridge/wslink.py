@@ -1,192 +1,197 @@
-"""``Link``: the one adapter between the bridge and a ``websockets`` connection (it uses that library's
-internals, so they are used here and nowhere else).
+"""The websockets transport: the one module that imports ``websockets`` on the client side.
 
-Decision: direct writes
-    There is no batching and no timer: a frame (a publish, a subscribe...) is written to the transport
-    before the call that made it returns, unless frames are already queued or the transport's buffer is
-    above its high-water mark; then it waits in a queue that the writer task (:meth:`Link.run_writer`)
-    drains with ``ws.send`` (which waits for the transport), so frames always leave in order.  asyncio
-    turns Nagle off on TCP sockets.
-
-    The direct write does what ``ws.send`` does minus the waiting: websockets' Sans-I/O protocol object
-    (``ws.protocol.send_text``) builds the frame and ``ws.send_data()`` hands it to the transport.  Those
-    two are internals of ``websockets.asyncio.connection.Connection`` (tested with websockets 13-15); when
-    a version lacks them, :func:`direct_writer` returns None and every frame goes through ``ws.send``.
-
-Decision: commands and their freshness limit (see ``freshness.py``)
-    A frame with a freshness limit (:meth:`Link.send_command`) is refused at once while the link is
-    DEGRADED or a ping has been unanswered for longer than the limit; when it has to wait in the queue it
-    carries its deadline (:class:`~rcon_core.bridge.freshness.TimedFrame`) and the writer drops it once
-    the deadline passed (``on_stale(pub)`` counts it).
-
-Decision: looking into the receive queue
-    :meth:`Link.waiting` lists the frames websockets has received but ``recv`` has not returned yet (its
-    ``recv_messages`` assembler, an internal; an empty list when a version lacks it), so the read loop can
-    skip a stale frame of a latest-only topic (``latest.py``).  It only reads that queue.
-
-Everything else the bridge does with the connection goes through :class:`Link` too (``ping``, ``close``,
-``abort``, ``cut``, the write buffer size for the stall watch), so no other module touches ``ws`` or its
-transport.
-
-Test hooks (public, documented): ``link.queued`` (frames waiting for the writer), ``link.buffered()`` (bytes
-in the transport's write buffer), ``link.socket`` (the TCP socket).
+Decision: websockets' documented Sans-I/O protocol under RCON's own asyncio protocol
+    ``websockets.client.ClientProtocol`` builds the handshake and the frames and parses what arrives;
+    this module owns the socket (an ``asyncio.Protocol``), so the direct write, the write buffer size,
+    the abort and the TCP-reset cut use the asyncio transport's public API, and nothing reaches into
+    websockets' asyncio connection (its ``protocol``, ``transport`` or receive queue were used before).
+    Only the public Sans-I/O API is used: ``connect``/``send_request``, ``receive_data``/``receive_eof``,
+    ``events_received``, ``data_to_send``, ``send_text``/``send_ping``/``send_close``/``fail``,
+    ``state``, ``close_code``/``close_reason``, ``handshake_exc``; tested with the range pinned in
+    ``pyproject.toml`` (and the newest release by ``tox -e newest``).
+    Frames are joined into messages here (websockets enforces ``max_size`` on the message); each whole
+    message goes to the :class:`~rcon_core.bridge.receive.Receiver`.  No compression extension is
+    offered (as before), and no HTTP proxy is used (the robot's link is direct).
 """
 
 from __future__ import annotations
 
 import asyncio
-import socket as _socket
-import time
-from collections import deque
-from collections.abc import Awaitable, Callable
+import ssl as _ssl
 from typing import Any
 
-from websockets.asyncio.client import ClientConnection
-from websockets.exceptions import ConnectionClosed
-from websockets.frames import Opcode
+from websockets.client import ClientProtocol
+from websockets.exceptions import InvalidHandshake, InvalidMessage, InvalidStatus, InvalidURI
+from websockets.frames import Frame, Opcode
+from websockets.http11 import Response
 from websockets.protocol import State
+from websockets.uri import parse_uri
 
-from .freshness import LinkWatch, TimedFrame, cut
+from .errors import BadUrlError, HandshakeError, LinkClosedError
+from .linkbase import Drain, Link, Pings
 
 _OPEN = State.OPEN
-_DATA = (Opcode.TEXT, Opcode.BINARY)
-_monotonic = time.monotonic
+_TEXT, _BINARY, _CONT, _PONG = Opcode.TEXT, Opcode.BINARY, Opcode.CONT, Opcode.PONG
+#: the transport's write buffer high-water mark (websockets' own default write limit)
+WRITE_LIMIT = 32 << 10
+CLOSE_TIMEOUT = 2.0
 
 
-def direct_writer(ws: ClientConnection) -> Callable[[bytes], bool] | None:
-    """A function that writes one text frame to ``ws`` synchronously and returns True, or returns False
-    when it cannot right now (the connection is not open, or the transport is above its high-water mark:
-    then the caller queues the frame for ``ws.send``, which waits for the drain).  None when this
-    websockets version lacks the pieces (every frame then goes through ``ws.send``)."""
-    protocol = getattr(ws, "protocol", None)
-    flush = getattr(ws, "send_data", None)
-    transport = getattr(ws, "transport", None)
-    if protocol is None or flush is None or transport is None or not hasattr(protocol, "send_text"):
-        return None
-    buffered = transport.get_write_buffer_size
-    closing = transport.is_closing
-    high = transport.get_write_buffer_limits()[1]
+class WebsocketsLink(Link):
+    """One connection over websockets' Sans-I/O protocol."""
 
-    def write_now(data: bytes) -> bool:
-        if protocol.state is not _OPEN or closing() or buffered() > high:
-            return False
-        protocol.send_text(data)
-        flush()
-        return True
+    name = "websockets"
 
-    return write_now
+    def __init__(self, protocol: ClientProtocol, receiver: Any, on_stale: Any) -> None:
+        super().__init__(on_stale)
+        self.protocol = protocol
+        self.receiver = receiver
+        self.drain = Drain()
+        self.pings = Pings()
+        self.opened: asyncio.Future[None] = asyncio.get_running_loop().create_future()
+        self._parts: list[bytes] = []  # a fragmented message being joined
+        self._text = False
+        receiver.fail = self.fail
 
+    # -- the asyncio protocol's events --------------------------------------------------------------
 
-class Link:
-    """One open connection: frames out (now or queued, in order), the writer task, the stall watch."""
+    def made(self, transport: asyncio.Transport) -> None:
+        self.transport = transport
+        transport.set_write_buffer_limits(high=WRITE_LIMIT)
+        self.receiver.pause = transport.pause_reading
+        self.receiver.resume = transport.resume_reading
+        protocol = self.protocol
+        protocol.send_request(protocol.connect())
+        self._flush()
 
-    __slots__ = ("ws", "recv", "queue", "event", "write_now", "watch", "degraded", "on_stale")
+    def data(self, data: bytes) -> None:
+        protocol = self.protocol
+        protocol.receive_data(data)
+        events = protocol.events_received()
+        self._flush()
+        if not events:
+            return
+        message = self.receiver.message
+        last = len(events) - 1
+        for i, event in enumerate(events):
+            if not isinstance(event, Frame):
+                if isinstance(event, Response):
+                    self._opened()
+                continue
+            opcode = event.opcode
+            if opcode is _TEXT or opcode is _BINARY:
+                if event.fin:
+                    message(event.data, opcode is _TEXT, i == last)
+                else:
+                    self._parts, self._text = [bytes(event.data)], opcode is _TEXT
+            elif opcode is _CONT:
+                self._parts.append(bytes(event.data))
+                if event.fin:
+                    whole, self._parts = b"".join(self._parts), []
+                    message(whole, self._text, i == last)
+            elif opcode is _PONG:
+                self.pings.pong(bytes(event.data))
+        if protocol.state is State.CLOSED:
+            self.transport.close()
 
-    def __init__(self, ws: ClientConnection, on_stale: Callable[[Any], None]) -> None:
-        self.ws = ws
-        #: ``await recv()``: the next frame (websockets' own method: no wrapper on the read path)
-        self.recv: Callable[[], Awaitable[str | bytes]] = ws.recv
-        self.queue: deque[bytes | TimedFrame] = deque()
-        self.event = asyncio.Event()
-        self.write_now = direct_writer(ws)
-        self.watch: LinkWatch | None = None  # set by the client's pinger when stall detection is on
-        self.degraded = False  # the client's state is DEGRADED: commands are refused
-        self.on_stale = on_stale  # ``on_stale(pub)``: a queued command passed its deadline (already counted sent)
-
-    # -- writing -----------------------------------------------------------------------------------
-
-    def write(self, data: bytes) -> None:
-        """Hand one encoded frame to the connection: written at once when nothing is queued and the
-        transport's buffer is below its high-water mark, else queued for the writer task."""
-        if not self.queue:
-            write_now = self.write_now
-            if write_now is not None and write_now(data):
-                return
-        self.queue.append(data)
-        self.event.set()
-
-    def send_command(self, data: bytes, pub: Any, max_age: float) -> bool:
-        """Write a frame with a freshness limit (see the module docstring); False when it was refused
-        because the link cannot carry it in time."""
-        now = _monotonic()
-        watch = self.watch
-        if self.degraded or (watch is not None and watch.overdue(now) > max_age):
-            return False
-        write_now = self.write_now
-        if not self.queue and write_now is not None and write_now(data):
-            if watch is not None:
-                watch.command(now)
-        else:
-            self.queue.append(TimedFrame(data, now + max_age, pub))
-            self.event.set()
-        return True
-
-    async def run_writer(self) -> None:
-        """Drain the queue with ``ws.send`` (waits for the transport) until the connection closes."""
-        out = self.queue
-        event = self.event
-        ws = self.ws
+    def eof(self) -> None:
         try:
-            while True:
-                while out:
-                    item = out.popleft()
-                    if isinstance(item, TimedFrame):  # a command: never written after its freshness limit
-                        now = _monotonic()
-                        if now > item.deadline or self.degraded:
-                            self.on_stale(item.pub)
-                            continue
-                        if self.watch is not None:
-                            self.watch.command(now)
-                        item = item.data
-                    await ws.send(item, text=True)
-                event.clear()
-                await event.wait()
-        except ConnectionClosed:
-            pass
+            self.protocol.receive_eof()
+        except EOFError:
+            return
+        self._flush()
 
-    def drop_queue(self) -> int:
-        """Forget every frame still queued (the link is gone); returns how many."""
-        n = len(self.queue)
-        self.queue.clear()
-        return n
+    def connection_lost(self, exc: BaseException | None) -> None:
+        protocol = self.protocol
+        if protocol.state is not State.CLOSED:
+            try:
+                protocol.receive_eof()
+            except EOFError:  # eof_received came first
+                pass
+        self.drain.lost()
+        self.receiver.lost()
+        if not self.opened.done():
+            error = HandshakeError("connection closed during the handshake", closed=True)
+            error.__cause__ = exc
+            self.opened.set_exception(error)
+        code = protocol.close_code if protocol.close_code is not None else None
+        self.lost(code, protocol.close_reason or "")
+        self.pings.lost(self.closed_error())
 
-    # -- reading and the connection ----------------------------------------------------------------
+    def _opened(self) -> None:
+        exc = self.protocol.handshake_exc
+        if self.opened.done():
+            return
+        if exc is None:
+            self.opened.set_result(None)
+            return
+        self.opened.set_exception(handshake_error(exc))
+        self.transport.close()
 
-    def waiting(self) -> list[bytes]:
-        """The payloads of the complete text and binary frames already received and not yet read by
-        ``recv`` (websockets' receive queue), oldest first; read only, for ``latest.py``."""
-        assembler = getattr(self.ws, "recv_messages", None)
-        frames = getattr(getattr(assembler, "frames", None), "queue", None)
-        if not frames:
-            return []
-        return [f.data for f in frames if f.fin and f.opcode in _DATA]
+    def _flush(self) -> None:
+        transport = self.transport
+        for chunk in self.protocol.data_to_send():
+            if chunk:
+                transport.write(chunk)
+            elif transport.can_write_eof():
+                transport.write_eof()
 
-    async def ping(self) -> Awaitable[float]:
-        """Send a WebSocket ping; the result is a waiter that gives the round trip in seconds."""
-        return await self.ws.ping()
+    # -- Link --------------------------------------------------------------------------------------
+
+    def write_now(self, data: bytes) -> bool:
+        if self.protocol.state is not _OPEN or self.drain.paused or self.transport.is_closing():
+            return False
+        self.protocol.send_text(data)
+        for chunk in self.protocol.data_to_send():
+            self.transport.write(chunk)
+        return True
+
+    def send_queued(self, data: bytes) -> None:
+        if self.protocol.state is not _OPEN or self.transport.is_closing():
+            raise self.closed_error()
+        self.protocol.send_text(data)
+        self._flush()
+
+    async def drained(self) -> None:
+        if self.is_closed:
+            raise self.closed_error()
+        await self.drain.wait()
+        if self.is_closed:
+            raise self.closed_error()
+
+    async def ping(self) -> asyncio.Future[float]:
+        if self.protocol.state is not _OPEN:
+            raise self.closed_error()
+        data, waiter = self.pings.new()
+        self.protocol.send_ping(data)
+        self._flush()
+        return waiter
 
     async def close(self) -> None:
-        await self.ws.close()
+        if self.protocol.state is _OPEN:
+            self.protocol.send_close(1000)
+            self._flush()
+        try:
+            await asyncio.wait_for(self.wait_closed(), CLOSE_TIMEOUT)
+        except TimeoutError:
+            self.abort()
+        if not self.is_closed and self.transport is not None:
+            self.transport.close()
 
-    def abort(self) -> None:
-        """Drop the connection at once (no close handshake)."""
-        self.ws.transport.abort()
+    def fail(self, code: int, reason: str) -> None:
+        if self.protocol.state is _OPEN:
+            self.protocol.fail(code, reason)
+            self._flush()
+        if self.transport is not None:
+            self.transport.close()
 
-    def cut(self) -> None:
-        """Drop the connection with a TCP reset, so the kernel discards what it has not sent yet."""
-        cut(self.ws.transport)
 
     def release(self) -> None:
-        """The connection is over: free what it held now. websockets' protocol object and its frame parser
-        (a generator whose frame refers back to the protocol) form a reference cycle holding the read
-        buffer and the last frames; the app's collector policy freezes long-lived objects
-        (``rcon_core/gcpolicy.py``), and frozen cyclic garbage waits for a full settle, so every dropped
-        connection kept its buffers (0.85 MB per reconnect). Closing the parser breaks the cycle and
-        reference counting frees them at once. Idempotent; a websockets version without these parts is
-        left alone."""
-        self.queue.clear()
-        self.write_now = None
-        protocol = getattr(self.ws, "protocol", None)
+        """Also the websockets protocol's buffers: its frame parser (a generator whose frame refers back to
+        the protocol) keeps a reference cycle holding the read buffer and the last frames; closing the
+        parser breaks it, so reference counting frees them at once."""
+        super().release()
+        protocol = self.protocol
         parser = getattr(protocol, "parser", None)
         close = getattr(parser, "close", None)
         if callable(close):
@@ -194,27 +199,77 @@ class Link:
                 close()
             except Exception:  # noqa: BLE001 - a parser that cannot be closed: the collector frees it later
                 pass
-        reader = getattr(protocol, "reader", None)
-        buffer = getattr(reader, "buffer", None)
-        if isinstance(buffer, bytearray):
-            buffer.clear()
-        events = getattr(protocol, "events", None)
-        if isinstance(events, list):
-            events.clear()
-        if protocol is not None and getattr(protocol, "parser_exc", None) is not None:
+        if getattr(protocol, "parser_exc", None) is not None:
             protocol.parser_exc = None  # its traceback holds the parser's frame (and the protocol) too
 
-    # -- test hooks ----------------------------------------------------------------------------------
 
-    @property
-    def queued(self) -> int:
-        """How many frames wait for the writer task."""
-        return len(self.queue)
+class _Protocol(asyncio.Protocol):
+    """The asyncio side of a :class:`WebsocketsLink`."""
 
-    def buffered(self) -> int:
-        """Bytes in the transport's write buffer."""
-        return self.ws.transport.get_write_buffer_size()
+    def __init__(self, link: WebsocketsLink) -> None:
+        self.link = link
 
-    @property
-    def socket(self) -> _socket.socket | None:
-        return self.ws.transport.get_extra_info("socket")
+    def connection_made(self, transport: asyncio.BaseTransport) -> None:
+        self.link.made(transport)  # type: ignore[arg-type]
+
+    def data_received(self, data: bytes) -> None:
+        self.link.data(data)
+
+    def eof_received(self) -> bool | None:
+        self.link.eof()
+        return None  # close the transport
+
+    def connection_lost(self, exc: Exception | None) -> None:
+        self.link.connection_lost(exc)
+
+    def pause_writing(self) -> None:
+        self.link.drain.pause()
+
+    def resume_writing(self) -> None:
+        self.link.drain.resume()
+
+
+def handshake_error(exc: BaseException) -> BaseException:
+    """RCON's own error for what websockets raised opening a connection (``reasons.describe`` words RCON's
+    errors only): ``HandshakeError`` (its ``__cause__`` the TLS error behind it, if any) or ``BadUrlError``;
+    anything else as it is.  Also used by the Foxglove link's seam (``rcon_core/foxglove/ws.py``)."""
+    if isinstance(exc, InvalidURI):
+        return BadUrlError(f"not a valid rosbridge URL: {exc}")
+    if isinstance(exc, InvalidStatus):
+        error = HandshakeError(f"HTTP {exc.response.status_code}", status=exc.response.status_code)
+    elif isinstance(exc, InvalidMessage):
+        error = HandshakeError("no valid HTTP answer", closed=isinstance(exc.__cause__, EOFError))
+    elif isinstance(exc, InvalidHandshake):
+        error = HandshakeError(str(exc))
+    else:
+        return exc
+    error.__cause__ = exc.__cause__ if isinstance(exc.__cause__, _ssl.SSLError) else exc
+    return error
+
+
+async def open_websockets(url: str, receiver: Any, on_stale: Any, *, ssl: _ssl.SSLContext | None,
+                          open_timeout: float, max_size: int) -> WebsocketsLink:
+    """Open one connection (see ``transport.open_link``)."""
+    try:
+        uri = parse_uri(url)
+    except InvalidURI as exc:
+        raise BadUrlError(f"not a valid rosbridge URL: {exc}") from None
+    protocol = ClientProtocol(uri, max_size=max_size)
+    link = WebsocketsLink(protocol, receiver, on_stale)
+    loop = asyncio.get_running_loop()
+    tls = (ssl or _ssl.create_default_context()) if uri.secure else None
+
+    async def go() -> None:
+        await loop.create_connection(lambda: _Protocol(link), uri.host, uri.port, ssl=tls,
+                                     server_hostname=uri.host if tls is not None else None)
+        await link.opened
+
+    try:
+        await asyncio.wait_for(go(), open_timeout)
+    except BaseException:
+        link.abort()
+        raise
+    return link
+
+
+__all__ = ["LinkClosedError", "WebsocketsLink", "handshake_error", "open_websockets"]

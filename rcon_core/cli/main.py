@@ -85,7 +85,9 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     module = importlib.import_module(COMMANDS[args.command][0])
     try:
-        return int(module.run(args.command, args) or 0)
+        code = int(module.run(args.command, args) or 0)
+        sys.stdout.flush()  # what is still buffered (a pipe is block-buffered) fails here, not at exit (120)
+        return code
     except BrokenPipeError:  # the reader went away (`rcon type X | head`): stop quietly, as `head` means
         _silence_stdout()
         return 0

@@ -22,10 +22,11 @@ from collections.abc import Awaitable, Callable
 from typing import Any
 
 from websockets.asyncio.client import ClientConnection, connect
-from websockets.exceptions import ConnectionClosed
+from websockets.exceptions import ConnectionClosed, InvalidHandshake, InvalidURI
 from websockets.protocol import State
 
 from rcon_core.bridge.freshness import LinkWatch, TimedFrame, cut
+from rcon_core.bridge.wslink import handshake_error
 
 _OPEN = State.OPEN
 _monotonic = time.monotonic
@@ -35,10 +36,15 @@ __all__ = ["ConnectionClosed", "FrameLink", "open_connection"]
 
 async def open_connection(url: str, subprotocols: list[str] | None, *, ssl_context: ssl.SSLContext | None,
                           open_timeout: float, max_size: int) -> ClientConnection:
-    """Open one WebSocket connection offering ``subprotocols`` (the server's pick is ``ws.subprotocol``)."""
-    return await connect(url, ssl=ssl_context, compression=None, ping_interval=None, open_timeout=open_timeout,
-                         max_size=max_size, close_timeout=2,
-                         subprotocols=[s for s in subprotocols] if subprotocols else None)  # type: ignore[misc]
+    """Open one WebSocket connection offering ``subprotocols`` (the server's pick is ``ws.subprotocol``).
+    What websockets raises about the URL or the handshake comes out as RCON's own error
+    (``wslink.handshake_error``), which ``reasons.describe`` words."""
+    try:
+        return await connect(url, ssl=ssl_context, compression=None, ping_interval=None, open_timeout=open_timeout,
+                             max_size=max_size, close_timeout=2,
+                             subprotocols=[s for s in subprotocols] if subprotocols else None)  # type: ignore[misc]
+    except (InvalidURI, InvalidHandshake) as exc:
+        raise handshake_error(exc)  # noqa: B904 -- its __cause__ is set: the TLS error behind it, if any
 
 
 def chosen_subprotocol(ws: ClientConnection) -> str | None:

@@ -31,7 +31,8 @@ def two_fixes(qtbot, sim_thread, threaded_client):
                      types=TYPES, dispatch=bt.call)
     bt.call(model.start).result(5)
     qtbot.waitUntil(lambda: model.state.value is not None and model.state.value.main.has_position, timeout=10_000)
-    other = client.node("other").advertise("/other/fix", "sensor_msgs/NavSatFix")
+    # on the bridge's loop thread, as everything that writes to the link (picows refuses any other thread)
+    other = bt.call(lambda: client.node("other").advertise("/other/fix", "sensor_msgs/NavSatFix")).result(5)
 
     def where(east, north):
         main = model.state.value.main

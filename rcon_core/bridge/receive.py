@@ -1,0 +1,266 @@
+"""Messages in from a transport adapter (``pwlink.py``, ``wslink.py``), in order, on the event loop.
+
+Decision: messages are pushed, and most are finished in the callback that brought them
+    An adapter calls :meth:`Receiver.message` for every whole message as its parser finds it (a view into
+    the read buffer for picows, valid during the call only) and says when a read's last message came
+    (``last``).  The Receiver hands it to :meth:`Inbound.take <rcon_core.bridge.inbound.Inbound.take>`,
+    which parses and delivers a small publish at once.  What needs to wait -- a frame decoded in the
+    worker thread (``offload.py``), a frame of a latest-only topic looking for a newer one
+    (``latest.py``), a big message completed by fragments -- comes back as an awaitable: the Receiver
+    runs it in a task and *holds* (copies) every message that arrives meanwhile, so delivery keeps the
+    order of arrival.  While more than :data:`HOLD_MAX` messages are held, the transport stops reading
+    (``pause_reading``): the kernel's buffers and then TCP push back on the server.  The held messages
+    are what :meth:`waiting` lists for ``latest.py`` (the receive queue).
+
+Decision: sharing the loop (the read loop's rule, kept in time)
+    A read can hold thousands of small messages (picows' read buffer grows to fit a camera frame and stays
+    that size) and a link that fell behind holds several camera frames.  So past the first
+    :data:`~rcon_core.bridge.inbound.YIELD_EVERY` (64) messages of one turn, the Receiver looks at the
+    clock every 64 messages, and once they have taken more than :data:`TURN_BUDGET` (1 ms) -- and before
+    a message of 32 kB or more that is not the first of its turn -- it holds the rest and gives the event
+    loop a turn (``await asyncio.sleep(0)`` in its task): due timers (a teleop pad's 20 Hz command),
+    writes and the other robots' links on the same loop wait for 64 small messages and about 1 ms more,
+    or one big message, not for the whole backlog.  A new read is a new turn: the loop ran in between.
+    (The rule was 64 messages a turn: kept that strictly, it copied every message past the 64th of a read,
+    as much work as the rest of the hot path, when a 16 kB read of small messages is about 0.3 ms of
+    work.  The clock is read only then: on this kind of machine a clock read costs about as much as a
+    small message.)
+
+Decision: a text message that is not UTF-8 closes the link
+    As the WebSocket rule says (and websockets' own reader did): the link is failed with code 1007 and
+    the client reconnects; the messages still held are dropped with it.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import time
+from collections import deque
+from collections.abc import Awaitable, Callable
+from typing import Any
+
+from orjson import JSONDecodeError
+from orjson import loads as _loads
+
+from .errors import NotUtf8
+from .inbound import YIELD_EVERY
+from .safety import safe_text
+
+log = logging.getLogger(__name__)
+
+#: held messages above which the transport stops reading (websockets' own receive queue held 16 frames)
+HOLD_MAX = 16
+#: seconds of messages one turn of the loop may take before the rest waits for the next turn
+TURN_BUDGET = 0.001
+_sleep = asyncio.sleep
+_clock = time.thread_time
+
+
+class Receiver:
+    """One connection's messages in (see the module docstring).  ``take(raw, text)`` and
+    ``heavy`` come from the client's ``Inbound``; the adapter sets ``pause``, ``resume`` and ``fail``."""
+
+    __slots__ = ("take", "deliver", "topics", "traffic", "counts", "failed", "heavy", "held", "busy", "n", "started", "check", "paused",
+                 "pause", "resume", "fail", "task", "closed", "flood")
+
+    def __init__(self, inbound: Any) -> None:
+        self.take: Callable[[Any, bool], Awaitable[None] | None] = inbound.take
+        self.deliver: Callable[[Any], Awaitable[None] | None] = inbound.deliver
+        self.topics: dict[str, Any] = inbound.topics
+        self.traffic = inbound.traffic  # bytes in by topic (``traffic.py``), counted here on the hot path
+        self.counts: dict[str, list[int]] = inbound.traffic.counts
+        self.failed: Callable[[BaseException], None] = inbound.bad.failed
+        self.heavy: int = inbound.heavy
+        self.held: deque[tuple[bytes | str, bool]] = deque()
+        self.busy = False
+        self.n = 0  # messages handled in this turn of the loop
+        self.started = 0.0  # when this turn's clock started (at its 65th message)
+        self.check = YIELD_EVERY  # the clock is read again after this many messages
+        self.paused = False
+        self.pause: Callable[[], None] = _nothing
+        self.resume: Callable[[], None] = _nothing
+        self.fail: Callable[[int, str], None] = _fail_nothing
+        self.task: asyncio.Task[None] | None = None
+        self.closed = False
+        #: the last read brought YIELD_EVERY messages or more (a transport may read less at a time)
+        self.flood = False
+
+    def detach(self) -> None:
+        """The connection is over: forget its transport's callbacks and the held messages, so nothing here
+        keeps the dead connection (and its buffers) alive in a reference cycle (``Link.release``)."""
+        self.pause = self.resume = _nothing
+        self.fail = _fail_nothing
+        self.held.clear()
+
+    def message(self, raw: Any, text: bool, last: bool) -> None:
+        """One whole message (``raw``: bytes-like, a text message's UTF-8 bytes unchecked; valid only during
+        this call); ``last``: the last one of this read.  The hot path: a small text message is parsed and,
+        when it is a publish of a subscribed topic, delivered here (``Inbound.take`` and ``Inbound.deliver``
+        inlined: one call less per message); everything else goes through ``Inbound.take``."""
+        if self.busy:
+            held = self.held
+            held.append((raw if raw.__class__ is bytes else bytes(raw), text))
+            if len(held) > HOLD_MAX and not self.paused and not self.closed:
+                self.paused = True
+                self.pause()
+        else:
+            n = self.n = self.n + 1
+            size = len(raw)
+            if size < self.heavy:
+                if n > self.check and self._spent():
+                    self._yield(raw, text)
+                elif text:
+                    try:
+                        m = _loads(raw)
+                    except JSONDecodeError:
+                        self._start(self._take(raw, text))
+                    else:
+                        try:
+                            topic = m["topic"] if m["op"] == "publish" else None
+                            entry = self.topics[topic] if topic is not None else None
+                            msg = m["msg"]
+                        except (KeyError, TypeError):
+                            entry = None
+                        if entry is not None and msg.__class__ is dict:
+                            c = self.counts.get(topic)  # type: ignore[arg-type]  # Traffic.count_name inlined
+                            if c is None:
+                                self.traffic.count_name(topic, size)
+                            else:
+                                c[0] += size
+                                c[1] += 1
+                            try:
+                                entry.fast(msg)
+                            except Exception:
+                                entry.callback_failed()
+                        else:
+                            self._slow(m, size)
+                else:
+                    self._start(self._take(raw, text))
+            elif n > 1:
+                self._yield(raw, text)
+            else:
+                self._start(self._take(raw, text))
+        if last:
+            self.flood = self.n >= YIELD_EVERY or self.busy
+            self.n = 0
+            self.check = YIELD_EVERY
+            self.started = 0.0
+
+    def _slow(self, m: Any, size: int) -> None:
+        """A parsed message that is not a publish of a subscribed topic: counted, then ``Inbound.deliver``."""
+        try:  # the frame boundary: nothing raised while handling one frame ends the link
+            self.traffic.count(m, size)
+        except Exception as exc:
+            self.failed(exc)
+            return
+        self._start(self.deliver(m))
+
+    def _yield(self, raw: Any, text: bool) -> None:
+        """This turn is over: hold ``raw`` and the rest, and go on after the loop had a turn."""
+        self.busy = True
+        self.held.append((raw if raw.__class__ is bytes else bytes(raw), text))
+        self.task = asyncio.ensure_future(self._drain(None))
+
+    def _take(self, raw: Any, text: bool) -> Awaitable[None] | None:
+        try:
+            return self.take(raw, text)
+        except NotUtf8 as exc:
+            self._not_utf8(exc)
+            return None
+
+    def _spent(self) -> bool:
+        """Every YIELD_EVERY messages past the first YIELD_EVERY of a turn: has the turn taken its budget
+        since then?  (The clock is read only here: a clock read costs as much as a small message.)"""
+        self.check = self.n + YIELD_EVERY
+        now = _clock()
+        if not self.started:
+            self.started = now
+            return False
+        return now - self.started > TURN_BUDGET
+
+    def waiting(self) -> list[bytes | str]:
+        """The messages held (received, not handled yet), oldest first: the receive queue ``latest.py``
+        looks into."""
+        return [raw for raw, _text in self.held]
+
+    def lost(self) -> None:
+        """The connection is gone: nothing more comes; what is held is still handled in order."""
+        self.closed = True
+
+    def cancel(self) -> None:
+        """Stop now (the client is closing): held messages are dropped."""
+        self.held.clear()
+        task, self.task = self.task, None
+        if task is not None:
+            task.cancel()
+
+    # -- holding -------------------------------------------------------------------------------------
+
+    def _start(self, job: Awaitable[None] | None) -> None:
+        """Run ``job`` (when there is one) before the next message."""
+        if job is not None:
+            self.busy = True
+            self.task = asyncio.ensure_future(self._drain(job))
+
+    async def _drain(self, job: Awaitable[None] | None) -> None:
+        held = self.held
+        take = self.take
+        heavy = self.heavy
+        try:
+            if job is None:
+                await _sleep(0)  # the turn's budget is spent: let the loop run first
+            else:
+                await self._run(job)
+            n = 0
+            started = _clock()
+            while held:
+                raw, text = held.popleft()
+                if self.paused and len(held) <= HOLD_MAX // 2:
+                    self.paused = False
+                    self.resume()
+                n += 1
+                if (n > 1 and len(raw) >= heavy) or (n > YIELD_EVERY and _clock() - started > TURN_BUDGET):
+                    n = 1
+                    await _sleep(0)
+                    started = _clock()
+                elif n > YIELD_EVERY:
+                    n = 1
+                try:
+                    job = take(raw, text)
+                except NotUtf8 as exc:
+                    self._not_utf8(exc)
+                    return
+                if job is not None:
+                    await self._run(job)
+                    n = 0
+                    started = _clock()
+        finally:
+            self.busy = False
+            self.task = None
+            if self.paused:
+                self.paused = False
+                self.resume()
+
+    async def _run(self, job: Awaitable[None]) -> None:
+        try:
+            await job
+        except NotUtf8 as exc:
+            self._not_utf8(exc)
+        except asyncio.CancelledError:
+            raise
+        except Exception as exc:  # the frame boundary: nothing raised while handling one frame ends the link
+            self.failed(exc)
+
+    def _not_utf8(self, exc: NotUtf8) -> None:
+        self.held.clear()
+        log.warning("the server sent a text message that is not UTF-8 (%s); closing the link (1007)", safe_text(exc))
+        self.fail(1007, "invalid UTF-8 in a text message")
+
+
+def _nothing() -> None:
+    pass
+
+
+def _fail_nothing(code: int, reason: str) -> None:
+    pass
