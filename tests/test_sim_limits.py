@@ -154,7 +154,7 @@ async def test_rosbridge_fragment_ops_are_bounded_too(limited):
         reply = json.loads(await asyncio.wait_for(ws.recv(), 5))
         assert reply["id"] == "after"
         [conn] = limited.connections
-        assert conn.incoming_fragments == {}  # dropped, not held
+        assert len(conn.fragments) == 0 and conn.fragments.bytes_held == 0  # dropped, not held
 
 
 # ---------------------------------------------------------------------------------------------- auth
