@@ -196,3 +196,27 @@ def snap(window: QtWidgets.QWidget, name: str) -> None:
         QtWidgets.QApplication.processEvents()
         Path(out).mkdir(parents=True, exist_ok=True)
         window.grab().save(str(Path(out) / f"{name}.png"))
+
+
+class FullDisk:
+    """A full disk, honestly at the OS call: while ``on``, every ``os.fsync`` (where a full disk reports
+    buffered writes it cannot keep) raises ENOSPC. Made by :func:`full_disk` for a module's fixture."""
+
+    def __init__(self) -> None:
+        self.on = False
+
+
+def full_disk(monkeypatch) -> FullDisk:
+    import errno
+
+    disk = FullDisk()
+    real = os.fsync
+
+    def fsync(fd: int) -> None:
+        if disk.on:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        real(fd)
+
+    monkeypatch.setattr(os, "fsync", fsync)
+    return disk
+

@@ -1,9 +1,11 @@
 """A scripted rosbridge server for the bridge tests: real websockets, exact recorded frames.
 
-It answers from the recorded frames in ``tests/recordings/rosbridge-ros1``: ``call_service`` requests whose
-service and args match a recorded request get the recorded ``received_text`` (only the id is swapped for
-the caller's), and a ``subscribe`` to a recorded topic gets that topic's recorded frames (text or CBOR
-bytes) for the compression asked.  Tests can add their own service handlers, push any frame, drop the
+It answers from the recorded frames of one real server: ``tests/recordings/rosbridge-ros1`` (rosbridge
+0.11, the default) or ``tests/recordings/rosbridge-ros2-2.1.0`` (``ScriptedServer(recording=ROS2)``).
+``call_service`` requests whose service and args match a recorded request get the recorded
+``received_text`` (only the id is swapped for the caller's; a request the real server never answered gets
+no answer here either), and a ``subscribe`` to a recorded topic gets that topic's recorded frames (text or
+CBOR bytes) for the compression asked.  Tests can add their own service handlers, push any frame, drop the
 connection, and inspect everything the client sent.
 """
 
@@ -20,12 +22,15 @@ from typing import Any
 import orjson
 from websockets.asyncio.server import ServerConnection, serve
 
-RECORDINGS = Path(__file__).resolve().parent / "recordings" / "rosbridge-ros1"
+ROS1 = "rosbridge-ros1"
+ROS2 = "rosbridge-ros2-2.1.0"
+RECORDINGS = Path(__file__).resolve().parent / "recordings" / ROS1
 
 
-def load(name: str) -> list[dict[str, Any]]:
-    """The lines of one recording (``tests/recordings/rosbridge-ros1/NAME``), parsed."""
-    return [json.loads(line) for line in (RECORDINGS / name).read_text(encoding="utf-8").splitlines() if line.strip()]
+def load(name: str, recording: str = ROS1) -> list[dict[str, Any]]:
+    """The lines of one recording (``tests/recordings/<recording>/NAME``), parsed."""
+    path = RECORDINGS.parent / recording / name
+    return [json.loads(line) for line in path.read_text(encoding="utf-8").splitlines() if line.strip()]
 
 
 def received_frame(line: dict[str, Any]) -> str | bytes | None:
@@ -41,22 +46,43 @@ def _key(service: str, args: Any) -> str:
 
 
 class Recorded:
-    """Indexes of the recordings: service answers and per-topic publish frames per compression."""
+    """Indexes of one set of recordings: service answers and per-topic publish frames per compression.
 
-    def __init__(self) -> None:
-        self.answers: dict[str, tuple[str, str]] = {}  # key -> (recorded id, received_text)
+    ``answers[key]`` is ``(recorded id, received_text)``, or ``(recorded id, None)`` for a request the real
+    server never answered (rosbridge 2.1.0's silences: a call that killed rosapi, a wedged connection)."""
+
+    def __init__(self, recording: str = ROS1) -> None:
+        self.answers: dict[str, tuple[str, str | None]] = {}
         for name in ("rosapi.jsonl", "services.jsonl", "malformed.jsonl", "client_publish.jsonl"):
-            for line in load(name):
+            lines = load(name, recording)
+            for i, line in enumerate(lines):
                 sent = line.get("sent")
+                if not (isinstance(sent, dict) and sent.get("op") == "call_service" and "id" in sent
+                        and isinstance(sent.get("service"), str) and len(str(sent["id"])) < 100):
+                    continue
                 text = line.get("received_text")
-                if isinstance(sent, dict) and sent.get("op") == "call_service" and text and "id" in sent \
-                        and isinstance(sent.get("service"), str) and len(str(sent["id"])) < 100:
-                    self.answers.setdefault(_key(sent["service"], sent.get("args")), (str(sent["id"]), text))
+                if text is None and recording != ROS1:  # the answer may follow on a later line of the script
+                    text = next((r["received_text"] for r in lines[i + 1:]
+                                 if (r.get("received") or {}).get("id") == sent["id"] and r.get("received_text")),
+                                None)
+                self.answers.setdefault(_key(sent["service"], sent.get("args")), (str(sent["id"]), text))
+        #: ROS 2 goals: (action, action_type, args) -> the frames the real server sent for that goal (ids
+        #: swapped for the caller's when replayed); a goal it never answered (a rejection) has []
+        self.goals: dict[str, tuple[str, list[str]]] = {}
+        if recording != ROS1:
+            lines = load("actions.jsonl", recording)
+            for line in lines:
+                sent = line.get("sent")
+                if isinstance(sent, dict) and sent.get("op") == "send_action_goal" and "action_type" in sent:
+                    replies = [r["received_text"] for r in lines if (r.get("received") or {}).get("id") == sent["id"]
+                               and (r.get("received") or {}).get("op", "").startswith("action_")]
+                    key = json.dumps([sent["action"], sent["action_type"], sent.get("args")], sort_keys=True)
+                    self.goals.setdefault(key, (sent["id"], replies))
         self.frames: dict[tuple[str, str], list[str | bytes]] = {}
         for name, comp in (("publish_json.jsonl", "none"), ("publish_cbor.jsonl", "cbor"),
                            ("publish_cbor_raw.jsonl", "cbor-raw"), ("publish_png.jsonl", "png")):
             topic = None
-            for line in load(name):
+            for line in load(name, recording):
                 sent = line.get("sent")
                 if isinstance(sent, dict) and sent.get("op") == "subscribe":
                     topic = sent["topic"]
@@ -64,18 +90,20 @@ class Recorded:
                 elif isinstance(sent, dict) and sent.get("op") == "unsubscribe":
                     topic = None
                 frame = received_frame(line)
-                if topic is not None and frame is not None:
+                own = (line.get("received") or line.get("received_decoded") or {}).get("topic")
+                if frame is not None and (own, comp) in self.frames:  # a frame names its topic
+                    self.frames[(own, comp)].append(frame)
+                elif topic is not None and frame is not None:  # fragments and png frames do not
                     self.frames[(topic, comp)].append(frame)
 
 
-_RECORDED: Recorded | None = None
+_RECORDED: dict[str, Recorded] = {}
 
 
-def recorded() -> Recorded:
-    global _RECORDED
-    if _RECORDED is None:
-        _RECORDED = Recorded()
-    return _RECORDED
+def recorded(recording: str = ROS1) -> Recorded:
+    if recording not in _RECORDED:
+        _RECORDED[recording] = Recorded(recording)
+    return _RECORDED[recording]
 
 
 ServiceFn = Callable[[dict[str, Any]], Any]
@@ -84,8 +112,9 @@ ServiceFn = Callable[[dict[str, Any]], Any]
 class ScriptedServer:
     """A rosbridge-like websockets server whose behaviour each test scripts."""
 
-    def __init__(self, replay: bool = True, ssl: Any = None) -> None:
+    def __init__(self, replay: bool = True, ssl: Any = None, recording: str = ROS1) -> None:
         self.replay = replay
+        self.recording = recording
         self.ssl = ssl
         self.received: list[Any] = []  # every frame the client sent, parsed
         self.connections: list[ServerConnection] = []
@@ -192,17 +221,27 @@ class ScriptedServer:
                     await ws.send(reply if isinstance(reply, str) else orjson.dumps(reply).decode())
                 return
             if self.replay:
-                hit = recorded().answers.get(_key(name, frame.get("args")))
-                if hit is not None:
+                hit = recorded(self.recording).answers.get(_key(name, frame.get("args")))
+                if hit is not None and hit[1] is not None:
                     rec_id, text = hit
-                    text = text.replace(f'"id":"{rec_id}"', f'"id":{json.dumps(frame.get("id"))}')
+                    new_id = json.dumps(frame.get("id"))
+                    text = text.replace(f'"id":"{rec_id}"', f'"id":{new_id}').replace(f'"id": "{rec_id}"',
+                                                                                     f'"id": {new_id}')
                     await ws.send(text)
+        elif op == "send_action_goal" and self.replay:
+            key = json.dumps([frame.get("action"), frame.get("action_type"), frame.get("args")], sort_keys=True)
+            hit = recorded(self.recording).goals.get(key)
+            if hit is not None:
+                rec_id, replies = hit
+                for text in replies:
+                    await ws.send(text.replace(f'"id": "{rec_id}"', f'"id": {json.dumps(frame.get("id"))}'))
         elif op == "subscribe":
             frames: list[str | bytes] = []
             if self.on_subscribe is not None:
                 frames = self.on_subscribe(frame)
             elif self.replay:
-                frames = recorded().frames.get((frame["topic"], frame.get("compression", "none")), [])
+                frames = recorded(self.recording).frames.get((frame["topic"], frame.get("compression", "none")),
+                                                             [])
             for f in frames:
                 await ws.send(f)
 

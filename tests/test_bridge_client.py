@@ -256,7 +256,7 @@ async def test_call_service_success_and_server_failure(server, client):
 async def test_call_service_always_has_a_client_side_timeout(server, client):
     """A service that never answers (rosbridge ignores 'timeout') must not hang the caller."""
     server.services["/hung"] = lambda frame: None
-    with pytest.raises(ServiceTimeoutError, match="no answer within 0.3 s"):
+    with pytest.raises(ServiceTimeoutError, match="no answer to call_service within 0.3 s"):
         await client.call_service("/hung", {}, timeout=0.3)
     (call,) = server.ops("call_service", service="/hung")
     assert call["timeout"] == 0.3
@@ -433,10 +433,11 @@ async def test_action_goal_feedback_result_and_cancel(server, client):
                        "values": {"sequence": [0, 1, 1, 2]}, "status": 4, "result": True})
     assert await goal.result(timeout=5) == {"sequence": [0, 1, 1, 2]}
     assert feedback == [{"sequence": [0, 1]}] and goal.status == GoalStatus.SUCCEEDED and goal.succeeded
-    # no callback: the goal asks for no feedback (the protocol's default)
+    # no callback: feedback is still asked for (it is how a running goal shows it was accepted, goals.py)
+    # and kept to the client
     g2 = node.send_action_goal("/fibonacci", "example_interfaces/action/Fibonacci", [50])
     (sent2,) = await server.wait_for("send_action_goal", id=g2.id)
-    assert sent2["feedback"] is False and sent2["args"] == [50]
+    assert sent2["feedback"] is True and sent2["args"] == [50]
     g2.cancel()
     (cancel,) = await server.wait_for("cancel_action_goal")
     assert cancel == {"op": "cancel_action_goal", "id": g2.id, "action": "/fibonacci"}

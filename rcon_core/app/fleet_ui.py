@@ -23,6 +23,7 @@ from typing import Any
 
 from qtpy import QtCore, QtGui, QtWidgets
 
+from rcon_core.app import view_only
 from rcon_core.app.connection_bar import LIVE_STATES
 from rcon_core.app.fleet_links import FleetLinks
 from rcon_core.app.link import EMPTY_CATALOG, OFFLINE, BadUrl, as_state
@@ -107,8 +108,12 @@ class FleetUi(QtCore.QObject):
         return self.links.url_of(robot_id)
 
     def config_view_only(self, robot_id: str) -> str | None:
-        url = self.robot_url(robot_id)
-        return f"robot {url} is view-only" if url and self.window.config.is_view_only(url) else None
+        """Why the robot may not be commanded, naming it (its URL's mark or its own flag; view_only.py)."""
+        return view_only.reason(self, robot_id)
+
+    def apply_guards(self) -> None:
+        """Each robot's link takes its view-only mark (rcon_core.bridge.guard; view_only.py)."""
+        view_only.guard_links(self)
 
     def side_fleet(self) -> Fleet:
         """The same, the side panel's robot first (a preview's binding names no robot or that one)."""
@@ -134,6 +139,7 @@ class FleetUi(QtCore.QObject):
         """Links, chips, pickers and menus for the workspace's robots; returns the robots to connect."""
         robots = self.robots
         new = self.links.sync(robots)
+        self.apply_guards()  # a robot's own view-only flag may have changed, a new link needs its mark
         self.window.host.first_robot = robots[0].id
         controller = getattr(self.window, "controller", None)
         if controller is not None:
@@ -266,10 +272,9 @@ class FleetUi(QtCore.QObject):
                 if state is ConnectionState.CONNECTED and robot.id != first:
                     window.link_came_up()
             latency = link.latency if state in LIVE_STATES else None
-            view_only = self.config_view_only(robot.id) or (f"robot “{robot.label}” is view-only"
-                                                            if robot.view_only else None)
+            mark = self.config_view_only(robot.id)  # its URL's mark or its own flag, naming it
             self.chips.show_state(robot.id, state, latency,
-                                  None if state is ConnectionState.CONNECTED else self.why.get(robot.id) or None, view_only)
+                                  None if state is ConnectionState.CONNECTED else self.why.get(robot.id) or None, mark)
         if self._marks_dirty or window.host.models_version != self._marked_models:
             self._marks_dirty = False
             self._marked_models = window.host.models_version

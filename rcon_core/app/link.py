@@ -105,6 +105,9 @@ class Link:
         self._catalog_task: asyncio.Task | None = None
         self._generation = 0
         self._listeners: list[Callable[[BridgeClient | None], None]] = []
+        #: why a robot at a URL may be sent nothing (its view-only mark, worded by the window: see
+        #: ``view_only.py``), asked for each new client before it connects and by :meth:`apply_guard`
+        self.guard_for: Callable[[str], str | None] | None = None
         self.state_box.put(ConnectionState.CLOSED)
 
     # ------------------------------------------------------------------------------------- GUI side
@@ -119,6 +122,7 @@ class Link:
         self._generation += 1
         gen = self._generation
         client = BridgeClient(url, reconnect=True, **(settings or LinkSettings()).client_options(url))
+        self._guard(client, url)  # a view-only robot's link refuses from its first frame on
         self.client, self.url = client, url
         self.state_box.put(ConnectionState.CONNECTING)
         self.thread.call(self._wire, client, gen)
@@ -137,6 +141,22 @@ class Link:
             fn(None)
         self.thread.run(self._close(client))
         self.state_box.put(ConnectionState.CLOSED)
+
+    def apply_guard(self) -> None:
+        """The robot's view-only mark changed: its current client refuses (or stops refusing) at once."""
+        client = self.client
+        if client is not None and self.url is not None:
+            self._guard(client, self.url)
+
+    def _guard(self, client: BridgeClient, url: str) -> None:
+        why: str | None = None
+        if self.guard_for is not None:
+            try:
+                why = self.guard_for(url)
+            except Exception:  # noqa: BLE001 - the mark's wording failed: refuse rather than send
+                log.exception("view-only mark of %s could not be read; the link sends nothing", url)
+                why = f"the view-only mark of {url} could not be read"
+        client.guard.set_view_only(why)
 
     @property
     def latency(self) -> float | None:

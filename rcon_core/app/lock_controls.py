@@ -5,12 +5,17 @@
 - *Lock Operate mode…* in the canvas menu (``canvas_lock``): engages the operator lock (asking for a new
   PIN first when none is set). While engaged the Edit segment shows a padlock and a tap on it asks for
   the PIN (no extra button: the bars have no room to spare on a 1024 px tablet);
-- the PIN gate on the canvas menu's editing actions and on the robot's Connect/Disconnect button (the
-  URL field is disabled while locked); the window itself gates leaving Operate mode, adding widgets and
-  quitting (see :class:`~rcon_core.app.operator_lock.OperatorLock`);
-- *View only* in the canvas menu, for the robot (``robot_view_only``: this robot URL never gets anything
-  sent, remembered in the app config) and for the canvas (``canvas_view_only``: saved in the layout).
-  Turning either on is always allowed; turning it off is an edit (the PIN when locked).
+- the PIN gate on the canvas menu's editing actions, on the robot's Connect/Disconnect button (the
+  URL field is disabled while locked), on the connection bar's Security dialog (the robot's TLS files and
+  rosauth secret) and on the Parameters panel's Set; the window itself gates leaving Operate mode, adding
+  widgets (and so calling a service from the side panel) and quitting, the robots menu gates the Robots
+  dialog (see :class:`~rcon_core.app.operator_lock.OperatorLock`);
+- *View only* in the canvas menu, for the side panel's robot, named in the action (``robot_view_only``:
+  that robot's URL never gets anything sent, remembered in the app config, enforced on its link; see
+  :mod:`rcon_core.app.view_only`) and for the canvas (``canvas_view_only``: saved in the layout).
+  Turning either on is always allowed; turning it off is an edit (the PIN when locked);
+- the app config's problems on the notice bar: a change that could not be saved (a full or read-only
+  disk: it holds for this run), and a config folder another RCON is writing (this window saves nothing).
 """
 
 from __future__ import annotations
@@ -20,6 +25,8 @@ from typing import Any
 from qtpy import QtCore, QtGui
 
 from rcon_core.app.operator_lock import lock_tooltip
+from rcon_core.app.view_only import show_action
+from rcon_core.app.view_only import toggle as toggle_robot_view_only
 
 #: canvas menu actions that change the layout: the PIN first while the lock is engaged
 GATED_ACTIONS = {
@@ -62,10 +69,10 @@ def install(window: Any) -> None:
     view_only.setCheckable(True)
     view_only.triggered.connect(lambda checked: set_canvas_view_only(window, checked))
     window.canvas_actions["view_only"] = view_only
-    robot_view_only = add("View only: nothing is sent to this robot")
+    robot_view_only = add("View only: nothing is sent to this robot")  # names the robot (show())
     robot_view_only.setObjectName("robot_view_only")
     robot_view_only.setCheckable(True)
-    robot_view_only.triggered.connect(lambda checked: set_robot_view_only(window, checked))
+    robot_view_only.triggered.connect(lambda checked: toggle_robot_view_only(window, checked))
     window.canvas_actions["robot_view_only"] = robot_view_only
     pin = add("Operator PIN…")
     pin.setObjectName("canvas_pin")
@@ -73,12 +80,32 @@ def install(window: Any) -> None:
     window.canvas_actions["pin"] = pin
     menu.insertSeparator(before)
 
-    # ---- the connection bar: the robot gated
+    # ---- the connection bar: the robot and its connection settings gated; the Parameters panel's Set
     bar = window.connection
     bar.connect_button.clicked.disconnect()
     bar.connect_button.clicked.connect(lambda: lock.guard("change the robot", bar.toggle))
+    open_settings = bar.open_settings  # the Security button, and a Connect that needs a secret first
+
+    def gated_settings(ask_secret: bool = False) -> None:
+        lock.guard("change the robot's connection settings", lambda: open_settings(ask_secret))
+
+    bar.open_settings = gated_settings
+    window.params_panel.gate = lock.guard
+
+    # ---- the app config's problems
+    config = window.config
+    config.add_problem_listener(lambda text: window.notice.show_notice(f"⚠ {text}"))
+    window.controller.save_failed.connect(lambda _text: keep_config_problem(window))
+    lock.problem.connect(lambda text: window.notice.show_notice(text))
+    if config.read_only_reason:
+        window.notice.show_notice(
+            f"⚠ This window is read-only: {config.read_only_reason}. Nothing changed here is saved (the "
+            "layout, the PIN, view-only marks, the URL history). To keep separate settings, start RCON with "
+            "RCON_CONFIG_DIR set to another folder.")
 
     lock.changed.connect(lambda _engaged: show(window))
+    menu.aboutToShow.connect(lambda: show(window))
+    window.fleet_ui.side_robot_changed.connect(lambda _robot: show(window))
     window.controller.current_changed.connect(lambda _i: show(window))
     window.controller.lock_changed.connect(lambda _locked: show(window))
     show(window)
@@ -103,7 +130,16 @@ def show(window: Any) -> None:
     window.connection.url.setToolTip("Locked: tap Connect/Disconnect and enter the PIN to change the robot"
                                      if engaged else "")
     window.canvas_actions["view_only"].setChecked(window.controller.canvas.view_only)
-    window.canvas_actions["robot_view_only"].setChecked(bool(window.connection.view_only_reason()))
+    show_action(window)
+
+
+def keep_config_problem(window: Any) -> None:
+    """A layout save failed (its notice was just shown, e.g. on a full disk): an app-settings change that
+    could not be saved either (the PIN) stays in sight under it instead of being replaced."""
+    problem = window.config.problem_text
+    text = window.notice.label.text()
+    if problem and not window.store.read_only and problem not in text:
+        window.notice.show_notice(f"{text}\n⚠ {problem}")
 
 
 def padlock_icon() -> QtGui.QIcon:
@@ -142,18 +178,3 @@ def set_canvas_view_only(window: Any, on: bool) -> None:
         window.operator_lock.guard("let this canvas send commands",
                                    lambda: window.doc.set_view_only(canvas.id, False))
     show(window)
-
-
-def set_robot_view_only(window: Any, on: bool) -> None:
-    url = window.connection.robot_url()
-
-    def apply(value: bool) -> None:
-        window.config.set_view_only(url, value)
-        window.apply_view_only()
-        show(window)
-
-    if on:
-        apply(True)
-    else:
-        window.canvas_actions["robot_view_only"].setChecked(True)
-        window.operator_lock.guard("let this robot be commanded", lambda: apply(False))

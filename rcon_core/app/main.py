@@ -176,6 +176,9 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
     window = MainWindow(config, plugins, layout_path=layout, demo=demo_factory, collector=CollectorPolicy())
     windows.append(window)
     window.connection.overrides = overrides
+    if config.read_only_reason:  # one writer per config folder: this one saves nothing (the window says so too)
+        print(f"rcon: {config.read_only_reason}: this window opens read-only, nothing changed in it is saved; "
+              "set RCON_CONFIG_DIR to another folder to keep separate settings", file=sys.stderr)
     if demo and getattr(args, "reset_layout", False):
         window.reset_demo_layout()
     if locked:  # kiosk: the operator lock on from the start, full screen

@@ -203,6 +203,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.layout_path = Path(layout_path) if layout_path is not None else config.workspace_path
         self.layout_file = LayoutFile(self.layout_path, self.notice, demo, lambda: self.controller.saver.flush())
         self.store = self.layout_file.store
+        if not config.claim():  # one writer per config folder (config_lock.py): this window saves nothing
+            self.store.read_only_reason = config.read_only_reason
         fresh = self.demo is not None and not self.layout_path.exists()  # the demo's first start
         self.doc = Document(self.demo() if fresh and self.demo is not None else self.layout_file.load())
         self.fleet_ui = FleetUi(self)  # one link per robot; hears a change of robots before the controller
@@ -488,7 +490,9 @@ class MainWindow(QtWidgets.QMainWindow):
     # -------------------------------------------------------------------------------------- link
     def apply_view_only(self) -> None:
         """The robot's view-only mark changed: every widget (and the preview) restarts on ports that
-        refuse, or no longer refuse, to send (each robot's mark travels in the fleet, see fleet_ui)."""
+        refuse, or no longer refuse, to send (each robot's mark travels in the fleet, see fleet_ui), after
+        each robot's link itself took the mark (``view_only.py``)."""
+        self.fleet_ui.apply_guards()
         self.controller.client = self.fleet_ui.fleet()
         self.controller.run_current()
         self.preview.restart()
@@ -600,4 +604,5 @@ class MainWindow(QtWidgets.QMainWindow):
         self.preview_live.stop()
         self.fleet_ui.shutdown()
         self.link.shutdown()
+        self.config.release()
 

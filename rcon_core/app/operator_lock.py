@@ -13,7 +13,12 @@ Two notions, kept apart:
 
 The PIN is set in the app (*Canvas ▾ → Operator PIN…*) and kept hashed in the app config (see
 :mod:`rcon_core.app.pin`), never in the layout. After :data:`MAX_TRIES` wrong PINs in a row, every try is
-refused for :data:`BACKOFF_S` seconds (doubling each time), so guessing a 4-digit PIN takes days.
+refused for :data:`BACKOFF_S` seconds (doubling each time), so guessing a 4-digit PIN takes days. The
+count and the wait are kept in the app config too, so restarting RCON does not start them afresh. A PIN
+entered right whose record was made at a lower scrypt cost (an older ``app.json``) is stored again at the
+current cost. A PIN that could not be saved still locks this run: a full disk is told by the app
+config's problem listeners, a read-only config (another RCON is the folder's writer) by ``problem(sentence)``;
+the window shows either.
 """
 
 from __future__ import annotations
@@ -25,7 +30,7 @@ from typing import Any
 from qtpy import QtCore, QtWidgets
 
 from rcon_core.app.config import AppConfig
-from rcon_core.app.pin import check_pin, make_record, pin_problem
+from rcon_core.app.pin import PIN_MAX, PIN_MIN, check_pin, make_record, needs_upgrade, pin_problem
 
 MAX_TRIES = 5
 BACKOFF_S = 30.0
@@ -86,7 +91,7 @@ class PinDialog(QtWidgets.QDialog):
         field.setObjectName(name)
         field.setEchoMode(QtWidgets.QLineEdit.EchoMode.Password)
         field.setPlaceholderText(placeholder)
-        field.setMaxLength(12)
+        field.setMaxLength(PIN_MAX)
         field.setInputMethodHints(QtCore.Qt.InputMethodHint.ImhDigitsOnly
                                   | QtCore.Qt.InputMethodHint.ImhSensitiveData)
         return field
@@ -121,17 +126,22 @@ class OperatorLock(QtCore.QObject):
     """Whether the operator lock is engaged, and the PIN dialogs. ``changed(engaged)`` on every change."""
 
     changed = QtCore.Signal(bool)
+    #: one sentence for the operator: the PIN could not be saved
+    problem = QtCore.Signal(str)
 
     def __init__(self, config: AppConfig, window: QtWidgets.QWidget,
-                 clock: Callable[[], float] = time.monotonic) -> None:
+                 clock: Callable[[], float] = time.monotonic, wall: Callable[[], float] = time.time) -> None:
         super().__init__(window)
         self.config = config
         self.window = window
         self.clock = clock
+        self.wall = wall
         self.engaged = False
-        self.wrong = 0
-        self.blocked_until = 0.0
-        self._backoff = BACKOFF_S
+        saved = config.pin_lockout  # kept across restarts
+        self.wrong = int(saved["wrong"]) % MAX_TRIES
+        self._backoff = max(BACKOFF_S, saved["backoff"])
+        left = min(saved["until"] - wall(), self._backoff)  # a clock set back never waits longer
+        self.blocked_until = clock() + left if left > 0 else 0.0
         self.dialog: PinDialog | None = None
 
     @property
@@ -158,9 +168,14 @@ class OperatorLock(QtCore.QObject):
         now = self.clock()
         if now < self.blocked_until:
             return f"too many wrong PINs: try again in {int(self.blocked_until - now + 0.999)} s"
-        if check_pin(self.config.pin_record, pin):
-            self.wrong = 0
-            self._backoff = BACKOFF_S
+        record = self.config.pin_record
+        if check_pin(record, pin):
+            if self.wrong or self._backoff != BACKOFF_S:
+                self.wrong = 0
+                self._backoff = BACKOFF_S
+                self.config.set_pin_lockout(0, 0.0, 0.0)
+            if needs_upgrade(record):  # an older app.json: the same PIN at today's cost
+                self.config.set_pin_record(make_record(pin))
             self.disengage()
             return None
         self.wrong += 1
@@ -169,7 +184,9 @@ class OperatorLock(QtCore.QObject):
             self.blocked_until = now + self._backoff
             wait = self._backoff
             self._backoff *= 2
+            self.config.set_pin_lockout(0, self.wall() + wait, self._backoff)
             return f"wrong PIN; too many wrong PINs: try again in {int(wait)} s"
+        self.config.set_pin_lockout(self.wrong, 0.0, self._backoff)
         return "wrong PIN"
 
     # ------------------------------------------------------------------------------- asking
@@ -195,11 +212,15 @@ class OperatorLock(QtCore.QObject):
                 problem = pin_problem(pin)
                 if problem:
                     return problem
-                self.config.set_pin_record(make_record(pin))
+                saved = self.config.set_pin_record(make_record(pin))  # in memory at least: it locks this run
+                if not saved and self.config.read_only_reason:  # else the config's listeners were told
+                    self.problem.emit(f"⚠ The operator PIN is not saved ({self.config.read_only_reason}): "
+                                      "it locks this window only.")
                 return None
 
             self._open(PinDialog(self.window, "Operator PIN",
-                                 "Choose the operator PIN (4 to 12 digits): it locks Operate mode.", store,
+                                 f"Choose the operator PIN ({PIN_MIN} to {PIN_MAX} digits; 6 or more resist "
+                                 "guessing from a copy of the device's files): it locks Operate mode.", store,
                                  repeat=True), then or (lambda: None))
 
         if not self.has_pin:

@@ -12,6 +12,10 @@ of the same kind of items for a list; a string needs no quotes; an int is taken 
 that does not fit is refused on the spot, naming what was expected. A good value is written only after the
 operator confirms ("Set /kingfisher:max_speed to 2.5?"); then it is read back, and a value the node did not
 take (ROS 2 nodes silently refuse undeclared names and other types) is reported as refused, not as set.
+
+While the operator lock is on, Set asks for the PIN first (``gate``, the window's lock; issue 21.2). A robot
+marked view-only refuses the write on its link (``rcon_core.bridge.guard``): the editor says so when it
+opens, and a write that gets that far is shown refused with the link's sentence (issue 21.1).
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ from typing import Any
 from qtpy import QtCore, QtWidgets
 
 from rcon_core.app.frame_clock import Waker
+from rcon_core.bridge import ViewOnlyError
 from rcon_core.bridge import params as P
 from rcon_core.bridge.params import ParamRejectedError
 
@@ -35,6 +40,12 @@ NAME_ROLE = QtCore.Qt.ItemDataRole.UserRole
 CONCURRENT_GETS = 16
 #: confirm(question, detail, yes, then): the main window's two-button question
 Confirm = Callable[[str, str, str, Callable[[], object]], object]
+#: gate(what, then): runs ``then`` now, or after the operator PIN while the lock is on
+Gate = Callable[[str, Callable[[], object]], object]
+
+
+def _now(_what: str, then: Callable[[], object]) -> object:
+    return then()
 
 
 async def fetch_params(client: Any) -> tuple[bool, dict[str, dict[str, Any]]]:
@@ -92,6 +103,8 @@ class ParamsPanel(QtWidgets.QWidget):
         super().__init__(parent)
         self.link = link
         self.confirm = confirm
+        #: the operator lock's PIN gate (the window sets it; by default nothing is asked)
+        self.gate: Gate = _now
         self.ros2 = False
         self.values: dict[str, Any] = {}
         self.loaded_for: Any = None  # the client the list was fetched from
@@ -309,8 +322,13 @@ class ParamsPanel(QtWidgets.QWidget):
         self.edit_value.setText(value_text(value))
         self.edit_value.setEnabled(editable)
         self.set_button.setEnabled(editable)
-        self.edit_problem.setText("")
+        self.edit_problem.setText(self._view_only(name) or "")
         self.editor.show()
+
+    def _view_only(self, name: str) -> str | None:
+        """The link's sentence when the robot is view-only (its link refuses the write), else None."""
+        guard = getattr(self.link.client, "guard", None)
+        return guard.sentence(f"setting parameter {name}") if guard is not None and guard.view_only else None
 
     def set_clicked(self) -> None:
         name = self._editing
@@ -325,8 +343,13 @@ class ParamsPanel(QtWidgets.QWidget):
         if value == current and P.kind(value) == P.kind(current):
             self.edit_problem.setText("That is the value it has already.")
             return
-        self.confirm(f"Set {name}?", f"{value_text(current)}  →  {value_text(value)}\n\nThe robot uses the new "
-                     "value at once.", "Set it", lambda: self._write(name, value))
+        refused = self._view_only(name)
+        if refused:
+            self.edit_problem.setText(refused)
+            return
+        self.gate(f"set {name}", lambda: self.confirm(
+            f"Set {name}?", f"{value_text(current)}  →  {value_text(value)}\n\nThe robot uses the new value at "
+            "once.", "Set it", lambda: self._write(name, value)))
 
     def _write(self, name: str, value: Any) -> None:
         async def write(client: Any) -> Any:
@@ -341,6 +364,9 @@ class ParamsPanel(QtWidgets.QWidget):
                 if row is not None:
                     self._show_value(row, P.split(name, self.ros2)[1], got)
                 self.status.setText(f"✓ {name} set to {value_text(got)}")
+            elif isinstance(got, ViewOnlyError):  # the robot's link refused it: its sentence says why
+                self.status.setText(f"✗ {got}")
+                self.edit_problem.setText(str(got))
             else:
                 what = "refused" if isinstance(got, ParamRejectedError) else "failed"
                 self.status.setText(f"✗ Setting {name} {what}: {got}")

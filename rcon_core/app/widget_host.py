@@ -149,6 +149,9 @@ class WidgetHost:
         if reason:  # the port refuses anyway (rcon_core.canvas.port); the controls say so
             hosted.view.setEnabled(False)
             hosted.view.setToolTip(f"View only: {reason}. Nothing is sent to the robot.")
+            # the badge with it, not at the next pass: a disabled control never shows without its reason
+            hosted.frame.badge.show_status("view-only", "VIEW ONLY")
+            hosted.frame.badge.setToolTip(f"{reason}: nothing is sent to the robot")
 
     def set_link_up(self, up: bool, robot_id: str | None = None) -> None:
         """One robot's link (``robot_id``), or, without it, every robot's (a one-robot window)."""

@@ -5,6 +5,7 @@ from .action_server import ActionServer, ServedGoal
 from .client import BridgeClient, ConnectionState
 from .errors import (
     ActionError,
+    ActionNoAnswerError,
     ActionTimeoutError,
     AuthRefusedError,
     BridgeError,
@@ -12,16 +13,19 @@ from .errors import (
     LinkSettingsError,
     NotConnectedError,
     ProtocolError,
+    RosapiRefusedError,
     ServiceError,
     ServiceTimeoutError,
 )
+from .guard import LinkGuard, ViewOnlyError
 from .nodes import ActionGoal, GoalStatus, Node, Publisher, ServiceServer, Subscription
 from .params import ParamNotFoundError, ParamRejectedError
 from .rosinfo import RosInfo
 
 __all__ = [
-    "ActionError", "ActionGoal", "ActionServer", "ActionTimeoutError", "AuthRefusedError", "BridgeClient",
-    "BridgeError", "ConnectionLostError", "ConnectionState", "GoalStatus", "LinkSettingsError", "Node",
-    "NotConnectedError", "ParamNotFoundError", "ParamRejectedError", "ProtocolError", "Publisher", "RosInfo",
-    "ServedGoal", "ServiceError", "ServiceServer", "ServiceTimeoutError", "Subscription",
+    "ActionError", "ActionGoal", "ActionNoAnswerError", "ActionServer", "ActionTimeoutError", "AuthRefusedError",
+    "BridgeClient", "BridgeError", "ConnectionLostError", "ConnectionState", "GoalStatus", "LinkGuard",
+    "LinkSettingsError", "Node", "NotConnectedError", "ParamNotFoundError", "ParamRejectedError", "ProtocolError",
+    "Publisher", "RosInfo", "RosapiRefusedError", "ServedGoal", "ServiceError", "ServiceServer",
+    "ServiceTimeoutError", "Subscription", "ViewOnlyError",
 ]

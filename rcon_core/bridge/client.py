@@ -13,7 +13,9 @@ link; frames are read by ``inbound.py`` and written through the one adapter over
 * restore after a reconnect, publishing while down, service calls: ``session.py``; shared subscriptions:
   ``topics.py``, ``subscribe.py``; services this client provides: ``services.py``; ROS 2 action goals:
   ``goals.py``; actions this client provides: ``action_server.py``;
-* ROS 1 or ROS 2: ``rosinfo.py`` (``detect_ros()``), ``params.py`` (``client.params``), ``cdrdecode.py``.
+* ROS 1 or ROS 2: ``rosinfo.py`` (``detect_ros()``, once per connection), ``params.py`` (``client.params``),
+  ``cdrdecode.py``; which rosapi calls may be sent at all: ``rosapi_guard.py`` (checked here, in
+  :meth:`BridgeClient.call_service`, for every caller: widgets, the CLI, discovery, type lookups).
 
 Test hooks (public, documented): ``client.session`` (``session.topics``, ``session.pending``...),
 ``client.inbound`` (``inbound.fragments``), ``client.link`` (the current ``wslink.Link`` or None: ``queued``,
@@ -63,9 +65,11 @@ from typing import Any
 from websockets.asyncio.client import ClientConnection, connect
 from websockets.exceptions import ConnectionClosed
 
+from . import rosapi_guard
 from .action_server import ProvidedActions
-from .errors import AuthRefusedError, NotConnectedError
+from .errors import AuthRefusedError, NotConnectedError, RosapiRefusedError, ServiceError
 from .freshness import LinkWatch, watch_link
+from .guard import LinkGuard
 from .inbound import BadFrames, Inbound
 from .nodes import Node
 from .params import Params
@@ -99,6 +103,18 @@ def _check_auth(auth: dict[str, Any]) -> dict[str, Any]:
     if missing:
         raise ValueError(f"auth is missing rosauth field(s): {', '.join(missing)}")
     return {"op": "auth", **{f: auth[f] for f in AUTH_FIELDS}}
+
+
+class _Unguarded:
+    """The client's calls without the rosapi guard: what ``detect_ros`` itself asks (``rosinfo.detect``)."""
+
+    def __init__(self, client: BridgeClient) -> None:
+        self.call_timeout = client.call_timeout
+        self._session = client.session
+
+    async def call_service(self, name: str, args: dict[str, Any] | list | None = None,
+                           timeout: float | None = None) -> Any:
+        return await self._session.call_service(name, args, timeout)
 
 
 class BridgeClient:
@@ -156,6 +172,10 @@ class BridgeClient:
 
         self.rosapi = Rosapi(self)
         self.ros_info: RosInfo | None = None  # set by detect_ros(); see rosinfo.py
+        self._info_link: Link | None = None  # the connection ros_info was learned on
+        self._detecting: dict[bool, asyncio.Future[RosInfo]] = {}  # quick / full detection in flight
+        self._profile: RosInfo | None = None  # the quick one (rosapi listing + get_ros_version)
+        self._profile_link: Link | None = None
         self.params = Params(self)  # ROS 1 and ROS 2 parameters; see params.py
         bad = BadFrames(url, self.stats)
         #: the protocol state: nodes, topics, advertisements, services, calls, goals (``session.py``)
@@ -176,6 +196,11 @@ class BridgeClient:
         return self.link is not None
 
     @property
+    def guard(self) -> LinkGuard:
+        """Whether this link is view-only (``guard.set_view_only(reason)``, any thread; see ``guard.py``)."""
+        return self.session.guard
+
+    @property
     def provided_actions(self) -> ProvidedActions:
         """Actions this client serves (``node.advertise_action``; see ``action_server.py``)."""
         return self.session.provided_actions
@@ -186,10 +211,46 @@ class BridgeClient:
         return self.ros_info.version if self.ros_info is not None else None
 
     async def detect_ros(self, refresh: bool = False) -> RosInfo:
-        """Which ROS the server runs (asked once; ``refresh`` asks again).  See ``rosinfo.py``."""
-        if self.ros_info is None or refresh:
-            self.ros_info = await detect_ros(self)
-        return self.ros_info
+        """Which ROS the server runs and which rosapi services it lists: asked once per connection (the
+        server behind a URL may have been restarted with another release) and by one caller at a time;
+        ``refresh`` asks again.  See ``rosinfo.py``."""
+        if self.ros_info is not None and not refresh and (self.link is None or self._info_link is self.link):
+            return self.ros_info
+        profile = None if refresh else await self.rosapi_profile()
+        if profile is not None and profile.version is not None:
+            info = profile
+        else:
+            info = await self._detect(quick=False)
+        self.ros_info, self._info_link = info, self._profile_link if info is profile else self.link
+        return info
+
+    async def rosapi_profile(self) -> RosInfo:
+        """The rosapi services the server lists and, where rosapi 2.x tells, its ROS and distro: asked once
+        per connection (``rosinfo.detect(quick=True)``); what ``rosapi_guard`` and ``rosapi.py`` go by."""
+        if self.ros_info is not None and self._info_link is self.link and self.link is not None:
+            return self.ros_info
+        if self._profile is not None and (self.link is None or self._profile_link is self.link):
+            return self._profile
+        link = self.link
+        info = await self._detect(quick=True)
+        self._profile, self._profile_link = info, link
+        return info
+
+    async def _detect(self, quick: bool) -> RosInfo:
+        """One detection at a time per kind; concurrent callers share it."""
+        running = self._detecting.get(quick)
+        if running is not None and not running.done():
+            return await asyncio.shield(running)
+        future: asyncio.Future[RosInfo] = asyncio.get_running_loop().create_future()
+        self._detecting[quick] = future
+        try:
+            info = await detect_ros(_Unguarded(self), quick=quick)
+        except BaseException as exc:
+            future.set_exception(exc)
+            future.exception()
+            raise
+        future.set_result(info)
+        return info
 
     def add_state_listener(self, fn: Callable[[ConnectionState], None]) -> Callable[[], None]:
         """Call ``fn(state)`` on every change; returns a function that removes the listener."""
@@ -247,8 +308,35 @@ class BridgeClient:
     async def call_service(self, name: str, args: dict[str, Any] | list | None = None,
                            timeout: float | None = None) -> Any:
         """Call a service; returns its ``values``.  Raises ServiceError / ServiceTimeoutError (see
-        ``session.py``)."""
+        ``session.py``), and RosapiRefusedError, without sending anything, for a rosapi call that would
+        kill the server's rosapi (``rosapi_guard.py``)."""
+        if rosapi_guard.rosapi_name(name) is not None:
+            await self._check_rosapi_call(name, args, timeout)
         return await self.session.call_service(name, args, timeout)
+
+    async def _check_rosapi_call(self, name: str, args: Any, timeout: float | None) -> None:
+        """Refuse a rosapi call the server's release cannot survive (``rosapi_guard.refusal``); a lookup
+        the judgement needs (is the node listed? has a listed service that type?) is made only when the
+        arguments alone do not settle it."""
+        info = await self.rosapi_profile()
+        reason = rosapi_guard.refusal(name, args, info)
+        need = rosapi_guard.needs(name, info)
+        what = args.get("node" if need == "node" else "type") if isinstance(args, dict) else None
+        if reason is None and need is not None and isinstance(what, str):
+            try:
+                if need == "node":
+                    found = await self.session.call_service("/rosapi/nodes", {}, timeout)
+                    listed = what in (found or {}).get("nodes", [])
+                else:
+                    found = await self.session.call_service("/rosapi/services_for_type", {"type": what}, timeout)
+                    listed = bool((found or {}).get("services"))
+            except ServiceError as exc:
+                raise RosapiRefusedError(f"not sent: could not check it is safe for this rosapi ({exc.message})",
+                                         name) from None
+            reason = rosapi_guard.refusal(name, args, info, node_listed=listed, type_listed=listed)
+        if reason is not None:
+            log.info("not sending %s to %s: %s", name, self.url, reason)
+            raise RosapiRefusedError(f"not sent: {reason}", name)
 
     async def typedefs(self, type_name: str) -> list[dict[str, Any]]:
         """rosapi typedefs of a message type, from the server (cached), else from the local registry."""

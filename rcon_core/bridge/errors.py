@@ -33,6 +33,11 @@ class ServiceTimeoutError(ServiceError, TimeoutError):
     """No answer arrived within the client-side timeout (a missing or hung service)."""
 
 
+class RosapiRefusedError(ServiceError):
+    """RCON did not send this rosapi call: it would kill or wedge the server's rosapi (``rosapi_guard.py``
+    says which calls and why).  Nothing was written; the message names the hazard."""
+
+
 class ConnectionLostError(ServiceError):
     """The connection dropped while a call or action goal was waiting for its answer."""
 
@@ -57,6 +62,12 @@ class ActionError(BridgeError):
 
 class ActionTimeoutError(ActionError, TimeoutError):
     """No result arrived within the goal's client-side timeout (the client then cancels the goal)."""
+
+
+class ActionNoAnswerError(ActionError, TimeoutError):
+    """Nothing came back for a goal -- no feedback, no result -- within its ``answer_timeout``.  rosbridge 2.1.0
+    answers a goal the action server *rejected* with nothing at all (``rosbridge-ros2-2.1.0/actions.jsonl:14-15``),
+    and a goal to an action nobody serves the same (``:16-17``), so this is the only way to tell."""
 
 
 class ProtocolError(BridgeError):

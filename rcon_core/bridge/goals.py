@@ -2,9 +2,19 @@
 
 Decisions:
 
-* ``send_action_goal`` carries ``feedback: true`` only when a feedback callback is given.  rosbridge answers
-  a goal that *ran* -- succeeded, cancelled or aborted -- with ``result: true`` and the GoalStatus in
-  ``status``: ``goal.result()`` returns the result message and ``goal.status`` tells how it ended.
+* ``send_action_goal`` always carries ``feedback: true``: feedback is how a running goal shows it was
+  accepted (rosbridge acknowledges nothing else), and it reaches the caller only when a feedback callback
+  was given.  rosbridge answers a goal that *ran* -- succeeded, cancelled or aborted -- with
+  ``result: true`` and the GoalStatus in ``status``: ``goal.result()`` returns the result message and
+  ``goal.status`` tells how it ended.
+* A goal the action server **rejects** gets no answer at all from rosbridge 2.1.0 -- no feedback, no result
+  (``rosbridge-ros2-2.1.0/actions.jsonl:14-15``; a goal to an action nobody serves: ``:16-17``).  So a goal
+  that hears nothing within ``answer_timeout`` (5 s by default) ends with :class:`ActionNoAnswerError`, "no
+  answer from the action server (rejected?)", instead of reading "running" forever; any feedback or result
+  before that is a sign of life and stops the clock.  A result that still comes later is kept
+  (``goal.status``, ``goal.late_result``) and ``outcome`` says how the goal really ended.  From 2.5.0 on
+  (#1139) rosbridge answers a rejection with ``result: false`` and "Action goal was rejected"; the outcome
+  is then ``rejected``.
 * ``result: false`` (the goal could not be sent: no action server, bad args; ``values`` is then the error
   string), an error ``status`` naming the goal, or the optional client-side ``timeout`` raise
   ``ActionError`` (the timeout also cancels the goal on the server).
@@ -24,6 +34,7 @@ from typing import TYPE_CHECKING, Any
 
 from .errors import (
     ActionError,
+    ActionNoAnswerError,
     ActionTimeoutError,
     ConnectionLostError,
     NotConnectedError,
@@ -38,6 +49,10 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
+#: seconds a goal may go without any feedback or result before it reads "no answer (rejected?)"
+ANSWER_TIMEOUT = 5.0
+NO_ANSWER = "no answer from the action server (rejected?)"
+
 
 class Goals:
     """Goals in flight: frames out through ``send``, the server's feedback and result frames in."""
@@ -49,20 +64,26 @@ class Goals:
         self._host = host  # url, rosapi (see session.Host)
         self.active: dict[str, ActionGoal] = {}
         self._timers: dict[str, asyncio.TimerHandle] = {}
+        self._silence: dict[str, asyncio.TimerHandle] = {}  # answer_timeout clocks
+        self.unanswered: dict[str, ActionGoal] = {}  # ended with "no answer"; a late result is still taken
         self._seq = 0
 
     def send(self, node: Node, action: str, action_type: str, args: dict[str, Any] | list | None,
-             feedback: Callable[[Any], None] | None, timeout: float | None, check: bool) -> ActionGoal:
+             feedback: Callable[[Any], None] | None, timeout: float | None, check: bool,
+             answer_timeout: float | None = ANSWER_TIMEOUT) -> ActionGoal:
         self._seq += 1
         goal = ActionGoal(node, action, action_type, f"goal:{action}:{self._seq}", feedback)
         op = {"op": "send_action_goal", "id": goal.id, "action": action, "action_type": action_type,
-              "args": {} if args is None else args, "feedback": feedback is not None}
+              "args": {} if args is None else args, "feedback": True}
         if not self._send(op):
             goal.settle(error=NotConnectedError(f"not connected to {self._host.url}"))
             return goal
         self.active[goal.id] = goal
+        loop = asyncio.get_running_loop()
         if timeout is not None:
-            self._timers[goal.id] = asyncio.get_running_loop().call_later(timeout, self._timed_out, goal, timeout)
+            self._timers[goal.id] = loop.call_later(timeout, self._timed_out, goal, timeout)
+        if answer_timeout is not None:
+            self._silence[goal.id] = loop.call_later(answer_timeout, self._no_answer, goal, answer_timeout)
         if check:
             self._spawn(self._check_exists(goal))
         return goal
@@ -73,10 +94,29 @@ class Goals:
 
     def _settle(self, goal: ActionGoal, result: dict[str, Any] | None = None,
                 error: BaseException | None = None) -> bool:
-        timer = self._timers.pop(goal.id, None)
+        for timers in (self._timers, self._silence):
+            timer = timers.pop(goal.id, None)
+            if timer is not None:
+                timer.cancel()
+        return goal.settle(result, error)
+
+    def _heard(self, goal: ActionGoal) -> None:
+        """A sign of life: the goal was accepted, so silence no longer means a rejection."""
+        timer = self._silence.pop(goal.id, None)
         if timer is not None:
             timer.cancel()
-        return goal.settle(result, error)
+
+    def _no_answer(self, goal: ActionGoal, after: float) -> None:
+        self._silence.pop(goal.id, None)
+        if goal.done or self.active.get(goal.id) is not goal:
+            return
+        del self.active[goal.id]
+        self.unanswered[goal.id] = goal
+        while len(self.unanswered) > 64:  # bounded: the oldest are forgotten
+            self.unanswered.pop(next(iter(self.unanswered)))
+        if self._settle(goal, error=ActionNoAnswerError(f"{NO_ANSWER}: nothing came back within {after:g} s",
+                                                        goal.action)):
+            log.warning("goal %s to %s: %s within %g s", goal.id, goal.action, NO_ANSWER, after)
 
     def fail(self, goal: ActionGoal, error: ActionError, cancel: bool) -> None:
         if self.active.get(goal.id) is goal:
@@ -116,9 +156,10 @@ class Goals:
         if goal is None:
             log.debug("action_feedback for unknown goal %r", m.get("id"))
             return
-        goal.feedback_count += 1
-        goal.last_feedback = m.get("values")
-        if goal.feedback_callback is not None:
+        self._heard(goal)
+        if goal.feedback_callback is not None:  # asked for on the wire in any case (see the docstring)
+            goal.feedback_count += 1
+            goal.last_feedback = m.get("values")
             values = m.get("values")
             try:
                 goal.feedback_callback({} if values is None else values)
@@ -127,6 +168,13 @@ class Goals:
 
     def on_result(self, m: dict[str, Any]) -> None:
         goal = self.active.pop(m["id"], None)
+        late = self.unanswered.pop(m["id"], None) if goal is None else None
+        if late is not None:  # it was accepted after all: say how it really ended
+            status = m.get("status")
+            late.status = status if isinstance(status, int) and not isinstance(status, bool) else None
+            late.late_result = m.get("values") if m.get("result", True) is not False else None
+            log.info("goal %s to %s answered after all (status %s)", late.id, late.action, late.status)
+            return
         if goal is None or goal.done:
             log.debug("action_result for unknown or finished goal %r", m.get("id"))
             return

@@ -44,7 +44,7 @@ import orjson
 from .errors import ProtocolError
 from .latest import LatestOnly
 from .offload import BigFrames, decode_big
-from .protocol import FragmentAssembler, RefusedFrame, decode_binary, decode_png
+from .protocol import FragmentAssembler, RefusedFrame, decode_binary, decode_png, loads_text
 from .safety import safe_text
 
 log = logging.getLogger(__name__)
@@ -127,9 +127,10 @@ class Inbound:
                 elif isinstance(raw, str):
                     try:
                         m = loads(raw)
-                    except orjson.JSONDecodeError as exc:
-                        self.bad.report("json", f"text frame is not valid JSON ({exc}): {raw[:80]!r}")
-                        continue
+                    except orjson.JSONDecodeError:
+                        m = self.lenient(raw)  # rosbridge 2.x's bare NaN tokens (protocol.loads_text)
+                        if m is None:
+                            continue
                 else:
                     m = self.decode_binary(raw)
                     if m is None:
@@ -180,6 +181,15 @@ class Inbound:
             self.bad.report("big", f"big frame dropped: {exc}")
             return None
 
+    def lenient(self, raw: str) -> Any:
+        """A text frame orjson refused: parsed again allowing bare ``NaN``/``Infinity``; None (counted) when
+        it is not JSON at all."""
+        try:
+            return loads_text(raw)
+        except ProtocolError as exc:
+            self.bad.report("json", f"text frame is {exc}: {raw[:80]!r}")
+            return None
+
     def decode_binary(self, raw: bytes) -> Any:
         try:
             return decode_binary(raw, self.typed_arrays)
@@ -208,9 +218,9 @@ class Inbound:
 
     def _dispatch_text(self, text: str | bytes) -> None:
         try:
-            m = _loads(text)
-        except orjson.JSONDecodeError as exc:
-            self.bad.report("json", f"reassembled frame is not valid JSON ({exc})")
+            m = loads_text(text)
+        except ProtocolError as exc:
+            self.bad.report("json", f"reassembled frame is {exc}")
             return
         self.other(m)
 

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 from .errors import BridgeError
 from .freshness import AUTO, resolve_max_age
+from .guard import ViewOnlyError
 from .protocol import COMPRESSIONS
 
 if TYPE_CHECKING:
@@ -160,6 +161,8 @@ class ActionGoal:
         self.last_feedback: dict[str, Any] | None = None
         self.status: int | None = None
         self.cancel_requested = False
+        #: the result of a goal that first ended with "no answer" and was answered later (goals.py)
+        self.late_result: dict[str, Any] | None = None
         self._future: asyncio.Future[dict[str, Any]] = asyncio.get_running_loop().create_future()
 
     @property
@@ -169,8 +172,9 @@ class ActionGoal:
     @property
     def outcome(self) -> str:
         """How the goal stands, in words: ``running``, ``canceling``, ``succeeded``, ``canceled``,
-        ``aborted``, ``timed out``, ``failed`` (could not be run) or ``unknown (link lost)``: a goal
-        whose link dropped never reads as a success."""
+        ``aborted``, ``timed out``, ``no answer (rejected?)`` (nothing came back: ``goals.py``),
+        ``rejected``, ``failed`` (could not be run) or ``unknown (link lost)``: a goal whose link dropped
+        never reads as a success."""
         if not self._future.done():
             return "canceling" if self.cancel_requested else "running"
         if self._future.cancelled():
@@ -183,12 +187,21 @@ class ActionGoal:
                 except ValueError:
                     pass
             return f"ended with status {self.status}"
-        from .errors import ActionTimeoutError, ConnectionLostError
+        from .errors import ActionError, ActionNoAnswerError, ActionTimeoutError, ConnectionLostError
 
         if isinstance(error, ConnectionLostError):
             return "unknown (link lost)"
+        if isinstance(error, ActionNoAnswerError):
+            if self.status is not None:  # answered after all
+                try:
+                    return GoalStatus(self.status).word
+                except ValueError:
+                    return f"ended with status {self.status}"
+            return "no answer (rejected?)"
         if isinstance(error, ActionTimeoutError):
             return "timed out"
+        if isinstance(error, ActionError) and "rejected" in error.message.lower():
+            return "rejected"  # rosbridge 2.5.0 and later say so (#1139)
         return "failed"
 
     @property
@@ -203,8 +216,10 @@ class ActionGoal:
         return await asyncio.wait_for(asyncio.shield(self._future), timeout)
 
     def cancel(self) -> None:
-        """Ask the server to cancel the goal (the result arrives as usual, with status CANCELED)."""
+        """Ask the server to cancel the goal (the result arrives as usual, with status CANCELED).  Raises
+        ``ViewOnlyError`` when the link was marked view-only since the goal was sent (``guard.py``)."""
         if not self._future.done():
+            self.node.session.guard.check(f"cancelling the goal to {self.action}")
             self.cancel_requested = True
             self.node.session.goals.cancel(self)
 
@@ -305,10 +320,12 @@ class Node:
 
     def send_action_goal(self, action: str, action_type: str, args: dict[str, Any] | list | None = None,
                          feedback: MessageCallback | None = None, *, timeout: float | None = None,
-                         check: bool = True) -> ActionGoal:
+                         check: bool = True, answer_timeout: float | None = 5.0) -> ActionGoal:
         """Send a ROS 2 action goal; ``feedback(values)`` gets each ``action_feedback``.
 
-        Feedback is asked for only when a callback is given (the protocol's default is none).
+        ``answer_timeout``: a goal that hears nothing (no feedback, no result) for that long ends with
+        ``ActionNoAnswerError``, "no answer from the action server (rejected?)" -- rosbridge 2.1.0 answers a
+        rejected goal with silence (``goals.py``); None waits for ever.
         ``timeout``: client-side budget for the result in seconds (None: no limit); when it runs out the
         goal is cancelled on the server and fails with ``ActionTimeoutError``.  ``check``: also ask
         ``/rosapi/action_servers`` (within ``call_timeout``) and fail the goal at once with a clear
@@ -327,7 +344,11 @@ class Node:
         if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, int | float)
                                     or not timeout > 0):
             raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
-        goal = self.session.goals.send(self, action, action_type, args, feedback, timeout, check)
+        if answer_timeout is not None and (isinstance(answer_timeout, bool) or not isinstance(answer_timeout, int | float)
+                                           or not answer_timeout > 0):
+            raise ValueError(f"answer_timeout must be a positive number of seconds, got {answer_timeout!r}")
+        self.session.guard.check(f"the goal to {action}")  # ViewOnlyError on a view-only link
+        goal = self.session.goals.send(self, action, action_type, args, feedback, timeout, check, answer_timeout)
         self.goals.add(goal)
         goal.add_done_callback(self.goals.discard)
         return goal
@@ -354,6 +375,9 @@ class Node:
         for action in list(self.action_servers):
             action.unadvertise()
         for g in list(self.goals):
-            g.cancel()
+            try:
+                g.cancel()
+            except ViewOnlyError:  # a view-only link sends no cancel either (guard.py)
+                pass
         self.closed = True
         self.session.node_closed(self)

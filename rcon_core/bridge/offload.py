@@ -22,10 +22,8 @@ import asyncio
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
-import orjson
-
 from .errors import ProtocolError
-from .protocol import decode_binary, decode_png
+from .protocol import decode_binary, decode_png, loads_text
 from .safety import safe_text
 
 
@@ -33,9 +31,9 @@ def decode_big(raw: str | bytes, typed_arrays: str, max_bytes: int) -> Any:
     """Decode one frame completely (runs in the worker thread)."""
     if isinstance(raw, str):
         try:
-            m = orjson.loads(raw)
-        except orjson.JSONDecodeError as exc:
-            raise ProtocolError(f"text frame of {len(raw)} bytes is not valid JSON ({exc})") from None
+            m = loads_text(raw)
+        except ProtocolError as exc:
+            raise ProtocolError(f"text frame of {len(raw)} bytes is {exc}") from None
     else:
         m = decode_binary(raw, typed_arrays)
     if isinstance(m, dict) and m.get("op") == "png" and "num" not in m and "total" not in m:

@@ -3,14 +3,15 @@
 ROS 1 has one parameter server with slash-separated names (``/kingfisher/max_speed``; a namespace reads
 back as a dict).  ROS 2 has none: each node owns its parameters and rosapi 2.x names one
 ``<node>:<param>`` (``/kingfisher:max_speed``, nested ones with dots: ``/kingfisher:gps.origin_lat``).
-Values travel as JSON text inside strings either way.  ROS 2 quirks handled here:
+On ROS 1 values travel as JSON text inside strings through rosapi's parameter calls.  On ROS 2 the
+nodes are asked directly through their own parameter services (``params_ros2.py`` says why: rosapi
+2.1.0's parameter calls die, hang or lie); what this module adds:
 
-* a missing parameter reads back as the request's default (``""`` when none), so ``get`` asks
-  ``has_param`` when the answer is ``""`` to tell "missing" from "empty string";
-* ``set_param`` always answers success, even when the node refused the value (undeclared parameter,
-  other type): ``set(..., verify=True)`` reads the value back and raises :class:`ParamRejectedError`;
-* a name that is not ``<node>:<param>`` gets empty answers from rosapi: refused here with ``ValueError``;
-* ``get_param``'s default field is ``default_value`` (ROS 1: ``default``).
+* a name that is not ``<node>:<param>`` is refused here with ``ValueError``;
+* ``set`` raises :class:`ParamRejectedError` with the node's own reason when the node did not take the
+  value (undeclared parameter, other type: an integer for a double too); with ``verify`` the value is
+  also read back;
+* ``delete`` undeclares the parameter (the node may refuse: :class:`ParamRejectedError`).
 
 Which shape applies comes from ``client.detect_ros()`` (done on first use).  Helpers for editors:
 :func:`split` / :func:`join` names, :func:`kind` names a value's type (bool, int, float, string, list),
@@ -25,6 +26,7 @@ from typing import TYPE_CHECKING, Any
 import yaml
 
 from .errors import BridgeError, ServiceError
+from .params_ros2 import NodeParams
 
 if TYPE_CHECKING:
     from .host import RosClient
@@ -111,6 +113,7 @@ class Params:
 
     def __init__(self, client: RosClient) -> None:
         self._client = client
+        self._nodes = NodeParams(client)
 
     async def ros2(self) -> bool:
         return (await self._client.detect_ros()).version == 2
@@ -122,7 +125,9 @@ class Params:
         return values
 
     async def names(self) -> list[str]:
-        """Every parameter name (ROS 2: ``<node>:<param>`` of every node but rosapi)."""
+        """Every parameter name (ROS 2: ``<node>:<param>`` of every node with parameter services)."""
+        if await self.ros2():
+            return await self._nodes.names()
         return list((await self._call("get_param_names", {})).get("names", []))
 
     async def by_owner(self) -> dict[str, list[str]]:
@@ -139,21 +144,21 @@ class Params:
 
     async def has(self, name: str) -> bool:
         if await self.ros2():
-            split(name, True)
+            return (await self._nodes.get(*split(name, True)))[0]
         return bool((await self._call("has_param", {"name": name})).get("exists", False))
 
     async def get(self, name: str, default: Any = MISSING) -> Any:
         """The value; ``default`` when missing, else :class:`ParamNotFoundError`."""
-        ros2 = await self.ros2()
-        if ros2:
-            split(name, True)
-        text = (await self._call("get_param", {"name": name})).get("value", "")
-        try:
-            value = json.loads(text) if text else None
-        except ValueError:
-            raise ServiceError(f"parameter {name} is not JSON text: {text[:80]!r}", "/rosapi/get_param") from None
-        missing = value is None if not ros2 else (value == "" and not await self.has(name))
-        if missing:
+        if await self.ros2():
+            found, value = await self._nodes.get(*split(name, True))
+        else:
+            text = (await self._call("get_param", {"name": name})).get("value", "")
+            try:
+                value = json.loads(text) if text else None
+            except ValueError:
+                raise ServiceError(f"parameter {name} is not JSON text: {text[:80]!r}", "/rosapi/get_param") from None
+            found = value is not None
+        if not found:
             if default is MISSING:
                 raise ParamNotFoundError(f"no parameter {name}")
             return default
@@ -164,8 +169,18 @@ class Params:
         when the node did not take it (ROS 2 nodes refuse undeclared names and other types silently)."""
         ros2 = await self.ros2()
         if ros2:
-            split(name, True)
-        await self._call("set_param", {"name": name, "value": json.dumps(value)})
+            node, param = split(name, True)
+            try:
+                taken, why = await self._nodes.set(node, param, value)
+            except LookupError as exc:
+                raise ParamRejectedError(f"{name} was not set to {value!r}: {exc}") from None
+            if not taken:
+                found, now = await self._nodes.get(node, param)
+                reason = "the parameter is not declared by the node" if not found else \
+                    f"it holds {kind(now)} {now!r}, so the node refused a {kind(value)}"
+                raise ParamRejectedError(f"{name} was not set to {value!r}: {reason}" + (f" ({why})" if why else ""))
+        else:
+            await self._call("set_param", {"name": name, "value": json.dumps(value)})
         if not verify:
             return
         now = await self.get(name, default=MISSING if not ros2 else None)
@@ -175,6 +190,14 @@ class Params:
             raise ParamRejectedError(f"{name} was not set to {value!r}: {reason}")
 
     async def delete(self, name: str) -> None:
+        """Remove the parameter (ROS 2: undeclare it; the node may refuse, :class:`ParamRejectedError`)."""
         if await self.ros2():
-            split(name, True)
+            node, param = split(name, True)
+            try:
+                taken, why = await self._nodes.set(node, param, None)
+            except LookupError as exc:
+                raise ParamRejectedError(f"{name} was not deleted: {exc}") from None
+            if not taken:
+                raise ParamRejectedError(f"{name} was not deleted: {why or 'the node refused'}")
+            return
         await self._call("delete_param", {"name": name})

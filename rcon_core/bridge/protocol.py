@@ -3,7 +3,12 @@
 Decisions (the recordings in ``shared/rosbridge-ros1`` are the ground truth):
 
 * Text frames are parsed with one ``orjson.loads``.  rosbridge escapes ``/`` and non-ASCII characters;
-  that is plain JSON and needs nothing special.  NaN/Inf arrive as ``null`` and stay ``None``.
+  that is plain JSON and needs nothing special.  NaN/Inf mostly arrive as ``null`` and stay ``None``.
+  But rosbridge 2.x writes NaN and infinities inside fixed-size arrays (an Imu's covariances, numpy arrays
+  inside rclpy) as the bare tokens ``NaN``/``Infinity``/``-Infinity``, which is not JSON
+  (``rosbridge-ros2-2.1.0/publish_json.jsonl:62``; a ``NaN`` id comes back the same way,
+  ``malformed.jsonl:34``).  A frame orjson refuses is parsed again with Python's own ``json`` module, which
+  reads those tokens as float NaN/inf (:func:`loads_text`), so such a message is delivered, not dropped.
 * Binary frames are CBOR (``compression: "cbor"`` and ``"cbor-raw"``).  RFC 8746 typed arrays (tags
   64-87) are decoded with numpy into **plain lists** by default, so a message looks the same whichever
   compression carried it; uint8 arrays (tags 64 and 68) become ``bytes`` (the same value a CBOR byte
@@ -26,6 +31,7 @@ from __future__ import annotations
 
 import base64
 import binascii
+import json as _stdlib_json
 import logging
 import math
 import time
@@ -46,6 +52,22 @@ loads = orjson.loads
 
 #: compression modes a subscription may ask for
 COMPRESSIONS = ("none", "png", "cbor", "cbor-raw")
+
+
+def loads_text(raw: str | bytes) -> Any:
+    """Parse one text frame: orjson, else -- only for text holding bare ``NaN``/``Infinity`` tokens, as
+    rosbridge 2.x writes them (see the module docstring) -- Python's ``json``.  Raises ProtocolError."""
+    try:
+        return loads(raw)
+    except orjson.JSONDecodeError as exc:
+        error = exc
+    text = raw.decode("utf-8", "replace") if isinstance(raw, bytes | bytearray) else raw
+    if "NaN" in text or "Infinity" in text:
+        try:
+            return _stdlib_json.loads(text)
+        except Exception:  # ValueError, RecursionError on absurd nesting...
+            pass
+    raise ProtocolError(f"not valid JSON ({error})")
 
 
 def encode(op: dict[str, Any]) -> bytes:
@@ -113,8 +135,8 @@ def decode_binary(data: bytes, typed_arrays: str = "list") -> Any:
     first = data[0]
     if first in (0x7B, 0x5B):  # '{' or '[': JSON text in a binary frame (a CBOR map never starts so)
         try:
-            return loads(data)
-        except orjson.JSONDecodeError:
+            return loads_text(data)
+        except ProtocolError:
             pass
     try:
         return decode_cbor(data, typed_arrays)
@@ -164,9 +186,9 @@ def decode_png(data_b64: str, max_bytes: int = 64 << 20) -> Any:
     :func:`png_to_text`)."""
     text = png_to_text(data_b64, max_bytes)
     try:
-        return loads(text)
-    except orjson.JSONDecodeError as exc:
-        raise ProtocolError(f"png frame: embedded text is not JSON ({exc})") from None
+        return loads_text(text)
+    except ProtocolError as exc:
+        raise ProtocolError(f"png frame: embedded text is {exc}") from None
 
 
 # --------------------------------------------------------------------------- fragments

@@ -3,23 +3,53 @@
 Quirks handled (``rosapi.jsonl:47-49``): parameter values travel as JSON text inside strings (``get_param``
 returns ``"7"``, ``"\\"hi\\""``; ``set_param`` needs JSON text); unknown names give empty results, not
 failures (``topic_type`` of an unknown topic is ``""``, returned here as ``None``).
+
+Decision: ask only for services the server lists
+    A service rosapi does not have is not "no answer": rosbridge answers ``result: false`` ("Service
+    /rosapi/action_type does not exist") *and logs an ERROR into the robot's own /rosout* for every call
+    (``rosbridge-ros2-2.1.0/rosapi.jsonl:62-63``).  So the optional services -- ``action_type``, the action
+    details -- are asked only when ``/rosapi/services`` lists them (learned once per connection,
+    ``client.rosapi_profile()``); otherwise the helpers answer what they would for "unknown" (None, ``""``)
+    quietly, with no call at all.  Calls that would kill a 2.x rosapi are refused by the client itself
+    (``rosapi_guard.py``); ``message_details`` then reads the type's ``.msg`` text from
+    ``topics_and_raw_types`` when a topic carries it.  Typedefs keep only real constants
+    (``msgs.typedefs.clean_typedefs``: rosapi 2.1.0 lists ``SLOT_TYPES`` and every field as "constants").
 """
 
 from __future__ import annotations
 
 import asyncio
 import json
+import logging
 from typing import TYPE_CHECKING, Any
 
-from .errors import ServiceError
+from rcon_core.msgs.names import normalize, pkg_type
+
+from . import rosapi_guard
+from .errors import RosapiRefusedError, ServiceError
 
 if TYPE_CHECKING:
     from .host import ServiceCaller
+    from .rosinfo import RosInfo
+
+
+log = logging.getLogger(__name__)
 
 
 class Rosapi:
     def __init__(self, client: ServiceCaller) -> None:
         self._client = client
+
+    async def profile(self) -> RosInfo | None:
+        """What the server's rosapi lists (``client.rosapi_profile()``, once per connection); None when the
+        client cannot say."""
+        ask = getattr(self._client, "rosapi_profile", None)
+        return await ask() if ask is not None else None
+
+    async def lists(self, name: str) -> bool:
+        """Whether the server's rosapi lists ``/rosapi/<name>`` (True when the client cannot say)."""
+        info = await self.profile()
+        return info is None or f"/rosapi/{name}" in info.rosapi_services
 
     async def _call(self, name: str, args: dict[str, Any] | None = None, timeout: float | None = None) -> Any:
         values = await self._client.call_service(f"/rosapi/{name}", args or {}, timeout=timeout)
@@ -52,14 +82,64 @@ class Rosapi:
         return (await self._call("service_type", {"service": service})).get("type") or None
 
     async def message_details(self, type_name: str) -> list[dict[str, Any]]:
-        return list((await self._call("message_details", {"type": type_name})).get("typedefs", []))
+        """The server's typedefs of a message type (real constants only); from ``topics_and_raw_types``
+        when ``message_details`` may not be asked (``rosapi_guard``) and a topic carries the type."""
+        from rcon_core.msgs.typedefs import clean_typedefs
+
+        try:
+            answer = await self._call("message_details", {"type": type_name})
+        except RosapiRefusedError:
+            found = await self.typedefs_from_text(type_name)
+            if found:
+                return found
+            raise
+        return clean_typedefs(list(answer.get("typedefs", [])))
 
     async def service_request_details(self, type_name: str) -> list[dict[str, Any]]:
-        return list((await self._call("service_request_details", {"type": type_name})).get("typedefs", []))
+        from rcon_core.msgs.typedefs import clean_typedefs
+
+        return clean_typedefs(list((await self._call("service_request_details", {"type": type_name}))
+                                   .get("typedefs", [])))
 
     async def service_response_details(self, type_name: str, timeout: float | None = None) -> list[dict[str, Any]]:
+        from rcon_core.msgs.typedefs import clean_typedefs
+
         v = await self._call("service_response_details", {"type": type_name}, timeout=timeout)
-        return list(v.get("typedefs", []))
+        return clean_typedefs(list(v.get("typedefs", [])))
+
+    async def raw_definition(self, type_name: str) -> tuple[str, str] | None:
+        """``(type, full .msg text)`` of a message type some topic carries, from ``topics_and_raw_types``
+        (what rosapi reads from the interface files; it never touches the crashing typedef code)."""
+        if not await self.lists("topics_and_raw_types"):
+            return None
+        v = await self._call("topics_and_raw_types")
+        key = pkg_type(type_name)
+        for spelled, text in zip(v.get("types") or [], v.get("typedefs_full_text") or [], strict=False):
+            if isinstance(spelled, str) and isinstance(text, str) and text and pkg_type(spelled) == key:
+                return spelled, text
+        return None
+
+    async def typedefs_from_text(self, type_name: str) -> list[dict[str, Any]]:
+        """rosapi-shaped typedefs built from the type's ``.msg`` text (:meth:`raw_definition`); [] when no
+        topic carries the type or the text cannot be read."""
+        from rcon_core.msgs import TypeRegistry
+        from rcon_core.msgs.parse import TIME_TYPES, split_full_text
+
+        found = await self.raw_definition(type_name)
+        if found is None:
+            return []
+        spelled, text = found
+        info = await self.profile()
+        reg = TypeRegistry(ros2=info is None or info.version != 1, empty=True)
+        try:
+            for name, body in split_full_text(spelled, text):
+                if normalize(name) not in TIME_TYPES and pkg_type(name) not in ("builtin_interfaces/Time",
+                                                                                 "builtin_interfaces/Duration"):
+                    reg.add_msg_text(name, body)
+            return reg.typedefs(spelled)
+        except Exception as exc:  # noqa: BLE001 - a text we cannot read: say so, fall back
+            log.info("cannot read the definition text of %s from the robot: %s", type_name, exc)
+            return []
 
     async def nodes(self) -> list[str]:
         return list((await self._call("nodes")).get("nodes", []))
@@ -78,9 +158,14 @@ class Rosapi:
         return list((await self._call("action_servers")).get("action_servers", []))
 
     async def action_type(self, action: str) -> str | None:
-        """``pkg/action/X`` of a ROS 2 action from rosapi's ``action_type`` (added after rosapi 2.1.0); None
-        when the action has no server or the rosapi is older (2.1.0 cannot tell an action's type at all:
-        ``topic_type`` ignores the hidden ``<action>/_action/*`` topics)."""
+        """``pkg/action/X`` of a ROS 2 action from rosapi's ``action_type``; None when the action has no
+        server or the rosapi cannot tell -- and then without asking: 2.1.0 has no ``action_type`` (a call
+        would log an ERROR on the robot) and the releases that list it crash on it
+        (``rosapi_guard.action_type_works``).  2.1.0 cannot tell an action's type at all: ``topic_type``
+        ignores the hidden ``<action>/_action/*`` topics."""
+        info = await self.profile()
+        if info is not None and not rosapi_guard.action_type_works(info):
+            return None
         try:
             answer = await self._call("action_type", {"action": action})
         except ServiceError:
@@ -88,8 +173,12 @@ class Rosapi:
         return str(answer.get("type") or "") or None
 
     async def action_servers_with_types(self) -> dict[str, str]:
-        """``{action: type}`` of every action server (``""`` where the type cannot be found)."""
+        """``{action: type}`` of every action server (``""`` where the type cannot be found; nothing is
+        asked per action when this rosapi cannot tell types)."""
         names = await self.action_servers()
+        info = await self.profile()
+        if info is not None and not rosapi_guard.action_type_works(info):
+            return dict.fromkeys(names, "")
         types = await asyncio.gather(*(self.action_type(n) for n in names), return_exceptions=True)
         return {n: (t if isinstance(t, str) else "") for n, t in zip(names, types, strict=True)}
 

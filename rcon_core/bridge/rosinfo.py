@@ -1,6 +1,8 @@
 """Which ROS the server runs, and what it showed it can do: ``await client.detect_ros()`` -> :class:`RosInfo`.
 
-Asked once per client (the answer is kept in ``client.ros_info``; ``detect_ros(refresh=True)`` asks again):
+Asked once per connection (the answer is kept in ``client.ros_info``; ``detect_ros(refresh=True)`` asks
+again); the list of ``/rosapi/*`` services comes with it (``RosInfo.rosapi_services``), and RCON asks
+rosapi only for services in that list (``rosapi.py``, ``rosapi_guard.py``):
 
 1. ``/rosapi/get_ros_version`` (rosapi 2.x: ``{"version": 2, "distro": "jazzy"}``);
 2. else the ROS 1 parameters ``/rosversion`` and ``/rosdistro``;
@@ -79,8 +81,10 @@ def _json_text(value: object) -> str:
     return str(decoded).strip() if decoded is not None else ""
 
 
-async def detect(client: ServiceCaller, timeout: float | None = None) -> RosInfo:
-    """Ask the server which ROS it runs (see the module docstring)."""
+async def detect(client: ServiceCaller, timeout: float | None = None, quick: bool = False) -> RosInfo:
+    """Ask the server which ROS it runs (see the module docstring).  ``quick``: only steps 1 and the rosapi
+    listing -- enough for ``rosapi_guard`` (its hazards are rosapi 2.x's, which always has
+    ``get_ros_version``); ``version`` stays None when those do not tell."""
     budget = min(client.call_timeout, 3.0) if timeout is None else timeout
     listing = await _ask(client, "/rosapi/services", None, budget)
     services = tuple(s for s in (listing or {}).get("services", []) if isinstance(s, str) and s.startswith("/rosapi/"))
@@ -90,6 +94,8 @@ async def detect(client: ServiceCaller, timeout: float | None = None) -> RosInfo
         return RosInfo(int(version["version"]), str(version.get("distro", "")).strip(), "get_ros_version", services)
     if listing is None:
         return RosInfo(None, "", "no rosapi answered", services)
+    if quick:
+        return RosInfo(None, "", "rosapi listing (no get_ros_version)", services)
     topics_type = await _ask(client, "/rosapi/service_type", {"service": "/rosapi/topics"}, budget)
     spelled = str((topics_type or {}).get("type", ""))
     if spelled.startswith("rosapi_msgs/"):

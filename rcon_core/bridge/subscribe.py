@@ -8,6 +8,15 @@ Decisions:
   cbor encoder sends nothing for those types (Imu, Odometry, NavSatFix, ...).  Either needs the type and its
   typedefs first (``/rosapi/topic_type``, ``/rosapi/message_details``); when they cannot be had the topic is
   subscribed without compression.
+* ``png`` is never asked of a ROS 2 server: rosbridge 2.1.0 cannot serialize its own png frame and sends
+  *nothing* -- it even silences a plain subscription to the same topic on that connection
+  (``rosbridge-ros2-2.1.0/publish_png.jsonl:1-8``).  A png subscription waits for the server's ROS
+  (``client.rosapi_profile()``, once per connection) and becomes plain JSON on ROS 2.
+* ``fragment_size`` never goes with a binary compression: rosbridge 2.1.0 then sends nothing at all
+  (``subscribe_options.jsonl:41``), and a CBOR frame cannot be cut into text fragments anyway; the
+  compression wins.  (A size the client does send stays in force for the whole connection, service
+  responses included, ``subscribe_options.jsonl:29-35``; the read loop joins whatever arrives in
+  fragments, with the float ``total`` 2.x sends.)
 * ``cbor-raw`` payloads are decoded by the one type system (``rawdecode.py``): CDR for types learned from a
   ROS 2 server (sniffed per payload when the flavour is unknown, ``cdrdecode.py``); else the
   application's registry (``BridgeClient(registry=...)``) when it knows the type -- it learns the server's
@@ -52,8 +61,26 @@ class Subscriber:
         entry.sent_options = wanted
         if wanted["compression"] in ("cbor", "cbor-raw"):
             self.session.spawn(self._resolve_and_subscribe(entry, wanted))
+        elif wanted["compression"] == "png" and getattr(self.host, "rosapi_profile", None) is not None:
+            self.session.spawn(self._png_unless_ros2(entry, wanted))
         else:
             self._subscribe_now(entry, wanted)
+
+    async def _png_unless_ros2(self, entry: TopicEntry, wanted: dict[str, Any]) -> None:
+        opts = dict(wanted)
+        try:
+            ros2 = (await self.host.rosapi_profile()).version == 2
+        except Exception as exc:  # no answer: png as asked (a ROS 1 server, most likely)
+            log.debug("%s: could not learn the server's ROS (%s)", entry.topic, exc)
+            ros2 = False
+        if ros2:
+            log.info("%s: rosbridge 2.x sends nothing for png compression; subscribing as plain JSON",
+                     entry.topic)
+            opts["compression"] = "none"
+        session = self.session
+        if session.topics.get(entry.topic) is not entry or entry.sent_options is not wanted or session.link is None:
+            return  # superseded while we were asking the server
+        self._subscribe_now(entry, opts)
 
     async def _resolve_and_subscribe(self, entry: TopicEntry, wanted: dict[str, Any]) -> None:
         opts = dict(wanted)
@@ -79,6 +106,10 @@ class Subscriber:
         self._subscribe_now(entry, opts)
 
     def _subscribe_now(self, entry: TopicEntry, opts: dict[str, Any]) -> None:
+        if opts.get("fragment_size") and opts["compression"] in ("cbor", "cbor-raw"):
+            log.info("%s: fragment_size is not sent with %s compression (rosbridge would send nothing)",
+                     entry.topic, opts["compression"])
+            opts = {k: v for k, v in opts.items() if k != "fragment_size"}
         sid = self.session.next_id("sub", entry.topic)
         op = {"op": "subscribe", "id": sid, "topic": entry.topic, **opts}
         entry.raw_type = opts["type"] if opts["compression"] == "cbor-raw" else None

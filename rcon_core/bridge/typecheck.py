@@ -24,7 +24,7 @@ import asyncio
 import logging
 from typing import Any
 
-from .errors import BridgeError, ConnectionLostError, ServiceError, ServiceTimeoutError
+from .errors import BridgeError, ConnectionLostError, RosapiRefusedError, ServiceError, ServiceTimeoutError
 
 __all__ = ["UNKNOWN_TYPE", "unknown_type_sentence", "is_standard", "robot_knows", "TypeChecker",
            "status_failure"]
@@ -79,8 +79,8 @@ async def robot_knows(client: Any, type_name: str, service: bool = False,
             typedefs = await asyncio.wait_for(rosapi.service_request_details(type_name), timeout)
         else:
             typedefs = await asyncio.wait_for(rosapi.message_details(type_name), timeout)
-    except (ServiceTimeoutError, ConnectionLostError, TimeoutError):
-        return None
+    except (ServiceTimeoutError, ConnectionLostError, RosapiRefusedError, TimeoutError):
+        return None  # no answer, or not asked: rosapi_guard keeps the call from killing a 2.x rosapi
     except ServiceError as exc:
         if _no_rosapi(exc):
             return None

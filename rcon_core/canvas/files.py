@@ -61,18 +61,20 @@ def _lock(fd: int, *, wait: bool) -> bool:
     return True
 
 
-def atomic_write(path: str | os.PathLike[str], text: str) -> None:
+def atomic_write(path: str | os.PathLike[str], text: str, *, mode: int | None = None) -> None:
     """Replace ``path`` with ``text`` atomically: temp file in the same directory, fsync, os.replace.
 
-    A symlink is resolved and its target written; the target keeps its mode. If anything fails
-    (including a crash before the replace), the old file is untouched.
+    A symlink is resolved and its target written; the target keeps its mode (``mode``: this mode
+    instead, e.g. 0o600 for a file holding a secret's hash). If anything fails (including a crash before
+    the replace), the old file is untouched.
     """
     target = real_path(path)
     target.parent.mkdir(parents=True, exist_ok=True)
-    try:
-        mode: int | None = target.stat().st_mode & 0o7777
-    except FileNotFoundError:
-        mode = None
+    if mode is None:
+        try:
+            mode = target.stat().st_mode & 0o7777
+        except FileNotFoundError:
+            mode = None
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
     try:
         with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as f:

@@ -21,6 +21,11 @@ Each refusal is counted (``port.refused``) and reported through ``on_refused(sen
 puts it on the widget). Models read ``port.view_only`` (the reason, or None) to show their controls as
 disabled; the app disables the view of every publishing, calling or serving widget too.
 
+Under the port, the bridge itself refuses the same for a robot marked view-only
+(``rcon_core.bridge.guard``: the mark is on the robot's link, so the app's panels and anything else on
+that link are refused too); the port's own refusal is what a view-only *canvas* has, and what lets the
+widget show its controls disabled. :class:`ViewOnlyError` and :data:`READ_ONLY_SERVICES` are the bridge's.
+
 What this is not: a sandbox. A widget package is Python code running in the app's process with the
 operator's rights; it could open its own WebSocket to the robot. View-only stops the widgets RCON runs
 from sending through RCON; a robot that must not be commanded is protected on the robot side (rosbridge's
@@ -35,30 +40,14 @@ import logging
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
+from rcon_core.bridge.guard import READ_ONLY_SERVICES, ViewOnlyError, read_only_service
+
 if TYPE_CHECKING:
     from .fleet import BridgeNode
 
 __all__ = ["GuardedPort", "ViewOnlyError", "READ_ONLY_SERVICES"]
 
 log = logging.getLogger(__name__)
-
-#: rosapi services that only read (types, names, the graph, parameters, the time): allowed in view-only
-#: mode, because widgets learn their message types through them. ``set_param``, ``delete_param`` and
-#: the logger-level services change the robot and stay refused.
-READ_ONLY_SERVICES = frozenset(
-    f"/rosapi/{name}" for name in (
-        "topics", "topics_for_type", "topics_and_raw_types", "topic_type", "publishers", "subscribers",
-        "services", "services_for_type", "service_type", "service_providers", "service_node",
-        "service_host", "nodes", "node_details", "action_servers", "message_details",
-        "service_request_details", "service_response_details", "get_param", "has_param",
-        "search_param", "get_param_names", "get_time",
-    )
-)
-
-
-class ViewOnlyError(PermissionError):
-    """Something was about to be sent to a robot through a view-only port; nothing was sent."""
-
 
 class _Handle:
     """What ``subscribe`` / ``advertise_service`` return: only a way to end it."""
@@ -207,7 +196,7 @@ def _operations(port: GuardedPort, node: BridgeNode, notify: Callable[[], None] 
         return _Publisher(lambda msg: pub.publish(msg), lambda: pub.unadvertise())
 
     async def call_service(name: str, args: Any, timeout: float | None) -> Any:
-        if view_only is not None and name not in READ_ONLY_SERVICES:
+        if view_only is not None and not read_only_service(name):
             raise ViewOnlyError(refuse(f"the call to {name}"))
         try:
             return await node.call_service(name, args, timeout=timeout)

@@ -177,8 +177,10 @@ def typedefs_text(typedefs: list[dict[str, Any]]) -> str:
 
 
 async def _server_definition(url: str, name: str, timeout: float = 5.0) -> tuple[Any, str] | None:
-    """(typedefs, text) from the server, or None when it is unreachable or does not know the type."""
-    from rcon_core.bridge import BridgeClient, BridgeError
+    """(typedefs, text) from the server, or None when it is unreachable, does not know the type, or may not
+    be asked (``rosapi_guard``: a note on stderr says why).  A message type some topic carries is read from
+    ``topics_and_raw_types`` -- the robot's own ``.msg`` text -- before ``message_details``."""
+    from rcon_core.bridge import BridgeClient, BridgeError, RosapiRefusedError
     from rcon_core.msgs.names import pkg_type
 
     client = BridgeClient(url, reconnect=False, call_timeout=timeout)
@@ -188,14 +190,21 @@ async def _server_definition(url: str, name: str, timeout: float = 5.0) -> tuple
         return None
     try:
         short = pkg_type(name)
-        if "/srv/" in name or await _is_service_type(client, short):
+        if "/srv/" in name or ("/msg/" not in name and await _is_service_type(client, short)):
             req = await client.rosapi.service_request_details(short)
             resp = await client.rosapi.service_response_details(short)
             if req or resp:
                 return {"request": req, "response": resp}, typedefs_text(req) + "\n---\n" + typedefs_text(resp)
             return None
+        raw = await client.rosapi.raw_definition(name)
+        if raw is not None:
+            tds = await client.rosapi.typedefs_from_text(name)
+            return (tds, raw[1].rstrip("\n")) if tds else None
         tds = await client.rosapi.message_details(short)
         return (tds, typedefs_text(tds)) if tds and tds[0].get("fieldnames") is not None else None
+    except RosapiRefusedError as exc:
+        print(f"rcon type: note: the robot was not asked ({exc.message})", file=sys.stderr)
+        return None
     except BridgeError:
         return None
     finally:
@@ -206,6 +215,8 @@ async def _is_service_type(client: Any, name: str) -> bool:
     from rcon_core.bridge import BridgeError
 
     try:
+        if await client.rosapi.raw_definition(name) is not None:
+            return False
         tds = await client.rosapi.message_details(name)
     except BridgeError:
         tds = []

@@ -8,7 +8,7 @@ from typing import Any
 from . import names
 from .fielddefs import IDL_ALIASES, PRIMITIVES, TIME_TYPES, Constant, FieldDef, MsgDef
 
-__all__ = ["parse_msg", "parse_interface", "resolve_base", "MsgParseError"]
+__all__ = ["parse_msg", "parse_interface", "resolve_base", "split_full_text", "MsgParseError"]
 
 
 class MsgParseError(ValueError):
@@ -133,6 +133,25 @@ def parse_interface(name: str, text: str) -> list[MsgDef]:
             f"{name}: a {kind} needs {len(suffixes)} parts separated by '---', found {len(parts)}"
         )
     return [parse_msg(f"{pkg}/{kind}/{typ}_{suffix}", part) for suffix, part in zip(suffixes, parts, strict=True)]
+
+
+def split_full_text(name: str, text: str) -> list[tuple[str, str]]:
+    """``(type, .msg text)`` of each definition in a ``gendeps --cat``-style text: the type ``name`` first,
+    then one block per type it uses after a line of ``=`` and ``MSG: pkg/Type`` (rosapi's
+    ``typedefs_full_text``, both ROS 1 and ROS 2)."""
+    blocks: list[tuple[str, list[str]]] = [(name, [])]
+    lines = text.splitlines()
+    i = 0
+    while i < len(lines):
+        line = lines[i]
+        nxt = lines[i + 1] if i + 1 < len(lines) else ""
+        if set(line.strip()) == {"="} and len(line.strip()) >= 10 and nxt.startswith("MSG: "):
+            blocks.append((nxt[5:].strip(), []))
+            i += 2
+            continue
+        blocks[-1][1].append(line)
+        i += 1
+    return [(n, "\n".join(body) + "\n") for n, body in blocks]
 
 
 TIME_NAMES = _TIME_NAMES

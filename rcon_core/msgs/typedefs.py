@@ -162,6 +162,36 @@ def _entry_name(raw: str) -> str:
     return names.normalize(raw)
 
 
+#: what rosapi 2.x's ``constvalues`` hold for class attributes that are not constants: tuples of rosidl
+#: objects with memory addresses, ``array('B')``, numpy's ``[0. 0. 0.]``, nested message reprs
+_NOT_A_LITERAL = re.compile(r"\A(\(.*\)|array\(.*|\[[^,]*\]|[A-Za-z_][\w.]*\.msg\.\w+\(.*)\Z|object at 0x", re.S)
+
+
+def is_real_constant(name: str, value: str, field_names: set[str]) -> bool:
+    """False for what rosapi 2.1.0 lists among ``constnames`` but is no constant of the type
+    (``rosbridge-ros2-2.1.0/rosapi.jsonl:5-10``): ``SLOT_TYPES``, every field name, rosidl's
+    ``<FIELD>__DEFAULT`` attributes, and any value that is a Python repr rather than a literal."""
+    if name == "SLOT_TYPES" or name in field_names:
+        return False
+    if name.endswith("__DEFAULT") and name[: -len("__DEFAULT")].lower() in field_names:
+        return False
+    return not _NOT_A_LITERAL.search(value)
+
+
+def clean_typedefs(typedefs: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The typedefs with only their real constants (see :func:`is_real_constant`); other keys unchanged."""
+    out = []
+    for td in typedefs:
+        if not isinstance(td, dict):
+            out.append(td)
+            continue
+        fields = {str(f) for f in td.get("fieldnames") or []}
+        pairs = [(str(n), str(v)) for n, v in zip(td.get("constnames") or [], td.get("constvalues") or [],
+                                                  strict=False) if is_real_constant(str(n), str(v), fields)]
+        out.append({**td, "constnames": [n for n, _ in pairs], "constvalues": [v for _, v in pairs]})
+    return out
+
+
 def _const(name: str, value: str) -> Constant:
     try:
         return Constant(name, "int64", int(value))
@@ -207,11 +237,11 @@ def parse_typedefs(typedefs: Any, root: str | None = None) -> list[MsgDef]:
                 fields.append(FieldDef.make(str(fname), _learn_base(str(ftype)), array_len))
         except ValueError as exc:
             raise TypedefError(f"typedef {raw}: {exc}") from None
-        field_names = set(fnames)
+        field_names = {str(f) for f in fnames}
         consts = tuple(
             _const(str(cn), str(cv))
             for cn, cv in zip(td.get("constnames", []), td.get("constvalues", []), strict=False)
-            if cn not in field_names and cn != "SLOT_TYPES"
+            if is_real_constant(str(cn), str(cv), field_names)
         )
         out.append(MsgDef(name, tuple(fields), consts))
     return out

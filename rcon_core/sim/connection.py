@@ -85,6 +85,7 @@ class _Frame:
     topic: str | None  # None: not droppable (replies, service requests)
     size: int
     fragment_size: int | None = None  # cut into fragments of this size as it is sent (text only)
+    fragment_id: Any = 0  # their id: 0 for a publish, the request's id for a reply
 
 
 class TokenBucket:
@@ -146,6 +147,8 @@ class Connection:
         self.frame_size = 0
         self.subscriptions: dict[str, TopicSubscription] = {}
         self.advertised: dict[str, str] = {}  # topic -> type
+        #: every op this client sent, by (op, topic/service/action name): what tests check reached the sim
+        self.ops_received: collections.Counter[tuple[str, str]] = collections.Counter()
         self.max_frames = max_frames
         self.max_bytes = max_bytes
         self.dropped = 0  # publishes thrown away (a client that does not keep up)
@@ -201,12 +204,12 @@ class Connection:
         return self._replies
 
     def send(self, payload: str | bytes, *, topic: str | None = None, queue_length: int = 0,
-             fragment_size: int | None = None) -> None:
+             fragment_size: int | None = None, fragment_id: Any = 0) -> None:
         """Queue a frame without blocking. ``topic`` marks a droppable publish frame; ``fragment_size``
-        has a text frame sent as rosbridge ``fragment`` ops when it is longer."""
+        has a text frame sent as rosbridge ``fragment`` ops (with ``fragment_id``) when it is longer."""
         if self._closed:
             return
-        frame = _Frame(payload, topic, len(payload), fragment_size)
+        frame = _Frame(payload, topic, len(payload), fragment_size, fragment_id)
         self._queue.append(frame)
         self._bytes += frame.size
         if topic is None:
@@ -260,7 +263,7 @@ class Connection:
     def _parts(frame: _Frame) -> Iterator[str | bytes]:
         payload, size = frame.payload, frame.fragment_size
         if size and isinstance(payload, str) and len(payload) > size:
-            yield from encoding.iter_fragments(payload, size)
+            yield from encoding.iter_fragments(payload, size, frame.fragment_id)
         else:
             yield payload
 

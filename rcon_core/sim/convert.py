@@ -26,7 +26,7 @@ _DTYPES: dict[str, Any] = {
     "uint16": np.uint16, "uint32": np.uint32, "uint64": np.uint64,
     "float32": np.float32, "float64": np.float64, "float": np.float32, "double": np.float64,
 }
-BYTES_TYPES = {"uint8", "char", "octet"}
+BYTES_TYPES = {"uint8", "char"}  # byte[] (ROS 2 octet) stays a list of numbers, as rosbridge 2.x sends it
 
 
 #: ROS 2 spellings of the time types in typedefs (ROS 1's ``time``/``duration`` are primitives there)

@@ -210,7 +210,7 @@ def fragment_size_for(length: int, size: int) -> int:
     return max(size, -(-length // MAX_FRAGMENTS))
 
 
-def iter_fragments(text: str, size: int) -> Iterator[str]:
+def iter_fragments(text: str, size: int, fid: Any = 0) -> Iterator[str]:
     """The rosbridge ``fragment`` frames of a JSON text, made one at a time (see :func:`fragments`)."""
     size = fragment_size_for(len(text), size)
     count = max(1, -(-len(text) // size))
@@ -219,12 +219,14 @@ def iter_fragments(text: str, size: int) -> Iterator[str]:
     if total >= count + 1:  # rounding up to the next whole number would mislead floor(total)
         total = count + 0.99
     for i in range(count):
-        yield dumps({"op": "fragment", "id": 0, "data": text[i * size : (i + 1) * size], "num": i, "total": total})
+        yield dumps({"op": "fragment", "id": fid, "data": text[i * size : (i + 1) * size], "num": i, "total": total})
 
 
-def fragments(text: str, size: int) -> list[str]:
+def fragments(text: str, size: int, fid: Any = 0) -> list[str]:
     """Split a JSON text into rosbridge ``fragment`` frames (at most :data:`MAX_FRAGMENTS`).
 
-    Like rosbridge 0.11, ``id`` is 0 and ``total`` is a float whose floor is the number of fragments.
+    Like rosbridge, ``total`` is a float whose floor is the number of fragments, and ``id`` is ``fid``: 0
+    for a publish (which has no id), the request's id for a reply
+    (``rosbridge-ros2-2.1.0/subscribe_options.jsonl:22-35``).
     """
-    return list(iter_fragments(text, size))
+    return list(iter_fragments(text, size, fid))

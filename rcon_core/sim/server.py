@@ -31,7 +31,7 @@ from websockets.exceptions import ConnectionClosed
 
 from rcon_core.msgs.names import pkg_type
 
-from . import assembly, fanout, gate
+from . import assembly, fanout, gate, ros2_clients
 from .auth import AuthLockout
 from .connection import Connection, SubOptions, TopicSubscription
 from .convert import ConversionError
@@ -144,6 +144,7 @@ class SimServer:
         if not self.ros2:
             self.advertise_internal("/rosout_agg", self.flavour.msg("rosgraph_msgs", "Log"), ROSOUT_NODE)
         self.advertise_internal("/client_count", self.flavour.msg("std_msgs", "Int32"), BRIDGE_NODE, latched=True)
+        ros2_clients.advertise(self)
         assembly.furnish(self)
         limits: dict[str, Any] = {"max_size": self.max_frame}
         if self.auth_secret is not None:  # the first message is small; the gate raises the limit after it
@@ -346,6 +347,7 @@ class SimServer:
         self.connections.add(conn)
         self.log(BRIDGE_NODE, "info", f"Client connected.  {len(self.connections)} clients total.")
         self.publish("/client_count", {"data": len(self.connections)}, BRIDGE_NODE)
+        ros2_clients.publish(self)
         try:
             async for message in ws:
                 try:
@@ -367,6 +369,7 @@ class SimServer:
             self.log(BRIDGE_NODE, "info", f"Client disconnected. {len(self.connections)} clients total.")
             if "/client_count" in self.topics:
                 self.publish("/client_count", {"data": len(self.connections)}, BRIDGE_NODE)
+            ros2_clients.publish(self)
 
     def _cleanup(self, conn: Connection) -> None:
         for name in list(conn.subscriptions):
@@ -406,7 +409,7 @@ class SimServer:
             return
         op = msg["op"]
         target = msg.get("topic") or msg.get("service") or msg.get("action") or ""
-        self._count_op(str(op)[:40], target if isinstance(target, str) else "")
+        self._count_op(conn, str(op)[:40], target if isinstance(target, str) else "")
         handler = self._ops().get(op) if isinstance(op, str) else None
         if handler is None:
             conn.log(logging.ERROR, "[id: %s] Unknown operation: %s.  Allowed operations: %s",
@@ -422,11 +425,12 @@ class SimServer:
         except Exception as exc:  # noqa: BLE001 - a malformed op is one bounded line, never a traceback
             self._failed(conn, f"op {op}", exc, msg)
 
-    def _count_op(self, op: str, name: str) -> None:
-        key = (op, name)
-        if key not in self.ops_received and len(self.ops_received) >= OPS_RECEIVED_KEYS:
-            key = (op, OTHER_NAMES)
-        self.ops_received[key] += 1
+    def _count_op(self, conn: Connection, op: str, name: str) -> None:
+        for counts in (self.ops_received, conn.ops_received):
+            key = (op, name)
+            if key not in counts and len(counts) >= OPS_RECEIVED_KEYS:
+                key = (op, OTHER_NAMES)
+            counts[key] += 1
 
     def _ops(self) -> dict[str, Callable[[Connection, dict[str, Any]], Any]]:
         ops: dict[str, Callable[[Connection, dict[str, Any]], Any]] = {

@@ -9,7 +9,9 @@ What the view paints is ``state.value``, an :class:`ActionStatus`:
 * ``phase``: ``idle``, ``active`` (sent, running), ``canceling``, then one of the final phases:
   ``succeeded``, ``canceled``, ``aborted`` (the server's GoalStatus 4/5/6), ``failed`` (the goal could not
   be run: no action server, args the server refused, a ROS 1 robot) or ``unknown``: the link dropped while
-  the goal ran, so its fate is unknown -- never reported as a success.
+  the goal ran, so its fate is unknown -- never reported as a success; or nothing at all came back (no
+  feedback, no result: "no answer from the action server (rejected?)", since rosbridge 2.1.0 answers a
+  rejected goal with silence; ``rcon_core/bridge/goals.py``).
 * ``feedback``: the last feedback message; ``numbers``: its numeric leaves (``distance_remaining``);
   ``progress``: 0..1 when a feedback field looks like progress (``progress``, ``percent``, ``completion``:
   a fraction, or a percentage above 1) or a distance remaining (progress = 1 - remaining / first remaining).
@@ -334,13 +336,16 @@ class ActionModel(StdModel):
                                 progress=progress, progress_label=label))
 
     async def _wait(self, handle: Any) -> None:
-        from rcon_core.bridge.errors import ConnectionLostError
+        from rcon_core.bridge.errors import ActionNoAnswerError, ConnectionLostError
 
         try:
             result = await handle.result()
         except ConnectionLostError:
             self._end(handle, "unknown", "link lost while the goal ran: its fate is unknown "
                                          "(the robot may still be executing it)")
+            return
+        except ActionNoAnswerError as exc:
+            self._end(handle, "unknown", exc.message)
             return
         except Exception as exc:
             self._end(handle, "failed", str(exc) or type(exc).__name__)
