@@ -20,7 +20,7 @@ from typing import Any
 __all__ = ["PublishedLog", "KEEP", "TOPIC_BYTES", "TOTAL_BYTES", "TOTAL_MESSAGES"]
 
 KEEP = 500
-TOPIC_BYTES = 8 * 1024 * 1024
+TOPIC_BYTES = 16 * 1024 * 1024
 TOTAL_BYTES = 64 * 1024 * 1024
 TOTAL_MESSAGES = 20_000
 

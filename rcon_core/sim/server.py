@@ -53,6 +53,8 @@ COMPRESSIONS = {"none", "png", "cbor", "cbor-raw"}
 #: distinct (op, name) keys ``ops_received`` counts; later new names are counted under (op, OTHER_NAMES)
 OPS_RECEIVED_KEYS = 10_000
 OTHER_NAMES = "(other names)"
+#: messages websockets reads ahead of the handler per client (its default, 16, buffered 512 MB of 32 MB frames)
+READ_AHEAD = 4
 
 
 class SimServer:
@@ -151,7 +153,7 @@ class SimServer:
             limits = {"max_size": self.auth_frame_limit,
                       "create_connection": gate.gated_connection(self.auth_secret, self.max_frame)}
         self._server = await serve(self._handle, self.host, self._requested_port, ssl=self.ssl, compression=None,
-                                   ping_interval=20, ping_timeout=20, **limits)
+                                   ping_interval=20, ping_timeout=20, max_queue=READ_AHEAD, **limits)
         sock = next(iter(self._server.sockets))
         self._port = sock.getsockname()[1]
         self.publish("/client_count", {"data": 0}, BRIDGE_NODE)
