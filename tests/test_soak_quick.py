@@ -1,6 +1,7 @@
 """Smoke run of ``benchmarks/soak.py --quick``: the reliability figures it prints are at their targets
 (fuzz: no client death, every valid message in order; flap: nothing lost; stall: no stale command
-delivered; saves: every layout complete after kill -9).  Its figures are printed, not judged on time."""
+delivered; saves: every layout complete after kill -9; fairness: the attacks on the sim ran).  Its figures
+are printed, not judged on time."""
 
 from __future__ import annotations
 
@@ -23,4 +24,7 @@ def test_soak_quick_meets_the_reliability_targets(tmp_path):
     assert r["flap"]["cuts"] >= 2 and not any(r["flap"]["lost"].values()), r["flap"]
     assert r["stall"]["stale_commands_delivered"] == 0 and r["stall"]["commands_delivered"] > 0, r["stall"]
     assert r["saves"]["complete_layouts"] == r["saves"]["kills"], r["saves"]
+    fair = r["fairness"]["ros1"]  # the attacks happened (their figures are printed, not judged on time)
+    assert fair["fragments"]["attacker"]["fragments_sent"] >= 20_000, fair["fragments"]
+    assert fair["camera"]["attacker"]["frames_received"] > 0 and fair["baseline"]["odom_hz"] > 0, fair
     assert "targets:" in proc.stdout
