@@ -260,6 +260,10 @@ def run(args: Any) -> dict:
             ba.BUSY[0] = 0.0
 
         window.clock._consumers.insert(0, measure_tick)
+        recording = os.environ.get("BENCH_RECORD_DIR")  # bench_record.py: the Record control on meanwhile
+        if recording:
+            window.record_control.directory = Path(recording)
+            window.record_control.start()
         before = sim_stats()
         sim_cpu0 = [proc_cpu_s(pid) for _, _, pid in sims]
         threads0 = thread_cpu_s()
@@ -291,6 +295,13 @@ def run(args: Any) -> dict:
         QTest.mouseRelease(pad, QtCore.Qt.MouseButton.LeftButton, pos=c)
         window.removeEventFilter(probe)
         figures["load_average_after"] = [round(v, 2) for v in os.getloadavg()]
+        if recording and window.record_control.recording is not None:
+            rec = window.record_control.recording
+            status = rec.status()
+            window.record_control.stop()
+            figures["record"] = {"messages_written": rec.status().messages, "dropped": rec.status().dropped,
+                                 "bytes_on_disk": rec.status().size, "operator_events": status.events,
+                                 "files": list(rec.status().files), "problem": status.problem}
 
         # ---- cameras
         cameras: dict[str, dict] = {}

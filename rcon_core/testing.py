@@ -19,7 +19,8 @@ A package loads these fixtures with ``pytest_plugins = ["rcon_core.testing"]`` i
 :func:`until` waits for a condition without sleeping a fixed time; :class:`ManualClock` is a clock (and a
 timer loop) that moves only when the test advances it, so rates are tested without the wall clock.
 
-View tests: :class:`RecordingPort` (a port that reaches no robot and records publishes), :func:`widget_state`
+View tests: :class:`RecordingPort` (a port that reaches no robot: it records publishes and calls, answers
+calls as scripted and delivers the messages a test plays), :func:`widget_state`
 (a state as a running model gives it), :func:`build_view` and :func:`grab_view` (``View(model)`` refreshed
 with a state, rendered to a ``QImage`` and optionally a PNG). Only these import Qt, when called.
 """
@@ -234,8 +235,10 @@ def threaded_client(sim_thread: SimServer) -> Iterator[tuple[Any, BridgeClient]]
 
 # ------------------------------------------------------------------------------------- view harness
 class _Handle:
-    def __init__(self, on_publish: Callable[[dict[str, Any]], None] | None = None) -> None:
+    def __init__(self, on_publish: Callable[[dict[str, Any]], None] | None = None,
+                 on_end: Callable[[], None] | None = None) -> None:
         self._on_publish = on_publish
+        self._on_end = on_end
 
     def publish(self, msg: dict[str, Any]) -> bool:
         if self._on_publish is not None:
@@ -243,22 +246,49 @@ class _Handle:
         return True
 
     def unsubscribe(self) -> None:
-        pass
+        if self._on_end is not None:
+            self._on_end()
+            self._on_end = None
 
     def unadvertise(self) -> None:
         pass
 
 
 class RecordingPort:
-    """A bridge port that reaches no robot: subscriptions stay silent, publishes and calls are recorded
-    (``published``: (topic, msg); ``calls``: (service, args)), so a model can be built for a view test."""
+    """A bridge port that reaches no robot: publishes and calls are recorded (``published``: (topic, msg);
+    ``calls``: (service, args)), so a model can be built for a view test. Subscriptions hear what the test
+    plays with :meth:`deliver` (as the bridge would deliver it: an exception in ``on_message`` becomes the
+    widget's error). Service calls answer what the test scripts with :meth:`answer` (else ``{}``)::
+
+        port = RecordingPort()
+        port.answer("/pump/set", {"success": True, "message": "on"}, {"success": False, "message": "dry"})
+        port.answer("/pump/set", lambda args: {"success": args["on"], "message": ""})   # computed
+        port.answer("/dock", TimeoutError("no answer"))                                # raised by the call
+    """
 
     def __init__(self) -> None:
         self.published: list[tuple[str, dict[str, Any]]] = []
         self.calls: list[tuple[str, Any]] = []
+        self._answers: dict[str, list[Any]] = {}
+        self._subscribers: dict[str, list[Callable[[dict[str, Any]], Any]]] = {}
+
+    def deliver(self, topic: str, msg: dict[str, Any]) -> int:
+        """Hand ``msg`` to every subscription on ``topic`` now, on this thread; returns how many heard it."""
+        callbacks = list(self._subscribers.get(topic, ()))
+        for callback in callbacks:
+            callback(msg)
+        return len(callbacks)
+
+    def answer(self, service: str, *answers: Any) -> None:
+        """Script the answers of ``service``, played one per call in order; the last one repeats. An answer
+        is a response dict, a function of the request that returns one, or an exception to raise."""
+        if not answers:
+            raise ValueError("answer() needs at least one answer")
+        self._answers[service] = list(answers)
 
     def subscribe(self, topic: str, callback: Callable[[dict[str, Any]], Any], **options: Any) -> _Handle:
-        return _Handle()
+        self._subscribers.setdefault(topic, []).append(callback)
+        return _Handle(on_end=lambda: self._subscribers[topic].remove(callback))
 
     def advertise(self, topic: str, type: str, **options: Any) -> _Handle:
         return _Handle(lambda msg: self.published.append((topic, msg)))
@@ -268,7 +298,15 @@ class RecordingPort:
 
     async def call_service(self, name: str, args: Any = None, timeout: float | None = None) -> dict[str, Any]:
         self.calls.append((name, args))
-        return {}
+        queue = self._answers.get(name)
+        if not queue:
+            return {}
+        answer = queue.pop(0) if len(queue) > 1 else queue[0]
+        if isinstance(answer, BaseException):
+            raise answer
+        if callable(answer):
+            answer = answer(args)
+        return dict(answer)
 
     def close(self) -> None:
         pass

@@ -78,8 +78,36 @@ def test_goal_form_fields_and_checked_entries(types):
         model.build_goal({"target.latitude": "north"})
     assert err.value.path == "target.latitude"
     fib = ActionModel(ActionSettings(goal="order: 7"), Binding(FIB, FIB_TYPE, Role.ACTION), None, types=types)
-    assert [(f.path, f.text) for f in fib.goal_fields()] == [("order", "7")]
+    # every entry starts empty; its placeholder is what an empty entry sends (the settings' goal value)
+    assert [(f.path, f.text, f.default, f.required) for f in fib.goal_fields()] == [("order", "", "7", False)]
+    assert fib.build_goal({"order": ""}) == {"order": 7} and fib.build_goal({"order": "1e1"}) == {"order": 10}
     assert ActionSettings(goal="order: [").problems()
+
+
+def test_the_goal_form_starts_empty_and_the_coordinates_of_a_place_are_required(types):
+    """issue 21.5: latitude/longitude started as real zeros: one tap of Send goal sent the boat to 0°N 0°E."""
+    model = ActionModel(ActionSettings(), Binding(NAV, NAV_TYPE, Role.ACTION), None, types=types)
+    fields = {f.path: f for f in model.goal_fields()}
+    assert all(f.text == "" for f in fields.values() if f.base != "bool")
+    assert [p for p, f in fields.items() if f.required] == ["target.latitude", "target.longitude"]
+    assert fields["target.altitude"].default == "0.0" and fields["target.latitude"].default == ""
+    assert model.missing({p: "" for p in fields}) == ["target.latitude", "target.longitude"]
+    assert model.missing({"target.latitude": "43.6", "target.longitude": " "}) == ["target.longitude"]
+    with pytest.raises(MessageTextError) as err:
+        model.build_goal({p: "" for p in fields})  # nothing typed: nothing sent, never 0°N 0°E
+    assert err.value.path == "target.latitude" and "required" in err.value.problem
+    # the settings may give the coordinates (a fixed station): then they are defaults, not required
+    station = ActionModel(ActionSettings(goal="target: {latitude: 43.6, longitude: -79.4}"),
+                          Binding(NAV, NAV_TYPE, Role.ACTION), None, types=types)
+    assert not any(f.required for f in station.goal_fields())
+    assert station.build_goal({"target.latitude": "", "target.longitude": ""}) == {
+        "target": {"latitude": 43.6, "longitude": -79.4}}
+    # or list exactly what is required
+    listed = ActionModel(ActionSettings(required="target.altitude"), Binding(NAV, NAV_TYPE, Role.ACTION), None,
+                         types=types)
+    assert [f.path for f in listed.goal_fields() if f.required] == ["target.altitude"]
+    none = ActionModel(ActionSettings(required=""), Binding(NAV, NAV_TYPE, Role.ACTION), None, types=types)
+    assert not any(f.required for f in none.goal_fields())
 
 
 def test_progress_from_feedback_fields():

@@ -10,7 +10,7 @@ import math
 
 import pytest
 from app_helpers import TIMEOUT_MS, choose_kind, entry_point_plugins, snap, tap, tap_item, window_session
-from qtpy import QtWidgets
+from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
 from rcon_core.canvas import Geometry
@@ -134,9 +134,35 @@ def test_cancel_stops_the_vessel_and_says_canceled(window, sim2, qtbot, plugins)
     assert v.cmd_surge == 0.0 and abs(v.surge) < 0.02  # no command after the cancel
 
 
+def test_the_goal_form_starts_empty_marks_what_is_required_and_sends_nothing_until_it_is_filled(
+        window, sim2, qtbot, plugins):
+    """issue 21.5: latitude/longitude started as real zeros; one tap of Send goal sent the boat to 0°N 0°E."""
+    _inst, view = place_action(window, qtbot, plugins)
+    lat_edit, lon_edit = view.editors["target.latitude"], view.editors["target.longitude"]
+    assert lat_edit.text() == "" and lon_edit.text() == "" and view.editors["target.altitude"].text() == ""
+    assert lat_edit.placeholderText() == "required" and view.editors["target.altitude"].placeholderText() == "0.0"
+    labels = [view.form.labelForField(e).text() for e in (lat_edit, lon_edit)]
+    assert labels == ["latitude *", "longitude *"]
+    assert not view.send_button.isEnabled() and "latitude, longitude" in view.send_button.toolTip()
+    snap(window, "action-goal-empty")
+    QTest.mouseClick(view.send_button, QtCore.Qt.MouseButton.LeftButton)  # a tap on the disabled button
+    lat, lon = fix_at(sim2, 8.0, 4.0)
+    type_into(lat_edit, f"{lat:.7f}")
+    assert not view.send_button.isEnabled() and "longitude" in view.send_button.toolTip()
+    type_into(lon_edit, f"{lon:.7f}")
+    assert view.send_button.isEnabled()
+    assert sim2.ops_received[("send_action_goal", NAV)] == 0  # nothing went out before both were typed
+    tap(view.send_button)
+    qtbot.waitUntil(lambda: fb(view) >= 1, timeout=TIMEOUT_MS)
+    assert sim2.ops_received[("send_action_goal", NAV)] == 1
+    qtbot.waitUntil(view.cancel_button.isEnabled, timeout=TIMEOUT_MS)
+    tap(view.cancel_button)
+
+
 def test_a_bad_entry_is_named_and_nothing_is_sent(window, sim2, qtbot, plugins):
     _inst, view = place_action(window, qtbot, plugins)
     type_into(view.editors["target.latitude"], "north")
+    type_into(view.editors["target.longitude"], "-79.4")
     tap(view.send_button)
     qtbot.waitUntil(lambda: "target.latitude" in view.status.text(), timeout=TIMEOUT_MS)
     assert view.status.colour == PHASE_TEXT["failed"][1] and phase(view) in ("", "idle")

@@ -76,8 +76,8 @@ def binding_of(window: MainWindow, widget_id: str):
 def test_configure_rebinds_a_running_label_to_another_field_and_undo_restores_it(window, qtbot, sim_thread):
     wid = place_label(window, "/battery", "sensor_msgs/BatteryState")
     assert binding_of(window, wid).field_paths == ("percentage",)
-    fraction = shown_number(window, qtbot, wid)
-    assert 0.0 <= fraction <= 1.0  # the battery's 0..1 charge
+    percent = shown_number(window, qtbot, wid)
+    assert 0.0 <= percent <= 100.0  # the battery's 0..1 charge, shown in % (issue 21.12)
     first_model = window.host.hosted[wid].model
 
     dialog = open_configure(window, qtbot, wid)
@@ -99,7 +99,8 @@ def test_configure_rebinds_a_running_label_to_another_field_and_undo_restores_it
     binding = binding_of(window, wid)
     assert binding.field_paths == ("voltage",) and binding.name == "/battery" and binding.role is Role.SUBSCRIBE
     qtbot.waitUntil(lambda: window.host.hosted[wid].model is not first_model, timeout=10_000)  # rebuilt
-    qtbot.waitUntil(lambda: shown_number(window, qtbot, wid) > 5.0, timeout=10_000)  # volts, not a fraction
+    qtbot.waitUntil(lambda: not window.host.hosted[wid].view.value.text().endswith("%"),
+                    timeout=10_000)  # volts, not the charge in %
     assert shown_number(window, qtbot, wid) == pytest.approx(sim_thread.robot.voltage, abs=0.5)
     assert window.controller.canvas.widget(wid).title == "Volts"
 
@@ -109,7 +110,8 @@ def test_configure_rebinds_a_running_label_to_another_field_and_undo_restores_it
     QTest.keyClick(window, QtCore.Qt.Key.Key_Z, QtCore.Qt.KeyboardModifier.ControlModifier)
     assert binding_of(window, wid).field_paths == ("percentage",)
     assert window.controller.canvas.widget(wid).title == "battery · percentage"  # the title it got from its binding
-    qtbot.waitUntil(lambda: shown_number(window, qtbot, wid) <= 1.0, timeout=10_000)
+    qtbot.waitUntil(lambda: window.host.hosted[wid].view is not None
+                    and window.host.hosted[wid].view.value.text().endswith("%"), timeout=10_000)
     assert window.host.hosted[wid].model.binding.field_paths == ("percentage",)
 
 

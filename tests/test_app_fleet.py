@@ -119,7 +119,8 @@ def test_chips_pick_the_side_robot_and_a_new_widget_is_bound_to_it(qtbot, tmp_pa
         tap(panel.place_button)
         added = win.controller.canvas.widgets[-1]
         assert added.binding.robot == "r-2" and added.binding.name == "/battery"
-        qtbot.waitUntil(lambda: shown(win, added.id).startswith("0.8"), timeout=TIMEOUT_MS)  # Bravo's 0.8
+        # Bravo's 80 %: a Label on the battery's 0..1 fraction shows it in percent (issue 21.12)
+        qtbot.waitUntil(lambda: shown(win, added.id) == "80 %", timeout=TIMEOUT_MS)
 
         # the picker in the side list picks back the first robot (a new widget then names no robot)
         picker.combo.activated.emit(picker.combo.findData("r-1"))

@@ -85,3 +85,9 @@ def test_editing_helpers() -> None:
     for text, current in (("yes please", 1), ("1.5", 2), ("[a]", [1]), ("3", True)):
         with pytest.raises(ValueError, match="expected"):
             parse_like(text, current)
+    # issue 21.12: 1e5 was refused as "got a string"; 1.0e+400 became .inf without a word
+    assert parse_like("1e5", 2.0) == 100000.0 and parse_like("-2.5E-3", 2.0) == -0.0025
+    with pytest.raises(ValueError, match=r"1.0e\+400 is too large for a number \(it would become infinity\)"):
+        parse_like("1.0e+400", 2.0)
+    with pytest.raises(ValueError, match="nothing typed"):
+        parse_like("  ", 2.0)

@@ -307,6 +307,12 @@ def test_version_2_files_of_this_build_load_and_the_current_format_round_trips(t
     ('[{"id": "", "name": "no id"}]', "robot #1 ('no id') has no id"),
     ('[{"name": "no id"}]', "required field missing at robots[0].id"),
     ('"r-1"', "robots"),
+    ('[{"id": "a", "envelope": {"max_linear": 999999999999}}]',
+     "the maximum linear speed must be more than 0 and at most 100 m/s, not 1e+12 at robots[0].envelope"),
+    ('[{"id": "a", "envelope": {"max_linear": -1}}]', "more than 0"),
+    ('[{"id": "a", "envelope": {"max_angular": "fast"}}]', "must be a number"),
+    ('[{"id": "a", "envelope": {"speed": 1}}]', "unknown keys speed"),
+    ('[{"id": "a", "envelope": 2}]', "must be an object"),
 ])
 def test_bad_robots_are_refused_with_a_reason(robots, expected):
     text = '{"format": "rcon-workspace", "version": 2, "robots": ' + robots + ', "canvases": []}'
@@ -351,3 +357,17 @@ def test_a_view_only_canvas_round_trips_and_others_do_not_write_the_key():
     assert data["canvases"][0]["view_only"] is True and "view_only" not in data["canvases"][1]
     back = loads_workspace(dumps_workspace(ws))
     assert [c.view_only for c in back.canvases] == [True, False]
+
+
+def test_a_robots_safety_envelope_round_trips_and_is_written_only_when_set():
+    """issue 21.4: the envelope is one of the robot's settings, saved with the workspace; a file of an
+    earlier build (no envelope) loads with none and is written back without the key."""
+    from rcon_core.bridge.envelope import Envelope
+
+    ws = loads_workspace(VERSION_2_FILE)
+    assert [r.envelope for r in ws.robots] == [None, None]
+    ws.robots[1].envelope = Envelope(max_linear=1.5, max_angular=None)
+    data = json.loads(dumps_workspace(ws))
+    assert "envelope" not in data["robots"][0] and data["robots"][1]["envelope"] == {"max_linear": 1.5}
+    again = loads_workspace(dumps_workspace(ws))
+    assert again.robots[1].envelope == Envelope(1.5, None) and again.robots[0].envelope is None

@@ -109,3 +109,52 @@ def test_echo_stops_quietly_when_the_reader_goes_away(sim_url):
     assert first.startswith(b"header:")
     assert proc.returncode == 0, err.decode()
     assert b"Traceback" not in err and b"BrokenPipe" not in err, err.decode()
+
+
+def _layout(tmp_path, envelope=None, name="boat1", url=""):
+    from rcon_core.bridge.envelope import Envelope
+    from rcon_core.canvas import Workspace
+    from rcon_core.canvas.robots import Robot
+    from rcon_core.canvas.store import dumps_workspace
+
+    ws = Workspace.new("Main")
+    ws.robots = [Robot("r-1", "first", envelope=Envelope(2.0, 2.0)),
+                 Robot("r-2", name, url=url, envelope=envelope)]
+    path = tmp_path / "workspace.json"
+    path.write_text(dumps_workspace(ws))
+    return path
+
+
+def test_pub_envelope_holds_a_command_to_the_saved_envelope_and_says_so(sim_url, sim_thread, tmp_path, capsys):
+    """issue 21.4: ``rcon pub`` honours a saved workspace's envelope when asked: 43099999999.96 is sent as 0.8."""
+    from rcon_core.bridge.envelope import Envelope
+
+    path = _layout(tmp_path, Envelope(0.8, 0.3), url=sim_url)
+    rc, _, err = run(capsys, "pub", "/cmd_vel", "geometry_msgs/Twist",
+                     "{linear: {x: 43099999999.96}, angular: {z: -1}}", "--url", sim_url, "--envelope", str(path))
+    assert rc == 0, err
+    assert "held to the safety envelope: linear.x 4.31e+10 → 0.8, angular.z -1 → -0.3" in err
+    assert "boat1: at most 0.8 m/s and 0.3 rad/s" in err  # the robot whose URL is --url
+    got = sim_thread.wait_for_published_sync("/cmd_vel", lambda m: m["angular"]["z"] == -0.3, timeout=10)
+    assert got["linear"]["x"] == 0.8
+    assert not any(abs(m["linear"]["x"]) > 0.8 for m in sim_thread.published("/cmd_vel"))
+    # --robot picks another robot of the file, by name or id
+    rc, _, err = run(capsys, "pub", "/cmd_vel", "geometry_msgs/Twist", "{linear: {x: 5}}", "--url", sim_url,
+                     "--envelope", str(path), "--robot", "first")
+    assert rc == 0 and "linear.x 5 → 2" in err
+
+
+@pytest.mark.parametrize("extra,problem", [
+    (("--robot", "nobody"), "no robot 'nobody' in"),
+    (("--robot", "r-2"), "robot 'boat1' in"),  # saved without an envelope: never sent without one
+])
+def test_pub_envelope_refuses_when_there_is_no_envelope_to_honour(sim_url, sim_thread, tmp_path, capsys, extra, problem):
+    path = _layout(tmp_path, None)
+    before = len(sim_thread.published("/cmd_vel"))
+    rc, _, err = run(capsys, "pub", "/cmd_vel", "geometry_msgs/Twist", "{linear: {x: 5}}", "--url", sim_url,
+                     "--envelope", str(path), *extra)
+    assert rc == 2 and problem in err
+    rc, _, err = run(capsys, "pub", "/cmd_vel", "geometry_msgs/Twist", "{linear: {x: 5}}", "--url", sim_url,
+                     "--envelope", str(tmp_path / "missing.json"))
+    assert rc == 2 and "cannot read" in err
+    assert len(sim_thread.published("/cmd_vel")) == before

@@ -8,10 +8,11 @@ from importlib.resources import files
 
 import pytest
 
+from rcon_core.bridge.envelope import Envelope
 from rcon_core.canvas import Binding, Document, Workspace, WorkspaceStore, export_canvas
 from rcon_core.canvas.store import workspace_to_dict
 from rcon_core.cli.main import main
-from rcon_core.plugins import PluginManager, SpecError, hookimpl
+from rcon_core.plugins import PluginManager, SpecError, WidgetSpec, hookimpl
 
 pytest.importorskip("rcon_widgets_std")
 
@@ -99,7 +100,9 @@ def test_the_shipped_schema_describes_what_the_store_writes(capsys):
     schema = json.loads(text)
     rc, out, _ = run(capsys, "layout", "schema")
     assert rc == 0 and json.loads(out) == schema
-    data = workspace_to_dict(workspace().workspace)
+    ws = workspace().workspace
+    ws.robots[0].envelope = Envelope(1.0, 0.5)  # written only when set: set here so the schema meets it
+    data = workspace_to_dict(ws)
     canvas = data["canvases"][0]
     widget = canvas["widgets"][0]
     assert _schema_keys(schema, "workspaceFile") == set(data)
@@ -108,28 +111,46 @@ def test_the_shipped_schema_describes_what_the_store_writes(capsys):
     assert _schema_keys(schema, "binding") == set(widget["binding"])
     assert _schema_keys(schema, "geometry") == set(widget["geometry"])
     assert _schema_keys(schema, "robot") == set(data["robots"][0])
+    assert _schema_keys(schema, "envelope") == set(data["robots"][0]["envelope"])
     assert set(schema["$defs"]["binding"]["properties"]["role"]["enum"]) == {"subscribe", "publish", "call", "serve"}
 
 
 class Templates:
-    def __init__(self, path):
-        self.path = path
+    def __init__(self, *paths):
+        self.paths = paths
+
+    @hookimpl
+    def rcon_register_widgets(self, registry):
+        registry.add(WidgetSpec(kind=f"t{len(self.paths)}.gauge", title="Gauge", model="x:y"))
 
     @hookimpl
     def rcon_canvas_templates(self, registry):
-        registry.add("Battery station", self.path, description="the battery, big")
+        for i, path in enumerate(self.paths):
+            registry.add(f"Battery station {i}", path, description="the battery, big")
 
 
-def test_plugins_offer_templates_and_a_missing_file_fails_only_that_plugin(tmp_path):
+def test_plugins_offer_templates_and_a_missing_file_withdraws_only_that_template(tmp_path, capsys):
+    """issue 25.1: a template file left out of the wheel took the whole plugin (both widgets) with it."""
     doc = workspace()
     export_canvas(doc.current, tmp_path / "station.json")
     pm = PluginManager(environ={})
     pm.register(Templates(tmp_path / "station.json"), name="good")
-    pm.register(Templates(tmp_path / "nowhere.json"), name="bad")
-    [template] = pm.canvas_templates()
-    assert (template.title, template.path, template.package) == ("Battery station", tmp_path / "station.json", "good")
-    [bad] = pm.failed
-    assert bad.name == "bad" and "no file at" in bad.error
+    pm.register(Templates(tmp_path / "nowhere.json", tmp_path / "station.json"), name="half")
+    assert pm.failed == []
+    assert pm.has_widget("t1.gauge") and pm.has_widget("t2.gauge")  # the widgets of both still load
+    assert [(t.title, t.package) for t in pm.canvas_templates()] == [
+        ("Battery station 0", "good"), ("Battery station 1", "half")]
+    half = next(i for i in pm.plugins if i.name == "half")
+    assert half.status == "loaded"
+    assert half.problems == [f"template 'Battery station 0' is not offered: no file at {tmp_path / 'nowhere.json'} "
+                             "(is it listed as package data in pyproject.toml?)"]
+    assert half.to_dict()["problems"] == half.problems
+    from rcon_core.cli.plugin_cmds import _check
+
+    assert _check(pm, pm.type_registry()) == 1  # --check fails on it: a lab's CI sees the packaging slip
+    err = capsys.readouterr().err.splitlines()
+    assert [line for line in err if "is not offered" in line] == [
+        f"rcon plugins: plugin 'half' ({half.value}) failed: {half.problems[0]}"]
     with pytest.raises(SpecError):
         from rcon_core.plugins import TemplateRegistry
 

@@ -2,7 +2,9 @@
 ``main_window.py``.
 
 OK is one undo step for all three (:meth:`Document.reconfigure_widget`); a new field rebinds the running
-widget (the runtime rebuilds its model). The settings are the generated :class:`SettingsForm`, its children
+widget (the runtime rebuilds its model). Settings with problems (a slider's maximum of 999999999999) are
+refused with the reason under the form; settings that could command more than the robot's safety envelope
+allows are saved only after a question (``envelope_dialog.beyond_envelope``). The settings are the generated :class:`SettingsForm`, its children
 editor (a Compound's children) given a :class:`~rcon_core.plugins.children.ChildContext` for the widget's
 binding.
 """
@@ -16,6 +18,7 @@ import attrs
 from qtpy import QtWidgets
 
 from rcon_core.app.choosers import FieldChooser
+from rcon_core.app.envelope_dialog import ask_beyond, beyond_envelope
 from rcon_core.app.settings_form import SettingsForm, form_label, tune_form
 from rcon_core.canvas import Document
 from rcon_core.matcher import match
@@ -47,6 +50,8 @@ class WidgetConfigurer:
         self.child_context = child_context
         self.dialog_closed = dialog_closed
         self.dialog: QtWidgets.QDialog | None = None  #: the dialog opened last
+        #: the question asked last before saving settings beyond the robot's safety envelope (tests)
+        self.beyond_dialog: QtWidgets.QMessageBox | None = None
 
     def open(self, instance_id: str) -> None:
         """Edit a placed widget's field, title and settings in a dialog (window-modal, returns at once)."""
@@ -96,17 +101,47 @@ class WidgetConfigurer:
         buttons = QtWidgets.QDialogButtonBox(
             QtWidgets.QDialogButtonBox.StandardButton.Ok | QtWidgets.QDialogButtonBox.StandardButton.Cancel
         )
-        buttons.accepted.connect(dialog.accept)
+        problem = QtWidgets.QLabel()
+        problem.setObjectName("configureProblem")
+        problem.setProperty("role", "problem")
+        problem.setWordWrap(True)
+        col.addWidget(problem)
+        if form is not None:
+            form.changed.connect(lambda: problem.setText(""))
         buttons.rejected.connect(dialog.reject)
         col.addWidget(buttons)
         self.dialog = dialog
 
-        def apply() -> None:
+        def rebound_binding() -> Binding | None:
             path = field.current_path()
-            rebound = None
             if top.isRowVisible(field) and path is not None and path != binding.field_path:
                 rest = tuple(p for p in binding.field_paths[1:] if p != path)
-                rebound = attrs.evolve(binding, field_paths=(path, *rest))
+                return attrs.evolve(binding, field_paths=(path, *rest))
+            return None
+
+        def ok() -> None:
+            """Settings that are wrong (a maximum of 999999999999) are refused, said under the form; settings
+            that could command more than the robot's safety envelope allows are saved only when the operator
+            says so (the robot is held to its envelope either way)."""
+            problems = form.problems() if form is not None else []
+            if problems:
+                problem.setText("Not saved: " + "; ".join(problems))
+                return
+            try:
+                envelope = self.doc.workspace.robot_of(inst).envelope
+            except KeyError:  # a robot not in the workspace: nothing to compare with
+                envelope = None
+            beyond = beyond_envelope(envelope, rebound_binding() or binding,
+                                     form.value() if form is not None else None)
+            if beyond:
+                self.beyond_dialog = ask_beyond(dialog, beyond, dialog.accept)
+                return
+            dialog.accept()
+
+        buttons.accepted.connect(ok)
+
+        def apply() -> None:
+            rebound = rebound_binding()
             self.doc.reconfigure_widget(  # one undo step for field, title and settings together
                 instance_id,
                 settings=spec.settings_to_dict(form.value()) if form is not None else None,

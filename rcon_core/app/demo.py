@@ -7,12 +7,17 @@ Widget kinds come from whatever plugins are installed: each slot names the kinds
 first; the first installed one is used, with the settings written for it (each slot's settings are
 valid, so no demo widget shows the "not configured" warning). When none is installed the first kind is
 kept, so the canvas shows its "not installed" placeholder (and the layout works once it is installed).
+
+The robot has a safety envelope (:data:`DEMO_ENVELOPE`: 1.5 m/s, 1 rad/s), and the Drive pad follows the
+robot's speed limit (``/speed_limit``, set by the Speed limit slider, 0..1.5 m/s): the pad shows what is
+actually sent, never more than the envelope and the speed limit allow.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
+from rcon_core.bridge.envelope import Envelope
 from rcon_core.canvas import Canvas, Geometry, WidgetInstance, Workspace, new_id
 from rcon_core.plugins import Binding, PluginManager, Role
 
@@ -24,10 +29,11 @@ Slot = tuple[str, dict[str, dict[str, Any]], str, str, Role, tuple[str, ...], tu
 DRIVE: list[Slot] = [
     ("Front camera", {"sensors.image": {"max_fps": 15.0}}, "/camera/front/image_raw",
      "sensor_msgs/Image", Role.SUBSCRIBE, (), (16, 16, 400, 304)),
-    ("Drive", {"sensors.teleop": {"max_linear": 2.0, "max_angular": 1.0}}, "/cmd_vel",
-     "geometry_msgs/Twist", Role.PUBLISH, (), (432, 16, 272, 416)),
-    ("Speed limit", {"std.slider": {"minimum": 0.0, "maximum": 3.0, "step": 0.1, "decimals": 1,
-                                    "units": "m/s"}},
+    # the pad follows the robot's speed limit (what the Speed limit slider sets): it shows what is sent
+    ("Drive", {"sensors.teleop": {"max_linear": 2.0, "max_angular": 1.0, "speed_limit_topic": "/speed_limit"}},
+     "/cmd_vel", "geometry_msgs/Twist", Role.PUBLISH, (), (432, 16, 272, 416)),
+    ("Speed limit", {"std.slider": {"minimum": 0.0, "maximum": 1.5, "step": 0.1, "decimals": 1,
+                                    "units": "m/s", "initial": 1.5}},
      "/speed_limit", "std_msgs/Float64", Role.PUBLISH, ("data",), (16, 336, 256, 96)),
     ("Battery", {"std.label": {"decimals": 0, "units": "%", "scale": 100.0}}, "/battery",
      "sensor_msgs/BatteryState", Role.SUBSCRIBE, ("percentage",), (720, 16, 144, 96)),
@@ -82,7 +88,14 @@ def _canvas(name: str, slots: list[Slot], plugins: PluginManager) -> Canvas:
     return canvas
 
 
+#: the demo robot's safety envelope: every motion command is held to it, whichever widget sends it (the pad
+#: reaches 2 m/s at its edge on its own; the envelope holds it to 1.5, and the pad says so)
+DEMO_ENVELOPE = Envelope(max_linear=1.5, max_angular=1.0)
+
+
 def demo_workspace(plugins: PluginManager) -> Workspace:
     canvases = [_canvas("Drive", DRIVE, plugins), _canvas("Cameras", CAMERAS, plugins),
                 _canvas("Sensors", SENSORS, plugins)]
-    return Workspace(canvases, canvases[0].id)
+    ws = Workspace(canvases, canvases[0].id)
+    ws.robots[0].envelope = DEMO_ENVELOPE
+    return ws

@@ -15,6 +15,8 @@ as it is and the map shows the same fix topic of every robot. The workspace has 
   panel open, without scrolling (:func:`fleet_canvas`);
 - canvas **Drive · boatK** per vessel: the single-robot demo's Drive canvas, bound to that vessel.
 
+Every vessel has the single-robot demo's safety envelope (``DEMO_ENVELOPE``).
+
 No Qt here: the window wires the links (``rcon_core/app/main.py``).
 """
 
@@ -28,7 +30,7 @@ from rcon_core.canvas import Canvas, Geometry, WidgetInstance, Workspace, new_id
 from rcon_core.canvas.robots import Robot
 from rcon_core.plugins import Binding, PluginManager, Role
 
-from .demo import DRIVE, pick_kind
+from .demo import DEMO_ENVELOPE, DRIVE, pick_kind
 
 MAX_ROBOTS = 6  #: the sim has six distinct camera scenes
 #: the part of the Fleet canvas the layout fills (canvas units, from the 16-unit margin): what a 1024x600
@@ -135,7 +137,7 @@ def fleet_workspace(n: int, plugins: PluginManager) -> Workspace:
     check_count(n)
     canvases = [fleet_canvas(n, plugins)] + [drive_canvas(k, plugins) for k in range(1, n + 1)]
     ws = Workspace(canvases, canvases[0].id)
-    ws.robots = [Robot(robot_id(k), vessel_name(k)) for k in range(1, n + 1)]
+    ws.robots = [Robot(robot_id(k), vessel_name(k), envelope=DEMO_ENVELOPE) for k in range(1, n + 1)]
     return ws
 
 

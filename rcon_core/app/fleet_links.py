@@ -14,7 +14,9 @@ The first robot keeps the window's own :class:`~rcon_core.app.link.Link`, which 
 field drives as before; a first robot whose ``url`` is ``""`` (every migrated one-robot layout) follows
 that field. Every other robot connects to its own ``url`` with its own connection settings (CA file,
 client certificate and key, and the rosauth secret the OS credential store keeps for that URL when
-``auth`` is set), reconnects on its own and has its own state, failure and catalogue mailboxes.
+``auth`` is set), reconnects on its own and has its own state, failure and catalogue mailboxes. Every
+link holds its robot's motion commands to the robot's safety envelope (``Robot.envelope``, set on the link
+by :meth:`FleetLinks.sync`, so an edited envelope applies at once, without reconnecting).
 """
 
 from __future__ import annotations
@@ -136,6 +138,8 @@ class FleetLinks:
                 link.on_client_changed(partial(self._changed, link))
                 self._links[r.id] = link
                 new.append(r.id)
+        for r in robots:  # each robot's safety envelope on its link, whatever else changed
+            self.link(r.id).set_envelope(r.envelope)
         if robots and robots[0].id != old_first:
             new.insert(0, robots[0].id)
         new += [r.id for r in robots if r.id in before and before[r.id] != _reach(r) and r.id not in new]

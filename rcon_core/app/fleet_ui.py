@@ -33,6 +33,7 @@ from rcon_core.app.widget_host import RateMeter
 from rcon_core.bridge import ConnectionState
 from rcon_core.canvas import Change, EditError
 from rcon_core.canvas.fleet import Fleet
+from rcon_core.canvas.retarget import plan_retarget, setting_names
 from rcon_core.canvas.robots import robot_colour
 
 log = logging.getLogger(__name__)
@@ -71,6 +72,8 @@ class FleetUi(QtCore.QObject):
         self._marks_dirty = True
         self._marked_models = -1  # the host's models_version the marks were last applied for
         self._states: dict[str, ConnectionState] = {}
+        #: the plan of the last "Duplicate for robot" (names mapped and missing; tests)
+        self.retarget_plan: Any = None
         #: robot id -> why its link is not up (words of rcon_core.bridge.reasons), for its chip
         self.why: dict[str, str] = {}
         self._remove = window.doc.add_listener(self._doc_changed)
@@ -329,11 +332,31 @@ class FleetUi(QtCore.QObject):
             action.setObjectName(f"retarget-{robot.id}")
             action.triggered.connect(lambda _c=False, rid=robot.id: self.retarget_current(rid))
 
-    def retarget_current(self, robot_id: str) -> None:
-        """Duplicate the current canvas for ``robot_id`` and show the copy (one undo step)."""
-        controller = self.window.controller
+    def retarget_current(self, robot_id: str) -> Any:
+        """Duplicate the current canvas for ``robot_id`` and show the copy (one undo step). The names its
+        widgets use are mapped into the robot's namespace and checked against the robot's topics, services
+        and actions (``rcon_core.canvas.retarget``); when a name changes or the robot lacks one, the
+        operator is told which before the copy is made (returns that question's dialog)."""
+        canvas = self.window.controller.canvas
+        label = next((r.label for r in self.robots if r.id == robot_id), robot_id)
+        names = [n for w in canvas.widgets for n in (w.binding.name, *setting_names(w.settings))]
+        catalog = self.catalogs.get(robot_id)
+        known = None if catalog is None else {n for part in ("topics", "services", "actions")
+                                              for n, _t in catalog.get(part, [])}
+        plan = plan_retarget(names, known)
+        self.retarget_plan = plan
+        if plan.quiet or robot_id not in [r.id for r in self.robots]:
+            return self._duplicate(canvas.id, robot_id, {})
+        if not plan.renames and not plan.missing:  # not connected: nothing to check, said, copied as it is
+            self._duplicate(canvas.id, robot_id, {})
+            self.window.notice.show_notice(f"⚠ {plan.describe(label)}")
+            return None
+        return self.window.confirm(f"Duplicate “{canvas.name}” for {label}?", plan.describe(label), "Duplicate",
+                                   lambda: self._duplicate(canvas.id, robot_id, plan.renames))
+
+    def _duplicate(self, canvas_id: str, robot_id: str, renames: dict[str, str]) -> None:
         try:
-            dup = self.window.doc.duplicate_for_robot(controller.canvas.id, robot_id)
+            dup = self.window.doc.duplicate_for_robot(canvas_id, robot_id, renames=renames)
         except EditError as exc:
             self.window.notice.show_notice(f"⚠ {exc}")
             return

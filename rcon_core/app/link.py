@@ -21,6 +21,7 @@ from typing import Any
 from urllib.parse import urlparse
 
 from rcon_core.bridge import BridgeClient, ConnectionState
+from rcon_core.bridge.envelope import Envelope
 from rcon_core.bridge.secure import confirm_auth, rosauth
 from rcon_core.bridge.threaded import BridgeThread, LatestValue
 
@@ -105,12 +106,21 @@ class Link:
         self._catalog_task: asyncio.Task | None = None
         self._generation = 0
         self._listeners: list[Callable[[BridgeClient | None], None]] = []
+        #: the robot's safety envelope, given to every client this link makes (``set_envelope``)
+        self.envelope: Envelope | None = None
         #: why a robot at a URL may be sent nothing (its view-only mark, worded by the window: see
         #: ``view_only.py``), asked for each new client before it connects and by :meth:`apply_guard`
         self.guard_for: Callable[[str], str | None] | None = None
         self.state_box.put(ConnectionState.CLOSED)
 
     # ------------------------------------------------------------------------------------- GUI side
+    def set_envelope(self, envelope: Envelope | None) -> None:
+        """Hold every motion command of this link to ``envelope`` (the robot's; None: no limit), now and on
+        every later client (``rcon_core/bridge/envelope.py``)."""
+        self.envelope = envelope
+        if self.client is not None:
+            self.client.envelope = envelope
+
     def on_client_changed(self, fn: Callable[[BridgeClient | None], None]) -> None:
         """``fn(client)`` is called (on the GUI thread, from :meth:`connect_to`) when the client changes."""
         self._listeners.append(fn)
@@ -122,6 +132,7 @@ class Link:
         self._generation += 1
         gen = self._generation
         client = BridgeClient(url, reconnect=True, **(settings or LinkSettings()).client_options(url))
+        client.envelope = self.envelope  # before anything can publish through it
         self._guard(client, url)  # a view-only robot's link refuses from its first frame on
         self.client, self.url = client, url
         self.state_box.put(ConnectionState.CONNECTING)

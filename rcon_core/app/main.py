@@ -1,5 +1,5 @@
-"""``rcon`` without a subcommand: open the app (``--url``, ``--layout``, ``--demo [--robots N]``, ``--locked``,
-``--screenshot``, and the secure-link options ``--ca-file``, ``--client-cert``/``--client-key``,
+"""``rcon`` without a subcommand: open the app (``--url``, ``--layout``, ``--canvas``, ``--demo [--robots N]``,
+``--locked``, ``--screenshot``, ``--window-size``, and the secure-link options ``--ca-file``, ``--client-cert``/``--client-key``,
 ``--auth-secret-file``)."""
 
 from __future__ import annotations
@@ -134,6 +134,9 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
             return 2
     # a layout file that cannot be read is reported in the window (and never overwritten)
     layout = Path(args.layout) if getattr(args, "layout", None) else None
+    size, canvas = _canvas_options(args, layout)
+    if isinstance(size, int):
+        return size
     existing = QtWidgets.QApplication.instance()
     app = existing if isinstance(existing, QtWidgets.QApplication) else QtWidgets.QApplication(sys.argv[:1])
     app.setApplicationName("RCON")
@@ -145,9 +148,18 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
               file=sys.stderr)
         return 2
     plugins = load_plugins()
+    if canvas:  # a canvas file or a template (rcon_core/app/open_canvas.py), in a workspace of its own
+        from rcon_core.app.open_canvas import CanvasOptionError, canvas_workspace, resolve_canvas
+
+        try:
+            layout = canvas_workspace(resolve_canvas(canvas, plugins), stack)
+        except CanvasOptionError as exc:
+            print(f"rcon: {exc}", file=sys.stderr)
+            return 2
     windows: list[Any] = []
     stack.enter_context(closing_on_signals(windows))
     demo_factory = None
+    replay: Any = None  # (server, player) of --play FILE
     fleet_urls: list[str] = []
     if demo and robots is not None:
         from rcon_core.app.fleet_demo import connect_fleet, fleet_sims, fleet_workspace
@@ -159,11 +171,25 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
         def demo_factory() -> Any:
             return fleet_workspace(robots, plugins)
 
+    elif getattr(args, "play", None):
+        if demo:
+            print("rcon: --play opens a recording as the robot; it does not go with --demo", file=sys.stderr)
+            return 2
+        from rcon_core.record.files import RecordingError
+        from rcon_core.sim.playback import played_in_thread
+
+        try:
+            replay = stack.enter_context(played_in_thread(args.play))
+        except (RecordingError, OSError) as exc:
+            print(f"rcon: cannot play {exc}", file=sys.stderr)
+            return 2
     elif demo:
         from rcon_core.app.demo import demo_workspace
         from rcon_core.sim import SimServer
 
-        server = stack.enter_context(SimServer.in_thread(port=0))
+        # the embedded robot knows the types installed plugins contribute, as `rcon sim` does: a lab's widget
+        # (--canvas its template) is shown on its own type
+        server = stack.enter_context(SimServer.in_thread(port=0, plugin_types=True))
         url = server.url
         if layout is None:
             layout = config.dir / "demo-workspace.json"
@@ -173,7 +199,9 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
 
     # the demo layout is built on its first start only (or when it cannot be read); edits persist
     # the collector's pauses kept short while robots stream (rcon_core/gcpolicy.py)
-    window = MainWindow(config, plugins, layout_path=layout, demo=demo_factory, collector=CollectorPolicy())
+    # with --canvas: the embedded robot under the canvas given, never the demo's layout
+    window = MainWindow(config, plugins, layout_path=layout, demo=None if canvas else demo_factory,
+                        collector=CollectorPolicy())
     windows.append(window)
     window.connection.overrides = overrides
     if config.read_only_reason:  # one writer per config folder: this one saves nothing (the window says so too)
@@ -186,12 +214,18 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
         window.show()  # first shown normally: a first showFullScreen() is not kept on every platform
         window.showFullScreen()
     else:
+        if size is not None:
+            window.resize(*size)
         window.show()
     # the embedded robot's URL is not put in the history: its port is gone after this run. The first robot:
     # --url, else its URL in the layout, else the newest in the history; the others connect to their own
     # URLs (window.fleet_ui)
     if fleet_urls:  # the demo's vessels: run-time URLs, never saved
         connect_fleet(window, fleet_urls)
+    elif replay is not None:  # the recording's robot: view-only, its timeline under the connection bar
+        from rcon_core.app.replay_bar import install_replay_bar
+
+        install_replay_bar(window, *replay)
     else:
         window.connect_to(url or window.fleet_ui.first_url() or config.last_url, remember=not demo)
     if getattr(args, "screenshot", None):
@@ -204,3 +238,29 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
         delay = max(0.5, (args.quit_after or 3.0) - 0.3)
         QtCore.QTimer.singleShot(int(delay * 1000), shoot)
     return window
+
+
+def _canvas_options(args: Any, layout: Path | None) -> tuple[Any, str]:
+    """(window size or None, ``--canvas`` or ""), or (an exit code, "") after a line saying why not."""
+    from rcon_core.app.open_canvas import CanvasOptionError, layout_is_canvas, parse_window_size
+
+    canvas = getattr(args, "canvas", None) or ""
+    if layout is not None and layout_is_canvas(layout):
+        print(f"rcon: {layout} is a canvas file (rcon-canvas), not a workspace: open it with --canvas {layout}",
+              file=sys.stderr)
+        return 2, ""
+    if canvas and (layout is not None or getattr(args, "robots", None) is not None):
+        print("rcon: --canvas opens one canvas in a workspace of its own: not with --layout or --robots",
+              file=sys.stderr)
+        return 2, ""
+    size = None
+    if getattr(args, "window_size", None):
+        if getattr(args, "locked", False):
+            print("rcon: --locked starts full screen: --window-size does not apply", file=sys.stderr)
+            return 2, ""
+        try:
+            size = parse_window_size(args.window_size)
+        except CanvasOptionError as exc:
+            print(f"rcon: {exc}", file=sys.stderr)
+            return 2, ""
+    return size, canvas

@@ -29,6 +29,8 @@ from rcon_core.app.config import AppConfig
 from rcon_core.app.configure_dialog import WidgetConfigurer
 from rcon_core.app.connection_bar import ConnectionBar
 from rcon_core.app.draft import Candidate, Target, rank_widgets, targets_for
+from rcon_core.app.envelope_dialog import check_placed
+from rcon_core.app.envelope_dialog import install as install_envelope
 from rcon_core.app.fleet_ui import FleetUi
 from rcon_core.app.focus import focus_into, has_focus_inside
 from rcon_core.app.frame_clock import FrameClock, Waker
@@ -41,6 +43,7 @@ from rcon_core.app.operator_lock import OperatorLock
 from rcon_core.app.palette_panel import PalettePanel
 from rcon_core.app.params_panel import ParamsPanel
 from rcon_core.app.preview import PreviewHost
+from rcon_core.app.record_control import install_record_control
 from rcon_core.app.side_panel import PANEL_MIN, SIDE_MIN, SidePanelPolicy
 from rcon_core.app.template_menu import add_template_menu
 from rcon_core.app.widget_host import RateMeter, WidgetHost
@@ -257,6 +260,12 @@ class MainWindow(QtWidgets.QMainWindow):
         if isinstance(app, QtGui.QGuiApplication):
             app.applicationStateChanged.connect(self._app_state_changed)
         install_lock_controls(self)  # the operator lock's and the view-only controls
+        install_envelope(self)  # Canvas ▾ → Safety envelope… (the PIN first while locked)
+        #: the Record control on the connection bar (the flight recorder: record_control.py)
+        self.record_control: Any = install_record_control(self)
+        #: the timeline of a recording played as the robot (replay_bar.py), or None
+        self.replay: Any = None
+        self.replay_stack: Any = None  # what plays a recording opened from the menu (closed at shutdown)
         self.resize(self.initial_size())
 
     # ------------------------------------------------------------------------------------ workspace
@@ -445,6 +454,8 @@ class MainWindow(QtWidgets.QMainWindow):
                 self.controller.add_draft(draft)
             except ValueError as exc:
                 self.notice.show_notice(f"⚠ {exc}")
+                return
+            check_placed(self, draft)  # beyond the robot's safety envelope: kept only when the operator says
 
     def _settle_layout(self) -> None:
         """Apply pending layout changes now (the add panel just closed, the side panel may be back), so
@@ -461,6 +472,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.side_policy.keep_hidden()
         if draft is not None:
             self.controller.add_draft(draft, point)
+            check_placed(self, draft)  # beyond the robot's safety envelope: kept only when the operator says
 
     def child_context(self, binding: Callable[[], Binding | None]) -> ChildContext:
         """What a settings form's children editor needs: types, widgets, the parent's binding, and a way to
@@ -600,6 +612,9 @@ class MainWindow(QtWidgets.QMainWindow):
             except (RuntimeError, TypeError):
                 pass
         self.add_panel.cancel()
+        self.record_control.close_files()  # closed properly before the links go
+        if self.replay_stack is not None:
+            self.replay_stack.close()  # a recording opened from the menu stops playing
         self.controller.shutdown()
         self.preview_live.stop()
         self.fleet_ui.shutdown()

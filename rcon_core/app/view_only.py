@@ -37,6 +37,9 @@ def reason(fleet_ui: Any, robot_id: str, url: str | None = None) -> str | None:
     if robot is None:
         return None
     url = url if url is not None else fleet_ui.robot_url(robot.id)
+    replay = getattr(fleet_ui.window, "replay", None)  # a recording played as the robot (replay_bar.py)
+    if replay is not None and url and url == replay.url:
+        return replay.reason
     if url and fleet_ui.window.config.is_view_only(url):
         return f"robot “{robot.label}” at {url} is view-only"
     if robot.view_only:

@@ -13,6 +13,8 @@ link; frames are read by ``inbound.py`` and written through the one adapter over
 * restore after a reconnect, publishing while down, service calls: ``session.py``; shared subscriptions:
   ``topics.py``, ``subscribe.py``; services this client provides: ``services.py``; ROS 2 action goals:
   ``goals.py``; actions this client provides: ``action_server.py``;
+* the safety envelope every motion command is held to (``client.envelope``): ``envelope.py``, applied in
+  ``Session.publish``;
 * ROS 1 or ROS 2: ``rosinfo.py`` (``detect_ros()``, once per connection), ``params.py`` (``client.params``),
   ``cdrdecode.py``; which rosapi calls may be sent at all: ``rosapi_guard.py`` (checked here, in
   :meth:`BridgeClient.call_service`, for every caller: widgets, the CLI, discovery, type lookups).
@@ -67,6 +69,7 @@ from websockets.exceptions import ConnectionClosed
 
 from . import rosapi_guard
 from .action_server import ProvidedActions
+from .envelope import Envelope
 from .errors import AuthRefusedError, NotConnectedError, RosapiRefusedError, ServiceError
 from .freshness import LinkWatch, watch_link
 from .guard import LinkGuard
@@ -160,7 +163,7 @@ class BridgeClient:
                                       "dropped_on_disconnect": 0, "oversize_frames": 0, "frame_errors": 0,
                                       "png_refused": 0, "non_object_msgs": 0, "big_frames": 0,
                                       "stale_dropped": 0, "degraded": 0, "stall_cuts": 0,
-                                      "stale_skipped": 0}
+                                      "stale_skipped": 0, "envelope_clamped": 0, "envelope_refused": 0}
         self._state = ConnectionState.CLOSED
         self._state_listeners: list[Callable[[ConnectionState], None]] = []
         #: the current connection (None while down); see ``wslink.py``
@@ -204,6 +207,19 @@ class BridgeClient:
     def provided_actions(self) -> ProvidedActions:
         """Actions this client serves (``node.advertise_action``; see ``action_server.py``)."""
         return self.session.provided_actions
+
+    @property
+    def envelope(self) -> Envelope | None:
+        """The robot's safety envelope: every motion command published through this client is held to it
+        (clamped, or refused when not a number; see ``envelope.py``). None: no speed limit. Any thread may
+        set it (one attribute; the loop reads it at each publish)."""
+        return self.session.envelope
+
+    @envelope.setter
+    def envelope(self, value: Envelope | None) -> None:
+        if value is not None and not isinstance(value, Envelope):
+            raise TypeError(f"envelope must be an Envelope or None, not {type(value).__name__}")
+        self.session.envelope = value
 
     @property
     def ros_version(self) -> int | None:

@@ -31,10 +31,13 @@ class Subscription:
     """One node's interest in a topic.  ``unsubscribe()`` is idempotent."""
 
     __slots__ = ("node", "topic", "callback", "type", "throttle_rate", "queue_length", "compression",
-                 "fragment_size", "active")
+                 "fragment_size", "active", "raw")
 
     def __init__(self, node: Node, topic: str, callback: MessageCallback, type: str | None, throttle_rate: int,
-                 queue_length: int, compression: str, fragment_size: int | None) -> None:
+                 queue_length: int, compression: str, fragment_size: int | None, raw: bool = False) -> None:
+        #: the callback takes the recorded form: a ``topics.RawPayload`` (the server's bytes, undecoded)
+        #: while the topic arrives as ``cbor-raw``, else the decoded dict (see ``Node.subscribe``)
+        self.raw = raw
         self.node = node
         self.topic = topic
         self.callback = callback
@@ -86,7 +89,16 @@ class Publisher:
             raise BridgeError(f"publish on {self.topic} after unadvertise")
         if not isinstance(msg, dict):
             raise TypeError(f"publish on {self.topic}: msg must be a dict, got {type(msg).__name__}")
-        return self._session.publish(self, msg)
+        tap = self._session.tap
+        if not tap.listeners:
+            return self._session.publish(self, msg)
+        try:
+            ok = self._session.publish(self, msg)
+        except Exception as exc:
+            tap.emit("publish", self.node.id, self.topic, self.type, msg, f"refused: {exc}")
+            raise
+        tap.emit("publish", self.node.id, self.topic, self.type, msg, "sent" if ok else "dropped")
+        return ok
 
     def unadvertise(self) -> None:
         if self.active:
@@ -215,12 +227,23 @@ class ActionGoal:
             return await asyncio.shield(self._future)
         return await asyncio.wait_for(asyncio.shield(self._future), timeout)
 
+    @property
+    def values(self) -> dict[str, Any] | None:
+        """The result message of a goal that ended with one, else None (for the operator tap)."""
+        f = self._future
+        if f.done() and not f.cancelled() and f.exception() is None:
+            return f.result()
+        return None
+
     def cancel(self) -> None:
         """Ask the server to cancel the goal (the result arrives as usual, with status CANCELED).  Raises
         ``ViewOnlyError`` when the link was marked view-only since the goal was sent (``guard.py``)."""
         if not self._future.done():
             self.node.session.guard.check(f"cancelling the goal to {self.action}")
             self.cancel_requested = True
+            tap = self.node.session.tap
+            if tap.listeners:
+                tap.emit("cancel", self.node.id, self.action, self.action_type, {"goal_id": self.id})
             self.node.session.goals.cancel(self)
 
     def add_done_callback(self, fn: Callable[[ActionGoal], None]) -> None:
@@ -267,13 +290,20 @@ class Node:
 
     def subscribe(self, topic: str, callback: MessageCallback, type: str | None = None, throttle_rate: int = 0,
                   queue_length: int = 0, compression: str = "none",
-                  fragment_size: int | None = None) -> Subscription:
+                  fragment_size: int | None = None, raw: bool = False) -> Subscription:
         """Receive ``topic``'s messages as dicts in ``callback`` (called on the loop thread; keep it quick).
 
         ``compression="cbor"`` on a type with fixed-size arrays is switched to ``"cbor-raw"`` because
         rosbridge's cbor encoder sends nothing for those types (Imu, Odometry, NavSatFix, ...).
+
+        ``raw=True`` (the flight recorder) asks for ``cbor-raw`` and gets each payload undecoded, as a
+        ``topics.RawPayload`` (type, server time, bytes), while the topic arrives that way; when it does
+        not (the server could not prepare it, or another consumer's ``cbor`` won the merge) the callback
+        gets the decoded dict as everyone else does.
         """
         self._check()
+        if raw:
+            compression = "cbor-raw"
         if not isinstance(topic, str) or not topic:
             raise ValueError(f"topic must be a non-empty string, got {topic!r}")
         if not callable(callback):
@@ -285,7 +315,8 @@ class Node:
                 raise ValueError(f"{name} must be a non-negative integer, got {value!r}")
         if fragment_size is not None and (not isinstance(fragment_size, int) or fragment_size <= 0):
             raise ValueError(f"fragment_size must be a positive integer, got {fragment_size!r}")
-        sub = Subscription(self, topic, callback, type, throttle_rate, queue_length, compression, fragment_size)
+        sub = Subscription(self, topic, callback, type, throttle_rate, queue_length, compression, fragment_size,
+                           bool(raw))
         self.subscriptions.add(sub)
         self.session.add_subscription(sub)
         return sub
@@ -307,7 +338,17 @@ class Node:
     async def call_service(self, name: str, args: dict[str, Any] | list | None = None,
                            timeout: float | None = None) -> dict[str, Any]:
         self._check()
-        return await self.client.call_service(name, args, timeout=timeout)
+        tap = self.session.tap
+        if not tap.listeners:
+            return await self.client.call_service(name, args, timeout=timeout)
+        tap.emit("call", self.id, name, "", args)
+        try:
+            values = await self.client.call_service(name, args, timeout=timeout)
+        except Exception as exc:
+            tap.emit("response", self.id, name, "", None, f"error: {exc}")
+            raise
+        tap.emit("response", self.id, name, "", values, "ok")
+        return values
 
     def advertise_service(self, name: str, type: str, handler: ServiceHandler) -> ServiceServer:
         self._check()
@@ -347,10 +388,21 @@ class Node:
         if answer_timeout is not None and (isinstance(answer_timeout, bool) or not isinstance(answer_timeout, int | float)
                                            or not answer_timeout > 0):
             raise ValueError(f"answer_timeout must be a positive number of seconds, got {answer_timeout!r}")
-        self.session.guard.check(f"the goal to {action}")  # ViewOnlyError on a view-only link
+        tap = self.session.tap
+        try:
+            self.session.guard.check(f"the goal to {action}")  # ViewOnlyError on a view-only link
+        except Exception as exc:
+            if tap.listeners:
+                tap.emit("goal", self.id, action, action_type, args, f"refused: {exc}")
+            raise
+        if tap.listeners:
+            feedback = _tapped_feedback(tap, self.id, action, action_type, feedback)
         goal = self.session.goals.send(self, action, action_type, args, feedback, timeout, check, answer_timeout)
         self.goals.add(goal)
         goal.add_done_callback(self.goals.discard)
+        if tap.listeners:
+            tap.emit("goal", self.id, action, action_type, args, goal.id)
+            goal.add_done_callback(lambda g: tap.emit("result", self.id, action, action_type, g.values, g.outcome))
         return goal
 
     def advertise_action(self, action: str, type: str, handler: Callable[[Any], Any]) -> Any:
@@ -381,3 +433,16 @@ class Node:
                 pass
         self.closed = True
         self.session.node_closed(self)
+
+
+def _tapped_feedback(tap: Any, node_id: str, action: str, action_type: str,
+                     feedback: MessageCallback | None) -> MessageCallback | None:
+    """The goal's feedback callback, telling the operator tap first (``tap.py``)."""
+    if feedback is None:
+        return None
+
+    def told(values: dict[str, Any]) -> None:
+        tap.emit("feedback", node_id, action, action_type, values)
+        feedback(values)
+
+    return told

@@ -23,8 +23,6 @@ from __future__ import annotations
 import json
 from typing import TYPE_CHECKING, Any
 
-import yaml
-
 from .errors import BridgeError, ServiceError
 from .params_ros2 import NodeParams
 
@@ -89,10 +87,13 @@ def parse_like(text: str, current: Any) -> Any:
     want = kind(current)
     if want == "string":
         return text
-    try:
-        value = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ValueError(f"not a value: {exc}") from None
+    if not text.strip():
+        raise ValueError("nothing typed")
+    # YAML as a person types numbers: 1e5 is a float (plain YAML 1.1 reads it as a string), and a number
+    # too large to be one (1.0e+400) is refused instead of becoming infinity without a word
+    from rcon_core.msgs.text import parse_text
+
+    value = parse_text(text)  # MessageTextError (a ValueError) says what is wrong
     got = kind(value)
     if want == "float" and got == "int":
         return float(value)
@@ -167,6 +168,17 @@ class Params:
     async def set(self, name: str, value: Any, verify: bool = True) -> None:
         """Set ``name`` to ``value``; with ``verify`` read it back and raise :class:`ParamRejectedError`
         when the node did not take it (ROS 2 nodes refuse undeclared names and other types silently)."""
+        tap = getattr(getattr(self._client, "session", None), "tap", None)  # the operator tap (tap.py)
+        if tap is None or not tap.listeners:
+            return await self._set(name, value, verify)
+        try:
+            await self._set(name, value, verify)
+        except Exception as exc:
+            tap.emit("param", "params", name, "", value, f"error: {exc}")
+            raise
+        tap.emit("param", "params", name, "", value, "ok" if verify else "sent")
+
+    async def _set(self, name: str, value: Any, verify: bool) -> None:
         ros2 = await self.ros2()
         if ros2:
             node, param = split(name, True)

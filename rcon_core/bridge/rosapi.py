@@ -130,6 +130,9 @@ class Rosapi:
             return []
         spelled, text = found
         info = await self.profile()
+        detect = getattr(self._client, "detect_ros", None)
+        if (info is None or info.version is None) and detect is not None:
+            info = await detect()  # the quick profile cannot tell ROS 1 (rosapi 0.11 has no get_ros_version)
         reg = TypeRegistry(ros2=info is None or info.version != 1, empty=True)
         try:
             for name, body in split_full_text(spelled, text):

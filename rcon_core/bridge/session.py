@@ -57,6 +57,7 @@ import orjson
 from rcon_core.msgs import names
 
 from .action_server import ProvidedActions
+from .envelope import Envelope, enforce
 from .errors import BridgeError, ConnectionLostError, ServiceError, ServiceTimeoutError
 from .goals import Goals
 from .guard import LinkGuard, ViewOnlyError, describe_call
@@ -65,6 +66,7 @@ from .protocol import encode
 from .safety import bounded_repr, safe_text
 from .services import ProvidedServices
 from .subscribe import Subscriber
+from .tap import OperatorTap
 from .topics import AdvertEntry, TopicEntry
 
 if TYPE_CHECKING:
@@ -117,12 +119,16 @@ class Session:
         self.unanswered: dict[str, str] = {}
         self._pending_names: dict[str, str] = {}  # id -> service of the calls in self.pending
         self.level: str | None = None
+        #: the robot's safety envelope (``envelope.py``): every publish is held to it (``client.envelope``)
+        self.envelope: Envelope | None = None
         self.tasks: set[asyncio.Task[Any]] = set()
         self._seq = 0
         self.services = ProvidedServices(self.send, self.spawn, host)
         self.goals = Goals(self.send, self.spawn, host)
         self.provided_actions = ProvidedActions(self.send)  # actions this client serves (ROS 2)
         self.subscriber = Subscriber(self, host)
+        #: what the nodes send, told to listeners (the flight recorder): ``tap.py``
+        self.tap = OperatorTap()
         #: whether this link is view-only, and what it offered the robot (``guard.py``)
         self.guard = LinkGuard(host.url)
         self.guard.add_listener(self._guard_changed)
@@ -362,10 +368,12 @@ class Session:
 
     def publish(self, pub: Publisher, msg: dict[str, Any]) -> bool:
         """Write one message now, or drop it (counted) -- see "publishing while the link is down".
-        Raises ``ViewOnlyError`` on a view-only link."""
+        Raises ``ViewOnlyError`` on a view-only link. A motion command is first held to the safety envelope
+        (``envelope.py``; raises ``EnvelopeRefused``)."""
         if self.guard.reason is not None:
             raise self.guard.refuse(f"publishing on {pub.topic}")
         entry = self.adverts[pub.topic]
+        msg = enforce(self.envelope, entry.type, msg, self.stats)
         link = self.link
         if link is not None and entry.active:
             data = b"".join((entry.head, _dumps(msg, option=_NUMPY), entry.tail))

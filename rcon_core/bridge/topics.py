@@ -33,11 +33,24 @@ log = logging.getLogger(__name__)
 _COMPRESSION_RANK = {"cbor": 0, "cbor-raw": 1, "png": 2, "none": 3}
 
 
+class RawPayload:
+    """A ``cbor-raw`` message as the server sent it, for consumers that asked for ``raw=True``: ``type``
+    (the server's spelling), ``secs``/``nsecs`` (the server's time) and ``data`` (ROS 1 or CDR bytes)."""
+
+    __slots__ = ("type", "secs", "nsecs", "data")
+
+    def __init__(self, type: str, secs: int, nsecs: int, data: bytes) -> None:
+        self.type = type
+        self.secs = secs
+        self.nsecs = nsecs
+        self.data = data
+
+
 class TopicEntry:
     """The client's one subscription to a topic, fanned out to every node's callback."""
 
     __slots__ = ("topic", "subs", "deliver", "fast", "sid", "sent_options", "raw_type", "decoder", "received",
-                 "report", "latest_only", "skipped")
+                 "report", "latest_only", "skipped", "raw_subs", "cooked_subs")
 
     def __init__(self, topic: str, report: Callable[[str, str], None]) -> None:
         self.report = report  # ``report(kind, message)``: a payload that cannot be decoded (a bad frame)
@@ -52,6 +65,9 @@ class TopicEntry:
         #: (``latest.py``); ``skipped`` counts them
         self.latest_only = False
         self.skipped = 0
+        #: consumers that take cbor-raw payloads undecoded (``Node.subscribe(raw=True)``) and the others
+        self.raw_subs: list[Subscription] = []
+        self.cooked_subs: list[Subscription] = []
         #: ``deliver(msg)`` never raises: callback errors are logged.  ``fast(msg)`` is what the client's
         #: read loop calls, inside its own ``try``: the one consumer's callback itself when there is one
         #: consumer (no wrapper frame per message), else the same as ``deliver``.
@@ -80,6 +96,8 @@ class TopicEntry:
         """Pick the delivery functions for the current set of consumers (no per-message branching)."""
         subs = self.subs
         self.latest_only = bool(subs) and all(s.queue_length == 1 for s in subs)
+        self.raw_subs = [s for s in subs if s.raw]
+        self.cooked_subs = [s for s in subs if not s.raw]
         if self.raw_type is not None:
             self.deliver = self.fast = self._deliver_raw
         elif not subs:
@@ -116,22 +134,38 @@ class TopicEntry:
                 log.exception("callback for %s (node %s) raised; other subscribers are unaffected",
                               self.topic, s.node.id)
 
-    def _fan_out(self, msg: Any) -> None:
-        for s in self.subs:
-            try:
-                s.callback(msg)
-            except Exception:
-                log.exception("callback for %s (node %s) raised; other subscribers are unaffected",
-                              self.topic, s.node.id)
-
     def _deliver_raw(self, msg: Any) -> None:
+        if self.raw_subs:
+            self._deliver_undecoded(msg)
+            if not self.cooked_subs:
+                return
         try:
             data = msg["bytes"]
             decoded = self.decoder.decode(self.raw_type, data)
         except Exception as exc:
             self.report("cbor-raw", f"{self.topic}: cannot decode cbor-raw message ({exc})")
             return
-        self._fan_out(decoded)
+        for s in self.cooked_subs:
+            try:
+                s.callback(decoded)
+            except Exception:
+                log.exception("callback for %s (node %s) raised; other subscribers are unaffected",
+                              self.topic, s.node.id)
+
+    def _deliver_undecoded(self, msg: Any) -> None:
+        try:
+            data = msg["bytes"]
+            payload = RawPayload(self.raw_type or "", int(msg.get("secs", 0)), int(msg.get("nsecs", 0)),
+                                 data if isinstance(data, bytes) else bytes(data))
+        except Exception as exc:
+            self.report("cbor-raw", f"{self.topic}: malformed cbor-raw message ({exc})")
+            return
+        for s in self.raw_subs:
+            try:
+                s.callback(payload)  # type: ignore[arg-type]  # raw consumers take RawPayload
+            except Exception:
+                log.exception("callback for %s (node %s) raised; other subscribers are unaffected",
+                              self.topic, s.node.id)
 
 
 class AdvertEntry:

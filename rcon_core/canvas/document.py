@@ -27,6 +27,7 @@ import attrs
 
 from rcon_core.plugins.model import Binding
 
+from .retarget import rename_settings
 from .robots import Robot, UnknownRobot, default_robot, resolve_robot
 from .workspace import Canvas, Geometry, WidgetInstance, Workspace, new_id
 
@@ -343,10 +344,12 @@ class Document:
         self._run(Command("edit robots", set_to(robots), set_to(old)))
 
     def duplicate_for_robot(self, canvas_id: str, robot_id: str, from_robot: str | None = None,
-                            name: str | None = None) -> Canvas:
+                            name: str | None = None, renames: dict[str, str] | None = None) -> Canvas:
         """Re-target a canvas: a copy (fresh ids, right after the original, named after the robot) whose
-        widgets of ``from_robot`` -- every widget when None -- talk to ``robot_id``. One undo step.
-        Raises :class:`EditError` for a robot the workspace does not have."""
+        widgets of ``from_robot`` -- every widget when None -- talk to ``robot_id``; ``renames`` maps the
+        names they use to the target robot's (its namespace: ``rcon_core.canvas.retarget``), in their
+        bindings and in the topic names of their settings. One undo step. Raises :class:`EditError` for a
+        robot the workspace does not have."""
         try:
             target = resolve_robot(self.workspace.robots, robot_id)
             source = resolve_robot(self.workspace.robots, from_robot).id if from_robot is not None else None
@@ -361,7 +364,10 @@ class Document:
             w.id = new_id("w")
             if source is None or (w.binding.robot or first) == source:
                 # the first robot is written "" (the default), as a one-robot layout has it
-                w.binding = attrs.evolve(w.binding, robot="" if target.id == first else target.id)
+                w.binding = attrs.evolve(w.binding, robot="" if target.id == first else target.id,
+                                         name=(renames or {}).get(w.binding.name, w.binding.name))
+                if renames:
+                    w.settings = rename_settings(w.settings, renames)
         self._run(self._insert_canvas(dup, self.workspace.canvases.index(src) + 1))
         return dup
 

@@ -17,6 +17,11 @@ through its port to get round the rules below.
 - ``advertise_service`` sends nothing and returns an inert handle; ``send_action_goal`` raises;
 - ``subscribe`` works as usual: a view-only widget shows everything.
 
+**The safety envelope** of the robot (``port.envelope``: a
+:class:`~rcon_core.bridge.envelope.Envelope`, or None) is read from the node's client at each use, so a
+widget can show what will actually be sent; the bridge client holds every motion command to it whatever
+a widget does (``rcon_core/bridge/envelope.py``).
+
 Each refusal is counted (``port.refused``) and reported through ``on_refused(sentence)`` (the runtime
 puts it on the widget). Models read ``port.view_only`` (the reason, or None) to show their controls as
 disabled; the app disables the view of every publishing, calling or serving widget too.
@@ -124,6 +129,11 @@ class GuardedPort:
         self.refused = 0
         self._notify = notify
         self._ops = _operations(self, node, notify, view_only, on_refused)
+
+    @property
+    def envelope(self) -> Any:
+        """The robot's safety envelope now (an ``Envelope``, or None: no limit); read it at each use."""
+        return self._ops["envelope"]()
 
     def changed(self) -> None:
         """The model has something new to show (any thread): the front end repaints it at once.  Called
@@ -245,4 +255,5 @@ def _operations(port: GuardedPort, node: BridgeNode, notify: Callable[[], None] 
         "advertise_service": advertise_service,
         "send_action_goal": send_action_goal,
         "close": lambda: node.close(),
+        "envelope": lambda: getattr(getattr(node, "client", None), "envelope", None),
     }

@@ -8,6 +8,8 @@ A robot's ``url`` ``""`` means "the URL of the app's connection bar" (``--url``,
 layout of format version 1, which stored no URL, migrates to. Its connection settings are the ones the
 app keeps per URL (CA file, client certificate and key, whether it uses rosauth; the secret itself lives
 in the OS credential store, never here) and ``view_only`` (the operator may watch but not command it).
+``envelope`` is the robot's safety envelope (:class:`~rcon_core.bridge.envelope.Envelope`: its maximum
+linear and angular speed; None: no limit), which every motion command sent to it is held to.
 ``colour`` ``""`` takes the colour of its position in :data:`PALETTE`.
 """
 
@@ -16,6 +18,8 @@ from __future__ import annotations
 from typing import Any
 
 import attrs
+
+from rcon_core.bridge.envelope import Envelope
 
 __all__ = ["Robot", "PALETTE", "DEFAULT_ROBOT_ID", "default_robot", "robot_colour", "resolve_robot",
            "UnknownRobot", "robot_label", "mixes_robots"]
@@ -40,6 +44,7 @@ class Robot:
     auth: bool = False  #: sign an ``auth`` op with the secret kept for this URL
     view_only: bool = False  #: commands are refused: the operator only watches this robot
     colour: str = ""  #: "#rrggbb"; "" = PALETTE by position
+    envelope: Envelope | None = None  #: the safety envelope its motion commands are held to (None: none)
     extra: dict[str, Any] = attrs.field(factory=dict)
 
     @property

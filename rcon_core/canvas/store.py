@@ -4,7 +4,7 @@ File layout (``version`` 2)::
 
     {"format": "rcon-workspace", "version": 2, "current": "c-...",
      "robots": [{"id", "name", "url", "ca_file", "client_cert", "client_key", "auth", "view_only",
-       "colour"}],
+       "colour", "envelope" (written only when set: {"max_linear", "max_angular"})}],
      "canvases": [{"id", "name", "locked", "view_only" (written only when true), "widgets": [{"id",
        "kind", "title", "binding": {"name", "type", "role", "field_paths", "robot"}, "geometry": {"x",
        "y", "w", "h"}, "settings": {...}}]}],
@@ -61,6 +61,7 @@ import cattrs
 import cattrs.gen
 import cattrs.v
 
+from rcon_core.bridge.envelope import Envelope
 from rcon_core.plugins.model import Binding, Role
 
 from . import checks
@@ -170,6 +171,12 @@ def _make_converter() -> cattrs.Converter:
 
     conv.register_structure_hook_func(lambda t: t == dict[str, Any], structure_settings)
 
+    def structure_envelope(data: Any, _t: Any) -> Envelope | None:
+        return None if data is None else Envelope.from_dict(data)  # ValueError says what is wrong
+
+    conv.register_structure_hook(Envelope | None, structure_envelope)
+    conv.register_unstructure_hook(Envelope, lambda env: env.to_dict())
+
     def with_extra(cls: type, order: tuple[str, ...], optional: tuple[str, ...] = ()) -> None:
         # ``optional`` keys are written only when set (a file without them reads the same)
         base_struct: cattrs.SimpleStructureHook[Any, Any] = cattrs.gen.make_dict_structure_fn(cls, conv)
@@ -195,7 +202,7 @@ def _make_converter() -> cattrs.Converter:
     with_extra(WidgetInstance, ("id", "kind", "title", "binding", "geometry", "settings"))
     with_extra(Canvas, ("id", "name", "locked", "view_only", "widgets"), optional=("view_only",))
     with_extra(Robot, ("id", "name", "url", "ca_file", "client_cert", "client_key", "auth", "view_only",
-                       "colour"))
+                       "colour", "envelope"), optional=("envelope",))
 
     return conv
 

@@ -6,7 +6,9 @@ for the robot; ``echo`` waits for ever unless given one) and the secure-link opt
 line on stderr (the server's own message where it sent one) and exit non-zero: 1 for a failed call,
 connection or refusal, 2 for bad input.  ``pub`` and ``echo`` of a type that is not standard first ask the
 robot whether it knows it (rosbridge 0.11 refuses such a type only in its log; see
-:mod:`rcon_core.bridge.typecheck`).
+:mod:`rcon_core.bridge.typecheck`). ``pub --envelope [LAYOUT]`` holds what it publishes to a robot's safety
+envelope saved in a workspace file (``--robot`` picks the robot): a motion command beyond it is clamped and
+says so on stderr; NaN or infinity in one is refused (exit 1), with or without ``--envelope``.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from typing import Any
 import orjson
 
 from rcon_core.cli.link_options import add_link_options, open_client
+from rcon_core.cli.type_text import typedefs_text
 
 DEFAULT_URL = "ws://localhost:9090"
 
@@ -33,6 +36,8 @@ def configure(name: str, parser: argparse.ArgumentParser) -> None:
     add_link_options(parser)
     if name == "type":
         parser.add_argument("type_name", metavar="TYPE", help="message or service type, e.g. sensor_msgs/Imu")
+        parser.add_argument("--recursive", "-r", action="store_true",
+                            help="write each nested type's fields out under its field, indented")
     elif name == "echo":
         parser.add_argument("topic", metavar="TOPIC")
         parser.add_argument("-n", type=int, default=0, metavar="N", help="exit after N messages (default: run)")
@@ -47,6 +52,12 @@ def configure(name: str, parser: argparse.ArgumentParser) -> None:
         parser.add_argument("--once", action="store_true", help="publish once and exit (the default without --rate)")
         parser.add_argument("--count", type=int, default=0, metavar="N", help="with --rate: stop after N messages")
         parser.add_argument("--latch", action="store_true", help="advertise the topic as latched")
+        parser.add_argument("--envelope", nargs="?", const="", default=None, metavar="LAYOUT",
+                            help="hold the message to a robot's safety envelope saved in a workspace file "
+                                 "(default: the app's workspace); motion commands beyond it are clamped")
+        parser.add_argument("--robot", metavar="ROBOT",
+                            help="with --envelope: the robot (its name or id; default: the one whose URL is "
+                                 "--url, else the first)")
     elif name == "call":
         parser.add_argument("service", metavar="SERVICE")
         parser.add_argument("args", nargs="?", default=None, metavar="ARGS",
@@ -120,9 +131,9 @@ def _registry() -> Any:
 
 
 def _parse_text(text: str) -> Any:
-    import yaml
+    from rcon_core.msgs.text import parse_text  # YAML whose keys stay text: {on: true} is the field "on"
 
-    return yaml.safe_load(text)
+    return parse_text(text)
 
 
 # ---------------------------------------------------------------------------------------------- commands
@@ -158,22 +169,6 @@ async def _listing(url: str, args: argparse.Namespace, fetch: Any) -> int:
     else:
         _table(rows)
     return 0
-
-
-def typedefs_text(typedefs: list[dict[str, Any]]) -> str:
-    """rosapi typedefs as ``.msg``-style text: the type first, then each nested type (like gendeps)."""
-    blocks = []
-    typedefs = [td for td in typedefs if td.get("type") not in ("time", "duration")]  # builtin pseudo-types
-    for i, td in enumerate(typedefs):
-        lines = [] if i == 0 else ["=" * 80, f"MSG: {td.get('type')}"]
-        for cname, cvalue in zip(td.get("constnames", []), td.get("constvalues", []), strict=False):
-            lines.append(f"{cname}={cvalue}")
-        for fname, ftype, alen in zip(td.get("fieldnames", []), td.get("fieldtypes", []),
-                                      td.get("fieldarraylen", []), strict=False):
-            suffix = "" if alen is None or alen < 0 else ("[]" if alen == 0 else f"[{alen}]")
-            lines.append(f"{ftype}{suffix} {fname}")
-        blocks.append("\n".join(lines))
-    return "\n".join(blocks)
 
 
 async def _server_definition(url: str, name: str, timeout: float = 5.0) -> tuple[Any, str] | None:
@@ -230,15 +225,24 @@ async def _is_service_type(client: Any, name: str) -> bool:
 
 async def _type(url: str, args: argparse.Namespace) -> int:
     name = args.type_name
+    from rcon_core.cli import type_text
+
     found = await _server_definition(url, name, args.timeout)
     if found is not None:
         typedefs, text = found
+        if args.recursive:
+            text = (type_text.service_expanded_text(typedefs) if isinstance(typedefs, dict)
+                    else type_text.expanded_text(typedefs))
         print(_json({"type": name, "source": "server", "typedefs": typedefs}, indent=True) if args.json else text)
         return 0
     reg = _registry()
-    if reg is not None and reg.has(name):
+    if reg is not None and (reg.has(name) or reg.has_service(name)):
         if args.json:
             print(_json({"type": name, "source": "local", "definition": reg.definition_text(name)}, indent=True))
+        elif args.recursive:
+            typedefs = type_text.local_typedefs(reg, name)
+            print(type_text.service_expanded_text(typedefs) if isinstance(typedefs, dict)
+                  else type_text.expanded_text(typedefs))
         else:
             print(reg.definition_text(name))
         return 0
@@ -285,6 +289,9 @@ async def _echo(url: str, args: argparse.Namespace) -> int:
         if refusal:
             _err(refusal)
             return 1
+        hint = "" if args.msg_type else await _unadvertised_hint(client, args.topic)
+        if hint:
+            _err(f"note: {hint}")
         client.node("rcon-echo").subscribe(args.topic, on_msg, type=args.msg_type, throttle_rate=args.throttle,
                                            compression=args.compression)
         waits = {asyncio.ensure_future(done.wait()), asyncio.ensure_future(_until_closed(client)),
@@ -298,16 +305,31 @@ async def _echo(url: str, args: argparse.Namespace) -> int:
             w.cancel()
         if done.is_set():
             return 0
+        more = f" ({hint})" if hint else ""
         if status.errors:
-            _err(status.sentence())
+            _err(status.sentence() + more)
         elif silence is not None and silence.done() and client.connected:
-            _err(f"no message on {args.topic} within {args.timeout:g} s")
+            _err(f"no message on {args.topic} within {args.timeout:g} s{more}")
         else:
             _err(f"connection to {url} lost")
         return 1
     finally:
         status.close()
         await client.close()
+
+
+async def _unadvertised_hint(client: Any, topic: str) -> str:
+    """A sentence when nobody advertises ``topic``: rosbridge then cannot tell its type (ROS 1 refuses the
+    subscription), so ``--type`` is what makes echo wait for it; "" when it is advertised or unknowable."""
+    from rcon_core.bridge import BridgeError
+
+    try:
+        topics = await asyncio.wait_for(client.rosapi.topics(), 5.0)
+    except (BridgeError, TimeoutError):
+        return ""
+    if topics.get(topic):
+        return ""
+    return f"{topic} is not advertised: give --type pkg/Msg to subscribe before it is"
 
 
 def _silence_stdout() -> None:
@@ -322,7 +344,47 @@ async def _until_closed(client: Any) -> None:
         await asyncio.sleep(0.2)
 
 
+def saved_envelope(layout: str, robot: str | None, url: str) -> tuple[Any, str]:
+    """(the safety envelope, the robot's name) saved in the workspace file ``layout`` (``""``: the app's)
+    for ``robot`` (a name or id; None: the robot whose URL is ``url``, else the first). ValueError with a
+    sentence when the file cannot be read, the robot is not in it or it has no envelope: a command that
+    asked to be held to an envelope is never sent without one."""
+    from pathlib import Path
+
+    from rcon_core.canvas.store import WorkspaceFileError, default_path, loads_workspace
+
+    path = Path(layout) if layout else default_path()
+    try:
+        ws = loads_workspace(path.read_bytes(), path)
+    except OSError as exc:
+        raise ValueError(f"--envelope: cannot read {path}: {exc.strerror or exc}") from None
+    except WorkspaceFileError as exc:
+        raise ValueError(f"--envelope: {exc}") from None
+    if robot:
+        found = [r for r in ws.robots if robot in (r.id, r.name)]
+        if not found:
+            names = ", ".join(r.label for r in ws.robots)
+            raise ValueError(f"--envelope: no robot {robot!r} in {path} (it has {names})")
+    else:
+        found = [r for r in ws.robots if r.url == url] or ws.robots[:1]
+    chosen = found[0]
+    if chosen.envelope is None:
+        raise ValueError(f"--envelope: robot {chosen.label!r} in {path} has no safety envelope "
+                         "(set one in the app: Canvas ▾ → Safety envelope…)")
+    return chosen.envelope, chosen.label
+
+
 async def _pub(url: str, args: argparse.Namespace) -> int:
+    envelope, robot_name = None, ""
+    if getattr(args, "envelope", None) is not None:
+        try:
+            envelope, robot_name = saved_envelope(args.envelope, args.robot, url)
+        except ValueError as exc:
+            _err(str(exc))
+            return 2
+    elif getattr(args, "robot", None):
+        _err("--robot goes with --envelope")
+        return 2
     reg = _registry()
     if reg is not None and reg.has(args.msg_type):
         from rcon_core.msgs import MessageTextError
@@ -344,11 +406,19 @@ async def _pub(url: str, args: argparse.Namespace) -> int:
     if args.rate is not None and args.rate <= 0:
         _err("--rate must be positive")
         return 2
+    from rcon_core.bridge.envelope import NO_LIMITS, EnvelopeRefused
     from rcon_core.cli.refusals import StatusErrors, type_refusal
 
+    verdict = (envelope or NO_LIMITS).judge(args.msg_type, msg)
+    if verdict.msg is None:
+        _err(verdict.refused)
+        return 1
+    if verdict.clamped:
+        _err(f"{verdict.sentence} ({robot_name}: {envelope.describe() if envelope else ''})")
     client = await _connect(url, args)
     if client is None:
         return 1
+    client.envelope = envelope  # the client holds every publish to it too
     status = StatusErrors(client, args.topic)
     try:
         refusal = await type_refusal(client, args.msg_type, args.timeout)
@@ -356,6 +426,7 @@ async def _pub(url: str, args: argparse.Namespace) -> int:
             _err(refusal)
             return 1
         pub = client.node("rcon-pub").advertise(args.topic, args.msg_type, latch=args.latch)
+        msg = verdict.msg
         if args.rate is None or args.once:
             pub.publish(msg)
             await asyncio.sleep(0.3)  # let the frame leave before the socket closes (and hear a refusal)
@@ -374,6 +445,9 @@ async def _pub(url: str, args: argparse.Namespace) -> int:
             _err(f"connection to {url} lost")
             return 1
         return 0
+    except EnvelopeRefused as exc:  # judged above already: only a changed message could get here
+        _err(str(exc))
+        return 1
     finally:
         status.close()
         await client.close()
@@ -381,21 +455,27 @@ async def _pub(url: str, args: argparse.Namespace) -> int:
 
 async def _call(url: str, args: argparse.Namespace) -> int:
     from rcon_core.bridge import ServiceError
+    from rcon_core.cli.type_text import typed_request
+    from rcon_core.msgs import MessageTextError
+    from rcon_core.msgs.text import parse_text
 
     request: Any = None
     if args.args is not None:
-        try:
-            request = _parse_text(args.args)
-        except Exception as exc:
-            _err(f"ARGS is not YAML or JSON: {exc}")
-            return 2
-        if request is not None and not isinstance(request, dict | list):
-            _err("ARGS must be a mapping like '{data: true}' or a list")
+        try:  # read before connecting: a syntax error needs no robot
+            parse_text(args.args)
+        except MessageTextError as exc:
+            _err(f"ARGS is not YAML or JSON: {exc.problem}")
             return 2
     client = await _connect(url, args)
     if client is None:
         return 1
     try:
+        if args.args is not None:
+            try:  # checked against the request type, as `rcon pub` checks a message
+                request = await typed_request(client, args.service, args.args, _registry(), args.timeout)
+            except MessageTextError as exc:
+                _err(f"bad request for {args.service}: {exc}")
+                return 2
         values = await client.call_service(args.service, request, timeout=args.timeout)
     except ServiceError as exc:
         _err(str(exc))

@@ -24,6 +24,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "plugins": ("rcon_core.cli.plugin_cmds", "list installed widget packages and their widgets"),
     "match": ("rcon_core.cli.plugin_cmds", "list the widgets that fit a type and role, ranked"),
     "new-widget": ("rcon_core.cli.new_widget", "write a new widget package (pyproject, plugin, model, view, tests)"),
+    "record": ("rcon_core.cli.record_cmd", "record a robot's topics to an MCAP file (or mend one cut short)"),
     "layout": ("rcon_core.cli.layout_cmd", "check a layout file (rcon layout validate FILE) or print its schema"),
 }
 
@@ -44,7 +45,15 @@ def build_parser() -> argparse.ArgumentParser:
                         help="with --demo: replace the saved demo layout by a fresh one")
     parser.add_argument("--locked", action="store_true",
                         help="kiosk: start full screen with the operator lock on (needs an operator PIN)")
+    parser.add_argument("--canvas", metavar="FILE|TEMPLATE",
+                        help="open this canvas file (rcon-canvas, as Export canvas writes it) or an installed "
+                        "plugin's template by its title, in a workspace of its own (nothing is saved)")
+    parser.add_argument("--play", metavar="FILE",
+                        help="open a recording as the robot (an .mcap file, a rosbag1 .bag or a rosbag2 folder), "
+                        "with a timeline to play, pause, change speed and seek; commands go nowhere")
     parser.add_argument("--screenshot", metavar="PATH", help="write a PNG of the window, then exit")
+    parser.add_argument("--window-size", metavar="WxH", help="the window's size, e.g. 1024x600 (with --screenshot: "
+                        "the picture's size)")
     parser.add_argument("--quit-after", type=float, metavar="SECONDS", help="quit after this many seconds")
     from rcon_core.cli.link_options import add_link_options
 
@@ -62,6 +71,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from rcon_core.plugins.folder import activate
+
+    activate()  # the app's plugins folder (the installed bundle, or RCON_PLUGINS_DIR): its widget packages
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command is None:
@@ -72,7 +84,20 @@ def main(argv: list[str] | None = None) -> int:
         print(args.command_unavailable, file=sys.stderr)
         return 2
     module = importlib.import_module(COMMANDS[args.command][0])
-    return int(module.run(args.command, args) or 0)
+    try:
+        return int(module.run(args.command, args) or 0)
+    except BrokenPipeError:  # the reader went away (`rcon type X | head`): stop quietly, as `head` means
+        _silence_stdout()
+        return 0
+
+
+def _silence_stdout() -> None:
+    """Point stdout at the null device, so the interpreter's last flush does not fail again."""
+    import os
+
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    os.close(devnull)
 
 
 if __name__ == "__main__":

@@ -1,4 +1,8 @@
-"""``rcon plugins`` (installed widget packages and their widgets) and ``rcon match`` (which widgets fit)."""
+"""``rcon plugins`` (installed widget packages and their widgets) and ``rcon match`` (which widgets fit).
+
+``rcon plugins install WHEEL`` / ``rcon plugins remove NAME`` / ``rcon plugins folder``: a lab's widget
+package in the app's plugins folder (the installed one-folder app has no pip; see
+:mod:`rcon_core.plugins.folder`)."""
 
 from __future__ import annotations
 
@@ -20,6 +24,10 @@ def configure(name: str, parser: argparse.ArgumentParser) -> None:
     if name == "plugins":
         parser.add_argument("--check", action="store_true",
                             help="exit 1 when a plugin failed, naming each and why (for a package's CI)")
+        parser.add_argument("action", nargs="?", choices=["install", "remove", "folder"],
+                            help="install WHEEL into the app's plugins folder, remove NAME from it, or print "
+                            "where the folder is (the installed app, or RCON_PLUGINS_DIR)")
+        parser.add_argument("target", nargs="?", metavar="WHEEL|NAME")
     if name == "match":
         parser.add_argument("type", help="message or service type, e.g. sensor_msgs/BatteryState")
         parser.add_argument(
@@ -36,6 +44,8 @@ def configure(name: str, parser: argparse.ArgumentParser) -> None:
 def run(name: str, args: argparse.Namespace) -> int:
     from rcon_core.plugins import PluginManager
 
+    if name == "plugins" and args.action:
+        return _folder_action(args)
     pm = PluginManager(disabled=args.disable)
     pm.load_entry_points()
     if name == "plugins":
@@ -74,13 +84,64 @@ def _plugins(pm: Any, args: argparse.Namespace) -> int:
             print(f"  type {d.name} ({d.kind})")
         for t in info.templates:
             print(f"  template {t.title!r} ({t.path.name})")
+        for problem in info.problems:
+            print(f"  problem: {problem}")
     return status
+
+
+def _folder_action(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from rcon_core.plugins import folder
+
+    root = folder.plugins_dir()
+    if root is None:
+        print("rcon plugins: this RCON is a pip installation, which has no plugins folder: `pip install WHEEL` "
+              f"adds a widget package (or set {folder.ENV} to use a folder)", file=sys.stderr)
+        return 2
+    if args.action == "folder":
+        print(root)
+        return 0
+    if not args.target:
+        print(f"rcon plugins {args.action}: give the {'wheel file' if args.action == 'install' else 'name'}",
+              file=sys.stderr)
+        return 2
+    if args.action == "remove":
+        try:
+            gone = folder.remove(args.target, root)
+        except KeyError:
+            print(f"rcon plugins remove: {args.target} is not in {root}", file=sys.stderr)
+            return 1
+        print(f"rcon plugins: removed {gone.name} {gone.version}; restart RCON")
+        return 0
+    try:
+        done = folder.install(Path(args.target), root)
+    except folder.PluginInstallError as exc:
+        print(f"rcon plugins install: {exc}", file=sys.stderr)
+        return 1
+    folder.activate(root)  # load it now, the way the app will: a plugin that fails is said at once
+    from rcon_core.plugins import PluginManager
+
+    pm = PluginManager(disabled=args.disable)
+    pm.load_entry_points()
+    mine = [i for i in pm.plugins if i.dist and folder.canonical(i.dist) == done.path.name]
+    print(f"rcon plugins: installed {done.name} {done.version} into {done.path}")
+    for info in mine:
+        if info.status is PluginStatus.FAILED:
+            print(f"rcon plugins install: it is installed but fails to load: {info.error}", file=sys.stderr)
+            return 1
+        kinds = ", ".join(s.kind for s in info.widgets) or "no widgets"
+        print(f"  {info.name}: {kinds}; restart RCON to use it")
+    return 0
 
 
 def _check(pm: Any, types: Any) -> int:
     """``--check``: each failed plugin and why on stderr (also a contributed type that does not resolve);
     1 if any failed, else 0."""
     unresolved = pm.type_problems(types)
+    for info in pm.plugins:  # withdrawn parts of a loaded plugin (a template file the wheel lacks)
+        if info.problems:
+            unresolved.setdefault(info.name, []).extend(info.problems)
     for template in pm.canvas_templates():  # a template file must be a usable canvas
         from rcon_core.cli.layout_cmd import check_layout
 

@@ -2,8 +2,12 @@
 
 Each template is ``str.format`` text; ``{{``/``}}`` are literal braces. The names:
 ``dist`` (rcon-lab-winch), ``module`` (rcon_lab_winch), ``kind`` (lab.winch), ``cls`` (Winch),
-``title`` (Winch), ``type`` (the bound message type), ``types_hook`` (the type contribution, or ""),
-``ep`` (the entry-point name).
+``title`` (Winch), ``type`` (the bound message or service type), ``types_hook`` (the type contribution,
+or ""), ``ep`` (the entry-point name), ``role`` (subscribe, publish or call), ``name`` (the topic or
+service the canvas template binds), ``what`` (what the widget does, in words).
+
+The subscriber's model, view and tests are here; the publisher's and the service caller's are in
+:mod:`rcon_core.cli.scaffold_roles`. :func:`files_for` gives the files of one role.
 """
 
 from __future__ import annotations
@@ -19,10 +23,10 @@ version = "0.1.0"
 description = "RCON widget: {title}"
 readme = "README.md"
 requires-python = ">=3.11"
-dependencies = ["rcon>=0.1"]
+dependencies = ["rcon-core>=0.1"]
 
 [project.optional-dependencies]
-test = ["rcon[test]"]
+test = ["rcon-core[test]"]
 
 [project.entry-points."rcon.widgets"]
 {ep} = "{module}.plugin"
@@ -31,7 +35,8 @@ test = ["rcon[test]"]
 include = ["{module}*"]
 
 [tool.setuptools.package-data]
-"{module}" = ["py.typed"]
+# the canvas template (*.json) must be listed: an editable install finds it anyway, a wheel does not
+"{module}" = ["py.typed", "*.json"]
 
 [tool.pytest.ini_options]
 asyncio_mode = "auto"
@@ -46,10 +51,13 @@ INIT = '''\
 PLUGIN = '''\
 """Entry point (group ``rcon.widgets``): hooks only, no Qt."""
 
+from importlib.resources import files
+
 from rcon_core.plugins import Accepts, Role, WidgetSpec, hookimpl
 
 KIND = "{kind}"
 TYPE = "{type}"
+TEMPLATE = "{title} canvas"
 {types_hook}
 
 @hookimpl
@@ -58,25 +66,52 @@ def rcon_register_widgets(registry):
         WidgetSpec(
             kind=KIND,  # stored in layouts: never rename it
             title="{title}",
-            description="Shows a number of {type}",
-            roles={{Role.SUBSCRIBE}},
-            accepts=Accepts(types=[TYPE], fields=["numeric"]),
+            description="{what_cap}",
+            roles={{Role.{role_upper}}},
+            accepts=Accepts({accepts}),
             settings="{module}.model:{cls}Settings",
             model="{module}.model:{cls}Model",
             view="{module}.view:{cls}View",
         )
     )
+
+
+@hookimpl
+def rcon_canvas_templates(registry):  # a ready canvas with the widget, under "New canvas from template"
+    registry.add(TEMPLATE, files(__package__) / "template.json", description="The {title} widget on {name}")
+'''
+
+TEMPLATE_JSON = '''\
+{{
+  "format": "rcon-canvas",
+  "version": 1,
+  "canvas": {{
+    "id": "c-{module}",
+    "name": "{title} canvas",
+    "locked": false,
+    "widgets": [
+      {{
+        "id": "w-{module}",
+        "kind": "{kind}",
+        "title": "{title}",
+        "binding": {{"name": "{name}", "type": "{type}", "role": "{role}", "field_paths": {field_paths}}},
+        "geometry": {{"x": 32.0, "y": 32.0, "w": 320.0, "h": 160.0}},
+        "settings": {{}}
+      }}
+    ]
+  }}
+}}
 '''
 
 TYPES_HOOK = '''
 # {type} is not a standard type RCON ships, so the package contributes its definition: RCON (and the
-# embedded robot in the tests) then knows it. Replace it with your message's own .msg text.
-DEFINITION = "float64 value\\n"
+# embedded robot in the tests) then knows it. Replace it with your {kind_word}'s own .{ext} text.
+DEFINITION = "{definition}"
 
 
 @hookimpl
 def rcon_register_types(registry):
-    registry.add_msg(TYPE, DEFINITION)
+    registry.add_{ext}(TYPE, DEFINITION)
 '''
 
 MODEL = '''\
@@ -138,7 +173,7 @@ TEST_MODEL = '''\
 """The model against the embedded robot: installed, the package's types are known to it."""
 
 from {module}.model import {cls}Model, {cls}Settings
-from {module}.plugin import KIND, TYPE
+from {module}.plugin import KIND, TEMPLATE, TYPE
 
 from rcon_core.bridge import BridgeClient
 from rcon_core.matcher import match
@@ -150,6 +185,13 @@ def bound_field(pm, types):
     """The field RCON binds when the widget is placed on TYPE (what `rcon match` shows)."""
     [found] = [m for m in match(TYPE, "subscribe", types, pm) if m.kind == KIND]
     return found.field_path
+
+
+def test_the_canvas_template_is_offered():
+    pm = PluginManager()
+    pm.load_entry_points()
+    [template] = [t for t in pm.canvas_templates() if t.title == TEMPLATE]
+    assert template.path.is_file()  # shipped in the wheel too: *.json is package data
 
 
 async def test_shows_the_bound_number(sim):
@@ -200,8 +242,7 @@ def test_view_shows_the_value(qapp, tmp_path):
 README = '''\
 # {dist}
 
-An RCON widget package: **{title}** (`{kind}`) shows a number of `{type}` (the field RCON binds, or the
-one the operator picks) with a unit and a number of decimals.
+An RCON widget package: **{title}** (`{kind}`) {what}.
 
 ```sh
 pip install -e ".[test]"          # install it (and the test tools) into RCON's environment
@@ -210,25 +251,36 @@ rcon plugins --check              # RCON finds it (exit 1, with the reason, if i
 rcon match {type}                 # the widget is offered for the type
 ```
 
-- `{module}/plugin.py`: the hooks (no Qt): the widget's spec{types_note}.
+- `{module}/plugin.py`: the hooks (no Qt): the widget's spec{types_note}, and a canvas template.
+- `{module}/template.json`: the template, a canvas with the widget (package data: listed in
+  `pyproject.toml` so the wheel carries it).
 - `{module}/model.py`: settings (an attrs class; `problems()` is the "not configured" warning) and the
-  model (no Qt; `on_message` runs on the bridge thread).
+  model (no Qt; it runs on the bridge thread).
 - `{module}/view.py`: the Qt view; `refresh(state)` shows what the model computed.
-- `tests/`: `conftest.py` loads RCON's fixtures; the model is tested against the embedded robot, the view
-  with `rcon_core.testing.grab_view`.
+- `tests/`: `conftest.py` loads RCON's fixtures; the model is tested against the embedded robot (which
+  also {robot_part}), the view with `rcon_core.testing.grab_view`.
 
 RCON's guide: `docs/writing-a-widget-plugin.md` and `docs/hooks.md` in RCON's repository.
 '''
 
-FILES = {
+COMMON = {
     "pyproject.toml": PYPROJECT,
     "README.md": README,
     "{module}/__init__.py": INIT,
     "{module}/py.typed": "",
     "{module}/plugin.py": PLUGIN,
-    "{module}/model.py": MODEL,
-    "{module}/view.py": VIEW,
+    "{module}/template.json": TEMPLATE_JSON,
     "tests/conftest.py": CONFTEST,
-    "tests/test_model.py": TEST_MODEL,
-    "tests/test_view.py": TEST_VIEW,
 }
+#: the subscriber's own files (the default role)
+FILES = {**COMMON, "{module}/model.py": MODEL, "{module}/view.py": VIEW, "tests/test_model.py": TEST_MODEL,
+         "tests/test_view.py": TEST_VIEW}
+
+
+def files_for(role: str) -> dict[str, str]:
+    """The files (relative path -> template) of a package whose widget takes ``role``."""
+    if role == "subscribe":
+        return FILES
+    from . import scaffold_roles
+
+    return {**COMMON, **scaffold_roles.FILES[role]}

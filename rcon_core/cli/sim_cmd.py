@@ -15,13 +15,15 @@ import logging
 import signal
 import ssl
 import sys
+from typing import Any
 
 OPEN_WARNING = """\
 rcon sim: WARNING: listening on {host} without --auth.
 rcon sim: WARNING: anyone who can reach this address can drive the simulated robot and read everything;
 rcon sim: WARNING: add --auth (the secret in RCON_AUTH_SECRET or --auth-secret-file) and --tls-cert/--tls-key,
 rcon sim: WARNING: or listen on 127.0.0.1 only."""
-SECRET_ON_COMMAND_LINE = """rcon sim: --auth takes no secret on the command line: every user of this machine could read it in the
+SECRET_ON_COMMAND_LINE = """\
+rcon sim: --auth takes no secret on the command line: every user of this machine could read it in the
 rcon sim: process list. Put it in RCON_AUTH_SECRET, or in a file given with --auth-secret-file PATH."""
 
 
@@ -53,6 +55,13 @@ def configure(name: str, parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--tls-cert", metavar="FILE", help="serve wss:// with this certificate (PEM)")
     parser.add_argument("--tls-key", metavar="FILE", help="the certificate's private key (PEM)")
     parser.add_argument("-v", "--verbose", action="store_true", help="log every client op")
+    play = parser.add_argument_group("a recording as the robot (sim/playback.py)")
+    play.add_argument("--play", metavar="FILE",
+                      help="serve this recording as the robot instead of the simulated vessel: an .mcap file, a "
+                      "rosbag1 .bag or a rosbag2 folder; ROS 1 or 2 as the file is (--ros2 forces ROS 2)")
+    play.add_argument("--rate", type=float, default=1.0, metavar="X", help="with --play: play X times as fast")
+    play.add_argument("--loop", action="store_true", help="with --play: start again at the end")
+    play.add_argument("--start", type=float, default=0.0, metavar="S", help="with --play: begin S seconds in")
 
 
 def run(name: str, args: argparse.Namespace) -> int:
@@ -64,6 +73,12 @@ def run(name: str, args: argparse.Namespace) -> int:
         return 2
     if not 0 <= args.port <= 65535:
         print(f"rcon sim: --port must be between 0 and 65535, got {args.port}")
+        return 2
+    if args.play is None and (args.rate != 1.0 or args.loop or args.start):
+        print("rcon sim: --rate, --loop and --start go with --play FILE", file=sys.stderr)
+        return 2
+    if not args.rate > 0 or args.start < 0:
+        print("rcon sim: --rate must be positive and --start not negative", file=sys.stderr)
         return 2
     if args.no_namespace and args.name is None:
         print("rcon sim: --no-namespace goes with --name", file=sys.stderr)
@@ -137,15 +152,26 @@ def _tls_context(cert: str, key: str) -> ssl.SSLContext:
 async def _serve(args: argparse.Namespace, tls: ssl.SSLContext | None = None, secret: str | None = None) -> int:
     from rcon_core.sim import SimServer
 
-    server = SimServer(host=args.host, port=args.port, ros2=args.ros2, rate_scale=args.rate_scale,
-                       auth_secret=secret, max_frame=int(args.max_frame * 1024 * 1024),
-                       plugin_types=not args.no_plugin_types, ssl=tls, name=args.name,
-                       namespace=not args.no_namespace)
+    recording = None
+    if args.play is not None:
+        from rcon_core.record.files import RecordingError, open_recording
+
+        try:
+            recording = open_recording(args.play)
+        except RecordingError as exc:
+            print(f"rcon sim: cannot play {exc}", file=sys.stderr)
+            return 2
+    server = SimServer(host=args.host, port=args.port, ros2=args.ros2 or bool(recording and recording.ros2),
+                       rate_scale=args.rate_scale, auth_secret=secret,
+                       max_frame=int(args.max_frame * 1024 * 1024), plugin_types=not args.no_plugin_types,
+                       ssl=tls, name=args.name, namespace=not args.no_namespace, robot=recording is None)
     try:
         await server.start()
     except OSError as exc:
         print(f"rcon sim: cannot listen on {args.host}:{args.port}: {exc.strerror or exc}")
         return 1
+    if recording is not None:
+        return await _play(server, recording, args)
     flavour = "ROS 2" if args.ros2 else "ROS 1"
     ns = server.identity.namespace
     who = f"Kingfisher '{server.name}'" + (f" (topics under {ns})" if ns else "") if server.name else "Kingfisher"
@@ -167,3 +193,29 @@ async def _serve(args: argparse.Namespace, tls: ssl.SSLContext | None = None, se
         await server.stop()
     return 0
 
+
+
+async def _play(server: Any, recording: Any, args: argparse.Namespace) -> int:
+    """Serve ``recording`` as the robot until interrupted (``sim/playback.py``)."""
+    from rcon_core.sim.playback import Player
+
+    player = Player(server, recording, rate=args.rate, loop=args.loop, start=args.start)
+    player.install()
+    flavour = "ROS 2" if server.ros2 else "ROS 1"
+    print(f"rcon sim: playing {recording.path} ({recording.kind}, {flavour}, {len(recording.tracks)} topics, "
+          f"{recording.message_count} messages, {recording.duration:.1f} s) on {server.url} at {args.rate:g}x"
+          f"{' in a loop' if args.loop else ''} (Ctrl+C to stop)", flush=True)
+    stop = asyncio.Event()
+    loop = asyncio.get_running_loop()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        with contextlib.suppress(NotImplementedError, RuntimeError):
+            loop.add_signal_handler(sig, stop.set)
+    try:
+        await stop.wait()
+    finally:
+        await player.stop()
+        await server.stop()
+        recording.close()
+    if player.absorbed:
+        print(f"rcon sim: absorbed (sent nowhere): {dict(player.absorbed)}", flush=True)
+    return 0

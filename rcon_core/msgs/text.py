@@ -264,22 +264,57 @@ _YAML: dict[str, Any] = {}
 _EXP_FLOAT = r"^[-+]?[0-9]+(?:\.[0-9]*)?[eE][-+]?[0-9]+$"
 
 
+class _Overflow(ValueError):
+    """A number typed by a person that is too large to be one (``1.0e+400`` would become infinity)."""
+
+    def __init__(self, text: str) -> None:
+        super().__init__(f"{text} is too large for a number (it would become infinity)")
+
+
+#: the spellings of infinity a person means as such (YAML's ``.inf``, JSON's ``Infinity``)
+_INF_WORDS = frozenset({".inf", "+.inf", "-.inf", "inf", "+inf", "-inf", "infinity", "+infinity", "-infinity"})
+
+
+def _float_or_overflow(text: str) -> float:
+    """``float(text)``, refusing a number that only overflowed to infinity (``1.0e+400``)."""
+    value = float(text)
+    if math.isinf(value) and text.strip().lower() not in _INF_WORDS:
+        raise _Overflow(text.strip())
+    return value
+
+
 def _yaml_classes() -> tuple[Any, Any]:
     """Safe YAML loader/dumper that also read ``1e-5`` and ``1E9`` as floats (YAML 1.1 wants a dot);
-    the dumper quotes strings that look like that, so dumped text reads back the same."""
+    the dumper quotes strings that look like that, so dumped text reads back the same. The loader refuses
+    a number that overflows to infinity (``1.0e+400``); ``.inf`` stays infinity."""
     if not _YAML:
         import re
 
         import yaml
 
         class Loader(yaml.SafeLoader):
-            pass
+            def construct_mapping(self, node: Any, deep: bool = False) -> dict[Any, Any]:
+                # a key is a field name: YAML 1.1 would read `on`, `off`, `yes`, `no`, `null` or `1` as a
+                # bool, None or int ({on: true} became {True: True}); a plain key stays the text written
+                for key_node, _ in node.value:
+                    if isinstance(key_node, yaml.ScalarNode) and key_node.style is None and \
+                            key_node.tag != "tag:yaml.org,2002:merge":
+                        key_node.tag = "tag:yaml.org,2002:str"
+                return super().construct_mapping(node, deep=deep)
 
         class Dumper(yaml.SafeDumper):
             pass
 
         for cls in (Loader, Dumper):
             cls.add_implicit_resolver("tag:yaml.org,2002:float", re.compile(_EXP_FLOAT), list("-+0123456789"))
+
+        def construct_float(loader: Any, node: Any) -> float:
+            value: float = yaml.SafeLoader.construct_yaml_float(loader, node)
+            if math.isinf(value) and str(node.value).strip().lower() not in _INF_WORDS:
+                raise _Overflow(str(node.value).strip())
+            return value
+
+        Loader.add_constructor("tag:yaml.org,2002:float", construct_float)
         _YAML.update(loader=Loader, dumper=Dumper)
     return _YAML["loader"], _YAML["dumper"]
 
@@ -296,7 +331,10 @@ def to_text(msg: Any) -> str:
 
 
 def parse_text(text: str) -> Any:
-    """YAML (a superset of JSON) -> Python value; raises :class:`MessageTextError` on a syntax error."""
+    """YAML (a superset of JSON) -> Python value; raises :class:`MessageTextError` on a syntax error and for
+    a number too large to be one (``1.0e+400`` would silently become infinity; ``.inf`` is infinity).
+    Numbers read as a person types them: ``1e5`` and ``1E-3`` are floats (YAML 1.1 alone reads them as
+    strings). Mapping keys stay text (``{on: true, 1: x}`` -> ``{"on": True, "1": "x"}``): they name fields."""
     import yaml
 
     if not text or not text.strip():
@@ -305,11 +343,15 @@ def parse_text(text: str) -> Any:
         import json
 
         try:  # real JSON first: YAML does not join \ud83d\ude00 surrogate pairs
-            return json.loads(text)
+            return json.loads(text, parse_float=_float_or_overflow)
+        except _Overflow as exc:
+            raise MessageTextError("", str(exc)) from None
         except ValueError:
             pass
     try:
         return yaml.load(text, Loader=_loader())  # noqa: S506 - a SafeLoader subclass
+    except _Overflow as exc:
+        raise MessageTextError("", str(exc)) from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" (line {mark.line + 1}, column {mark.column + 1})" if mark is not None else ""

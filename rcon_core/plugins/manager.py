@@ -76,6 +76,8 @@ class PluginInfo:
     widgets: list[WidgetSpec] = attrs.field(factory=list)
     types: list[TypeDefinition] = attrs.field(factory=list)
     templates: list[CanvasTemplate] = attrs.field(factory=list)
+    #: what of a loaded plugin is withdrawn while the rest works (a template whose file is missing)
+    problems: list[str] = attrs.field(factory=list)
     plugin: Any = attrs.field(default=None, repr=False)
 
     @property
@@ -102,6 +104,7 @@ class PluginInfo:
             ],
             "types": [d.name for d in self.types],
             "templates": [t.title for t in self.templates],
+            "problems": list(self.problems),
         }
 
 
@@ -216,6 +219,7 @@ class PluginManager:
         info.widgets.clear()
         info.types.clear()
         info.templates.clear()
+        info.problems.clear()
         if info.plugin is not None and self.pluggy.is_registered(info.plugin):
             self.pluggy.unregister(info.plugin)
 
@@ -229,6 +233,7 @@ class PluginManager:
             info.widgets.clear()
             info.types.clear()
             info.templates.clear()
+            info.problems.clear()
         for impl in self.pluggy.hook.rcon_register_widgets.get_hookimpls():  # registration order
             info = self._infos[impl.plugin_name]
             reg = WidgetRegistry(info.package, self._specs)
@@ -266,6 +271,9 @@ class PluginManager:
                 self._fail(info, exc)
                 continue
             info.templates.extend(templates.templates)
+            info.problems.extend(templates.problems)
+            for problem in templates.problems:
+                log.warning("plugin %s: %s", info.name, problem)
 
     @property
     def plugins(self) -> list[PluginInfo]:

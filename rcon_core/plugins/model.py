@@ -139,8 +139,10 @@ class BridgePort(Protocol):
     """The slice of a bridge client node (``client.node(id)``) a model may use. Tests may pass a fake or a
     node; in the app it is a ``rcon_core.canvas.port.GuardedPort`` (sealed; refuses to send when view-only).
 
-    Besides these methods the app's port carries three plain attributes a model may read with
+    Besides these methods the app's port carries plain attributes a model may read with
     ``getattr(port, name, None)`` (a fake may lack them): ``view_only`` (None or why nothing may be sent),
+    ``envelope`` (the robot's safety envelope, ``rcon_core.bridge.envelope.Envelope``, or None; read it at
+    each use: it may change while the widget runs),
     ``link`` (an opaque key, the same for every widget on one robot; to share per-robot objects use
     ``WidgetContext.shared``, which is keyed by it) and
     ``widget_id`` (the widget instance's id, the same across rebuilds of its model)."""
@@ -383,9 +385,17 @@ class WidgetModel:
 
     # -- outgoing (any thread) -----------------------------------------------------------------------
     def publish(self, msg: dict[str, Any]) -> bool:
-        """Publish a whole message on the bound topic. Returns False (and sets ``error``) if not running."""
+        """Publish a whole message on the bound topic. Returns False (and sets ``error``) if not running,
+        or if the message does not fit the bound type: rosbridge drops such a message and says so only in
+        the robot's log, so it is checked here when the type registry knows the type (a wrong field name,
+        text for a number, a number out of the field's range); missing fields are fine (the robot fills
+        in defaults)."""
         if self._pub is None:
             self.set_error("not publishing: the widget is not running or has no topic")
+            return False
+        misfit = self._misfit(msg)
+        if misfit:
+            self.set_error(f"not sent: the message does not fit {self.binding.type} ({misfit})")
             return False
         pub = self._pub
 
@@ -397,6 +407,20 @@ class WidgetModel:
 
         self._dispatch(send)
         return True
+
+    def _misfit(self, msg: Any) -> str:
+        """The first problems of ``msg`` as a message of the bound type; "" when it fits or cannot be
+        checked (no registry, a type it does not know)."""
+        check = getattr(self.types, "validate", None)
+        if check is None or not self.binding.type:
+            return ""
+        try:
+            if not self.types.has(self.binding.type):  # type: ignore[union-attr]
+                return ""
+            problems = check(self.binding.type, msg)
+        except Exception:  # a registry that cannot tell must not stop the publish
+            return ""
+        return "; ".join(str(p) for p in problems[:3])
 
     def build_message(self, value: Any, path: str | None = None) -> dict[str, Any]:
         """A message of the bound type with ``value`` at ``path`` (default: the bound field path).

@@ -115,19 +115,25 @@ class TemplateRegistry:
     def __init__(self, package: str) -> None:
         self._package = package
         self.templates: list[CanvasTemplate] = []
+        #: sentences about templates that are not offered (a file missing from the installed package)
+        self.problems: list[str] = []
 
     @property
     def package(self) -> str:
         return self._package
 
-    def add(self, title: str, path: str | os.PathLike[str] | Any, description: str = "") -> CanvasTemplate:
+    def add(self, title: str, path: str | os.PathLike[str] | Any, description: str = "") -> CanvasTemplate | None:
         """Offer the canvas file at ``path`` (e.g. ``importlib.resources.files(__package__) / "x.json"``)
-        as ``title``. The file must exist; it is read when the operator picks the template."""
+        as ``title``; it is read when the operator picks the template. A file that is not there (package
+        data left out of the wheel) withdraws that template alone: it is recorded in :attr:`problems`
+        (``rcon plugins --check`` fails on it) and None is returned; the plugin's widgets still load."""
         if not isinstance(title, str) or not title.strip():
             raise SpecError("a canvas template needs a non-empty title")
         file = Path(str(path))
         if not file.is_file():
-            raise SpecError(f"canvas template {title!r}: no file at {file}")
+            self.problems.append(f"template {title.strip()!r} is not offered: no file at {file} (is it listed "
+                                 "as package data in pyproject.toml?)")
+            return None
         template = CanvasTemplate(title.strip(), file, description, self._package)
         self.templates.append(template)
         return template

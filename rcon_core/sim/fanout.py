@@ -63,7 +63,8 @@ def encoded(cache: dict[Any, Any], topic: Topic, msg: dict[str, Any], compressio
         if compression == "cbor":
             payload = encoding.cbor_dumps(encoding.publish_frame(topic.name, msg))
         elif compression == "cbor-raw":
-            raw = {**flavour.time(), "bytes": types.serialize(topic.type, msg)}
+            recorded = getattr(msg, "raw", None)  # a recording's own bytes (playback.RecordedMessage)
+            raw = {**flavour.time(), "bytes": recorded if recorded is not None else types.serialize(topic.type, msg)}
             if flavour.ros2:
                 raw = {"secs": raw["sec"], "nsecs": raw["nanosec"], "bytes": raw["bytes"]}
             payload = encoding.cbor_dumps(encoding.publish_frame(topic.name, raw))

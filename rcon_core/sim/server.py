@@ -102,10 +102,12 @@ class SimServer:
         self._server: Server | None = None
         self._port = 0
         self._client_ids = itertools.count(0)
-        #: what clients published (bounded by count and bytes: published.py)
-        self.published_log = PublishedLog()
+        self.published_log = PublishedLog()  # what clients published (bounded by count and bytes)
         self._published_event: asyncio.Event | None = None
         self._tasks: set[asyncio.Task[Any]] = set()
+        #: ``absorb(conn, topic, msg) -> bool``: when set and it answers True, a client's publish goes no
+        #: further than this (a recording played as a robot takes commands nowhere: ``playback.py``)
+        self.absorb: Callable[[Connection, str, dict[str, Any]], bool] | None = None
         #: every operation clients sent, by (op, topic/service/action name): what tests check reached it
         #: (at most OPS_RECEIVED_KEYS names; the rest under OTHER_NAMES)
         self.ops_received: collections.Counter[tuple[str, str]] = collections.Counter()
@@ -224,9 +226,8 @@ class SimServer:
 
     def _task_done(self, task: asyncio.Task[Any]) -> None:
         self._tasks.discard(task)
-        if not task.cancelled() and task.exception() is not None:
+        if not task.cancelled() and (exc := task.exception()) is not None:
             self.op_failures += 1
-            exc = task.exception()
             log.error("a task of the sim failed: %s: %s", type(exc).__name__, bounded(str(exc)))
 
     # -- inspection (tests) ---------------------------------------------------------------------------
@@ -492,8 +493,7 @@ class SimServer:
             self._forget_if_unused(name)
 
     def _forget_if_unused(self, name: str) -> None:
-        """Forget a topic no one publishes, subscribes or latched a message on any more (clients' topic
-        names stayed forever: 100,000 of them made ``/rosapi/topics`` take 455 ms)."""
+        """Forget a topic no one publishes, subscribes or latched on (100,000 made /rosapi/topics 455 ms)."""
         topic = self.topics.get(name)
         if topic is not None and not topic.is_alive() and not topic.latched_msgs:
             del self.topics[name]
@@ -520,6 +520,8 @@ class SimServer:
         self.published_log.add(name, body, conn.frame_size)
         assert self._published_event is not None
         self._published_event.set()
+        if self.absorb is not None and self.absorb(conn, name, body):
+            return
         self.publish(name, body, BRIDGE_NODE)
 
     def _op_subscribe(self, conn: Connection, msg: dict[str, Any]) -> None:

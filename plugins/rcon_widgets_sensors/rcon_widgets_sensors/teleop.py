@@ -16,10 +16,19 @@ Several pads bound to the same topic on the same connection (two thumbs: linear 
 other) form a group: their axes are merged into one message, published by one of them at its rate, so
 they never fight; each pad's release zeroes only its own axes. The group is an object the model's
 ``WidgetContext`` shares per robot link (``context.shared``), so pads of two robots never merge.
+
+What the pad shows is what is sent. The command at the pad's edge is the least of its own maximum
+(``max_linear`` / ``max_angular``), the robot's safety envelope (the port's ``envelope``: the bridge holds
+every command to it anyway, see ``rcon_core/bridge/envelope.py``) and, for forward speed, the robot's
+speed limit when ``speed_limit_topic`` names where it is published (``/speed_limit``: the demo's Speed
+limit slider); :meth:`TeleopModel.limits` says which holds. A pad whose topic nobody subscribes to says so
+(asked of ``/rosapi/subscribers`` when it starts, when its link comes back and when a finger goes down), so
+a pad bound to a topic the robot does not have never animates as if it drove.
 """
 
 from __future__ import annotations
 
+import asyncio
 import itertools
 import math
 import re
@@ -33,7 +42,7 @@ from rcon_core.plugins.paths import PathError, get_path, set_path
 
 from .slots import LoopTicker
 
-__all__ = ["TeleopSettings", "TeleopModel", "TeleopValue", "TELEOP_TYPES", "shape_axes"]
+__all__ = ["TeleopSettings", "TeleopModel", "TeleopValue", "TELEOP_TYPES", "shape_axes", "axis_words"]
 
 #: canonical type -> path of the part the axes are relative to
 TELEOP_TYPES: dict[str, str] = {
@@ -66,6 +75,7 @@ for _stamped, _inner, _key in (("TwistStamped", "Twist", "twist"), ("AccelStampe
 #: freshness limit of a motion command (s): older ones are dropped by the bridge, never sent late
 COMMAND_MAX_AGE = 0.25
 
+_TOPIC_RE = re.compile(r"^/?[A-Za-z_~][A-Za-z0-9_/~]*$")
 _AXIS_RE = re.compile(r"^(auto|-?[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*)?$")
 
 
@@ -77,7 +87,8 @@ class TeleopSettings:
     right = ``-y``. ``max_linear`` (m/s) and ``max_angular`` (rad/s) are the commands at the pad's edge
     (``angular.*`` and ``theta`` use ``max_angular``). ``dead_zone``: fraction of the pad radius around the
     centre that means zero. ``rate_hz``: publish rate while a finger is down. ``frame_id``: for stamped
-    types."""
+    types. ``speed_limit_topic``: a ``std_msgs/Float64`` topic holding the robot's speed limit (m/s); the
+    pad's linear command never exceeds its last value (``""``: none)."""
 
     horizontal: str = "auto"
     vertical: str = "auto"
@@ -86,6 +97,7 @@ class TeleopSettings:
     dead_zone: float = 0.1
     rate_hz: float = 10.0
     frame_id: str = ""
+    speed_limit_topic: str = ""
 
     def problems(self) -> list[str]:
         out = []
@@ -103,6 +115,22 @@ class TeleopSettings:
             out.append(f"the dead zone must be between 0 and 0.9 of the pad, not {self.dead_zone:g}")
         if not 1 <= self.rate_hz <= 50:
             out.append(f"the publish rate must be between 1 and 50 Hz, not {self.rate_hz:g}")
+        if self.speed_limit_topic and not _TOPIC_RE.match(self.speed_limit_topic):
+            out.append(f"the speed limit topic {self.speed_limit_topic!r} is not a topic name such as /speed_limit")
+        return out
+
+    def commands(self, binding: Any) -> list[tuple[str, float]]:
+        """(field path, the largest value this pad may send there) for each axis it drives: what the app
+        compares with the robot's safety envelope before saving these settings."""
+        base = binding.field_path or TELEOP_TYPES.get(binding.canonical_type, "")
+        out = []
+        for axis, auto in ((self.horizontal, "-angular.z"), (self.vertical, "linear.x")):
+            rel = (auto if axis == "auto" else axis).lstrip("-")
+            if not rel:
+                continue
+            leaf = rel.rsplit(".", 1)[-1]
+            limit = self.max_angular if rel.startswith("angular") or leaf == "theta" else self.max_linear
+            out.append((f"{base}.{rel}" if base else rel, float(limit)))
         return out
 
 
@@ -119,6 +147,28 @@ class TeleopValue:
     locked: bool = False
     sent: int = 0
     reason: str = ""
+    #: what holds the command at the pad's edge below the pad's own maximum ("" when nothing does):
+    #: "≤ 1 m/s, 0.5 rad/s (safety envelope)", "≤ 0.5 m/s (speed limit)"
+    held: str = ""
+    #: nobody subscribes to the pad's topic: what the pad says instead of pretending to drive ("" otherwise)
+    unheard: str = ""
+
+
+#: what moving the finger along an axis does, by the field it drives (the leaf, or part.leaf)
+_WORDS = {"linear.x": ("forward", "back"), "linear.y": ("left", "right"), "linear.z": ("up", "down"),
+          "angular.z": ("turn left", "turn right"), "angular.x": ("roll", "roll back"),
+          "angular.y": ("pitch", "pitch back"), "x": ("forward", "back"), "y": ("left", "right"),
+          "z": ("up", "down"), "theta": ("turn left", "turn right")}
+
+
+def axis_words(axis: str) -> str:
+    """What a finger moving up (vertical axis) or right (horizontal) does, in words: ``linear.x`` ->
+    "forward", ``-angular.z`` -> "turn right"; "" for a field without words (the field is shown then)."""
+    rel = axis.lstrip("-")
+    words = _WORDS.get(rel) or _WORDS.get(".".join(rel.split(".")[-2:])) or _WORDS.get(rel.rsplit(".", 1)[-1])
+    if words is None or not rel:
+        return ""
+    return words[1] if axis.startswith("-") else words[0]
 
 
 def shape_axes(x: float, y: float, dead_zone: float) -> tuple[float, float]:
@@ -165,6 +215,10 @@ class TeleopModel(WidgetModel):
         self._x = self._y = 0.0
         self._sent = 0
         self._reason = ""
+        self._speed_limit: float | None = None  #: the last value heard on ``speed_limit_topic``
+        self._limit_sub: Any = None
+        self._unheard = ""
+        self._listeners_asked = -math.inf  #: the model's clock when /rosapi/subscribers was last asked
         self.send_times: list[float] = []  # the model's clock at each publish (tests, diagnostics)
         self._show_value()
 
@@ -235,10 +289,37 @@ class TeleopModel(WidgetModel):
     def _abs(self, rel: str) -> str:
         return f"{self.body_path}.{rel}" if self.body_path else rel
 
+    def limits(self) -> tuple[float, float, str]:
+        """(linear, angular, what holds them) at the pad's edge: the pad's own maximum, lowered to the
+        robot's safety envelope and, for linear, to the robot's speed limit. The words say what holds,
+        compactly ("≤ 1 m/s, 0.5 rad/s (safety envelope)"; "" when the pad's own maximum does)."""
+        s = self.settings
+        linear, angular = float(s.max_linear), float(s.max_angular)
+        lin_by = ang_by = ""
+        env = getattr(self.port, "envelope", None)
+        if env is not None:
+            lin_env = getattr(env, "max_linear", None)
+            ang_env = getattr(env, "max_angular", None)
+            if lin_env is not None and lin_env < linear:
+                linear, lin_by = float(lin_env), "safety envelope"
+            if ang_env is not None and ang_env < angular:
+                angular, ang_by = float(ang_env), "safety envelope"
+        limit = self._speed_limit
+        if limit is not None and limit < linear:
+            linear, lin_by = limit, "speed limit"
+        groups: dict[str, list[str]] = {}
+        if lin_by:
+            groups.setdefault(lin_by, []).append(f"{linear:g} m/s")
+        if ang_by:
+            groups.setdefault(ang_by, []).append(f"{angular:g} rad/s")
+        held = ", ".join(f"{', '.join(parts)} ({by})" for by, parts in groups.items())
+        return linear, angular, f"≤ {held}" if held else ""
+
     def command_for(self, x: float, y: float) -> dict[str, float]:
-        """Field path -> value for a finger at (x, y) (raw pad coordinates, -1..1, y up)."""
+        """Field path -> value for a finger at (x, y) (raw pad coordinates, -1..1, y up): what is sent."""
         s = self.settings
         sx, sy = shape_axes(x, y, s.dead_zone)
+        max_linear, max_angular, _held = self.limits()
         out: dict[str, float] = {}
         for axis, v in zip(self.axes(), (sx, sy), strict=True):
             if not axis:
@@ -246,7 +327,7 @@ class TeleopModel(WidgetModel):
             sign = -1.0 if axis.startswith("-") else 1.0
             rel = axis.lstrip("-")
             leaf = rel.rsplit(".", 1)[-1]
-            limit = s.max_angular if rel.startswith("angular") or leaf == "theta" else s.max_linear
+            limit = max_angular if rel.startswith("angular") or leaf == "theta" else max_linear
             out[self._abs(rel)] = out.get(self._abs(rel), 0.0) + sign * v * limit + 0.0
         return out
 
@@ -314,6 +395,7 @@ class TeleopModel(WidgetModel):
         if not self._active:
             self._active = True
             self._reason = ""
+            self._ask_listeners(fresh=2.0)  # does anyone listen? said on the pad, never a silent drive
             g.members.append(self)
             self._ticker = LoopTicker(1.0 / self.settings.rate_hz, self._tick, clock=self._ticker_clock)
             self._send()  # the first command goes out at once
@@ -353,10 +435,59 @@ class TeleopModel(WidgetModel):
             self._show_value()
         return was
 
+    # -- the robot's speed limit, and who listens (loop thread) ---------------------------------------------
+    def _on_speed_limit(self, msg: dict[str, Any]) -> None:
+        value = msg.get("data") if isinstance(msg, dict) else None
+        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value) or value < 0:
+            return  # the robot ignores an invalid limit too
+        self._speed_limit = float(value)
+        self._show_value()
+
+    def _ask_listeners(self, fresh: float = 0.0) -> None:
+        """Ask the robot (``/rosapi/subscribers``) whether anyone subscribes to the pad's topic, unless it
+        was asked less than ``fresh`` s ago. Loop thread; the answer arrives later."""
+        now = self._clock()
+        if now - self._listeners_asked < fresh or not self.binding.name:
+            return
+        self._listeners_asked = now
+        try:
+            loop = asyncio.get_running_loop()
+        except RuntimeError:
+            return  # no loop (plain tests): nothing to ask with
+        task = loop.create_task(self._listeners())
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+
+    async def _listeners(self) -> None:
+        try:
+            answer = await self.port.call_service("/rosapi/subscribers", {"topic": self.binding.name},
+                                                  timeout=3.0)
+        except Exception:  # an old rosapi, a link drop: nothing known, nothing said
+            return
+        subs = answer.get("subscribers") if isinstance(answer, dict) else None
+        if not isinstance(subs, list):
+            return
+        unheard = "" if subs else f"nobody subscribes to {self.binding.name}: nothing moves"
+        if unheard != self._unheard:
+            self._unheard = unheard
+            self._show_value()
+
     # -- lifecycle ------------------------------------------------------------------------------------
+    def on_start(self) -> None:
+        topic = self.settings.speed_limit_topic
+        if topic:
+            self._limit_sub = self.port.subscribe(topic, self._on_speed_limit, type="std_msgs/Float64")
+        self._ask_listeners()
+
     def on_stop(self) -> None:
         self._force_release("stopped")
         self._zero_pending = False  # the group stays with the link (one small object per topic)
+        if self._limit_sub is not None:
+            try:
+                self._limit_sub.unsubscribe()
+            except Exception as exc:  # the link may be down: the server drops it with the socket
+                self.set_error(f"while stopping: {exc}")
+            self._limit_sub = None
 
     def set_link(self, up: bool) -> None:
         was_down = self.state.link_down
@@ -371,6 +502,7 @@ class TeleopModel(WidgetModel):
             self._zero_pending = True  # the zero may not have gone out: send it again once back
 
     def _link_back(self) -> None:
+        self._ask_listeners()
         if self._zero_pending and self.running:
             self._zero_pending = False
             g = self._group()
@@ -383,7 +515,8 @@ class TeleopModel(WidgetModel):
         cmd = self.command_for(self._x, self._y) if active else {}
         sx, sy = shape_axes(self._x, self._y, self.settings.dead_zone) if active else (0.0, 0.0)
         self.set_value(TeleopValue(active=active, x=sx, y=sy, command=tuple(sorted(cmd.items())),
-                                   locked=self._locked, sent=self._sent, reason=self._reason))
+                                   locked=self._locked, sent=self._sent, reason=self._reason,
+                                   held=self.limits()[2], unheard=self._unheard))
 
     @property
     def active(self) -> bool:

@@ -24,7 +24,7 @@ from typing import Any
 
 from qtpy import QtCore, QtGui, QtWidgets
 
-from .teleop import TeleopValue
+from .teleop import TeleopValue, axis_words
 
 TRAIL_S = 0.6
 #: the status line of a pad the app runs offline on purpose (the add panel's preview)
@@ -48,6 +48,8 @@ class TeleopView(QtWidgets.QWidget):
         self._layers_key: tuple[Any, ...] | None = None
         #: how often the cached backdrop and labels were painted (tests, diagnostics)
         self.layer_builds = 0
+        #: the axis labels as last painted: (vertical words, its field or "", horizontal words, its field or "")
+        self.axis_labels: tuple[str, str, str, str] = ("", "", "", "")
         self.setAttribute(QtCore.Qt.WidgetAttribute.WA_AcceptTouchEvents, True)
         self.setFocusPolicy(QtCore.Qt.FocusPolicy.StrongFocus)
         self.setMinimumSize(120, 120)
@@ -261,19 +263,56 @@ class TeleopView(QtWidgets.QWidget):
         return pm
 
     def _paint_labels(self, pal: QtGui.QPalette, h_axis: str, v_axis: str) -> QtGui.QPixmap:
+        """What moving the finger does, in words ("↑ forward", "turn right →"), each with the field it
+        drives in small print beside it ("linear.x"); the small print goes first when the pad is too narrow
+        for both; an axis without words shows its field."""
         pm = self._new_layer()
         pm.fill(QtCore.Qt.GlobalColor.transparent)
         p = QtGui.QPainter(pm)
         p.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing, True)
-        p.setPen(pal.color(QtGui.QPalette.ColorRole.WindowText))
-        p.setFont(self._small_font())
-        top = QtCore.QRectF(4, 1, self.width() - 8, 16)
-        if v_axis:
-            p.drawText(top, QtCore.Qt.AlignmentFlag.AlignLeft | QtCore.Qt.AlignmentFlag.AlignVCenter, "↑ " + v_axis)
-        if h_axis:
-            p.drawText(top, QtCore.Qt.AlignmentFlag.AlignRight | QtCore.Qt.AlignmentFlag.AlignVCenter, h_axis + " →")
+        big, small = self._small_font(), self._fine_font()
+        fm_big, fm_small = QtGui.QFontMetricsF(big), QtGui.QFontMetricsF(small)
+        v_word = "↑ " + (axis_words(v_axis) or v_axis) if v_axis else ""
+        h_word = (axis_words(h_axis) or h_axis) + " →" if h_axis else ""
+        v_fine = v_axis if v_axis and axis_words(v_axis) else ""
+        h_fine = h_axis if h_axis and axis_words(h_axis) else ""
+        width = self.width() - 8
+        gap = 6.0
+        need = (fm_big.horizontalAdvance(v_word) + fm_big.horizontalAdvance(h_word) + 2 * gap
+                + fm_small.horizontalAdvance(v_fine) + fm_small.horizontalAdvance(h_fine) + 12)
+        fine = need <= width  # room for the fields in small print too
+        self.axis_labels = (v_word, v_fine if fine else "", h_word, h_fine if fine else "")
+        text_colour = pal.color(QtGui.QPalette.ColorRole.WindowText)
+        muted = QtGui.QColor(text_colour)
+        muted.setAlpha(150)
+        mid = QtCore.Qt.AlignmentFlag.AlignVCenter
+        left, right = QtCore.Qt.AlignmentFlag.AlignLeft | mid, QtCore.Qt.AlignmentFlag.AlignRight | mid
+        x0, x1 = 4.0, self.width() - 4.0
+        if v_word:
+            p.setFont(big)
+            p.setPen(text_colour)
+            p.drawText(QtCore.QRectF(x0, 1, width, 16), left, v_word)
+            if fine and v_fine:
+                p.setFont(small)
+                p.setPen(muted)
+                p.drawText(QtCore.QRectF(x0 + fm_big.horizontalAdvance(v_word) + gap, 2, width, 16), left, v_fine)
+        if h_word:
+            p.setFont(big)
+            p.setPen(text_colour)
+            p.drawText(QtCore.QRectF(x0, 1, width, 16), right, h_word)
+            if fine and h_fine:
+                p.setFont(small)
+                p.setPen(muted)
+                end = x1 - fm_big.horizontalAdvance(h_word) - gap
+                p.drawText(QtCore.QRectF(x0, 2, end - x0, 16), right, h_fine)
         p.end()
         return pm
+
+    def _fine_font(self) -> QtGui.QFont:
+        """The small print beside the axis words: the labels' font, 0.8 times again (at least 6 pt)."""
+        font = QtGui.QFont(self._small_font())
+        font.setPointSizeF(max(6.0, font.pointSizeF() * 0.8))
+        return font
 
     @property
     def dry_run(self) -> bool:
@@ -292,9 +331,17 @@ class TeleopView(QtWidgets.QWidget):
             return st.error
         if v.locked:
             return f"stopped ({v.reason}): lift your finger"
-        if v.active:
+        if v.unheard:  # nothing moves: never animate as if the robot drove
+            return f"⚠ {v.unheard}"
+        held = f" · {v.held}" if v.held else ""  # what holds the command below the pad's own maximum
+        if v.active:  # what is sent, after the envelope and the speed limit; the vertical axis (forward) first
+            axes = self.model.axes() if hasattr(self.model, "axes") else ("", "")
+            up = axes[1].lstrip("-")
+            command = sorted(v.command, key=lambda pv: not (up and pv[0].endswith(up)))
             parts = [f"{path.rsplit('.', 2)[-2] + '.' if '.' in path else ''}{path.rsplit('.', 1)[-1]} "
-                     f"{val:+.2f}" for path, val in v.command]
-            return "  ".join(parts) or "driving"
+                     f"{val:+.2f}" for path, val in command]
+            return ("  ".join(parts) or "driving") + held
+        if v.held:  # the limit matters more than the rate on a narrow pad
+            return f"touch to drive {v.held}"
         rate = getattr(self.model.settings, "rate_hz", 0)
         return f"idle · touch to drive ({rate:g} Hz)"

@@ -4,6 +4,14 @@ The goal form is generated from the goal type (:meth:`ActionModel.goal_fields`: 
 a message's own scalars before nested ones, arrays last, ``header`` fields left out: the server fills them); what the operator types is checked against the definition
 with ``TypeRegistry.from_text`` before anything is sent, and a bad entry names its field.
 
+Every entry starts empty: a pre-filled ``0.0`` in a latitude is a real place (0°N 0°E) one tap away. An
+empty entry sends its default -- the settings' ``goal`` value for it, else nothing (the server's default) --
+which the view shows as the entry's placeholder. *Required* entries (``settings.required``; ``auto``: the
+coordinates of the place a goal names -- numeric ``latitude``, ``longitude``, ``x``, ``y`` at the top of the
+form -- unless the settings' goal gives them a value) have no default: the view marks them and keeps Send
+disabled until they are filled (:meth:`ActionModel.missing`), and :meth:`ActionModel.build_goal` refuses an
+empty one.
+
 What the view paints is ``state.value``, an :class:`ActionStatus`:
 
 * ``phase``: ``idle``, ``active`` (sent, running), ``canceling``, then one of the final phases:
@@ -63,6 +71,11 @@ class ActionSettings:
         default="", metadata={"label": "Progress field",
                               "help": "feedback field shown as the progress bar (default: one named like "
                                       "progress, percent or distance_remaining)"})
+    required: str = attrs.field(
+        default="auto", metadata={"label": "Required fields",
+                                  "help": "goal fields the operator must fill before Send, comma-separated "
+                                          "(e.g. 'target.latitude, target.longitude'); auto: the coordinates "
+                                          "a goal names (latitude, longitude, x, y); empty: none"})
 
     def problems(self) -> list[str]:
         try:
@@ -71,16 +84,33 @@ class ActionSettings:
             return [f"goal: {exc.problem}"]
         return []
 
+    def required_paths(self) -> list[str] | None:
+        """The paths listed in ``required`` (None for ``auto``)."""
+        text = self.required.strip()
+        if text == "auto":
+            return None
+        return [p.strip() for p in text.split(",") if p.strip()]
+
+
+#: the names of the coordinates of a place a goal names: zero there is a real place (0°N 0°E, the origin)
+PLACE_NAMES = frozenset({"latitude", "longitude", "lat", "lon", "x", "y"})
+_NUMBERS = frozenset({"float32", "float64", "int8", "uint8", "int16", "uint16", "int32", "uint32", "int64",
+                      "uint64", "double", "float"})
+
 
 @attrs.frozen
 class GoalField:
     """One entry of the goal form: ``path`` below the goal (``target.latitude``), its ROS base type,
-    whether it is an array, and the text it starts with."""
+    whether it is an array, the text it starts with (always empty, but for a check box: its default),
+    ``default`` (what an empty entry sends, as text, for the placeholder; "" when the server's default)
+    and ``required`` (it must be filled before Send)."""
 
     path: str
     base: str
     is_array: bool
     text: str
+    default: str = ""
+    required: bool = False
 
     @property
     def is_bool(self) -> bool:
@@ -217,51 +247,85 @@ class ActionModel(StdModel):
         if not self.type_known():
             return []
         try:
-            start = self.default_goal()
+            start = self.types.from_text(self.part_type("goal"), "{}")
+            configured = parse_text(self.settings.goal or "{}")
         except (KeyError, ValueError):
             return []
-        out: list[GoalField] = []
+        if not isinstance(configured, dict):
+            configured = {}
+        found: list[tuple[str, str, bool, Any]] = []
 
         def walk(type_name: str, prefix: str, value: dict[str, Any], depth: int) -> None:
             for f in self.types.fields(type_name):
                 path = f"{prefix}.{f.name}" if prefix else f.name
                 v = value.get(f.name) if isinstance(value, dict) else None
                 if f.is_builtin or f.array_len is not None or depth > 4:
-                    out.append(GoalField(path, f.base, f.array_len is not None, _text(v)))
+                    found.append((path, f.base, f.array_len is not None, v))
                 elif f.name != "header" and f.name != "structure_needs_at_least_one_member":
                     walk(f.base, path, v if isinstance(v, dict) else {}, depth + 1)
 
         walk(self.part_type("goal"), "", start, 0)
+        found = [g for g in found if g[0] != "structure_needs_at_least_one_member"]
+        listed = self.settings.required_paths()
+        top = min((p.count(".") for p, _b, arr, _v in found if not arr), default=0)
+        out = []
+        for path, base, is_array, type_default in found:
+            given = _has_path(configured, path)
+            default = get_path(configured, path) if given else None
+            if listed is not None:
+                required = path in listed
+            else:  # auto: the coordinates of a place, where 0 is a real place, unless the settings set them
+                required = (not given and not is_array and base in _NUMBERS and path.count(".") == top
+                            and path.rsplit(".", 1)[-1] in PLACE_NAMES)
+            is_bool = base == "bool" and not is_array
+            shown = default if given else type_default
+            out.append(GoalField(path, base, is_array, _text(shown) if is_bool else "",
+                                 "" if required else _text(shown), required))
         # the message's own scalars first (a NavSatFix's latitude before its status.status), arrays last
         out.sort(key=lambda g: (g.is_array, g.path.count(".")))
-        return [g for g in out if g.path != "structure_needs_at_least_one_member"]
+        return out
+
+    def missing(self, texts: dict[str, str]) -> list[str]:
+        """The required entries left empty in ``texts`` (``{path: text}``): Send waits for them."""
+        return [g.path for g in self.goal_fields() if g.required and not texts.get(g.path, "").strip()]
 
     def default_goal(self) -> dict[str, Any]:
         """The goal the form starts with: the settings' goal over the type's default."""
         return self.types.from_text(self.part_type("goal"), self.settings.goal or "{}")
 
     def build_goal(self, texts: dict[str, str]) -> dict[str, Any]:
-        """The goal from the form's texts (``{path: text}``), checked against the goal type; only those
-        fields (an empty text is left out: the server's default).
+        """The goal from the form's texts (``{path: text}``), checked against the goal type: the typed
+        entries, and for an empty one its default from the settings' ``goal`` (else it is left out: the
+        server's default). A required entry left empty is refused.
 
         Raises ``MessageTextError`` naming the field (``target.latitude: expected a number, got 'x'``)."""
-        import yaml
-
         goal: dict[str, Any] = {}
-        bases = {g.path: g for g in self.goal_fields()}
+        fields = {g.path: g for g in self.goal_fields()}
+        try:
+            configured = parse_text(self.settings.goal or "{}")
+        except MessageTextError:
+            configured = {}
+        if not isinstance(configured, dict):
+            configured = {}
         for path, text in texts.items():
-            field = bases.get(path)
+            field = fields.get(path)
             if field is not None and field.base in ("string", "wstring") and not field.is_array:
                 value: Any = text
+            elif not text.strip():
+                if not _has_path(configured, path):
+                    continue  # left empty: the server's default
+                value = get_path(configured, path)
             else:
-                try:
-                    value = yaml.safe_load(text) if text.strip() else None
-                except yaml.YAMLError as exc:
-                    raise MessageTextError(path, f"not a value: {str(exc).splitlines()[0]}") from None
-                if value is None:
-                    continue  # left empty: the default
+                try:  # YAML numbers as a person types them (1e5 too); an overflow to infinity is refused
+                    value = parse_text(text)
+                except MessageTextError as exc:
+                    raise MessageTextError(path, exc.problem) from None
+                if value == {}:
+                    continue
             goal = set_path(goal, path, value)
-        checked = self.types.from_text(self.part_type("goal"), json.dumps(goal))
+        checked = self.types.from_text(self.part_type("goal"), json.dumps(goal, allow_nan=True))
+        for path in self.missing(texts):  # after what was typed is checked: a typo is named first
+            raise MessageTextError(path, "required: type a value (its default would be a real place)")
         # only the form's fields go out (checked and converted): the server fills in the rest, in its own
         # ROS version's shapes (a ROS 2 header has no seq)
         out: dict[str, Any] = {}

@@ -94,22 +94,51 @@ class ActionView(QtWidgets.QWidget):
             self.form.addRow(heading)
         for f in fields:
             editor: QtWidgets.QWidget
+            kind = f"{f.base}{'[]' if f.is_array else ''}"
             if f.is_bool:
                 editor = QtWidgets.QCheckBox()
                 editor.setChecked(f.text == "true")
-            else:
+                tip = f"{f.path}: {kind}"
+            else:  # empty: its placeholder is what an empty entry sends; a required one has none to send
                 editor = QtWidgets.QLineEdit(f.text)
-                editor.setPlaceholderText(f"{f.base}[]" if f.is_array else f.base)
+                editor.setPlaceholderText("required" if f.required else f.default or f"{kind} (robot's default)")
+                editor.textChanged.connect(self._update_send)
+                tip = (f"{f.path}: {kind}, required" if f.required else
+                       f"{f.path}: {kind}; empty sends {f.default}" if f.default else
+                       f"{f.path}: {kind}; empty: the robot's default")
             editor.setObjectName(f"goal_{f.path}")
-            editor.setToolTip(f"{f.path}: {f.base}{'[]' if f.is_array else ''}")
+            editor.setToolTip(tip)
+            editor.setAccessibleName(f"{f.path}{' (required)' if f.required else ''}")
             editor.setMinimumWidth(120)  # a narrow widget puts the label above its field instead
             self.editors[f.path] = editor
-            self.form.addRow(form_label(f.path[len(common):], editor), editor)
+            label = form_label(f.path[len(common):] + (" *" if f.required else ""), editor)
+            if f.required:
+                label.setToolTip("required: type a value before Send")
+                label.setProperty("required", True)
+            self.form.addRow(label, editor)
         if not fields:
             note = QtWidgets.QLabel("The goal's fields appear once the action type is known.")
             note.setProperty("role", "hint")
             note.setWordWrap(True)
             self.form.addRow(note)
+        elif any(f.required for f in fields):
+            note = QtWidgets.QLabel("* required")
+            note.setObjectName("goalRequiredNote")
+            note.setProperty("role", "hint")
+            self.form.addRow(note)
+        self._update_send()
+
+    def missing(self) -> list[str]:
+        """The required entries still empty (Send waits for them)."""
+        return [f.path for f in self._fields if f.required and isinstance(self.editors.get(f.path), QtWidgets.QLineEdit)
+                and not self.editors[f.path].text().strip()]
+
+    def _update_send(self, *_: Any) -> None:
+        """Send only once every required entry is filled; the button says what it waits for."""
+        missing = self.missing()
+        self.send_button.setEnabled(not missing)
+        self.send_button.setToolTip(
+            "fill in " + ", ".join(m.rsplit(".", 1)[-1] for m in missing) + " first" if missing else "")
 
     def texts(self) -> dict[str, str]:
         """What the form holds, ``{path: text}``."""

@@ -19,6 +19,10 @@ __all__ = [
     "field_at",
     "part_type",
     "type_limits",
+    "SANE_LIMIT",
+    "sane_limits",
+    "envelope_limit",
+    "held_to_envelope",
     "format_number",
     "format_value",
     "summarize",
@@ -91,8 +95,56 @@ def type_limits(base: str) -> tuple[float, float] | None:
     return None
 
 
+#: a Slider's or Stepper's numbers beyond this are a slip of a finger (999999999999 typed for 1.0), never a
+#: range anyone means: a slider has at most 100,000 positions, and floats lose their steps up there
+SANE_LIMIT = 1e9
+
+
+def sane_limits(base: str, type_name: str = "", path: str = "") -> tuple[float, float, str]:
+    """(lowest, highest, words) a numeric setting for the field at ``path`` of ``type_name`` (a ``base``
+    number) may be: what the type holds, within :data:`SANE_LIMIT`; on a motion command's field (a Twist's
+    ``linear.x``) what any robot's safety envelope may allow (100 m/s, 50 rad/s). ``words`` says which, to
+    follow "beyond what": "a int8 holds (-128..127)"."""
+    from rcon_core.bridge.envelope import MAX_ANGULAR, MAX_LINEAR, motion_path
+
+    motion = motion_path(type_name, path) if type_name else None
+    if motion is not None:
+        top, units = (MAX_LINEAR, "m/s") if motion[0] == "linear" else (MAX_ANGULAR, "rad/s")
+        return -top, top, f"any safety envelope allows on {motion[0]} (±{top:g} {units})"
+    lo, hi = type_limits(base) or (-SANE_LIMIT, SANE_LIMIT)
+    if base in INT_LIMITS:
+        return lo, hi, f"a {base} holds ({lo}..{hi})"
+    lo, hi = max(lo, -SANE_LIMIT), min(hi, SANE_LIMIT)
+    return lo, hi, f"is sane (±{SANE_LIMIT:g})"
+
+
+def envelope_limit(port: Any, type_name: str, path: str) -> float | None:
+    """The robot's safety envelope on the field at ``path`` of ``type_name`` as ``port`` tells it (the
+    app's port carries ``envelope``; a fake or a bare node has none): None when nothing limits it."""
+    env = getattr(port, "envelope", None)
+    if env is None:
+        return None
+    try:
+        return env.limit_for(type_name, path)  # type: ignore[no-any-return]
+    except Exception:  # a port's odd envelope never stops a widget: the bridge still holds the robot
+        return None
+
+
+def held_to_envelope(port: Any, type_name: str, msg: dict[str, Any]) -> tuple[dict[str, Any] | None, str]:
+    """(the message that will actually be sent, a sentence) for ``msg`` under the robot's safety envelope:
+    the message clamped ("held to the safety envelope: linear.x 5 → 1"), or None with why it is refused
+    (NaN, infinity). The bridge holds every command to the same envelope; a widget calls this to *say*
+    what is sent. A motion command is judged even without an envelope (non-numbers are never sent)."""
+    from rcon_core.bridge.envelope import NO_LIMITS, Envelope
+
+    env = getattr(port, "envelope", None)
+    verdict = (env if isinstance(env, Envelope) else NO_LIMITS).judge(type_name, msg)
+    return verdict.msg, verdict.sentence
+
+
 def format_number(value: float, decimals: int = -1) -> str:
-    """``decimals`` < 0: as it came (ints stay ints, floats in short form)."""
+    """``decimals`` < 0: as it came -- ints stay ints, floats with every digit they carry (15 significant
+    digits: 43.6532117 stays 43.6532117, never rounded to 6; a whole float without its ".0")."""
     if value is None:
         return "NaN"  # NaN/Inf arrive as None on the JSON wire
     if isinstance(value, bool):
@@ -101,7 +153,7 @@ def format_number(value: float, decimals: int = -1) -> str:
         return str(value) if decimals < 0 else f"{value:.{decimals}f}"
     if not math.isfinite(value):
         return str(value)
-    text = f"{value:.6g}" if decimals < 0 else f"{value:.{decimals}f}"
+    text = f"{value:.15g}" if decimals < 0 else f"{value:.{decimals}f}"
     if text.startswith("-") and float(text) == 0.0:
         return text[1:]  # -0.001 at 2 decimals, or -0.0 itself: "0.00", never "-0.00"
     return text

@@ -50,7 +50,7 @@ from rcon_core.plugins.paths import PathError, get_path, parse_path, set_path, s
 
 from .base import StdModel
 from .button import CallStatus, describe_response
-from .common import RateLimiter, field_at
+from .common import RateLimiter, field_at, held_to_envelope
 
 __all__ = ["ChildSpec", "CompoundSettings", "CompoundModel", "Child", "CompoundValue", "find_spec"]
 
@@ -96,6 +96,25 @@ class CompoundSettings:
             out.append("update rate must be more than 0 Hz")
         if not 1 <= self.columns <= 6:
             out.append("columns must be between 1 and 6")
+        return out
+
+    def commands(self, binding: Binding) -> list[tuple[str, float]]:
+        """What the input children may send, each at its path in the compound's message (a slider child on
+        ``linear.x`` up to 5: ``("linear.x", 5.0)``): checked against the robot's safety envelope."""
+        if binding.role is not Role.PUBLISH:
+            return []
+        out: list[tuple[str, float]] = []
+        for c in self.children:
+            spec = _spec_or_none(c.kind)
+            if spec is None:
+                continue
+            try:
+                settings = spec.make_settings(c.settings)
+                commands = getattr(settings, "commands", None)
+                if callable(commands):
+                    out += commands(Binding(binding.name, binding.type, Role.PUBLISH, (c.field_path,)))
+            except Exception:  # a child's bad settings are its own problem, said elsewhere
+                continue
         return out
 
     def preferred_size(self) -> tuple[float, float]:
@@ -219,6 +238,11 @@ class ChildPort:
     def __init__(self, compound: CompoundModel, child: Child | None = None) -> None:
         self.compound = compound
         self.child = child
+
+    @property
+    def envelope(self) -> Any:
+        """The robot's safety envelope, as the compound's own port tells it (a child's range follows it)."""
+        return getattr(self.compound.port, "envelope", None)
 
     def advertise(self, topic: str, type: str, **options: Any) -> _Captured:
         assert self.child is not None
@@ -434,8 +458,13 @@ class CompoundModel(StdModel):
                 self.set_error(f"not {verb}: " + "; ".join(blocked))
                 return
         if role is Role.PUBLISH:
-            if self.publish(self.composed()):
-                self._status = CallStatus("ok", self.binding.name, "published", time.time(), 0.0)
+            msg, note = held_to_envelope(self.port, self.binding.type, self.composed())
+            if msg is None:  # NaN or infinity in a motion command: never sent
+                self.set_error(note)
+                return
+            if self.publish(msg):
+                self._status = CallStatus("ok", self.binding.name, f"published, {note}" if note else "published",
+                                          time.time(), 0.0)
                 self._show_state()
         elif role is Role.CALL:
             self._status = CallStatus("busy", self.binding.name, "", time.time())

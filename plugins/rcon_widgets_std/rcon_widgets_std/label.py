@@ -1,5 +1,10 @@
 """Label: shows one field (or the whole message) of any subscribed topic, with decimals, units and the
-age of the data. Settings and model; the Qt view is in ``label_view``."""
+age of the data. Settings and model; the Qt view is in ``label_view``.
+
+A field the message definition gives as a fraction of 1 (``sensor_msgs/BatteryState.percentage``: "charge
+percentage on 0 to 1 range") is shown in % when the settings leave the scale at 1 and the units empty:
+``85 %``, never ``0.85`` (the decimals count for the percentage, less two, so the default 2 shows a whole
+percent)."""
 
 from __future__ import annotations
 
@@ -7,6 +12,7 @@ from typing import Any
 
 import attrs
 
+from rcon_core.msgs.names import pkg_type
 from rcon_core.plugins.paths import PathError, get_path
 
 from .base import StdModel
@@ -51,6 +57,11 @@ class LabelValue:
     numeric: bool
 
 
+#: fields defined as a fraction of 1, by (type, field path): shown in % unless the settings scale them
+FRACTIONS = frozenset({("sensor_msgs/BatteryState", "percentage"),
+                       ("sensor_msgs/RelativeHumidity", "relative_humidity")})
+
+
 class LabelModel(StdModel):
     """Subscriber: the bound field becomes a :class:`LabelValue`."""
 
@@ -58,6 +69,9 @@ class LabelModel(StdModel):
 
     def __init__(self, settings: LabelSettings | None, *args: Any, **kwargs: Any) -> None:
         super().__init__(settings if settings is not None else LabelSettings(), *args, **kwargs)
+        b = self.binding
+        #: the bound field is a fraction of 1 (BatteryState.percentage): shown in % (see the module docstring)
+        self.fraction = (pkg_type(b.type), b.field_path) in FRACTIONS if b.type else False
 
     def on_message(self, msg: dict[str, Any]) -> None:
         path = self.binding.field_path
@@ -71,6 +85,10 @@ class LabelModel(StdModel):
     def make_value(self, value: Any) -> LabelValue:
         s = self.settings
         numeric = isinstance(value, (int, float)) and not isinstance(value, bool)
+        if numeric and self.fraction and s.scale == 1.0 and not s.units:
+            percent = value * 100.0
+            decimals = max(0, s.decimals - 2) if s.decimals >= 0 else -1
+            return LabelValue(format_value(percent, decimals, "%"), percent, True)
         if numeric and s.scale != 1.0:
             value = value * s.scale
         return LabelValue(format_value(value, s.decimals, s.units), value, numeric)

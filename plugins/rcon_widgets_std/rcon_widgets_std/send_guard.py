@@ -4,7 +4,8 @@ A :class:`SendGuard` sits on the control's push button as an event filter. With 
 does nothing (the control works as before). Otherwise it takes the button's presses itself:
 
 - **hold to send**: the button must be held for :data:`HOLD_S` (1 s); a bar along the button's bottom
-  edge fills while it is held. Let go earlier and nothing is sent (the face says "hold 1 s to send");
+  edge fills while it is held. Let go earlier and nothing is sent (the face says "✗ hold 1 s", short
+  enough for the smallest control: "hold 1 s to send" was cut to "✗ hold 1…");
   the keyboard cannot hold, so Space/Enter send nothing either.
 - **ask before sending**: a confirm dialog names exactly what goes to the robot: the service (or topic),
   its type and the request (or message) as YAML. Cancel sends nothing. With both settings the dialog
@@ -14,6 +15,10 @@ does nothing (the control works as before). Otherwise it takes the button's pres
 settings; None when it cannot be built: then ``send()`` runs and the model reports why nothing was sent).
 ``send()`` sends; ``release()`` (optional, the Button's release call) runs when the finger lifts after a
 hold, or right after ``send()`` when the dialog was confirmed.
+
+The decisions (how long, what a release means, the counts) are the core's Qt-free
+:class:`rcon_core.plugins.send_guard.SendGate`, a documented API any widget can use; this module is the
+Qt side for a push button, and re-exports the core's names.
 """
 
 from __future__ import annotations
@@ -23,8 +28,13 @@ from typing import Any
 
 from qtpy import QtCore, QtWidgets
 
-HOLD_S = 1.0
+from rcon_core.plugins.send_guard import HOLD_S, Outcome, SendGate, describe_send
+
+__all__ = ["HOLD_S", "SendGate", "SendGuard", "describe_send"]
+
 TICK_MS = 30
+#: what the face flashes after a press too short to send (the tooltip says it in full)
+HOLD_FACE = f"hold {HOLD_S:g} s"
 
 
 class SendGuard(QtCore.QObject):
@@ -37,11 +47,7 @@ class SendGuard(QtCore.QObject):
         self.describe, self.send, self.release = describe, send, release
         self.face = face
         self.dialog: QtWidgets.QMessageBox | None = None
-        self.sent = 0  #: commands this guard let through
-        self.refused = 0  #: presses that sent nothing (a short press, Cancel)
-        self._held = QtCore.QElapsedTimer()
-        self._holding = False
-        self._fired = False
+        self.gate = SendGate(ask=ask, hold=hold)  #: the decisions (rcon_core.plugins.send_guard)
         self._tick = QtCore.QTimer(self)
         self._tick.setInterval(TICK_MS)
         self._tick.timeout.connect(self._step)
@@ -59,7 +65,17 @@ class SendGuard(QtCore.QObject):
 
     @property
     def active(self) -> bool:
-        return self.ask or self.hold
+        return self.gate.active
+
+    @property
+    def sent(self) -> int:
+        """Commands this guard let through."""
+        return self.gate.sent
+
+    @property
+    def refused(self) -> int:
+        """Presses that sent nothing (a short press, Cancel)."""
+        return self.gate.refused
 
     # ------------------------------------------------------------------------------------ events
     def eventFilter(self, obj: QtCore.QObject, event: QtCore.QEvent) -> bool:  # noqa: N802 - Qt's name
@@ -84,8 +100,7 @@ class SendGuard(QtCore.QObject):
         self.button.setDown(True)
         if not self.hold:
             return
-        self._holding, self._fired = True, False
-        self._held.start()
+        self.gate.press()
         self.progress.setGeometry(0, self.button.height() - 8, self.button.width(), 8)
         self.progress.setValue(0)
         self.progress.show()
@@ -93,12 +108,10 @@ class SendGuard(QtCore.QObject):
         self._tick.start()
 
     def _step(self) -> None:
-        if not self._holding:
+        if not self.gate.holding:
             return
-        done = self._held.elapsed() / (HOLD_S * 1000)
-        self.progress.setValue(min(100, int(done * 100)))
-        if done >= 1.0 and not self._fired:
-            self._fired = True
+        self.progress.setValue(int(self.gate.progress() * 100))
+        if self.gate.due():
             self._tick.stop()
             if self.ask:
                 self._end_hold()
@@ -107,19 +120,17 @@ class SendGuard(QtCore.QObject):
                 self._go(release=False)
 
     def _release(self) -> None:
-        was_holding, fired = self._holding, self._fired
+        outcome = self.gate.release()
         self._end_hold()
-        if not self.hold:
+        if outcome is Outcome.CONFIRM:
             self._confirm()
-        elif was_holding and not fired:
-            self.refused += 1
-            if self.face is not None:
-                self.face.answer(False, f"hold {HOLD_S:g} s to send")
-        elif was_holding and fired and not self.ask and self.release is not None:
+        elif outcome is Outcome.TOO_SHORT:
+            if self.face is not None:  # short enough for the face of the smallest control, never cut
+                self.face.answer(False, HOLD_FACE)
+        elif outcome is Outcome.HELD and not self.ask and self.release is not None:
             self.release()
 
     def _end_hold(self) -> None:
-        self._holding = False
         self._tick.stop()
         self.progress.hide()
         self.button.setDown(False)
@@ -131,7 +142,7 @@ class SendGuard(QtCore.QObject):
 
     # ------------------------------------------------------------------------------------ sending
     def _go(self, release: bool) -> None:
-        self.sent += 1
+        self.gate.sent_one()
         self.send()
         if release and self.release is not None:
             self.release()
@@ -165,10 +176,9 @@ class SendGuard(QtCore.QObject):
             b.setMinimumWidth(max(b.sizeHint().width(), 160))
 
         def answered(button: Any) -> None:
+            self.gate.answered(button is yes)
             if button is yes:
                 self._go(release=True)
-            else:
-                self.refused += 1
 
         box.buttonClicked.connect(answered)
         box.finished.connect(lambda _r: self._closed(box))

@@ -13,7 +13,7 @@ from rcon_core.plugins import Role
 from rcon_core.plugins.paths import PathError, get_path
 
 from .base import StdModel
-from .common import INT_LIMITS, RateLimiter, field_at, type_limits
+from .common import INT_LIMITS, SANE_LIMIT, RateLimiter, envelope_limit, field_at, sane_limits, type_limits
 
 __all__ = ["SliderSettings", "SliderModel", "NumberRange", "PUBLISH_ON_RELEASE", "PUBLISH_CONTINUOUS"]
 
@@ -52,10 +52,28 @@ class SliderSettings:
     def problems(self) -> list[str]:
         out = [] if isinstance(self.initial, (int, float)) and math.isfinite(self.initial) else [
             f"start value must be a finite number, not {self.initial!r}"]
+        if not out and abs(self.initial) > SANE_LIMIT:
+            out.append(f"start value {self.initial:g} is out of any sane range (at most ±{SANE_LIMIT:g})")
         return out + range_problems(self.minimum, self.maximum, self.step, self.rate_hz) + (
             [] if self.publish_mode in (PUBLISH_ON_RELEASE, PUBLISH_CONTINUOUS)
             else [f"publish must be {PUBLISH_ON_RELEASE!r} or {PUBLISH_CONTINUOUS!r}, not {self.publish_mode!r}"]
         )
+
+    def commands(self, binding: Any) -> list[tuple[str, float]]:
+        """(field path, the largest value it may send there): checked against the robot's safety envelope."""
+        return numeric_commands(self, binding)
+
+
+def numeric_commands(settings: Any, binding: Any) -> list[tuple[str, float]]:
+    """A Slider's or Stepper's ``commands(binding)``: the largest number it may send on its field (what the
+    app compares with the robot's safety envelope before saving the settings)."""
+    if getattr(binding, "role", None) not in (Role.PUBLISH, "publish"):
+        return []
+    try:
+        top = max(abs(float(settings.minimum)), abs(float(settings.maximum)))
+    except (TypeError, ValueError):
+        return []
+    return [(binding.field_path, top)]
 
 
 def range_problems(minimum: float, maximum: float, step: float, rate_hz: float) -> list[str]:
@@ -63,6 +81,11 @@ def range_problems(minimum: float, maximum: float, step: float, rate_hz: float) 
     for name, v in (("minimum", minimum), ("maximum", maximum), ("step", step), ("update rate", rate_hz)):
         if not isinstance(v, (int, float)) or not math.isfinite(v):
             out.append(f"{name} must be a finite number, not {v!r}")
+    if out:
+        return out
+    for name, v in (("minimum", minimum), ("maximum", maximum), ("step", step)):
+        if abs(v) > SANE_LIMIT:  # 999999999999 typed for 1.0: a slip of a finger, never a range
+            out.append(f"{name} {v:g} is out of any sane range (at most ±{SANE_LIMIT:g}): a slip of a finger?")
     if out:
         return out
     if minimum >= maximum:
@@ -85,7 +108,8 @@ class NumberRange:
     step: float
     integer: bool
     base: str = "float64"
-    clamped: bool = False  #: the settings asked for more than the type holds
+    clamped: bool = False  #: the settings asked for more than the type holds (or the envelope allows)
+    why: str = ""  #: what limits it, in words, when ``clamped`` ("what a int8 holds", "the safety envelope")
 
     def coerce(self, value: float) -> float | int:
         """Clamp into the range and snap to the step grid (ints for integer fields)."""
@@ -101,14 +125,21 @@ class NumberRange:
         return max(1, round((self.maximum - self.minimum) / self.step))
 
 
-def number_range(minimum: float, maximum: float, step: float, base: str) -> NumberRange:
+def number_range(minimum: float, maximum: float, step: float, base: str, limit: float | None = None,
+                 units: str = "") -> NumberRange:
+    """The usable range: the settings' ``minimum..maximum`` within what ``base`` holds and, when ``limit``
+    is given (the robot's safety envelope on this field), within ``±limit``."""
     lo, hi = type_limits(base) or (-math.inf, math.inf)
     integer = base in INT_LIMITS
     cmin, cmax = max(minimum, lo), min(maximum, hi)
+    why = f"what a {base} holds" if (cmin, cmax) != (minimum, maximum) else ""
+    if limit is not None and (cmin < -limit or cmax > limit):
+        cmin, cmax = max(cmin, -limit), min(cmax, limit)
+        why = f"the robot's safety envelope (at most {limit:g} {units})".replace(" )", ")")
     if integer:
         cmin, cmax, step = math.ceil(cmin), math.floor(cmax), max(1, round(step))
     clamped = (cmin, cmax) != (minimum, maximum)
-    return NumberRange(cmin, cmax, step, integer, base, clamped)
+    return NumberRange(cmin, cmax, step, integer, base, clamped, why if clamped else "")
 
 
 class NumericModel(StdModel):
@@ -137,9 +168,16 @@ class NumericModel(StdModel):
         return f.base if f is not None else "float64"
 
     @property
+    def envelope_limit(self) -> float | None:
+        """The robot's safety envelope on the bound field (a Twist's ``linear.x``: its maximum linear
+        speed), None when it holds nothing here. Read at each use: the envelope may change."""
+        return envelope_limit(self.port, self.binding.type, self.binding.field_path)
+
+    @property
     def range(self) -> NumberRange:
         s = self.settings
-        return number_range(s.minimum, s.maximum, s.step, self.field_base)
+        return number_range(s.minimum, s.maximum, s.step, self.field_base, self.envelope_limit,
+                            "m/s" if ".angular" not in f".{self.binding.field_path}" else "rad/s")
 
     def problems(self) -> list[str]:
         out = super().problems()
@@ -153,8 +191,17 @@ class NumericModel(StdModel):
         if f is None or not f.is_builtin or f.array_len is not None or type_limits(f.base) is None:
             what = "the whole message" if f is None else f"{f.name} ({f.type})"
             return [*out, f"the bound field must be a number, but it is {what}"]
-        if not out and self.range.minimum >= self.range.maximum:
-            out.append(f"the range {self.settings.minimum:g}..{self.settings.maximum:g} holds no {f.base} value")
+        s = self.settings
+        if out:  # the settings' own problems first (not a number, out of any sane range)
+            return out
+        lo, hi, what = sane_limits(f.base, b.type, b.field_path)
+        for name, v in (("minimum", s.minimum), ("maximum", s.maximum)):
+            if not lo <= v <= hi:  # a slip of a finger: refused, never silently clamped
+                out.append(f"{name} {v:g} is beyond what {what}")
+        r = self.range
+        if not out and r.minimum >= r.maximum:
+            out.append(f"the range {s.minimum:g}..{s.maximum:g} holds no value {r.why} allows"
+                       if "envelope" in r.why else f"the range {s.minimum:g}..{s.maximum:g} holds no {f.base} value")
         return out
 
     # -- publishing (any thread) ---------------------------------------------------------------------
@@ -178,6 +225,12 @@ class NumericModel(StdModel):
         self._limiter.cancel()
 
     # -- inside a Compound (loop thread) ---------------------------------------------------------------
+    @property
+    def in_compound(self) -> bool:
+        """A Compound's child (its port ``composes``): nothing goes out until the compound sends, and it
+        shows the number the compound *will* send (before it is touched: the start value), never "not set"."""
+        return bool(getattr(self.port, "composes", False))
+
     def shown_number(self) -> float | int | None:
         """The number the widget shows (None before it shows one)."""
         v = self.state.value
@@ -229,6 +282,13 @@ class SliderModel(NumericModel):
     def resting(self) -> float | int:
         """Where a publish slider's handle rests while nothing was sent or heard: the start value, in range."""
         return self.range.coerce(self.settings.initial)
+
+    def shown_number(self) -> float | int | None:
+        """Inside a Compound an untouched publish slider shows (and the compound sends) its resting value."""
+        v = super().shown_number()
+        if v is None and self.in_compound and self.binding.role is Role.PUBLISH:
+            return self.resting
+        return v
 
     def on_types_ready(self) -> None:
         super().on_types_ready()

@@ -96,9 +96,10 @@ class SliderView(QtWidgets.QWidget):
         self.slider.blockSignals(False)
         units = getattr(self.model.settings, "units", "")
         self.low.show_text(f"{self._fmt(r.minimum)} {units}".strip())
-        self.high.show_text(f"{self._fmt(r.maximum)} {units}".strip())
-        if r.clamped:
-            self.high.setToolTip(f"limited to what a {r.base} holds")
+        held = "envelope" in getattr(r, "why", "")
+        # a range the robot's safety envelope holds in says so at its ends: what the slider can send
+        self.high.show_text(f"{self._fmt(r.maximum)} {units}".strip() + (" · envelope" if held else ""),
+                            tooltip=f"limited to {r.why}" if r.clamped else "")
 
     def _fmt(self, v: float) -> str:
         return format_number(v, -1 if self._range and self._range.integer else self.model.settings.decimals)
@@ -134,7 +135,12 @@ class SliderView(QtWidgets.QWidget):
             self.value.setToolTip("")
 
     def _show_unset(self) -> None:
-        """Nothing was sent or heard on the topic: no number that could pass for the robot's setting."""
+        """Nothing was sent or heard on the topic: no number that could pass for the robot's setting.
+        Inside a Compound the number the compound will send (the start value), said as such."""
+        if getattr(self.model, "in_compound", False):
+            self._show(self.model.resting)
+            self.value.setToolTip("the compound sends this value (the start value) until you move the slider")
+            return
         if self.value.text() != NOT_SET:
             self.value.setText(NOT_SET)
             self.value.setToolTip(f"nothing sent or heard on {self.model.binding.name} yet; "

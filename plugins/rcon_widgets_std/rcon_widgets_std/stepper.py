@@ -7,7 +7,7 @@ from typing import Any
 
 import attrs
 
-from .slider import NumericModel, range_problems
+from .slider import NumericModel, numeric_commands, range_problems
 
 __all__ = ["StepperSettings", "StepperModel"]
 
@@ -29,6 +29,10 @@ class StepperSettings:
             out.append(f"start value {self.initial:g} is outside {self.minimum:g}..{self.maximum:g}")
         return out
 
+    def commands(self, binding: Any) -> list[tuple[str, float]]:
+        """(field path, the largest value it may send there): checked against the robot's safety envelope."""
+        return numeric_commands(self, binding)
+
 
 class StepperModel(NumericModel):
     """``up()``/``down()``/``set_to(v)`` change the value at once (shown) and publish it, rate-limited."""
@@ -47,6 +51,11 @@ class StepperModel(NumericModel):
 
     def shown_number(self) -> float | int:
         return self.current
+
+    @property
+    def in_compound(self) -> bool:
+        """A Compound's child: it shows the number the compound will send (the start value until stepped)."""
+        return bool(getattr(self.port, "composes", False))
 
     def up(self) -> float | int:
         return self.set_to(self.current + self.range.step)

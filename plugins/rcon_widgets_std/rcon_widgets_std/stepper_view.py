@@ -1,5 +1,6 @@
 """Stepper's Qt view: − value + ; holding a button repeats (the model limits the publish rate). Until the
-first step the value reads "not set" (the first step starts from the start value)."""
+first step the value reads "not set" (the first step starts from the start value); inside a Compound it
+shows the start value, which is what the compound sends until it is stepped."""
 
 from __future__ import annotations
 
@@ -38,7 +39,11 @@ class StepperView(QtWidgets.QWidget):
         layout.addWidget(self.note)
         self.minus.clicked.connect(lambda: self._show(model.down()))
         self.plus.clicked.connect(lambda: self._show(model.up()))
-        self._show(model.current, shown=False)  # nothing sent yet: no number that passes for the robot's
+        # nothing sent yet: no number that passes for the robot's -- except inside a Compound, which sends the
+        # number shown (the start value until stepped): there it is shown, as what will be sent
+        self._show(model.current, shown=bool(getattr(model, "in_compound", False)))
+        if getattr(model, "in_compound", False):
+            self.value.setToolTip("the compound sends this value (the start value) until you step it")
 
     def _show(self, v: float, shown: bool = True) -> None:
         s = self.model.settings

@@ -21,7 +21,7 @@ from rcon_core.plugins import Role
 from rcon_core.plugins.paths import PathError, get_path, set_path
 
 from .base import StdModel
-from .common import field_at, format_value
+from .common import field_at, format_value, held_to_envelope
 
 __all__ = ["TextFieldSettings", "TextFieldModel", "TextValue"]
 
@@ -54,6 +54,8 @@ class TextValue:
     sent: bool = False
     #: inside a Compound: the typed text parses; it is what the compound will send
     ready: bool = False
+    #: what the robot's safety envelope made of it ("held to the safety envelope: linear.x 5 → 1")
+    note: str = ""
 
 
 class TextFieldModel(StdModel):
@@ -118,8 +120,16 @@ class TextFieldModel(StdModel):
             self.set_error(f"not sent: {exc}")
             return False
         self._draft = text
+        note = ""
+        if not self.in_compound:  # a compound judges its whole message when it sends
+            held, note = held_to_envelope(self.port, self.binding.type, msg)
+            if held is None:
+                self.set_error(note)
+                return False
+            msg = held
         if self.publish(msg):
-            self.set_value(TextValue(text, sent=not self.in_compound, ready=self.in_compound), message=msg)
+            self.set_value(TextValue(text, sent=not self.in_compound, ready=self.in_compound, note=note),
+                           message=msg)
             return True
         return False
 

@@ -16,7 +16,7 @@ from qtpy import QtWidgets
 
 from rcon_core.plugins import Role
 
-from .view_common import BAD, MUTED, OK, Caption, fit_caption, vbox
+from .view_common import BAD, MUTED, OK, STALE, Caption, fit_caption, vbox
 
 
 class TextFieldView(QtWidgets.QWidget):
@@ -71,7 +71,10 @@ class TextFieldView(QtWidgets.QWidget):
             ready = v is not None and v.ready
             self.status.show_text(f"will send: {v.text}" if ready else "nothing typed yet", OK if ready else MUTED)
         elif v is not None and v.sent:
-            self.status.show_text(f"sent: {v.text}", OK)
+            if v.note:  # the robot's safety envelope changed what went out: said, never silent
+                self.status.show_text(f"sent, {v.note}", STALE, tooltip=f"typed: {v.text}")
+            else:
+                self.status.show_text(f"sent: {v.text}", OK)
             if self.model.settings.clear_after_send and self.edit.text() == v.text:
                 self.edit.clear()
         else:

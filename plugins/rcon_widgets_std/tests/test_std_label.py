@@ -25,6 +25,39 @@ def test_number_formatting_with_decimals_units_and_scale():
     assert format_value({"secs": 3, "nsecs": 500_000_000}) == "3.500 s"
 
 
+def test_as_received_shows_every_digit_of_the_value():
+    """issue 22.20: "as received" rounded to 6 digits (43.6532117 -> 43.6532)."""
+    m = build(LabelModel, LabelSettings(decimals=-1), "/gps/fix", "sensor_msgs/NavSatFix", "subscribe", "latitude")
+    m.on_message({"latitude": 43.6532117})
+    assert m.state.value.text == "43.6532117"
+    m.on_message({"latitude": -79.38318429999999})
+    assert m.state.value.text == "-79.3831843"  # every digit the double carries, not its last bit of noise
+    m.on_message({"latitude": 12.0})
+    assert m.state.value.text == "12"
+    assert format_value(1234567.891, -1) == "1234567.891" and format_value(7, -1) == "7"
+
+
+def test_a_battery_fraction_is_shown_in_percent():
+    """issue 21.12: a Label on /battery showed 0.85 (BatteryState.percentage is 0..1)."""
+    m = build(LabelModel, LabelSettings(), "/battery", "sensor_msgs/msg/BatteryState", "subscribe", "percentage")
+    m.on_message({"percentage": 0.8534})
+    assert m.state.value.text == "85 %" and m.state.value.raw == 85.34
+    m.settings.decimals = 3
+    m.on_message({"percentage": 0.8534})
+    assert m.state.value.text == "85.3 %"
+    m.settings.decimals = -1
+    m.on_message({"percentage": 0.8534})
+    assert m.state.value.text == "85.34 %"
+    # the operator's own scale and units win (the demo's: scale 100, "%")
+    own = build(LabelModel, LabelSettings(decimals=0, scale=100, units="%"), "/battery", "sensor_msgs/BatteryState",
+                "subscribe", "percentage")
+    own.on_message({"percentage": 0.85})
+    assert own.state.value.text == "85 %"
+    other = build(LabelModel, LabelSettings(), "/battery", "sensor_msgs/BatteryState", "subscribe", "voltage")
+    other.on_message({"voltage": 12.6})
+    assert other.state.value.text == "12.60"
+
+
 def test_never_negative_zero_after_rounding():
     m = build(LabelModel, LabelSettings(decimals=2, units="rad/s"), "/imu/data", "sensor_msgs/Imu", "subscribe",
               "angular_velocity.z")

@@ -26,15 +26,37 @@ from rcon_core.testing import ManualClock, until
      ("std_msgs/Float32", -3.4028234663852886e38, 3.4028234663852886e38),
      ("std_msgs/Float64", -1e300, 1e300)],
 )
-def test_range_is_clamped_to_every_standard_numeric_type(type_, lo, hi):
+def test_range_is_clamped_to_every_standard_numeric_type_and_such_settings_are_refused(type_, lo, hi):
+    """The range a saved layout asks for is still clamped to what the field holds (nothing beyond it is
+    ever sent), but such settings are refused with a sentence (issue 21.4: 999999999999 was accepted)."""
     m = build(SliderModel, SliderSettings(minimum=-1e300, maximum=1e300, step=1), "/n", type_, "publish", "data")
     r = m.range
     assert (r.minimum, r.maximum) == (lo, hi)
     assert r.clamped == (type_ != "std_msgs/Float64")
     assert r.integer == ("Int" in type_)
-    assert m.problems() == []
+    assert m.problems()[0] == "minimum -1e+300 is out of any sane range (at most ±1e+09): a slip of a finger?"
     top = r.coerce(1e301)
     assert top == hi and (isinstance(top, int) if r.integer else isinstance(top, float))
+
+
+@pytest.mark.parametrize("type_,path,maximum,problem", [
+    ("std_msgs/Int8", "data", 500, "maximum 500 is beyond what a int8 holds (-128..127)"),
+    ("std_msgs/UInt8", "data", 256, "maximum 256 is beyond what a uint8 holds (0..255)"),
+    ("geometry_msgs/Twist", "linear.x", 999999999999,
+     "maximum 1e+12 is out of any sane range (at most ±1e+09): a slip of a finger?"),
+    ("geometry_msgs/Twist", "linear.x", 1000, "maximum 1000 is beyond what any safety envelope allows on linear "
+                                              "(±100 m/s)"),
+    ("geometry_msgs/TwistStamped", "twist.angular.z", 60, "maximum 60 is beyond what any safety envelope allows "
+                                                          "on angular (±50 rad/s)"),
+    ("std_msgs/Float32", "data", 2e9, "maximum 2e+09 is out of any sane range (at most ±1e+09): a slip of a finger?"),
+])
+def test_numeric_settings_outside_the_fields_sane_range_are_refused(type_, path, maximum, problem):
+    """issue 21.4: a slider's maximum typed as 999999999999 on /cmd_vel linear.x was accepted."""
+    m = build(SliderModel, SliderSettings(minimum=0, maximum=maximum, step=1), "/n", type_, "publish", path)
+    assert m.problems() == [problem]
+    ok = build(SliderModel, SliderSettings(minimum=0, maximum=50 if "Twist" in type_ else 127, step=1), "/n",
+               type_, "publish", path)
+    assert ok.problems() == []
 
 
 def test_step_snapping_and_integer_rounding():
@@ -59,9 +81,9 @@ def test_problems_name_what_is_wrong():
     assert "must be a number" in m.problems()[0]
     m = build(SliderModel, SliderSettings(), "/battery", "sensor_msgs/BatteryState", "subscribe", "percentagee")
     assert "no field 'percentagee'" in m.problems()[0]
-    # a range with nothing a uint8 can hold
+    # a range with nothing a uint8 can hold: refused, its first end named
     m = build(SliderModel, SliderSettings(minimum=-10, maximum=-1, step=1), "/n", "std_msgs/UInt8", "publish", "data")
-    assert "holds no uint8 value" in m.problems()[0]
+    assert m.problems()[0] == "minimum -10 is beyond what a uint8 holds (0..255)"
 
 
 def test_rate_limiter_keeps_the_latest_and_never_loses_it():

@@ -22,7 +22,12 @@ def test_integer_field_and_problems():
     m = build(StepperModel, StepperSettings(minimum=-200, maximum=200, step=0.4), "/n", "std_msgs/Int8", "publish",
               "data")
     r = m.range
-    assert (r.minimum, r.maximum, r.step) == (-128, 127, 1) and m.problems() == []
+    assert (r.minimum, r.maximum, r.step) == (-128, 127, 1)  # a saved layout's range: clamped, and refused
+    assert m.problems() == ["minimum -200 is beyond what a int8 holds (-128..127)",
+                            "maximum 200 is beyond what a int8 holds (-128..127)"]
+    m = build(StepperModel, StepperSettings(minimum=-100, maximum=100, step=0.4), "/n", "std_msgs/Int8", "publish",
+              "data")
+    assert m.range.step == 1 and m.problems() == []
     assert "outside" in StepperSettings(initial=20).problems()[0]
     assert "less than maximum" in StepperSettings(minimum=3, maximum=3).problems()[0]
 

@@ -1,0 +1,527 @@
+"""Benchmark of the flight recorder and of replay (issue 27's figures).
+
+Usage: ``python benchmarks/bench_record.py [--only fleet writer ingest pacing seek memory] [--seconds 20]
+[--pacing-seconds 600] [--out FILE.json]``. Each part prints its figures with the load average of the
+machine before and after it (a 2-core machine shared with other work: timing figures taken under load
+are noisy, and the JSON says what the load was).
+
+- ``fleet``: the 3-vessel fleet benchmark (``bench_app.py --robots 3``: 6 cameras, 60 values at 20 Hz, one
+  window) run twice, without and with the app's Record control on; the app's CPU share of each run, the
+  messages the recorder wrote and dropped, and every file read back (its message count must equal what
+  was written). Target: app CPU +10 % at most, nothing dropped.
+- ``writer``: the writer alone (``McapSink``, its thread) taking the fleet's camera frames as fast as it
+  can, zstd and lz4: MB/s, and its headroom over the fleet's data rate (target >= 10x).
+- ``ingest``: ``rcon record`` (a process) recording a publisher of raw 640x480 rgb8 frames (a bare sim in
+  another process, as fast as it can), against a plain subscriber process that only counts them: MB/s
+  written (target >= 50) and CPU per message of each (target: recording within 5 % of plain subscribe).
+- ``pacing``: a 10-minute recording (odometry 50 Hz, fix 5 Hz, a 320x240 camera 5 Hz) played at 1x with a
+  subscriber: each message's release time minus its due time, p50/p99/max (target p99 < 5 ms).
+  ``--pacing-seconds`` plays only the first N seconds of it (the default plays all 600).
+- ``seek``: a 1 GB recording of 640x480 camera frames served as a robot; 20 seeks to random times, each
+  timed from the seek to the first frame at the new time received and decoded by a client (the app's
+  paint adds one frame, ~16 ms, not measured here). Target < 300 ms.
+- ``memory``: RSS of the process while it records an hour of messages (odometry 20 Hz, a JPEG-sized
+  camera 10 Hz: time stamps over an hour, written as fast as the writer takes them, with at most 4 MB
+  waiting in its queue as at a live robot's pace), then while it plays that hour-long file at 120x to a
+  subscriber (30 s). Target: growth < 20 MB each.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import json
+import os
+import random
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent))
+MB = 1_000_000
+#: the 3-vessel fleet's data rate by its specification: per vessel a 640x480 rgb8 camera at 10 Hz, a JPEG
+#: camera at 12 Hz (about 35 kB a frame) and 20 Float64 at 20 Hz
+NOMINAL_FLEET = round(3 * (640 * 480 * 3 * 10 + 35_000 * 12 + 20 * 20 * 8) / MB, 1)
+
+
+def load() -> list[float]:
+    return [round(v, 2) for v in os.getloadavg()]
+
+
+def rss_mb() -> float:
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
+
+
+def pct(values: list[float], q: float) -> float:
+    if not values:
+        return float("nan")
+    values = sorted(values)
+    return values[min(len(values) - 1, int(q / 100 * len(values)))]
+
+
+def proc_cpu_s(pid: int) -> float:
+    with open(f"/proc/{pid}/stat") as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def camera_frame(i: int, w: int = 640, h: int = 480, noise: float = 0.0) -> bytes:
+    import numpy as np
+
+    img = np.zeros((h, w, 3), dtype=np.uint8)
+    img[:, :, 0] = (np.arange(w) + i) % 256
+    img[: h // 2, :, 2] = 180
+    img[h // 2:, :, 1] = (np.arange(h // 2)[:, None] + i) % 256
+    if noise:
+        rng = np.random.default_rng(i)
+        rows = int(h * noise)
+        img[:rows] = rng.integers(0, 256, size=(rows, w, 3), dtype=np.uint8)
+    return img.tobytes()
+
+
+def image_msg(reg: Any, t_ns: int, pixels: bytes, w: int = 640, h: int = 480) -> bytes:
+    return reg.serialize_ros1("sensor_msgs/Image", {
+        "header": {"seq": 0, "stamp": {"secs": t_ns // 10**9, "nsecs": t_ns % 10**9}, "frame_id": "cam"},
+        "height": h, "width": w, "encoding": "rgb8", "is_bigendian": 0, "step": w * 3, "data": pixels})
+
+
+def schema(reg: Any, name: str) -> tuple[str, str, bytes, str]:
+    from rcon_core.record.schema import schema_for
+
+    s = schema_for(name, False, reg)
+    return s.name, s.encoding, s.data, s.message_encoding
+
+
+# ------------------------------------------------------------------------------------------------ fleet
+
+def part_fleet(args: Any) -> dict[str, Any]:
+    out: dict[str, Any] = {"load_before": load()}
+    runs = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for label, env in (("plain", {}), ("recording", {"BENCH_RECORD_DIR": str(Path(tmp) / "rec")})):
+            path = Path(tmp) / f"{label}.json"
+            subprocess.run([sys.executable, str(HERE / "bench_app.py"), "--robots", "3", "--seconds",
+                            str(args.seconds), "--out", str(path)], env={**os.environ, **env,
+                                                                        "QT_QPA_PLATFORM": "offscreen"},
+                           check=True, stdout=subprocess.DEVNULL)
+            runs[label] = json.loads(path.read_text())
+        plain, rec = runs["plain"], runs["recording"]
+        r = rec.get("record", {})
+        in_files, data_bytes, seconds = 0, 0, 0.0
+        from mcap.reader import make_reader
+
+        for f in r.get("files", []):
+            with open(f, "rb") as fh:
+                reader = make_reader(fh)
+                summary = reader.get_summary()
+                in_files += summary.statistics.message_count
+                st = summary.statistics
+                seconds = max(seconds, (st.message_end_time - st.message_start_time) / 1e9)
+                for _s, _c, m in reader.iter_messages():
+                    data_bytes += len(m.data)
+    cpu_plain, cpu_rec = plain["app_cpu_share"], rec["app_cpu_share"]
+    out.update({
+        "app_cpu_share_plain": cpu_plain, "app_cpu_share_recording": cpu_rec,
+        "app_cpu_increase_pct": round((cpu_rec - cpu_plain) / cpu_plain * 100, 1),
+        "app_cpu_by_thread_recording": rec.get("app_cpu_share_by_thread"),
+        "messages_written": r.get("messages_written"), "messages_in_files": in_files,
+        "dropped": r.get("dropped"), "problem": r.get("problem"), "bytes_on_disk": r.get("bytes_on_disk"),
+        "fleet_data_rate_mb_s": round(data_bytes / max(seconds, 1e-9) / MB, 2),
+        "camera_frames_shown_per_s_plain": plain.get("camera_frames_shown_per_s"),
+        "camera_frames_shown_per_s_recording": rec.get("camera_frames_shown_per_s"),
+        "load_during_plain": [plain.get("load_average_before"), plain.get("load_average_after")],
+        "load_during_recording": [rec.get("load_average_before"), rec.get("load_average_after")],
+        "target_cpu_increase_pct": 10.0,
+    })
+    out["ok_cpu"] = out["app_cpu_increase_pct"] <= 10.0
+    out["ok_nothing_dropped"] = r.get("dropped") == 0 and in_files == r.get("messages_written")
+    out["load_after"] = load()
+    return out
+
+
+# ------------------------------------------------------------------------------------------------ writer
+
+def part_writer(args: Any, fleet_rate: float | None) -> dict[str, Any]:
+    from rcon_core.msgs import TypeRegistry
+    from rcon_core.record.writer import McapSink
+
+    reg = TypeRegistry.standard()
+    out: dict[str, Any] = {"load_before": load()}
+    with tempfile.TemporaryDirectory() as tmp:
+        for comp, noise in (("zstd", 0.0), ("lz4", 0.0), ("zstd", 0.5)):
+            # the sim's kind of picture (smooth: compresses ~30x), and one half noise (a worse case)
+            frames = [image_msg(reg, i, camera_frame(i, noise=noise)) for i in range(30)]
+            out["frame_bytes"] = len(frames[0])
+            label = comp if not noise else f"{comp}_half_noise"
+            sink = McapSink(str(Path(tmp) / f"w-{label}.mcap"), "ros1", compression=comp, max_queue=1 << 40)
+            sink.add_channel("/cam", *schema(reg, "sensor_msgs/Image"))
+            n = int(args.writer_mb * MB / len(frames[0]))
+            t0 = time.perf_counter()
+            cpu0 = time.process_time()
+            for i in range(n):
+                while sink.queued > 64 * MB:
+                    time.sleep(0.001)
+                sink.write("/cam", i, i, frames[i % len(frames)])
+            sink.close()
+            wall = time.perf_counter() - t0
+            mbps = n * len(frames[0]) / wall / MB
+            out[label] = {"mb_s": round(mbps, 1), "cpu_share": round((time.process_time() - cpu0) / wall, 2),
+                         "compressed_to_pct": round(sink.size / (n * len(frames[0])) * 100, 1),
+                         "dropped": sink.stats.dropped}
+            if fleet_rate:
+                out[label]["headroom_x"] = round(mbps / fleet_rate, 1)
+    out["fleet_data_rate_mb_s"] = fleet_rate
+    out["load_after"] = load()
+    return out
+
+
+# ------------------------------------------------------------------------------------------------ ingest
+
+PUBLISHER = """
+import asyncio, sys, time
+sys.path.insert(0, {root!r})
+from rcon_core.sim import SimServer
+sys.path.insert(0, {here!r})
+from bench_record import camera_frame
+async def main():
+    s = SimServer(robot=False, port=0)
+    await s.start()
+    s.advertise_internal("/cam", "sensor_msgs/Image", "/pub")
+    print(s.url, flush=True)
+    frames = [camera_frame(i) for i in range(8)]
+    i = 0
+    while True:
+        t = time.time()
+        if s.topics["/cam"].client_subscribers:
+            s.publish("/cam", {{"header": {{"seq": 0, "stamp": {{"secs": int(t), "nsecs": int(t % 1 * 1e9)}},
+                       "frame_id": "cam"}}, "height": 480, "width": 640, "encoding": "rgb8", "is_bigendian": 0,
+                       "step": 1920, "data": frames[i % 8]}}, "/pub")
+            i += 1
+        await asyncio.sleep(1 / {hz})
+asyncio.run(main())
+"""
+
+COUNTER = """
+import asyncio, sys, time
+sys.path.insert(0, {root!r})
+from rcon_core.bridge import BridgeClient
+async def main():
+    c = BridgeClient({url!r}, max_size=64 << 20)
+    await c.connect()
+    n = [0, 0]
+    def got(p):
+        n[0] += 1; n[1] += len(p.data)
+    c.node("count").subscribe("/cam", got, raw=True)
+    t0 = time.time()
+    while time.time() - t0 < {seconds}:
+        await asyncio.sleep(0.5)
+    print(n[0], n[1], flush=True)
+    await c.close()
+asyncio.run(main())
+"""
+
+
+def part_ingest(args: Any) -> dict[str, Any]:
+    from mcap.reader import make_reader
+
+    out: dict[str, Any] = {"load_before": load(), "offered_hz": args.ingest_hz}
+    pub = subprocess.Popen([sys.executable, "-c", PUBLISHER.format(root=str(HERE.parent), here=str(HERE),
+                                                                    hz=args.ingest_hz)],
+                           stdout=subprocess.PIPE, text=True)
+    try:
+        url = pub.stdout.readline().strip()  # type: ignore[union-attr]
+        seconds = args.seconds
+        with tempfile.TemporaryDirectory() as tmp:
+            # plain subscribe
+            counter = subprocess.Popen([sys.executable, "-c", COUNTER.format(root=str(HERE.parent), url=url,
+                                                                             seconds=seconds)],
+                                       stdout=subprocess.PIPE, text=True)
+            cpu = 0.0
+            while counter.poll() is None:
+                cpu = proc_cpu_s(counter.pid)
+                time.sleep(0.2)
+            n_plain, bytes_plain = (int(x) for x in counter.stdout.read().split())  # type: ignore[union-attr]
+            cpu_plain = cpu
+            # rcon record
+            path = Path(tmp) / "ingest.mcap"
+            rec = subprocess.Popen([sys.executable, "-m", "rcon_core", "record", "-q", "-o", str(path), "/cam",
+                                    "--url", url, "--duration", str(seconds), "--compression", args.ingest_compression],
+                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            cpu = 0.0
+            while rec.poll() is None:
+                cpu = proc_cpu_s(rec.pid)
+                time.sleep(0.2)
+            err = rec.stderr.read()  # type: ignore[union-attr]
+            with open(path, "rb") as f:
+                st = make_reader(f).get_summary().statistics
+                cam = [c for c in make_reader(open(path, "rb")).get_summary().channels.values() if c.topic == "/cam"]
+                n_rec = st.channel_message_counts.get(cam[0].id, 0) if cam else 0
+                span = (st.message_end_time - st.message_start_time) / 1e9
+            frame = 640 * 480 * 3
+            out.update({
+                "plain_subscribe": {"messages": n_plain, "mb_s": round(bytes_plain / seconds / MB, 1),
+                                    "cpu_ms_per_message": round(cpu_plain * 1000 / max(1, n_plain), 3)},
+                "rcon_record": {"messages": n_rec, "mb_s_of_frames": round(n_rec * frame / max(span, 1e-9) / MB, 1),
+                                "cpu_ms_per_message": round(cpu * 1000 / max(1, n_rec), 3),
+                                "file_mb": round(path.stat().st_size / MB, 1), "said": err.strip()[-300:],
+                                "compression": args.ingest_compression},
+            })
+            out["record_cpu_over_plain_pct"] = round(
+                (out["rcon_record"]["cpu_ms_per_message"] / out["plain_subscribe"]["cpu_ms_per_message"] - 1) * 100, 1)
+            out["ok_50_mb_s"] = out["rcon_record"]["mb_s_of_frames"] >= 50
+            out["ok_cpu_5_pct"] = out["record_cpu_over_plain_pct"] <= 5
+    finally:
+        pub.terminate()
+        pub.wait()
+    out["load_after"] = load()
+    return out
+
+
+# ------------------------------------------------------------------------------------------------ pacing
+
+def make_recording(path: Path, seconds: float, topics: list[tuple[str, str, float, Any]], t0: int = 10**18,
+                   max_queued: int = 128 * MB) -> int:
+    """Write a recording of ``seconds`` with ``(topic, type, hz, make(i, t_ns) -> bytes)`` channels; the
+    messages are made as they are written (never all in memory) and at most ``max_queued`` bytes wait for
+    the writer (a live robot's messages come at its pace; the bench makes them as fast as it can)."""
+    import heapq
+
+    from rcon_core.msgs import TypeRegistry
+    from rcon_core.record.writer import McapSink
+
+    reg = TypeRegistry.standard()
+    sink = McapSink(str(path), "ros1", max_queue=1 << 40)
+    def stream(topic: str, hz: float, make: Any) -> Any:
+        for i in range(int(seconds * hz)):
+            yield t0 + int(i / hz * 1e9), topic, i, make
+
+    streams = []
+    for topic, type_name, hz, make in topics:
+        sink.add_channel(topic, *schema(reg, type_name))
+        streams.append(stream(topic, hz, make))
+    n = 0
+    for t, topic, i, make in heapq.merge(*streams, key=lambda e: e[0]):
+        while sink.queued > max_queued:
+            time.sleep(0.001)
+        sink.write(topic, t, t, make(i, t))
+        n += 1
+    sink.close()
+    return n
+
+
+def odom(reg: Any) -> Any:
+    def make(i: int, t: int) -> bytes:
+        return reg.serialize_ros1("nav_msgs/Odometry", {
+            "header": {"seq": i, "stamp": {"secs": t // 10**9, "nsecs": t % 10**9}, "frame_id": "odom"},
+            "child_frame_id": "base", "pose": {"pose": {"position": {"x": i * 0.01, "y": 0.0, "z": 0.0},
+                                                        "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}},
+                                               "covariance": [0.0] * 36},
+            "twist": {"twist": {"linear": {"x": 1.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}},
+                      "covariance": [0.0] * 36}})
+    return make
+
+
+def fix(reg: Any) -> Any:
+    def make(i: int, t: int) -> bytes:
+        return reg.serialize_ros1("sensor_msgs/NavSatFix", {
+            "header": {"seq": i, "stamp": {"secs": t // 10**9, "nsecs": t % 10**9}, "frame_id": "gps"},
+            "status": {"status": 0, "service": 1}, "latitude": 59.9 + i * 1e-6, "longitude": 10.7, "altitude": 0.0,
+            "position_covariance": [0.0] * 9, "position_covariance_type": 0})
+    return make
+
+
+async def _play(path: Path, seconds: float, rate: float, topics: list[str], sample: Any = None) -> Any:
+    from rcon_core.bridge import BridgeClient
+    from rcon_core.sim.playback import serve_recording
+
+    server, player = await serve_recording(str(path), rate=rate, paused=True)
+    client = BridgeClient(server.url, max_size=64 << 20)
+    await client.connect()
+    got = {"n": 0}
+    for t in topics:
+        client.node(f"s{t}").subscribe(t, lambda _m: got.__setitem__("n", got["n"] + 1), raw=True)
+    while not all(server.topic_subscriber_count(t) for t in topics):
+        await asyncio.sleep(0.01)
+    await asyncio.sleep(0.5)
+    player.play()
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < seconds and not player.ended:
+        await asyncio.sleep(0.25)
+        if sample is not None:
+            sample()
+    await client.close()
+    await player.stop()
+    await server.stop()
+    player.recording.close()
+    return player, got["n"]
+
+
+def part_pacing(args: Any) -> dict[str, Any]:
+    from rcon_core.msgs import TypeRegistry
+
+    reg = TypeRegistry.standard()
+    small = camera_frame(0, 320, 240)
+    out: dict[str, Any] = {"load_before": load()}
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "ten-minutes.mcap"
+        n = make_recording(path, 600, [("/odom", "nav_msgs/Odometry", 50, odom(reg)),
+                                       ("/gps/fix", "sensor_msgs/NavSatFix", 5, fix(reg)),
+                                       ("/cam", "sensor_msgs/Image", 5,
+                                        lambda i, t: image_msg(reg, t, small, 320, 240))])
+        player, received = asyncio.run(_play(path, args.pacing_seconds, 1.0, ["/odom", "/gps/fix", "/cam"]))
+    late = [x * 1000 for x in player.lateness]
+    out.update({"recording_messages": n, "played_seconds": min(args.pacing_seconds, 600),
+                "released": len(late), "received_by_client": received,
+                "release_error_p50_ms": round(pct(late, 50), 3), "release_error_p99_ms": round(pct(late, 99), 3),
+                "release_error_max_ms": round(max(late), 3) if late else None, "target_p99_ms": 5.0})
+    out["ok"] = out["release_error_p99_ms"] < 5.0
+    out["load_after"] = load()
+    return out
+
+
+# ------------------------------------------------------------------------------------------------ seek
+
+def part_seek(args: Any) -> dict[str, Any]:
+    from rcon_core.msgs import TypeRegistry
+
+    reg = TypeRegistry.standard()
+    out: dict[str, Any] = {"load_before": load()}
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "one-gb.mcap"
+        frames = [camera_frame(i, noise=1.0) for i in range(16)]
+        t = time.perf_counter()
+        make_recording(path, args.seek_frames / 10, [("/cam", "sensor_msgs/Image", 10,
+                                                     lambda i, tt: image_msg(reg, tt, frames[i % 16]))])
+        out["file_gb"] = round(path.stat().st_size / 1e9, 2)
+        out["written_in_s"] = round(time.perf_counter() - t, 1)
+        out["seeks_ms"] = asyncio.run(_seeks(path, reg))
+    s = out["seeks_ms"]
+    out.update({"seek_to_frame_p50_ms": round(pct(s, 50), 1), "seek_to_frame_max_ms": round(max(s), 1),
+                "target_ms": 300.0})
+    out["ok"] = out["seek_to_frame_max_ms"] < 300
+    out["load_after"] = load()
+    return out
+
+
+async def _seeks(path: Path, reg: Any) -> list[float]:
+    from rcon_core.bridge import BridgeClient
+    from rcon_core.sim.playback import serve_recording
+
+    server, player = await serve_recording(str(path), paused=True)
+    client = BridgeClient(server.url, max_size=64 << 20)
+    await client.connect()
+    box: dict[str, Any] = {"t": None, "event": asyncio.Event()}
+
+    def got(msg: Any) -> None:
+        stamp = msg["header"]["stamp"]
+        t = stamp["secs"] * 10**9 + stamp["nsecs"]
+        if box["t"] is not None and abs(t - box["t"]) <= 100_000_000:
+            box["event"].set()
+
+    client.node("view").subscribe("/cam", got, compression="cbor-raw", queue_length=1)
+    while not server.topic_subscriber_count("/cam"):
+        await asyncio.sleep(0.01)
+    times = []
+    rng = random.Random(27)
+    rec = player.recording
+    for _ in range(20):
+        target = rng.uniform(1.0, rec.duration - 1.0)
+        box["t"] = rec.start_ns + int(target * 1e9) - 100_000_000  # the frame before it (10 Hz)
+        box["event"] = asyncio.Event()
+        t0 = time.perf_counter()
+        player.seek(target)
+        await asyncio.wait_for(box["event"].wait(), 10)
+        times.append((time.perf_counter() - t0) * 1000)
+        await asyncio.sleep(0.2)
+    await client.close()
+    await player.stop()
+    await server.stop()
+    rec.close()
+    return [round(x, 1) for x in times]
+
+
+# ------------------------------------------------------------------------------------------------ memory
+
+def part_memory(args: Any) -> dict[str, Any]:
+    import gc
+
+    from rcon_core.msgs import TypeRegistry
+
+    reg = TypeRegistry.standard()
+    jpegs = [bytes(random.Random(k).getrandbits(8) for _ in range(30_000)) for k in range(8)]
+    out: dict[str, Any] = {"load_before": load()}
+    samples: list[float] = []
+    stop = threading.Event()
+
+    def sampler() -> None:
+        while not stop.is_set():
+            samples.append(rss_mb())
+            time.sleep(0.2)
+
+    def jpeg_msg(i: int, t: int) -> bytes:
+        return reg.serialize_ros1("sensor_msgs/CompressedImage", {
+            "header": {"seq": i, "stamp": {"secs": t // 10**9, "nsecs": t % 10**9}, "frame_id": "cam"},
+            "format": "jpeg", "data": jpegs[i % 8]})
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "hour.mcap"
+        # warm up the writer and the codecs, then measure
+        make_recording(Path(tmp) / "warm.mcap", 10, [("/odom", "nav_msgs/Odometry", 20, odom(reg))])
+        gc.collect()
+        base = rss_mb()
+        th = threading.Thread(target=sampler, daemon=True)
+        th.start()
+        t = time.perf_counter()
+        n = make_recording(path, 3600, [("/odom", "nav_msgs/Odometry", 20, odom(reg)),
+                                        ("/camera/compressed", "sensor_msgs/CompressedImage", 10, jpeg_msg)],
+                           max_queued=4 * MB)
+        stop.set()
+        th.join()
+        out["record"] = {"messages": n, "file_mb": round(path.stat().st_size / MB, 1),
+                         "written_in_s": round(time.perf_counter() - t, 1), "rss_start_mb": round(base, 1),
+                         "rss_max_mb": round(max(samples), 1), "rss_growth_mb": round(max(samples) - base, 1)}
+        # replay: the first 5 s warm up, then the growth over the rest
+        play_samples: list[float] = []
+        asyncio.run(_play(path, 3600 / 120 + 10, 120.0, ["/odom", "/camera/compressed"],
+                          sample=lambda: play_samples.append(rss_mb())))
+        warm = play_samples[min(20, len(play_samples) - 1)]
+        out["replay"] = {"rate": 120, "rss_after_warm_up_mb": round(warm, 1), "rss_max_mb": round(max(play_samples), 1),
+                         "rss_growth_mb": round(max(play_samples) - warm, 1)}
+    out["ok"] = out["record"]["rss_growth_mb"] < 20 and out["replay"]["rss_growth_mb"] < 20
+    out["load_after"] = load()
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--only", nargs="*", default=None)
+    parser.add_argument("--seconds", type=float, default=20.0, help="fleet and ingest runs (s)")
+    parser.add_argument("--pacing-seconds", type=float, default=600.0)
+    parser.add_argument("--writer-mb", type=float, default=1500.0)
+    parser.add_argument("--ingest-hz", type=float, default=120.0)
+    parser.add_argument("--ingest-compression", default="zstd", choices=("zstd", "lz4", "none"))
+    parser.add_argument("--seek-frames", type=int, default=1150, help="640x480 frames in the seek file (~1 GB)")
+    parser.add_argument("--out", type=Path)
+    args = parser.parse_args(argv)
+    parts = args.only or ["fleet", "writer", "ingest", "pacing", "seek", "memory"]
+    figures: dict[str, Any] = {"cores": os.cpu_count()}
+    for part in parts:
+        print(f"--- {part} (load {load()})", flush=True)
+        if part == "writer":  # the fleet's measured data rate, else its nominal one
+            figures[part] = part_writer(args, figures.get("fleet", {}).get("fleet_data_rate_mb_s") or NOMINAL_FLEET)
+        else:
+            figures[part] = globals()[f"part_{part}"](args)
+        print(json.dumps(figures[part], indent=1), flush=True)
+    if args.out:
+        args.out.write_text(json.dumps(figures, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,335 @@
+"""``McapSink``: the one writer of a recording -- an MCAP file written by the ``mcap`` package in its own thread.
+
+Threading: ``add_channel`` and ``write`` may be called from any thread (the bridge loop calls them from a
+message callback); they only queue. One writer thread owns the ``mcap.writer.Writer`` and the file, so
+compressing a chunk never holds up the bridge loop or the GUI.
+
+Decisions:
+
+* **Chunked, compressed, indexed.** Chunks of ``chunk_size`` (4 MB) compressed with zstd (or lz4, or
+  none), message indexes after each chunk, and a summary (schemas, channels, statistics, chunk indexes)
+  when the file is closed: Foxglove, Lichtblick, ``rosbags`` and the ``mcap`` reader open it.
+* **A crash loses at most the open chunk.** A chunk is also closed after ``chunk_seconds`` (1 s) however
+  small, and every record goes straight to the OS (no buffer in the process), so after SIGKILL or a power
+  cut of the process the file holds every complete chunk: ``recover.py`` rewrites it with a summary
+  (``rcon record --recover``). Closing the chunk early uses the writer's private ``__finalize_chunk``
+  (the ``mcap`` package has no public call for it; pinned to ``mcap<2``; without it chunks close by size
+  only, which is still readable).
+* **Nothing blocks the sender.** The queue is bounded in bytes (``max_queue``, 256 MB); a message that
+  would pass it is dropped and counted (``stats.dropped``) -- the bench checks none is at the fleet's rate.
+* **Disk budget.** ``budget`` bytes (None: none): ``warning`` is set once 90 % is used, and at 100 %
+  the file is closed properly and later messages are dropped and counted.
+* **Disk full or any write error** (``OSError``): the recorder stops writing, says what happened in
+  ``problem``, keeps counting what it drops, and tries to close the file; what was written up to the last
+  complete chunk stays readable.
+* **Split.** With ``split_size`` the file is closed once it passes that size and the next one opened,
+  ``run.mcap`` then ``run_1.mcap``, ``run_2.mcap``...; each has every schema and channel again.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import queue
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from mcap.writer import CompressionType, Writer
+
+log = logging.getLogger(__name__)
+
+__all__ = ["McapSink", "SinkStats", "COMPRESSIONS"]
+
+COMPRESSIONS = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
+LIBRARY = "rcon"
+
+
+class _DirectFile:
+    """The stream the ``mcap`` writer writes to: each write goes to the OS at once (``os.write``), so
+    what was written survives the process being killed; ``tell`` is counted, not asked."""
+
+    def __init__(self, path: str) -> None:
+        self.fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+        self.position = 0
+
+    def write(self, data: bytes | bytearray | memoryview) -> int:
+        view = memoryview(data)
+        while view:
+            n = os.write(self.fd, view)
+            view = view[n:]
+        self.position += len(data)
+        return len(data)
+
+    def tell(self) -> int:
+        return self.position
+
+    def flush(self) -> None:
+        return None
+
+    def close(self) -> None:
+        if self.fd >= 0:
+            try:
+                os.fsync(self.fd)
+            except OSError:
+                pass
+            os.close(self.fd)
+            self.fd = -1
+
+
+@dataclass
+class SinkStats:
+    """Counters (read from any thread; updated by the writer thread)."""
+
+    messages: int = 0  #: written
+    bytes_in: int = 0  #: message bytes written (before compression)
+    dropped: int = 0  #: not written: queue full, budget reached, write error, closed
+    files: list[str] = field(default_factory=list)  #: every file written, in order
+    per_topic: dict[str, int] = field(default_factory=dict)
+    started: float = field(default_factory=time.monotonic)
+    closed_size: int = 0  #: bytes of the files already closed
+
+    def elapsed(self) -> float:
+        return time.monotonic() - self.started
+
+
+_STOP = object()
+
+
+class McapSink:
+    """A recording being written (see the module docstring)."""
+
+    def __init__(self, path: str, profile: str, *, compression: str = "zstd", chunk_size: int = 4 << 20,
+                 chunk_seconds: float = 1.0, split_size: int | None = None, budget: int | None = None,
+                 max_queue: int = 256 << 20, metadata: dict[str, str] | None = None,
+                 on_problem: Callable[[str], None] | None = None) -> None:
+        if compression not in COMPRESSIONS:
+            raise ValueError(f"compression must be one of {', '.join(COMPRESSIONS)}; got {compression!r}")
+        if profile not in ("ros1", "ros2", ""):
+            raise ValueError(f"profile must be ros1, ros2 or empty, got {profile!r}")
+        self.path = path
+        self.profile = profile
+        self.compression = compression
+        self.chunk_size = chunk_size
+        self.chunk_seconds = chunk_seconds
+        self.split_size = split_size
+        self.budget = budget
+        self.max_queue = max_queue
+        self.metadata = dict(metadata or {})
+        self.on_problem = on_problem
+        self.stats = SinkStats()
+        #: what went wrong, in words (None while all is well); ``warning``: the budget is nearly used
+        self.problem: str | None = None
+        self.warning: str | None = None
+        self.stopped = False  #: no more messages are written (budget, error or close)
+        self._queue: queue.SimpleQueue[Any] = queue.SimpleQueue()
+        self._queued_bytes = 0
+        self._lock = threading.Lock()
+        self._channels: dict[str, tuple[str, str, bytes, str, dict[str, str]]] = {}
+        self._ids: dict[str, int] = {}  # topic -> channel id in the current file
+        self._writer: Writer | None = None
+        self._file: _DirectFile | None = None
+        self._index = 0
+        self._last_chunk = time.monotonic()
+        self._closed = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="rcon-record-writer", daemon=True)
+        self._open(path)  # raises OSError at once when the file cannot be created
+        self._thread.start()
+
+    # ------------------------------------------------------------------ any thread
+
+    def add_channel(self, topic: str, schema_name: str, schema_encoding: str, schema_data: bytes,
+                    message_encoding: str, metadata: dict[str, str] | None = None) -> None:
+        """Declare ``topic`` (once; later calls for the same topic are ignored)."""
+        with self._lock:
+            if topic in self._channels:
+                return
+            self._channels[topic] = (schema_name, schema_encoding, schema_data, message_encoding,
+                                     dict(metadata or {}))
+        self._queue.put(("channel", topic))
+
+    def has_channel(self, topic: str) -> bool:
+        return topic in self._channels
+
+    def write(self, topic: str, log_time: int, publish_time: int, data: bytes) -> bool:
+        """Queue one message; False when it was dropped (counted)."""
+        size = len(data)
+        if self.stopped or self._queued_bytes + size > self.max_queue or topic not in self._channels:
+            self.stats.dropped += 1
+            return False
+        with self._lock:
+            self._queued_bytes += size
+        self._queue.put((topic, log_time, publish_time, data))
+        return True
+
+    @property
+    def size(self) -> int:
+        """Bytes on disk so far (every file of the recording)."""
+        f = self._file
+        return self.stats.closed_size + (f.position if f is not None else 0)
+
+    @property
+    def queued(self) -> int:
+        return self._queued_bytes
+
+    def close(self, timeout: float = 30.0) -> None:
+        """Write what is queued, the summary and the footer; idempotent. Waits for the writer thread."""
+        if not self._closed.is_set():
+            self._queue.put(_STOP)
+            self._thread.join(timeout)
+
+    # ------------------------------------------------------------------ the writer thread
+
+    def _open(self, path: str) -> None:
+        self._file = _DirectFile(path)
+        self.stats.files.append(path)
+        self._writer = Writer(self._file, chunk_size=self.chunk_size,  # type: ignore[arg-type]
+                              compression=COMPRESSIONS[self.compression])
+        self._writer.start(profile=self.profile, library=LIBRARY)
+        if self.metadata:
+            self._writer.add_metadata("rcon", self.metadata)
+        self._ids = {}
+        self._schema_ids: dict[tuple[str, str, bytes], int] = {}
+        for topic in list(self._channels):
+            self._register(topic)
+        self._last_chunk = time.monotonic()
+
+    def _register(self, topic: str) -> None:
+        assert self._writer is not None
+        name, encoding, data, message_encoding, metadata = self._channels[topic]
+        schema_id = 0
+        if encoding:
+            key = (name, encoding, data)
+            schema_id = self._schema_ids.get(key, 0)
+            if not schema_id:
+                schema_id = self._schema_ids[key] = self._writer.register_schema(name, encoding, data)
+        self._ids[topic] = self._writer.register_channel(topic, message_encoding, schema_id, metadata)
+
+    def _finish_file(self) -> None:
+        writer, f = self._writer, self._file
+        self._writer = self._file = None
+        try:
+            if writer is not None:
+                writer.finish()
+        finally:
+            if f is not None:
+                self.stats.closed_size += f.position
+                f.close()
+
+    def _next_path(self) -> str:
+        self._index += 1
+        base, ext = os.path.splitext(self.path)
+        return f"{base}_{self._index}{ext or '.mcap'}"
+
+    def _fail(self, text: str) -> None:
+        self.stopped = True
+        if self.problem is None:
+            self.problem = text
+            log.error("recording %s: %s", self.path, text)
+            if self.on_problem is not None:
+                try:
+                    self.on_problem(text)
+                except Exception:  # noqa: BLE001
+                    log.exception("problem listener failed")
+
+    def _close_chunk(self) -> None:
+        finalize = getattr(self._writer, "_Writer__finalize_chunk", None)
+        if finalize is not None:
+            finalize()
+        self._last_chunk = time.monotonic()
+
+    def _run(self) -> None:
+        get = self._queue.get
+        timeout = max(0.05, self.chunk_seconds / 2)
+        try:
+            while True:
+                try:
+                    item = get(timeout=timeout)
+                except queue.Empty:
+                    item = None
+                if item is _STOP:
+                    break
+                if self._writer is None:
+                    if isinstance(item, tuple) and len(item) == 4:
+                        self._unqueue(len(item[3]))
+                        self.stats.dropped += 1
+                    continue
+                try:
+                    if item is not None:
+                        self._handle(item)
+                    if time.monotonic() - self._last_chunk >= self.chunk_seconds:
+                        self._close_chunk()
+                except OSError as exc:
+                    self._fail(_os_words(exc))
+                    self._abandon()
+                except Exception as exc:  # noqa: BLE001 - one bad message never ends the recording
+                    log.exception("recording %s: a record could not be written", self.path)
+                    if self.problem is None:
+                        self.problem = f"a record could not be written ({exc})"
+        finally:
+            self.stopped = True
+            try:
+                if self._writer is not None:
+                    self._finish_file()
+            except OSError as exc:
+                self._fail(_os_words(exc))
+                self._abandon()
+            self._closed.set()
+
+    def _unqueue(self, size: int) -> None:
+        with self._lock:
+            self._queued_bytes -= size
+
+    def _abandon(self) -> None:
+        """After a write error: let the file be (readable up to its last complete chunk)."""
+        f = self._file
+        self._writer = self._file = None
+        if f is not None:
+            self.stats.closed_size += f.position
+            try:
+                f.close()
+            except OSError:
+                pass
+
+    def _handle(self, item: tuple[Any, ...]) -> None:
+        if item[0] == "channel":
+            if item[1] not in self._ids:
+                self._register(item[1])
+            return
+        topic, log_time, publish_time, data = item
+        self._unqueue(len(data))
+        if self.stopped:
+            self.stats.dropped += 1
+            return
+        assert self._writer is not None and self._file is not None
+        self._writer.add_message(self._ids[topic], log_time, data, publish_time)
+        st = self.stats
+        st.messages += 1
+        st.bytes_in += len(data)
+        st.per_topic[topic] = st.per_topic.get(topic, 0) + 1
+        size = self.size
+        if self.budget is not None:
+            if size >= self.budget:
+                self._fail(f"the disk budget of {self.budget / 1e6:.0f} MB is used up; the recording was "
+                           "closed there")
+                self._finish_file()
+                return
+            if self.warning is None and size >= 0.9 * self.budget:
+                self.warning = (f"90 % of the disk budget ({self.budget / 1e6:.0f} MB) is used; the recording "
+                                "stops when it is full")
+                log.warning("recording %s: %s", self.path, self.warning)
+        if self.split_size is not None and self._file.position >= self.split_size:
+            self._finish_file()
+            self._open(self._next_path())
+
+
+def _os_words(exc: OSError) -> str:
+    import errno
+
+    if exc.errno == errno.ENOSPC:
+        return "the disk is full; the recording stopped there (it is readable up to that point)"
+    if exc.errno == errno.EDQUOT:
+        return "the disk quota is used up; the recording stopped there (it is readable up to that point)"
+    return f"cannot write the recording ({exc.strerror or exc}); it stopped there"
