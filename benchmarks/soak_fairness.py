@@ -73,11 +73,15 @@ def _mem_mb(pid: int) -> dict[str, float]:
 # ------------------------------------------------------------------------------------------ attacker
 
 
-async def attack(mode: str, url: str, auth: bool) -> dict[str, Any]:
-    """Run one attack until SIGTERM; what it managed, as a dict."""
-    stop = asyncio.Event()
-    asyncio.get_running_loop().add_signal_handler(signal.SIGTERM, stop.set)
+async def attack(mode: str, url: str, auth: bool) -> None:
+    """Run one attack until SIGTERM, then print what it managed (JSON) and exit."""
     counts = {"fragments_sent": 0, "messages_sent": 0, "replies": 0, "frames_received": 0, "bytes_received": 0}
+
+    def report() -> None:  # at once: a sender the sim holds back (TCP) may be stuck in a send
+        print(json.dumps(counts), flush=True)
+        os._exit(0)
+
+    asyncio.get_running_loop().add_signal_handler(signal.SIGTERM, report)
     max_queue = 1 if mode == "camera-stalled" else 64
     async with websockets.connect(url, max_size=None, max_queue=max_queue, ping_interval=None) as ws:
         if auth:
@@ -90,12 +94,13 @@ async def attack(mode: str, url: str, auth: bool) -> dict[str, Any]:
                 if '"service_response"' in frame[:64]:
                     counts["replies"] += 1
 
-        reader = asyncio.ensure_future(read()) if mode != "camera-stalled" else None
+        if mode != "camera-stalled":
+            asyncio.ensure_future(read())
         if mode in FLOODS:
             parts = FLOODS[mode]
             print("ready", flush=True)
             k = 0
-            while not stop.is_set():
+            while True:
                 head = json.dumps({"op": "call_service", "service": "/rosapi/get_time", "id": f"flood{k}",
                                    "pad": ""})[:-2]
                 text = head + "x" * (parts - len(head) - 2) + '"}'
@@ -103,17 +108,12 @@ async def attack(mode: str, url: str, auth: bool) -> dict[str, Any]:
                     await ws.send(json.dumps({"op": "fragment", "id": f"m{k}", "data": ch, "num": i,
                                               "total": parts}))
                     counts["fragments_sent"] += 1
-                    if stop.is_set():
-                        break
                 k += 1
                 counts["messages_sent"] = k
         else:
             await ws.send(json.dumps({"op": "subscribe", "topic": CAMERA, "fragment_size": 1}))
             print("ready", flush=True)
-            await stop.wait()
-        if reader is not None:
-            reader.cancel()
-    return counts
+            await asyncio.Event().wait()
 
 
 # ------------------------------------------------------------------------------------------- healthy
@@ -247,7 +247,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.attacker:
         mode, url = args.attacker
-        print(json.dumps(asyncio.run(attack(mode, url, args.auth))), flush=True)
+        asyncio.run(attack(mode, url, args.auth))  # reports and exits on SIGTERM
         return 0
     flavours = tuple(args.flavours) if args.flavours else (("ros1",) if args.quick else ("ros1", "ros2+auth"))
     r = part_fairness(4.0 if args.quick else 10.0, flavours)

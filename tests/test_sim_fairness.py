@@ -159,6 +159,27 @@ async def test_20000_one_byte_fragments_cost_one_log_line(sim: SimServer, caplog
     assert len(lines) == 1 and "20000" in lines[0].getMessage(), [r.getMessage() for r in lines]
 
 
+async def test_a_flooding_client_is_read_within_its_budget(sim: SimServer) -> None:
+    """More frames than the read burst in one write: the server waits before reading that client on (TCP
+    holds it back) instead of spending the loop on it; everything it sent is still handled, in order."""
+    from test_sim_limits import RawClient
+
+    from rcon_core.sim.connection import READ_BURST
+
+    n = int(READ_BURST) + 10_000
+    frames = [RawClient.frame(json.dumps({"op": "publish", "topic": "/nowhere", "msg": {"data": i}}).encode())
+              for i in range(n)]
+    client = await RawClient.open(sim)
+    try:
+        await client.send(*frames, RawClient.frame(json.dumps(
+            {"op": "call_service", "service": "/rosapi/get_time", "id": "after"}).encode()))
+        assert (await client.reply("after", timeout=60))["result"] is True
+        [conn] = sim.connections
+        assert conn.read_waits > 0 and conn.ops_received[("publish", "/nowhere")] == n
+    finally:
+        client.close()
+
+
 # ----------------------------------------------------------------------------- fragments the sim sends
 
 

@@ -17,6 +17,11 @@ them. What keeps one client from costing the others their latency:
   :data:`SEND_BURST`); a greedy client (``fragment_size: 1`` on the camera) waits for its budget while its
   queue drops old publishes. The writer also gives the loop back every :data:`SLICE_S` seconds, so no one
   client's burst delays another's frame or the robot's timers.
+* **A read budget per connection**: the server reads at most :data:`READ_RATE` frames a second from one
+  client after a burst of :data:`READ_BURST` (a frame counts one, plus one per :data:`READ_BYTES_PER_TOKEN`
+  bytes); beyond it the server waits before reading that client's next frame, so TCP holds a flooding
+  client back (20,000 one-byte fragments, a stream of 32 MB frames) and no one client takes more than its
+  share of the loop (:meth:`Connection.read_pause`).
 * Log lines caused by one client are rate limited (:class:`LogLimiter`): a flood of bad frames costs a few
   lines a second, and a count of what was left out.
 """
@@ -44,6 +49,11 @@ SEND_RATE = 4000.0
 SEND_BURST = 2.0 * encoding.MAX_FRAGMENTS
 #: the writer gives the event loop back after this much time spent sending (seconds)
 SLICE_S = 0.002
+#: frames read from one client per second at most, after a burst (a 10,000-fragment message fits in it)
+READ_RATE = 5000.0
+READ_BURST = 20_000.0
+#: a frame's size costs one more token per this many bytes (a 32 MB frame: 2049 tokens)
+READ_BYTES_PER_TOKEN = 16 * 1024
 #: queued replies (and requests to a service the client provides) at which the server stops reading it
 REPLY_BACKLOG = 20_000
 REPLY_BYTES = 16 * 1024 * 1024
@@ -158,6 +168,8 @@ class Connection:
         self.calls_in_flight = 0  # call_service ops of this client not answered yet (services.py)
         self.log = LogLimiter(self.label)
         self._budget = TokenBucket(send_rate, send_burst)
+        self._read_budget = TokenBucket(READ_RATE, READ_BURST)
+        self.read_waits = 0  # times reading this client waited for its read budget
         self._queue: collections.deque[_Frame] = collections.deque()
         self._per_topic: collections.Counter[str] = collections.Counter()
         self._bytes = 0
@@ -228,6 +240,14 @@ class Connection:
 
     def _replies_full(self) -> bool:
         return self._replies >= REPLY_BACKLOG or self._reply_bytes >= REPLY_BYTES
+
+    async def read_pause(self, size: int) -> None:
+        """After a frame of ``size`` bytes was handled: give the loop to the others, and wait as long as this
+        client is over its read budget."""
+        wait = self._read_budget.debit(1.0 + size / READ_BYTES_PER_TOKEN)
+        if wait > 0:
+            self.read_waits += 1
+        await asyncio.sleep(wait)
 
     async def room_for_replies(self) -> None:
         """Return once the replies in the queue are under :data:`REPLY_BACKLOG` and :data:`REPLY_BYTES`

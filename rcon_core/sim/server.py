@@ -357,9 +357,9 @@ class SimServer:
                     await self._receive(conn, message)
                 except Exception as exc:  # noqa: BLE001 - bad input never takes the connection down
                     self._failed(conn, "a frame", exc)
-                # fairness: the others (and the robot's timers) get the loop between two frames of one
-                # client, and a client whose replies pile up unread is not read until they drain
-                await asyncio.sleep(0)
+                # fairness: the others (and the robot's timers) get the loop between two frames of one client,
+                # which is read within its budget, and not while its unread replies pile up (connection.py)
+                await conn.read_pause(len(message))
                 await conn.room_for_replies()
         except ConnectionClosed:
             pass
