@@ -33,6 +33,7 @@ from rcon_core.app.draft import ROLE_TEXT, Candidate, Draft, Target, role_prefer
 from rcon_core.app.new_topic import NEW_TOPIC, NewTopicBox, add_new_topic_entry, new_topic_index
 from rcon_core.app.preview_slot import PreviewSlot
 from rcon_core.app.settings_form import SettingsForm, form_label, tune_form
+from rcon_core.app.theme import current_touch_px
 from rcon_core.app.widget_frame import WidgetFrame
 from rcon_core.msgs.names import pkg_type
 from rcon_core.plugins import Binding, Role, SettingsError, WidgetSpec
@@ -175,6 +176,9 @@ class AddPanel(QtWidgets.QWidget):
         scroll.setObjectName("settingsScroll")
         scroll.setWidgetResizable(True)
         scroll.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        # two rows of fields at least (not Qt's 150 px): with a large text size on a 600 px screen the page
+        # keeps its title, preview and buttons without growing the window; the rest scrolls
+        scroll.setMinimumHeight(2 * current_touch_px())
         QtWidgets.QScroller.grabGesture(
             scroll.viewport(), QtWidgets.QScroller.ScrollerGestureType.TouchGesture
         )

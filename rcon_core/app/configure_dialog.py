@@ -71,7 +71,7 @@ class WidgetConfigurer:
         # one white page holding every label and field (no label boxes on the dialog's grey)
         body = QtWidgets.QFrame()
         body.setObjectName("configureBody")
-        body.setStyleSheet("QFrame#configureBody { background: #ffffff; border: 3px solid #000000;"
+        body.setStyleSheet("QFrame#configureBody { background: palette(base); border: 3px solid palette(dark);"
                            " border-radius: 6px; }")
         body_col = QtWidgets.QVBoxLayout(body)
         body_col.setContentsMargins(16, 12, 16, 12)

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from typing import Any
 from urllib.parse import urlparse
 
+from rcon_core.app.link_detect import ProtocolFinder
 from rcon_core.bridge import BridgeClient, ConnectionState
 from rcon_core.bridge.envelope import Envelope
 from rcon_core.bridge.secure import confirm_auth, rosauth
@@ -95,7 +96,7 @@ class Link:
         self._own_thread = bridge_thread is None
         if self._own_thread:
             self.thread.start()
-        self.client: BridgeClient | None = None
+        self._client: BridgeClient | None = None
         self.url: str | None = None
         self.state_box = LatestValue()
         self.catalog_box = LatestValue()
@@ -112,6 +113,23 @@ class Link:
         #: ``view_only.py``), asked for each new client before it connects and by :meth:`apply_guard`
         self.guard_for: Callable[[str], str | None] | None = None
         self.state_box.put(ConnectionState.CLOSED)
+        #: the robot's protocol when forced (``--protocol``); None: found per URL (``link_detect.py``)
+        self.protocol: str | None = None
+        self.finder = ProtocolFinder(self.thread)
+        self.finding = False  # connect_to is waiting for the URL's protocol
+
+    @property
+    def client(self) -> BridgeClient | None:
+        """The current client (a robot link of either protocol).  While the URL's protocol is being found,
+        the answer is taken here on the thread that called :meth:`connect_to` (the GUI thread), at its first
+        look after the answer came (or when the finder's wake runs), so a switched client starts there."""
+        if self.finding:
+            self.finder.take()
+        return self._client
+
+    @client.setter
+    def client(self, client: BridgeClient | None) -> None:
+        self._client = client
 
     # ------------------------------------------------------------------------------------- GUI side
     def set_envelope(self, envelope: Envelope | None) -> None:
@@ -126,13 +144,39 @@ class Link:
         self._listeners.append(fn)
 
     def connect_to(self, url: str, settings: LinkSettings | None = None) -> None:
-        """Close any current client and connect to ``url`` (with automatic reconnection)."""
+        """Close any current client and connect to ``url`` (with automatic reconnection), over the
+        protocol the robot speaks (``self.protocol``, else found: ``link_detect.py``)."""
         url = check_url(url)
         self.disconnect()
         self._generation += 1
         gen = self._generation
-        client = BridgeClient(url, reconnect=True, **(settings or LinkSettings()).client_options(url))
-        client.envelope = self.envelope  # before anything can publish through it
+        protocol = self.protocol or self.finder.known.get(url)
+        if protocol is None:  # start as rosbridge; a robot that picks a Foxglove subprotocol is switched
+            self.finding = True
+            options = (settings or LinkSettings()).client_options(url)
+            self.finder.find(url, options, gen, lambda: self._generation, self._adopt, settings)
+        self._start(url, settings, protocol or "rosbridge", gen)
+
+    def _adopt(self, gen: int, protocol: str, settings: LinkSettings | None) -> None:
+        """The URL's protocol was found (on this thread): a robot speaking Foxglove gets a Foxglove client in
+        place of the rosbridge one started meanwhile (which never connected: the server refused it)."""
+        self.finding = False
+        current = self._client
+        if gen != self._generation or self.url is None or current is None:
+            return
+        if getattr(current, "protocol", "rosbridge") == protocol:
+            return
+        url = self.url
+        self._client = None
+        self._generation += 1  # the rosbridge client's late events (its CLOSED) are not this link's any more
+        self.thread.run(self._close(current))
+        self._start(url, settings, protocol, self._generation)
+
+    def _start(self, url: str, settings: LinkSettings | None, protocol: str, gen: int) -> None:
+        from rcon_core.link import make_client
+
+        client = make_client(url, protocol, reconnect=True, **(settings or LinkSettings()).client_options(url))
+        client.envelope = self.envelope  # before anything can publish through it (either protocol)
         self._guard(client, url)  # a view-only robot's link refuses from its first frame on
         self.client, self.url = client, url
         self.state_box.put(ConnectionState.CONNECTING)
@@ -146,6 +190,7 @@ class Link:
         self._generation += 1
         self.failure_box.put(None)
         self.catalog_box.put(EMPTY_CATALOG)
+        self.finding = False
         if client is None:
             return
         for fn in self._listeners:
@@ -168,6 +213,20 @@ class Link:
                 log.exception("view-only mark of %s could not be read; the link sends nothing", url)
                 why = f"the view-only mark of {url} could not be read"
         client.guard.set_view_only(why)
+
+    def protocol_text(self) -> str:
+        """Which protocol and server the current client speaks to, for the connection bar ("" for rosbridge,
+        the default; a Foxglove link names its server, encodings and what it cannot do)."""
+        client = self.client
+        describe = getattr(client, "describe", None)
+        if client is None or describe is None or getattr(client, "protocol", "rosbridge") != "foxglove":
+            return ""
+        try:
+            info = describe()
+        except Exception:
+            return ""
+        return (f"Foxglove WebSocket · {info.get('server') or 'server'} · {', '.join(info.get('encodings') or [])}"
+                " · no actions, no rosauth")
 
     @property
     def latency(self) -> float | None:
@@ -264,14 +323,21 @@ class Link:
         self.thread.run(once())
 
 
-async def fetch_catalog(client: BridgeClient) -> dict[str, list[tuple[str, str]]]:
-    """``{"topics": [(name, type)], "services": [(name, type)], "actions": [(name, type)]}`` from rosapi
-    (actions only from a ROS 2 robot: ``/rosapi/action_servers``)."""
+async def fetch_catalog(client: BridgeClient) -> dict[str, Any]:
+    """``{"topics": [(name, type)], "services": [(name, type)], "actions": [(name, type)]}`` from the link's
+    catalogue (rosapi on rosbridge; actions only from a ROS 2 robot: ``/rosapi/action_servers``), and for a
+    Foxglove robot ``"notes"``: what its protocol cannot do (``{"actions": sentence}``), shown in the list."""
     api = client.rosapi
     topics = _pairs(await api.topics())
     with_types = getattr(api, "services_with_types", None)
     services = _pairs(await (with_types() if with_types is not None else api.services()))
-    return {"topics": sorted(topics), "services": sorted(services), "actions": sorted(await _actions(client))}
+    catalog: dict[str, Any] = {"topics": sorted(topics), "services": sorted(services),
+                               "actions": sorted(await _actions(client))}
+    if getattr(client, "protocol", "rosbridge") == "foxglove":  # what the protocol cannot do, where one looks
+        from rcon_core.foxglove import CANNOT
+
+        catalog["notes"] = {"actions": CANNOT["actions"][:1].upper() + CANNOT["actions"][1:] + "."}
+    return catalog
 
 
 async def _actions(client: BridgeClient) -> list[tuple[str, str]]:

@@ -15,6 +15,7 @@ import time
 from collections.abc import Iterable
 from typing import Any
 
+from rcon_core.app.accessibility import name_parts
 from rcon_core.app.widget_frame import WidgetFrame
 from rcon_core.bridge.safety import safe_text
 from rcon_core.canvas import WidgetInstance
@@ -144,6 +145,10 @@ class WidgetHost:
             frame.set_placeholder(f"{hosted.widget.title or hosted.widget.kind} could not be shown:\n{exc}")
             return
         frame.set_view(hosted.view)
+        try:  # what the view leaves nameless is named after the widget (accessibility.py)
+            name_parts(hosted.view, hosted.widget.title or self.plugins.widget(hosted.widget.kind).title)
+        except Exception as exc:  # noqa: BLE001 - a view that fails here still shows
+            log.warning("naming the parts of %s failed: %s", widget_id, exc)
         frame.problems.set_problems(list(model.problems()))
         reason = view_only_control(hosted.widget, model)
         if reason:  # the port refuses anyway (rcon_core.canvas.port); the controls say so
@@ -209,18 +214,17 @@ class WidgetHost:
         state = model.state
         badge = hosted.frame.badge
         if hosted.widget.id in self.dry_run:
-            badge.show_status("ok", "PREVIEW ONLY")
-            badge.setToolTip("not sent to the robot until the widget is placed")
+            badge.show_status("ok", "PREVIEW ONLY", "not sent to the robot until the widget is placed")
         elif view_only_control(hosted.widget, model):
-            badge.show_status("view-only", "VIEW ONLY")
-            badge.setToolTip(f"{model.view_only}: nothing is sent to the robot")
+            badge.show_status("view-only", "VIEW ONLY", f"{model.view_only}: nothing is sent to the robot")
         elif state.link_down or not self.link_up_for(hosted.widget):
-            badge.show_status("down", "LINK DOWN")
+            badge.show_status("down", "LINK DOWN", "the link to this widget's robot is down: nothing arrives, "
+                                                   "nothing is sent")
         elif state.error or hosted.view_error:
-            badge.show_status("problem", "ERROR")
-            badge.setToolTip(state.error or hosted.view_error or "")
+            badge.show_status("problem", "ERROR", state.error or hosted.view_error or "")
         elif state.stale:
-            badge.show_status("stale", "STALE" if state.count else "NO DATA")
+            badge.show_status("stale", "STALE" if state.count else "NO DATA",
+                              "no new value for a while" if state.count else "nothing has arrived yet")
         else:
             badge.show_status("", "")
         if state.seq == hosted.painted_seq:
@@ -251,8 +255,7 @@ class WidgetHost:
         if n <= 20 or n % 1000 == 0:
             log.error("widget %s (%s): %s (%d so far)", hosted.widget.id, hosted.widget.kind, hosted.view_error, n)
         try:
-            hosted.frame.badge.show_status("problem", "ERROR")
-            hosted.frame.badge.setToolTip(hosted.view_error)
+            hosted.frame.badge.show_status("problem", "ERROR", hosted.view_error)
         except Exception:  # noqa: BLE001 - the frame itself is broken: the count and the log say it
             pass
 

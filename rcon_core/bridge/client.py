@@ -82,6 +82,7 @@ from .rosinfo import RosInfo
 from .rosinfo import detect as detect_ros
 from .secure import ssl_context
 from .session import LOG_LEVELS, Session
+from .traffic import Traffic
 from .wslink import Link
 
 log = logging.getLogger(__name__)
@@ -121,7 +122,10 @@ class _Unguarded:
 
 
 class BridgeClient:
-    """A rosbridge v2 client.  Create, ``await connect()``, then hand out ``node(label)`` to consumers."""
+    """A rosbridge v2 client.  Create, ``await connect()``, then hand out ``node(label)`` to consumers.
+    One of the two implementations of ``rcon_core.link.RobotLink``."""
+
+    protocol = "rosbridge"
 
     def __init__(self, url: str, *, reconnect: bool = True, ca_file: str | None = None,
                  auth: dict[str, Any] | Callable[[], Any] | None = None, call_timeout: float = 10.0,
@@ -202,6 +206,22 @@ class BridgeClient:
     def guard(self) -> LinkGuard:
         """Whether this link is view-only (``guard.set_view_only(reason)``, any thread; see ``guard.py``)."""
         return self.session.guard
+
+    @property
+    def traffic(self) -> Traffic:
+        """Bytes received by topic since this client was made (``traffic.py``; any thread may snapshot it)."""
+        return self.inbound.traffic
+
+    @property
+    def catalog(self) -> Any:
+        """The robot-link catalogue (``rcon_core.link.Catalog``): on rosbridge, rosapi (``client.rosapi``)."""
+        return self.rosapi
+
+    def describe(self) -> dict[str, Any]:
+        """Which protocol and server (the robot-link interface; ``rcon info`` adds what rosapi tells)."""
+        info = self.ros_info
+        return {"protocol": "rosbridge", "server": "rosbridge", "ros": info.version if info else None,
+                "rosapi_services": list(info.rosapi_services) if info else [], "cannot": []}
 
     @property
     def provided_actions(self) -> ProvidedActions:

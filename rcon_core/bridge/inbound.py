@@ -42,10 +42,11 @@ from typing import Any
 import orjson
 
 from .errors import ProtocolError
-from .latest import LatestOnly
+from .latest import LatestOnly, topic_of
 from .offload import BigFrames, decode_big
 from .protocol import FragmentAssembler, RefusedFrame, decode_binary, decode_png, loads_text
 from .safety import safe_text
+from .traffic import Traffic
 
 log = logging.getLogger(__name__)
 
@@ -91,6 +92,8 @@ class Inbound:
         self.big_frame = big_frame
         self.big = BigFrames(typed_arrays, max_size)
         self.latest = LatestOnly(session.topics, stats)
+        #: bytes in by topic (``traffic.py``): the connection bar's bandwidth readout
+        self.traffic = Traffic()
         warn = self._fragment_warning
         self.fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_size, warn=warn)
         self.png_fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_size, warn=warn)
@@ -110,6 +113,7 @@ class Inbound:
         skip_size = latest.min_size if waiting is not None else 1 << 62
         heavy = latest.min_size
         burst = YIELD_EVERY
+        count = self.traffic.count
         n = 0
         while True:
             raw = await recv()
@@ -119,6 +123,7 @@ class Inbound:
                 await _sleep(0)
             try:  # the frame boundary: nothing raised while handling one frame ends the loop
                 if len(raw) >= skip_size and await latest.stale(raw, waiting):  # type: ignore[arg-type]
+                    self.traffic.count_name(topic_of(raw), len(raw))  # skipped, but it crossed the link
                     continue
                 if len(raw) > big:
                     m = await self.decode_big(raw)
@@ -135,6 +140,7 @@ class Inbound:
                     m = self.decode_binary(raw)
                     if m is None:
                         continue
+                count(m, len(raw))
                 try:
                     entry = topics[m["topic"]] if m["op"] == "publish" else None
                     msg = m["msg"]

@@ -11,8 +11,8 @@ from .teleop import TELEOP_TYPES
 
 P = "rcon_widgets_sensors"
 
-IMAGE_TYPES = ["sensor_msgs/Image", "sensor_msgs/CompressedImage", "sensor_msgs/LaserScan",
-               "nav_msgs/OccupancyGrid"]
+IMAGE_TYPES = ["sensor_msgs/Image", "sensor_msgs/CompressedImage", "foxglove_msgs/CompressedVideo",
+               "ffmpeg_image_transport_msgs/FFMPEGPacket", "sensor_msgs/LaserScan", "nav_msgs/OccupancyGrid"]
 
 
 def specs() -> list[WidgetSpec]:
@@ -20,8 +20,8 @@ def specs() -> list[WidgetSpec]:
     return [
         WidgetSpec(
             kind="sensors.image", title="Image", icon="image", category="Sensors",
-            description="Camera images (raw, compressed, depth), laser scans and occupancy grids; "
-                        "pinch to zoom, double-tap to fit",
+            description="Camera images (raw, compressed, depth), H.264/H.265 video, laser scans and "
+                        "occupancy grids; pinch to zoom, double-tap to fit",
             roles={Role.SUBSCRIBE},
             accepts=Accepts(types=IMAGE_TYPES, messages=["image", "compressed_image"]),
             settings=f"{P}.image:ImageSettings", model=f"{P}.image:ImageModel",

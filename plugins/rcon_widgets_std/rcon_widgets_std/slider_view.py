@@ -65,6 +65,8 @@ class SliderView(QtWidgets.QWidget):
         layout.addWidget(self.value)
         self.slider = TapSlider(QtCore.Qt.Orientation.Horizontal)
         self.slider.setEnabled(self.publishing)
+        self.slider.setAccessibleDescription(f"{model.binding.name}: slide to set" if self.publishing
+                                             else f"{model.binding.name}, as the robot reports it")
         self.slider.setMinimumHeight(32)
         layout.addWidget(self.slider)
         ends = QtWidgets.QHBoxLayout()
@@ -84,6 +86,24 @@ class SliderView(QtWidgets.QWidget):
             self._show_unset()
         self.slider.valueChanged.connect(self._moved)
         self.slider.sliderReleased.connect(self._released)
+
+    def resizeEvent(self, event: QtGui.QResizeEvent) -> None:  # noqa: N802 - Qt override
+        """The range's ends show only when the value, the slider and they all fit (large text, a short
+        frame): never squeezed over one another; the slider's tooltip then says the range."""
+        super().resizeEvent(event)
+        layout = self.layout()
+        if layout is None:
+            return
+        m, spacing = layout.contentsMargins(), max(0, layout.spacing())
+        need = (self.value.sizeHint().height() + self.slider.minimumHeight() + self.low.sizeHint().height()
+                + 2 * spacing + m.top() + m.bottom())
+        show = self.height() >= need
+        for end in (self.low, self.high):
+            if end.isHidden() == show:
+                end.setVisible(show)
+        tip = "" if show else f"{self.low.text()} … {self.high.text()}"
+        if self.slider.toolTip() != tip:
+            self.slider.setToolTip(tip)
 
     # -- range <-> positions ------------------------------------------------------------------------
     def _apply_range(self) -> None:

@@ -10,7 +10,7 @@ from qtpy import QtCore, QtWidgets
 
 from .common import format_number
 from .slider_view import NOT_SET
-from .view_common import BAD, Caption, style_text, vbox
+from .view_common import BAD, MUTED, Caption, style_text, vbox
 
 
 class StepperView(QtWidgets.QWidget):
@@ -59,7 +59,7 @@ class StepperView(QtWidgets.QWidget):
             self._show(state.value)
         r = self.model.range
         note = (state.error or f"{format_number(r.minimum)} … {format_number(r.maximum)}, "
-                               f"step {format_number(r.step)}", BAD if state.error else "#5a5a5a")
+                               f"step {format_number(r.step)}", BAD if state.error else MUTED)
         if note != self._note:  # show_text sets a style sheet (a re-polish): only when it changes
             self._note = note
             self.note.show_text(*note)
