@@ -1,7 +1,8 @@
 """Reliability soak: what a hostile server, a flapping or stalled link and kill -9 during saves do to RCON.
 
-Usage: ``python benchmarks/soak.py [--quick] [--out FILE] [--parts fuzz flap stall saves gui reconnect]``.
-Everything runs on 127.0.0.1, bounded in count and time (about 3.5 minutes in full, 20 s with --quick).
+Usage: ``python benchmarks/soak.py [--quick] [--out FILE] [--parts fuzz flap stall saves gui reconnect
+fairness]``. Everything runs on 127.0.0.1, bounded in count and time (several minutes in full, about a minute
+with --quick).
 
 * ``fuzz``: 100,000 seeded frames from a hostile rosbridge server (``rcon_core.fuzz``: invalid UTF-8, bad
   JSON, deep JSON, wrong field types, bogus fragments, bad png/cbor, PNG bombs, unknown ops, non-object
@@ -22,6 +23,11 @@ Everything runs on 127.0.0.1, bounded in count and time (about 3.5 minutes in fu
   pass while a Text View gets one 5 MB String and a 10,000 msg/s flood (target < 50 ms, no stall cut),
   and the app's RSS growth per reconnect on the demo workspace with the link cut every 3 s (target
   < 0.05 MB per reconnect).
+* ``fairness``: the sim (``rcon sim`` in its own process) under a fragment attack from another process
+  (``soak_fairness.py``): a healthy client's ``/odom`` rate and worst gap, and its call latency, while
+  another client sends 20,000 one-byte fragments a message, or subscribes to the camera with
+  ``fragment_size: 1`` (reading, or not).  Targets: >= 18 Hz, gaps < 200 ms.  ROS 1, and ROS 2 with
+  ``--auth`` (``--quick``: ROS 1 only, 4 s a scenario).
 """
 
 from __future__ import annotations
@@ -39,6 +45,8 @@ import tempfile
 import time
 from pathlib import Path
 from typing import Any
+
+from soak_fairness import fairness_targets, part_fairness
 
 from rcon_core.bridge import BridgeClient, ConnectionState
 from rcon_core.fuzz import FuzzRun, fuzz_frames
@@ -356,8 +364,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="a short smoke run (about 20 s)")
     parser.add_argument("--out", type=Path, help="write the figures as JSON here")
-    parser.add_argument("--parts", nargs="*", default=["fuzz", "flap", "stall", "saves", *APP_PARTS],
-                        choices=["fuzz", "flap", "stall", "saves", *APP_PARTS])
+    parser.add_argument("--parts", nargs="*", default=["fuzz", "flap", "stall", "saves", *APP_PARTS, "fairness"],
+                        choices=["fuzz", "flap", "stall", "saves", *APP_PARTS, "fairness"])
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.ERROR)  # the bad frames are the point here: no warning per frame
     q = args.quick
@@ -379,6 +387,9 @@ def main(argv: list[str] | None = None) -> int:
         if part in args.parts:
             results[part] = part_app(part, q)
             print(f"{part}:", json.dumps(results[part]), flush=True)
+    if "fairness" in args.parts:  # the sim under a fragment attack (soak_fairness.py)
+        results["fairness"] = part_fairness(4.0 if q else 10.0, ("ros1",) if q else ("ros1", "ros2+auth"))
+        print("fairness:", json.dumps(results["fairness"]), flush=True)
     results["targets"] = targets(results) + app_targets(results)
     print("\ntargets:")
     for what, value, met in results["targets"]:
@@ -404,6 +415,8 @@ def targets(r: dict[str, Any]) -> list[tuple[str, Any, bool]]:
                     s["stale_commands_delivered"] == 0))
         out.append(("stall: DEGRADED reported within 1.5 s", s["degraded_reported_after_s"],
                     s["degraded_reported_after_s"] is not None and s["degraded_reported_after_s"] <= 1.5))
+    if "fairness" in r:
+        out += fairness_targets(r["fairness"])
     if "saves" in r:
         s = r["saves"]
         out.append(("saves: complete layouts = all", f"{s['complete_layouts']}/{s['kills']}",

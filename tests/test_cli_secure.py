@@ -31,8 +31,9 @@ def secure_sim_url(pki):
     """``rcon sim`` serving wss:// with rosauth, on a free loopback port, in its own process."""
     proc = subprocess.Popen(
         [sys.executable, "-m", "rcon_core.cli.main", "sim", "--port", "0", "--tls-cert", str(pki.server.cert),
-         "--tls-key", str(pki.server.key), "--auth", SECRET],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env={**os.environ, "PYTHONUNBUFFERED": "1"})
+         "--tls-key", str(pki.server.key), "--auth"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        env={**os.environ, "PYTHONUNBUFFERED": "1", "RCON_AUTH_SECRET": SECRET})
     try:
         line = proc.stdout.readline()
         match = re.search(r"(wss://127\.0\.0\.1:\d+)", line)
@@ -108,13 +109,14 @@ def test_refused_port_says_so(capsys):
     assert rc == 1 and err == "rcon: cannot connect to ws://127.0.0.1:9: connection refused\n" and took < 2.0
 
 
-def test_sim_warns_loudly_when_open_to_the_network(capsys):
+def test_sim_warns_loudly_when_open_to_the_network(capsys, monkeypatch):
     # 192.0.2.1 (TEST-NET-1) is never a local address: the warning is printed, then binding fails
     rc = main(["sim", "--host", "192.0.2.1", "--port", "0"])
     _, err = capsys.readouterr()
     assert rc == 1
     assert "WARNING: listening on 192.0.2.1 without --auth" in err
-    rc = main(["sim", "--host", "192.0.2.1", "--port", "0", "--auth", "x"])
+    monkeypatch.setenv("RCON_AUTH_SECRET", "x")
+    rc = main(["sim", "--host", "192.0.2.1", "--port", "0", "--auth"])
     _, err = capsys.readouterr()
     assert rc == 1 and "WARNING" not in err
 

@@ -154,7 +154,7 @@ async def test_rosbridge_fragment_ops_are_bounded_too(limited):
         reply = json.loads(await asyncio.wait_for(ws.recv(), 5))
         assert reply["id"] == "after"
         [conn] = limited.connections
-        assert conn.incoming_fragments == {}  # dropped, not held
+        assert len(conn.fragments) == 0 and conn.fragments.bytes_held == 0  # dropped, not held
 
 
 # ---------------------------------------------------------------------------------------------- auth
@@ -270,7 +270,8 @@ async def test_rcon_sim_takes_the_frame_limit_from_the_command_line():
 
     assert main(["sim", "--max-frame", "0"]) == 2
     proc = subprocess.Popen([sys.executable, "-m", "rcon_core.cli.main", "sim", "--port", "0", "--max-frame",
-                             "0.0625", "--auth", SECRET], stdout=subprocess.PIPE, text=True)
+                             "0.0625", "--auth"], stdout=subprocess.PIPE, text=True,
+                            env={**os.environ, "RCON_AUTH_SECRET": SECRET})
     try:
         line = await asyncio.wait_for(asyncio.to_thread(proc.stdout.readline), 60)
         url = re.search(r"ws://\S+", line).group(0)

@@ -1,6 +1,7 @@
 """Smoke run of ``benchmarks/soak.py --quick``: the reliability figures it prints are at their targets
 (fuzz: no client death, every valid message in order; flap: nothing lost; stall: no stale command
-delivered; saves: every layout complete after kill -9; gui and reconnect: the app's parts ran).  Its figures are printed, not judged on time."""
+delivered; saves: every layout complete after kill -9; gui and reconnect: the app's parts ran; fairness:
+the attacks on the sim ran).  Its figures are printed, not judged on time."""
 
 from __future__ import annotations
 
@@ -26,4 +27,7 @@ def test_soak_quick_meets_the_reliability_targets(tmp_path):
     # the app's parts: a 5 MB String shown and a flood received on a Text View, reconnects counted
     assert r["gui"]["text_5mb_shown"] and r["gui"]["flood_messages_received"] > 0, r["gui"]
     assert r["reconnect"]["reconnects"] >= 8 and r["reconnect"]["rss_per_reconnect_mb"] is not None, r["reconnect"]
+    fair = r["fairness"]["ros1"]  # the attacks happened (their figures are printed, not judged on time)
+    assert fair["fragments"]["attacker"]["fragments_sent"] >= 20_000, fair["fragments"]
+    assert fair["camera"]["attacker"]["frames_received"] > 0 and fair["baseline"]["odom_hz"] > 0, fair
     assert "targets:" in proc.stdout

@@ -1,6 +1,11 @@
 """``rcon sim``: run the embedded simulated robot as a rosbridge v2 server until interrupted; with
 ``--protocol foxglove`` the same vessel is served over the Foxglove WebSocket protocol (through
-foxglove-sdk: ``rcon_core/foxglove/gateway.py``), its rosbridge port then on loopback only."""
+foxglove-sdk: ``rcon_core/foxglove/gateway.py``), its rosbridge port then on loopback only.
+
+With ``--auth`` it requires a rosauth ``auth`` op signed with the secret in ``RCON_AUTH_SECRET``, or in the
+file ``--auth-secret-file`` names (its first line), as the client reads it: never from the command line,
+where every user of the machine sees it (``ps``).
+"""
 
 from __future__ import annotations
 
@@ -17,7 +22,11 @@ from typing import Any
 OPEN_WARNING = """\
 rcon sim: WARNING: listening on {host} without --auth.
 rcon sim: WARNING: anyone who can reach this address can drive the simulated robot and read everything;
-rcon sim: WARNING: add --auth SECRET (and --tls-cert/--tls-key), or listen on 127.0.0.1 only."""
+rcon sim: WARNING: add --auth (the secret in RCON_AUTH_SECRET or --auth-secret-file) and --tls-cert/--tls-key,
+rcon sim: WARNING: or listen on 127.0.0.1 only."""
+SECRET_ON_COMMAND_LINE = """\
+rcon sim: --auth takes no secret on the command line: every user of this machine could read it in the
+rcon sim: process list. Put it in RCON_AUTH_SECRET, or in a file given with --auth-secret-file PATH."""
 
 
 def configure(name: str, parser: argparse.ArgumentParser) -> None:
@@ -35,7 +44,11 @@ def configure(name: str, parser: argparse.ArgumentParser) -> None:
                         "<node>:<param> parameters, actions, CDR cbor-raw")
     parser.add_argument("--rate-scale", type=float, default=1.0, metavar="X",
                         help="multiply every publish rate by X (default 1.0)")
-    parser.add_argument("--auth", metavar="SECRET", help="require a rosauth 'auth' op signed with SECRET")
+    parser.add_argument("--auth", nargs="?", const="", default=None, metavar="",
+                        help="require a rosauth 'auth' op signed with the secret in $RCON_AUTH_SECRET (or in "
+                        "--auth-secret-file); never on the command line")
+    parser.add_argument("--auth-secret-file", metavar="PATH",
+                        help="require a rosauth 'auth' op signed with the secret in this file (its first line)")
     parser.add_argument("--max-frame", type=float, default=32.0, metavar="MB",
                         help="largest message a client may send, in MB (default 32)")
     parser.add_argument("--no-plugin-types", action="store_true",
@@ -97,23 +110,48 @@ def run(name: str, args: argparse.Namespace) -> int:
     if bool(args.tls_cert) != bool(args.tls_key):
         print("rcon sim: --tls-cert and --tls-key go together", file=sys.stderr)
         return 2
+    if args.auth:  # a value after --auth: the secret on the command line
+        print(SECRET_ON_COMMAND_LINE, file=sys.stderr)
+        return 2
+    try:
+        secret = _secret(args)
+    except ValueError as exc:
+        print(f"rcon sim: {exc}", file=sys.stderr)
+        return 2
     try:
         tls = _tls_context(args.tls_cert, args.tls_key) if args.tls_cert else None
     except (OSError, ssl.SSLError) as exc:
         print(f"rcon sim: cannot use {args.tls_cert} / {args.tls_key}: {exc}", file=sys.stderr)
         return 2
-    if getattr(args, "protocol", "rosbridge") == "foxglove" and args.auth:
+    if getattr(args, "protocol", "rosbridge") == "foxglove" and secret is not None:
         print("rcon sim: --auth: the Foxglove WebSocket protocol has no rosauth; use --tls-cert/--tls-key and "
               "listen on a network you trust", file=sys.stderr)
         return 2
-    if not _loopback(args.host) and not args.auth:
+    if not _loopback(args.host) and secret is None:
         print(OPEN_WARNING.format(host=args.host), file=sys.stderr, flush=True)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     try:
-        return asyncio.run(_serve(args, tls))
+        return asyncio.run(_serve(args, tls, secret))
     except KeyboardInterrupt:
         return 0
+
+
+def _secret(args: argparse.Namespace) -> str | None:
+    """The secret ``--auth``/``--auth-secret-file`` ask for, None without them; ValueError says what is
+    missing or cannot be read."""
+    if args.auth is None and not args.auth_secret_file:
+        return None
+    from rcon_core.bridge.errors import LinkSettingsError
+    from rcon_core.bridge.secure import AUTH_ENV, read_secret
+
+    try:
+        secret = read_secret(args.auth_secret_file)
+    except LinkSettingsError as exc:
+        raise ValueError(str(exc)) from None
+    if not secret:
+        raise ValueError(f"--auth needs the secret: put it in {AUTH_ENV}, or in a file given with --auth-secret-file")
+    return secret
 
 
 def _video_params(args: argparse.Namespace) -> dict[str, float] | str:
@@ -147,7 +185,7 @@ def _tls_context(cert: str, key: str) -> ssl.SSLContext:
     return ctx
 
 
-async def _serve(args: argparse.Namespace, tls: ssl.SSLContext | None = None) -> int:
+async def _serve(args: argparse.Namespace, tls: ssl.SSLContext | None = None, secret: str | None = None) -> int:
     from rcon_core.sim import SimServer
 
     recording = None
@@ -166,7 +204,7 @@ async def _serve(args: argparse.Namespace, tls: ssl.SSLContext | None = None) ->
     # over Foxglove the sim's own rosbridge port stays on loopback, behind the gateway (foxglove/gateway.py)
     server = SimServer(host="127.0.0.1" if foxglove else args.host, port=0 if foxglove else args.port,
                        ros2=args.ros2 or bool(recording and recording.ros2), rate_scale=args.rate_scale,
-                       auth_secret=args.auth, max_frame=int(args.max_frame * 1024 * 1024),
+                       auth_secret=secret, max_frame=int(args.max_frame * 1024 * 1024),
                        plugin_types=not args.no_plugin_types, ssl=None if foxglove else tls, name=args.name,
                        namespace=not args.no_namespace, robot=recording is None)
     try:

@@ -1,9 +1,10 @@
 """Sending one published message to the clients subscribed to its topic, in the encodings they asked for.
 
 A subscription names its compression (``none``, ``png``, ``cbor``, ``cbor-raw``) and may ask for fragments;
-each distinct (compression, fragment size) is encoded once per message however many clients share it, and a
-message that cannot be encoded is logged and sent to nobody (as rosbridge does). Each connection's own
-bounded queue (``connection.py``) takes it from there.
+each compression is encoded once per message however many clients share it, and a message that cannot be
+encoded is logged and sent to nobody (as rosbridge does). Each connection's own bounded queue
+(``connection.py``) takes it from there, and cuts a text frame into fragments only as it sends it: a frame
+dropped from a slow client's queue is never cut at all.
 """
 
 from __future__ import annotations
@@ -34,11 +35,11 @@ def fan_out(topic: Topic, msg: dict[str, Any], flavour: Flavour, types: TypeSour
         throttle = sub.throttle_s
         if throttle > 0 and now - sub.last_sent < throttle:
             continue  # throttling drops, it does not delay
-        payload = encoded(cache, topic, msg, sub.compression, conn.fragment_size, flavour, types)
+        payload = encoded(cache, topic, msg, sub.compression, flavour, types)
         if payload is None:
             continue
         sub.last_sent = now
-        conn.send(payload, topic=topic.name, queue_length=sub.queue_length)
+        conn.send(payload, topic=topic.name, queue_length=sub.queue_length, fragment_size=conn.fragment_size)
 
 
 def wants_text(topic: Topic) -> bool:
@@ -51,14 +52,14 @@ def wants_text(topic: Topic) -> bool:
 
 
 def encoded(cache: dict[Any, Any], topic: Topic, msg: dict[str, Any], compression: str,
-            fragment_size: int | None, flavour: Flavour, types: TypeSource) -> str | bytes | list[str] | None:
-    """``msg`` as a publish frame in ``compression`` (fragments if longer than ``fragment_size``), from or
-    into ``cache``; None if it cannot be encoded (logged, as rosbridge does)."""
-    key = (compression, fragment_size)
+            flavour: Flavour, types: TypeSource) -> str | bytes | None:
+    """``msg`` as a publish frame in ``compression``, from or into ``cache``; None if it cannot be encoded
+    (logged, as rosbridge does)."""
+    key = ("frame", compression)
     if key in cache:
         return cache[key]
     try:
-        payload: str | bytes | list[str] | None
+        payload: str | bytes | None
         if compression == "cbor":
             payload = encoding.cbor_dumps(encoding.publish_frame(topic.name, msg))
         elif compression == "cbor-raw":
@@ -74,8 +75,6 @@ def encoded(cache: dict[Any, Any], topic: Topic, msg: dict[str, Any], compressio
             if compression == "png":
                 text = encoding.png_frame(text)
             payload = text
-            if fragment_size and len(text) > fragment_size:
-                payload = encoding.fragments(text, fragment_size)
     except Exception as exc:  # noqa: BLE001 - mirror rosbridge: log once per message, send nothing
         log.error("Exception calling subscribe callback: %s", exc)
         payload = None

@@ -10,7 +10,10 @@ With auth, nothing but one small ``auth`` op is read before the client is authen
 * it must be exactly one JSON object ``{"op": "auth", ...}`` with a valid MAC; anything else closes the
   connection with code 4001 and a reason that says what was wrong;
 * a client that does not send it within ``auth_timeout`` seconds is closed (4001 "authentication timed
-  out").
+  out");
+* an address that failed :data:`~rcon_core.sim.auth.MAX_FAILURES` times within a minute is locked out: its
+  connections are closed with 4001 before anything is read, for a minute (:func:`authenticate`,
+  ``auth.AuthLockout``).
 
 rosbridge sends no reply to ``auth``, so clients send their next frames right behind it (an image a
 latched publisher restores, for instance). Those frames may already be read by websockets before the
@@ -23,18 +26,25 @@ accepted, so a websockets upgrade that changes this is caught.)
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 import functools
+import logging
+import math
 from collections.abc import Callable
 from typing import Any
 
 import orjson
 from websockets.asyncio.server import ServerConnection
+from websockets.exceptions import ConnectionClosed
 from websockets.frames import Frame, Opcode
 
-from .auth import check_auth
+from .auth import AuthLockout, check_auth
 
 __all__ = ["first_frame_problem", "gated_connection", "GatedConnection", "PENDING", "DEFAULT_MAX_FRAME", "AUTH_FRAME_LIMIT",
-           "AUTH_TIMEOUT_S", "close_reason"]
+           "AUTH_TIMEOUT_S", "close_reason", "authenticate"]
+
+log = logging.getLogger("rcon.sim")
 
 #: the largest message the sim reads: its own use and a client's 1080p rgb8 image publish fit
 DEFAULT_MAX_FRAME = 32 * 1024 * 1024
@@ -58,7 +68,10 @@ def first_frame_problem(secret: str, data: bytes) -> str | None:
         op = msg.get("op") if isinstance(msg, dict) else None
         shown = f" (got op {op[:20]!r})" if isinstance(op, str) else ""
         return f"the first frame must be an auth op{shown}"
-    return check_auth(secret, msg)
+    try:
+        return check_auth(secret, msg)
+    except Exception as exc:  # noqa: BLE001 - never a 1011 and a traceback: a refusal that says why
+        return f"the auth op cannot be checked ({type(exc).__name__})"
 
 
 def close_reason(text: str) -> str:
@@ -96,3 +109,33 @@ class GatedConnection(ServerConnection):
 def gated_connection(secret: str, max_frame: int) -> Callable[..., ServerConnection]:
     """The ``create_connection`` factory for ``serve``."""
     return functools.partial(GatedConnection, secret=secret, max_frame=max_frame)
+
+
+async def authenticate(ws: ServerConnection, timeout: float, lockout: AuthLockout) -> bool:
+    """Read the one small ``auth`` op (judged by :class:`GatedConnection` as it arrived); close the
+    connection (4001, with the reason) unless it was valid. An address locked out for failing too often is
+    closed before anything is read."""
+    peer = str(ws.remote_address[0]) if ws.remote_address else "?"
+    locked = lockout.locked(peer)
+    if locked:
+        problem = f"too many failed authentication attempts from {peer}; try again in {math.ceil(locked):d} s"
+    else:
+        try:
+            async with asyncio.timeout(timeout):
+                await ws.recv()
+        except TimeoutError:
+            problem = f"authentication timed out (no auth op within {timeout:g} s)"
+        except ConnectionClosed:
+            return False  # gone, or its first message was too big (closed with 1009)
+        else:
+            verdict = getattr(ws, "auth_problem", PENDING)
+            if verdict is None:
+                lockout.succeeded(peer)
+                log.info("client %s has authenticated.", ws.remote_address)
+                return True
+            lockout.failed(peer)
+            problem = f"authentication failed: {verdict}"
+    log.warning("client %s: %s. Closing connection.", ws.remote_address, problem)
+    with contextlib.suppress(Exception):
+        await ws.close(4001, close_reason(problem))
+    return False

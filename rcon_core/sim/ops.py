@@ -49,9 +49,7 @@ def retype(topic: Topic, type_name: str) -> Topic:
 
 
 def send_frame(conn: Connection, frame: dict[str, Any]) -> None:
-    """Send a non-publish frame (a reply or a request), fragmented if the connection asked for it."""
-    text = encoding.dumps(frame)
-    if conn.fragment_size and len(text) > conn.fragment_size:
-        conn.send(encoding.fragments(text, conn.fragment_size, frame.get("id", 0)))
-    else:
-        conn.send(text)
+    """Send a non-publish frame (a reply or a request), fragmented if the connection asked for it (the
+    fragments' ``id`` is the frame's, as rosbridge does). It is never dropped from the connection's queue
+    (``connection.py``)."""
+    conn.send(encoding.dumps(frame), fragment_size=conn.fragment_size, fragment_id=frame.get("id", 0))

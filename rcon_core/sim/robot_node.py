@@ -31,6 +31,7 @@ from rcon_core.priority import lower_this_thread
 
 from . import world
 from .camera import CameraRenderer
+from .commands import StampedCommands
 from .encoding import Base64Bytes
 from .identity import Identity
 from .rosapi import add_logger_services
@@ -130,6 +131,11 @@ class RobotNode:
                                       latched=topic in ("/map", "/lights/state"))
         ns, node = self.ns, self.node
         server.subscribe_internal(ns("/cmd_vel"), m("geometry_msgs", "Twist"), node, self._on_cmd_vel)
+        #: TwistStamped commands older than cmd_max_age are dropped, the watchdog runs from the stamp
+        self.stamped = StampedCommands(self.vessel.params.watchdog_s, lambda text: server.log(
+            self.node, "warn", text, function="cmd_vel_stamped"))
+        server.subscribe_internal(ns("/cmd_vel_stamped"), m("geometry_msgs", "TwistStamped"), node,
+                                  self._on_cmd_vel_stamped)
         server.subscribe_internal(ns("/speed_limit"), m("std_msgs", "Float64"), node, self._on_speed_limit)
         server.add_service(ns("/reset_pose"), s("std_srvs", "Empty"), node, self._srv_reset_pose)
         server.add_service(ns("/lights/set"), s("std_srvs", "SetBool"), node, self._srv_lights)
@@ -139,6 +145,7 @@ class RobotNode:
         p = self.vessel.params
         server.params_tree.set(node, {
             "max_speed": p.max_surge, "max_yaw_rate": p.max_yaw_rate, "watchdog_timeout": p.watchdog_s,
+            "cmd_max_age": self.stamped.max_age,
             "battery_capacity_ah": p.capacity_ah, "frame_id": "base_link",
             "gps": {"origin_lat": self.vessel.origin_lat, "origin_lon": self.vessel.origin_lon},
         })
@@ -220,14 +227,23 @@ class RobotNode:
             elif event == "docked":
                 self.server.log(self.node, "info", f"Docked; charging at {v.current:.1f} A", function="dock")
 
-    def _on_cmd_vel(self, msg: dict[str, Any]) -> None:
+    def _on_cmd_vel_stamped(self, msg: dict[str, Any]) -> None:
+        limit = self.server.params_tree.get(f"{self.node}/cmd_max_age")  # a client may set it (rosapi)
+        if isinstance(limit, int | float) and not isinstance(limit, bool) and limit > 0:
+            self.stamped.max_age = float(limit)
+        made = self.stamped.judge(msg, self.ns("/cmd_vel_stamped"))
+        if made is not None:
+            self._on_cmd_vel(msg.get("twist") or {}, made)
+
+    def _on_cmd_vel(self, msg: dict[str, Any], made: float | None = None) -> None:
+        """A velocity command; ``made``: when (monotonic) a stamped one was made, the watchdog's start."""
         linear = msg.get("linear") or {}
         angular = msg.get("angular") or {}
         surge = float(linear.get("x", 0.0) or 0.0)
         yaw_rate = float(angular.get("z", 0.0) or 0.0)
         now = time.monotonic()
         was_docking = self.vessel.docking
-        self.vessel.command(surge, yaw_rate, now)
+        self.vessel.command(surge, yaw_rate, now if made is None else made)
         if was_docking:
             self.server.log(self.node, "warn", "Docking cancelled by a /cmd_vel command", function="cmd_vel")
         if self._idle or now - self._cmd_logged_at > 10.0:

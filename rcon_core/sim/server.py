@@ -2,9 +2,13 @@
 
 Every client op of rosbridge 0.11 is handled the way the real server does it (the recorded frames in
 ``tests/recordings/``): no acknowledgements except service responses, errors only in the log, lenient
-input parsing (in linear time, see ``frames.py``). Slow clients never stall the simulation: each connection has its own
-bounded, drop-oldest send queue. Incoming messages are limited to ``max_frame`` bytes (32 MB); with
-``auth_secret`` nothing but one small ``auth`` op is read before a client is authenticated (``gate.py``).
+input parsing (in linear time, see ``frames.py``). No client costs the others their latency: each connection
+has its own bounded, budgeted send queue that drops old publishes but never a reply (``connection.py``),
+the loop is given back after every frame a client sends, fragments are reassembled in linear time within
+bounds (``fragments.py``). Incoming messages are limited to ``max_frame`` bytes (32 MB) and to a decoded-size
+budget; with ``auth_secret`` nothing but one small ``auth`` op is read before a client is authenticated
+(``gate.py``), and an address that keeps failing it is locked out for a while (``auth.py``). Topics
+clients made are forgotten when no one publishes or subscribes them any more.
 ``name`` makes the sim one vessel of a fleet: its own topics, services, action and node under ``/NAME``,
 its own start position and camera scene (``identity.py``); without it the sim is unchanged.
 """
@@ -28,22 +32,29 @@ from websockets.exceptions import ConnectionClosed
 from rcon_core.msgs.names import pkg_type
 
 from . import assembly, fanout, gate, ros2_clients
+from .auth import AuthLockout
 from .connection import Connection, SubOptions, TopicSubscription
 from .convert import ConversionError
+from .encoding import bounded
 from .flavour import Flavour
+from .fragments import FragmentError
 from .frames import parse_frame
 from .graph import BRIDGE_NODE, ROSOUT_NODE, InternalCallback, Service, ServiceHandler, Topic
 from .identity import Identity
 from .ops import OpError, field, nonneg_int, retype
 from .params import ParamTree
+from .published import PublishedLog
 from .services import ServiceOps
 from .typesource import TypeSource
 
 log = logging.getLogger("rcon.sim")
 
 COMPRESSIONS = {"none", "png", "cbor", "cbor-raw"}
-PUBLISHED_KEEP = 500
-MAX_FRAGMENTED = 64  # partial (fragmented) messages a client may have in flight
+#: distinct (op, name) keys ``ops_received`` counts; later new names are counted under (op, OTHER_NAMES)
+OPS_RECEIVED_KEYS = 10_000
+OTHER_NAMES = "(other names)"
+#: messages websockets reads ahead of the handler per client (its default, 16, buffered 512 MB of 32 MB frames)
+READ_AHEAD = 4
 
 
 class SimServer:
@@ -91,15 +102,19 @@ class SimServer:
         self._server: Server | None = None
         self._port = 0
         self._client_ids = itertools.count(0)
-        self._published: dict[str, collections.deque[dict[str, Any]]] = {}
-        self._published_lock = threading.Lock()
+        self.published_log = PublishedLog()  # what clients published (bounded by count and bytes)
         self._published_event: asyncio.Event | None = None
         self._tasks: set[asyncio.Task[Any]] = set()
         #: ``absorb(conn, topic, msg) -> bool``: when set and it answers True, a client's publish goes no
         #: further than this (a recording played as a robot takes commands nowhere: ``playback.py``)
         self.absorb: Callable[[Connection, str, dict[str, Any]], bool] | None = None
         #: every operation clients sent, by (op, topic/service/action name): what tests check reached it
+        #: (at most OPS_RECEIVED_KEYS names; the rest under OTHER_NAMES)
         self.ops_received: collections.Counter[tuple[str, str]] = collections.Counter()
+        #: failed auth ops per peer address (auth.py)
+        self.auth_lockout = AuthLockout()
+        #: client frames whose handling failed in an unexpected way (each logged in one bounded line)
+        self.op_failures = 0
 
     # -- lifecycle ------------------------------------------------------------------------------------
 
@@ -140,7 +155,7 @@ class SimServer:
             limits = {"max_size": self.auth_frame_limit,
                       "create_connection": gate.gated_connection(self.auth_secret, self.max_frame)}
         self._server = await serve(self._handle, self.host, self._requested_port, ssl=self.ssl, compression=None,
-                                   ping_interval=20, ping_timeout=20, **limits)
+                                   ping_interval=20, ping_timeout=20, max_queue=READ_AHEAD, **limits)
         sock = next(iter(self._server.sockets))
         self._port = sock.getsockname()[1]
         self.publish("/client_count", {"data": 0}, BRIDGE_NODE)
@@ -203,11 +218,17 @@ class SimServer:
         return asyncio.run_coroutine_threadsafe(call(), self.loop).result(timeout)
 
     def spawn(self, coro: Any) -> asyncio.Task[Any]:
-        """Run ``coro`` as a task the server cancels when it stops."""
+        """Run ``coro`` as a task the server cancels when it stops; what it raises is logged in one line."""
         task = asyncio.get_running_loop().create_task(coro)
         self._tasks.add(task)
-        task.add_done_callback(self._tasks.discard)
+        task.add_done_callback(self._task_done)
         return task
+
+    def _task_done(self, task: asyncio.Task[Any]) -> None:
+        self._tasks.discard(task)
+        if not task.cancelled() and (exc := task.exception()) is not None:
+            self.op_failures += 1
+            log.error("a task of the sim failed: %s: %s", type(exc).__name__, bounded(str(exc)))
 
     # -- inspection (tests) ---------------------------------------------------------------------------
 
@@ -221,9 +242,8 @@ class SimServer:
         return dict(self.robot_node.published_counts) if self.robot_node is not None else {}
 
     def published(self, topic: str) -> list[dict[str, Any]]:
-        """Messages clients published on ``topic`` (the most recent ones, oldest first)."""
-        with self._published_lock:
-            return list(self._published.get(topic, ()))
+        """Messages clients published on ``topic`` (the most recent ones, oldest first; published.py)."""
+        return self.published_log.messages(topic)
 
     async def wait_for_published(self, topic: str, predicate: Callable[[dict[str, Any]], bool] | None = None,
                                  timeout: float = 5.0) -> dict[str, Any]:
@@ -322,31 +342,10 @@ class SimServer:
 
     # -- connections ----------------------------------------------------------------------------------
 
-    async def _authenticate(self, ws: ServerConnection) -> bool:
-        """Read the one small ``auth`` op (judged by the gate as it arrived); close the connection unless
-        it was valid."""
-        try:
-            async with asyncio.timeout(self.auth_timeout):
-                await ws.recv()
-        except TimeoutError:
-            problem = f"authentication timed out (no auth op within {self.auth_timeout:g} s)"
-        except ConnectionClosed:
-            return False  # gone, or its first message was too big (closed with 1009)
-        else:
-            verdict = getattr(ws, "auth_problem", gate.PENDING)
-            if verdict is None:
-                log.info("client %s has authenticated.", ws.remote_address)
-                return True
-            problem = f"authentication failed: {verdict}"
-        log.warning("client %s: %s. Closing connection.", ws.remote_address, problem)
-        with contextlib.suppress(Exception):
-            await ws.close(4001, gate.close_reason(problem))
-        return False
-
     async def _handle(self, ws: ServerConnection) -> None:
-        if self.auth_secret is not None and not await self._authenticate(ws):
+        if self.auth_secret is not None and not await gate.authenticate(ws, self.auth_timeout, self.auth_lockout):
             return
-        conn = Connection(ws, next(self._client_ids))
+        conn = Connection(ws, next(self._client_ids), max_frame=self.max_frame)
         conn.start()
         self.connections.add(conn)
         self.log(BRIDGE_NODE, "info", f"Client connected.  {len(self.connections)} clients total.")
@@ -356,8 +355,12 @@ class SimServer:
             async for message in ws:
                 try:
                     await self._receive(conn, message)
-                except Exception:  # noqa: BLE001 - bad input never takes the connection down
-                    log.exception("%s failed to handle a frame", conn.label)
+                except Exception as exc:  # noqa: BLE001 - bad input never takes the connection down
+                    self._failed(conn, "a frame", exc)
+                # fairness: the others (and the robot's timers) get the loop between two frames of one client,
+                # which is read within its budget, and not while its unread replies pile up (connection.py)
+                await conn.read_pause(len(message))
+                await conn.room_for_replies()
         except ConnectionClosed:
             pass
         finally:
@@ -376,7 +379,9 @@ class SimServer:
             topic = self.topics.get(name)
             if topic is not None:
                 topic.client_subscribers.discard(conn)
+                self._forget_if_unused(name)
         conn.subscriptions.clear()
+        conn.fragments.clear()
         for name in list(conn.advertised):
             self._unadvertise(conn, name)
         self.service_ops.connection_closed(conn)
@@ -384,34 +389,51 @@ class SimServer:
             self.action_hub.connection_closed(conn)
 
     async def _receive(self, conn: Connection, message: str | bytes) -> None:
-        for frame in parse_frame(message, conn.label):
+        frames = parse_frame(message, conn.label, warn=conn.log)
+        conn.frame_size = len(message) // max(1, len(frames))  # what one message of this frame weighs
+        for frame in frames:
             await self._dispatch(conn, frame)
+
+    def _failed(self, conn: Connection, what: str, exc: BaseException, msg: Any = None) -> None:
+        """A frame whose handling raised unexpectedly: one bounded line (rate limited per client), counted."""
+        self.op_failures += 1
+        ident = f"[id: {bounded(repr(msg.get('id')), 60)}] " if isinstance(msg, dict) and "id" in msg else ""
+        conn.log(logging.ERROR, "%sfailed to handle %s: %s: %s", ident, bounded(what, 60), type(exc).__name__,
+                 bounded(str(exc)), logger=log)
 
     async def _dispatch(self, conn: Connection, msg: Any) -> None:
         if not isinstance(msg, dict) or "op" not in msg:
             if isinstance(msg, dict) and "receiver" in msg:
-                log.error("%s Received a rosbridge v1.0 message.  Please refer to rosbridge.org for the correct "
-                          "format of rosbridge v2.0 messages.", conn.label)
+                conn.log(logging.ERROR, "Received a rosbridge v1.0 message.  Please refer to rosbridge.org for the "
+                         "correct format of rosbridge v2.0 messages.", logger=log)
             else:
-                log.error("%s Received a message without an op.  All messages require 'op' field with value "
-                          "one of: %s.", conn.label, sorted(self._ops()))
+                conn.log(logging.ERROR, "Received a message without an op.  All messages require 'op' field with "
+                         "value one of: %s.", sorted(self._ops()), logger=log)
             return
         op = msg["op"]
         target = msg.get("topic") or msg.get("service") or msg.get("action") or ""
-        key = (str(op), target if isinstance(target, str) else "")
-        self.ops_received[key] += 1
-        conn.ops_received[key] += 1
+        self._count_op(conn, str(op)[:40], target if isinstance(target, str) else "")
         handler = self._ops().get(op) if isinstance(op, str) else None
         if handler is None:
-            log.error("%s [id: %s] Unknown operation: %s.  Allowed operations: %s", conn.label, msg.get("id"),
-                      op, sorted(self._ops()))
+            conn.log(logging.ERROR, "[id: %s] Unknown operation: %s.  Allowed operations: %s",
+                     bounded(str(msg.get("id")), 60), bounded(str(op), 60), sorted(self._ops()), logger=log)
             return
         try:
             result = handler(conn, msg)
             if inspect.isawaitable(result):
                 await result
-        except OpError as exc:
-            log.error("%s [id: %s] %s: %s", conn.label, msg.get("id"), op, exc)
+        except (OpError, FragmentError) as exc:
+            conn.log(logging.ERROR, "[id: %s] %s: %s", bounded(str(msg.get("id")), 60), op, bounded(str(exc), 300),
+                     logger=log)
+        except Exception as exc:  # noqa: BLE001 - a malformed op is one bounded line, never a traceback
+            self._failed(conn, f"op {op}", exc, msg)
+
+    def _count_op(self, conn: Connection, op: str, name: str) -> None:
+        for counts in (self.ops_received, conn.ops_received):
+            key = (op, name)
+            if key not in counts and len(counts) >= OPS_RECEIVED_KEYS:
+                key = (op, OTHER_NAMES)
+            counts[key] += 1
 
     def _ops(self) -> dict[str, Callable[[Connection, dict[str, Any]], Any]]:
         ops: dict[str, Callable[[Connection, dict[str, Any]], Any]] = {
@@ -468,6 +490,13 @@ class SimServer:
             if topic.publishers[BRIDGE_NODE] <= 0:
                 del topic.publishers[BRIDGE_NODE]
                 topic.latched_msgs.pop(BRIDGE_NODE, None)
+            self._forget_if_unused(name)
+
+    def _forget_if_unused(self, name: str) -> None:
+        """Forget a topic no one publishes, subscribes or latched on (100,000 made /rosapi/topics 455 ms)."""
+        topic = self.topics.get(name)
+        if topic is not None and not topic.is_alive() and not topic.latched_msgs:
+            del self.topics[name]
 
     def _op_publish(self, conn: Connection, msg: dict[str, Any]) -> None:
         name = field(msg, "topic", str)
@@ -488,8 +517,7 @@ class SimServer:
                 raise OpError(str(exc)) from exc
         elif not isinstance(body, dict):
             raise OpError(f"Expected a JSON object for type {topic.type}")
-        with self._published_lock:
-            self._published.setdefault(name, collections.deque(maxlen=PUBLISHED_KEEP)).append(body)
+        self.published_log.add(name, body, conn.frame_size)
         assert self._published_event is not None
         self._published_event.set()
         if self.absorb is not None and self.absorb(conn, name, body):
@@ -515,9 +543,13 @@ class SimServer:
         fragment_size = msg.get("fragment_size")
         if isinstance(fragment_size, int) and not isinstance(fragment_size, bool) and fragment_size > 0:
             conn.fragment_size = fragment_size
+        sub_id = msg.get("id")
+        if isinstance(sub_id, dict | list):
+            raise OpError(f"Expected field id to be a string or a number. Invalid value: {bounded(str(sub_id), 60)}")
         compression = msg.get("compression") or "none"
-        if compression not in COMPRESSIONS:
-            log.warning("%s unknown compression %r, sending plain JSON", conn.label, compression)
+        if not isinstance(compression, str) or compression not in COMPRESSIONS:
+            conn.log(logging.WARNING, "unknown compression %s, sending plain JSON", bounded(repr(compression), 60),
+                     logger=log)
             compression = "none"
         options = SubOptions(
             throttle_rate=nonneg_int(msg.get("throttle_rate")),
@@ -527,7 +559,7 @@ class SimServer:
         sub = conn.subscriptions.get(name)
         if sub is None:
             sub = conn.subscriptions[name] = TopicSubscription(name, topic.type)
-        sub.ids[msg.get("id")] = options
+        sub.ids[sub_id] = options
         sub.compression = compression
         first = conn not in topic.client_subscribers
         topic.client_subscribers.add(conn)
@@ -535,10 +567,9 @@ class SimServer:
         if first and topic.latched_msgs:
             now = time.monotonic()
             for latched in list(topic.latched_msgs.values()):
-                payload = fanout.encoded({}, topic, latched, sub.compression, conn.fragment_size, self.flavour,
-                                         self.types)
+                payload = fanout.encoded({}, topic, latched, sub.compression, self.flavour, self.types)
                 if payload is not None:
-                    conn.send(payload, topic=name)
+                    conn.send(payload, topic=name, fragment_size=conn.fragment_size)
             sub.last_sent = now
 
     def _op_unsubscribe(self, conn: Connection, msg: dict[str, Any]) -> None:
@@ -549,31 +580,19 @@ class SimServer:
         sub_id = msg.get("id")
         if sub_id is None:
             sub.ids.clear()
-        else:
+        elif not isinstance(sub_id, dict | list):
             sub.ids.pop(sub_id, None)
         if not sub.ids:
             del conn.subscriptions[name]
             topic = self.topics.get(name)
             if topic is not None:
                 topic.client_subscribers.discard(conn)
+                self._forget_if_unused(name)
             log.info("%s Unsubscribed from %s", conn.label, name)
 
     def _op_fragment(self, conn: Connection, msg: dict[str, Any]) -> None:
-        """Reassemble fragments a client sends (by id), then handle the joined frame."""
-        frag_id = msg.get("id")
-        data, num, total = msg.get("data"), msg.get("num"), msg.get("total")
-        if not isinstance(data, str) or not isinstance(num, int) or not isinstance(total, int | float):
-            raise OpError("fragment needs string data, integer num and numeric total")
-        held = sum(len(d) for p in conn.incoming_fragments.values() for d in p.values())
-        if held + len(data) > self.max_frame or (frag_id not in conn.incoming_fragments
-                                                and len(conn.incoming_fragments) >= MAX_FRAGMENTED):
-            conn.incoming_fragments.clear()
-            raise OpError(f"fragments held exceed {self.max_frame} bytes or {MAX_FRAGMENTED} messages; "
-                           "all partial messages were dropped")
-        parts = conn.incoming_fragments.setdefault(frag_id, {})
-        parts[num] = data
-        count = int(total)
-        if len(parts) >= count and all(i in parts for i in range(count)):
-            del conn.incoming_fragments[frag_id]
-            text = "".join(parts[i] for i in range(count))
+        """Reassemble fragments a client sends (by id; linear and bounded, fragments.py), then handle the
+        joined frame (in a task of its own: a joined frame may hold fragments again)."""
+        text = conn.fragments.add(msg)
+        if text is not None:
             self.spawn(self._receive(conn, text))
