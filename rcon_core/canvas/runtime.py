@@ -11,6 +11,7 @@
     rt.restart_widget(inst)     # after a reconfigure
     rt.focus_lost()             # the operator looked away: models' optional on_focus_lost() (teleop stops)
     rt.set_client(robot_id, c)  # that robot's link is another client now: only its widgets restart
+                                #   (those added or restarted since start() too: offline, then connected)
     rt.stop()                   # focus_lost() first, then every model stops
 
 Several robots (:mod:`rcon_core.canvas.fleet`): each widget runs on the client of the robot its binding
@@ -171,6 +172,9 @@ class CanvasRuntime:
         self.models: dict[str, WidgetModel] = {}
         self._nodes: dict[str, list[Any]] = {}  # widget id -> its node, then its other robots' nodes
         self._robot_of: dict[str, str] = {}  # widget id -> robot id (resolved)
+        #: widget id -> the instance its running model was built from: the canvas's own widgets and those
+        #: added or reconfigured since (the caller's canvas may be a snapshot that never hears of them)
+        self._instances: dict[str, WidgetInstance] = {}
         self._fleet_wide: set[str] = set()  # widgets whose model has on_fleet
         self._remove: dict[str, list[Callable[[], None]]] = {}  # robot id -> listener removers
         self._link_up: dict[str, bool] = {}
@@ -237,8 +241,8 @@ class CanvasRuntime:
         if not restart:  # the running widgets keep their nodes but hear the new link's state
             self._on_state(rid, ConnectionState.CONNECTED if self._link_up.get(rid) else ConnectionState.CLOSED)
             return
-        for inst in list(self.canvas.widgets):
-            if inst.id in self.models and (self._robot_of.get(inst.id) == rid or inst.id in self._fleet_wide):
+        for widget_id, inst in list(self._instances.items()):  # every running widget, added ones too
+            if widget_id in self.models and (self._robot_of.get(widget_id) == rid or widget_id in self._fleet_wide):
                 self.restart_widget(inst)
         self.shared.forget(id(old))  # nobody is on the old link any more
 
@@ -325,6 +329,7 @@ class CanvasRuntime:
                            on_refused=refused, link=id(self.fleet.client(robot_id)), widget_id=widget_id)
 
     def _start_widget(self, inst: WidgetInstance) -> WidgetModel:
+        self._instances[inst.id] = inst
         try:
             rid = self.fleet.resolve(inst.binding.robot)
         except UnknownRobot as exc:
@@ -425,6 +430,7 @@ class CanvasRuntime:
 
     def _stop_widget(self, widget_id: str) -> None:
         model = self.models.pop(widget_id, None)
+        self._instances.pop(widget_id, None)
         nodes = self._nodes.pop(widget_id, [])
         self._robot_of.pop(widget_id, None)
         self._fleet_wide.discard(widget_id)
