@@ -356,3 +356,25 @@ async def test_silent_stall_stops_the_pad_and_never_delivers_a_late_command(sim)
             model.release()
             model.stop()
             await c.close()
+
+
+async def test_a_pad_started_after_the_limit_was_set_shows_that_limit(sim):
+    """The operator set the robot's speed limit from another app, which then closed; a pad started later
+    hears the limit at once: the robot holds /speed_limit latched (ROS 1 latched / ROS 2 transient local),
+    so rosbridge gives the last value to a new subscriber."""
+    setter = BridgeClient(sim.url, reconnect=False)
+    await setter.connect()
+    limit = setter.node("slider").advertise("/speed_limit", "std_msgs/Float64")
+    limit.publish({"data": 0.4})
+    await until(lambda: sim.robot.speed_limit == 0.4, what="the robot taking the limit")
+    await setter.close()  # the app that set it is gone: its own publisher with it
+    later = BridgeClient(sim.url, reconnect=False)
+    await later.connect()
+    try:
+        p = pad(later, TeleopSettings(max_linear=1.0, speed_limit_topic="/speed_limit"))
+        p.start()
+        await until(lambda: p.limits()[0] == 0.4, what="the pad hearing the limit set before it started")
+        assert p.limits()[2] == "≤ 0.4 m/s (speed limit)"
+        p.stop()
+    finally:
+        await later.close()
