@@ -8,7 +8,7 @@ import attrs
 
 from rcon_core.matcher import match
 from rcon_core.plugins import Binding, Role, WidgetSpec
-from rcon_core.plugins.children import settings_problems
+from rcon_core.plugins.children import settings_binding_problems, settings_problems
 from rcon_core.plugins.paths import parse_path
 
 #: each role's button on the add panel: (what it does, in words; what it means)
@@ -90,9 +90,11 @@ class Draft:
             return Binding(role=self.role, robot=self.robot)
         return Binding(self.target.name, self.target.type, self.role, self.target.field_paths, self.robot)
 
-    def problems(self) -> list[str]:
-        """What keeps the draft from being placed: binding first, then the settings' own checks."""
-        return list(self.binding.problems()) + settings_problems(self.settings)
+    def problems(self, types: Any = None) -> list[str]:
+        """What keeps the draft from being placed: binding first, then the settings' own checks, then (given
+        ``types``) the settings against the bound field (``settings_binding_problems``)."""
+        out = list(self.binding.problems()) + settings_problems(self.settings)
+        return out + [p for p in settings_binding_problems(self.settings, self.binding, types) if p not in out]
 
     def settings_dict(self) -> dict[str, Any]:
         return self.spec.settings_to_dict(self.settings) if self.settings is not None else {}

@@ -329,3 +329,17 @@ def settings_problems(settings: Any) -> list[str]:
         return [str(p) for p in fn()]
     except Exception as exc:  # a broken problems() is itself a problem to show, not a crash
         return [f"settings check failed: {exc}"]
+
+
+def settings_binding_problems(settings: Any, binding: Binding | None, types: Any) -> list[str]:
+    """``settings.binding_problems(binding, types)`` if the class has it: what the settings can only check
+    against the field they are bound to (a slider's range against what its field's type holds, an int8
+    slider up to 500 refused); else no problems. Asked by the add panel and Configure, beside
+    :func:`settings_problems`, so such settings are refused before a widget is placed or saved."""
+    fn = getattr(settings, "binding_problems", None)
+    if fn is None or binding is None:
+        return []
+    try:
+        return [str(p) for p in fn(binding, types)]
+    except Exception as exc:  # a broken check is itself a problem to show, not a crash
+        return [f"settings check failed: {exc}"]
