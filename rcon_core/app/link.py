@@ -103,6 +103,9 @@ class Link:
         self.failure_box = LatestValue()
         #: the URL of a link whose robot answered a call (so it goes into the URL history)
         self.answered_box = LatestValue()
+        #: why the robot's bridge holds this link's commands now (a sentence), None when it does not
+        #: (``rcon_core/bridge/held.py``: a service call unanswered on a server that runs one at a time)
+        self.held_box = LatestValue()
         self._catalog_task: asyncio.Task | None = None
         self._generation = 0
         self._listeners: list[Callable[[BridgeClient | None], None]] = []
@@ -145,6 +148,7 @@ class Link:
         client, self.client = self.client, None
         self._generation += 1
         self.failure_box.put(None)
+        self.held_box.put(None)
         self.catalog_box.put(EMPTY_CATALOG)
         if client is None:
             return
@@ -200,8 +204,13 @@ class Link:
             if gen == self._generation:
                 self.failure_box.put(failure)
 
+        def on_held(held: Any) -> None:
+            if gen == self._generation:
+                self.held_box.put(held.sentence() if held is not None else None)
+
         client.add_state_listener(on_state)
         client.add_failure_listener(on_failure)
+        client.session.held.add_listener(on_held)
         asyncio.ensure_future(self._connect(client, gen))
 
     async def _connect(self, client: BridgeClient, gen: int) -> None:

@@ -14,6 +14,9 @@
                                 #   (those added or restarted since start() too: offline, then connected)
     rt.stop()                   # focus_lost() first, then every model stops
 
+Each robot's link state and its commands held behind an unanswered service call (``bridge/held.py``)
+reach only its own widgets: ``model.set_link(up)``, ``model.on_commands_held(reason or None)``.
+
 Several robots (:mod:`rcon_core.canvas.fleet`): each widget runs on the client of the robot its binding
 names (``binding.robot``, ``""`` = the first); each robot's link state reaches only its own widgets
 (``model.set_link``), so losing one robot's link stops that robot's commands (teleop sends nothing, its
@@ -178,6 +181,7 @@ class CanvasRuntime:
         self._fleet_wide: set[str] = set()  # widgets whose model has on_fleet
         self._remove: dict[str, list[Callable[[], None]]] = {}  # robot id -> listener removers
         self._link_up: dict[str, bool] = {}
+        self._held: dict[str, str | None] = {}  # robot id -> why its commands are held (bridge/held.py)
         #: objects the widgets on one robot link share (``WidgetContext.shared``), by the port's ``link``
         self.shared = SharedResources()
         self._checkers: dict[str, TypeChecker] = {}
@@ -346,6 +350,8 @@ class CanvasRuntime:
         self._robot_of[inst.id] = rid
         self.models[inst.id] = model
         model.set_link(self._link_up.get(rid, True))
+        if self._held.get(rid):
+            model.on_commands_held(self._held[rid])
         try:
             self._give_fleet(inst.id, model, rid, port, built)
             model.start()
@@ -459,6 +465,10 @@ class CanvasRuntime:
             removers.append(client.add_state_listener(lambda state: self._on_state(robot_id, state)))
         if hasattr(client, "add_status_listener"):
             removers.append(client.add_status_listener(lambda frame: self._on_status(robot_id, frame)))
+        held = getattr(getattr(client, "session", None), "held", None)  # commands held behind a call
+        if held is not None:
+            removers.append(held.add_listener(lambda h: self._on_held(robot_id, h)))
+            self._held[robot_id] = held.current.sentence() if held.current is not None else None
         self._remove[robot_id] = [r for r in removers if callable(r)]
         self._link_up[robot_id] = _is_up(getattr(client, "state", ConnectionState.CONNECTED))
 
@@ -480,6 +490,20 @@ class CanvasRuntime:
                 model.set_link(up)
             if widget_id in self._fleet_wide:
                 self._tell_robot_link(model, robot_id)
+
+    def _on_held(self, robot_id: str, held: Any) -> None:
+        """The robot's bridge holds (or no longer holds) its link's commands behind a call: its widgets hear
+        it (the teleop pad stops sending and says why)."""
+        if robot_id not in self._remove:  # an old client's late callback
+            return
+        text = held.sentence() if held is not None else None
+        self._held[robot_id] = text
+        for widget_id, model in list(self.models.items()):
+            if self._robot_of.get(widget_id) == robot_id:
+                try:
+                    model.on_commands_held(text)
+                except Exception as exc:
+                    log.warning("widget %s failed on commands held: %s", widget_id, exc)
 
     def _tell_robot_link(self, model: WidgetModel, robot_id: str | None) -> None:
         hook = getattr(model, "on_robot_link", None)

@@ -541,6 +541,14 @@ class WidgetModel:
                     self._subscribed_at = self._clock()
                     self._deliveries, self._first_delivery = 0, None
 
+    def on_commands_held(self, reason: str | None) -> None:
+        """The robot's bridge holds this link's commands behind a service call it has not answered
+        (rosbridge 2.1.0 runs one connection's frames one at a time: ``rcon_core/bridge/held.py``):
+        ``reason`` says so ("commands held: the robot's bridge is still busy with /dock"); None once it
+        answered. Called by the runtime on the loop thread. Default: nothing. A widget that streams
+        commands (the teleop pad) stops sending while held, so nothing more queues behind the call, and
+        says why."""
+
     @property
     def state(self) -> WidgetState:
         """A consistent snapshot for the view (any thread)."""

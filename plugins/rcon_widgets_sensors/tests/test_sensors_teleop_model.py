@@ -378,3 +378,34 @@ async def test_a_pad_started_after_the_limit_was_set_shows_that_limit(sim):
         p.stop()
     finally:
         await later.close()
+
+
+async def test_commands_held_behind_a_call_stop_the_pad_with_one_zero_and_nothing_more(sim, client):
+    """The runtime says the robot's bridge holds the link's commands behind an unanswered call
+    (``rcon_core/bridge/held.py``): the pad sends one zero (it waits behind the call with whatever went out
+    since, so the robot ends stopped), then nothing, finger or not, and says why; once the call is answered
+    the finger is lifted and put down again to drive."""
+    rx = Receiver(sim)
+    model = pad(client, TeleopSettings(rate_hz=20))
+    model.start()
+    try:
+        t0 = time.monotonic()
+        model.set_axes(0.0, 0.8)
+        await until(lambda: len(rx.since(t0)) >= 2, 5.0, "commands")
+        held = "commands held: the robot's bridge is still busy with /dock"
+        t_held = time.monotonic()
+        model.on_commands_held(held)
+        await until(lambda: rx.first_zero_since(t_held)[0], 2.0, "the zero")
+        sent = model.state.value.sent
+        assert model.state.value.commands_held == held and not model.state.value.active
+        model.set_axes(0.0, 0.9)  # the finger moves on: nothing
+        model.release()
+        model.set_axes(0.0, 0.9)  # lifted and put down again while still held: nothing
+        assert model.state.value.sent == sent and not model.state.value.active
+        model.on_commands_held(None)  # answered
+        assert model.state.value.commands_held == ""
+        model.release()
+        model.set_axes(0.0, 0.9)
+        assert model.state.value.active and model.state.value.sent == sent + 1  # drives again at once
+    finally:
+        model.stop()
