@@ -13,7 +13,13 @@ and drives the window the way a person does (taps, as the app tests do), saving 
 
 Then the sensor widgets' pictures of ``plugins/rcon_widgets_sensors/README.md`` into ``OUT/sensors``: each
 view built on its model as the app builds it, with no robot (fed frames, the test signal, touches on two
-pads whose commands go nowhere). ``--only app`` or ``--only sensors`` makes one of the two sets.
+pads whose commands go nowhere). Then the display set: the demo in both themes (``demo.png``,
+``demo-night.png``), at 200 % text on a 1024x600 tablet (``text-200-1024x600.png``), and the fleet demo of
+three vessels at 1024x600 and 1280x800 (``fleet-3-*.png``). Then the demo's "Video" canvas
+(``demo-video.png``: the front camera raw beside the same camera as H.264, each tile saying its bytes per
+second; ``demo-video-tile.png``: the H.264 tile alone) and the connection bar's bandwidth details
+(``bandwidth-details.png``). ``--only app``, ``--only sensors``, ``--only display`` or ``--only video``
+makes one of the sets.
 (The tests do not write pictures: a picture generator is not a test.)
 """
 
@@ -241,6 +247,56 @@ def run(out: Path) -> list[Path]:
     return shoot.saved
 
 
+def video(out: Path) -> list[Path]:
+    """The demo's Video canvas on the sim, in operator mode, once both tiles show their rates."""
+    app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(sys.argv[:1])
+    from rcon_core.app import theme
+    from rcon_core.app.config import AppConfig
+    from rcon_core.app.demo import demo_workspace
+    from rcon_core.app.main_window import MainWindow
+    from rcon_core.bridge import ConnectionState
+    from rcon_core.plugins import PluginManager
+    from rcon_core.sim import SimServer
+
+    theme.apply(app)
+    plugins = PluginManager(environ={})
+    plugins.load_entry_points()
+    out.mkdir(parents=True, exist_ok=True)
+    saved = []
+    with tempfile.TemporaryDirectory(prefix="rcon-shots-") as tmp, SimServer.in_thread(port=0) as robot:
+        win = MainWindow(AppConfig(Path(tmp) / "config"), plugins, demo=lambda: demo_workspace(plugins))
+        win.resize(*SIZE)
+        win.show()
+        QTest.qWaitForWindowExposed(win)
+        try:
+            win.connect_to(robot.url, remember=False)
+            wait_until(lambda: win.connection.state is ConnectionState.CONNECTED, "the connection")
+            names = [c.name for c in win.controller.workspace.canvases]
+            win.switch_canvas(names.index("Video"))
+            hosted = [win.host.hosted[w.id] for w in win.controller.canvas.widgets]
+            wait_until(lambda: all(h.view is not None and getattr(h.view, "frame", None) is not None
+                                   and h.view.frame.byte_rate > 0 for h in hosted), "both tiles' pictures")
+            settle(3000)  # the rates over their 2 s window, the bandwidth readout's too
+            path = out / "demo-video.png"
+            win.grab().save(str(path), "PNG", 0)
+            saved.append(path)
+            tile = next(h for h in hosted if "H.264" in h.widget.title)
+            saved.append(save_view(tile.frame, out / "demo-video-tile.png"))
+            button = win.connection.bandwidth
+            button.show_details()
+            settle(600)
+            popup = button.popup
+            assert popup is not None
+            saved.append(save_view(popup, out / "bandwidth-details.png"))
+            popup.close()
+        finally:
+            win.shutdown()
+            win.close()
+    for path in saved:
+        print(f"{path}  {path.stat().st_size // 1024} KB")
+    return saved
+
+
 def save_view(widget: QtWidgets.QWidget, path: Path) -> Path:
     """Grab ``widget`` as it is now into ``path`` (PNG, under :data:`MAX_BYTES`)."""
     settle(150)
@@ -378,17 +434,96 @@ def sensors(out: Path) -> list[Path]:
     return saved
 
 
+def save_window(window: QtWidgets.QWidget, path: Path, size: tuple[int, int]) -> Path:
+    """Grab the whole window (at ``size``) into ``path``."""
+    settle()
+    if (window.width(), window.height()) != size:
+        raise SystemExit(f"make_screenshots: {path.name}: the window is {window.width()}x{window.height()}, "
+                         f"not {size}")
+    return save_view(window, path)
+
+
+def display(out: Path) -> list[Path]:
+    """The demo in both themes and at the largest text size, and the fleet demo of three vessels on a
+    1024x600 tablet and in a 1280x800 window (laid out for each, as ``rcon --demo --robots 3`` does)."""
+    app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(sys.argv[:1])
+    app.setApplicationName("RCON")
+
+    from rcon_core.app import theme
+    from rcon_core.app.config import AppConfig
+    from rcon_core.app.demo import demo_workspace
+    from rcon_core.app.display_settings import set_display
+    from rcon_core.app.fleet_demo import connect_fleet, fit_fleet, fleet_sims, fleet_workspace
+    from rcon_core.app.main_window import MainWindow
+    from rcon_core.bridge import ConnectionState
+    from rcon_core.plugins import PluginManager
+    from rcon_core.sim import SimServer
+
+    plugins = PluginManager(environ={})
+    plugins.load_entry_points()
+    saved: list[Path] = []
+    shots = (("demo", "sunlight", 100, (1280, 800)), ("demo-night", "night", 100, (1280, 800)),
+             ("text-200-1024x600", "sunlight", 200, (1024, 600)))
+    for name, look, text_size, size in shots:
+        with tempfile.TemporaryDirectory(prefix="rcon-shots-") as tmp, SimServer.in_thread(port=0) as robot:
+            win = MainWindow(AppConfig(Path(tmp) / "config"), plugins, layout_path=Path(tmp) / "demo.json",
+                             demo=lambda: demo_workspace(plugins))
+            win.resize(*size)
+            win.show()
+            QTest.qWaitForWindowExposed(win)
+            try:
+                set_display(win, look, text_size)
+                win.connect_to(robot.url, remember=False)
+                wait_until(lambda win=win: win.connection.state is ConnectionState.CONNECTED, "the connection")
+                shown = {w.id for w in win.controller.canvas.widgets}
+                hosted = [h for h in win.host.hosted.values() if h.widget.id in shown]
+                wait_until(lambda hosted=hosted: all(h.model is not None and h.model.state.count > 0 for h in hosted
+                                                     if h.widget.binding.role.value == "subscribe"), "live data")
+                settle(1500)
+                saved.append(save_window(win, out / f"{name}.png", size))
+            finally:
+                win.shutdown()
+                win.close()
+    theme.apply(app, theme.DEFAULT_THEME, 100)
+    for size in ((1024, 600), (1280, 800)):
+        with tempfile.TemporaryDirectory(prefix="rcon-shots-") as tmp, fleet_sims(3) as sims:
+            win = MainWindow(AppConfig(Path(tmp) / "config"), plugins, layout_path=Path(tmp) / "fleet.json",
+                             demo=lambda: fleet_workspace(3, plugins))
+            win.resize(*size)
+            win.show()
+            QTest.qWaitForWindowExposed(win)
+            try:
+                fit_fleet(win, 3, plugins)
+                connect_fleet(win, [s.url for s in sims])
+                shown = {w.id for w in win.controller.canvas.widgets}
+                hosted = [h for h in win.host.hosted.values() if h.widget.id in shown]
+                wait_until(lambda hosted=hosted: all(h.model is not None and h.model.state.count > 0 for h in hosted
+                                                     if h.widget.binding.role.value == "subscribe"),
+                           "every vessel's data")
+                wait_until(lambda hosted=hosted: all(not h.frame.badge.isVisible() for h in hosted), "no badge left")
+                settle(1500)
+                saved.append(save_window(win, out / f"fleet-3-{size[0]}x{size[1]}.png", size))
+            finally:
+                win.shutdown()
+                win.close()
+    return saved
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description="Make the screenshots of docs/using-the-app.md and of the "
                                                  "sensor widgets.")
     parser.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "screenshots",
                         help="where to write the PNGs (default: docs/screenshots)")
-    parser.add_argument("--only", choices=("app", "sensors"), help="make only one of the two sets")
+    parser.add_argument("--only", choices=("app", "sensors", "display", "video"), help="make only one of the sets")
     args = parser.parse_args(argv)
     if args.only in (None, "sensors"):  # first: the app's theme, once applied, stays on the application
         sensors(args.out / "sensors")
     if args.only in (None, "app"):
         run(args.out)
+    if args.only in (None, "display"):
+        display(args.out)
+    if args.only in (None, "video"):
+        video(args.out)
     return 0
 
 

@@ -17,7 +17,9 @@ Within a rank, higher ``WidgetSpec.priority`` first,
 then title. Structural matching needs the definition: the registry must know the type (standard types,
 plugin contributions, or ``types.add_typedefs(...)`` from a server). An unknown type still gets exact,
 package and generic matches. Services (roles CALL and SERVE) match on the request/response definitions;
-their paths start with ``request``/``response``. Actions (role ACTION, type ``pkg/action/X``) match on
+their paths start with ``request``/``response``. A foreign type (a Foxglove schema such as
+``foxglove.CompressedImage``) matches as its ROS equivalent, or gets the any-message widgets
+(``rcon_core.msgs.foreign``). Actions (role ACTION, type ``pkg/action/X``) match on
 the goal, feedback and result definitions (``Accepts.action_parts``); their paths start with
 ``goal``/``feedback``/``result``.
 """
@@ -30,7 +32,7 @@ from typing import Any
 
 import attrs
 
-from rcon_core.msgs import names, walk_fields
+from rcon_core.msgs import foreign, names, walk_fields
 from rcon_core.msgs.walk import own_fields
 from rcon_core.plugins.context import WidgetCatalog
 from rcon_core.plugins.model_types import ModelTypes
@@ -209,6 +211,13 @@ def _match_one(spec: WidgetSpec, role: Role, type_name: str, types: ModelTypes, 
     return None
 
 
+def _generic_only(role: Role, plugin_manager: WidgetCatalog) -> list[Match]:
+    found = [Match(spec, Rank.GENERIC, "", (), "accepts any message (a foreign type)")
+             for spec in plugin_manager.widgets() if role in spec.roles and "any" in spec.accepts.messages]
+    found.sort(key=lambda m: (-m.spec.priority, m.spec.title.lower(), m.spec.kind))
+    return found
+
+
 def match(type_name: str, role: Role | str, types: ModelTypes, plugin_manager: WidgetCatalog) -> list[Match]:
     """The widgets that fit ``type_name`` in ``role``, best first (see the module docstring).
 
@@ -217,6 +226,11 @@ def match(type_name: str, role: Role | str, types: ModelTypes, plugin_manager: W
     malformed type name or role.
     """
     role = Role.parse(role)
+    if foreign.is_foreign(type_name):  # a Foxglove/protobuf/JSON type: as its ROS equivalent, else any-message
+        equivalent = foreign.ros_equivalent(type_name)
+        if equivalent is None:
+            return _generic_only(role, plugin_manager)
+        type_name = equivalent
     names.split(type_name)  # ValueError with a clear message for a malformed name
     wanted = _canonical_names(type_name, role)
     found: list[Match] = []

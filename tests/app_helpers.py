@@ -147,6 +147,15 @@ def tap(widget: QtWidgets.QWidget, pos: QtCore.QPoint | None = None) -> None:
     QTest.mouseClick(widget, LEFT, NO_MOD, pos if pos is not None else widget.rect().center())
 
 
+def tap_through(widget: QtWidgets.QWidget, pos: QtCore.QPoint | None = None) -> None:
+    """A finger tap at ``pos`` of ``widget`` (its centre unless told), delivered to the window as the screen
+    delivers it: whatever is on top under the finger (a child, a badge, an overlay) gets it."""
+    window = widget.window().windowHandle()
+    assert window is not None and widget.isVisible(), widget.objectName()
+    at = widget.mapTo(widget.window(), pos if pos is not None else widget.rect().center())
+    QTest.mouseClick(window, LEFT, NO_MOD, at)
+
+
 def tap_item(view: QtWidgets.QAbstractItemView, index: QtCore.QModelIndex) -> None:
     """Scroll an item into sight and tap it."""
     view.scrollTo(index)

@@ -7,7 +7,7 @@ from qtpy.QtTest import QTest
 from test_app_window import robot  # noqa: F401 - fixture re-used
 
 from rcon_core.app.config import AppConfig
-from rcon_core.app.demo import CAMERAS, DRIVE, SENSORS, demo_workspace
+from rcon_core.app.demo import CAMERAS, DRIVE, SENSORS, VIDEO, demo_workspace
 from rcon_core.app.main import load_plugins
 from rcon_core.app.main_window import MainWindow
 from rcon_core.bridge import ConnectionState
@@ -29,7 +29,7 @@ def plugins():
 def test_every_demo_slot_uses_an_installed_kind_with_valid_settings(plugins):
     ws = demo_workspace(plugins)
     widgets = [w for c in ws.canvases for w in c.widgets]
-    assert len(widgets) == len(DRIVE) + len(CAMERAS) + len(SENSORS)
+    assert len(widgets) == len(DRIVE) + len(CAMERAS) + len(VIDEO) + len(SENSORS)
     for w in widgets:
         assert plugins.has_widget(w.kind), w.kind
         spec = plugins.widget(w.kind)

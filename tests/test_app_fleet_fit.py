@@ -1,20 +1,24 @@
-"""The fleet demo on a small screen (``rcon --demo --robots N``, real sims on loopback, the real window):
-the Fleet canvas fits a 1024x600 tablet and a 1280x800 window without scrolling for 2, 3 and 4 vessels,
-and its map opens showing every vessel, fits again when one is out of view, and keeps still once the
-operator has moved it by hand (until Fit)."""
+"""The fleet demo's canvas on a real window (``rcon --demo --robots N``), laid out for the screen it opens
+on (issue 21.7): at 1024x600 and at 1280x800, for 2 to 6 vessels, it fills the canvas's width (and its
+height, scrolling down only where the vessels do not fit), every pad's disc is at least 160 px, every tap
+target at least 48 px, the map's buttons a small block in its corner; with real sims the titles are
+whole and a finger on a pad drives its own vessel. Then the map: it opens showing every vessel, fits
+again when one is out of view, and keeps still once the operator has moved it by hand (until Fit)."""
 
 from __future__ import annotations
 
 import pytest
 from app_helpers import TIMEOUT_MS, open_window, settle, snap, tap
-from qtpy import QtCore
+from fit_check import problems
+from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
-from rcon_core.app.fleet_demo import connect_fleet, fleet_sims, fleet_workspace
+from rcon_core.app.fleet_demo import GAP, connect_fleet, fit_fleet, fleet_sims, fleet_workspace
 
 pytestmark = pytest.mark.usefixtures("qapp")
 PACKAGES = ("rcon_widgets_std", "rcon_widgets_sensors", "rcon_widgets_map")
 SIZES = ((1024, 600), (1280, 800))
+TOUCH = 48
 
 
 @pytest.fixture(scope="module")
@@ -26,58 +30,113 @@ def fleet_plugins():
     return entry_point_plugins()
 
 
-def open_fleet(qtbot, tmp_path, plugins, sims, size):
-    """The fleet demo's window at ``size`` on the Fleet canvas, every vessel connected and every widget's view
-    built: (window, {(kind, robot id): hosted widget})."""
-    n = len(sims)
+def open_fleet(qtbot, tmp_path, plugins, n, size, urls=()):
+    """The fleet demo's window at ``size``, laid out for it as ``rcon --demo --robots N`` does on its first
+    start, connected to ``urls`` if given, every widget's view built: (window, {(kind, robot): hosted})."""
     window = open_window(qtbot, tmp_path, plugins, size=size, layout=tmp_path / "fleet.json",
                          demo=lambda: fleet_workspace(n, plugins))
-    connect_fleet(window, [s.url for s in sims])
+    fit_fleet(window, n, plugins)
+    if urls:
+        connect_fleet(window, list(urls))
     canvas = window.controller.canvas
     assert canvas.name == "Fleet"
     hosted = {(w.kind, w.binding.robot): window.host.hosted[w.id] for w in canvas.widgets}
     assert len(hosted) == 2 * n + 1
     qtbot.waitUntil(lambda: all(h.view is not None for h in hosted.values()), timeout=TIMEOUT_MS)
+    settle(90)
     return window, hosted
 
 
-@pytest.mark.parametrize("n", [2, 3, 4])
-def test_the_fleet_canvas_fits_a_tablet_without_scrolling(qtbot, tmp_path, fleet_plugins, n):
-    with fleet_sims(n, rate_scale=1.0) as sims:
-        window, hosted = open_fleet(qtbot, tmp_path, fleet_plugins, sims, SIZES[0])
+def tap_targets(widget: QtWidgets.QWidget) -> list[QtWidgets.QAbstractButton]:
+    return [b for b in widget.findChildren(QtWidgets.QAbstractButton) if b.isVisible()]
+
+
+@pytest.mark.parametrize("size", SIZES, ids=["1024x600", "1280x800"])
+@pytest.mark.parametrize("n", [2, 3, 4, 5, 6])
+def test_the_fleet_canvas_fills_the_screen_with_finger_sized_tiles(qtbot, tmp_path, fleet_plugins, n, size):
+    window, hosted = open_fleet(qtbot, tmp_path, fleet_plugins, n, size)
+    try:
+        assert (window.width(), window.height()) == size
+        scroll = window.controller.surface.scroll_area
+        viewport = scroll.viewport()
+        frames = [h.frame.geometry() for h in hosted.values()]
+        for (kind, robot), h in hosted.items():
+            g = h.widget.geometry  # shown at the layout's size, over no other frame
+            assert h.frame.geometry() == QtCore.QRect(int(g.x), int(g.y), int(g.w), int(g.h)), (kind, robot)
+            assert sum(h.frame.geometry().intersects(f) for f in frames) == 1, (kind, robot)
+        # never sideways; the first screen is filled across and down
+        assert scroll.horizontalScrollBar().maximum() == 0, (n, size, viewport.size())
+        content = QtCore.QRect()
+        for f in frames:
+            content = content.united(f)
+        assert content.right() + 1 + GAP >= viewport.width() - GAP, (n, size, content, viewport.size())
+        first_screen = [f for f in frames if f.top() < viewport.height()]
+        assert max(f.bottom() for f in first_screen) + 1 + GAP >= viewport.height() - GAP, (n, size)
+        # each pad: a disc of 160 px or more, its whole frame in one screenful
+        for k in range(1, n + 1):
+            pad = hosted[("sensors.teleop", f"r-{k}")]
+            _centre, radius = pad.view.pad()
+            assert 2 * radius >= 160, (k, 2 * radius, pad.frame.size())
+            assert pad.frame.height() <= viewport.height()
+            camera = hosted[("sensors.image", f"r-{k}")].frame.geometry()
+            assert camera.right() < pad.frame.geometry().left() and camera.top() == pad.frame.geometry().top()
+        assert problems(window) == [], problems(window)  # no text cut (the robots' chips: six on 1024 px)
+        # every button in the window (the map's too) is a finger's size
+        for b in tap_targets(window):
+            assert b.width() >= TOUCH and b.height() >= TOUCH, (b.objectName(), b.accessibleName(), b.size())
+        # the map: in sight where it fits (2 vessels on a tablet, 2 and 3 at 1280x800), its buttons a small
+        # block in its top right corner
+        fleet_map = hosted[("map.gps", "r-1")]
+        view = fleet_map.view
+        if (size, n) in (((1024, 600), 2), ((1280, 800), 2), ((1280, 800), 3)):
+            assert scroll.verticalScrollBar().maximum() == 0, (n, size)
+            corner = fleet_map.frame.mapTo(viewport, QtCore.QPoint(0, 0))
+            assert viewport.rect().contains(QtCore.QRect(corner, fleet_map.frame.size()))
+        block = view.controls_rect()
+        assert block.right() >= view.width() - 10 and block.top() <= 10
+        assert block.width() * block.height() <= 0.2 * view.width() * view.height(), (block, view.size())
+        snap(window, f"fleet-{n}-{size[0]}x{size[1]}")
+    finally:
+        window.shutdown()
+
+
+@pytest.mark.parametrize("size", SIZES, ids=["1024x600", "1280x800"])
+def test_three_vessels_show_whole_titles_and_each_pad_drives_its_own(qtbot, tmp_path, fleet_plugins, size):
+    with fleet_sims(3, rate_scale=1.0) as sims:
+        window, hosted = open_fleet(qtbot, tmp_path, fleet_plugins, 3, size, [s.url for s in sims])
         try:
-            for size in SIZES:
-                window.resize(*size)
-                settle(90)
-                assert (window.width(), window.height()) == size
-                scroll = window.controller.surface.scroll_area
-                viewport = scroll.viewport()
-                frames = [h.frame.geometry() for h in hosted.values()]
-                for (kind, robot), h in hosted.items():
-                    g = h.widget.geometry  # shown at the layout's size (none grown into a neighbour)...
-                    assert h.frame.geometry() == QtCore.QRect(int(g.x), int(g.y), int(g.w), int(g.h)), (kind, robot)
-                    # ...over no other
-                    assert sum(h.frame.geometry().intersects(f) for f in frames) == 1, (kind, robot)
-                for (kind, robot), h in hosted.items():  # every widget wholly in sight
-                    corner = h.frame.mapTo(viewport, QtCore.QPoint(0, 0))
-                    assert viewport.rect().contains(QtCore.QRect(corner, h.frame.size())), (
-                        n, size, kind, robot, corner, h.frame.size(), viewport.size())
-                # nothing to scroll to, sideways or down
-                assert scroll.horizontalScrollBar().maximum() == 0, (n, size, viewport.size())
-                assert scroll.verticalScrollBar().maximum() == 0, (n, size, viewport.size())
-                snap(window, f"fleet-{n}-{size[0]}x{size[1]}")
-            # each vessel's camera and pad side by side, on the same row
-            for k in range(1, n + 1):
-                camera = hosted[("sensors.image", f"r-{k}")].frame.geometry()
-                pad = hosted[("sensors.teleop", f"r-{k}")].frame.geometry()
-                assert camera.right() < pad.left() and camera.top() == pad.top(), k
+            for k in (1, 2, 3):  # live: no badge left on a vessel's camera or pad
+                for kind in ("sensors.image", "sensors.teleop"):
+                    frame = hosted[(kind, f"r-{k}")].frame
+                    qtbot.waitUntil(lambda frame=frame: not frame.badge.isVisible(), timeout=TIMEOUT_MS)
+            settle(60)
+            for (kind, robot), h in hosted.items():
+                title = h.frame.title
+                assert title.text() == title.full_title, (kind, robot, title.text())  # whole, never "boat1 · Fr…"
+                if kind != "map.gps":
+                    assert title.full_title.startswith(("boat1 · ", "boat2 · ", "boat3 · "))
+            # a finger on boat 3's pad (scrolled into sight if need be) drives boat 3 only
+            pad = hosted[("sensors.teleop", "r-3")]
+            window.controller.surface.reveal(pad.frame.geometry())
+            settle(60)
+            centre, radius = pad.view.pad()
+            c = centre.toPoint()
+            QTest.mousePress(pad.view, QtCore.Qt.MouseButton.LeftButton, pos=c)
+            QTest.mouseMove(pad.view, c - QtCore.QPoint(0, int(radius * 0.9)))
+            qtbot.waitUntil(lambda: sims[2].robot.cmd_surge > 0.5, timeout=TIMEOUT_MS)
+            QTest.mouseRelease(pad.view, QtCore.Qt.MouseButton.LeftButton, pos=c)
+            qtbot.waitUntil(lambda: sims[2].robot.cmd_surge == 0.0, timeout=TIMEOUT_MS)
+            assert sims[0].robot.cmd_surge == 0.0 and sims[1].robot.cmd_surge == 0.0
+            window.controller.surface.reveal(QtCore.QRect(0, 0, 10, 10))
+            settle(200)
+            snap(window, f"fleet-live-3-{size[0]}x{size[1]}")
         finally:
             window.shutdown()
 
 
 def test_the_fleet_map_shows_every_vessel_and_keeps_still_after_a_pan(qtbot, tmp_path, fleet_plugins):
     with fleet_sims(3, rate_scale=1.0) as sims:
-        window, hosted = open_fleet(qtbot, tmp_path, fleet_plugins, sims, SIZES[0])
+        window, hosted = open_fleet(qtbot, tmp_path, fleet_plugins, 3, SIZES[1], [s.url for s in sims])
         try:
             fleet_map = hosted[("map.gps", "r-1")]
 
@@ -86,12 +145,17 @@ def test_the_fleet_map_shows_every_vessel_and_keeps_still_after_a_pan(qtbot, tmp
                 return {t.label: t for t in value.tracks if t.has_position} if value is not None else {}
 
             def in_view():
-                """Vessel name -> whether its marker lies on the map, clear of the buttons above it."""
+                """Vessel name -> whether its marker lies on the map, clear of its buttons' corner."""
                 view = fleet_map.view
                 if view is None or not view.isVisible():  # a view just rebuilt, not laid out yet
                     return {}
-                top = max(b.geometry().bottom() for b in view.control_buttons() if b.isVisible())
-                return {name: view.viewport.shows(t.lat, t.lon, inset=(0, top, 0, 0)) for name, t in fixes().items()}
+                block = view.controls_rect().adjusted(-10, -10, 10, 10)
+                out = {}
+                for name, t in fixes().items():
+                    x, y = view.viewport.to_screen(t.lat, t.lon)
+                    out[name] = view.viewport.shows(t.lat, t.lon) and not block.contains(QtCore.QPoint(round(x),
+                                                                                                       round(y)))
+                return out
 
             def all_in_view():
                 shown = in_view()

@@ -188,7 +188,7 @@ def test_the_demo_fits_without_scrolling_with_a_camera_beside_the_drive_pad(make
     window = make_window(size)
     settle()
     scroll = window.controller.surface.scroll_area
-    for index, name in enumerate(("Drive", "Cameras", "Sensors")):
+    for index, name in enumerate(("Drive", "Cameras", "Sensors", "Video")):
         window.switch_canvas(index)
         settle()
         assert window.tabs.tabText(index) == name

@@ -11,7 +11,8 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-CLEAN = ["rcon_core/bridge", "rcon_core/msgs", "rcon_core/app", "rcon_core/canvas", "rcon_core/plugins"]
+CLEAN = ["rcon_core/bridge", "rcon_core/msgs", "rcon_core/app", "rcon_core/canvas", "rcon_core/plugins",
+         "rcon_core/foxglove", "rcon_core/link"]
 #: no cycle of real imports; the sim's op handlers still name ``SimServer`` in annotations only
 CLEAN_RUNTIME = [*CLEAN, "rcon_core/sim"]
 

@@ -154,3 +154,22 @@ def test_bad_inputs_get_clear_errors(pm, types):
 def test_candidate_paths_for_service_roles(types):
     spec = next(s for s in SPECS if s.kind == "t.slider")
     assert candidate_paths(spec, "subscribe", "geometry_msgs/Vector3", types) == ["x", "y", "z"]
+
+
+def test_foxglove_schemas_match_the_widgets_that_fit():
+    """Foxglove's own schemas (the Foxglove link's topic types) are offered the widgets of their ROS
+    equivalent; another foreign type (a JSON channel) gets the any-message widgets (rcon_core.msgs.foreign)."""
+    from app_helpers import entry_point_plugins
+
+    from rcon_core.msgs import TypeRegistry
+
+    plugins = entry_point_plugins()
+    types = TypeRegistry.standard(ros2=True)
+    image = match("foxglove.CompressedImage", "subscribe", types, plugins)
+    assert image[0].kind == "sensors.image" and image[0].rank is Rank.EXACT
+    fix = match("foxglove.LocationFix", "subscribe", types, plugins)
+    assert fix[0].kind == "map.gps" and fix[0].rank is Rank.EXACT
+    chatter = match("json.schema_bglyvMWM", "subscribe", types, plugins)
+    assert chatter and {m.rank for m in chatter} == {Rank.GENERIC}
+    with pytest.raises(ValueError, match="not a ROS type name"):
+        match("std msgs Bool", "subscribe", types, plugins)

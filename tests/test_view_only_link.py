@@ -328,3 +328,79 @@ async def test_a_view_only_ros2_link_reads_parameters_through_the_nodes_but_neve
         assert not changing(connection_of(sim_ros2, monitor).ops_received)
     async with _client(sim_ros2) as operator:
         assert await operator.params.get("/kingfisher:max_speed") == 2.0  # the robot kept its value
+
+
+# ------------------------------------------------------------------------------------ the Foxglove link
+# The same rule on the second protocol (``rcon_core/foxglove/guard.py``): every op the Foxglove link writes is
+# classified, and a view-only Foxglove link gets nothing that changes the robot to the foxglove-sdk peer.
+
+def foxglove_ops() -> set[str]:
+    """Every op the Foxglove link writes: the JSON ops in its frame builders and the kinds its session
+    passes to the guard (binary frames by the names ``publish`` and ``call_service``)."""
+    import rcon_core.foxglove
+
+    folder = Path(rcon_core.foxglove.__file__).parent
+    wire_src = (folder / "wire.py").read_text(encoding="utf-8")
+    builders = wire_src.split("# ====", 2)[-1]  # the client -> server half
+    session_src = (folder / "session.py").read_text(encoding="utf-8")
+    return (set(re.findall(r'"op":\s*"(\w+)"', builders)) | set(re.findall(r'"(\w+)" if subscribe', builders))
+            | set(re.findall(r'else "(\w+)"', builders)) | set(re.findall(r'_send\("(\w+)"', session_src))
+            | set(re.findall(r'admit_op\("(\w+)"', session_src)))
+
+
+def test_every_op_the_foxglove_link_writes_is_classified_by_its_guard():
+    from rcon_core.foxglove import guard as FG
+
+    found = foxglove_ops()
+    assert {"subscribe", "advertise", "setParameters", "publish", "call_service"} <= found
+    assert found == FG.OUTGOING_OPS, f"classify in foxglove/guard.py: {sorted(found ^ FG.OUTGOING_OPS)}"
+
+
+async def test_a_view_only_foxglove_link_sends_nothing_that_changes_the_robot():
+    from rcon_core.foxglove import FoxgloveClient
+    from rcon_core.foxglove.testing import FoxPeer
+
+    peer = FoxPeer()
+    ordinary = FoxgloveClient(peer.url, call_timeout=3)
+    marked = FoxgloveClient(peer.url, call_timeout=3)
+    marked.guard.set_view_only(REASON)
+    try:
+        await ordinary.connect(timeout=10)
+        await marked.connect(timeout=10)
+        # the scenario is real on an ordinary link: each op reaches the peer
+        pub = ordinary.node("pad").advertise("/cmd_vel", "geometry_msgs/msg/Twist")
+        await until(lambda: peer.advertised)
+        pub.publish(STOP)
+        await until(lambda: peer.received)
+        await ordinary.call_service("/add", {"a": 1, "b": 1})
+        await ordinary.params.set("/boat.max_speed", 3.0)
+        assert len(peer.calls) == 1
+        # marked from the start: refused in words, nothing reaches the peer
+        before = (len(peer.advertised), len(peer.received), len(peer.calls))
+        node = marked.node("pad")
+        held = node.advertise("/cmd_vel2", "geometry_msgs/msg/Twist")  # kept, not offered
+        with pytest.raises(ViewOnlyError, match="is view-only"):
+            held.publish(STOP)
+        with pytest.raises(ViewOnlyError, match="The call to /add was not sent"):
+            await marked.call_service("/add", {"a": 1, "b": 1})
+        with pytest.raises(ViewOnlyError, match="Setting parameter /boat.max_speed was not sent"):
+            await marked.params.set("/boat.max_speed", 9.0)
+        assert await marked.params.get("/boat.max_speed") == 3.0  # reads pass
+        got: list = []
+        node.subscribe("/chatter", got.append)  # subscriptions pass
+        await until(lambda: "/chatter" in peer.subscribed)
+        # marked while it had a topic offered: the offer is withdrawn
+        ordinary.guard.set_view_only(REASON)
+        await until(lambda: "/cmd_vel" in peer.unadvertised, what="the withdrawal")
+        with pytest.raises(ViewOnlyError):
+            pub.publish(STOP)
+        await asyncio.sleep(0.2)
+        assert (len(peer.advertised), len(peer.received), len(peer.calls)) == before
+        assert marked.guard.refused >= 3
+        # lifting the mark offers the topic again
+        ordinary.guard.set_view_only(None)
+        await until(lambda: len(peer.advertised) == before[0] + 1, what="offered again")
+    finally:
+        await ordinary.close()
+        await marked.close()
+        peer.stop()

@@ -33,6 +33,7 @@ from rcon_core.app.draft import ROLE_TEXT, Candidate, Draft, Target, role_prefer
 from rcon_core.app.new_topic import NEW_TOPIC, NewTopicBox, add_new_topic_entry, new_topic_index
 from rcon_core.app.preview_slot import PreviewSlot
 from rcon_core.app.settings_form import SettingsForm, form_label, tune_form
+from rcon_core.app.theme import current_touch_px
 from rcon_core.app.widget_frame import WidgetFrame
 from rcon_core.msgs.names import pkg_type
 from rcon_core.plugins import Binding, Role, SettingsError, WidgetSpec
@@ -175,6 +176,9 @@ class AddPanel(QtWidgets.QWidget):
         scroll.setObjectName("settingsScroll")
         scroll.setWidgetResizable(True)
         scroll.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        # two rows of fields at least (not Qt's 150 px): with a large text size on a 600 px screen the page
+        # keeps its title, preview and buttons without growing the window; the rest scrolls
+        scroll.setMinimumHeight(2 * current_touch_px())
         QtWidgets.QScroller.grabGesture(
             scroll.viewport(), QtWidgets.QScroller.ScrollerGestureType.TouchGesture
         )
@@ -309,7 +313,9 @@ class AddPanel(QtWidgets.QWidget):
             error = f"{spec.title}: {exc}"
         self.settings_error.setText(error)
         self.settings_error.setVisible(bool(error))
-        self.draft = Draft(spec=spec, role=role, target=target, settings=settings, title=spec.title)
+        catalog = self._child_context(lambda: None).plugins if self._child_context is not None else None
+        self.draft = Draft(spec=spec, role=role, target=target, settings=settings, title=spec.title,
+                           catalog=catalog)
         self.settings_title.set_name(spec.title)
         self._pick_target = pick_target
         self._roles = role_preference(spec) if pick_target else [role]

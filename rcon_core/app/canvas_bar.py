@@ -104,6 +104,13 @@ class CanvasBar(QtWidgets.QFrame):
         every = sum(self.tabs.tabSizeHint(i).width() for i in range(self.tabs.count()))
         self.tabs.setMinimumWidth(min(every, readable + scrollers))
 
+    def changeEvent(self, event: QtCore.QEvent) -> None:  # noqa: N802 - Qt's name
+        super().changeEvent(event)
+        if event.type() in (QtCore.QEvent.Type.StyleChange, QtCore.QEvent.Type.FontChange) and \
+                hasattr(self, "_locked"):
+            self._fit_tabs()  # another text size: the tabs' and the segments' room measured again
+            self.show_mode(self._locked, self._padlock)
+
     # -- the mode ----------------------------------------------------------------------------------
     def show_lock(self, locked: bool, canvases: int, padlock: bool) -> None:
         """Edit or Operate mode: the segments, undo/redo and the editing actions follow."""
@@ -122,7 +129,7 @@ class CanvasBar(QtWidgets.QFrame):
             button.setChecked(checked)
             button.blockSignals(False)
             fm = button.fontMetrics()
-            button.setMinimumWidth(fm.horizontalAdvance(button.text()) + 44)
+            button.setMinimumWidth(fm.horizontalAdvance(button.text()) + 32)  # the border, a little room
         self.lock_button.setToolTip("Operate (current): the canvas is locked, the widgets take your touches"
                                     if locked else "Tap to lock the canvas for operation")
         self.edit_button.setToolTip("Edit (current): move, resize, add and delete widgets" if not locked

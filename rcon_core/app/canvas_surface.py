@@ -13,6 +13,7 @@ from collections.abc import Iterable
 from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app.geometry import GRID, MARGIN, snap, snap_up
+from rcon_core.app.theme import colour as theme_colour
 from rcon_core.app.widget_frame import WidgetFrame
 
 #: mime type of a widget draft dragged from the settings preview onto a canvas
@@ -202,7 +203,7 @@ class CanvasSurface(QtWidgets.QWidget):
         if not self.editable:
             return
         p = QtGui.QPainter(self)
-        pen = QtGui.QPen(QtGui.QColor("#b8b8b8"))
+        pen = QtGui.QPen(theme_colour("GRID"))
         pen.setWidth(2)
         p.setPen(pen)
         r = event.rect()

@@ -131,8 +131,9 @@ class ChoiceRow(QtWidgets.QFrame):
         self.setCursor(QtCore.Qt.CursorShape.PointingHandCursor)
         self.setFocusPolicy(QtCore.Qt.FocusPolicy.StrongFocus)
         self.setMinimumHeight(current_touch_px())
-        self.setStyleSheet("ChoiceRow { border: 3px solid #000000; border-radius: 6px; background: #ffffff; }"
-                           "ChoiceRow:focus { border-color: #0040a0; }")
+        # the theme's colours (the application palette: see theme.py)
+        self.setStyleSheet("ChoiceRow { border: 3px solid palette(dark); border-radius: 6px; background: palette(base); }"
+                           "ChoiceRow:focus { border-color: palette(link); }")
         col = QtWidgets.QVBoxLayout(self)
         col.setContentsMargins(12, 6, 12, 6)
         col.setSpacing(2)

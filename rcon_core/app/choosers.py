@@ -211,7 +211,8 @@ class DragHandle(QtWidgets.QLabel):
         self.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
         self.setWordWrap(True)  # "Not ready: <the first problem>" wraps instead of being cut at both ends
         self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Ignored, QtWidgets.QSizePolicy.Policy.Preferred)
-        self.setStyleSheet("padding: 4px 8px; border:3px dashed #0040a0; color:#0040a0; font-weight:bold; border-radius:6px;")
+        self.setStyleSheet("padding: 4px 8px; border:3px dashed palette(link); color:palette(link); font-weight:bold;"
+                           " border-radius:6px;")
         self._press: QtCore.QPoint | None = None
 
     def mousePressEvent(self, event: QtGui.QMouseEvent) -> None:

@@ -314,6 +314,28 @@ class AppConfig:
         return self._change(lambda _data: None, f"the view-only mark of {url.strip()}")
 
 
+    @property
+    def theme(self) -> str:
+        """The display theme the operator chose ("sunlight" or "night"; see ``theme.py``)."""
+        value = self._data.get("theme")
+        return value if isinstance(value, str) else "sunlight"
+
+    @property
+    def text_size(self) -> int:
+        """The text size the operator chose, in percent (100 to 200)."""
+        value = self._data.get("text_size")
+        return value if isinstance(value, int) and not isinstance(value, bool) else 100
+
+    def set_display(self, theme: str, text_size: int) -> bool:
+        """Keep the display theme and text size (in memory at once; False, and the listeners told, when the
+        save failed)."""
+
+        def change(data: dict[str, Any]) -> None:
+            data["theme"], data["text_size"] = str(theme), int(text_size)
+
+        return self._change(change, "the display settings")
+
+
 def _migrate_history(data: dict[str, Any]) -> None:
     history = data.get("url_history", [])
     if isinstance(history, list):

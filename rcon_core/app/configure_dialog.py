@@ -22,8 +22,8 @@ from rcon_core.app.envelope_dialog import ask_beyond, beyond_envelope
 from rcon_core.app.settings_form import SettingsForm, form_label, tune_form
 from rcon_core.canvas import Document
 from rcon_core.matcher import match
-from rcon_core.plugins import Binding, PluginManager, WidgetSpec
-from rcon_core.plugins.children import ChildContext, settings_binding_problems
+from rcon_core.plugins import Binding, PluginManager, WidgetSpec, settings_binding_problems
+from rcon_core.plugins.children import ChildContext
 
 __all__ = ["WidgetConfigurer", "field_choices"]
 
@@ -71,7 +71,7 @@ class WidgetConfigurer:
         # one white page holding every label and field (no label boxes on the dialog's grey)
         body = QtWidgets.QFrame()
         body.setObjectName("configureBody")
-        body.setStyleSheet("QFrame#configureBody { background: #ffffff; border: 3px solid #000000;"
+        body.setStyleSheet("QFrame#configureBody { background: palette(base); border: 3px solid palette(dark);"
                            " border-radius: 6px; }")
         body_col = QtWidgets.QVBoxLayout(body)
         body_col.setContentsMargins(16, 12, 16, 12)
@@ -135,7 +135,7 @@ class WidgetConfigurer:
             except KeyError:  # a robot not in the workspace: nothing to compare with
                 envelope = None
             beyond = beyond_envelope(envelope, rebound_binding() or binding,
-                                     form.value() if form is not None else None)
+                                     form.value() if form is not None else None, self.plugins)
             if beyond:
                 self.beyond_dialog = ask_beyond(dialog, beyond, dialog.accept)
                 return

@@ -7,7 +7,8 @@ the failed attempt; a fatal failure (TLS, refused authentication) ends the link,
 While the robot's bridge holds the link's commands behind an unanswered service call
 (``rcon_core/bridge/held.py``) it says "⚠ commands held: the robot's bridge is still busy with /x".
 No text changes the window's width or the bar's height: the message takes a second line where the bar
-has the height, then is elided, the whole of it in its tooltip.  A URL enters
+has the height, then is elided, the whole of it in its tooltip.  Enter connects to exactly what the URL
+field holds: the history is offered as the field's list, never completed inline.  A URL enters
 the history once its link has come up, or, with rosauth, once its robot answered a call after the auth
 op (a robot refusing the secret opens the link and then closes it).
 """
@@ -19,12 +20,15 @@ from typing import Any
 
 from qtpy import QtCore, QtGui, QtWidgets
 
+from rcon_core.app.bandwidth import BandwidthButton
 from rcon_core.app.config import AppConfig
 from rcon_core.app.elided_label import ElidedLabel
 from rcon_core.app.link import BadUrl, Link, LinkSettings, check_url
 from rcon_core.app.link_settings import LinkSettingsDialog
 from rcon_core.app.secret_store import SecretStore
-from rcon_core.app.theme import repolish
+from rcon_core.app.theme import colour as theme_colour
+from rcon_core.app.theme import repolish, tinted_icon
+from rcon_core.app.url_field import UrlLineEdit
 from rcon_core.bridge import ConnectionState
 
 
@@ -77,9 +81,16 @@ class ConnectionBar(QtWidgets.QFrame):
         self.url = QtWidgets.QComboBox()
         self.url.setObjectName("urlField")
         self.url.setEditable(True)
+        # a long URL shows its scheme and its port, "…" in the middle (url_field.py)
+        self.url.setLineEdit(UrlLineEdit())
+        # Enter connects to exactly what is typed: the history is the list to pick from, never completed
+        # inline (an inline completion turned ":91" into the history's ":9191", another robot)
+        self.url.setCompleter(None)  # type: ignore[arg-type]  # Qt takes None: no completer
         self.url.setInsertPolicy(QtWidgets.QComboBox.InsertPolicy.NoInsert)
-        # an 800 px window keeps its side panel toggle, the lock and the state
-        self.url.setMinimumWidth(200)
+        self.url.setAccessibleName("Robot URL")
+        # an 800 px window keeps its side panel toggle, the lock and the state, also with large text (the
+        # field then shows the URL's two ends: "ws://…:9090")
+        self.url.setMinimumWidth(140)
         # a long URL in the history never widens the bar (and so the window)
         self.url.setSizeAdjustPolicy(QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
         self.url.setMinimumContentsLength(16)
@@ -106,7 +117,7 @@ class ConnectionBar(QtWidgets.QFrame):
         self.settings_button = QtWidgets.QPushButton()
         self.settings_button.setObjectName("linkSettingsButton")
         self.settings_button.setProperty("square", True)
-        self.settings_button.setIcon(QtGui.QIcon(str(resources.files("rcon_core.app") / "link-settings.svg")))
+        self._tint_icon()
         self.settings_button.setIconSize(QtCore.QSize(22, 22))
         self.settings_button.setAccessibleName("Security")
         self.settings_button.setToolTip("Security: this robot's connection settings (CA file, client "
@@ -120,6 +131,8 @@ class ConnectionBar(QtWidgets.QFrame):
         self.latency_label = QtWidgets.QLabel("—")
         self.latency_label.setObjectName("latency")
         self.latency_label.setToolTip("round-trip time to the robot")
+        #: bytes per second in, per robot and by topic (a tap shows the details)
+        self.bandwidth = BandwidthButton(link)
         self.message = ElidedLabel()
         self.message.setObjectName("linkMessage")
         self.message.setProperty("role", "problem")
@@ -127,12 +140,15 @@ class ConnectionBar(QtWidgets.QFrame):
         row = QtWidgets.QHBoxLayout(self)
         row.setContentsMargins(10, 8, 10, 8)
         row.setSpacing(10)
-        row.addWidget(self.url, 1)
+        # the URL field takes two thirds of the free width, the message one third: at 1024 px beside the
+        # bandwidth readout the field was squeezed to "ws:…847" next to an empty message holding two thirds
+        row.addWidget(self.url, 2)
         row.addWidget(self.connect_button)
         row.addWidget(self.settings_button)
         row.addWidget(self.state_label)
         row.addWidget(self.latency_label)
-        row.addWidget(self.message, 2)  # the message gets the room: the reason comes first, then the countdown
+        row.addWidget(self.bandwidth)
+        row.addWidget(self.message, 1)
         self._show_state(ConnectionState.CLOSED)
 
     # ---------------------------------------------------------------------------------------- actions
@@ -152,7 +168,7 @@ class ConnectionBar(QtWidgets.QFrame):
         else:
             self.link.disconnect()
             self.failure, self.note = None, ""
-            self.message.clear()
+            self._say("")
             self._show_state(ConnectionState.CLOSED)
 
     def _return_pressed(self) -> None:
@@ -175,7 +191,7 @@ class ConnectionBar(QtWidgets.QFrame):
             return
         settings = self.settings_for(text)
         if settings is None:  # the robot checks a secret and none is known in this run
-            self.message.setText("this robot checks a secret: enter it in Security (the lock)")
+            self._say("this robot checks a secret: enter it in Security (the lock)")
             self.open_settings(ask_secret=True)
             return
         self.failure, self.note = None, ""
@@ -196,7 +212,7 @@ class ConnectionBar(QtWidgets.QFrame):
             self.note = f"{exc} · {verb} {active}"
         else:
             self.note = str(exc)
-        self.message.setText(self.note if self.failure is None else f"{self.note}: {self.failure.text()}")
+        self._say(self.note if self.failure is None else f"{self.note}: {self.failure.text()}")
 
     def settings_for(self, url: str) -> LinkSettings | None:
         """How to connect to ``url``: its saved settings under this run's command-line ones; None when it
@@ -265,6 +281,38 @@ class ConnectionBar(QtWidgets.QFrame):
             widths.append(label.sizeHint().width())
         label.setText(shown)
         label.setMinimumWidth(max(widths))
+        # and the latency the widest it reads ("888 ms"), so a new reading never cuts it or moves the bar
+        latency = self.latency_label
+        latency.setMinimumWidth(0)
+        latency.setMinimumWidth(max(latency.minimumSizeHint().width(), 4 + max(
+            latency.fontMetrics().horizontalAdvance(t) for t in ("888 ms", "<1 ms"))))
+        self._hold_latency_room()
+
+    def _hold_latency_room(self) -> None:
+        """The latency shows only while connected; otherwise the message holds its room as its minimum, so
+        the bar's minimum width is the same in every state (the smaller minimum first, so the bar never asks
+        for both at once, not even for one layout pass)."""
+        spacing = layout.spacing() if (layout := self.layout()) is not None else 0
+        if self.state is ConnectionState.CONNECTED:
+            self.message.setMinimumWidth(0)
+            self.latency_label.setVisible(True)
+        else:
+            self.latency_label.setVisible(False)
+            self.message.setMinimumWidth(self.latency_label.minimumWidth() + spacing)
+
+    def _tint_icon(self) -> None:
+        """The padlock in the theme's text colour (black on light, light grey at night)."""
+        self.settings_button.setIcon(tinted_icon(str(resources.files("rcon_core.app") / "link-settings.svg"),
+                                                 theme_colour("TEXT")))
+
+    def changeEvent(self, event: QtCore.QEvent) -> None:  # noqa: N802 - Qt's name
+        super().changeEvent(event)
+        if event.type() == QtCore.QEvent.Type.PaletteChange:
+            self._tint_icon()  # another theme
+        if event.type() in (QtCore.QEvent.Type.StyleChange, QtCore.QEvent.Type.FontChange) and self.isVisible():
+            # another text size: "DISCONNECTED" and "Disconnect" measured again, once every child has its
+            # new font (the bar hears of the change before its children are polished again)
+            QtCore.QTimer.singleShot(0, self._fit_widths)
 
     def showEvent(self, event: QtGui.QShowEvent) -> None:  # noqa: N802 - Qt's name
         super().showEvent(event)
@@ -277,7 +325,7 @@ class ConnectionBar(QtWidgets.QFrame):
             self._show_state(state)
         ok, error = self.link.error_box.take()
         if ok and self.link.client is not None:
-            self.message.setText(str(error))
+            self._say(str(error))
         ok, failure = self.link.failure_box.take()
         if ok and (failure is not None or not getattr(self.failure, "fatal", False)):
             self.failure = failure
@@ -285,25 +333,30 @@ class ConnectionBar(QtWidgets.QFrame):
                 self.link.disconnect()  # retrying cannot help: the operator changes a setting first
                 self._show_state(ConnectionState.CLOSED)
             elif failure is None and self.state is not ConnectionState.CONNECTED:
-                self.message.clear()
+                self._say("")
         ok, held = self.link.held_box.take()
         if ok:  # commands held behind an unanswered call (rcon_core/bridge/held.py): said until it answers
             if held:
-                self.message.setText(f"⚠ {held}")
+                self._say(f"⚠ {held}")
             elif self.held:
-                self.message.clear()
+                self._say(self.link.protocol_text() if self.state is ConnectionState.CONNECTED else "")
             self.held = held
         ok, answered = self.link.answered_box.take()
         if ok and answered is not None and answered == self._remember == self.link.url:
             self._keep_url()
         if self.failure is not None:
             why = self.failure.text()
-            self.message.setText(f"{self.note}: {why}" if self.note else why)
+            self._say(f"{self.note}: {why}" if self.note else why)
         latency = self.link.latency if self.state in LIVE_STATES else None
         text = "—" if latency is None else ("<1 ms" if latency < 0.0005 else f"{latency * 1000:.0f} ms")
         if text != self._last_latency_text:
             self._last_latency_text = text
             self.latency_label.setText(text)
+        self.bandwidth.poll()
+
+    def _say(self, text: str) -> None:
+        """The one-line message (the reason comes first, then the countdown)."""
+        self.message.setText(text)
 
     def _show_state(self, state: ConnectionState) -> None:
         self.state = state
@@ -312,20 +365,11 @@ class ConnectionBar(QtWidgets.QFrame):
         repolish(self.state_label)
         self.connect_button.setText("Connect" if self.link.client is None else "Disconnect")
         self._fit_widths()
-        # a latency means something only while connected; otherwise its room goes to the message, which
-        # then asks for that room as its minimum: the bar's minimum width is the same in every state
-        # (the smaller minimum first, so the bar never asks for both at once, not even for one layout pass)
         connected = state is ConnectionState.CONNECTED
-        spacing = layout.spacing() if (layout := self.layout()) is not None else 0
-        if connected:
-            self.message.setMinimumWidth(0)
-            self.latency_label.setVisible(True)
-        else:
-            self.latency_label.setVisible(False)
-            self.message.setMinimumWidth(self.latency_label.minimumSizeHint().width() + spacing)
+        self._hold_latency_room()
         if connected:
             self.failure, self.note = None, ""
-            self.message.clear()
+            self._say(self.link.protocol_text())  # "" on rosbridge; a Foxglove link says so
             if self._remember is not None and self._remember == self.link.url and not self._remember_on_answer:
                 self._keep_url()
         self.state_changed.emit(state)

@@ -1,7 +1,8 @@
 """The demo layout on the embedded robot. Every canvas fits a 1024 x 600 tablet in Operate mode (the side
 panel hidden) without scrolling, and a 1280 x 800 window with the side panel shown: "Drive" (the front
 camera beside the teleop pad, speed limit, battery, lights, dock, depth), "Cameras" (front and rear side
-by side) and "Sensors" (GPS map, battery, depth, IMU, log).
+by side), "Sensors" (GPS map, battery, depth, IMU, log) and "Video" (the front camera raw beside the same
+camera as H.264 video, each tile saying the bytes per second it costs the link).
 
 Widget kinds come from whatever plugins are installed: each slot names the kinds it would like, best
 first; the first installed one is used, with the settings written for it (each slot's settings are
@@ -50,6 +51,13 @@ CAMERAS: list[Slot] = [
     ("Rear camera", {"sensors.image": {"max_fps": 15.0}}, "/camera/rear/image_raw/compressed",
      "sensor_msgs/CompressedImage", Role.SUBSCRIBE, (), (448, 16, 416, 312)),
 ]
+#: the same camera twice: raw rgb8 (about 9 MB/s at 10 fps) and H.264 (tens of kB/s), the overlays say so
+VIDEO: list[Slot] = [
+    ("Front camera · raw", {"sensors.image": {"max_fps": 15.0}}, "/camera/front/image_raw",
+     "sensor_msgs/Image", Role.SUBSCRIBE, (), (16, 16, 416, 312)),
+    ("Front camera · H.264", {"sensors.image": {}}, "/camera/front/image_raw/foxglove",
+     "foxglove_msgs/CompressedVideo", Role.SUBSCRIBE, (), (448, 16, 416, 312)),
+]
 SENSORS: list[Slot] = [
     ("GPS", {"map.gps": {}}, "/gps/fix", "sensor_msgs/NavSatFix", Role.SUBSCRIBE, (), (16, 16, 416, 416)),
     ("Battery", {"std.label": {"decimals": 0, "units": "%", "scale": 100.0}}, "/battery",
@@ -95,7 +103,7 @@ DEMO_ENVELOPE = Envelope(max_linear=1.5, max_angular=1.0)
 
 def demo_workspace(plugins: PluginManager) -> Workspace:
     canvases = [_canvas("Drive", DRIVE, plugins), _canvas("Cameras", CAMERAS, plugins),
-                _canvas("Sensors", SENSORS, plugins)]
+                _canvas("Sensors", SENSORS, plugins), _canvas("Video", VIDEO, plugins)]
     ws = Workspace(canvases, canvases[0].id)
     ws.robots[0].envelope = DEMO_ENVELOPE
     return ws

@@ -32,7 +32,7 @@ from rcon_core.app.robot_marks import apply_marks
 from rcon_core.app.robot_recordings import RobotRecordings
 from rcon_core.app.widget_host import RateMeter
 from rcon_core.bridge import ConnectionState
-from rcon_core.canvas import Change, EditError
+from rcon_core.canvas import Change, ChangeKind, EditError
 from rcon_core.canvas.fleet import Fleet
 from rcon_core.canvas.retarget import plan_retarget, setting_names
 from rcon_core.canvas.robots import robot_colour
@@ -52,6 +52,8 @@ class FleetUi(QtCore.QObject):
         self.window = window
         self.links = FleetLinks(window.link, secret_for=window.connection.secrets.get,
                                 overrides=lambda: window.connection.overrides)
+        # the bandwidth readout lists every robot's link (named when there are several)
+        window.connection.bandwidth.sources = self._bandwidth_sources
         self.chips = RobotChips()
         self.chips.picked.connect(self.pick_side_robot)
         root = window.centralWidget()
@@ -133,17 +135,36 @@ class FleetUi(QtCore.QObject):
 
     # ------------------------------------------------------------------------------------ robots
     def _doc_changed(self, change: Change) -> None:
-        if change.what in ("robots-changed", "workspace-replaced"):
-            new = self._sync_robots()
-            if change.what == "robots-changed":  # the controller restarts on workspace-replaced itself
-                self.window.controller.run_current()
+        if change.what in (ChangeKind.ROBOTS_CHANGED, ChangeKind.WORKSPACE_REPLACED):
+            before = self._seen
+            new = self._sync_robots()  # _seen is now the new robots
+            if change.what is ChangeKind.ROBOTS_CHANGED:  # the controller restarts on workspace-replaced itself
+                self._rerun(before)
             # once the runtime runs on the new robots (the controller hears this change after us)
             QtCore.QTimer.singleShot(0, lambda: self._connect(new))
         self._marks_dirty = True
 
+    def _rerun(self, before: list[tuple[str, str, bool]]) -> None:
+        """The robots were edited (Robots… OK, undo, redo): rebuild only the running widgets that change.
+        Another robot list or view-only mark: every widget (its port, its robot); only names: the widgets
+        that show every robot (their tracks carry the names); a new URL or connection setting: nothing here
+        (that robot reconnects, and its own widgets are rebuilt on the new link, see _client_changed). OK
+        with nothing changed keeps every form, trail and value as it was."""
+        now = self._seen
+        if [(rid, vo) for rid, _n, vo in before] != [(rid, vo) for rid, _n, vo in now]:
+            self.window.controller.run_current()
+        elif before != now:
+            host, live = self.window.host, self.window.live
+            for widget in self.window.controller.canvas.widgets:
+                hosted = host.hosted.get(widget.id)
+                if hosted is not None and hosted.model is not None and hosted.model.shows_every_robot:
+                    live.restart(widget)
+
     def _sync_robots(self) -> list[str]:
         """Links, chips, pickers and menus for the workspace's robots; returns the robots to connect."""
         robots = self.robots
+        #: what of the robots the running widgets depend on: id, name and view-only mark, in order
+        self._seen: list[tuple[str, str, bool]] = [(r.id, r.label, bool(r.view_only)) for r in robots]
         new = self.links.sync(robots)
         self.recordings.sync(robots)  # a robot gone, or given another file: its player stops
         self.apply_guards()  # a robot's own view-only flag may have changed, a new link needs its mark
@@ -263,6 +284,18 @@ class FleetUi(QtCore.QObject):
             return None
         self._catalog_dirty = False
         return self.catalogs.get(self.side_robot, EMPTY_CATALOG)
+
+    def _bandwidth_sources(self) -> list[tuple[str, Any]]:
+        """Each robot's link for the bandwidth readout, named when there are several."""
+        pairs = self.links.items()
+        return [(robot.label if len(pairs) > 1 else "", link) for robot, link in pairs]
+
+    def catalog_state(self) -> str:
+        """What the side robot's lists wait for (``Link.catalog_state``: "connecting", "listing", "lost"...)."""
+        try:
+            return str(self.links.link(self.side_robot).catalog_state)
+        except KeyError:
+            return "offline"
 
     # ------------------------------------------------------------------------------------- polling
     def poll(self, _now: float = 0.0) -> None:

@@ -25,6 +25,7 @@ from typing import Any
 from qtpy import QtCore, QtGui
 
 from rcon_core.app.operator_lock import lock_tooltip
+from rcon_core.app.theme import colour as theme_colour
 from rcon_core.app.view_only import show_action
 from rcon_core.app.view_only import toggle as toggle_robot_view_only
 
@@ -143,12 +144,12 @@ def keep_config_problem(window: Any) -> None:
 
 
 def padlock_icon() -> QtGui.QIcon:
-    """A closed padlock drawn in black (no font needed: the theme's font has no emoji)."""
+    """A closed padlock drawn in the theme's text colour (no font needed: the theme's font has no emoji)."""
     pix = QtGui.QPixmap(56, 56)
     pix.fill(QtCore.Qt.GlobalColor.transparent)
     p = QtGui.QPainter(pix)
     p.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing)
-    colour = QtGui.QColor("#000000")
+    colour = theme_colour("TEXT")
     p.setPen(QtGui.QPen(colour, 6))
     shackle = QtCore.QRectF(16, 6, 24, 28)
     p.drawArc(shackle, 0, 180 * 16)

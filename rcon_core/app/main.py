@@ -138,6 +138,13 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
     if isinstance(size, int):
         return size
     existing = QtWidgets.QApplication.instance()
+    if existing is None:  # Qt aborts the process when its platform plugin cannot load: look first
+        from rcon_core.app.platform_check import xcb_problem
+
+        problem = xcb_problem()
+        if problem:
+            print(problem, file=sys.stderr)
+            return 1
     app = existing if isinstance(existing, QtWidgets.QApplication) else QtWidgets.QApplication(sys.argv[:1])
     app.setApplicationName("RCON")
     theme.apply(app)
@@ -161,15 +168,20 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
     demo_factory = None
     replay: Any = None  # (server, player) of --play FILE
     fleet_urls: list[str] = []
+    refit = False  # the fleet demo's layout is new: fill the window's canvas once it is shown
     if demo and robots is not None:
-        from rcon_core.app.fleet_demo import connect_fleet, fleet_sims, fleet_workspace
+        from rcon_core.app.fleet_demo import connect_fleet, fleet_room, fleet_sims, fleet_workspace
 
         fleet_urls = [s.url for s in stack.enter_context(fleet_sims(robots))]
         if layout is None:
             layout = config.dir / f"demo-fleet{robots}-workspace.json"
+        refit = not layout.exists() or bool(getattr(args, "reset_layout", False))
 
         def demo_factory() -> Any:
-            return fleet_workspace(robots, plugins)
+            if not windows:  # built with the window: a tablet's room, laid out again once it is shown
+                return fleet_workspace(robots, plugins)
+            room, bar = fleet_room(windows[0])  # "Reset demo layout…": the room the window has now
+            return fleet_workspace(robots, plugins, room, bar)
 
     elif getattr(args, "play", None):
         if demo:
@@ -191,6 +203,10 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
         # (--canvas its template) is shown on its own type
         server = stack.enter_context(SimServer.in_thread(port=0, plugin_types=True))
         url = server.url
+        if getattr(args, "protocol", None) == "foxglove":  # the same vessel over the Foxglove protocol
+            from rcon_core.foxglove.gateway import FoxgloveGateway
+
+            url = stack.enter_context(FoxgloveGateway(server.url, name="rcon-demo")).url
         if layout is None:
             layout = config.dir / "demo-workspace.json"
 
@@ -204,6 +220,7 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
                         collector=CollectorPolicy())
     windows.append(window)
     window.connection.overrides = overrides
+    window.link.protocol = getattr(args, "protocol", None)  # --protocol: forced; else found per URL
     if config.read_only_reason:  # one writer per config folder: this one saves nothing (the window says so too)
         print(f"rcon: {config.read_only_reason}: this window opens read-only, nothing changed in it is saved; "
               "set RCON_CONFIG_DIR to another folder to keep separate settings", file=sys.stderr)
@@ -217,6 +234,8 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
         if size is not None:
             window.resize(*size)
         window.show()
+    if refit:
+        window.reset_demo_layout()  # the Fleet canvas fills the screen it opens on
     # the embedded robot's URL is not put in the history: its port is gone after this run. The first robot:
     # --url, else its URL in the layout, else the newest in the history; the others connect to their own
     # URLs (window.fleet_ui)

@@ -19,6 +19,8 @@ from typing import Any
 from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app import theme
+from rcon_core.app.accessibility import install as install_accessibility
+from rcon_core.app.accessibility import name_side_panel
 from rcon_core.app.add_panel import AddPanel
 from rcon_core.app.canvas_bar import COMPACT_BELOW, CanvasBar
 from rcon_core.app.canvas_controller import CanvasController
@@ -28,6 +30,7 @@ from rcon_core.app.children_editor import link_learner
 from rcon_core.app.config import AppConfig
 from rcon_core.app.configure_dialog import WidgetConfigurer
 from rcon_core.app.connection_bar import ConnectionBar
+from rcon_core.app.display_settings import install as install_display
 from rcon_core.app.draft import Candidate, Target, rank_widgets, targets_for
 from rcon_core.app.envelope_dialog import check_placed
 from rcon_core.app.envelope_dialog import install as install_envelope
@@ -49,7 +52,7 @@ from rcon_core.app.template_menu import add_template_menu
 from rcon_core.app.widget_host import RateMeter, WidgetHost
 from rcon_core.bridge import ConnectionState
 from rcon_core.canvas import Document, Workspace
-from rcon_core.canvas.document import Change
+from rcon_core.canvas.document import Change, ChangeKind
 from rcon_core.gcpolicy import CollectorPolicy
 from rcon_core.plugins import Binding, PluginManager, Role, WidgetSpec
 from rcon_core.plugins.children import ChildContext
@@ -83,8 +86,8 @@ class MainWindow(QtWidgets.QMainWindow):
     ) -> None:
         super().__init__()
         app = QtWidgets.QApplication.instance()
-        if isinstance(app, QtWidgets.QApplication) and not app.property("rcon_touch_px"):
-            theme.apply(app)  # the touch-sized high-contrast theme, also for embedders and tests
+        if isinstance(app, QtWidgets.QApplication):  # the touch-sized theme the operator chose (display_settings)
+            theme.apply(app, config.theme, config.text_size)
         self.setAttribute(QtCore.Qt.WidgetAttribute.WA_AcceptTouchEvents)
         self.setWindowTitle("RCON")
         self.config = config
@@ -266,6 +269,9 @@ class MainWindow(QtWidgets.QMainWindow):
         #: the timeline of a recording played as the robot (replay_bar.py), or None
         self.replay: Any = None
         self.replay_stack: Any = None  # what plays a recording opened from the menu (closed at shutdown)
+        install_display(self)  # Canvas ▾ → Display…: theme and text size
+        install_accessibility()  # the roles of the widgets that paint themselves
+        name_side_panel(self.side)
         self.resize(self.initial_size())
 
     # ------------------------------------------------------------------------------------ workspace
@@ -560,7 +566,7 @@ class MainWindow(QtWidgets.QMainWindow):
     def _settle_after(self, change: Change) -> None:
         """Widgets were made and dropped (a workspace opened, another canvas shown): a full settle at
         the next frame, when the pause is not felt."""
-        if self.collector is not None and change.what in ("workspace-replaced", "canvas-switched"):
+        if self.collector is not None and change.what in (ChangeKind.WORKSPACE_REPLACED, ChangeKind.CANVAS_SWITCHED):
             self.collector.soon(0.0, full=True)
 
     def _poll_catalog(self, now: float) -> None:
@@ -570,6 +576,11 @@ class MainWindow(QtWidgets.QMainWindow):
             self.topics.set_entries(catalog["topics"])
             self.services.set_entries(catalog["services"])
             self.actions_list.set_entries(catalog.get("actions", []))
+            notes: Any = catalog.get("notes") or {}  # what a Foxglove robot's protocol cannot do (link.py)
+            self.actions_list.set_listed_hint(notes.get("actions") or ACTIONS_EMPTY)
+        status = self.fleet_ui.catalog_state()  # what the (empty) lists wait for: listing, lost...
+        for listing in (self.topics, self.services, self.actions_list):
+            listing.set_status(status)
         if now - self._last_rate_sample >= 1.0:
             self._last_rate_sample = now
             self.topics.set_rates(self.rates.sample(self.host.topic_counts(self.fleet_ui.side_robot), now))

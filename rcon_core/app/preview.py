@@ -2,9 +2,10 @@
 
 The preview's model is built and started by its own canvas runtime (a :class:`LiveCanvas`) on the
 bridge thread, like any placed widget, and shown by the same :class:`WidgetHost`; releasing the preview
-stops it there. Only a widget that *shows* (subscribe) runs on the robot: a preview that would publish,
-call or serve runs offline, so touching a teleop pad or a button in the add panel never moves the robot
-(its frame says PREVIEW ONLY).
+stops it there. Only a widget that *shows* (subscribe) runs on the robot, and then on a view-only port
+(it subscribes, it never advertises, publishes or calls: a map's preview does not announce its goal
+topic): a preview that would publish, call or serve runs offline, so touching a teleop pad or a button in
+the add panel never moves the robot (its frame says PREVIEW ONLY).
 """
 
 from __future__ import annotations
@@ -17,6 +18,9 @@ from rcon_core.app.widget_frame import WidgetFrame
 from rcon_core.app.widget_host import WidgetHost
 from rcon_core.canvas import Canvas, Geometry, WidgetInstance, new_id
 from rcon_core.plugins import Role
+
+#: why a preview on the robot sends nothing (its port's view-only reason)
+PREVIEW_LISTENS = "a preview sends nothing until the widget is placed"
 
 
 class PreviewHost:
@@ -61,4 +65,7 @@ class PreviewHost:
         """Run the preview again on the current client (after the link changed)."""
         if self.widget is not None:
             client = self.client() if self.live_on_robot else OFFLINE
-            self.live.start(client, Canvas("preview", "Preview", [self.widget]), view_only=self.view_only)
+            # a preview on the robot only listens: its port sends nothing, not even an advertise (a map's
+            # preview told the robot it would publish goals on /goal/fix)
+            view_only = self.view_only or (PREVIEW_LISTENS if self.live_on_robot else None)
+            self.live.start(client, Canvas("preview", "Preview", [self.widget]), view_only=view_only)

@@ -10,7 +10,7 @@ is of and picks another the same way.
 
 from __future__ import annotations
 
-from qtpy import QtCore, QtWidgets
+from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app.connection_bar import LIVE_STATES, STATE_TEXT
 from rcon_core.bridge import ConnectionState
@@ -47,6 +47,7 @@ class RobotChip(QtWidgets.QPushButton):
         #: why the operator may only watch this robot (None: it takes commands); shown on the chip
         self.view_only: str | None = None
         self._shown: tuple[str, ConnectionState, bool, str | None] | None = None
+        self.full_text = ""  #: what the chip says; shown cut with "…" when the chip is narrower (many robots)
         self.show_state(ConnectionState.CLOSED, None)
 
     def show_state(self, state: ConnectionState, latency: float | None, why: str | None = None) -> None:
@@ -59,7 +60,9 @@ class RobotChip(QtWidgets.QPushButton):
         if key == self._shown:
             return
         self._shown = key
-        self.setText(text)
+        self.full_text = text
+        self.setText(text)  # whole: the bar lays the chips out for it; cut once it has (a chip too narrow)
+        QtCore.QTimer.singleShot(0, self._fit)
         self.setToolTip(f"{self.name}: {STATE_TEXT[state]}" + (f", round trip {lat}" if lat else "")
                         + (f" ({why})" if why else "")
                         + (f"; {self.view_only}: nothing is sent to it" if self.view_only else "")
@@ -74,6 +77,35 @@ class RobotChip(QtWidgets.QPushButton):
 
     def nextCheckState(self) -> None:  # noqa: N802 - Qt's name: a tap picks, never un-picks
         self.setChecked(True)
+
+    #: the chip's edges as styled: the colour strip on the left, borders and padding
+    CHROME_PX = 14 + 4 + 2 * 10 + 4
+
+    def _fit(self) -> None:
+        """The text as far as the chip's width allows: its name first, the state cut with "…" (six robots
+        on a 1280 px window), never clipped at both ends."""
+        fm = self.fontMetrics()
+        chrome = QtWidgets.QPushButton.sizeHint(self).width() - fm.horizontalAdvance(self.text())  # as styled
+        room = self.width() - max(chrome, 0)
+        shown = self.full_text
+        if room > 0 and fm.horizontalAdvance(shown) > room:
+            shown = fm.elidedText(shown, QtCore.Qt.TextElideMode.ElideRight, room)
+        if shown != self.text():
+            self.setText(shown)
+
+    def sizeHint(self) -> QtCore.QSize:  # noqa: N802 - Qt's name: the whole text's room, whatever is shown
+        hint = super().sizeHint()
+        fm = self.fontMetrics()
+        return QtCore.QSize(hint.width() + fm.horizontalAdvance(self.full_text) - fm.horizontalAdvance(self.text()),
+                            hint.height())
+
+    def minimumSizeHint(self) -> QtCore.QSize:  # noqa: N802 - Qt's name: may be narrower than its words
+        return QtCore.QSize(min(self.sizeHint().width(), self.CHROME_PX + self.fontMetrics().horizontalAdvance(
+            self.name[:6] + "…")), super().minimumSizeHint().height())
+
+    def resizeEvent(self, event: QtGui.QResizeEvent) -> None:  # noqa: N802 - Qt's name
+        super().resizeEvent(event)
+        self._fit()
 
 
 class RobotChips(QtWidgets.QFrame):

@@ -1,6 +1,8 @@
 """Canvas ▾ → Robots…: the workspace's robots, one row each (name, URL, CA file, rosauth, view only).
 
-OK replaces the robots in one undo step (``Document.set_robots``). The first robot's URL may stay empty:
+One tap on a cell edits it (the hint under the table says so). OK replaces the robots in one undo step
+(``Document.set_robots``); the running widgets are rebuilt only where that changes what they do (see
+``FleetUi``): OK with nothing changed keeps every form, trail and value as it was. The first robot's URL may stay empty:
 it then follows the connection bar's URL field; the first robot cannot be removed (it is the connection
 bar's, and the robot of every binding that names none). A robot whose URL or connection settings changed
 connects again. A robot removed here leaves its widgets in place; they
@@ -41,6 +43,10 @@ class RobotsDialog(QtWidgets.QDialog):
         self.table = QtWidgets.QTableWidget(0, len(COLUMNS))
         self.table.setObjectName("robotsTable")
         self.table.setHorizontalHeaderLabels(list(COLUMNS))
+        self.table.setAccessibleName("Robots")
+        # one tap on a cell types in it (a double tap is no gesture a gloved finger finds, and nothing said
+        # so); a cell is never opened for typing by itself (on opening, by focus), only by a tap or a key
+        self.table.clicked.connect(self._tapped)
         header = self.table.horizontalHeader()
         header.setSectionResizeMode(1, QtWidgets.QHeaderView.ResizeMode.Stretch)
         # rows as tall as the theme's touch-sized check boxes, with room around them
@@ -57,6 +63,10 @@ class RobotsDialog(QtWidgets.QDialog):
         remove = QtWidgets.QPushButton("Remove")
         remove.setObjectName("removeRobot")
         remove.clicked.connect(self._remove_row)
+        self.hint = QtWidgets.QLabel("Tap a cell to type in it; tick rosauth or View only in a robot's row.")
+        self.hint.setObjectName("robotsHint")
+        self.hint.setProperty("role", "hint")
+        self.hint.setWordWrap(True)
         self.problem = QtWidgets.QLabel()
         self.problem.setObjectName("robotsProblem")
         self.problem.setProperty("role", "problem")
@@ -72,6 +82,7 @@ class RobotsDialog(QtWidgets.QDialog):
         row.addStretch(1)
         col = QtWidgets.QVBoxLayout(self)
         col.addWidget(self.table, 1)
+        col.addWidget(self.hint)
         col.addLayout(row)
         col.addWidget(self.problem)
         col.addWidget(buttons)
@@ -95,11 +106,16 @@ class RobotsDialog(QtWidgets.QDialog):
             box.setObjectName(("robotAuth", "robotViewOnly")[c - 3])
             box.setChecked(flag)
             box.setEnabled(not robot.recording)
+            box.setAccessibleName(f"{COLUMNS[c]} for {robot.name or robot.id}")
             cell = QtWidgets.QWidget()
             row = QtWidgets.QHBoxLayout(cell)
             row.setContentsMargins(0, 0, 0, 0)
             row.addWidget(box, 0, QtCore.Qt.AlignmentFlag.AlignCenter)
             self.table.setCellWidget(r, c, cell)
+
+    def _tapped(self, index: QtCore.QModelIndex) -> None:
+        if self.table.item(index.row(), index.column()) is not None:  # a text cell (not a tick box's)
+            self.table.edit(index)
 
     def _pick_recording(self) -> None:
         path, _filter = QtWidgets.QFileDialog.getOpenFileName(
@@ -159,6 +175,8 @@ class RobotsDialog(QtWidgets.QDialog):
         return out
 
     def _ok(self) -> None:
+        # a cell still being typed in counts: leaving it commits the editor's text to the table
+        self.table.setCurrentIndex(QtCore.QModelIndex())
         try:
             self.robots()
         except BadUrl as exc:

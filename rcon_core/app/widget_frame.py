@@ -18,10 +18,14 @@ from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app.elided_label import OneLineLabel
 from rcon_core.app.geometry import GRID, fit_rect, scaled_about_center, snap_rect, snap_up
-from rcon_core.app.theme import current_touch_px, repolish
+from rcon_core.app.theme import colour as theme_colour
+from rcon_core.app.theme import current_text_size, current_touch_px, font_px, repolish
 
 LONG_PRESS_MS = 600
 DRAG_SLOP = 12
+#: a widget's frame holds at least this many lines of its text: a larger text size grows the text in a
+#: widget as far as the widget's box allows (its title and its view), never past it
+FRAME_LINES = 6
 
 
 def frame_min_size() -> QtCore.QSize:
@@ -31,7 +35,9 @@ def frame_min_size() -> QtCore.QSize:
 
 
 class Badge(QtWidgets.QLabel):
-    """A small status pill at the right end of the frame's title bar."""
+    """A small status pill at the right end of the frame's title bar. Its tooltip is the reason (hover);
+    a tap shows the reason on the frame, on one line under the title (:class:`ReasonLine`), and a second
+    tap hides it."""
 
     COLOURS = {"stale": "#a85400", "down": "#b00000", "problem": "#b00000", "ok": "#006b1b",
                "view-only": "#3a3a3a"}
@@ -40,29 +46,87 @@ class Badge(QtWidgets.QLabel):
         super().__init__(parent)
         self.setObjectName("frameBadge")
         self.kind = ""
-        self.setAttribute(QtCore.Qt.WidgetAttribute.WA_TransparentForMouseEvents)
+        self.reason = ""
+        self.font_sheet = ""  #: the frame's text size for it (WidgetFrame.fit_text), "" for the app's
+        self.setCursor(QtCore.Qt.CursorShape.PointingHandCursor)
         self.hide()
 
-    def show_status(self, kind: str, text: str) -> None:
-        if kind == self.kind and text == self.text():
+    def show_status(self, kind: str, text: str, reason: str = "") -> None:
+        """Show ``text`` in ``kind``'s colour (``""``: hide); ``reason`` is the sentence behind it, shown on
+        hover (the tooltip) and on a tap (the frame's reason line)."""
+        if kind == self.kind and text == self.text() and reason == self.reason:
             return
-        self.kind = kind
+        self.kind, self.reason = kind, reason
+        self.setToolTip(reason)
+        self.setAccessibleName(f"status: {text}" if kind else "")
+        self.setAccessibleDescription(reason)
         frame = self.parentWidget()
         if not kind:
             self.hide()
+        else:
+            self.setText(text)
+            self.restyle()
+            self.adjustSize()
+            self.show()
+            self.raise_()
+        if isinstance(frame, WidgetFrame):
+            frame.layout_overlays()  # hidden: the title gets its full width back
+            frame.reason_line.follow(self)
+
+    def restyle(self) -> None:
+        """Its colour for its kind, at its frame's text size (a style sheet only when it changed)."""
+        colour = self.COLOURS.get(self.kind, "#000000")
+        sheet = (f"background:{colour}; color:#ffffff; font-weight:bold; border-radius:4px; padding:2px 8px;"
+                 f"{self.font_sheet}")
+        if sheet != self.styleSheet():
+            self.setStyleSheet(sheet)
+            self.adjustSize()
+
+    def mouseReleaseEvent(self, event: QtGui.QMouseEvent) -> None:  # noqa: N802 - Qt's name
+        if event.button() == QtCore.Qt.MouseButton.LeftButton and self.rect().contains(event.position().toPoint()):
+            frame = self.parentWidget()
             if isinstance(frame, WidgetFrame):
-                frame.layout_overlays()  # the title gets its full width back
+                frame.reason_line.toggle(self)
+        super().mouseReleaseEvent(event)
+
+
+class ReasonLine(OneLineLabel):
+    """The badge's reason on one line across the top of the frame's body, cut with "…" when it is too
+    long (the whole sentence in its tooltip); shown by a tap on the badge, hidden by another tap on either."""
+
+    def __init__(self, parent: QtWidgets.QWidget) -> None:
+        super().__init__(parent)
+        self.setObjectName("frameReason")
+        self.full = ""  # its look: QLabel#frameReason in theme.qss
+        self.hide()
+
+    def toggle(self, badge: Badge) -> None:
+        if self.isVisible() or not badge.reason:
+            self.hide()
             return
-        colour = self.COLOURS.get(kind, "#000000")
-        self.setStyleSheet(
-            f"background:{colour}; color:#ffffff; font-weight:bold; border-radius:4px; padding:2px 8px;"
-        )
-        self.setText(text)
-        self.adjustSize()
+        self.full = ""
+        self.follow(badge)
         self.show()
         self.raise_()
-        if isinstance(frame, WidgetFrame):
-            frame.layout_overlays()
+
+    def follow(self, badge: Badge) -> None:
+        """The badge changed: the line says its new reason, or goes away with it."""
+        if not badge.isVisible() or not badge.reason:
+            self.hide()
+            return
+        if badge.reason != self.full:
+            self.full = badge.reason
+            self.setToolTip(badge.reason)
+            self.setAccessibleName(badge.reason)
+            self._elide()
+
+    def _elide(self) -> None:
+        room = self.contentsRect().width()
+        self.setText(self.fontMetrics().elidedText(self.full, QtCore.Qt.TextElideMode.ElideRight, max(0, room)))
+
+    def mouseReleaseEvent(self, event: QtGui.QMouseEvent) -> None:  # noqa: N802 - Qt's name
+        self.hide()
+        super().mouseReleaseEvent(event)
 
 
 class FrameTitle(OneLineLabel):
@@ -112,11 +176,15 @@ class ProblemOverlay(QtWidgets.QLabel):
         self.setWordWrap(True)
         self.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
         self.setAttribute(QtCore.Qt.WidgetAttribute.WA_TransparentForMouseEvents)
-        self.setStyleSheet(
-            "background: rgba(255, 236, 179, 235); color: #000000; border: 3px dashed #b00000;"
-            " font-weight: bold; padding: 6px;"
-        )
+        self.set_font_sheet("")
         self.hide()
+
+    def set_font_sheet(self, font_sheet: str) -> None:
+        """Its look, at its frame's text size (``font_sheet``: "" for the app's)."""
+        sheet = ("background: rgba(255, 236, 179, 235); color: #000000; border: 3px dashed #b00000;"
+                 f" font-weight: bold; padding: 6px;{font_sheet}")
+        if sheet != self.styleSheet():
+            self.setStyleSheet(sheet)
 
     def set_problems(self, problems: list[str]) -> None:
         if problems:
@@ -180,6 +248,12 @@ class Shield(QtWidgets.QWidget):
         if t == QtCore.QEvent.Type.TouchCancel:
             self._end(commit=False)
             return True
+        if t == QtCore.QEvent.Type.ToolTip:  # over the badge: its reason, as in Operate mode
+            badge = self.frame.badge
+            pos = event.pos()  # type: ignore[attr-defined]
+            if badge.isVisible() and badge.reason and badge.geometry().contains(pos):
+                QtWidgets.QToolTip.showText(event.globalPos(), badge.reason, self)  # type: ignore[attr-defined]
+                return True
         return super().event(event)
 
     def _touch(self, event: QtGui.QTouchEvent) -> None:
@@ -242,7 +316,7 @@ class Shield(QtWidgets.QWidget):
 
 CORNERS = ("tl", "tr", "bl", "br")
 MARK_INSET = 4
-_MARK_CACHE: dict[tuple[str, bool, int, float], QtGui.QPixmap] = {}
+_MARK_CACHE: dict[tuple[str, bool, int, float, str], QtGui.QPixmap] = {}
 
 
 def mark_geometry(selected: bool, handle: int) -> tuple[int, int]:
@@ -250,10 +324,10 @@ def mark_geometry(selected: bool, handle: int) -> tuple[int, int]:
     return (8, round(handle * 0.6)) if selected else (5, max(14, handle // 3))
 
 
-def mark_pixmap(corner: str, selected: bool, handle: int, dpr: float = 1.0) -> QtGui.QPixmap:
+def mark_pixmap(corner: str, selected: bool, handle: int, dpr: float = 1.0, colour: str = "#0040a0") -> QtGui.QPixmap:
     """The L at ``corner`` ("tl", "tr", "bl", "br") in a transparent square pixmap whose outer corner is
     the frame's corner: thick and blue on the selected frame, "drag here to resize"."""
-    key = (corner, selected, handle, dpr)
+    key = (corner, selected, handle, dpr, colour)
     pix = _MARK_CACHE.get(key)
     if pix is not None:
         return pix
@@ -264,7 +338,7 @@ def mark_pixmap(corner: str, selected: bool, handle: int, dpr: float = 1.0) -> Q
     pix.fill(QtCore.Qt.GlobalColor.transparent)
     p = QtGui.QPainter(pix)
     p.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing)
-    pen = QtGui.QPen(QtGui.QColor("#0040a0"), width)
+    pen = QtGui.QPen(QtGui.QColor(colour), width)
     pen.setCapStyle(QtCore.Qt.PenCapStyle.FlatCap)
     p.setPen(pen)
     x, dx = (MARK_INSET, 1) if corner[1] == "l" else (side - MARK_INSET, -1)
@@ -287,7 +361,8 @@ class CornerMark(QtWidgets.QLabel):
 
     def show_mark(self, selected: bool, handle: int) -> None:
         screen = self.screen()
-        pix = mark_pixmap(self.corner, selected, handle, screen.devicePixelRatio() if screen else 1.0)
+        pix = mark_pixmap(self.corner, selected, handle, screen.devicePixelRatio() if screen else 1.0,
+                          theme_colour("FOCUS").name())
         self.setPixmap(pix)
         side = round(pix.width() / pix.devicePixelRatio())
         frame = self.parentWidget()
@@ -348,8 +423,12 @@ class WidgetFrame(QtWidgets.QFrame):
         col.addWidget(self.body, 1)
         self.problems = ProblemOverlay(self)
         self.badge = Badge(self)
+        self.reason_line = ReasonLine(self)
         self.shield = Shield(self)
         self.marks = [CornerMark(corner, self) for corner in CORNERS]
+        self.setProperty("accessibleRole", "Grouping")  # a widget on the canvas: its title names it
+        self.shield.setProperty("accessibleRole", "Grip")  # Edit mode: drag to move, corners to resize
+        self._name_parts(title)
         self._pinch_start = QtCore.QRect()
 
     # content ----------------------------------------------------------------------------------------
@@ -366,12 +445,16 @@ class WidgetFrame(QtWidgets.QFrame):
         label.setObjectName("placeholder")
         label.setWordWrap(True)
         label.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
-        label.setStyleSheet("background:#f0f0f0; border:3px dashed #707070; color:#000000; font-weight:bold;")
         self.set_view(label)
         return label
 
     def set_title(self, title: str) -> None:
         self.title.set_title(title)
+        self._name_parts(title)
+
+    def _name_parts(self, title: str) -> None:
+        self.setAccessibleName(title)
+        self.shield.setAccessibleName(f"Move or resize {title}")
 
     # modes ------------------------------------------------------------------------------------------
     def set_editable(self, editable: bool) -> None:
@@ -520,14 +603,45 @@ class WidgetFrame(QtWidgets.QFrame):
         menu.popup(global_pos)
         return menu
 
+    # text size ----------------------------------------------------------------------------------------
+    def text_px(self) -> int:
+        """The font size of this widget's title and view: the app's (theme.py), but no more than
+        :data:`FRAME_LINES` lines fill the frame's height (never below the standard size)."""
+        base = font_px(current_touch_px(), current_text_size())
+        room = max(1, self.height() - 6) // FRAME_LINES
+        return max(min(base, room), min(base, font_px(current_touch_px(), 100)))
+
+    def fit_text(self) -> None:
+        """Give the title and the view :meth:`text_px` (through style sheets: the theme's would win over a
+        font); nothing when it is the app's own size."""
+        px = self.text_px()
+        sheet = "" if px == font_px(current_touch_px(), current_text_size()) else f"font-size: {px}px;"
+        for part in (self.title, self.body, self.reason_line):
+            if part.styleSheet() != sheet:
+                part.setStyleSheet(sheet)
+        self.problems.set_font_sheet(f" {sheet}" if sheet else "")
+        if self.badge.font_sheet != sheet:
+            self.badge.font_sheet = sheet
+            if self.badge.kind:
+                self.badge.restyle()
+                self.layout_overlays()
+
     # overlays ---------------------------------------------------------------------------------------
     def resizeEvent(self, event: QtGui.QResizeEvent) -> None:
         super().resizeEvent(event)
+        self.fit_text()
         self.layout_overlays()
 
     def showEvent(self, event: QtGui.QShowEvent) -> None:
         super().showEvent(event)
         self.body.ensure_opaque()
+
+    def changeEvent(self, event: QtCore.QEvent) -> None:  # noqa: N802 - Qt's name
+        super().changeEvent(event)
+        if event.type() == QtCore.QEvent.Type.PaletteChange and self.editable:
+            self.layout_overlays()  # another theme: the corner marks in its colour
+        if event.type() in (QtCore.QEvent.Type.StyleChange, QtCore.QEvent.Type.FontChange):
+            self.fit_text()  # another text size
 
     def layout_overlays(self) -> None:
         self.shield.setGeometry(self.rect())
@@ -541,7 +655,11 @@ class WidgetFrame(QtWidgets.QFrame):
             self.title.set_reserve(max(0, self.badge.width() + 6 - self.title.contentsMargins().right()))
         else:
             self.title.set_reserve(0)
+        title = self.title.geometry()
+        line = self.reason_line.sizeHint().height()
+        self.reason_line.setGeometry(title.left(), title.bottom() + 1, title.width(), line)
         self.problems.raise_()
+        self.reason_line.raise_()
         self.badge.raise_()
         if self.editable:
             self.shield.raise_()

@@ -27,6 +27,9 @@ def add_link_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--client-cert", metavar="PATH",
                        help="client certificate (PEM) for a robot that asks for one")
     group.add_argument("--client-key", metavar="PATH", help="the client certificate's private key (PEM)")
+    group.add_argument("--protocol", choices=("rosbridge", "foxglove"), default=None,
+                       help="the robot's protocol (default: detected -- a server that picks a Foxglove "
+                            "WebSocket subprotocol speaks Foxglove, any other rosbridge)")
     group.add_argument("--auth-secret-file", metavar="PATH",
                        help=f"authenticate (rosauth) with the secret in this file; ${AUTH_ENV} also works. "
                             "The secret is never taken on the command line")
@@ -48,18 +51,34 @@ def link_settings(args: argparse.Namespace, url: str) -> dict[str, Any]:
 
 async def open_client(url: str, args: argparse.Namespace, *, call_timeout: float = 10.0,
                       quiet: bool = False) -> Any:
-    """A connected ``BridgeClient`` (authenticated when a secret is given), or None after one line on
-    stderr saying why not (``quiet``: say nothing)."""
-    from rcon_core.bridge import AuthRefusedError, BridgeClient, LinkSettingsError
+    """A connected robot link (``BridgeClient`` or ``FoxgloveClient``: ``--protocol``, else detected;
+    authenticated when a secret is given and the protocol has rosauth), or None after one line on stderr
+    saying why not (``quiet``: say nothing)."""
+    from rcon_core.bridge import AuthRefusedError, LinkSettingsError
     from rcon_core.bridge.reasons import AUTH_NEEDED, describe
     from rcon_core.bridge.secure import confirm_auth
+    from rcon_core.link import detect, make_client
 
     try:
         settings = link_settings(args, url)
-        client = BridgeClient(url, reconnect=False, call_timeout=call_timeout, **settings)
+        protocol = getattr(args, "protocol", None)
+        client = None if protocol is None else make_client(url, protocol, reconnect=False,
+                                                           call_timeout=call_timeout, **settings)
     except (LinkSettingsError, ValueError) as exc:
         _say(quiet, str(exc))
         return None
+    if client is None:
+        try:  # one handshake offering the Foxglove subprotocols (rcon_core/link/detect.py)
+            protocol = await asyncio.wait_for(detect(url, ca_file=settings["ca_file"], client_cert=settings[
+                "client_cert"], client_key=settings["client_key"]), CONNECT_TIMEOUT)
+        except Exception as exc:  # the handshake failed: said as any connection failure
+            why = describe(exc, ca_file=settings["ca_file"],
+                           wss_without_cert=url.startswith("wss:") and not settings["client_cert"])
+            _say(quiet, f"cannot connect to {url}: {why.reason}")
+            return None
+        client = make_client(url, str(protocol), reconnect=False, call_timeout=call_timeout, **settings)
+    if client.protocol == "foxglove":
+        return await _open_foxglove(client, url, settings, quiet)
     bridge_log = logging.getLogger("rcon_core.bridge.client")
     level = bridge_log.level
     bridge_log.setLevel(logging.ERROR)  # while connecting, the one line below says it all
@@ -79,6 +98,23 @@ async def open_client(url: str, args: argparse.Namespace, *, call_timeout: float
         return None
     finally:
         bridge_log.setLevel(level)
+    return client
+
+
+async def _open_foxglove(client: Any, url: str, settings: dict[str, Any], quiet: bool) -> Any:
+    """Connect a Foxglove link (no rosauth on that protocol: a given secret is said unused)."""
+    from rcon_core.bridge.reasons import describe
+    from rcon_core.foxglove import CANNOT
+
+    if settings["auth"] is not None:
+        _say(quiet, f"note: {CANNOT['rosauth']}")
+    try:
+        await asyncio.wait_for(client.connect(), CONNECT_TIMEOUT)
+    except Exception as exc:
+        await client.close()
+        why = client.failure or describe(exc, ca_file=settings["ca_file"])
+        _say(quiet, f"cannot connect to {url}: {why.reason}")
+        return None
     return client
 
 

@@ -1,4 +1,6 @@
-"""``rcon sim``: run the embedded simulated robot as a rosbridge v2 server until interrupted."""
+"""``rcon sim``: run the embedded simulated robot as a rosbridge v2 server until interrupted; with
+``--protocol foxglove`` the same vessel is served over the Foxglove WebSocket protocol (through
+foxglove-sdk: ``rcon_core/foxglove/gateway.py``), its rosbridge port then on loopback only."""
 
 from __future__ import annotations
 
@@ -39,8 +41,17 @@ def configure(name: str, parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-plugin-types", action="store_true",
                         help="do not load the message types installed widget plugins contribute (the sim then "
                         "refuses them, like a robot without the lab's package)")
+    parser.add_argument("--video-bitrate", type=float, metavar="KBIT", default=None,
+                        help="the front camera's H.264 stream (/camera/front/image_raw/foxglove and /ffmpeg): "
+                        "bits per second asked of the encoder, in kbit/s (default 600)")
+    parser.add_argument("--video-keyframe-interval", type=float, metavar="S", default=None,
+                        help="seconds between the H.264 stream's keyframes: what a viewer joining mid-stream "
+                        "waits at most (default 1)")
     parser.add_argument("--tls-cert", metavar="FILE", help="serve wss:// with this certificate (PEM)")
     parser.add_argument("--tls-key", metavar="FILE", help="the certificate's private key (PEM)")
+    parser.add_argument("--protocol", choices=("rosbridge", "foxglove"), default="rosbridge",
+                        help="serve rosbridge v2 (the default) or the Foxglove WebSocket protocol (Foxglove, "
+                        "Lichtblick and RCON open it; no rosauth on that protocol)")
     parser.add_argument("-v", "--verbose", action="store_true", help="log every client op")
     play = parser.add_argument_group("a recording as the robot (sim/playback.py)")
     play.add_argument("--play", metavar="FILE",
@@ -78,6 +89,11 @@ def run(name: str, args: argparse.Namespace) -> int:
         except ValueError as exc:
             print(f"rcon sim: --name: {exc}", file=sys.stderr)
             return 2
+    video = _video_params(args)
+    if isinstance(video, str):
+        print(f"rcon sim: {video}", file=sys.stderr)
+        return 2
+    args.video_params = video
     if bool(args.tls_cert) != bool(args.tls_key):
         print("rcon sim: --tls-cert and --tls-key go together", file=sys.stderr)
         return 2
@@ -85,6 +101,10 @@ def run(name: str, args: argparse.Namespace) -> int:
         tls = _tls_context(args.tls_cert, args.tls_key) if args.tls_cert else None
     except (OSError, ssl.SSLError) as exc:
         print(f"rcon sim: cannot use {args.tls_cert} / {args.tls_key}: {exc}", file=sys.stderr)
+        return 2
+    if getattr(args, "protocol", "rosbridge") == "foxglove" and args.auth:
+        print("rcon sim: --auth: the Foxglove WebSocket protocol has no rosauth; use --tls-cert/--tls-key and "
+              "listen on a network you trust", file=sys.stderr)
         return 2
     if not _loopback(args.host) and not args.auth:
         print(OPEN_WARNING.format(host=args.host), file=sys.stderr, flush=True)
@@ -94,6 +114,22 @@ def run(name: str, args: argparse.Namespace) -> int:
         return asyncio.run(_serve(args, tls))
     except KeyboardInterrupt:
         return 0
+
+
+def _video_params(args: argparse.Namespace) -> dict[str, float] | str:
+    """The robot node's ``video/*`` parameters the options ask for, or what is wrong with them."""
+    from rcon_core.sim.video import VideoSettings
+
+    params: dict[str, float] = {}
+    if args.video_bitrate is not None:
+        params["bitrate"] = int(args.video_bitrate * 1000)
+    if args.video_keyframe_interval is not None:
+        params["keyframe_interval"] = args.video_keyframe_interval
+    base = VideoSettings()
+    settings = VideoSettings(keyframe_interval=params.get("keyframe_interval", base.keyframe_interval),
+                             bitrate=int(params.get("bitrate", base.bitrate)))
+    problems = settings.problems()
+    return "; ".join(problems) if problems else params
 
 
 def _loopback(host: str) -> bool:
@@ -123,21 +159,48 @@ async def _serve(args: argparse.Namespace, tls: ssl.SSLContext | None = None) ->
         except RecordingError as exc:
             print(f"rcon sim: cannot play {exc}", file=sys.stderr)
             return 2
-    server = SimServer(host=args.host, port=args.port, ros2=args.ros2 or bool(recording and recording.ros2),
-                       rate_scale=args.rate_scale, auth_secret=args.auth,
-                       max_frame=int(args.max_frame * 1024 * 1024), plugin_types=not args.no_plugin_types,
-                       ssl=tls, name=args.name, namespace=not args.no_namespace, robot=recording is None)
+    foxglove = getattr(args, "protocol", "rosbridge") == "foxglove"
+    if foxglove and recording is not None:
+        print("rcon sim: --play serves a recording over rosbridge only (drop --protocol foxglove)", file=sys.stderr)
+        return 2
+    # over Foxglove the sim's own rosbridge port stays on loopback, behind the gateway (foxglove/gateway.py)
+    server = SimServer(host="127.0.0.1" if foxglove else args.host, port=0 if foxglove else args.port,
+                       ros2=args.ros2 or bool(recording and recording.ros2), rate_scale=args.rate_scale,
+                       auth_secret=args.auth, max_frame=int(args.max_frame * 1024 * 1024),
+                       plugin_types=not args.no_plugin_types, ssl=None if foxglove else tls, name=args.name,
+                       namespace=not args.no_namespace, robot=recording is None)
     try:
         await server.start()
     except OSError as exc:
         print(f"rcon sim: cannot listen on {args.host}:{args.port}: {exc.strerror or exc}")
         return 1
+    video = getattr(server.robot_node, "video", None)
+    if video is not None:
+        if video.unavailable:
+            print(f"rcon sim: no video: {video.unavailable}", flush=True)
+        for key, value in getattr(args, "video_params", {}).items():  # checked in run()
+            server.params_tree.set(f"{server.robot_node.node}/video/{key}", value)
     if recording is not None:
         return await _play(server, recording, args)
     flavour = "ROS 2" if args.ros2 else "ROS 1"
     ns = server.identity.namespace
     who = f"Kingfisher '{server.name}'" + (f" (topics under {ns})" if ns else "") if server.name else "Kingfisher"
-    print(f"rcon sim: {flavour} {who} simulator on {server.url} (Ctrl+C to stop)", flush=True)
+    gateway = None
+    if foxglove:
+        from rcon_core.foxglove.gateway import FoxgloveGateway
+
+        pem = (open(args.tls_cert, "rb").read(), open(args.tls_key, "rb").read()) if args.tls_cert else None
+        gateway = FoxgloveGateway(server.url, host=args.host, port=args.port, name=server.name or "rcon-sim", tls=pem)
+        try:
+            await asyncio.to_thread(gateway.start)
+        except Exception as exc:
+            print(f"rcon sim: cannot serve the Foxglove protocol on {args.host}:{args.port}: {exc}")
+            await server.stop()
+            return 1
+        print(f"rcon sim: {flavour} {who} simulator over the Foxglove WebSocket protocol on {gateway.url} "
+              "(Ctrl+C to stop)", flush=True)
+    else:
+        print(f"rcon sim: {flavour} {who} simulator on {server.url} (Ctrl+C to stop)", flush=True)
     if server.types.plugin_type_names:
         print(f"rcon sim: plugin types: {', '.join(server.types.plugin_type_names)}", flush=True)
     stop = asyncio.Event()
@@ -152,6 +215,8 @@ async def _serve(args: argparse.Namespace, tls: ssl.SSLContext | None = None) ->
         await stop.wait()
     finally:
         settler.cancel()
+        if gateway is not None:
+            await asyncio.to_thread(gateway.stop)
         await server.stop()
     return 0
 

@@ -321,6 +321,10 @@ class TypeRegistry:
         """ROS 2 CDR (with its 4-byte header), as rosbridge 2.x sends ``cbor-raw``; see ``cdr.py``."""
         return self._cdr().serialize(self.resolve(name), msg)
 
+    def cdr_codec(self) -> CdrCodec:
+        """The CDR codec of this registry's current definitions (``cdr.frame_reader`` compiles readers on it)."""
+        return self._cdr()
+
     def deserialize_cdr(self, name: str, data: bytes | bytearray | memoryview) -> dict[str, Any]:
         """ROS 2 CDR -> wire-shape dict (``uint8[]`` as bytes, NaN stays NaN)."""
         return self._cdr().deserialize(self.resolve(name), data)

@@ -35,6 +35,7 @@ from .encoding import Base64Bytes
 from .identity import Identity
 from .rosapi import add_logger_services
 from .vessel import Vessel
+from .video import FrontVideo
 
 if TYPE_CHECKING:
     from .server import SimServer
@@ -148,6 +149,9 @@ class RobotNode:
         scale = server.rate_scale
         self._periodic = [_Periodic(t, 1.0 / (hz * scale), getattr(self, "_pub_" + t.strip("/").replace("/", "_")))
                           for t, hz in RATES.items()]
+        #: the front camera as H.264 video (video.py; no topics without PyAV)
+        self.video = FrontVideo(self)
+        self._periodic += [_Periodic(t, 1.0 / (hz * scale), fn) for t, hz, fn in self.video.periodic()]
 
     # -- lifecycle ----------------------------------------------------------------------------------
 
@@ -396,7 +400,7 @@ class RobotNode:
                 "data": Base64Bytes.of(data) if text else data}
 
     def _render(self, topic: str, camera: CameraRenderer,
-                build: Callable[[np.ndarray, float, bool], dict[str, Any]]) -> None:
+                build: Callable[[np.ndarray, float, bool], dict[str, Any] | None]) -> None:
         """Draw one frame of ``camera`` in the worker thread, then publish it on ``topic`` from the loop.
 
         The worker also makes the pixels' base64 text when a JSON subscriber is there now (``text``); the
@@ -414,13 +418,13 @@ class RobotNode:
         text = self.server.wants_text(self.graph_name(topic))
         future = self._render_pool.submit(lambda: camera.render(pose, stamp, lambda img: build(img, stamp, text)))
 
-        def done(fut: concurrent.futures.Future[dict[str, Any]]) -> None:
+        def done(fut: concurrent.futures.Future[dict[str, Any] | None]) -> None:
             with contextlib.suppress(RuntimeError):  # the loop is closed: the sim has stopped
                 loop.call_soon_threadsafe(self._rendered, topic, fut)
 
         future.add_done_callback(done)
 
-    def _rendered(self, topic: str, future: concurrent.futures.Future[dict[str, Any]]) -> None:
+    def _rendered(self, topic: str, future: concurrent.futures.Future[dict[str, Any] | None]) -> None:
         self._rendering.discard(topic)
         if self._task is None or future.cancelled():
             return  # stopped meanwhile
@@ -428,7 +432,9 @@ class RobotNode:
         if exc is not None:
             log.error("drawing %s failed: %s", topic, exc)
             return
-        self._publish(topic, future.result())
+        msg = future.result()
+        if msg is not None:  # None: nothing to send this turn (a video encoder held the frame back)
+            self._publish(topic, msg)
 
     def _pub_scan(self, now: float) -> None:
         if not self._wanted("/scan"):

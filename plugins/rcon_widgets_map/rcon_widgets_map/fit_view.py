@@ -14,7 +14,8 @@ from typing import Any
 
 from qtpy import QtGui, QtWidgets
 
-#: free pixels kept around the markers: left, below the buttons, right of the names, above the scale bar
+#: free pixels kept around the markers: left, beside or below the buttons, right of the names, above the
+#: scale bar
 EDGE_PX, BELOW_BUTTONS_PX, BOTTOM_PX = 24, 24, 56
 #: how far (pixels) a marker may stray past the fitted room before the map fits again
 SLACK_PX = 12
@@ -28,10 +29,11 @@ class FitControls:
         self.fitting = bool(getattr(view.settings, "fit_all", False))
         self.button = QtWidgets.QToolButton(view)
         self.button.setObjectName("mapFit")
-        self.button.setText("Fit")
+        self.button.setText("Fit")  # the view draws its icon
         self.button.setCheckable(True)
         self.button.setChecked(self.fitting)
-        self.button.setToolTip("Show every marker (panning or zooming by hand turns this off)")
+        self.button.setToolTip("Fit: show every marker (panning or zooming by hand turns this off)")
+        self.button.setAccessibleName("Fit every marker in view")
         self.button.clicked.connect(self._clicked)
         self.button.setVisible(self.fitting)
         self._fitted: set[str] = set()  #: the markers (track keys) of the last fit
@@ -43,15 +45,23 @@ class FitControls:
         return [(t.lat, t.lon) for t in tracks if t.has_position]
 
     def inset(self, value: Any) -> tuple[float, float, float, float]:
-        """The pixels kept free at the left, top, right and bottom: the buttons above, the longest marker
-        name at the right (names are written right of their markers), the scale bar below."""
+        """The pixels kept free at the left, top, right and bottom: the longest marker name at the right
+        (names are written right of their markers), the scale bar below, and the buttons' corner: either
+        a band as tall as the buttons across the top or one as wide as them down the right side, whichever
+        leaves the markers more room."""
         view = self.view
-        buttons = [b for b in view.control_buttons() if b.isVisibleTo(view)]
-        top = max((b.geometry().bottom() for b in buttons), default=0) + BELOW_BUTTONS_PX
+        block = view.controls_rect()
         fm = QtGui.QFontMetricsF(view.font())
         names = [t.label for t in value.tracks if t.has_position] if value is not None else []
-        right = EDGE_PX + (14 + max(fm.horizontalAdvance(n) for n in names) if len(names) > 1 else 0)
-        return EDGE_PX, max(EDGE_PX, top), right, BOTTOM_PX
+        named = EDGE_PX + (14 + max(fm.horizontalAdvance(n) for n in names) if len(names) > 1 else 0)
+        if block.isEmpty():
+            return EDGE_PX, EDGE_PX, named, BOTTOM_PX
+        w, h = view.width(), view.height()
+        top = max(EDGE_PX, block.bottom() + BELOW_BUTTONS_PX)
+        right = max(named, w - block.left() + EDGE_PX)
+        below = (w - EDGE_PX - named) * (h - top - BOTTOM_PX)
+        beside = (w - EDGE_PX - right) * (h - EDGE_PX - BOTTOM_PX)
+        return (EDGE_PX, top, named, BOTTOM_PX) if below >= beside else (EDGE_PX, EDGE_PX, right, BOTTOM_PX)
 
     # -- state ------------------------------------------------------------------------------------
     def sync(self, value: Any) -> bool:

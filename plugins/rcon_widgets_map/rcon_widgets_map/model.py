@@ -40,6 +40,12 @@ PALETTE = ("#0050d0", "#d05a00", "#008a2e", "#c0007a", "#6a2fd0", "#8a6d00", "#0
 #: a course heading needs the robot to have moved this far over the last COURSE_WINDOW points
 COURSE_MIN_M = 2.0
 COURSE_WINDOW = 60
+#: a fix this far from the one before, faster than JUMP_SPEED_MS, is a jump (a robot restarted at its
+#: start, a GPS re-acquired elsewhere): the trail breaks there instead of drawing a line across
+JUMP_MIN_M = 50.0
+JUMP_SPEED_MS = 60.0
+#: no fix for this long (when the widget has no stale_after of its own) breaks the trail too
+TRAIL_GAP_S = 10.0
 
 
 @attrs.frozen
@@ -50,6 +56,9 @@ class Track:
     label: str
     colour: str
     points: tuple[tuple[float, float], ...] = ()
+    #: indices into ``points`` where the trail starts again (after a jump, a gap, a lost link): the trail
+    #: is drawn as :meth:`segments`, never as one line through these breaks
+    breaks: tuple[int, ...] = ()
     lat: float | None = None
     lon: float | None = None
     status: int | None = None
@@ -63,6 +72,11 @@ class Track:
     @property
     def has_position(self) -> bool:
         return self.lat is not None and self.lon is not None
+
+    def segments(self) -> list[tuple[tuple[float, float], ...]]:
+        """The trail's unbroken pieces, oldest first."""
+        cuts = [0, *self.breaks, len(self.points)]
+        return [self.points[a:b] for a, b in zip(cuts, cuts[1:], strict=False) if b > a]
 
 
 @attrs.frozen
@@ -96,6 +110,10 @@ class _TrackState:
     def __init__(self, key: str, label: str, colour: str, trail_length: int) -> None:
         self.key, self.label, self.colour = key, label, colour
         self.points: collections.deque[tuple[float, float]] = collections.deque(maxlen=max(1, trail_length))
+        #: beside each point: whether the trail starts again there
+        self.starts: collections.deque[bool] = collections.deque(maxlen=max(1, trail_length))
+        self.break_next = False  #: the next point starts a new piece (the link was lost)
+        self.good_stamp: float | None = None  #: when ``last_good`` came
         self.keep_trail = trail_length > 0
         self.fix: Fix | None = None
         self.last_good: tuple[float, float] | None = None
@@ -116,6 +134,7 @@ class MapModel(WidgetModel):
         self._extra_subs: list[Any] = []
         self._goal_pub: Any = None
         self._robot_ports: list[tuple[str, Any]] = []  # (track key, port) of the other robots
+        self._own_robot: str | None = None  # the robot id of this widget's own port (on_fleet)
         self._goal: Goal | None = None
         self._goals_sent = 0
         self.navigator = Navigator(settings, port, self.types, self._dispatch, self._replace_value, self.set_error)
@@ -142,6 +161,7 @@ class MapModel(WidgetModel):
         trail = self.settings.trail_length
         for robot in robots:
             if robot.port is self.port:
+                self._own_robot = robot.id
                 main = self._tracks.get("")
                 if main is not None:
                     main.label, main.colour = robot.name, robot.colour
@@ -236,16 +256,50 @@ class MapModel(WidgetModel):
             self._record_locked(self._tracks[key], fix)
 
     def _record_locked(self, t: _TrackState, fix: Fix) -> None:
-        t.fix, t.stamp = fix, self._clock()
+        now = self._clock()
+        t.fix, t.stamp = fix, now
         t.count += 1
         if fix.has_fix:
             assert fix.lat is not None and fix.lon is not None
-            t.last_good = (fix.lat, fix.lon)
+            broken = t.break_next or self._jumped(t, fix.lat, fix.lon, now)
+            t.last_good, t.good_stamp = (fix.lat, fix.lon), now
             if t.keep_trail:
                 spacing = self.settings.trail_spacing_m
                 last = t.points[-1] if t.points else None
-                if last is None or mercator.haversine_m(last[0], last[1], fix.lat, fix.lon) >= spacing:
+                if broken or last is None or mercator.haversine_m(last[0], last[1], fix.lat, fix.lon) >= spacing:
                     t.points.append((fix.lat, fix.lon))
+                    t.starts.append(broken)
+                    t.break_next = False
+
+    def _jumped(self, t: _TrackState, lat: float, lon: float, now: float) -> bool:
+        """Whether a fix at ``lat``/``lon`` cannot follow the last one by moving: too far too fast (a robot
+        restarted at its start), or after too long a silence."""
+        if t.last_good is None or t.good_stamp is None:
+            return False
+        dt = max(0.0, now - t.good_stamp)
+        gap = self.stale_after_s if math.isfinite(self.stale_after_s) else TRAIL_GAP_S
+        if dt > gap:
+            return True
+        metres = mercator.haversine_m(t.last_good[0], t.last_good[1], lat, lon)
+        return metres > JUMP_MIN_M and metres > JUMP_SPEED_MS * dt
+
+    # -- link state (bridge thread) ------------------------------------------------------------------
+    def set_link(self, up: bool) -> None:
+        """The own robot's link: lost, its trails (the bound topic's, the extra topics') break there."""
+        if not up:
+            self._break_trails(lambda key: not key.startswith("@"))
+        super().set_link(up)
+
+    def on_robot_link(self, robot_id: str, up: bool) -> None:
+        """Another robot's link (``every_robot``): lost, its trail breaks there."""
+        if not up and robot_id != self._own_robot:
+            self._break_trails(lambda key: key == f"@{robot_id}")
+
+    def _break_trails(self, which: Any) -> None:
+        with self._build_lock:
+            for key, t in self._tracks.items():
+                if which(key) and t.points:
+                    t.break_next = True
 
     def _replace_value(self) -> None:
         """A new snapshot without counting it as a value of the bound topic (its age stays the main one's)."""
@@ -256,8 +310,9 @@ class MapModel(WidgetModel):
         if not t.points or t.last_good is None:
             return None
         lat, lon = t.last_good
+        starts = list(t.starts)
         for i, (plat, plon) in enumerate(reversed(t.points)):
-            if i >= COURSE_WINDOW:
+            if i >= COURSE_WINDOW or (i > 0 and starts[-i]):  # never across a break
                 break
             if mercator.haversine_m(plat, plon, lat, lon) >= COURSE_MIN_M:
                 return mercator.bearing_deg(plat, plon, lat, lon)
@@ -278,6 +333,7 @@ class MapModel(WidgetModel):
                 fix = t.fix
                 tracks.append(Track(
                     key=t.key, label=t.label, colour=t.colour, points=tuple(t.points),
+                    breaks=tuple(i for i, start in enumerate(t.starts) if start and i > 0),
                     lat=t.last_good[0] if t.last_good else None, lon=t.last_good[1] if t.last_good else None,
                     status=fix.status if fix else None, no_fix=bool(fix and not fix.has_fix),
                     accuracy_m=fix.accuracy_m if fix and fix.has_fix else None,
@@ -320,15 +376,13 @@ class MapModel(WidgetModel):
         publishing = self.binding.role is Role.PUBLISH
         type_name = self.binding.type if publishing else NAVSATFIX
         path = self.binding.field_path if publishing else ""
-        base: dict[str, Any] = {}
-        if self.types is not None:
-            base = self.types.default(type_name)
-        ros2 = bool(getattr(self.types, "ros2", False))
+        base: dict[str, Any] = self.types.default(type_name)
+        ros2 = self.types.ros2
         geo = get_path(base, path) if path else base
         geo = dict(geo) if isinstance(geo, dict) else {}
         geo.update(latitude=float(lat), longitude=float(lon))
         if names.normalize(type_name) == names.normalize(NAVSATFIX):
-            header = {"stamp": rcon_time.now(ros2), "frame_id": "map"}
+            header: dict[str, Any] = {"stamp": rcon_time.now(ros2), "frame_id": "map"}
             if not ros2:
                 header = {"seq": 0, **header}
             geo.update(
@@ -379,5 +433,6 @@ class MapModel(WidgetModel):
             with self._build_lock:
                 for t in self._tracks.values():
                     t.points.clear()
+                    t.starts.clear()
             self._replace_value()
         self._dispatch(go)

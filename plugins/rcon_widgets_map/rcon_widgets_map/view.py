@@ -31,6 +31,9 @@ Qt = QtCore.Qt
 TAP_SLOP_PX = 8
 BACKGROUND = QtGui.QColor("#dfe6ea")
 GRID_COLOUR = QtGui.QColor(90, 110, 125, 110)
+#: the same on a dark palette (the app's night theme): a dim chart that does not dazzle
+NIGHT_BACKGROUND = QtGui.QColor("#1b242b")
+NIGHT_GRID_COLOUR = QtGui.QColor(150, 170, 185, 90)
 STALE_COLOUR = QtGui.QColor("#7a7a7a")
 NO_FIX_COLOUR = QtGui.QColor("#c00000")
 
@@ -51,8 +54,8 @@ class _Bubble(QtWidgets.QFrame):
         self.setObjectName("mapGoalBubble")
         self.setAutoFillBackground(True)
         self.setFrameShape(QtWidgets.QFrame.Shape.Box)
-        self.setStyleSheet(
-            "#mapGoalBubble { background: #ffffff; border: 3px solid #000000; border-radius: 8px; }"
+        self.setStyleSheet(  # the palette's colours: the app's theme, light or dark
+            "#mapGoalBubble { background: palette(base); border: 3px solid palette(window-text); border-radius: 8px; }"
         )
         layout = QtWidgets.QVBoxLayout(self)
         layout.setContentsMargins(10, 8, 10, 8)
@@ -87,6 +90,7 @@ class MapView(QtWidgets.QWidget):
         self.setAttribute(Qt.WidgetAttribute.WA_OpaquePaintEvent)
         self.setAttribute(Qt.WidgetAttribute.WA_AcceptTouchEvents)
         self.grabGesture(Qt.GestureType.PinchGesture)
+        self.setProperty("accessibleRole", "Canvas")  # a chart to pan, zoom and tap (the app names it)
         self.viewport = Viewport(zoom=self.settings.zoom, width=max(1, self.width()), height=max(1, self.height()))
         self.value: MapValue | None = None
         self.state: Any = None
@@ -100,22 +104,27 @@ class MapView(QtWidgets.QWidget):
 
         self.follow_button = QtWidgets.QToolButton(self)
         self.follow_button.setObjectName("mapFollow")
-        self.follow_button.setText("Follow")
         self.follow_button.setCheckable(True)
         self.follow_button.setChecked(bool(self.settings.follow))
-        self.follow_button.setToolTip("Keep the robot in the middle (dragging the map turns this off)")
+        self.follow_button.setToolTip("Follow: keep the robot in the middle (dragging the map turns this off)")
+        self.follow_button.setAccessibleName("Follow the robot")
         self.follow_button.toggled.connect(self._follow_toggled)
         self.zoom_in = QtWidgets.QToolButton(self)
         self.zoom_in.setObjectName("mapZoomIn")
         self.zoom_in.setText("+")
+        self.zoom_in.setToolTip("Zoom in")
+        self.zoom_in.setAccessibleName("Zoom in")
         self.zoom_in.clicked.connect(lambda: self.zoom_by(1.0))
         self.zoom_out = QtWidgets.QToolButton(self)
         self.zoom_out.setObjectName("mapZoomOut")
         self.zoom_out.setText("\u2212")
+        self.zoom_out.setToolTip("Zoom out")
+        self.zoom_out.setAccessibleName("Zoom out")
         self.zoom_out.clicked.connect(lambda: self.zoom_by(-1.0))
         self.bubble = _Bubble(self)
         self.nav = NavigateControls(self)
         self.fit = FitControls(self)
+        self._paint_icons()
         if self.fit.fitting:  # every marker in view, not one robot in the middle
             self.follow_button.setChecked(False)
         self.bubble.send.clicked.connect(lambda: self.nav.confirm() if self.nav.pending else self.confirm_goal())
@@ -236,24 +245,85 @@ class MapView(QtWidgets.QWidget):
         super().resizeEvent(event)
 
     def control_buttons(self) -> list[QtWidgets.QToolButton]:
-        """The buttons at the top right, right to left."""
-        return [self.zoom_out, self.zoom_in, self.follow_button, self.fit.button]
+        """The buttons in the top right corner: zoom in and out (right column), follow and fit (left)."""
+        return [self.zoom_in, self.zoom_out, self.follow_button, self.fit.button]
+
+    def button_side(self) -> int:
+        """The buttons' side, one symbol each: the app's touch size (RCON sets it on the application), else
+        what the style asks for; taller when the text is larger."""
+        app = QtWidgets.QApplication.instance()
+        touch = app.property("rcon_touch_px") if app is not None else None
+        text = self.zoom_in.fontMetrics().height() + 16
+        if touch:
+            return max(int(touch), text)
+        return max(max(b.minimumSizeHint().height(), 32) for b in self.control_buttons())
 
     def place_controls(self) -> None:
-        """Right to left along the top; on a narrow map the ones that do not fit go on a row below."""
-        m = 8
-        x, y, row_h = self.width() - m, m, 0
-        for b in self.control_buttons():
-            if not b.isVisibleTo(self):
-                continue
-            b.adjustSize()
-            if x - b.width() < m and x < self.width() - m:
-                x, y, row_h = self.width() - m, y + row_h + 6, 0
-            x -= b.width()
-            b.move(x, y)
-            row_h = max(row_h, b.height())
-            x -= 6
+        """A compact 2x2 block in the top right corner: + and − on the right, Follow and Fit left of them;
+        the map keeps the rest (the markers are fitted beside or below the block)."""
+        m, gap = 8, 6
+        side = self.button_side()
+        right_col, left_col = [self.zoom_in, self.zoom_out], [self.follow_button, self.fit.button]
+        for col, buttons in enumerate((right_col, left_col)):
+            x = self.width() - m - side - col * (side + gap)
+            row = 0
+            for b in buttons:
+                b.setFixedSize(side, side)
+                if not b.isVisibleTo(self):
+                    continue
+                b.move(x, m + row * (side + gap))
+                row += 1
         self.nav.place()
+
+    def controls_rect(self) -> QtCore.QRect:
+        """The corner the buttons take (empty when none shows)."""
+        out = QtCore.QRect()
+        for b in self.control_buttons():
+            if b.isVisibleTo(self):
+                out = out.united(b.geometry())
+        return out
+
+    def _paint_icons(self) -> None:
+        """Follow (a crosshair) and Fit (four corners) drawn in the button's text colour (white when on), so
+        they follow the theme; + and − are text."""
+        side = max(16, round(self.button_side() * 0.55))
+        for button, draw in ((self.follow_button, _draw_follow), (self.fit.button, _draw_fit)):
+            icon = QtGui.QIcon()
+            for state, colour in ((QtGui.QIcon.State.Off, button.palette().color(QtGui.QPalette.ColorRole.ButtonText)),
+                                  (QtGui.QIcon.State.On, QtGui.QColor("#ffffff"))):
+                pm = QtGui.QPixmap(side * 2, side * 2)
+                pm.setDevicePixelRatio(2.0)
+                pm.fill(Qt.GlobalColor.transparent)
+                p = QtGui.QPainter(pm)
+                p.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing)
+                p.setPen(QtGui.QPen(colour, max(2.0, side / 9), Qt.PenStyle.SolidLine, Qt.PenCapStyle.RoundCap))
+                draw(p, float(side))
+                p.end()
+                icon.addPixmap(pm, QtGui.QIcon.Mode.Normal, state)
+            button.setIcon(icon)
+            button.setIconSize(QtCore.QSize(side, side))
+            button.setText("")
+
+    def night(self) -> bool:
+        """Whether the map sits on a dark palette (the app's night theme): a dim chart, light ink."""
+        return self.palette().color(QtGui.QPalette.ColorRole.Window).lightness() < 128
+
+    def ink(self) -> QtGui.QColor:
+        """The colour of the map's own writing (coordinates, the scale bar): the palette's text."""
+        return self.palette().color(QtGui.QPalette.ColorRole.WindowText)
+
+    def halo(self) -> QtGui.QColor:
+        """The halo around writing on the map: the palette's background, nearly opaque."""
+        colour = QtGui.QColor(self.palette().color(QtGui.QPalette.ColorRole.Window))
+        colour.setAlpha(230)
+        return colour
+
+    def changeEvent(self, event: QtCore.QEvent) -> None:  # noqa: N802 - Qt API
+        super().changeEvent(event)
+        if event.type() in (QtCore.QEvent.Type.StyleChange, QtCore.QEvent.Type.PaletteChange,
+                            QtCore.QEvent.Type.FontChange):
+            self._paint_icons()  # another theme or text size
+            self.place_controls()
 
     # -- goals ----------------------------------------------------------------------------------------
     def tap(self, pos: QtCore.QPointF) -> None:
@@ -366,7 +436,7 @@ class MapView(QtWidgets.QWidget):
         vp.width, vp.height = max(1, self.width()), max(1, self.height())
         p = QtGui.QPainter(self)
         p.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing)
-        p.fillRect(self.rect(), BACKGROUND)
+        p.fillRect(self.rect(), NIGHT_BACKGROUND if self.night() else BACKGROUND)
         self.tiles_drawn = self._paint_tiles(p) if self.loader is not None else 0
         if self.tiles_drawn == 0:
             self._paint_grid(p)
@@ -413,10 +483,11 @@ class MapView(QtWidgets.QWidget):
         if east < west:  # across the antimeridian: keep it simple, draw latitude lines only
             east = west
         step = scale.grid_step(max(north - south, east - west, 1e-9), target_lines=4)
-        pen = QtGui.QPen(GRID_COLOUR, 1)
+        pen = QtGui.QPen(NIGHT_GRID_COLOUR if self.night() else GRID_COLOUR, 1)
         p.setPen(pen)
-        font = p.font()
-        font.setPointSizeF(max(7.0, font.pointSizeF() * 0.8))
+        font = p.font()  # the grid's labels: 0.8 times the widget's font (it follows the app's text size)
+        px = font.pixelSize() if font.pixelSize() > 0 else QtGui.QFontInfo(font).pixelSize()
+        font.setPixelSize(max(10, round(px * 0.8)))
         p.setFont(font)
         try:
             lats = scale.grid_lines(south, north, step)
@@ -447,8 +518,14 @@ class MapView(QtWidgets.QWidget):
         pen.setJoinStyle(Qt.PenJoinStyle.RoundJoin)
         p.setPen(pen)
         p.setBrush(Qt.BrushStyle.NoBrush)
+        for line in self.trail_lines(track):
+            p.drawPolyline(line)
+
+    def trail_lines(self, track: Track) -> list[QtGui.QPolygonF]:
+        """The trail on screen: one line per unbroken piece (never a line across a jump or a lost link)."""
         to_screen = self.viewport.to_screen
-        p.drawPolyline(QtGui.QPolygonF([QtCore.QPointF(*to_screen(lat, lon)) for lat, lon in track.points]))
+        return [QtGui.QPolygonF([QtCore.QPointF(*to_screen(lat, lon)) for lat, lon in piece])
+                for piece in track.segments() if len(piece) >= 2]
 
     def _paint_marker(self, p: QtGui.QPainter, track: Track, labelled: bool) -> None:
         if not track.has_position:
@@ -477,11 +554,11 @@ class MapView(QtWidgets.QWidget):
             p.drawEllipse(QtCore.QPointF(x, y), 8, 8)
         if labelled or track.no_fix:
             text = track.label + ("  NO FIX" if track.no_fix else "")
-            _label(p, QtCore.QPointF(x + 14, y + 4), text, colour)
+            _label(p, QtCore.QPointF(x + 14, y + 4), text, colour, self.halo())
 
     def _paint_goal(self, p: QtGui.QPainter, lat: float, lon: float, sent: bool) -> None:
         x, y = self.viewport.to_screen(lat, lon)
-        colour = QtGui.QColor("#000000") if sent else QtGui.QColor("#c05000")
+        colour = self.ink() if sent else QtGui.QColor("#c05000")
         p.setPen(QtGui.QPen(colour, 3))
         p.setBrush(Qt.BrushStyle.NoBrush)
         p.drawEllipse(QtCore.QPointF(x, y), 10, 10)
@@ -514,9 +591,15 @@ class MapView(QtWidgets.QWidget):
         p.setFont(font)
         chip = self.status_text()
         if chip is not None:
-            _chip(p, QtCore.QPointF(8, 8), chip[0], chip[1])
+            fm_bold = QtGui.QFontMetricsF(font)
+            at = QtCore.QPointF(8, 8)
+            room = QtCore.QRectF(at.x(), at.y(), fm_bold.horizontalAdvance(chip[0]) + 20, fm_bold.height() + 10)
+            block = QtCore.QRectF(self.controls_rect())
+            if room.intersects(block):  # a narrow map: the chip goes below the buttons' corner
+                at = QtCore.QPointF(8, block.bottom() + 8)
+            _chip(p, at, chip[0], chip[1])
         main = self._follow_target()
-        y = self.height() - 8
+        y = float(self.height() - 8)
         lines = []
         if main is not None:
             lines.append(f"{main.lat:.6f}, {main.lon:.6f}"
@@ -531,7 +614,7 @@ class MapView(QtWidgets.QWidget):
         fm = QtGui.QFontMetricsF(font)
         for line in reversed(lines):
             _label(p, QtCore.QPointF(self.width() - fm.horizontalAdvance(line) - 12, y - 4), line,
-                   QtGui.QColor("#000000"))
+                   self.ink(), self.halo())
             y -= fm.height() + 6
 
     def _paint_scale(self, p: QtGui.QPainter) -> None:
@@ -540,13 +623,31 @@ class MapView(QtWidgets.QWidget):
         except ValueError:
             return
         x0, y0 = 10.0, self.height() - 12.0
-        p.setPen(QtGui.QPen(QtGui.QColor("#ffffff"), 6))
+        p.setPen(QtGui.QPen(self.halo(), 6))
         p.drawLine(QtCore.QPointF(x0, y0), QtCore.QPointF(x0 + px, y0))
-        p.setPen(QtGui.QPen(QtGui.QColor("#000000"), 3))
+        p.setPen(QtGui.QPen(self.ink(), 3))
         p.drawLine(QtCore.QPointF(x0, y0), QtCore.QPointF(x0 + px, y0))
         p.drawLine(QtCore.QPointF(x0, y0 - 6), QtCore.QPointF(x0, y0))
         p.drawLine(QtCore.QPointF(x0 + px, y0 - 6), QtCore.QPointF(x0 + px, y0))
-        _label(p, QtCore.QPointF(x0, y0 - 10), text, QtGui.QColor("#000000"))
+        _label(p, QtCore.QPointF(x0, y0 - 10), text, self.ink(), self.halo())
+
+
+def _draw_follow(p: QtGui.QPainter, side: float) -> None:
+    """A crosshair: "keep the robot in the middle"."""
+    c, r = side / 2, side * 0.3
+    p.drawEllipse(QtCore.QPointF(c, c), r, r)
+    for a, b in (((c, 0.5), (c, c - r * 0.5)), ((c, side - 0.5), (c, c + r * 0.5)),
+                 ((0.5, c), (c - r * 0.5, c)), ((side - 0.5, c), (c + r * 0.5, c))):
+        p.drawLine(QtCore.QPointF(*a), QtCore.QPointF(*b))
+
+
+def _draw_fit(p: QtGui.QPainter, side: float) -> None:
+    """Four corners: "every marker in view"."""
+    e, arm = 1.5, side * 0.32
+    for x, dx in ((e, 1), (side - e, -1)):
+        for y, dy in ((e, 1), (side - e, -1)):
+            p.drawLine(QtCore.QPointF(x, y), QtCore.QPointF(x + dx * arm, y))
+            p.drawLine(QtCore.QPointF(x, y), QtCore.QPointF(x, y + dy * arm))
 
 
 def _draw_clipped(p: QtGui.QPainter, img: QtGui.QImage, target: QtCore.QRectF, src: QtCore.QRectF,
@@ -565,12 +666,13 @@ def _draw_clipped(p: QtGui.QPainter, img: QtGui.QImage, target: QtCore.QRectF, s
     p.drawImage(visible, img, cut)
 
 
-def _label(p: QtGui.QPainter, at: QtCore.QPointF, text: str, colour: QtGui.QColor) -> None:
-    """Text with a white halo so it reads on any tile."""
+def _label(p: QtGui.QPainter, at: QtCore.QPointF, text: str, colour: QtGui.QColor,
+           halo: QtGui.QColor | None = None) -> None:
+    """Text with a halo (white, or the night's dark) so it reads on any tile."""
     path = QtGui.QPainterPath()
     path.addText(at, p.font(), text)
-    p.setPen(QtGui.QPen(QtGui.QColor(255, 255, 255, 230), 4, Qt.PenStyle.SolidLine, Qt.PenCapStyle.RoundCap,
-                        Qt.PenJoinStyle.RoundJoin))
+    p.setPen(QtGui.QPen(halo if halo is not None else QtGui.QColor(255, 255, 255, 230), 4, Qt.PenStyle.SolidLine,
+                        Qt.PenCapStyle.RoundCap, Qt.PenJoinStyle.RoundJoin))
     p.setBrush(Qt.BrushStyle.NoBrush)
     p.drawPath(path)
     p.setPen(Qt.PenStyle.NoPen)

@@ -57,9 +57,14 @@ def two_fixes(qtbot, sim_thread, threaded_client):
 
 
 def in_view(view) -> list[bool]:
-    """For each marker with a position: whether it lies on the map, clear of the buttons above it."""
-    top = max(b.geometry().bottom() for b in view.control_buttons() if b.isVisible())
-    return [view.viewport.shows(t.lat, t.lon, inset=(0, top, 0, 0)) for t in view.value.tracks if t.has_position]
+    """For each marker with a position: whether it lies on the map, clear of the buttons' corner."""
+    block = view.controls_rect().adjusted(-10, -10, 10, 10)
+    out = []
+    for t in view.value.tracks:
+        if t.has_position:
+            x, y = view.viewport.to_screen(t.lat, t.lon)
+            out.append(view.viewport.shows(t.lat, t.lon) and not block.contains(QtCore.QPoint(round(x), round(y))))
+    return out
 
 
 def test_both_markers_stay_in_view_until_the_map_is_moved_by_hand(qtbot, two_fixes):
@@ -122,12 +127,12 @@ def test_zooming_or_following_by_hand_stops_fitting(qtbot, two_fixes, by_hand):
     assert view.fit.fitting and not view.following and in_view(view) == [True, True]
 
 
-def test_a_narrow_map_puts_its_buttons_on_two_rows_and_the_markers_below_them(qtbot, two_fixes):
+def test_the_buttons_sit_in_a_small_corner_block_and_the_markers_clear_of_it(qtbot, two_fixes):
     model, _publish, wait_other = two_fixes
     wait_other(0.0, 400.0)  # straight north: the fit is as tall as it can be
     view = MapView(model)
     qtbot.addWidget(view)
-    view.setStyleSheet("QToolButton { min-width: 64px; min-height: 48px; }")  # finger-sized, as the app's theme
+    view.setStyleSheet("QToolButton { min-width: 48px; min-height: 48px; }")  # finger-sized, as the app's theme
     view.resize(224, 330)
     view.show()
     qtbot.waitExposed(view)
@@ -137,9 +142,14 @@ def test_a_narrow_map_puts_its_buttons_on_two_rows_and_the_markers_below_them(qt
     rect = view.rect()
     for b in buttons:
         assert rect.contains(b.geometry()), (b.objectName(), b.geometry())
+        assert b.width() == b.height() >= 48  # square, a finger's size
+        assert b.accessibleName() and b.toolTip()
     for a in buttons:  # none over another
         assert not any(a.geometry().intersects(b.geometry()) for b in buttons if b is not a), a.objectName()
-    assert len({b.y() for b in buttons}) == 2
+    assert len({b.y() for b in buttons}) == 2 and len({b.x() for b in buttons}) == 2  # two by two
+    block = view.controls_rect()
+    assert block.right() >= view.width() - 10 and block.top() <= 10  # in the top right corner
+    assert block.width() * block.height() < 0.25 * view.width() * view.height()
     assert in_view(view) == [True, True]
 
 

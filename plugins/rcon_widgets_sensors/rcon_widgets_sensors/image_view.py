@@ -26,6 +26,7 @@ from typing import Any
 from qtpy import QtCore, QtGui, QtWidgets
 
 from .image import Frame
+from .rates import human_bits, human_rate
 from .viewport import Viewport, device_box, unscaled_origin
 
 DOUBLE_TAP_S = 0.35
@@ -63,12 +64,15 @@ class ImageView(QtWidgets.QWidget):
         self.drawn_unscaled = False
         self.setAttribute(QtCore.Qt.WidgetAttribute.WA_AcceptTouchEvents, True)
         self.setAttribute(QtCore.Qt.WidgetAttribute.WA_OpaquePaintEvent, True)
+        self.setProperty("accessibleRole", "Canvas")  # a picture to zoom and pan (the app names it)
         self.setMinimumSize(80, 60)
         self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Expanding, QtWidgets.QSizePolicy.Policy.Expanding)
         #: where the overlay was last painted (the stale ticker repaints only this, grown to the new text)
         self.overlay_rect = QtCore.QRect()
         #: the overlay's text as last painted (tests, accessibility)
         self.overlay_text: list[str] = []
+        #: the sentence painted in the middle while there is no picture ("waiting for a keyframe…"), else ""
+        self.center_text = ""
         # the overlay's age is computed when painting, and a view repaints on new frames: with the link
         # down nothing would repaint and the age would freeze. A cheap ticker ages a stale overlay.
         self._ticker = QtCore.QTimer(self)
@@ -168,14 +172,19 @@ class ImageView(QtWidgets.QWidget):
         p.setFont(self._overlay_font())
         if frame is None:
             text = "waiting for images…"
+            notice = getattr(self.model, "notice", None)
             if state is not None and state.error:
                 text = state.error
             elif state is not None and not state.running:
                 text = "not running"
+            elif notice:
+                text = notice + "…"
+            self.center_text = text
             p.setPen(QtGui.QColor(170, 180, 195))
             p.drawText(self.rect().adjusted(8, 8, -8, -8),
                        QtCore.Qt.AlignmentFlag.AlignCenter | QtCore.Qt.TextFlag.TextWordWrap, text)
             return
+        self.center_text = ""
         lines, bg = self._overlay_lines()
         self.overlay_text = lines
         if not lines:
@@ -212,9 +221,16 @@ class ImageView(QtWidgets.QWidget):
             age = time.time() - (frame.stamp or frame.received)
             lines.append((f"{fps:4.1f} fps" if fps > 0 else "– fps") + f" · age {_duration(age)}")
         if show:
-            lines.append(frame.info)
+            lines.append(frame.info + _rate_text(frame))
+            source = getattr(self.model, "transport_note", None)
+            if source:
+                lines.append(source)
             if not self.viewport.fitted:
                 lines.append(f"zoom ×{self.viewport.zoom:.1f} (double-tap to fit)")
+        notice = getattr(self.model, "notice", None)
+        if notice:  # always shown: the picture is held, not live
+            lines.append(f"⏸ picture held: {notice}")
+            bg = _STALE_BG
         if state is not None and state.error:
             lines.append("⚠ " + state.error)
         return lines, bg
@@ -305,6 +321,16 @@ class ImageView(QtWidgets.QWidget):
             self.viewport.zoom_at(1.25 ** steps, pos.x(), pos.y())
             self.sync_display_size()
             self.update()
+
+
+def _rate_text(frame: Frame) -> str:
+    """What the frame's stream costs the link, for the overlay: video as a bit rate and bytes per second,
+    images as bytes per second; nothing before the rate is known."""
+    if frame.byte_rate <= 0:
+        return ""
+    if frame.kind == "video":
+        return f" · {human_bits(frame.byte_rate)} ({human_rate(frame.byte_rate)})"
+    return f" · {human_rate(frame.byte_rate)}"
 
 
 def _duration(seconds: float) -> str:

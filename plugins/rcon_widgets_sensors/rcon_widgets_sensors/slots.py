@@ -3,6 +3,8 @@
 * :class:`LatestSlot`: a one-item mailbox where the newest item replaces an unread one (latest wins).
 * :class:`SlotWorker`: a daemon thread that takes items from a :class:`LatestSlot` and handles them, so
   heavy work (image decoding, JPEG encoding) never runs on the bridge loop or the GUI thread.
+* :class:`QueueWorker`: a daemon thread that takes every item, in order, from a bounded queue (video
+  packets: each one is needed to decode the next); a queue that overflows is emptied and the handler told.
 * :class:`LoopTicker`: a steady periodic call on the running asyncio loop (the bridge loop), used for
   publish rates; it never bursts to catch up.
 """
@@ -19,7 +21,7 @@ from rcon_core.priority import lower_this_thread
 
 log = logging.getLogger(__name__)
 
-__all__ = ["LatestSlot", "SlotWorker", "LoopTicker"]
+__all__ = ["LatestSlot", "SlotWorker", "QueueWorker", "LoopTicker"]
 
 #: a LoopTicker call later than this fraction of its period restarts the schedule from its own time
 LATE_FRACTION = 0.1
@@ -103,6 +105,81 @@ class SlotWorker:
     def close(self, timeout: float = 1.0) -> None:
         """Stop after the item being handled; waits up to ``timeout`` (never from the thread itself)."""
         self.slot.close()
+        if threading.current_thread() is not self._thread:
+            self._thread.join(timeout)
+
+    @property
+    def alive(self) -> bool:
+        return self._thread.is_alive()
+
+
+class QueueWorker:
+    """A daemon thread handing everything queued so far, in order, to ``handle(items, overflowed)``.
+
+    Unlike :class:`SlotWorker` nothing is replaced: a video stream needs every packet. ``max_items``
+    bounds the queue: an item that finds it full empties it (those items are lost, counted in
+    ``dropped``) and the next call of ``handle`` gets ``overflowed=True``, so a decoder that cannot keep up
+    starts again from a keyframe instead of falling further behind (no growing backlog). Exceptions from
+    ``handle`` go to ``on_error`` (the thread keeps running); the thread runs at a lower OS priority unless
+    ``background`` is False.
+    """
+
+    def __init__(self, name: str, handle: Callable[[list[Any], bool], None],
+                 on_error: Callable[[BaseException], None] | None = None, *, max_items: int = 120,
+                 background: bool = True) -> None:
+        self.max_items = max_items
+        self.background = background
+        self.dropped = 0
+        self.overflows = 0
+        self._items: list[Any] = []
+        self._overflowed = False
+        self._closed = False
+        self._cond = threading.Condition()
+        self._handle = handle
+        self._on_error = on_error
+        self._thread = threading.Thread(target=self._run, name=name, daemon=True)
+        self._thread.start()
+
+    def submit(self, item: Any) -> None:
+        with self._cond:
+            if len(self._items) >= self.max_items:
+                self.dropped += len(self._items)
+                self.overflows += 1
+                self._items = []
+                self._overflowed = True
+            self._items.append(item)
+            self._cond.notify()
+
+    @property
+    def queued(self) -> int:
+        """Items waiting now (not counting the batch being handled)."""
+        with self._cond:
+            return len(self._items)
+
+    def _run(self) -> None:
+        if self.background:
+            lower_this_thread()
+        while True:
+            with self._cond:
+                while not self._items and not self._closed:
+                    self._cond.wait()
+                if self._closed:
+                    return
+                items, self._items = self._items, []
+                overflowed, self._overflowed = self._overflowed, False
+            try:
+                self._handle(items, overflowed)
+            except Exception as exc:  # noqa: BLE001 - report, keep going with the next items
+                if self._on_error is not None:
+                    self._on_error(exc)
+                else:
+                    log.exception("worker %s failed", self._thread.name)
+
+    def close(self, timeout: float = 1.0) -> None:
+        """Stop after the batch being handled (what is still queued is dropped); waits up to ``timeout``."""
+        with self._cond:
+            self._closed = True
+            self._cond.notify_all()
         if threading.current_thread() is not self._thread:
             self._thread.join(timeout)
 

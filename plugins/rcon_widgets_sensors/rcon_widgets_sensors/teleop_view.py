@@ -51,6 +51,9 @@ class TeleopView(QtWidgets.QWidget):
         #: the axis labels as last painted: (vertical words, its field or "", horizontal words, its field or "")
         self.axis_labels: tuple[str, str, str, str] = ("", "", "", "")
         self.setAttribute(QtCore.Qt.WidgetAttribute.WA_AcceptTouchEvents, True)
+        # for assistive technology: an area to drag in (the app names it after the widget's title)
+        self.setProperty("accessibleRole", "Canvas")
+        self.setAccessibleDescription(f"drag to drive {getattr(model.binding, 'name', '')}; lift to stop")
         self.setFocusPolicy(QtCore.Qt.FocusPolicy.StrongFocus)
         self.setMinimumSize(120, 120)
         self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Expanding, QtWidgets.QSizePolicy.Policy.Expanding)
@@ -58,7 +61,8 @@ class TeleopView(QtWidgets.QWidget):
     # -- geometry -----------------------------------------------------------------------------------------
     def pad(self) -> tuple[QtCore.QPointF, float]:
         """Centre and radius of the pad (leaving room for the labels)."""
-        top, bottom = 18, 22  # room for the axis labels and the status line
+        line = QtGui.QFontMetrics(self._small_font()).height()
+        top, bottom = line + 2, line + 6  # room for the axis labels and the status line (the text size's)
         r = max(10.0, min(self.width() - 8, self.height() - top - bottom) / 2 - 4)
         return QtCore.QPointF(self.width() / 2, top + (self.height() - top - bottom) / 2), r
 
@@ -205,7 +209,8 @@ class TeleopView(QtWidgets.QWidget):
         font = self._small_font()
         p.setFont(font)
         p.setPen(self.palette().color(QtGui.QPalette.ColorRole.WindowText))
-        room = QtCore.QRectF(4, self.height() - 20, self.width() - 8, 18)
+        line = p.fontMetrics().height()
+        room = QtCore.QRectF(4, self.height() - line - 2, self.width() - 8, line)
         # a narrow pad (a fleet tile) shows the line's beginning and "…", never both ends cut off
         self.status_shown = p.fontMetrics().elidedText(self.status_text(), QtCore.Qt.TextElideMode.ElideRight,
                                                        int(room.width()))
@@ -213,9 +218,11 @@ class TeleopView(QtWidgets.QWidget):
         p.end()
 
     def _small_font(self) -> QtGui.QFont:
-        """The labels' and the status line's font: the widget's, 0.8 times (at least 7 pt)."""
+        """The labels' and the status line's font: the widget's, 0.8 times (at least 10 px), so it follows
+        the app's text size (the theme gives the font in pixels: its point size reads -1)."""
         font = QtGui.QFont(self.font())
-        font.setPointSizeF(max(7.0, font.pointSizeF() * 0.8))
+        px = font.pixelSize() if font.pixelSize() > 0 else QtGui.QFontInfo(font).pixelSize()
+        font.setPixelSize(max(10, round(px * 0.8)))
         return font
 
     def _cached_layers(self) -> tuple[QtGui.QPixmap, QtGui.QPixmap]:
@@ -272,8 +279,11 @@ class TeleopView(QtWidgets.QWidget):
         p.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing, True)
         big, small = self._small_font(), self._fine_font()
         fm_big, fm_small = QtGui.QFontMetricsF(big), QtGui.QFontMetricsF(small)
-        v_word = "↑ " + (axis_words(v_axis) or v_axis) if v_axis else ""
-        h_word = (axis_words(h_axis) or h_axis) + " →" if h_axis else ""
+        # each label in its half of the row (a large text size or a narrow pad): "…" rather than overlap
+        half = (self.width() - 8) / 2 - 4 if v_axis and h_axis else self.width() - 8
+        elide = QtCore.Qt.TextElideMode.ElideRight
+        v_word = fm_elide(big, "↑ " + (axis_words(v_axis) or v_axis), elide, half) if v_axis else ""
+        h_word = fm_elide(big, (axis_words(h_axis) or h_axis) + " →", elide, half) if h_axis else ""
         v_fine = v_axis if v_axis and axis_words(v_axis) else ""
         h_fine = h_axis if h_axis and axis_words(h_axis) else ""
         width = self.width() - 8
@@ -317,7 +327,7 @@ class TeleopView(QtWidgets.QWidget):
     @property
     def dry_run(self) -> bool:
         """Whether the app runs this pad offline on purpose (a preview): nothing it does reaches a robot."""
-        return bool(getattr(self.model, "dry_run", False))
+        return bool(self.model.dry_run)
 
     def status_text(self) -> str:
         """The line under the pad: what the pad is doing, or why it is not driving."""
@@ -348,3 +358,8 @@ class TeleopView(QtWidgets.QWidget):
             return f"touch to drive {v.held}"
         rate = getattr(self.model.settings, "rate_hz", 0)
         return f"idle · touch to drive ({rate:g} Hz)"
+
+
+def fm_elide(font: QtGui.QFont, text: str, mode: QtCore.Qt.TextElideMode, width: float) -> str:
+    """``text`` elided to ``width`` pixels in ``font``."""
+    return QtGui.QFontMetricsF(font).elidedText(text, mode, width)

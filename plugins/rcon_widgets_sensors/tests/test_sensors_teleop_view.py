@@ -170,9 +170,7 @@ def test_a_narrow_pad_shows_the_start_of_its_status_line_whole_never_both_ends_c
     qtbot.addWidget(view)
     view.show()
     full = view.status_text()
-    font = view.font()  # the pad's small text, as paintEvent sets it
-    font.setPointSizeF(max(7.0, font.pointSizeF() * 0.8))
-    fm = QtGui.QFontMetrics(font)
+    fm = QtGui.QFontMetrics(view._small_font())  # the pad's small text, as paintEvent sets it
     narrow = max(view.minimumWidth(), fm.horizontalAdvance(full) * 2 // 3)
     view.resize(narrow, 160)
     view.grab()  # paints it

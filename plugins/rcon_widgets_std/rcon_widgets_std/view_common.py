@@ -11,6 +11,22 @@ BAD = "#b00000"
 STALE = "#a85400"
 MUTED = "#5a5a5a"
 LEVEL_COLOURS = {"debug": "#6a6a6a", "info": "#000000", "warn": "#a85400", "error": "#b00000", "fatal": "#8a0070"}
+#: the same meanings on a dark palette (the app's night theme): light enough to read, not glaring
+ON_DARK = {OK: "#5fd47a", BAD: "#ff7b72", STALE: "#f0a040", MUTED: "#a0a6ad", "#6a6a6a": "#9aa0a6",
+           "#000000": "#e2e4e7", "#8a0070": "#ff6ad5", "#00558f": "#6cb6ff"}
+
+
+def tone(widget: QtWidgets.QWidget, colour: str) -> str:
+    """``colour`` as it reads on ``widget``'s palette: one of the colours above is swapped for its light
+    twin when the widget sits on a dark background (another colour, or "" for the palette's text, is kept)."""
+    if not colour:
+        return colour
+    behind: QtWidgets.QWidget | None = widget  # the first one with a background of its own
+    while behind is not None and behind.palette().color(QtGui.QPalette.ColorRole.Window).alpha() < 255:
+        behind = behind.parentWidget()
+    if (behind or widget).palette().color(QtGui.QPalette.ColorRole.Window).lightness() < 128:
+        return ON_DARK.get(colour.lower(), colour)
+    return colour
 
 
 def age_text(age: float | None) -> str:
@@ -48,7 +64,19 @@ class Caption(QtWidgets.QLabel):
         if colour == self._colour:
             return
         self._colour = colour
-        self.setStyleSheet(f"color: {colour}; background: transparent;")
+        self._apply_colour()
+
+    def _apply_colour(self) -> None:
+        sheet = f"color: {tone(self, self._colour or MUTED)}; background: transparent;"
+        if sheet != self.styleSheet():
+            self.setStyleSheet(sheet)
+
+    def changeEvent(self, event: QtCore.QEvent) -> None:  # noqa: N802 - Qt override
+        super().changeEvent(event)
+        if event.type() == QtCore.QEvent.Type.ParentChange or (
+                event.type() == QtCore.QEvent.Type.StyleChange and self._colour is not None
+                and not self.styleSheet().startswith(f"color: {tone(self, self._colour)};")):
+            self._apply_colour()  # placed, or another theme: the colour's twin for it
 
     def paintEvent(self, event: Any) -> None:  # noqa: N802 - Qt override
         text, rect = self.text(), self.contentsRect()
@@ -59,7 +87,7 @@ class Caption(QtWidgets.QLabel):
         font, shown = fit_line(self.font(), text, rect.width(), min_px=max(8, round(_pixel_size(self.font()) * 0.8)))
         painter = QtGui.QPainter(self)
         painter.setFont(font)
-        painter.setPen(QtGui.QColor(self._colour or MUTED))
+        painter.setPen(QtGui.QColor(tone(self, self._colour or MUTED)))
         align = self.alignment()
         if shown != text:  # elided: start at the left, so what is shown is the beginning
             align = (align & QtCore.Qt.AlignmentFlag.AlignVertical_Mask) | QtCore.Qt.AlignmentFlag.AlignLeft
@@ -223,7 +251,9 @@ class FitLabel(QtWidgets.QWidget):
         font, shown = self.fitted()
         painter = QtGui.QPainter(self)
         painter.setFont(font)
-        painter.setPen(self._pen if self._pen is not None else self.palette().color(QtGui.QPalette.ColorRole.WindowText))
+        pen = QtGui.QColor(tone(self, self._colour)) if self._pen is not None else \
+            self.palette().color(QtGui.QPalette.ColorRole.WindowText)
+        painter.setPen(pen)
         painter.drawText(self.contentsRect(), int(self._align), shown)
         painter.end()
 
@@ -244,12 +274,12 @@ def age_timer(view: QtWidgets.QWidget, fn: Any, ms: int = 500) -> QtCore.QTimer:
     return timer
 
 
-def style_text(label: QtWidgets.QLabel, px: int, colour: str = "", bold: bool = True) -> None:
+def style_text(label: QtWidgets.QWidget, px: int, colour: str = "", bold: bool = True) -> None:
     """Size and colour through a style sheet (the app's theme sets font sizes by style sheet too, which
     would override ``setFont``). Does nothing when the label already has exactly this style (setting a
     style sheet re-polishes the widget, even an identical one)."""
     weight = "bold" if bold else "normal"
-    tint = f" color: {colour};" if colour else ""
+    tint = f" color: {tone(label, colour)};" if colour else ""
     sheet = f"font-size: {px}px; font-weight: {weight};{tint} background: transparent;"
     if sheet != label.styleSheet():
         label.setStyleSheet(sheet)
