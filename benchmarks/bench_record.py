@@ -66,9 +66,15 @@ def pct(values: list[float], q: float) -> float:
 
 
 def proc_cpu_s(pid: int) -> float:
+    return sum(proc_cpu_split(pid))
+
+
+def proc_cpu_split(pid: int) -> tuple[float, float]:
+    """(user, system) CPU seconds of a process so far."""
     with open(f"/proc/{pid}/stat") as f:
         fields = f.read().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    tick = os.sysconf("SC_CLK_TCK")
+    return int(fields[11]) / tick, int(fields[12]) / tick
 
 
 def camera_frame(i: int, w: int = 640, h: int = 480, noise: float = 0.0) -> bytes:
@@ -242,21 +248,22 @@ def part_ingest(args: Any) -> dict[str, Any]:
             counter = subprocess.Popen([sys.executable, "-c", COUNTER.format(root=str(HERE.parent), url=url,
                                                                              seconds=seconds)],
                                        stdout=subprocess.PIPE, text=True)
-            cpu = 0.0
+            split = (0.0, 0.0)
             while counter.poll() is None:
-                cpu = proc_cpu_s(counter.pid)
+                split = proc_cpu_split(counter.pid)
                 time.sleep(0.2)
             n_plain, bytes_plain = (int(x) for x in counter.stdout.read().split())  # type: ignore[union-attr]
-            cpu_plain = cpu
+            cpu_plain, split_plain = sum(split), split
             # rcon record
             path = Path(tmp) / "ingest.mcap"
             rec = subprocess.Popen([sys.executable, "-m", "rcon_core", "record", "-q", "-o", str(path), "/cam",
                                     "--url", url, "--duration", str(seconds), "--compression", args.ingest_compression],
                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-            cpu = 0.0
+            split = (0.0, 0.0)
             while rec.poll() is None:
-                cpu = proc_cpu_s(rec.pid)
+                split = proc_cpu_split(rec.pid)
                 time.sleep(0.2)
+            cpu = sum(split)
             err = rec.stderr.read()  # type: ignore[union-attr]
             with open(path, "rb") as f:
                 st = make_reader(f).get_summary().statistics
@@ -266,9 +273,12 @@ def part_ingest(args: Any) -> dict[str, Any]:
             frame = 640 * 480 * 3
             out.update({
                 "plain_subscribe": {"messages": n_plain, "mb_s": round(bytes_plain / seconds / MB, 1),
-                                    "cpu_ms_per_message": round(cpu_plain * 1000 / max(1, n_plain), 3)},
+                                    "cpu_ms_per_message": round(cpu_plain * 1000 / max(1, n_plain), 3),
+                                    "user_sys_ms_per_message": [round(x * 1000 / max(1, n_plain), 3)
+                                                                for x in split_plain]},
                 "rcon_record": {"messages": n_rec, "mb_s_of_frames": round(n_rec * frame / max(span, 1e-9) / MB, 1),
                                 "cpu_ms_per_message": round(cpu * 1000 / max(1, n_rec), 3),
+                                "user_sys_ms_per_message": [round(x * 1000 / max(1, n_rec), 3) for x in split],
                                 "file_mb": round(path.stat().st_size / MB, 1), "said": err.strip()[-300:],
                                 "compression": args.ingest_compression},
             })

@@ -3,6 +3,7 @@
 Each widget runs on the client of the robot its binding names; one robot's link dropping reaches only
 that robot's widgets; a fleet-wide model gets a port on every robot. No Qt."""
 
+import copy
 import json
 
 import pytest
@@ -190,6 +191,40 @@ async def test_a_new_client_for_one_robot_restarts_only_its_widgets(sim_fleet, p
         await again.close()
         for client in clients:
             await client.close()
+
+
+async def test_a_widget_added_while_a_robot_is_offline_moves_to_its_new_client(sim_fleet, pm):
+    """A widget added (or reconfigured) after the canvas started is rebuilt on the robot's new client like
+    the ones the canvas started with; one removed meanwhile is not brought back."""
+    from rcon_core.app.link import OFFLINE
+
+    (alpha,) = await sim_fleet(1)
+    ws = Workspace.new("Fleet")
+    ws.robots = robots(1)
+    doc = Document(ws)
+    c = doc.current
+    rt = CanvasRuntime(pm, Fleet([(ws.robots[0], OFFLINE)]), types=TypeRegistry.standard())
+    client = BridgeClient(alpha.url, reconnect=False)
+    await client.connect()
+    try:
+        rt.start(copy.deepcopy(c))  # a snapshot, as the app's LiveCanvas gives it
+        added = doc.add_widget(c.id, "fl.label", Binding(*BATTERY))
+        gone = doc.add_widget(c.id, "fl.label", Binding(*BATTERY))
+        changed = doc.add_widget(c.id, "fl.label", Binding("/odom", "nav_msgs/Odometry", "subscribe"))
+        for w in (added, gone, changed):
+            rt.add_widget(copy.deepcopy(w))
+        rt.remove_widget(gone.id)
+        changed = copy.deepcopy(changed)
+        changed.binding = Binding(*BATTERY)
+        rt.restart_widget(changed)
+        rt.set_client("r-1", client)
+        assert gone.id not in rt.models
+        await until(lambda: rt.models[added.id].state.count > 0 and rt.models[changed.id].state.count > 0,
+                    what="the widgets added offline hearing the robot")
+        assert rt.models[changed.id].binding.name == "/battery"
+    finally:
+        rt.stop()
+        await client.close()
 
 
 async def test_a_view_only_robot_refuses_commands_the_others_take_them(sim_fleet, pm):

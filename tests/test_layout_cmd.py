@@ -102,6 +102,7 @@ def test_the_shipped_schema_describes_what_the_store_writes(capsys):
     assert rc == 0 and json.loads(out) == schema
     ws = workspace().workspace
     ws.robots[0].envelope = Envelope(1.0, 0.5)  # written only when set: set here so the schema meets it
+    ws.robots[0].recording = "run.mcap"  # likewise
     data = workspace_to_dict(ws)
     canvas = data["canvases"][0]
     widget = canvas["widgets"][0]

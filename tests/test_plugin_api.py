@@ -69,11 +69,12 @@ def test_the_count_sees_a_lookup(tmp_path):
 def test_every_capability_is_declared_in_the_api():
     declared = set()
     for proto in (api.Port, api.HostedModel, api.ModelHooks, api.WidgetView, api.WidgetSettings, api.CommandBounds,
-                  api.SizedSettings, api.StaleAfterSettings):
+                  api.BindingChecks, api.SizedSettings, api.StaleAfterSettings):
         declared |= {n for c in proto.__mro__ for n in vars(c)} | set(getattr(proto, "__annotations__", {}))
         declared |= {n for c in proto.__mro__ for n in getattr(c, "__annotations__", {})}
     assert CAPABILITIES <= declared, CAPABILITIES - declared
-    for hook in ("on_focus_lost", "on_fleet", "on_robot_link", "shown_message", "dry_run", "fleet_wide"):
+    for hook in ("on_focus_lost", "on_fleet", "on_robot_link", "on_commands_held", "shown_message", "dry_run",
+                 "fleet_wide"):
         assert hasattr(WidgetModel, hook), hook  # a documented no-op (or default) on the base class
 
 

@@ -176,7 +176,16 @@ def test_a_full_disk_stops_the_recording_says_so_and_leaves_it_readable(tmp_path
         limit["left"] -= len(data)
         return real_write(fd, data)
 
+    def full_disk_v(fd: int, pieces: Any) -> int:
+        size = sum(memoryview(p).nbytes for p in pieces)
+        if limit["left"] < size:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        limit["left"] -= size
+        return real_writev(fd, pieces)
+
+    real_writev = os.writev
     monkeypatch.setattr(writer_mod.os, "write", full_disk)
+    monkeypatch.setattr(writer_mod.os, "writev", full_disk_v)  # a chunk goes to the OS in one writev
     problems: list[str] = []
     path = tmp_path / "full.mcap"
     sink = McapSink(str(path), "ros1", chunk_size=50_000, compression="none", on_problem=problems.append)

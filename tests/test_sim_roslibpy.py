@@ -12,6 +12,7 @@ import pytest
 import roslibpy
 
 from rcon_core.sim import SimServer
+from rcon_core.sim.graph import BRIDGE_NODE
 
 TIMEOUT = 10.0
 
@@ -152,3 +153,34 @@ def test_published_messages_are_visible_to_the_server(ros: roslibpy.Ros, sim_thr
         time.sleep(0.05)
     assert sim_thread.wait_for_published_sync("/operator/note", lambda m: m["data"] == "checked") == {"data": "checked"}
     note.unadvertise()
+
+
+def test_state_topics_are_latched_for_a_client_that_comes_later(sim_thread: SimServer) -> None:
+    """The robot holds its speed limit and its lights' state latched (ROS 1 latched / ROS 2 transient
+    local): a client connecting after they were set gets them at once, though the client that set the
+    limit has gone (its own publisher with it)."""
+    setter = roslibpy.Ros(host="127.0.0.1", port=sim_thread.port)
+    setter.run(timeout=TIMEOUT)
+    try:
+        limit = roslibpy.Topic(setter, "/speed_limit", "std_msgs/Float64")
+        limit.advertise()
+        deadline = time.monotonic() + TIMEOUT
+        while sim_thread.robot.speed_limit != 0.7 and time.monotonic() < deadline:
+            limit.publish(roslibpy.Message({"data": 0.7}))
+            time.sleep(0.05)
+        lights = roslibpy.Service(setter, "/lights/set", "std_srvs/SetBool")
+        assert lights.call(roslibpy.ServiceRequest({"data": True}), timeout=TIMEOUT)["success"] is True
+    finally:
+        setter.close()
+    topic = sim_thread.topics["/speed_limit"]
+    deadline = time.monotonic() + TIMEOUT
+    while topic.publishers.get(BRIDGE_NODE) and time.monotonic() < deadline:
+        time.sleep(0.02)
+    assert not topic.publishers.get(BRIDGE_NODE)  # the setter's publisher is gone: what is latched is the robot's
+    later = roslibpy.Ros(host="127.0.0.1", port=sim_thread.port)
+    later.run(timeout=TIMEOUT)
+    try:
+        assert first_message(later, "/speed_limit", "std_msgs/Float64") == {"data": 0.7}
+        assert first_message(later, "/lights/state", "std_msgs/Bool") == {"data": True}
+    finally:
+        later.close()

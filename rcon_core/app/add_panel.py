@@ -536,7 +536,7 @@ class AddPanel(QtWidgets.QWidget):
         on a field the chosen type lacks)."""
         if self.draft is None:
             return ["nothing chosen"]
-        out = self.draft.problems()
+        out = self.draft.problems(self._types())  # the settings against the bound field's type too
         new_topic = self.new_topic.problem() if self._new_topic_on else None
         if new_topic:  # what the new topic lacks, instead of "no topic chosen"
             out = [new_topic, *[p for p in out if not p.startswith("no topic")]]

@@ -22,7 +22,7 @@ from rcon_core.app.envelope_dialog import ask_beyond, beyond_envelope
 from rcon_core.app.settings_form import SettingsForm, form_label, tune_form
 from rcon_core.canvas import Document
 from rcon_core.matcher import match
-from rcon_core.plugins import Binding, PluginManager, WidgetSpec
+from rcon_core.plugins import Binding, PluginManager, WidgetSpec, settings_binding_problems
 from rcon_core.plugins.children import ChildContext
 
 __all__ = ["WidgetConfigurer", "field_choices"]
@@ -124,6 +124,9 @@ class WidgetConfigurer:
             that could command more than the robot's safety envelope allows are saved only when the operator
             says so (the robot is held to its envelope either way)."""
             problems = form.problems() if form is not None else []
+            if form is not None:  # and the settings against the field they are bound to (an int8's range)
+                problems += [p for p in settings_binding_problems(form.value(), rebound_binding() or binding,
+                                                                  self.types) if p not in problems]
             if problems:
                 problem.setText("Not saved: " + "; ".join(problems))
                 return

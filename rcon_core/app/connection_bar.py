@@ -4,6 +4,8 @@
 The message says why a link is not up, in the words of :mod:`rcon_core.bridge.reasons` ("connection
 refused · retrying in 3 s", "certificate not trusted (self-signed? pass the CA file)"), within a frame of
 the failed attempt; a fatal failure (TLS, refused authentication) ends the link, a retried one counts down.
+While the robot's bridge holds the link's commands behind an unanswered service call
+(``rcon_core/bridge/held.py``) it says "⚠ commands held: the robot's bridge is still busy with /x".
 No text changes the window's width or the bar's height: the message takes a second line where the bar
 has the height, then is elided, the whole of it in its tooltip.  Enter connects to exactly what the URL
 field holds: the history is offered as the field's list, never completed inline.  A URL enters
@@ -73,6 +75,8 @@ class ConnectionBar(QtWidgets.QFrame):
         self._remember: str | None = None  # the URL to put in the history once connected
         self._remember_on_answer = False
         self._last_latency_text = ""
+        #: why the robot's bridge holds this link's commands (shown as the message), None when it does not
+        self.held: str | None = None
 
         self.url = QtWidgets.QComboBox()
         self.url.setObjectName("urlField")
@@ -330,6 +334,13 @@ class ConnectionBar(QtWidgets.QFrame):
                 self._show_state(ConnectionState.CLOSED)
             elif failure is None and self.state is not ConnectionState.CONNECTED:
                 self._say("")
+        ok, held = self.link.held_box.take()
+        if ok:  # commands held behind an unanswered call (rcon_core/bridge/held.py): said until it answers
+            if held:
+                self._say(f"⚠ {held}")
+            elif self.held:
+                self._say(self.link.protocol_text() if self.state is ConnectionState.CONNECTED else "")
+            self.held = held
         ok, answered = self.link.answered_box.take()
         if ok and answered is not None and answered == self._remember == self.link.url:
             self._keep_url()

@@ -8,7 +8,7 @@ import attrs
 
 from rcon_core.matcher import match
 from rcon_core.plugins import Binding, Role, WidgetCatalog, WidgetSpec
-from rcon_core.plugins.api import settings_problems, settings_size
+from rcon_core.plugins.api import settings_binding_problems, settings_problems, settings_size
 from rcon_core.plugins.paths import parse_path
 
 #: each role's button on the add panel: (what it does, in words; what it means)
@@ -93,9 +93,11 @@ class Draft:
             return Binding(role=self.role, robot=self.robot)
         return Binding(self.target.name, self.target.type, self.role, self.target.field_paths, self.robot)
 
-    def problems(self) -> list[str]:
-        """What keeps the draft from being placed: binding first, then the settings' own checks."""
-        return list(self.binding.problems()) + settings_problems(self.settings, self.catalog)
+    def problems(self, types: Any = None) -> list[str]:
+        """What keeps the draft from being placed: binding first, then the settings' own checks, then (given
+        ``types``) the settings against the bound field (``settings_binding_problems``)."""
+        out = list(self.binding.problems()) + settings_problems(self.settings, self.catalog)
+        return out + [p for p in settings_binding_problems(self.settings, self.binding, types) if p not in out]
 
     def settings_dict(self) -> dict[str, Any]:
         return self.spec.settings_to_dict(self.settings) if self.settings is not None else {}

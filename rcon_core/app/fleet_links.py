@@ -56,7 +56,7 @@ def robot_link_settings(robot: Robot, secret_for: Callable[[str], str | None] | 
 
 def _reach(robot: Robot) -> tuple[Any, ...]:
     """What decides how a robot is reached: a change of it means connecting again."""
-    return (robot.url, robot.ca_file, robot.client_cert, robot.client_key, robot.auth)
+    return (robot.url, robot.ca_file, robot.client_cert, robot.client_key, robot.auth, robot.recording)
 
 
 class FleetLinks:
@@ -164,7 +164,7 @@ class FleetLinks:
         """Connect every robot but the first (the connection bar's) that has a URL; a bad URL is logged
         and leaves the others connecting."""
         for r in self.robots[1:]:
-            if self.link(r.id).client is None:
+            if self.link(r.id).client is None and not r.recording:  # a recording: played first (robot_recordings)
                 try:
                     self.connect_robot(r.id)
                 except ValueError as exc:

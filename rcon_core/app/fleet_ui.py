@@ -29,6 +29,7 @@ from rcon_core.app.fleet_links import FleetLinks
 from rcon_core.app.link import EMPTY_CATALOG, OFFLINE, BadUrl, as_state
 from rcon_core.app.robot_chips import RobotChips, RobotPicker
 from rcon_core.app.robot_marks import apply_marks
+from rcon_core.app.robot_recordings import RobotRecordings
 from rcon_core.app.widget_host import RateMeter
 from rcon_core.bridge import ConnectionState
 from rcon_core.canvas import Change, ChangeKind, EditError
@@ -78,6 +79,8 @@ class FleetUi(QtCore.QObject):
         self.retarget_plan: Any = None
         #: robot id -> why its link is not up (words of rcon_core.bridge.reasons), for its chip
         self.why: dict[str, str] = {}
+        #: the players of the robots whose source is a recording file (robot_recordings.py)
+        self.recordings = RobotRecordings(window)
         self._remove = window.doc.add_listener(self._doc_changed)
         self.links.on_client_changed(self._client_changed)
         self._sync_robots()
@@ -163,6 +166,7 @@ class FleetUi(QtCore.QObject):
         #: what of the robots the running widgets depend on: id, name and view-only mark, in order
         self._seen: list[tuple[str, str, bool]] = [(r.id, r.label, bool(r.view_only)) for r in robots]
         new = self.links.sync(robots)
+        self.recordings.sync(robots)  # a robot gone, or given another file: its player stops
         self.apply_guards()  # a robot's own view-only flag may have changed, a new link needs its mark
         self.window.host.first_robot = robots[0].id
         controller = getattr(self.window, "controller", None)
@@ -190,7 +194,10 @@ class FleetUi(QtCore.QObject):
             if rid not in self.links.ids:  # gone again before this ran (an undo)
                 continue
             try:
-                if rid != first:
+                robot = self.links.robot(rid)
+                if robot.recording:
+                    self.recordings.play(robot, first=rid == first)
+                elif rid != first:
                     self.links.connect_robot(rid)
                 elif self.first_url():  # the first robot's URL was set: the connection bar goes there
                     self.window.connect_to(self.first_url())
@@ -198,8 +205,12 @@ class FleetUi(QtCore.QObject):
                 log.warning("robot %s: %s", rid, exc)
 
     def connect_saved(self) -> None:
-        """Connect every robot but the first to its URL (the window connects the first one)."""
+        """Connect every robot but the first to its URL (the window connects the first one); play each
+        robot whose source is a recording file."""
         self.links.connect_saved()
+        for i, robot in enumerate(self.robots):
+            if robot.recording:
+                self.recordings.play(robot, first=i == 0)
 
     def connect_robot(self, robot_id: str, url: str | None = None) -> None:
         """Connect ``robot_id`` to ``url`` for this run (not saved: the demo's sims) or to its saved URL.
@@ -414,3 +425,4 @@ class FleetUi(QtCore.QObject):
     def shutdown(self) -> None:
         self._remove()
         self.links.shutdown()
+        self.recordings.shutdown()

@@ -121,6 +121,9 @@ class Link:
         self.failure_box = LatestValue()
         #: the URL of a link whose robot answered a call (so it goes into the URL history)
         self.answered_box = LatestValue()
+        #: why the robot's bridge holds this link's commands now (a sentence), None when it does not
+        #: (``rcon_core/bridge/held.py``: a service call unanswered on a server that runs one at a time)
+        self.held_box = LatestValue()
         self._catalog_task: asyncio.Task | None = None
         self._catalog_wake: asyncio.Event | None = None
         #: what the catalogue lists are waiting for, for their empty text (written on the bridge thread):
@@ -212,6 +215,7 @@ class Link:
         client, self.client = self.client, None
         self._generation += 1
         self.failure_box.put(None)
+        self.held_box.put(None)
         self.catalog_box.put(EMPTY_CATALOG)
         self.finding = False
         self.catalog_state = "offline"
@@ -290,8 +294,15 @@ class Link:
             if gen == self._generation:
                 self.failure_box.put(failure)
 
+        def on_held(held: Any) -> None:
+            if gen == self._generation:
+                self.held_box.put(held.sentence() if held is not None else None)
+
         client.add_state_listener(on_state)
         client.add_failure_listener(on_failure)
+        held = getattr(getattr(client, "session", None), "held", None)  # rosbridge only (bridge/held.py)
+        if held is not None:
+            held.add_listener(on_held)
         asyncio.ensure_future(self._connect(client, gen))
 
     async def _connect(self, client: BridgeClient, gen: int) -> None:

@@ -8,6 +8,12 @@ bar's, and the robot of every binding that names none). A robot whose URL or con
 connects again. A robot removed here leaves its widgets in place; they
 say that their robot is not in the workspace until it is added back (or ↶). A URL the app cannot use is
 refused with its reason before anything changes.
+
+*Recording file…* adds a robot whose source is a recording (``Robot.recording``: an .mcap, a .bag or a
+rosbag2 folder's file), named after the file; its URL cell shows the file and cannot be edited, and it
+is view-only (commands go nowhere). A file that is not a recording is refused with the reason. It is saved
+with the workspace like any robot: the window plays it again when the workspace opens
+(``robot_recordings.py``).
 """
 
 from __future__ import annotations
@@ -50,6 +56,10 @@ class RobotsDialog(QtWidgets.QDialog):
         add = QtWidgets.QPushButton("Add robot")
         add.setObjectName("addRobot")
         add.clicked.connect(lambda: self._add_row(Robot(new_id("r"), f"Robot {self.table.rowCount() + 1}")))
+        recording = QtWidgets.QPushButton("Recording file…")
+        recording.setObjectName("addRecording")
+        recording.setToolTip("A recording (.mcap, .bag, rosbag2) played as one more robot; commands go nowhere")
+        recording.clicked.connect(self._pick_recording)
         remove = QtWidgets.QPushButton("Remove")
         remove.setObjectName("removeRobot")
         remove.clicked.connect(self._remove_row)
@@ -67,6 +77,7 @@ class RobotsDialog(QtWidgets.QDialog):
         buttons.rejected.connect(self.reject)
         row = QtWidgets.QHBoxLayout()
         row.addWidget(add)
+        row.addWidget(recording)
         row.addWidget(remove)
         row.addStretch(1)
         col = QtWidgets.QVBoxLayout(self)
@@ -82,15 +93,19 @@ class RobotsDialog(QtWidgets.QDialog):
             self._robots.append(robot)
         r = self.table.rowCount()
         self.table.insertRow(r)
-        for c, text in enumerate((robot.name, robot.url, robot.ca_file)):
+        for c, text in enumerate((robot.name, robot.recording or robot.url, robot.ca_file)):
             item = QtWidgets.QTableWidgetItem(text)
             if c == 1 and r == 0:
                 item.setToolTip("empty: the URL of the connection bar")
+            if c == 1 and robot.recording:  # where it comes from: a file, not a URL to edit
+                item.setFlags(item.flags() & ~QtCore.Qt.ItemFlag.ItemIsEditable)
+                item.setToolTip("a recording played as this robot: commands go nowhere")
             self.table.setItem(r, c, item)
-        for c, flag in ((3, robot.auth), (4, robot.view_only)):
+        for c, flag in ((3, robot.auth), (4, robot.view_only or bool(robot.recording))):
             box = QtWidgets.QCheckBox()
             box.setObjectName(("robotAuth", "robotViewOnly")[c - 3])
             box.setChecked(flag)
+            box.setEnabled(not robot.recording)
             box.setAccessibleName(f"{COLUMNS[c]} for {robot.name or robot.id}")
             cell = QtWidgets.QWidget()
             row = QtWidgets.QHBoxLayout(cell)
@@ -101,6 +116,32 @@ class RobotsDialog(QtWidgets.QDialog):
     def _tapped(self, index: QtCore.QModelIndex) -> None:
         if self.table.item(index.row(), index.column()) is not None:  # a text cell (not a tick box's)
             self.table.edit(index)
+
+    def _pick_recording(self) -> None:
+        path, _filter = QtWidgets.QFileDialog.getOpenFileName(
+            self, "Recording file", "", "Recordings (*.mcap *.bag *.db3 metadata.yaml);;All files (*)")
+        if path:
+            self.add_recording(path)
+
+    def add_recording(self, path: str) -> Robot | None:
+        """Add a robot that plays the recording at ``path`` (a rosbag2 folder's ``metadata.yaml`` or
+        ``.db3``: the folder); a file that is not a recording is refused in :attr:`problem`."""
+        from pathlib import Path
+
+        from rcon_core.record.files import RecordingError, open_recording
+
+        p = Path(path).expanduser().absolute()  # kept with the workspace: not relative to where the app started
+        if p.name == "metadata.yaml" or p.suffix == ".db3":
+            p = p.parent
+        try:
+            open_recording(str(p)).close()
+        except (RecordingError, OSError, ValueError) as exc:
+            self.problem.setText(f"cannot replay {p.name}: {exc}")
+            return None
+        self.problem.clear()
+        robot = Robot(new_id("r"), p.name.split(".")[0] or p.name, recording=str(p), view_only=True)
+        self._add_row(robot)
+        return robot
 
     def _remove_row(self) -> None:
         r = self.table.currentRow()
@@ -126,7 +167,7 @@ class RobotsDialog(QtWidgets.QDialog):
         """The robots as edited (raises BadUrl for a URL the app cannot use)."""
         out = []
         for r, robot in enumerate(self._robots):
-            url = self._text(r, 1)
+            url = "" if robot.recording else self._text(r, 1)  # a recording's cell shows its file
             if url:
                 url = check_url(normalize_url(url))
             out.append(attrs.evolve(robot, name=self._text(r, 0) or robot.id, url=url, ca_file=self._text(r, 2),

@@ -20,6 +20,8 @@ from __future__ import annotations
 from functools import partial
 from typing import Any
 
+from rcon_core.app.robot_recordings import recording_reason
+
 __all__ = ["reason", "guard_links", "target", "toggle", "show_action"]
 
 
@@ -36,6 +38,8 @@ def reason(fleet_ui: Any, robot_id: str, url: str | None = None) -> str | None:
     robot = _robot(fleet_ui, robot_id)
     if robot is None:
         return None
+    if robot.recording:  # a recording file played as this robot (robot_recordings.py)
+        return recording_reason(robot)
     url = url if url is not None else fleet_ui.robot_url(robot.id)
     replay = getattr(fleet_ui.window, "replay", None)  # a recording played as the robot (replay_bar.py)
     if replay is not None and url and url == replay.url:

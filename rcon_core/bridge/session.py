@@ -34,6 +34,8 @@ Decision: service calls
     unanswered says so, naming it.  A late answer to a call that timed out is dropped quietly.  A call made
     while reconnecting waits for the link inside the same budget.  Calls waiting when the link drops fail
     with ``ConnectionLostError``.  ``result: false`` raises ``ServiceError`` carrying the server's string.
+    Every call written is watched until its answer arrives (``held.py``, :attr:`Session.held`): one
+    unanswered past 0.5 s on a server that may run calls one at a time is reported as commands held.
 
 Decision: a view-only link (``guard.py``)
     ``self.guard`` (``client.guard``) decides what a view-only link may send: :meth:`publish` and
@@ -61,6 +63,7 @@ from .envelope import Envelope, enforce
 from .errors import BridgeError, ConnectionLostError, ServiceError, ServiceTimeoutError
 from .goals import Goals
 from .guard import LinkGuard, ViewOnlyError, describe_call
+from .held import HeldWatch
 from .inbound import BadFrames
 from .protocol import encode
 from .safety import MAX_ANSWER_DEPTH, LogBudget, bounded_repr, clip, nested_deeper, safe_text
@@ -121,6 +124,8 @@ class Session:
         #: calls that timed out and were never answered on this link: id -> service (bounded)
         self.unanswered: dict[str, str] = {}
         self._pending_names: dict[str, str] = {}  # id -> service of the calls in self.pending
+        #: calls written and not answered yet: commands may be held behind them (``held.py``)
+        self.held = HeldWatch(may_hold=lambda: host.ros_version != 1)
         self.level: str | None = None
         #: the robot's safety envelope (``envelope.py``): every publish is held to it (``client.envelope``)
         self.envelope: Envelope | None = None
@@ -212,6 +217,7 @@ class Session:
                 fut.set_exception(ConnectionLostError("connection lost before the answer arrived"))
         self.pending.clear()
         self.unanswered.clear()
+        self.held.reset()
         self.goals.disconnected()
         self.provided_actions.disconnected()
 
@@ -273,6 +279,8 @@ class Session:
 
     def _on_service_response(self, m: dict[str, Any]) -> None:
         cid = m.get("id")
+        if isinstance(cid, str):
+            self.held.answered(cid)  # the server is free again, whoever still waits for the answer
         fut = self.pending.pop(cid, None) if isinstance(cid, str) else None
         if fut is None:
             late = self.unanswered.pop(cid, None) if isinstance(cid, str) else None
@@ -443,7 +451,9 @@ class Session:
                 await self.host.wait_connected()
                 self.pending[cid] = fut
                 self._pending_names[cid] = name
-                if not self.send(op) and self.guard.view_only:  # marked while it waited for the link
+                if self.send(op):
+                    self.held.started(cid, name)  # until its answer arrives, however late
+                elif self.guard.view_only:  # marked while it waited for the link
                     raise ViewOnlyError(self.guard.sentence(describe_call(name, args)))
                 return await fut
         except TimeoutError:

@@ -79,6 +79,9 @@ class MissingWidgetModel:
     def on_robot_link(self, robot_id: str, up: bool) -> None:
         """Never fleet-wide."""
 
+    def on_commands_held(self, reason: str | None) -> None:
+        """Sends nothing."""
+
     def shown_message(self) -> dict[str, Any] | None:
         return None
 

@@ -10,7 +10,9 @@ app keeps per URL (CA file, client certificate and key, whether it uses rosauth;
 in the OS credential store, never here) and ``view_only`` (the operator may watch but not command it).
 ``envelope`` is the robot's safety envelope (:class:`~rcon_core.bridge.envelope.Envelope`: its maximum
 linear and angular speed; None: no limit), which every motion command sent to it is held to.
-``colour`` ``""`` takes the colour of its position in :data:`PALETTE`.
+``colour`` ``""`` takes the colour of its position in :data:`PALETTE`. ``recording``: a recording file
+played as the robot (Robots… → Recording file…): the app serves it on a player of its own at run time
+(so no URL is kept for it) and the robot is view-only.
 """
 
 from __future__ import annotations
@@ -45,6 +47,9 @@ class Robot:
     view_only: bool = False  #: commands are refused: the operator only watches this robot
     colour: str = ""  #: "#rrggbb"; "" = PALETTE by position
     envelope: Envelope | None = None  #: the safety envelope its motion commands are held to (None: none)
+    #: a recording file (.mcap, .bag, a rosbag2 folder) played as this robot, view-only; its URL is the
+    #: player's, made at run time ("" = a live robot)
+    recording: str = ""
     extra: dict[str, Any] = attrs.field(factory=dict)
 
     @property

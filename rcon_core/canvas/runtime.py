@@ -11,7 +11,11 @@
     rt.restart_widget(inst)     # after a reconfigure
     rt.focus_lost()             # the operator looked away: models' optional on_focus_lost() (teleop stops)
     rt.set_client(robot_id, c)  # that robot's link is another client now: only its widgets restart
+                                #   (those added or restarted since start() too: offline, then connected)
     rt.stop()                   # focus_lost() first, then every model stops
+
+Each robot's link state and its commands held behind an unanswered service call (``bridge/held.py``)
+reach only its own widgets: ``model.set_link(up)``, ``model.on_commands_held(reason or None)``.
 
 Several robots (:mod:`rcon_core.canvas.fleet`): each widget runs on the client of the robot its binding
 names (``binding.robot``, ``""`` = the first); each robot's link state reaches only its own widgets
@@ -122,9 +126,13 @@ class CanvasRuntime:
         self.models: dict[str, HostedModel] = {}
         self._nodes: dict[str, list[Any]] = {}  # widget id -> its node, then its other robots' nodes
         self._robot_of: dict[str, str] = {}  # widget id -> robot id (resolved)
+        #: widget id -> the instance its running model was built from: the canvas's own widgets and those
+        #: added or reconfigured since (the caller's canvas may be a snapshot that never hears of them)
+        self._instances: dict[str, WidgetInstance] = {}
         self._fleet_wide: set[str] = set()  # widgets whose model has on_fleet
         self._remove: dict[str, list[Callable[[], None]]] = {}  # robot id -> listener removers
         self._link_up: dict[str, bool] = {}
+        self._held: dict[str, str | None] = {}  # robot id -> why its commands are held (bridge/held.py)
         #: objects the widgets on one robot link share (``WidgetContext.shared``), by the port's ``link``
         self.shared = SharedResources()
         self._checkers: dict[str, TypeChecker] = {}
@@ -190,8 +198,8 @@ class CanvasRuntime:
         if not restart:  # the running widgets keep their nodes but hear the new link's state
             self._on_state(rid, ConnectionState.CONNECTED if self._link_up.get(rid) else ConnectionState.CLOSED)
             return
-        for inst in list(self.canvas.widgets):
-            if inst.id in self.models and (self._robot_of.get(inst.id) == rid or inst.id in self._fleet_wide):
+        for widget_id, inst in list(self._instances.items()):  # every running widget, added ones too
+            if widget_id in self.models and (self._robot_of.get(widget_id) == rid or widget_id in self._fleet_wide):
                 self.restart_widget(inst)
         self.shared.forget(id(old))  # nobody is on the old link any more
 
@@ -279,6 +287,7 @@ class CanvasRuntime:
                            on_refused=refused, link=id(self.fleet.client(robot_id)), widget_id=widget_id)
 
     def _start_widget(self, inst: WidgetInstance) -> HostedModel:
+        self._instances[inst.id] = inst
         try:
             rid = self.fleet.resolve(inst.binding.robot)
         except UnknownRobot as exc:
@@ -295,6 +304,8 @@ class CanvasRuntime:
         self._robot_of[inst.id] = rid
         self.models[inst.id] = model
         self._hook(inst.id, "set_link", model.set_link, self._link_up.get(rid, True))
+        if self._held.get(rid):  # the robot's bridge holds this link's commands now (bridge/held.py)
+            self._hook(inst.id, "on_commands_held", model.on_commands_held, self._held[rid])
         try:  # the widget boundary: every hook of a plugin's model may raise (see _hook)
             self._give_fleet(inst.id, model, rid, port, built)
             model.start()
@@ -390,6 +401,7 @@ class CanvasRuntime:
 
     def _stop_widget(self, widget_id: str) -> None:
         model = self.models.pop(widget_id, None)
+        self._instances.pop(widget_id, None)
         nodes = self._nodes.pop(widget_id, [])
         self._robot_of.pop(widget_id, None)
         self._fleet_wide.discard(widget_id)
@@ -418,6 +430,10 @@ class CanvasRuntime:
             removers.append(client.add_state_listener(lambda state: self._on_state(robot_id, state)))
         if hasattr(client, "add_status_listener"):
             removers.append(client.add_status_listener(lambda frame: self._on_status(robot_id, frame)))
+        held = getattr(getattr(client, "session", None), "held", None)  # commands held behind a call
+        if held is not None:
+            removers.append(held.add_listener(lambda h: self._on_held(robot_id, h)))
+            self._held[robot_id] = held.current.sentence() if held.current is not None else None
         self._remove[robot_id] = [r for r in removers if callable(r)]
         self._link_up[robot_id] = _is_up(getattr(client, "state", ConnectionState.CONNECTED))
 
@@ -440,6 +456,18 @@ class CanvasRuntime:
                     self._hook(widget_id, "set_link", m.set_link, up)
             if widget_id in self._fleet_wide:
                 self._tell_robot_link(model, robot_id)
+
+    def _on_held(self, robot_id: str, held: Any) -> None:
+        """The robot's bridge holds (or no longer holds) its link's commands behind a call: its widgets hear
+        it (the teleop pad stops sending and says why)."""
+        if robot_id not in self._remove:  # an old client's late callback
+            return
+        text = held.sentence() if held is not None else None
+        self._held[robot_id] = text
+        for widget_id, model in list(self.models.items()):
+            if self._robot_of.get(widget_id) == robot_id:
+                for m in (model, *model.child_models()):
+                    self._hook(widget_id, "on_commands_held", m.on_commands_held, text)
 
     def _tell_robot_link(self, model: HostedModel, robot_id: str | None) -> None:
         for rid in [robot_id] if robot_id is not None else self.fleet.ids:

@@ -4,7 +4,8 @@ File layout (``version`` 2)::
 
     {"format": "rcon-workspace", "version": 2, "current": "c-...",
      "robots": [{"id", "name", "url", "ca_file", "client_cert", "client_key", "auth", "view_only",
-       "colour", "envelope" (written only when set: {"max_linear", "max_angular"})}],
+       "colour", "envelope" (written only when set: {"max_linear", "max_angular"}), "recording" (written
+       only when set: a recording file played as the robot)}],
      "canvases": [{"id", "name", "locked", "view_only" (written only when true), "widgets": [{"id",
        "kind", "title", "binding": {"name", "type", "role", "field_paths", "robot"}, "geometry": {"x",
        "y", "w", "h"}, "settings": {...}}]}],
@@ -202,7 +203,7 @@ def _make_converter() -> cattrs.Converter:
     with_extra(WidgetInstance, ("id", "kind", "title", "binding", "geometry", "settings"))
     with_extra(Canvas, ("id", "name", "locked", "view_only", "widgets"), optional=("view_only",))
     with_extra(Robot, ("id", "name", "url", "ca_file", "client_cert", "client_key", "auth", "view_only",
-                       "colour", "envelope"), optional=("envelope",))
+                       "colour", "envelope", "recording"), optional=("envelope", "recording"))
 
     return conv
 

@@ -59,6 +59,8 @@ from .spec import (
 if TYPE_CHECKING:
     from rcon_core.bridge.envelope import Envelope
 
+    from .model_types import ModelTypes
+
 __all__ = [
     # declared in the modules they belong to, stated here with the rest of the contract
     "WidgetSpec",
@@ -90,12 +92,14 @@ __all__ = [
     "NotAValue",
     "WidgetSettings",
     "CommandBounds",
+    "BindingChecks",
     "SizedSettings",
     "StaleAfterSettings",
     "CatalogSettings",
     "settings_problems",
     "stored_settings_problems",
     "settings_commands",
+    "settings_binding_problems",
     "settings_size",
     "CAPABILITIES",
     "PUBLIC_API",
@@ -364,6 +368,7 @@ class ModelHooks(Protocol):
     - ``on_fleet(robots)`` (bridge thread, before ``start``): one :class:`RobotPort` per robot of the
       workspace. A model that overrides it is fleet-wide (``fleet_wide``) and subscribes on each port.
     - ``on_robot_link(robot_id, up)`` (bridge thread): a fleet-wide model hears each robot's link state.
+    - ``on_commands_held(reason)`` (bridge thread): commands held behind an unanswered call (``bridge/held.py``).
     - ``shown_message()`` (bridge thread): for a Compound's input child, a message of its bound type holding
       the value it shows (raise ``ValueError`` to block the send with the reason); None: what it last
       published.
@@ -378,6 +383,7 @@ class ModelHooks(Protocol):
     def on_focus_lost(self) -> None: ...
     def on_fleet(self, robots: list[RobotPort]) -> None: ...
     def on_robot_link(self, robot_id: str, up: bool) -> None: ...
+    def on_commands_held(self, reason: str | None) -> None: ...
     def shown_message(self) -> dict[str, Any] | None: ...
 
 
@@ -425,6 +431,14 @@ class CommandBounds(Protocol):
     value)]``. The Configure dialog asks before saving a limit beyond the robot's safety envelope."""
 
     def commands(self, binding: Binding) -> list[tuple[str, float]]: ...
+
+
+@runtime_checkable
+class BindingChecks(Protocol):
+    """Settings judged against their binding (a slider's range against what an ``int8`` holds; ``types``:
+    the app's registry or None): the add panel and Configure refuse while it says anything."""
+
+    def binding_problems(self, binding: Binding, types: ModelTypes | None) -> list[str]: ...
 
 
 @runtime_checkable
@@ -498,6 +512,15 @@ def settings_commands(settings: Any, binding: Binding,
     return []
 
 
+def settings_binding_problems(settings: Any, binding: Binding | None, types: ModelTypes | None) -> list[str]:
+    """The settings against their binding (``binding_problems``); a check that raises is itself a problem."""
+    try:
+        ok = binding is not None and isinstance(settings, BindingChecks)
+        return [str(p) for p in settings.binding_problems(binding, types)] if ok else []
+    except Exception as exc:
+        return [f"settings check failed: {exc}"]
+
+
 def settings_size(settings: Any, catalog: WidgetCatalog | None = None) -> tuple[float, float] | None:
     """The size the settings ask for (``preferred_size``), or None; a hint that fails is no hint."""
     try:
@@ -553,7 +576,8 @@ class GoalPhase(enum.StrEnum):
 CAPABILITIES = frozenset({
     "on_focus_lost", "on_fleet", "on_robot_link", "dry_run", "shown_message", "composes", "fleet_wide",
     "view_only", "envelope", "link", "widget_id", "changed", "send_action_goal", "refresh",
-    "problems", "commands", "preferred_size", "stale_after", "shows_every_robot",
+    "problems", "commands", "preferred_size", "stale_after", "shows_every_robot", "on_commands_held",
+    "binding_problems",
 })
 
 #: what a widget package may import from RCON: module -> the names it may use ("*": the module's

@@ -191,6 +191,13 @@ class WidgetModel:
     def on_robot_link(self, robot_id: str, up: bool) -> None:
         """A fleet-wide model hears each robot's link state here (bridge thread)."""
 
+    def on_commands_held(self, reason: str | None) -> None:
+        """The robot's bridge holds this link's commands behind a service call it has not answered
+        (rosbridge 2.1.0 runs one connection's frames one at a time: ``rcon_core/bridge/held.py``):
+        ``reason`` says so ("commands held: the robot's bridge is still busy with /dock"); None once it
+        answered (bridge thread). A widget that streams commands (the teleop pad) stops sending while held,
+        so nothing more queues behind the call, and says why."""
+
     def shown_message(self) -> dict[str, Any] | None:
         """As a Compound's input child: a message of the bound type holding the value the widget shows
         (bridge thread); raise ``ValueError`` with the problem when it cannot say (the send is blocked, the

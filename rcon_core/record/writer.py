@@ -1,20 +1,23 @@
-"""``McapSink``: the one writer of a recording -- an MCAP file written by the ``mcap`` package in its own thread.
+"""``McapSink``: the one writer of a recording -- an MCAP file written in its own thread.
 
 Threading: ``add_channel`` and ``write`` may be called from any thread (the bridge loop calls them from a
-message callback); they only queue. One writer thread owns the ``mcap.writer.Writer`` and the file, so
+message callback); they only queue. One writer thread owns the ``McapFile`` (``mcapfile.py``) and the file, so
 compressing a chunk never holds up the bridge loop or the GUI.
 
 Decisions:
 
 * **Chunked, compressed, indexed.** Chunks of ``chunk_size`` (4 MB) compressed with zstd (or lz4, or
   none), message indexes after each chunk, and a summary (schemas, channels, statistics, chunk indexes)
-  when the file is closed: Foxglove, Lichtblick, ``rosbags`` and the ``mcap`` reader open it.
+  when the file is closed: Foxglove, Lichtblick, ``rosbags`` and the ``mcap`` reader open it. The file is
+  written by :class:`~rcon_core.record.mcapfile.McapFile`: no copy of a message's bytes, no CRC of the
+  data (the format allows 0), no compression of a chunk of payloads compressed already (JPEG...).
 * **A crash loses at most the open chunk.** A chunk is also closed after ``chunk_seconds`` (1 s) however
   small, and every record goes straight to the OS (no buffer in the process), so after SIGKILL or a power
   cut of the process the file holds every complete chunk: ``recover.py`` rewrites it with a summary
-  (``rcon record --recover``). Closing the chunk early uses the writer's private ``__finalize_chunk``
-  (the ``mcap`` package has no public call for it; pinned to ``mcap<2``; without it chunks close by size
-  only, which is still readable).
+  (``rcon record --recover``).
+* **The writer thread wakes per batch, not per message.** ``write`` appends to a deque; the thread is
+  woken once ``wake_bytes`` (the chunk size) are queued, else every ``wake_every`` (0.1 s): a camera's
+  frames do not cost a thread switch (and a fight for the GIL) each.
 * **Nothing blocks the sender.** The queue is bounded in bytes (``max_queue``, 256 MB); a message that
   would pass it is dropped and counted (``stats.dropped``) -- the bench checks none is at the fleet's rate.
 * **Disk budget.** ``budget`` bytes (None: none): ``warning`` is set once 90 % is used, and at 100 %
@@ -30,20 +33,20 @@ from __future__ import annotations
 
 import logging
 import os
-import queue
 import threading
 import time
-from collections.abc import Callable
+from collections import deque
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from mcap.writer import CompressionType, Writer
+from .mcapfile import McapFile
 
 log = logging.getLogger(__name__)
 
 __all__ = ["McapSink", "SinkStats", "COMPRESSIONS"]
 
-COMPRESSIONS = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
+COMPRESSIONS = ("zstd", "lz4", "none")
 LIBRARY = "rcon"
 
 
@@ -62,6 +65,24 @@ class _DirectFile:
             view = view[n:]
         self.position += len(data)
         return len(data)
+
+    def writev(self, pieces: Sequence[bytes | bytearray | memoryview]) -> int:
+        """Write ``pieces`` in order with as few system calls as the OS allows, copying none of them."""
+        views = [memoryview(p) for p in pieces]
+        total = sum(v.nbytes for v in views)
+        i = 0
+        while i < len(views):
+            n = os.writev(self.fd, views[i:i + _IOV_MAX])
+            self.position += n
+            while n and i < len(views):  # drop what was written (a short write leaves part of a piece)
+                size = views[i].nbytes
+                if n >= size:
+                    n -= size
+                    i += 1
+                else:
+                    views[i] = views[i][n:]
+                    n = 0
+        return total
 
     def tell(self) -> int:
         return self.position
@@ -96,6 +117,8 @@ class SinkStats:
 
 
 _STOP = object()
+#: pieces per ``writev`` call (the OS's limit is at least 1024 on Linux, 16 by POSIX)
+_IOV_MAX = min(os.sysconf("SC_IOV_MAX"), 1024) if hasattr(os, "sysconf") else 16
 
 
 class McapSink:
@@ -124,12 +147,16 @@ class McapSink:
         self.problem: str | None = None
         self.warning: str | None = None
         self.stopped = False  #: no more messages are written (budget, error or close)
-        self._queue: queue.SimpleQueue[Any] = queue.SimpleQueue()
+        self._queue: deque[Any] = deque()  # appended by any thread, drained by the writer thread
+        self._wake = threading.Event()
+        #: queued bytes that wake the writer thread at once (else it looks every ``wake_every`` s)
+        self.wake_bytes = chunk_size
+        self.wake_every = min(0.1, chunk_seconds / 2)
         self._queued_bytes = 0
         self._lock = threading.Lock()
         self._channels: dict[str, tuple[str, str, bytes, str, dict[str, str]]] = {}
         self._ids: dict[str, int] = {}  # topic -> channel id in the current file
-        self._writer: Writer | None = None
+        self._writer: McapFile | None = None
         self._file: _DirectFile | None = None
         self._index = 0
         self._last_chunk = time.monotonic()
@@ -148,7 +175,7 @@ class McapSink:
                 return
             self._channels[topic] = (schema_name, schema_encoding, schema_data, message_encoding,
                                      dict(metadata or {}))
-        self._queue.put(("channel", topic))
+        self._queue.append(("channel", topic))
 
     def has_channel(self, topic: str) -> bool:
         return topic in self._channels
@@ -161,7 +188,10 @@ class McapSink:
             return False
         with self._lock:
             self._queued_bytes += size
-        self._queue.put((topic, log_time, publish_time, data))
+            queued = self._queued_bytes
+        self._queue.append((topic, log_time, publish_time, data))
+        if queued >= self.wake_bytes:
+            self._wake.set()
         return True
 
     @property
@@ -177,7 +207,8 @@ class McapSink:
     def close(self, timeout: float = 30.0) -> None:
         """Write what is queued, the summary and the footer; idempotent. Waits for the writer thread."""
         if not self._closed.is_set():
-            self._queue.put(_STOP)
+            self._queue.append(_STOP)
+            self._wake.set()
             self._thread.join(timeout)
 
     # ------------------------------------------------------------------ the writer thread
@@ -185,8 +216,7 @@ class McapSink:
     def _open(self, path: str) -> None:
         self._file = _DirectFile(path)
         self.stats.files.append(path)
-        self._writer = Writer(self._file, chunk_size=self.chunk_size,  # type: ignore[arg-type]
-                              compression=COMPRESSIONS[self.compression])
+        self._writer = McapFile(self._file, compression=self.compression, chunk_size=self.chunk_size)
         self._writer.start(profile=self.profile, library=LIBRARY)
         if self.metadata:
             self._writer.add_metadata("rcon", self.metadata)
@@ -204,8 +234,8 @@ class McapSink:
             key = (name, encoding, data)
             schema_id = self._schema_ids.get(key, 0)
             if not schema_id:
-                schema_id = self._schema_ids[key] = self._writer.register_schema(name, encoding, data)
-        self._ids[topic] = self._writer.register_channel(topic, message_encoding, schema_id, metadata)
+                schema_id = self._schema_ids[key] = self._writer.add_schema(name, encoding, data)
+        self._ids[topic] = self._writer.add_channel(topic, message_encoding, schema_id, metadata)
 
     def _finish_file(self) -> None:
         writer, f = self._writer, self._file
@@ -235,39 +265,27 @@ class McapSink:
                     log.exception("problem listener failed")
 
     def _close_chunk(self) -> None:
-        finalize = getattr(self._writer, "_Writer__finalize_chunk", None)
-        if finalize is not None:
-            finalize()
+        if self._writer is not None:
+            self._writer.close_chunk()
         self._last_chunk = time.monotonic()
 
     def _run(self) -> None:
-        get = self._queue.get
-        timeout = max(0.05, self.chunk_seconds / 2)
+        items = self._queue
         try:
             while True:
-                try:
-                    item = get(timeout=timeout)
-                except queue.Empty:
-                    item = None
-                if item is _STOP:
+                self._wake.wait(self.wake_every)
+                self._wake.clear()
+                stop = False
+                while items:
+                    item = items.popleft()
+                    if item is _STOP:
+                        stop = True
+                        break
+                    self._take(item)
+                if stop:
                     break
-                if self._writer is None:
-                    if isinstance(item, tuple) and len(item) == 4:
-                        self._unqueue(len(item[3]))
-                        self.stats.dropped += 1
-                    continue
-                try:
-                    if item is not None:
-                        self._handle(item)
-                    if time.monotonic() - self._last_chunk >= self.chunk_seconds:
-                        self._close_chunk()
-                except OSError as exc:
-                    self._fail(_os_words(exc))
-                    self._abandon()
-                except Exception as exc:  # noqa: BLE001 - one bad message never ends the recording
-                    log.exception("recording %s: a record could not be written", self.path)
-                    if self.problem is None:
-                        self.problem = f"a record could not be written ({exc})"
+                if self._writer is not None and time.monotonic() - self._last_chunk >= self.chunk_seconds:
+                    self._guarded(self._close_chunk)
         finally:
             self.stopped = True
             try:
@@ -277,6 +295,29 @@ class McapSink:
                 self._fail(_os_words(exc))
                 self._abandon()
             self._closed.set()
+
+    def _take(self, item: Any) -> None:
+        if self._writer is None:
+            if isinstance(item, tuple) and len(item) == 4:
+                self._unqueue(len(item[3]))
+                self.stats.dropped += 1
+            return
+        self._guarded(self._handle, item)
+        if time.monotonic() - self._last_chunk >= self.chunk_seconds:
+            self._guarded(self._close_chunk)
+
+    def _guarded(self, fn: Callable[..., Any], *args: Any) -> None:
+        """Run one step of writing: a write error stops the recording (said), any other error is said and
+        the recording goes on."""
+        try:
+            fn(*args)
+        except OSError as exc:
+            self._fail(_os_words(exc))
+            self._abandon()
+        except Exception as exc:  # noqa: BLE001 - one bad message never ends the recording
+            log.exception("recording %s: a record could not be written", self.path)
+            if self.problem is None:
+                self.problem = f"a record could not be written ({exc})"
 
     def _unqueue(self, size: int) -> None:
         with self._lock:
@@ -304,7 +345,7 @@ class McapSink:
             self.stats.dropped += 1
             return
         assert self._writer is not None and self._file is not None
-        self._writer.add_message(self._ids[topic], log_time, data, publish_time)
+        self._writer.add_message(self._ids[topic], log_time, publish_time, data)
         st = self.stats
         st.messages += 1
         st.bytes_in += len(data)

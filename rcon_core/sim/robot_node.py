@@ -137,6 +137,10 @@ class RobotNode:
         server.subscribe_internal(ns("/cmd_vel_stamped"), m("geometry_msgs", "TwistStamped"), node,
                                   self._on_cmd_vel_stamped)
         server.subscribe_internal(ns("/speed_limit"), m("std_msgs", "Float64"), node, self._on_speed_limit)
+        # and holds the limit it took, latched (ROS 1 latched, ROS 2 transient local): a pad started later
+        # hears it at once, as the last value rosbridge keeps for a new subscriber
+        server.advertise_internal(ns("/speed_limit"), m("std_msgs", "Float64"), node, latched=True)
+        self._echo = False
         server.add_service(ns("/reset_pose"), s("std_srvs", "Empty"), node, self._srv_reset_pose)
         server.add_service(ns("/lights/set"), s("std_srvs", "SetBool"), node, self._srv_lights)
         server.add_service(ns("/dock"), s("std_srvs", "Trigger"), node, self._srv_dock)
@@ -253,12 +257,19 @@ class RobotNode:
                             f"{self.vessel.cmd_yaw_rate:.2f} rad/s", function="cmd_vel")
 
     def _on_speed_limit(self, msg: dict[str, Any]) -> None:
+        if self._echo:  # our own latched copy of the limit, coming back through our subscription
+            return
         value = msg.get("data")
         if not isinstance(value, int | float) or not math.isfinite(value) or value < 0:
             self.server.log(self.node, "error", f"Ignoring invalid speed limit {value!r}", function="speed_limit")
             return
         self.vessel.speed_limit = float(value)
         self.server.log(self.node, "info", f"Speed limit set to {value:.2f} m/s", function="speed_limit")
+        self._echo = True
+        try:
+            self._publish("/speed_limit", {"data": float(value)})
+        finally:
+            self._echo = False
 
     # -- services -----------------------------------------------------------------------------------
 

@@ -6,7 +6,9 @@ a timer on the bridge loop; when it lifts it publishes one zero command at once 
 (an idle pad never floods zeros that would fight another controller).
 
 Safety: the zero is also sent, immediately, when the model is stopped (the canvas is left), when the link
-goes down (sent again once it is back, then silence), and by the view on touch cancel and focus loss.
+goes down (sent again once it is back, then silence), when the robot's bridge holds the link's commands
+behind an unanswered service call (``on_commands_held``: then nothing at all until it answers), and by the
+view on touch cancel and focus loss.
 After a forced stop the pad ignores the finger until it is lifted and put down again.
 A stalled link (the client's DEGRADED state) counts as down. Every command has a freshness limit of
 ``COMMAND_MAX_AGE`` (the publisher's ``max_age``): the bridge drops a command it could not write within it,
@@ -152,6 +154,8 @@ class TeleopValue:
     held: str = ""
     #: nobody subscribes to the pad's topic: what the pad says instead of pretending to drive ("" otherwise)
     unheard: str = ""
+    #: the robot's bridge holds this link's commands behind an unanswered call: why the pad sends nothing
+    commands_held: str = ""
 
 
 #: what moving the finger along an axis does, by the field it drives (the leaf, or part.leaf)
@@ -218,6 +222,7 @@ class TeleopModel(WidgetModel):
         self._speed_limit: float | None = None  #: the last value heard on ``speed_limit_topic``
         self._limit_sub: Any = None
         self._unheard = ""
+        self._commands_held = ""  #: why the robot's bridge holds commands now ("" when it does not)
         self._listeners_asked = -math.inf  #: the model's clock when /rosapi/subscribers was last asked
         self.send_times: list[float] = []  # the model's clock at each publish (tests, diagnostics)
         self._show_value()
@@ -385,7 +390,7 @@ class TeleopModel(WidgetModel):
         del self.send_times[:-2000]
 
     def _on_axes(self, x: float, y: float) -> None:
-        if not self.running or self._pub is None or self._locked or self.state.link_down:
+        if not self.running or self._pub is None or self._locked or self.state.link_down or self._commands_held:
             self._x, self._y = x, y
             self._show_value()
             return
@@ -497,6 +502,19 @@ class TeleopModel(WidgetModel):
         elif up and was_down:
             self._dispatch(self._link_back)
 
+    def on_commands_held(self, reason: str | None) -> None:
+        """The robot's bridge holds this link's commands behind an unanswered service call (the runtime
+        says so, ``rcon_core/bridge/held.py``): the pad stops at once -- one zero, which waits behind the
+        call with whatever was sent since it, so the robot ends stopped when they are let through -- and
+        sends nothing more until the call is answered and the finger is lifted and put down again."""
+        self._dispatch(lambda: self._held_changed(reason or ""))
+
+    def _held_changed(self, reason: str) -> None:
+        self._commands_held = reason
+        if reason:
+            self._force_release(reason)
+        self._show_value()
+
     def _link_lost(self) -> None:
         if self._force_release("link down"):
             self._zero_pending = True  # the zero may not have gone out: send it again once back
@@ -516,7 +534,8 @@ class TeleopModel(WidgetModel):
         sx, sy = shape_axes(self._x, self._y, self.settings.dead_zone) if active else (0.0, 0.0)
         self.set_value(TeleopValue(active=active, x=sx, y=sy, command=tuple(sorted(cmd.items())),
                                    locked=self._locked, sent=self._sent, reason=self._reason,
-                                   held=self.limits()[2], unheard=self._unheard))
+                                   held=self.limits()[2], unheard=self._unheard,
+                                   commands_held=self._commands_held))
 
     @property
     def active(self) -> bool:

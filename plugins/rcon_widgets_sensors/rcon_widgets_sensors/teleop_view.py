@@ -339,6 +339,9 @@ class TeleopView(QtWidgets.QWidget):
             return "link down: stopped"
         if st is not None and st.error:
             return st.error
+        if v.commands_held:  # nothing is sent: it would wait behind the robot's unanswered call
+            busy = v.commands_held.rpartition("busy with ")[2] if "busy with " in v.commands_held else ""
+            return f"⚠ not sending: bridge busy with {busy}" if busy else f"⚠ {v.commands_held}: not sending"
         if v.locked:
             return f"stopped ({v.reason}): lift your finger"
         if v.unheard:  # nothing moves: never animate as if the robot drove

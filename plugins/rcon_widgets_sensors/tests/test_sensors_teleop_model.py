@@ -356,3 +356,56 @@ async def test_silent_stall_stops_the_pad_and_never_delivers_a_late_command(sim)
             model.release()
             model.stop()
             await c.close()
+
+
+async def test_a_pad_started_after_the_limit_was_set_shows_that_limit(sim):
+    """The operator set the robot's speed limit from another app, which then closed; a pad started later
+    hears the limit at once: the robot holds /speed_limit latched (ROS 1 latched / ROS 2 transient local),
+    so rosbridge gives the last value to a new subscriber."""
+    setter = BridgeClient(sim.url, reconnect=False)
+    await setter.connect()
+    limit = setter.node("slider").advertise("/speed_limit", "std_msgs/Float64")
+    limit.publish({"data": 0.4})
+    await until(lambda: sim.robot.speed_limit == 0.4, what="the robot taking the limit")
+    await setter.close()  # the app that set it is gone: its own publisher with it
+    later = BridgeClient(sim.url, reconnect=False)
+    await later.connect()
+    try:
+        p = pad(later, TeleopSettings(max_linear=1.0, speed_limit_topic="/speed_limit"))
+        p.start()
+        await until(lambda: p.limits()[0] == 0.4, what="the pad hearing the limit set before it started")
+        assert p.limits()[2] == "≤ 0.4 m/s (speed limit)"
+        p.stop()
+    finally:
+        await later.close()
+
+
+async def test_commands_held_behind_a_call_stop_the_pad_with_one_zero_and_nothing_more(sim, client):
+    """The runtime says the robot's bridge holds the link's commands behind an unanswered call
+    (``rcon_core/bridge/held.py``): the pad sends one zero (it waits behind the call with whatever went out
+    since, so the robot ends stopped), then nothing, finger or not, and says why; once the call is answered
+    the finger is lifted and put down again to drive."""
+    rx = Receiver(sim)
+    model = pad(client, TeleopSettings(rate_hz=20))
+    model.start()
+    try:
+        t0 = time.monotonic()
+        model.set_axes(0.0, 0.8)
+        await until(lambda: len(rx.since(t0)) >= 2, 5.0, "commands")
+        held = "commands held: the robot's bridge is still busy with /dock"
+        t_held = time.monotonic()
+        model.on_commands_held(held)
+        await until(lambda: rx.first_zero_since(t_held)[0], 2.0, "the zero")
+        sent = model.state.value.sent
+        assert model.state.value.commands_held == held and not model.state.value.active
+        model.set_axes(0.0, 0.9)  # the finger moves on: nothing
+        model.release()
+        model.set_axes(0.0, 0.9)  # lifted and put down again while still held: nothing
+        assert model.state.value.sent == sent and not model.state.value.active
+        model.on_commands_held(None)  # answered
+        assert model.state.value.commands_held == ""
+        model.release()
+        model.set_axes(0.0, 0.9)
+        assert model.state.value.active and model.state.value.sent == sent + 1  # drives again at once
+    finally:
+        model.stop()

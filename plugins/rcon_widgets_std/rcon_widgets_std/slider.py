@@ -15,7 +15,8 @@ from rcon_core.plugins.paths import PathError, get_path
 from .base import StdModel
 from .common import INT_LIMITS, SANE_LIMIT, RateLimiter, envelope_limit, field_at, sane_limits, type_limits
 
-__all__ = ["SliderSettings", "SliderModel", "NumberRange", "PUBLISH_ON_RELEASE", "PUBLISH_CONTINUOUS"]
+__all__ = ["SliderSettings", "SliderModel", "NumberRange", "PUBLISH_ON_RELEASE", "PUBLISH_CONTINUOUS",
+           "numeric_binding_problems"]
 
 PUBLISH_ON_RELEASE = "release"
 PUBLISH_CONTINUOUS = "continuous"
@@ -62,6 +63,33 @@ class SliderSettings:
     def commands(self, binding: Any) -> list[tuple[str, float]]:
         """(field path, the largest value it may send there): checked against the robot's safety envelope."""
         return numeric_commands(self, binding)
+
+    def binding_problems(self, binding: Any, types: Any) -> list[str]:
+        """What only the bound field can tell: minimum and maximum within what its type holds."""
+        return numeric_binding_problems(self, binding, types)
+
+
+def numeric_binding_problems(settings: Any, binding: Any, types: Any) -> list[str]:
+    """A Slider's or Stepper's minimum and maximum against the field they are bound to (an int8 slider up
+    to 500: "maximum 500 is beyond what a int8 holds (-128..127)"): what the add panel and Configure check
+    before a widget is placed or saved, as the model does once it runs. Nothing while the binding is
+    incomplete, its type unknown or its field not a number (the binding's own checks say those), nor
+    while the settings' own numbers are wrong (``problems()`` says that)."""
+    b = binding
+    if types is None or b is None or b.problems():
+        return []
+    if range_problems(settings.minimum, settings.maximum, settings.step, settings.rate_hz):
+        return []
+    try:
+        f = field_at(types, b.type, b.field_path, b.role.is_service)
+    except (PathError, KeyError, ValueError):
+        return []
+    if f is None or not f.is_builtin or f.array_len is not None or type_limits(f.base) is None:
+        return []
+    lo, hi, what = sane_limits(f.base, b.type, b.field_path)
+    # a slip of a finger: refused, never silently clamped
+    return [f"{name} {v:g} is beyond what {what}"
+            for name, v in (("minimum", settings.minimum), ("maximum", settings.maximum)) if not lo <= v <= hi]
 
 
 def numeric_commands(settings: Any, binding: Any) -> list[tuple[str, float]]:
@@ -194,10 +222,7 @@ class NumericModel(StdModel):
         s = self.settings
         if out:  # the settings' own problems first (not a number, out of any sane range)
             return out
-        lo, hi, what = sane_limits(f.base, b.type, b.field_path)
-        for name, v in (("minimum", s.minimum), ("maximum", s.maximum)):
-            if not lo <= v <= hi:  # a slip of a finger: refused, never silently clamped
-                out.append(f"{name} {v:g} is beyond what {what}")
+        out = numeric_binding_problems(s, b, self.types)
         r = self.range
         if not out and r.minimum >= r.maximum:
             out.append(f"the range {s.minimum:g}..{s.maximum:g} holds no value {r.why} allows"

@@ -7,7 +7,7 @@ from typing import Any
 
 import attrs
 
-from .slider import NumericModel, numeric_commands, range_problems
+from .slider import NumericModel, numeric_binding_problems, numeric_commands, range_problems
 
 __all__ = ["StepperSettings", "StepperModel"]
 
@@ -32,6 +32,10 @@ class StepperSettings:
     def commands(self, binding: Any) -> list[tuple[str, float]]:
         """(field path, the largest value it may send there): checked against the robot's safety envelope."""
         return numeric_commands(self, binding)
+
+    def binding_problems(self, binding: Any, types: Any) -> list[str]:
+        """What only the bound field can tell: minimum and maximum within what its type holds."""
+        return numeric_binding_problems(self, binding, types)
 
 
 class StepperModel(NumericModel):

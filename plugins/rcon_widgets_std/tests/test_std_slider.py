@@ -12,6 +12,7 @@ from rcon_widgets_std.slider import (
     SliderSettings,
     number_range,
 )
+from rcon_widgets_std.stepper import StepperSettings
 from std_testkit import bridge, build
 
 from rcon_core.msgs import TypeRegistry
@@ -57,6 +58,26 @@ def test_numeric_settings_outside_the_fields_sane_range_are_refused(type_, path,
     ok = build(SliderModel, SliderSettings(minimum=0, maximum=50 if "Twist" in type_ else 127, step=1), "/n",
                type_, "publish", path)
     assert ok.problems() == []
+    # what the add panel and Configure ask before placing or saving (no model yet): the settings against the
+    # binding say the same, beside the settings' own problems (each said once)
+    types = TypeRegistry.standard()
+    settings = SliderSettings(minimum=0, maximum=maximum, step=1)
+    assert settings.problems() + settings.binding_problems(m.binding, types) == [problem]
+    assert ok.settings.binding_problems(ok.binding, types) == []
+    stepper = StepperSettings(minimum=0, maximum=maximum, step=1)
+    assert stepper.problems() + stepper.binding_problems(m.binding, types) == [problem]
+
+
+def test_the_settings_against_a_binding_say_nothing_until_the_binding_and_its_type_are_known():
+    from rcon_core.plugins import Binding
+
+    settings = SliderSettings(minimum=0, maximum=500, step=1)
+    types = TypeRegistry.standard()
+    assert settings.binding_problems(Binding("/gear", "std_msgs/Int8", "publish", ("data",)), None) == []
+    assert settings.binding_problems(Binding(role="publish"), types) == []  # no topic chosen yet
+    assert settings.binding_problems(Binding("/gear", "lab_msgs/Gear", "publish", ("data",)), types) == []
+    assert settings.binding_problems(Binding("/gear", "std_msgs/Int8", "publish", ("data",)), types) == [
+        "maximum 500 is beyond what a int8 holds (-128..127)"]
 
 
 def test_step_snapping_and_integer_rounding():
