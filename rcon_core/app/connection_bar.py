@@ -320,10 +320,14 @@ class ConnectionBar(QtWidgets.QFrame):
             self.latency_label.setText(text)
         self.bandwidth.poll()
 
-    def _say(self, text: str) -> None:
+    def _say(self, text: str, role: str = "problem") -> None:
         """The one-line message; while it is empty its room goes to the URL field (at 1024 px the field was
-        squeezed to "ws:…847" beside an empty message that held two thirds of the free width)."""
+        squeezed to "ws:…847" beside an empty message that held two thirds of the free width).  ``role``:
+        "problem" (red, bold: why the link is not up) or "info" (plain: which protocol and server)."""
         self.message.setText(text)
+        if self.message.property("role") != role:
+            self.message.setProperty("role", role)
+            repolish(self.message)
         layout = self.layout()
         if isinstance(layout, QtWidgets.QBoxLayout):
             layout.setStretchFactor(self.message, 2 if text else 0)
@@ -349,7 +353,7 @@ class ConnectionBar(QtWidgets.QFrame):
             self.message.setMinimumWidth(self.latency_label.minimumSizeHint().width() + spacing)
         if connected:
             self.failure, self.note = None, ""
-            self._say(self.link.protocol_text())  # "" on rosbridge; a Foxglove link says so
+            self._say(self.link.protocol_text(), "info")  # "" on rosbridge; a Foxglove link says so
             if self._remember is not None and self._remember == self.link.url and not self._remember_on_answer:
                 self._keep_url()
         self.state_changed.emit(state)
