@@ -1,6 +1,6 @@
 """Reliability soak: what a hostile server, a flapping or stalled link and kill -9 during saves do to RCON.
 
-Usage: ``python benchmarks/soak.py [--quick] [--out FILE] [--parts fuzz flap stall saves]``.
+Usage: ``python benchmarks/soak.py [--quick] [--out FILE] [--parts fuzz flap stall saves gui reconnect]``.
 Everything runs on 127.0.0.1, bounded in count and time (about 3.5 minutes in full, 20 s with --quick).
 
 * ``fuzz``: 100,000 seeded frames from a hostile rosbridge server (``rcon_core.fuzz``: invalid UTF-8, bad
@@ -18,6 +18,10 @@ Everything runs on 127.0.0.1, bounded in count and time (about 3.5 minutes in fu
   with SIGKILL at a random point; after each kill the store is opened again (``load``).  Figures:
   complete layouts (200/200), temp files left (``.*.tmp``, target 0) once the store is opened again
   after its age guard (``canvas.files.STALE_AFTER_S``: a younger temp file may be a live writer's).
+* ``gui`` and ``reconnect`` (``benchmarks/soak_app.py``, each in a process of its own): the GUI's worst
+  pass while a Text View gets one 5 MB String and a 10,000 msg/s flood (target < 50 ms, no stall cut),
+  and the app's RSS growth per reconnect on the demo workspace with the link cut every 3 s (target
+  < 0.05 MB per reconnect).
 """
 
 from __future__ import annotations
@@ -48,6 +52,10 @@ def rss_mb() -> float:
             if line.startswith("VmRSS:"):
                 return int(line.split()[1]) / 1024
     return float("nan")
+
+
+#: the app's parts (``soak_app.py``)
+APP_PARTS = ["gui", "reconnect"]
 
 
 def pct(values: list[float], p: float) -> float:
@@ -304,6 +312,43 @@ def part_saves(kills: int, seed: int = 7) -> dict[str, Any]:
             "temp_bytes_left": left_bytes, "problems": problems[:5]}
 
 
+# ----------------------------------------------------------------------------------------------- gui, reconnect
+
+
+def part_app(part: str, quick: bool) -> dict[str, Any]:
+    """One of ``soak_app.py``'s parts (``gui``, ``reconnect``) in a process of its own."""
+    import subprocess
+
+    here = Path(__file__).resolve().parent
+    with tempfile.TemporaryDirectory(prefix="rcon-soak-app-") as tmp:
+        out = Path(tmp) / f"{part}.json"
+        cmd = [sys.executable, str(here / "soak_app.py"), part, "--out", str(out)] + (["--quick"] if quick else [])
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=1800,
+                              env={**os.environ, "QT_QPA_PLATFORM": os.environ.get("QT_QPA_PLATFORM", "offscreen")})
+        if not out.exists():
+            return {"error": (proc.stderr or proc.stdout)[-1500:]}
+        return dict(json.loads(out.read_text()))
+
+
+def app_targets(r: dict[str, Any]) -> list[tuple[str, Any, bool]]:
+    out: list[tuple[str, Any, bool]] = []
+    if "gui" in r:
+        g = r["gui"]
+        ok = "error" not in g
+        out.append(("gui: worst GUI pass, one 5 MB String on a Text View < 50 ms",
+                    g.get("text_5mb_worst_gui_pass_ms", g.get("error")), ok and g["text_5mb_worst_gui_pass_ms"] < 50))
+        out.append(("gui: worst GUI pass, 10,000 msg/s on a Text View < 50 ms",
+                    g.get("flood_worst_gui_pass_ms"), ok and g["flood_worst_gui_pass_ms"] < 50))
+        out.append(("gui: stall cuts during both = 0", ok and g["text_5mb_stall_cuts"] + g["flood_stall_cuts"],
+                    ok and g["text_5mb_stall_cuts"] + g["flood_stall_cuts"] == 0))
+    if "reconnect" in r:
+        c = r["reconnect"]
+        per = c.get("rss_per_reconnect_mb")
+        out.append(("reconnect: app RSS growth < 0.05 MB per reconnect", per if per is not None else c.get("error"),
+                    per is not None and per < 0.05))
+    return out
+
+
 # ----------------------------------------------------------------------------------------------- main
 
 
@@ -311,8 +356,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="a short smoke run (about 20 s)")
     parser.add_argument("--out", type=Path, help="write the figures as JSON here")
-    parser.add_argument("--parts", nargs="*", default=["fuzz", "flap", "stall", "saves"],
-                        choices=["fuzz", "flap", "stall", "saves"])
+    parser.add_argument("--parts", nargs="*", default=["fuzz", "flap", "stall", "saves", *APP_PARTS],
+                        choices=["fuzz", "flap", "stall", "saves", *APP_PARTS])
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.ERROR)  # the bad frames are the point here: no warning per frame
     q = args.quick
@@ -330,7 +375,11 @@ def main(argv: list[str] | None = None) -> int:
     if "stall" in args.parts:
         results["stall"] = asyncio.run(part_stall(2.0 if q else 5.0))
         print("stall:", json.dumps(results["stall"]), flush=True)
-    results["targets"] = targets(results)
+    for part in APP_PARTS:
+        if part in args.parts:
+            results[part] = part_app(part, q)
+            print(f"{part}:", json.dumps(results[part]), flush=True)
+    results["targets"] = targets(results) + app_targets(results)
     print("\ntargets:")
     for what, value, met in results["targets"]:
         print(f"  {'ok  ' if met else 'MISS'} {what}: {value}")

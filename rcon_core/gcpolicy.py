@@ -14,7 +14,10 @@ Decision: freeze what has settled
     counting the moment nothing refers to them; only *cyclic* garbage among them waits, until the next
     *full* settle (``gc.unfreeze()`` first), which the app does when a workspace is opened or another
     canvas is shown (the moment widgets are made and dropped, when a pause of some tens of ms is not
-    felt: no pad of the new canvas is held yet).  Between those, a *light* settle every
+    felt: no pad of the new canvas is held yet).  So what a robot link drops must not be left in cycles:
+    a dropped connection frozen while it was alive kept its buffers for good (0.85 MB per reconnect) until
+    the bridge broke websockets' own cycles and stopped keeping tracebacks (``wslink.Link.release``,
+    ``safety.without_traceback``; ``benchmarks/soak.py --parts reconnect``).  Between those, a *light* settle every
     :data:`SETTLE_EVERY` seconds and one a few seconds after a robot connects (its catalogue and message
     classes arrive then) freezes what has been made since, walking only that.
 

@@ -135,6 +135,22 @@ def plugins() -> Any:
     return pm
 
 
+def widget_catalog(*plugins: Any, names: list[str] | None = None) -> Any:
+    """A widget catalog (a ``PluginManager``) holding only ``plugins`` (plugin modules or objects with
+    ``rcon_*`` hooks), no entry point: a unit test sees exactly what it registered, as npe2's test manager
+    does. Give it to a model as ``context=WidgetContext(widget_catalog(my_plugin))``::
+
+        from rcon_widgets_std import plugin as std
+        catalog = widget_catalog(std)                  # only the standard kinds
+    """
+    from rcon_core.plugins import PluginManager
+
+    pm = PluginManager(environ={})
+    for i, plugin in enumerate(plugins):
+        pm.register(plugin, name=names[i] if names else None)
+    return pm
+
+
 @asynccontextmanager
 async def connected(url: str, *, timeout: float = 10.0, **options: Any) -> AsyncIterator[BridgeClient]:
     """``async with connected(sim.url, call_timeout=5) as client:`` a :class:`BridgeClient` on ``url``
@@ -266,9 +282,20 @@ class RecordingPort:
         port.answer("/dock", TimeoutError("no answer"))                                # raised by the call
     """
 
+    #: a complete port (``rcon_core.plugins.api.Port``): a test may set these to play the app's port
+    view_only: str | None = None
+    envelope: Any = None
+    widget_id: str | None = None
+    composes = False
+
     def __init__(self) -> None:
         self.published: list[tuple[str, dict[str, Any]]] = []
         self.calls: list[tuple[str, Any]] = []
+        #: action goals the model tried to send: (action, type, goal)
+        self.goals: list[tuple[str, str, Any]] = []
+        #: how often the model said it has something new to show (``changed()``)
+        self.changes = 0
+        self.link: Any = id(self)
         self._answers: dict[str, list[Any]] = {}
         self._subscribers: dict[str, list[Callable[[dict[str, Any]], Any]]] = {}
 
@@ -308,8 +335,64 @@ class RecordingPort:
             answer = answer(args)
         return dict(answer)
 
+    def send_action_goal(self, action: str, action_type: str, args: Any = None, feedback: Any = None,
+                         **options: Any) -> Any:
+        """Recorded in :attr:`goals`; no robot answers, so it raises after recording."""
+        self.goals.append((action, action_type, args))
+        raise RuntimeError("a RecordingPort sends no action goals (it reaches no robot)")
+
+    def changed(self) -> None:
+        self.changes += 1
+
     def close(self) -> None:
         pass
+
+
+def check_conformance(spec: Any, *, catalog: Any = None, types: Any = None, view: bool = True) -> None:
+    """Check one widget kind against the widget API (``rcon_core.plugins.api``), as
+    ``tests/test_plugin_conformance.py`` checks every installed kind: raises ``AssertionError`` saying what
+    does not conform. For each role: the model is a ``WidgetModel`` built as the runtime builds it, unbound
+    (it must say what it lacks, start, stop and take focus loss and link state without a robot); the
+    settings round-trip through a layout's dict; the view (``view=True``, needs a QApplication) builds
+    offscreen as ``View(model)`` and takes ``refresh(state)``. A lab's package runs it in its own tests::
+
+        from rcon_core.testing import check_conformance
+        def test_conforms(qapp):
+            check_conformance(plugin.SPEC)
+    """
+    from rcon_core.msgs import TypeRegistry
+    from rcon_core.plugins import Binding, WidgetContext, WidgetModel
+    from rcon_core.plugins.api import Port, WidgetView, check_api_version
+
+    check_api_version(spec.api_version, spec.kind, spec.package)
+    model_cls = spec.load_model()
+    assert isinstance(model_cls, type) and issubclass(model_cls, WidgetModel), (
+        f"{spec.kind}: the model {model_cls!r} is not a WidgetModel")
+    settings = spec.make_settings({})
+    stored = spec.settings_to_dict(settings)
+    assert spec.settings_to_dict(spec.make_settings(stored)) == stored, f"{spec.kind}: settings do not round-trip"
+    types = types if types is not None else TypeRegistry.standard()
+    for role in sorted(spec.roles):
+        model = model_cls(spec.make_settings({}), Binding("", "", role), RecordingPort(), types=types,
+                          context=WidgetContext(catalog))
+        assert isinstance(model.port, Port)
+        problems = model.problems()
+        assert problems and all(isinstance(p, str) and p for p in problems), (
+            f"{spec.kind} ({role}): an unbound widget must say what it lacks, got {problems!r}")
+        model.start()
+        model.on_focus_lost()
+        model.set_link(False)
+        assert model.state.running and model.state.link_down, f"{spec.kind} ({role}): start/set_link"
+        if view:
+            built = build_view(spec.load_view(), model)
+            try:
+                refreshes: WidgetView = built
+                assert isinstance(refreshes, WidgetView), f"{spec.kind}: its view has no refresh(state)"
+                refreshes.refresh(widget_state(None, seq=model.state.seq + 1))
+            finally:
+                built.deleteLater()  # a QWidget (build_view returns Any)
+        model.stop()
+        assert not model.state.running, f"{spec.kind} ({role}): stop"
 
 
 def widget_state(value: Any = None, **fields: Any) -> Any:
@@ -331,9 +414,10 @@ def build_view(view_cls: Any, model: Any, state: Any = None, *, size: tuple[int,
         QtWidgets.QApplication([])
     view = view_cls(model)
     view.resize(*size)
-    refresh = getattr(view, "refresh", None)
-    if refresh is not None:
-        refresh(state if state is not None else model.state)
+    from rcon_core.plugins.api import WidgetView
+
+    if isinstance(view, WidgetView):  # a view without refresh() reads model.state when it paints
+        view.refresh(state if state is not None else model.state)
     return view
 
 

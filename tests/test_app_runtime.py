@@ -136,11 +136,19 @@ def test_values_are_painted_without_waiting_for_the_frame_clock(qtbot, tmp_path,
 
 
 class CountingModel:
-    """Just enough of a model for the host: a state whose seq the test moves."""
+    """Just enough of a model for the host (what ``HostedModel`` says the host reads): a state whose seq the
+    test moves."""
+
+    view_only = None
+    dry_run = False
+    shows_every_robot = False
 
     def __init__(self) -> None:
         self.seq = 0
         self.settings = ProbeSettings(caption="n")
+
+    def child_models(self) -> list:
+        return []
 
     @property
     def state(self) -> WidgetState:

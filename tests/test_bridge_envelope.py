@@ -21,6 +21,7 @@ from rcon_core.bridge.envelope import (
     is_command,
     motion_path,
 )
+from rcon_core.bridge.stats import BridgeStats
 
 
 def twist(lx=0.0, az=0.0, **more):
@@ -137,12 +138,13 @@ def test_motion_path_names_the_part_a_field_belongs_to(type_name, path, expected
 
 
 def test_enforce_counts_clamps_and_refusals():
-    stats: dict[str, int] = {}
+    stats = BridgeStats()
     enforce(ENV, "geometry_msgs/Twist", twist(5.0), stats)
     enforce(None, "geometry_msgs/Twist", twist(5.0), stats)  # no envelope: no limit
     with pytest.raises(EnvelopeRefused):
         enforce(None, "geometry_msgs/Twist", twist(math.nan), stats)
-    assert stats == {"envelope_clamped": 1, "envelope_refused": 1}
+    assert (stats.envelope_clamped, stats.envelope_refused) == (1, 1)
+    assert stats.as_dict() == {**BridgeStats().as_dict(), "envelope_clamped": 1, "envelope_refused": 1}
 
 
 # -- the bridge: every publish of the client is held, a raw node's too ---------------------------------------

@@ -11,6 +11,7 @@ import sys
 import pytest
 
 from rcon_core.cli.main import main
+from rcon_core.plugins.api import API_VERSION
 
 
 def rcon(*argv, cwd=None, env=None):
@@ -44,8 +45,10 @@ def test_a_generated_package_installs_passes_its_tests_and_is_found(tmp_path):
     assert {p.relative_to(package).as_posix() for p in package.rglob("*") if p.is_file()} == {
         "pyproject.toml", "README.md", "rcon_lab_winch/__init__.py", "rcon_lab_winch/py.typed",
         "rcon_lab_winch/plugin.py", "rcon_lab_winch/model.py", "rcon_lab_winch/view.py",
-        "rcon_lab_winch/template.json", "tests/conftest.py", "tests/test_model.py", "tests/test_view.py"}
-    site, env = install_and_test(tmp_path, package, 4)
+        "rcon_lab_winch/template.json", "tests/conftest.py", "tests/test_model.py", "tests/test_view.py",
+        "tests/test_conformance.py"}
+    assert f'api_version="{API_VERSION}"' in (package / "rcon_lab_winch" / "plugin.py").read_text()
+    site, env = install_and_test(tmp_path, package, 5)
     assert (site / "rcon_lab_winch" / "py.typed").exists()
     assert (site / "rcon_lab_winch" / "template.json").exists()  # issue 25.1: the wheel carries the template
     listed = rcon("plugins", "--check", "--json", env=env)
@@ -60,9 +63,10 @@ def test_a_generated_package_installs_passes_its_tests_and_is_found(tmp_path):
 
 
 @pytest.mark.parametrize("argv, role, passed", [
-    (["--type", "lab_srvs/SetPump"], "call", 7),  # not standard: a _srvs package is a service; a .srv to fill in
-    (["--type", "std_srvs/SetBool", "--role", "call"], "call", 7),
-    (["--type", "std_msgs/Float64", "--role", "publish"], "publish", 4),
+    (["--type", "lab_srvs/SetPump"], "call", 8),  # not standard: a _srvs package is a service; a .srv to fill in
+    (["--type", "std_srvs/SetBool", "--role", "call"], "call", 8),
+    (["--type", "std_msgs/Float64", "--role", "publish"], "publish", 5),
+    (["--type", "lab_msgs/Winch", "--role", "publish"], "publish", 5),  # its view test has no registry
 ])
 def test_a_publisher_and_a_service_caller_install_and_pass_their_tests(tmp_path, argv, role, passed):
     """issue 25.2: `--type std_srvs/SetBool` crashed and `--type lab_srvs/SetPump` wrote a subscriber that

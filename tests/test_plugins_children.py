@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 
 from rcon_core.msgs import TypeRegistry, walk_fields
-from rcon_core.plugins import Binding, Role
+from rcon_core.plugins import Binding, Role, WidgetContext
 from rcon_core.plugins.children import ChildCatalog, child_name, child_problems, child_role, kind_problems
 
 pytest.importorskip("rcon_widgets_std")
@@ -39,7 +39,8 @@ def test_the_editor_and_the_compound_name_and_refuse_a_child_alike(plugins) -> N
     cat = ChildCatalog(types, plugins, binding)
     [placed] = cat.placement_problems(wrong)
     assert cat.child_name(0, wrong) == "child 1 (Label) on linear.x" and placed.startswith("Label cannot publish")
-    model = CompoundModel(CompoundSettings(children=[wrong]), binding, None, types=types)
+    model = CompoundModel(CompoundSettings(children=[wrong]), binding, None, types=types,
+                          context=WidgetContext(plugins))  # the same catalog as the editor's
     assert any("Label cannot publish" in p for p in model.problems()), model.problems()
     assert child_role(Role.CALL, "response") is Role.SUBSCRIBE and child_role(Role.SERVE, "response") is Role.PUBLISH
 

@@ -313,7 +313,9 @@ class AddPanel(QtWidgets.QWidget):
             error = f"{spec.title}: {exc}"
         self.settings_error.setText(error)
         self.settings_error.setVisible(bool(error))
-        self.draft = Draft(spec=spec, role=role, target=target, settings=settings, title=spec.title)
+        catalog = self._child_context(lambda: None).plugins if self._child_context is not None else None
+        self.draft = Draft(spec=spec, role=role, target=target, settings=settings, title=spec.title,
+                           catalog=catalog)
         self.settings_title.set_name(spec.title)
         self._pick_target = pick_target
         self._roles = role_preference(spec) if pick_target else [role]

@@ -69,20 +69,32 @@ class BandwidthButton(QtWidgets.QToolButton):
 
     def showEvent(self, event: QtGui.QShowEvent) -> None:  # noqa: N802 - Qt's name
         super().showEvent(event)
-        # wide enough for the widest reading (measured as styled: the theme's font and padding are in
-        # force by now), so no reading ever changes what the bar needs
         self.ensurePolished()
+        self._measure()
+
+    def _measure(self) -> None:
+        """Wide enough for the widest reading, measured as styled (the theme's font and padding), so no
+        reading ever changes what the bar needs; measured again when the text size or the theme changes."""
+        self._full_width = 0
         self.setMaximumWidth(16_777_215)
-        self.setText("↓ 888 kB/s")
-        self._full_width = self.sizeHint().width()
+        shown = self.text()
+        widths = []
+        for sample in ("↓ 888 kB/s", "↓ 88.8 MB/s"):
+            self.setText(sample)
+            widths.append(super().sizeHint().width())
+        self.setText(shown)
+        self._full_width = max(widths)
         self.setMaximumWidth(self._full_width)
         self.updateGeometry()
         self._show_reading()
 
     def event(self, e: QtCore.QEvent) -> bool:
         handled = super().event(e)
-        if e.type() in (QtCore.QEvent.Type.Polish, QtCore.QEvent.Type.StyleChange) and self.minimumWidth():
+        kind = e.type()
+        if kind in (QtCore.QEvent.Type.Polish, QtCore.QEvent.Type.StyleChange) and self.minimumWidth():
             self.setMinimumWidth(0)  # a theme's touch-size min-width would widen the bar: squeezed instead
+        if kind in (QtCore.QEvent.Type.StyleChange, QtCore.QEvent.Type.FontChange) and self._full_width:
+            self._measure()  # another text size or theme: the readings' widths changed
         return handled
 
     def sizeHint(self) -> QtCore.QSize:  # noqa: N802 - Qt's name

@@ -30,6 +30,7 @@ from rcon_core.canvas import (
     Canvas,
     CanvasLocked,
     Change,
+    ChangeKind,
     Document,
     EditError,
     Geometry,
@@ -167,43 +168,43 @@ class CanvasController(QtCore.QObject):
     def _changed(self, change: Change) -> None:
         what, cid, wid = change.what, change.canvas_id or "", change.widget_id or ""
         current = self.canvas.id
-        if what == "workspace-replaced":
+        if what is ChangeKind.WORKSPACE_REPLACED:
             self._rebuild_surfaces()
             self.run_current()
-        elif what == "canvas-added" and cid not in self.surfaces:
+        elif what is ChangeKind.CANVAS_ADDED and cid not in self.surfaces:
             self._make_surface(self.workspace.canvas(cid))
             self.canvases_changed.emit()
-        elif what == "canvas-removed" and cid in self.surfaces:
+        elif what is ChangeKind.CANVAS_REMOVED and cid in self.surfaces:
             self._drop_surface(cid)
             self.canvases_changed.emit()
-        elif what == "canvas-renamed" and cid in self.surfaces:
+        elif what is ChangeKind.CANVAS_RENAMED and cid in self.surfaces:
             self.surfaces[cid].name = self.workspace.canvas(cid).name
             self.canvases_changed.emit()
-        elif what == "canvas-switched":
+        elif what is ChangeKind.CANVAS_SWITCHED:
             self._show_current()
             self.live.switch(self.canvas)
-        elif what == "canvas-view-only" and cid == current:
+        elif what is ChangeKind.CANVAS_VIEW_ONLY and cid == current:
             self.run_current()  # every widget gets a port that refuses (or no longer refuses)
             self.lock_changed.emit(self.canvas.locked)
-        elif what == "canvas-locked" and cid in self.surfaces:
+        elif what is ChangeKind.CANVAS_LOCKED and cid in self.surfaces:
             self.surfaces[cid].set_editable(not self.workspace.canvas(cid).locked)
             if cid == current:
                 self._apply_lock()
-        elif what == "widget-added" and cid in self.surfaces:
+        elif what is ChangeKind.WIDGET_ADDED and cid in self.surfaces:
             widget = self.workspace.canvas(cid).widget(wid)
             self._add_frame(self.surfaces[cid], widget)
             self.surfaces[cid].set_order(w.id for w in self.workspace.canvas(cid).widgets)
             if cid == current:
                 self.live.add(widget)
-        elif what == "widget-removed" and cid in self.surfaces:
+        elif what is ChangeKind.WIDGET_REMOVED and cid in self.surfaces:
             self.surfaces[cid].remove_frame(wid)
             self.host.discard(wid)
             self._known.pop(wid, None)
             if cid == current:
                 self.live.remove(wid)
-        elif what == "widget-changed" and cid in self.surfaces:
+        elif what is ChangeKind.WIDGET_CHANGED and cid in self.surfaces:
             self._widget_changed(cid, self.workspace.canvas(cid).widget(wid))
-        elif what == "plugin-settings-changed":
+        elif what is ChangeKind.PLUGIN_SETTINGS_CHANGED:
             self.run_current()
 
     def _widget_changed(self, canvas_id: str, widget: WidgetInstance) -> None:

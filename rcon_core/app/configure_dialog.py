@@ -132,7 +132,7 @@ class WidgetConfigurer:
             except KeyError:  # a robot not in the workspace: nothing to compare with
                 envelope = None
             beyond = beyond_envelope(envelope, rebound_binding() or binding,
-                                     form.value() if form is not None else None)
+                                     form.value() if form is not None else None, self.plugins)
             if beyond:
                 self.beyond_dialog = ask_beyond(dialog, beyond, dialog.accept)
                 return

@@ -136,15 +136,16 @@ class ConnectionBar(QtWidgets.QFrame):
         row = QtWidgets.QHBoxLayout(self)
         row.setContentsMargins(10, 8, 10, 8)
         row.setSpacing(10)
-        row.addWidget(self.url, 1)
+        # the URL field takes two thirds of the free width, the message one third: at 1024 px beside the
+        # bandwidth readout the field was squeezed to "ws:…847" next to an empty message holding two thirds
+        row.addWidget(self.url, 2)
         row.addWidget(self.connect_button)
         row.addWidget(self.settings_button)
         row.addWidget(self.state_label)
         row.addWidget(self.latency_label)
         row.addWidget(self.bandwidth)
-        row.addWidget(self.message, 2)  # the message gets the room: the reason comes first, then the countdown
+        row.addWidget(self.message, 1)
         self._show_state(ConnectionState.CLOSED)
-        self._say(self.message.text())
 
     # ---------------------------------------------------------------------------------------- actions
     def robot_url(self) -> str:
@@ -276,6 +277,24 @@ class ConnectionBar(QtWidgets.QFrame):
             widths.append(label.sizeHint().width())
         label.setText(shown)
         label.setMinimumWidth(max(widths))
+        # and the latency the widest it reads ("888 ms"), so a new reading never cuts it or moves the bar
+        latency = self.latency_label
+        latency.setMinimumWidth(0)
+        latency.setMinimumWidth(max(latency.minimumSizeHint().width(), 4 + max(
+            latency.fontMetrics().horizontalAdvance(t) for t in ("888 ms", "<1 ms"))))
+        self._hold_latency_room()
+
+    def _hold_latency_room(self) -> None:
+        """The latency shows only while connected; otherwise the message holds its room as its minimum, so
+        the bar's minimum width is the same in every state (the smaller minimum first, so the bar never asks
+        for both at once, not even for one layout pass)."""
+        spacing = layout.spacing() if (layout := self.layout()) is not None else 0
+        if self.state is ConnectionState.CONNECTED:
+            self.message.setMinimumWidth(0)
+            self.latency_label.setVisible(True)
+        else:
+            self.latency_label.setVisible(False)
+            self.message.setMinimumWidth(self.latency_label.minimumWidth() + spacing)
 
     def _tint_icon(self) -> None:
         """The padlock in the theme's text colour (black on light, light grey at night)."""
@@ -286,6 +305,10 @@ class ConnectionBar(QtWidgets.QFrame):
         super().changeEvent(event)
         if event.type() == QtCore.QEvent.Type.PaletteChange:
             self._tint_icon()  # another theme
+        if event.type() in (QtCore.QEvent.Type.StyleChange, QtCore.QEvent.Type.FontChange) and self.isVisible():
+            # another text size: "DISCONNECTED" and "Disconnect" measured again, once every child has its
+            # new font (the bar hears of the change before its children are polished again)
+            QtCore.QTimer.singleShot(0, self._fit_widths)
 
     def showEvent(self, event: QtGui.QShowEvent) -> None:  # noqa: N802 - Qt's name
         super().showEvent(event)
@@ -321,17 +344,12 @@ class ConnectionBar(QtWidgets.QFrame):
         self.bandwidth.poll()
 
     def _say(self, text: str, role: str = "problem") -> None:
-        """The one-line message; while it is empty its room goes to the URL field (at 1024 px the field was
-        squeezed to "ws:…847" beside an empty message that held two thirds of the free width).  ``role``:
-        "problem" (red, bold: why the link is not up) or "info" (plain: which protocol and server)."""
+        """The one-line message (the reason comes first, then the countdown).  ``role``: "problem" (red,
+        bold: why the link is not up) or "info" (the plain text colour: which protocol and server)."""
         self.message.setText(text)
-        if self.message.property("role") != role:
+        if text and self.message.property("role") != role:  # an empty line keeps its style
             self.message.setProperty("role", role)
             repolish(self.message)
-        layout = self.layout()
-        if isinstance(layout, QtWidgets.QBoxLayout):
-            layout.setStretchFactor(self.message, 2 if text else 0)
-            layout.setStretchFactor(self.url, 1 if text else 3)
 
     def _show_state(self, state: ConnectionState) -> None:
         self.state = state
@@ -340,17 +358,8 @@ class ConnectionBar(QtWidgets.QFrame):
         repolish(self.state_label)
         self.connect_button.setText("Connect" if self.link.client is None else "Disconnect")
         self._fit_widths()
-        # a latency means something only while connected; otherwise its room goes to the message, which
-        # then asks for that room as its minimum: the bar's minimum width is the same in every state
-        # (the smaller minimum first, so the bar never asks for both at once, not even for one layout pass)
         connected = state is ConnectionState.CONNECTED
-        spacing = layout.spacing() if (layout := self.layout()) is not None else 0
-        if connected:
-            self.message.setMinimumWidth(0)
-            self.latency_label.setVisible(True)
-        else:
-            self.latency_label.setVisible(False)
-            self.message.setMinimumWidth(self.latency_label.minimumSizeHint().width() + spacing)
+        self._hold_latency_room()
         if connected:
             self.failure, self.note = None, ""
             self._say(self.link.protocol_text(), "info")  # "" on rosbridge; a Foxglove link says so

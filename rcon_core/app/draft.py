@@ -7,8 +7,8 @@ from typing import Any
 import attrs
 
 from rcon_core.matcher import match
-from rcon_core.plugins import Binding, Role, WidgetSpec
-from rcon_core.plugins.children import settings_problems
+from rcon_core.plugins import Binding, Role, WidgetCatalog, WidgetSpec
+from rcon_core.plugins.api import settings_problems, settings_size
 from rcon_core.plugins.paths import parse_path
 
 #: each role's button on the add panel: (what it does, in words; what it means)
@@ -68,6 +68,9 @@ class Draft:
     title: str = ""
     #: the robot the topic/service comes from (the side panel's robot; "" = the first robot)
     robot: str = ""
+    #: the enabled widget kinds (the app's plugin manager): settings whose checks need the other kinds (a
+    #: Compound's children) are checked against it
+    catalog: WidgetCatalog | None = None
 
     @property
     def field_path(self) -> str:
@@ -92,7 +95,7 @@ class Draft:
 
     def problems(self) -> list[str]:
         """What keeps the draft from being placed: binding first, then the settings' own checks."""
-        return list(self.binding.problems()) + settings_problems(self.settings)
+        return list(self.binding.problems()) + settings_problems(self.settings, self.catalog)
 
     def settings_dict(self) -> dict[str, Any]:
         return self.spec.settings_to_dict(self.settings) if self.settings is not None else {}
@@ -101,13 +104,9 @@ class Draft:
         """The size a new widget gets: the kind's ``default_size``, grown to what these settings need
         when the settings object offers ``preferred_size() -> (w, h)`` (a Compound with many children)."""
         w, h = (int(v) for v in self.spec.default_size)
-        preferred = getattr(self.settings, "preferred_size", None)
-        if callable(preferred):
-            try:
-                pw, ph = preferred()
-                w, h = max(w, int(pw)), max(h, int(ph))
-            except Exception:  # a plugin's hint must never stop a widget from being placed
-                pass
+        preferred = settings_size(self.settings, self.catalog)  # a hint that fails is no hint
+        if preferred is not None:
+            w, h = max(w, int(preferred[0])), max(h, int(preferred[1]))
         return w, h
 
 

@@ -27,6 +27,8 @@ from qtpy import QtGui, QtWidgets
 
 from rcon_core.bridge.envelope import MAX_ANGULAR, MAX_LINEAR, Envelope
 from rcon_core.canvas.robots import Robot
+from rcon_core.plugins import WidgetCatalog
+from rcon_core.plugins.api import settings_commands
 
 __all__ = ["EnvelopeDialog", "beyond_envelope", "check_placed", "install", "parse_limit"]
 
@@ -51,19 +53,15 @@ def parse_limit(text: str, what: str, top: float, units: str = "") -> float | No
     return value
 
 
-def beyond_envelope(envelope: Envelope | None, binding: Any, settings: Any) -> list[str]:
+def beyond_envelope(envelope: Envelope | None, binding: Any, settings: Any,
+                    catalog: WidgetCatalog | None = None) -> list[str]:
     """What ``settings`` (of a widget bound by ``binding``) could send beyond ``envelope``, one sentence
     each ("linear.x up to 5 m/s: the safety envelope holds it to 1 m/s"); empty when nothing is beyond or
-    the settings do not say what they send (no ``commands(binding)``)."""
+    the settings do not say what they send (no ``commands(binding)``; ``catalog``: the enabled kinds, for
+    settings whose commands are their children's)."""
     if envelope is None or not envelope.limited or settings is None:
         return []
-    commands = getattr(settings, "commands", None)
-    if not callable(commands):
-        return []
-    try:
-        pairs = list(commands(binding))
-    except Exception:  # a plugin's hint must never keep the operator from saving
-        return []
+    pairs = settings_commands(settings, binding, catalog)  # a hint that fails says nothing
     out = []
     for path, value in pairs:
         limit = envelope.limit_for(binding.type, path)
@@ -205,7 +203,7 @@ def check_placed(window: Any, draft: Any) -> QtWidgets.QMessageBox | None:
         envelope = window.doc.workspace.robot(draft.robot).envelope
     except KeyError:
         return None
-    beyond = beyond_envelope(envelope, draft.binding, draft.settings)
+    beyond = beyond_envelope(envelope, draft.binding, draft.settings, draft.catalog)
     if not beyond:
         return None
     box = ask_beyond(window, beyond, lambda: None, otherwise=window.doc.undo, save="Keep it")

@@ -31,7 +31,7 @@ from rcon_core.app.robot_chips import RobotChips, RobotPicker
 from rcon_core.app.robot_marks import apply_marks
 from rcon_core.app.widget_host import RateMeter
 from rcon_core.bridge import ConnectionState
-from rcon_core.canvas import Change, EditError
+from rcon_core.canvas import Change, ChangeKind, EditError
 from rcon_core.canvas.fleet import Fleet
 from rcon_core.canvas.retarget import plan_retarget, setting_names
 from rcon_core.canvas.robots import robot_colour
@@ -132,10 +132,10 @@ class FleetUi(QtCore.QObject):
 
     # ------------------------------------------------------------------------------------ robots
     def _doc_changed(self, change: Change) -> None:
-        if change.what in ("robots-changed", "workspace-replaced"):
+        if change.what in (ChangeKind.ROBOTS_CHANGED, ChangeKind.WORKSPACE_REPLACED):
             before = self._seen
             new = self._sync_robots()  # _seen is now the new robots
-            if change.what == "robots-changed":  # the controller restarts on workspace-replaced itself
+            if change.what is ChangeKind.ROBOTS_CHANGED:  # the controller restarts on workspace-replaced itself
                 self._rerun(before)
             # once the runtime runs on the new robots (the controller hears this change after us)
             QtCore.QTimer.singleShot(0, lambda: self._connect(new))
@@ -154,7 +154,7 @@ class FleetUi(QtCore.QObject):
             host, live = self.window.host, self.window.live
             for widget in self.window.controller.canvas.widgets:
                 hosted = host.hosted.get(widget.id)
-                if hosted is not None and getattr(hosted.model, "shows_every_robot", False):
+                if hosted is not None and hosted.model is not None and hosted.model.shows_every_robot:
                     live.restart(widget)
 
     def _sync_robots(self) -> list[str]:
@@ -278,6 +278,13 @@ class FleetUi(QtCore.QObject):
         """Each robot's link for the bandwidth readout, named when there are several."""
         pairs = self.links.items()
         return [(robot.label if len(pairs) > 1 else "", link) for robot, link in pairs]
+
+    def catalog_state(self) -> str:
+        """What the side robot's lists wait for (``Link.catalog_state``: "connecting", "listing", "lost"...)."""
+        try:
+            return str(self.links.link(self.side_robot).catalog_state)
+        except KeyError:
+            return "offline"
 
     # ------------------------------------------------------------------------------------- polling
     def poll(self, _now: float = 0.0) -> None:

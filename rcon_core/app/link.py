@@ -6,7 +6,17 @@ bridge client lacks, so the app compares and stores that enum, never its words) 
 and service catalogue in another mailbox, and why the last attempt failed (a
 :class:`rcon_core.bridge.reasons.Failure`, None once connected) in a third.  Nothing here blocks the GUI
 thread.  Connecting to another robot, or disconnecting, empties the catalogue at once: the previous
-robot's topics never stay on screen as if they were the new one's.
+robot's topics never stay on screen as if they were the new one's; so does losing the link (the list
+comes back when the robot does), and ``catalog_state`` says which of these the (empty) lists are in.
+
+Decision: the catalogue loop diffs, batches and paces
+    Every ``CATALOG_PERIOD`` (or, for a big graph, ``CATALOG_SHARE`` times what the last listing took,
+    whichever is longer) the loop asks ``/rosapi/topics`` and ``/rosapi/services`` once each and asks the
+    type of only the services it has not seen on this connection (``Rosapi.services_with_types(known)``,
+    a few calls in flight at a time). A listing that takes long is published as it goes (names first,
+    types as they come), and a catalogue equal to the last one is not published again: the GUI does
+    nothing when nothing changed. 10^5 services were asked all at once every 5 s (a 22 s stall, the
+    link cut by the watchdog).
 """
 
 from __future__ import annotations
@@ -30,6 +40,10 @@ log = logging.getLogger(__name__)
 
 #: how often the catalogue is fetched from rosapi while connected (s)
 CATALOG_PERIOD = 5.0
+#: ... and at least this many times what the last listing took, apart (a big graph is listed less often)
+CATALOG_SHARE = 4.0
+#: a listing that takes longer is published as it goes, this often (s)
+CATALOG_PROGRESS_EVERY = 2.0
 
 
 class BadUrl(ValueError):
@@ -55,8 +69,11 @@ def check_url(url: str) -> str:
     return url
 
 
+#: what the side panel lists: {"topics" | "services" | "actions": [(name, type)]}, and for a Foxglove
+#: robot "notes": {"actions": what its protocol cannot do}
+Catalog = dict[str, Any]
 _LABEL = re.compile(r"^[A-Za-z0-9_]([A-Za-z0-9_-]{0,61}[A-Za-z0-9_])?$")
-EMPTY_CATALOG: dict[str, list[tuple[str, str]]] = {"topics": [], "services": []}
+EMPTY_CATALOG: Catalog = {"topics": [], "services": []}
 
 
 def _host_ok(host: str) -> bool:
@@ -105,6 +122,11 @@ class Link:
         #: the URL of a link whose robot answered a call (so it goes into the URL history)
         self.answered_box = LatestValue()
         self._catalog_task: asyncio.Task | None = None
+        self._catalog_wake: asyncio.Event | None = None
+        #: what the catalogue lists are waiting for, for their empty text (written on the bridge thread):
+        #: "offline" (no robot), "connecting", "listing" (connected, first listing under way), "listed",
+        #: "lost" (the link dropped; reconnecting)
+        self.catalog_state = "offline"
         self._generation = 0
         self._listeners: list[Callable[[BridgeClient | None], None]] = []
         #: the robot's safety envelope, given to every client this link makes (``set_envelope``)
@@ -179,6 +201,7 @@ class Link:
         client.envelope = self.envelope  # before anything can publish through it (either protocol)
         self._guard(client, url)  # a view-only robot's link refuses from its first frame on
         self.client, self.url = client, url
+        self.catalog_state = "connecting"
         self.state_box.put(ConnectionState.CONNECTING)
         self.thread.call(self._wire, client, gen)
         for fn in self._listeners:
@@ -191,6 +214,7 @@ class Link:
         self.failure_box.put(None)
         self.catalog_box.put(EMPTY_CATALOG)
         self.finding = False
+        self.catalog_state = "offline"
         if client is None:
             return
         for fn in self._listeners:
@@ -250,10 +274,17 @@ class Link:
     def _wire(self, client: BridgeClient, gen: int) -> None:
         def on_state(state: Any) -> None:
             if gen == self._generation:
-                self.state_box.put(as_state(state))
-                if as_state(state) is ConnectionState.CONNECTED:
+                state = as_state(state)
+                self.state_box.put(state)
+                if state is ConnectionState.CONNECTED:
                     self.failure_box.put(None)
+                    if self.catalog_state != "listed":
+                        self.catalog_state = "listing"
                     self._start_catalog(client, gen)
+                elif state in (ConnectionState.RECONNECTING, ConnectionState.CLOSED):
+                    # the robot's topics are no longer known to be there: the lists empty until it is back
+                    self.catalog_state = "lost"
+                    self.catalog_box.put(EMPTY_CATALOG)
 
         def on_failure(failure: Any) -> None:
             if gen == self._generation:
@@ -283,19 +314,59 @@ class Link:
 
     def _start_catalog(self, client: BridgeClient, gen: int) -> None:
         if self._catalog_task is not None and not self._catalog_task.done():
+            if self._catalog_wake is not None:
+                self._catalog_wake.set()  # (re)connected: list now, not at the end of the pause
             return
-        self._catalog_task = asyncio.ensure_future(self._catalog_loop(client, gen))
+        self._catalog_wake = asyncio.Event()
+        self._catalog_task = asyncio.ensure_future(self._catalog_loop(client, gen, self._catalog_wake))
 
-    async def _catalog_loop(self, client: BridgeClient, gen: int) -> None:
+    async def _catalog_loop(self, client: BridgeClient, gen: int, wake: asyncio.Event) -> None:
+        """List the robot now and then (see the module docstring); service types learned on one connection
+        are kept until it drops."""
+        loop = asyncio.get_running_loop()
+        known: dict[str, str] = {}
+        connects = -1
+        last: Catalog | None = None
         while gen == self._generation:
+            started = loop.time()
+            wake.clear()
             if client.state is ConnectionState.CONNECTED:
+                if client.stats["connects"] != connects:  # another connection: learn the types again
+                    connects, last = client.stats["connects"], None
+                    known.clear()
+                shown = _Partial(known)
+                publisher = asyncio.ensure_future(self._publish_partial(client, gen, shown))
                 try:
-                    catalog = await fetch_catalog(client)
-                    if gen == self._generation:
-                        self.catalog_box.put(catalog)
+                    catalog = await fetch_catalog(client, known, shown.listed)
+                    if gen == self._generation and client.state is ConnectionState.CONNECTED:
+                        self.catalog_state = "listed"
+                        if catalog != last:
+                            last = catalog
+                            self.catalog_box.put(catalog)
                 except Exception as exc:
                     log.debug("catalogue refresh failed: %s", exc)
-            await asyncio.sleep(CATALOG_PERIOD)
+                finally:
+                    publisher.cancel()
+            pause = max(CATALOG_PERIOD, CATALOG_SHARE * (loop.time() - started))
+            try:
+                await asyncio.wait_for(wake.wait(), pause)
+            except TimeoutError:
+                pass
+
+    async def _publish_partial(self, client: BridgeClient, gen: int, shown: _Partial) -> None:
+        """While a long listing goes on, publish what it has every ``CATALOG_PROGRESS_EVERY`` seconds (the
+        names, with the types known so far), made a slice at a time so the loop keeps turning."""
+        while True:
+            await asyncio.sleep(CATALOG_PROGRESS_EVERY)
+            if shown.names is None:
+                continue
+            services: list[tuple[str, str]] = []
+            names, known = shown.names, shown.known
+            for i in range(0, len(names), 10_000):
+                services += [(n, known.get(n, "")) for n in names[i:i + 10_000]]
+                await asyncio.sleep(0)
+            if gen == self._generation and client.state is ConnectionState.CONNECTED:
+                self.catalog_box.put({"topics": shown.topics, "services": services, "actions": []})
 
     async def _close(self, client: BridgeClient) -> None:
         if self._catalog_task is not None:
@@ -324,21 +395,49 @@ class Link:
         self.thread.run(once())
 
 
-async def fetch_catalog(client: BridgeClient) -> dict[str, Any]:
+async def fetch_catalog(client: BridgeClient, known: dict[str, str] | None = None,
+                        listed: Callable[[list[tuple[str, str]], list[str]], None] | None = None) -> Catalog:
     """``{"topics": [(name, type)], "services": [(name, type)], "actions": [(name, type)]}`` from the link's
     catalogue (rosapi on rosbridge; actions only from a ROS 2 robot: ``/rosapi/action_servers``), and for a
-    Foxglove robot ``"notes"``: what its protocol cannot do (``{"actions": sentence}``), shown in the list."""
+    Foxglove robot ``"notes"``: what its protocol cannot do (``{"actions": sentence}``), shown in the list.
+    ``known``: service types learned before (only new services are asked; updated in place as the answers
+    come); ``listed(topics, service names)``: called once both lists are known, before the services' types
+    are asked."""
     api = client.rosapi
-    topics = _pairs(await api.topics())
+    pairs = _pairs(await api.topics())
+    await asyncio.sleep(0)  # a long list: timers and other links get a turn between the steps
+    topics = sorted(pairs)
+    await asyncio.sleep(0)
     with_types = getattr(api, "services_with_types", None)
-    services = _pairs(await (with_types() if with_types is not None else api.services()))
-    catalog: dict[str, Any] = {"topics": sorted(topics), "services": sorted(services),
-                               "actions": sorted(await _actions(client))}
+    if with_types is None:
+        services = sorted(_pairs(await api.services()))
+    elif known is None:
+        services = sorted(_pairs(await with_types()))
+    else:
+        def names_known(names: list[str]) -> None:
+            if listed is not None:
+                listed(topics, names)
+
+        services = list((await with_types(known, names_known)).items())  # str to str, in name order
+    await asyncio.sleep(0)
+    catalog: Catalog = {"topics": topics, "services": services, "actions": sorted(await _actions(client))}
     if getattr(client, "protocol", "rosbridge") == "foxglove":  # what the protocol cannot do, where one looks
         from rcon_core.foxglove import CANNOT
 
         catalog["notes"] = {"actions": CANNOT["actions"][:1].upper() + CANNOT["actions"][1:] + "."}
     return catalog
+
+
+class _Partial:
+    """What a listing under way knows: the topics and service names once listed, the types as they come."""
+
+    def __init__(self, known: dict[str, str]) -> None:
+        self.known = known
+        self.topics: list[tuple[str, str]] = []
+        self.names: list[str] | None = None
+
+    def listed(self, topics: list[tuple[str, str]], names: list[str]) -> None:
+        self.topics, self.names = topics, names
 
 
 async def _actions(client: BridgeClient) -> list[tuple[str, str]]:
@@ -363,7 +462,10 @@ def _pairs(answer: Any) -> list[tuple[str, str]]:
             names = answer.get("topics") or answer.get("services") or []
             types = answer.get("types") or [""] * len(names)
             return list(zip(names, types, strict=False))
-        return [(str(k), str(v)) for k, v in answer.items()]
+        pairs = list(answer.items())  # Rosapi's mappings are str to str already: no copy per item
+        if all(type(k) is str and type(v) is str for k, v in pairs):
+            return pairs
+        return [(str(k), str(v)) for k, v in pairs]
     out = []
     for item in answer or []:
         if isinstance(item, str):

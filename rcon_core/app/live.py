@@ -16,14 +16,31 @@ from collections import deque
 from collections.abc import Callable
 from typing import Any
 
+import attrs
+
 from rcon_core.canvas import Canvas, WidgetInstance
 from rcon_core.canvas.runtime import CanvasRuntime
+from rcon_core.plugins.api import HostedModel
 
 log = logging.getLogger(__name__)
 
-#: an update for the GUI: ("reset", {widget_id: model or None}) after a whole canvas (re)started (None
-#: for the widgets that stopped), ("one", (widget_id, model or None)) for one widget (None: removed)
-Update = tuple[str, Any]
+@attrs.frozen
+class Reset:
+    """A whole canvas (re)started: every widget's model (None for the widgets that stopped)."""
+
+    models: dict[str, HostedModel | None]
+
+
+@attrs.frozen
+class One:
+    """One widget was added, rebuilt or removed (``model`` None)."""
+
+    widget_id: str
+    model: HostedModel | None
+
+
+#: an update for the GUI
+Update = Reset | One
 
 
 class LiveCanvas:
@@ -109,15 +126,15 @@ class LiveCanvas:
         except Exception:
             log.exception("canvas runtime request failed")
 
-    def _post(self, kind: str, payload: Any) -> None:
-        self._updates.append((kind, payload))
+    def _post(self, update: Update) -> None:
+        self._updates.append(update)
         self.notify(None)
 
     def _post_reset(self, before: set[str]) -> None:
-        models: dict[str, Any] = dict.fromkeys(before)
+        models: dict[str, HostedModel | None] = dict.fromkeys(before)
         if self._rt is not None:
             models.update(self._rt.models)
-        self._post("reset", models)
+        self._post(Reset(models))
 
     def _running_ids(self) -> set[str]:
         return set(self._rt.models) if self._rt is not None else set()
@@ -144,13 +161,13 @@ class LiveCanvas:
         if self._rt is None or self._rt.canvas is None:
             return
         model = self._rt.restart_widget(widget) if restart else self._rt.add_widget(widget)
-        self._post("one", (widget.id, model))
+        self._post(One(widget.id, model))
 
     def _loop_remove(self, widget_id: str) -> None:
         if self._rt is None:
             return
         self._rt.remove_widget(widget_id)
-        self._post("one", (widget_id, None))
+        self._post(One(widget_id, None))
 
     def _loop_focus_lost(self) -> None:
         if self._rt is not None:

@@ -52,7 +52,7 @@ from rcon_core.app.template_menu import add_template_menu
 from rcon_core.app.widget_host import RateMeter, WidgetHost
 from rcon_core.bridge import ConnectionState
 from rcon_core.canvas import Document, Workspace
-from rcon_core.canvas.document import Change
+from rcon_core.canvas.document import Change, ChangeKind
 from rcon_core.gcpolicy import CollectorPolicy
 from rcon_core.plugins import Binding, PluginManager, Role, WidgetSpec
 from rcon_core.plugins.children import ChildContext
@@ -566,7 +566,7 @@ class MainWindow(QtWidgets.QMainWindow):
     def _settle_after(self, change: Change) -> None:
         """Widgets were made and dropped (a workspace opened, another canvas shown): a full settle at
         the next frame, when the pause is not felt."""
-        if self.collector is not None and change.what in ("workspace-replaced", "canvas-switched"):
+        if self.collector is not None and change.what in (ChangeKind.WORKSPACE_REPLACED, ChangeKind.CANVAS_SWITCHED):
             self.collector.soon(0.0, full=True)
 
     def _poll_catalog(self, now: float) -> None:
@@ -577,7 +577,10 @@ class MainWindow(QtWidgets.QMainWindow):
             self.services.set_entries(catalog["services"])
             self.actions_list.set_entries(catalog.get("actions", []))
             notes: Any = catalog.get("notes") or {}  # what a Foxglove robot's protocol cannot do (link.py)
-            self.actions_list.empty.setText(notes.get("actions") or ACTIONS_EMPTY)
+            self.actions_list.set_listed_hint(notes.get("actions") or ACTIONS_EMPTY)
+        status = self.fleet_ui.catalog_state()  # what the (empty) lists wait for: listing, lost...
+        for listing in (self.topics, self.services, self.actions_list):
+            listing.set_status(status)
         if now - self._last_rate_sample >= 1.0:
             self._last_rate_sample = now
             self.topics.set_rates(self.rates.sample(self.host.topic_counts(self.fleet_ui.side_robot), now))

@@ -38,7 +38,11 @@ def apply_marks(host: Any, workspace: Any) -> None:
     names one robot, but what it shows is the fleet's."""
     marks = marks_for(workspace)
     for widget_id, hosted in host.hosted.items():
-        if getattr(hosted.model, "shows_every_robot", False):
+        try:
+            every = bool(hosted.model is not None and hosted.model.shows_every_robot)
+        except Exception:  # noqa: BLE001 - a widget that cannot say keeps its mark; the others go on
+            every = False
+        if every:
             marks.pop(widget_id, None)
     host.robot_marks = marks
     for widget_id, hosted in host.hosted.items():

@@ -326,7 +326,8 @@ class SettingsForm(QtWidgets.QWidget):
     def problems(self) -> list[str]:
         """What is still missing or wrong, empty once valid: the settings' own ``problems()``, then what
         children editors find against the binding (a child on a field the type lacks...)."""
-        out = settings_problems(self._value)
+        context = self.child_context()
+        out = settings_problems(self._value, context.plugins if context is not None else None)
         for children in self.children_editors.values():
             out += [p for p in children.problems() if p not in out]
         return out

@@ -16,11 +16,13 @@ from collections.abc import Iterable
 from typing import Any
 
 from rcon_core.app.accessibility import name_parts
+from rcon_core.app.live import Reset, Update
 from rcon_core.app.widget_frame import WidgetFrame
 from rcon_core.bridge.safety import safe_text
 from rcon_core.canvas import WidgetInstance
 from rcon_core.canvas.runtime import BrokenWidgetModel, MissingWidgetModel, UnconfiguredWidgetModel
 from rcon_core.plugins import PluginManager, Role, UnknownWidget
+from rcon_core.plugins.api import HostedModel, WidgetView
 
 log = logging.getLogger(__name__)
 
@@ -33,17 +35,22 @@ FRAME_INTERVAL = 1 / 60
 class Hosted:
     """One widget instance on a canvas: its frame, and its model and view while its canvas runs."""
 
-    __slots__ = ("widget", "frame", "model", "view", "painted_seq", "painted_at", "view_error")
+    __slots__ = ("widget", "frame", "model", "view", "refreshes", "painted_seq", "painted_at", "view_error",
+                 "hook_error")
 
     def __init__(self, widget: WidgetInstance, frame: WidgetFrame) -> None:
         self.widget = widget
         self.frame = frame
-        self.model: Any = None
+        self.model: HostedModel | None = None
         self.view: Any = None
+        #: the view has ``refresh(state)`` (the ``WidgetView`` protocol); else the host calls its ``update()``
+        self.refreshes = False
         self.painted_seq = -1
         self.painted_at = 0.0
         #: why the view failed to show the last state (its ``refresh`` raised), until one succeeds
         self.view_error: str | None = None
+        #: why another hook of the widget raised (``problems()``, ``view_only``...), until it is attached again
+        self.hook_error: str | None = None
 
 
 class WidgetHost:
@@ -57,6 +64,8 @@ class WidgetHost:
         self.models_version = 0
         #: views whose ``refresh`` raised (each counted, logged, shown on its badge; the others go on)
         self.view_errors = 0
+        #: other hooks of a widget that raised (``problems()``, ``view_only``, attaching it...), counted the same
+        self.hook_errors = 0
         self._view_error_counts: dict[str, int] = {}
         self._cursor = 0
         self._link_up = False
@@ -99,21 +108,25 @@ class WidgetHost:
         self._due.discard(widget_id)
 
     # -------------------------------------------------------------------------------------- models
-    def apply(self, updates: Iterable[tuple[str, Any]]) -> None:
+    def apply(self, updates: Iterable[Update]) -> None:
         """Take the runtime's updates (see :class:`rcon_core.app.live.LiveCanvas`), in order."""
-        for kind, payload in updates:
-            if kind == "reset":
-                for widget_id, model in payload.items():
+        for update in updates:
+            pairs = update.models.items() if isinstance(update, Reset) else [(update.widget_id, update.model)]
+            for widget_id, model in pairs:
+                try:  # the widget boundary: one widget that cannot be attached leaves the others alone
                     self.attach(widget_id, model)
-            else:
-                self.attach(*payload)
+                except Exception as exc:
+                    hosted = self.hosted.get(widget_id)
+                    if hosted is not None:
+                        self.hook_failed(hosted, "being shown", exc)
 
-    def attach(self, widget_id: str, model: Any) -> None:
+    def attach(self, widget_id: str, model: HostedModel | None) -> None:
         """Show ``model`` in its widget's frame (None: the widget stopped)."""
         hosted = self.hosted.get(widget_id)
         if hosted is None or model is hosted.model:
             return
-        hosted.model, hosted.view, hosted.painted_seq = model, None, -1
+        hosted.model, hosted.view, hosted.refreshes, hosted.painted_seq = model, None, False, -1
+        hosted.hook_error = None
         self.models_version += 1
         frame = hosted.frame
         if model is None:
@@ -122,7 +135,7 @@ class WidgetHost:
             return
         if isinstance(model, UnconfiguredWidgetModel):  # settings it cannot read: the warning, no view
             frame.set_placeholder("")
-            frame.problems.set_problems(list(model.problems()))
+            frame.problems.set_problems(self.problems_of(hosted))
             return
         if isinstance(model, MissingWidgetModel):
             if isinstance(model, BrokenWidgetModel):
@@ -135,11 +148,13 @@ class WidgetHost:
         try:
             view_cls = self.plugins.widget(hosted.widget.kind).load_view()
             if widget_id in self.dry_run:
-                try:
-                    model.dry_run = True  # a preview: offline on purpose (see the view contract)
-                except AttributeError:  # a model with __slots__ may refuse; the badge still says it
-                    pass
+                for m in (model, *model.child_models()):  # a preview: offline on purpose (the view contract)
+                    try:
+                        m.dry_run = True
+                    except AttributeError:  # a model with __slots__ may refuse; the badge still says it
+                        pass
             hosted.view = view_cls(model)
+            hosted.refreshes = isinstance(hosted.view, WidgetView)
         except (UnknownWidget, Exception) as exc:  # a broken view must not break the app
             log.warning("view of %s (%s) failed: %s", widget_id, hosted.widget.kind, exc)
             frame.set_placeholder(f"{hosted.widget.title or hosted.widget.kind} could not be shown:\n{exc}")
@@ -149,7 +164,7 @@ class WidgetHost:
             name_parts(hosted.view, hosted.widget.title or self.plugins.widget(hosted.widget.kind).title)
         except Exception as exc:  # noqa: BLE001 - a view that fails here still shows
             log.warning("naming the parts of %s failed: %s", widget_id, exc)
-        frame.problems.set_problems(list(model.problems()))
+        frame.problems.set_problems(self.problems_of(hosted))
         reason = view_only_control(hosted.widget, model)
         if reason:  # the port refuses anyway (rcon_core.canvas.port); the controls say so
             hosted.view.setEnabled(False)
@@ -213,15 +228,16 @@ class WidgetHost:
             return
         state = model.state
         badge = hosted.frame.badge
+        view_only = view_only_control(hosted.widget, model)
         if hosted.widget.id in self.dry_run:
             badge.show_status("ok", "PREVIEW ONLY", "not sent to the robot until the widget is placed")
-        elif view_only_control(hosted.widget, model):
-            badge.show_status("view-only", "VIEW ONLY", f"{model.view_only}: nothing is sent to the robot")
+        elif view_only:
+            badge.show_status("view-only", "VIEW ONLY", f"{view_only}: nothing is sent to the robot")
         elif state.link_down or not self.link_up_for(hosted.widget):
             badge.show_status("down", "LINK DOWN", "the link to this widget's robot is down: nothing arrives, "
                                                    "nothing is sent")
-        elif state.error or hosted.view_error:
-            badge.show_status("problem", "ERROR", state.error or hosted.view_error or "")
+        elif state.error or hosted.view_error or hosted.hook_error:
+            badge.show_status("problem", "ERROR", state.error or hosted.view_error or hosted.hook_error or "")
         elif state.stale:
             badge.show_status("stale", "STALE" if state.count else "NO DATA",
                               "no new value for a while" if state.count else "nothing has arrived yet")
@@ -236,9 +252,8 @@ class WidgetHost:
         self._due.discard(hosted.widget.id)
         hosted.painted_seq, hosted.painted_at = state.seq, now
         view = hosted.view
-        refresh = getattr(view, "refresh", None)
-        if refresh is not None:
-            refresh(state)
+        if hosted.refreshes:
+            view.refresh(state)
         elif view is not None:
             view.update()
         if hosted.view_error is not None:  # it shows again: the next pass clears the badge
@@ -246,14 +261,39 @@ class WidgetHost:
         for hook in self.paint_hooks:
             hook(hosted, state)
 
+    def problems_of(self, hosted: Hosted) -> list[str]:
+        """The model's ``problems()``; one that raises is itself the problem shown (and counted)."""
+        if hosted.model is None:
+            return []
+        try:
+            return [str(p) for p in hosted.model.problems()]
+        except Exception as exc:
+            self.hook_failed(hosted, "problems()", exc)
+            return [f"the widget could not check its settings: {safe_text(exc)}"]
+
+    def hook_failed(self, hosted: Hosted, hook: str, exc: Exception) -> None:
+        """A widget's hook other than ``refresh`` raised: counted, logged with a bounded text (the first 20,
+        then every 1000th), shown on that widget's badge until it is attached again; the others go on."""
+        self.hook_errors += 1
+        hosted.hook_error = f"the widget failed in {hook}: {safe_text(exc)}"
+        self._log_failure(hosted, hosted.hook_error)
+        try:
+            hosted.frame.badge.show_status("problem", "ERROR")
+            hosted.frame.badge.setToolTip(hosted.hook_error)
+        except Exception:  # noqa: BLE001 - the frame itself is broken: the count and the log say it
+            pass
+
+    def _log_failure(self, hosted: Hosted, text: str) -> None:
+        n = self._view_error_counts[hosted.widget.id] = self._view_error_counts.get(hosted.widget.id, 0) + 1
+        if n <= 20 or n % 1000 == 0:
+            log.error("widget %s (%s): %s (%d so far)", hosted.widget.id, hosted.widget.kind, text, n)
+
     def _view_failed(self, hosted: Hosted, exc: Exception) -> None:
         """A view's ``refresh`` (or the widget's badge) raised: counted, logged with a bounded text (the
         first 20, then every 1000th), shown on the widget's badge; the pass goes on with the others."""
         self.view_errors += 1
         hosted.view_error = f"the view could not show the value: {safe_text(exc)}"
-        n = self._view_error_counts[hosted.widget.id] = self._view_error_counts.get(hosted.widget.id, 0) + 1
-        if n <= 20 or n % 1000 == 0:
-            log.error("widget %s (%s): %s (%d so far)", hosted.widget.id, hosted.widget.kind, hosted.view_error, n)
+        self._log_failure(hosted, hosted.view_error)
         try:
             hosted.frame.badge.show_status("problem", "ERROR", hosted.view_error)
         except Exception:  # noqa: BLE001 - the frame itself is broken: the count and the log say it
@@ -268,16 +308,26 @@ class WidgetHost:
             if robot_id is not None and (binding.robot or self.first_robot) != robot_id:
                 continue
             if hosted.model is not None and binding.role is Role.SUBSCRIBE and binding.name:
-                out[binding.name] = max(out.get(binding.name, 0), hosted.model.state.count)
+                try:
+                    count = int(hosted.model.state.count)
+                except Exception as exc:  # the widget boundary: its count is left out, the others kept
+                    self.hook_failed(hosted, "state", exc)
+                    continue
+                out[binding.name] = max(out.get(binding.name, 0), count)
         return out
 
 
-def view_only_control(widget: WidgetInstance, model: Any) -> str | None:
-    """Why ``widget`` (a publishing, calling or serving one) runs view-only, or None."""
-    reason = getattr(model, "view_only", None)
-    if reason and widget.binding.role.value != "subscribe":
-        return str(reason)
-    return None
+def view_only_control(widget: WidgetInstance, model: HostedModel) -> str | None:
+    """Why ``widget`` (a publishing, calling or serving one) runs view-only, or None. A model whose
+    ``view_only`` raises cannot say: its controls are shown disabled (its port refuses anyway when the
+    robot is view-only, see ``rcon_core.canvas.port``)."""
+    if widget.binding.role.value == "subscribe":
+        return None
+    try:
+        reason = model.view_only
+    except Exception as exc:
+        return f"the widget could not say whether it may send ({safe_text(exc, 80)})"
+    return str(reason) if reason else None
 
 
 def _not_installed(kind: str) -> str:

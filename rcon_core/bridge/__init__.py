@@ -21,10 +21,11 @@ from .guard import LinkGuard, ViewOnlyError
 from .nodes import ActionGoal, GoalStatus, Node, Publisher, ServiceServer, Subscription
 from .params import ParamNotFoundError, ParamRejectedError
 from .rosinfo import RosInfo
+from .stats import BridgeStats
 
 __all__ = [
     "ActionError", "ActionGoal", "ActionNoAnswerError", "ActionServer", "ActionTimeoutError", "AuthRefusedError",
-    "BridgeClient", "BridgeError", "ConnectionLostError", "ConnectionState", "GoalStatus", "LinkGuard",
+    "BridgeClient", "BridgeError", "BridgeStats", "ConnectionLostError", "ConnectionState", "GoalStatus", "LinkGuard",
     "LinkSettingsError", "Node", "NotConnectedError", "ParamNotFoundError", "ParamRejectedError", "ProtocolError",
     "Publisher", "RosInfo", "RosapiRefusedError", "ServedGoal", "ServiceError", "ServiceServer",
     "ServiceTimeoutError", "Subscription", "ViewOnlyError",

@@ -71,7 +71,7 @@ from . import rosapi_guard
 from .action_server import ProvidedActions
 from .envelope import Envelope
 from .errors import AuthRefusedError, NotConnectedError, RosapiRefusedError, ServiceError
-from .freshness import LinkWatch, watch_link
+from .freshness import LinkEvent, LinkWatch, watch_link
 from .guard import LinkGuard
 from .inbound import BadFrames, Inbound
 from .nodes import Node
@@ -80,8 +80,10 @@ from .protocol import encode
 from .reasons import Failure, describe, refused_auth
 from .rosinfo import RosInfo
 from .rosinfo import detect as detect_ros
+from .safety import without_traceback
 from .secure import ssl_context
 from .session import LOG_LEVELS, Session
+from .stats import BridgeStats
 from .traffic import Traffic
 from .wslink import Link
 
@@ -134,7 +136,7 @@ class BridgeClient:
                  open_timeout: float = 10.0, max_size: int = 32 << 20, max_message_size: int | None = None,
                  max_frame_size: int | None = None, fragment_timeout: float = 10.0, big_frame: int = 1 << 20,
                  stall_timeout: float | None = 1.0, client_cert: str | None = None,
-                 client_key: str | None = None) -> None:
+                 client_key: str | None = None, max_decoded: int | None = None) -> None:
         if not isinstance(url, str) or not url.startswith(("ws://", "wss://")):
             raise ValueError(f"url must start with ws:// or wss://, got {url!r}")
         if typed_arrays not in ("list", "numpy"):
@@ -158,16 +160,15 @@ class BridgeClient:
         self.max_size = self.max_message_size = max_size if max_message_size is None else max_message_size
         self.max_frame_size = max_frame_size or max(2 * self.max_message_size, self.max_message_size + (1 << 20))
         self.big_frame = min(big_frame, self.max_message_size)
+        #: the bytes of Python objects one (big) frame may decode to; a frame over it is refused (offload.py)
+        self.max_decoded = 4 * self.max_message_size if max_decoded is None else max_decoded
         self.stall_timeout = stall_timeout
         self.latency: float | None = None
         self.last_error: BaseException | None = None
         self.failure: Failure | None = None
         self._failure_listeners: list[Callable[[Failure], None]] = []
-        self.stats: dict[str, int] = {"connects": 0, "bad_frames": 0, "dropped_while_down": 0,
-                                      "dropped_on_disconnect": 0, "oversize_frames": 0, "frame_errors": 0,
-                                      "png_refused": 0, "non_object_msgs": 0, "big_frames": 0,
-                                      "stale_dropped": 0, "degraded": 0, "stall_cuts": 0,
-                                      "stale_skipped": 0, "envelope_clamped": 0, "envelope_refused": 0}
+        #: what the client counts (``stats.py``)
+        self.stats = BridgeStats()
         self._state = ConnectionState.CLOSED
         self._state_listeners: list[Callable[[ConnectionState], None]] = []
         #: the current connection (None while down); see ``wslink.py``
@@ -190,7 +191,7 @@ class BridgeClient:
         #: frames in (``inbound.py``)
         self.inbound = Inbound(self.session, bad, self.stats, typed_arrays=typed_arrays,
                                max_size=self.max_message_size, big_frame=self.big_frame,
-                               fragment_timeout=fragment_timeout)
+                               fragment_timeout=fragment_timeout, max_decoded=self.max_decoded)
 
     # ================================================================== state
 
@@ -409,7 +410,7 @@ class BridgeClient:
             delay = min(delay * 2, self.backoff_max)
 
     def _process_exception(self, exc: Exception) -> Exception | None:
-        self.last_error = exc
+        self.last_error = without_traceback(exc)
         if describe(exc).fatal:
             return exc  # retrying cannot fix a certificate problem, a bad URL...
         if self._state is not ConnectionState.CLOSED:
@@ -503,7 +504,7 @@ class BridgeClient:
 
     async def _serve_once(self, ws: ClientConnection, final: bool = True) -> None:
         link = self.link = Link(ws, self.session.stale_in_queue)
-        self.stats["connects"] += 1
+        self.stats.connects += 1
         writer = asyncio.create_task(link.run_writer())
         pinger = asyncio.create_task(self._pinger(link))
         try:
@@ -513,7 +514,7 @@ class BridgeClient:
             self._set_state(ConnectionState.CONNECTED)
             await self.inbound.read(link.recv, link.waiting)
         except ConnectionClosed as exc:
-            self.last_error = exc
+            self.last_error = without_traceback(exc)
         finally:
             self.link = None
             self._connected.clear()
@@ -521,6 +522,7 @@ class BridgeClient:
             pinger.cancel()
             self.inbound.disconnected()
             self.session.detached()
+            link.release()  # its buffers go now, not at the collector's next full pass (wslink.py)
             if final:
                 self._set_state(ConnectionState.CLOSED)
         if not self._closing:
@@ -557,22 +559,22 @@ class BridgeClient:
         except ConnectionClosed:
             pass
 
-    def _link_event(self, event: str, detail: Any) -> bool:
+    def _link_event(self, event: LinkEvent, detail: Any) -> bool:
         """What the watchdog (``freshness.watch_link``) reports; True when a stall counts (CONNECTED)."""
-        if event == "latency":
+        if event is LinkEvent.LATENCY:
             self.latency = detail
-        elif event == "stalled":
+        elif event is LinkEvent.STALLED:
             if self._state is not ConnectionState.CONNECTED:
                 return False
-            self.stats["degraded"] += 1
+            self.stats.degraded += 1
             log.warning("link to %s is degraded: %s", self.url, detail)
             self._set_state(ConnectionState.DEGRADED)
-        elif event == "recovered":
+        elif event is LinkEvent.RECOVERED:
             log.info("link to %s has recovered", self.url)
             if self._state is ConnectionState.DEGRADED:
                 self._set_state(ConnectionState.CONNECTED)
-        elif event == "cut":
-            self.stats["stall_cuts"] += 1
+        elif event is LinkEvent.CUT:
+            self.stats.stall_cuts += 1
             log.warning("link to %s stalled (%s) with commands in flight; cut it so they are never delivered "
                         "late; reconnecting", self.url, detail)
         else:

@@ -23,8 +23,8 @@ Decision: clamp each component, refuse what is not a number.
     the sentence for the operator). This holds even with no envelope set (:data:`NO_LIMITS`): such a
     command is never meaningful. A missing field is left out (rosbridge fills in 0).
 
-What :func:`enforce` counts: ``stats["envelope_clamped"]`` and ``stats["envelope_refused"]`` (the client's
-``stats``). A clamped message is a copy; the caller's dict is never changed.
+What :func:`enforce` counts: ``stats.envelope_clamped`` and ``stats.envelope_refused`` (the client's
+``stats``, a ``BridgeStats``). A clamped message is a copy; the caller's dict is never changed.
 """
 
 from __future__ import annotations
@@ -36,6 +36,8 @@ from typing import Any
 import attrs
 
 from rcon_core.msgs.names import pkg_type
+
+from .stats import BridgeStats
 
 __all__ = ["Envelope", "EnvelopeRefused", "Verdict", "NO_LIMITS", "COMMAND_TYPES", "MAX_LINEAR", "MAX_ANGULAR",
            "enforce", "is_command", "motion_path"]
@@ -235,15 +237,15 @@ def _bounded(value: Any) -> str:
     return text if len(text) <= 40 else text[:37] + "..."
 
 
-def enforce(envelope: Envelope | None, type_name: str, msg: dict[str, Any], stats: dict[str, int]) -> dict[str, Any]:
+def enforce(envelope: Envelope | None, type_name: str, msg: dict[str, Any], stats: BridgeStats) -> dict[str, Any]:
     """The bridge's hook (``Session.publish``): the message to send, clamped to ``envelope``
     (:data:`NO_LIMITS` when None); raises :class:`EnvelopeRefused`. Counts into ``stats``."""
     if not is_command(type_name):
         return msg
     verdict = (envelope or NO_LIMITS).judge(type_name, msg)
     if verdict.msg is None:
-        stats["envelope_refused"] = stats.get("envelope_refused", 0) + 1
+        stats.envelope_refused += 1
         raise EnvelopeRefused(verdict.refused)
     if verdict.clamped:
-        stats["envelope_clamped"] = stats.get("envelope_clamped", 0) + 1
+        stats.envelope_clamped += 1
     return verdict.msg

@@ -23,14 +23,14 @@ Freshness limits (``max_age``)
     while the link is DEGRADED, or while a ping has been unanswered for longer than the command's limit
     (the link cannot carry it in time), is dropped at once; one waiting in the outgoing queue (the
     transport was above its high-water mark) past its limit is dropped when its turn comes.  Both are
-    counted (``Publisher.dropped``, ``client.stats["stale_dropped"]``).
+    counted (``Publisher.dropped``, ``client.stats.stale_dropped``).
 
 Commands already written when a stall starts
     TCP cannot take back what it holds: commands written in the instant before a stall is detected would
     be delivered in one late burst when the link recovers.  So when the link is found stalled while
     commands written since the last answered ping are unconfirmed, the client *cuts* the connection with
     a TCP reset (``SO_LINGER`` 0, then abort): the kernel discards its unsent data and the robot never
-    receives them; the client reconnects as after any drop (``client.stats["stall_cuts"]``).  A stalled
+    receives them; the client reconnects as after any drop (``client.stats.stall_cuts``).  A stalled
     link that carried no command only goes DEGRADED.  Left open: a stall shorter than ``stall_timeout``
     can still deliver the commands of its first few hundred ms late (by less than ``stall_timeout``).
 """
@@ -38,6 +38,7 @@ Commands already written when a stall starts
 from __future__ import annotations
 
 import asyncio
+import enum
 import math
 import socket
 import struct
@@ -151,9 +152,18 @@ def cut(transport: Any) -> None:
     transport.abort()
 
 
-#: ``report(event, detail) -> bool``: "latency" (seconds), "stalled" (why; True when it counts, i.e. the link
-#: was CONNECTED), "recovered", "cut" (why), "timeout" (why)
-Report = Callable[[str, Any], bool]
+class LinkEvent(enum.StrEnum):
+    """What the watchdog reports about one connection (a ``str`` too)."""
+
+    LATENCY = "latency"  #: a pong came: the detail is the round trip (s)
+    STALLED = "stalled"  #: nothing moves: the detail is why
+    RECOVERED = "recovered"  #: it moves again
+    CUT = "cut"  #: stalled with commands in flight: cut so they are never delivered late (detail: why)
+    TIMEOUT = "timeout"  #: no pong within the timeout: dropped (detail: why)
+
+
+#: ``report(event, detail) -> bool``: True when a stall counts (the link was CONNECTED)
+Report = Callable[[LinkEvent, Any], bool]
 
 
 async def watch_link(link: Any, watch: LinkWatch, pong_timeout: float, report: Report) -> None:
@@ -170,20 +180,20 @@ async def watch_link(link: Any, watch: LinkWatch, pong_timeout: float, report: R
                 probes.add(task)
                 task.add_done_callback(probes.discard)
             if watch.overdue(now) >= pong_timeout:
-                report("timeout", f"no pong within {pong_timeout:g} s")
+                report(LinkEvent.TIMEOUT, f"no pong within {pong_timeout:g} s")
                 link.abort()
                 return
             why = watch.stalled(now)
             if why is not None and not watch.degraded:
-                if report("stalled", why):
+                if report(LinkEvent.STALLED, why):
                     watch.degraded = True
                     if watch.at_risk():
-                        report("cut", why)
+                        report(LinkEvent.CUT, why)
                         link.cut()
                         return
             elif why is None and watch.degraded:
                 watch.degraded = False
-                report("recovered", None)
+                report(LinkEvent.RECOVERED, None)
             await asyncio.sleep(watch.probe_interval / 2)
     finally:
         for task in probes:
@@ -199,7 +209,7 @@ async def _probe(link: Any, watch: LinkWatch, sent: float, report: Report) -> No
     except ConnectionClosed:
         return
     watch.answered(sent)
-    report("latency", latency)
+    report(LinkEvent.LATENCY, latency)
     if watch.degraded and watch.stalled(time.monotonic()) is None:
         watch.degraded = False
-        report("recovered", None)
+        report(LinkEvent.RECOVERED, None)

@@ -5,8 +5,9 @@ Decision: the read loop
     direct call of the topic's ``fast`` function -- for a topic with one consumer, its callback.
     Everything unusual (other ops, unknown topics, malformed frames) takes the slow path
     (:meth:`Inbound.other`), which unwraps ``fragment`` and ``png`` frames and hands every op to the
-    session (``session.handle``).  Frames above ``big_frame`` (1 MB) are decoded in a worker thread while
-    the read loop waits for them, so the event loop keeps serving and the order of delivery is kept
+    session (``session.handle``).  Frames above ``big_frame`` (1 MB), and every ``png`` frame whatever its
+    size (its pixels may be far larger than the frame), are decoded in a worker thread while the read
+    loop waits for them, so the event loop keeps serving and the order of delivery is kept
     (``offload.py``).  A frame of a latest-only topic (every consumer asked for ``queue_length`` 1) is
     skipped before decoding when a newer frame of the same topic already waits (``latest.py``).
 
@@ -19,23 +20,30 @@ Decision: sharing the loop
 
 Decision: bad input from the server
     No exception raised while handling one frame ends the read loop: the loop body and the slow path
-    catch everything at the frame boundary (``stats["frame_errors"]``).  Invalid JSON, unknown ops,
+    catch everything at the frame boundary (``stats.frame_errors``).  Invalid JSON, unknown ops,
     missing or mistyped fields, JSON nested too deep to format, broken fragments, ``png`` data that is no
     image, PNGs whose header declares more pixel bytes than ``max_size`` (refused before decoding,
-    ``stats["png_refused"]``), publish frames whose ``msg`` is not an object
-    (``stats["non_object_msgs"]``) and frames above ``max_size`` are logged (rate limited by
+    ``stats.png_refused``), publish frames whose ``msg`` is not an object
+    (``stats.non_object_msgs``) and frames above ``max_size`` are logged (rate limited by
     :class:`BadFrames`, with a bounded repr from ``safety.py``: never ``str()`` of an untrusted value),
     counted in ``client.stats`` and dropped; the connection, the process and other subscriptions carry on.
     A callback that raises is logged and does not affect other callbacks (``topics.py``).
 
+Decision: unfinished fragmented messages
+    Bounded per message (``max_size``), in all (twice that), by age (``fragment_timeout``, also when no
+    fragment comes any more: a timer sweeps them) and by connection (a lost link drops them all): 256 MB
+    of unfinished messages used to stay for good, and up to 2 GB could (``protocol.FragmentAssembler``).
+
 Test hooks (public): ``inbound.fragments`` and ``inbound.png_fragments`` (the assemblers: ``len()`` is the
-number of messages in progress, ``completed`` counts the finished ones).
+number of messages in progress, ``buffered_bytes`` what they hold, ``completed`` counts the finished
+ones).
 """
 
 from __future__ import annotations
 
 import asyncio
 import logging
+import time
 from collections.abc import Awaitable, Callable, Iterable
 from typing import Any
 
@@ -44,8 +52,9 @@ import orjson
 from .errors import ProtocolError
 from .latest import LatestOnly, topic_of
 from .offload import BigFrames, decode_big
-from .protocol import FragmentAssembler, RefusedFrame, decode_binary, decode_png, loads_text
+from .protocol import DecodedTooBig, FragmentAssembler, RefusedFrame, decode_binary, decode_png, loads_text
 from .safety import safe_text
+from .stats import BridgeStats
 from .traffic import Traffic
 
 log = logging.getLogger(__name__)
@@ -59,13 +68,13 @@ YIELD_EVERY = 64
 class BadFrames:
     """Counts bad frames from the server and logs them: the first 20 of each kind, then every 1000th."""
 
-    def __init__(self, url: str, stats: dict[str, int]) -> None:
+    def __init__(self, url: str, stats: BridgeStats) -> None:
         self.url = url
         self.stats = stats
         self.counts: dict[str, int] = {}
 
     def report(self, kind: str, message: str) -> None:
-        self.stats["bad_frames"] += 1
+        self.stats.bad_frames += 1
         n = self.counts[kind] = self.counts.get(kind, 0) + 1
         if n <= 20 or n % 1000 == 0:
             log.warning("bad frame from %s: %s", self.url, message)
@@ -75,22 +84,24 @@ class BadFrames:
 
     def failed(self, exc: BaseException) -> None:
         """A frame whose handling raised: counted, logged with a bounded text, dropped; the loop goes on."""
-        self.stats["frame_errors"] += 1
+        self.stats.frame_errors += 1
         self.report("error", f"handling a frame failed, dropped it ({safe_text(exc)})")
 
 
 class Inbound:
     """Turns what the socket delivers into messages for the session's topics and ops for the session."""
 
-    def __init__(self, session: Any, bad: BadFrames, stats: dict[str, int], *, typed_arrays: str,
-                 max_size: int, big_frame: int, fragment_timeout: float) -> None:
+    def __init__(self, session: Any, bad: BadFrames, stats: BridgeStats, *, typed_arrays: str,
+                 max_size: int, big_frame: int, fragment_timeout: float, max_decoded: int | None = None) -> None:
         self.session = session
         self.bad = bad
         self.stats = stats
         self.typed_arrays = typed_arrays
         self.max_size = max_size
         self.big_frame = big_frame
-        self.big = BigFrames(typed_arrays, max_size)
+        #: the bytes of objects one frame may decode to (big frames; see offload.py)
+        self.max_decoded = max_decoded
+        self.big = BigFrames(typed_arrays, max_size, max_decoded)
         self.latest = LatestOnly(session.topics, stats)
         #: bytes in by topic (``traffic.py``): the connection bar's bandwidth readout
         self.traffic = Traffic()
@@ -99,6 +110,7 @@ class Inbound:
         self.png_fragments = FragmentAssembler(timeout=fragment_timeout, max_bytes=max_size, warn=warn)
         #: a big message completed by fragments or a big png: the read loop awaits it (order is kept)
         self.deferred: Callable[[], Awaitable[Any]] | None = None
+        self._sweeper: asyncio.TimerHandle | None = None  # expires unfinished messages without new fragments
 
     async def read(self, recv: Callable[[], Awaitable[str | bytes]],
                    waiting: Callable[[], Iterable[bytes]] | None = None) -> None:
@@ -162,28 +174,61 @@ class Inbound:
                 failed(exc)
 
     def disconnected(self) -> None:
-        self.deferred = None  # a big message of the lost connection is not delivered on the next one
+        """The connection is gone: nothing it started is finished on the next one (a big message waiting
+        to be decoded, unfinished fragmented messages)."""
+        self.deferred = None
+        self.fragments.clear()
+        self.png_fragments.clear()
+        self._stop_sweeping()
 
     def close(self) -> None:
+        self._stop_sweeping()
         self.big.close()
+
+    # -- unfinished fragmented messages expire by age, also when no fragment comes any more -------------
+
+    def _sweep_later(self) -> None:
+        if self._sweeper is not None or not (len(self.fragments) or len(self.png_fragments)):
+            return
+        try:
+            loop = asyncio.get_running_loop()
+        except RuntimeError:  # called off the loop (a test feeding frames by hand): expiry on the next add
+            return
+        oldest = min(t for t in (self.fragments.oldest_update(), self.png_fragments.oldest_update())
+                     if t is not None)
+        delay = max(0.01, oldest + self.fragments.timeout - time.monotonic() + 0.01)
+        self._sweeper = loop.call_later(delay, self._sweep)
+
+    def _sweep(self) -> None:
+        self._sweeper = None
+        self.fragments.expire()
+        self.png_fragments.expire()
+        self._sweep_later()
+
+    def _stop_sweeping(self) -> None:
+        sweeper, self._sweeper = self._sweeper, None
+        if sweeper is not None:
+            sweeper.cancel()
 
     # -- decoding -------------------------------------------------------------------------------------
 
     async def decode_big(self, raw: str | bytes) -> Any:
         """Decode a frame above ``big_frame`` in the worker thread (see ``offload.py``); None when dropped."""
         if len(raw) > self.max_size:
-            self.stats["oversize_frames"] += 1
+            self.stats.oversize_frames += 1
             self.bad.report("size", f"frame of {len(raw)} bytes exceeds max_message_size={self.max_size}; dropped")
             return None
-        return await self._offloaded(decode_big, raw, self.typed_arrays, self.max_size)
+        return await self._offloaded(decode_big, raw, self.typed_arrays, self.max_size, self.max_decoded)
 
     async def _offloaded(self, fn: Callable[..., Any], *args: Any) -> Any:
-        self.stats["big_frames"] += 1
+        self.stats.big_frames += 1
         try:
             return await self.big.run(fn, *args)
         except ProtocolError as exc:
-            if isinstance(exc, RefusedFrame):
-                self.stats["png_refused"] += 1
+            if isinstance(exc, DecodedTooBig):
+                self.stats.decode_refused += 1
+            elif isinstance(exc, RefusedFrame):
+                self.stats.png_refused += 1
             self.bad.report("big", f"big frame dropped: {exc}")
             return None
 
@@ -236,6 +281,8 @@ class Inbound:
         except ProtocolError as exc:
             self.bad.report("fragment", str(exc))
             return
+        finally:
+            self._sweep_later()
         if text is not None and len(text) > self.big_frame:
             self.deferred = lambda: self.decode_big(text)
         elif text is not None:
@@ -246,17 +293,14 @@ class Inbound:
             data = m["data"]
             if "num" in m and "total" in m:
                 data = self.png_fragments.add(m)
+                self._sweep_later()
                 if data is None:
                     return
             if not isinstance(data, str):
                 raise ProtocolError(f"png frame: 'data' must be a string, got {type(data).__name__}")
-            if len(data) > self.big_frame:
-                self.deferred = lambda: self._offloaded(decode_png, data, self.max_size)
-                return
-            inner = decode_png(data, self.max_size)
+            # every PNG, small or not, is decoded in the worker (a 5.6 KB one held the loop 2.2 s)
+            self.deferred = lambda: self._offloaded(decode_png, data, self.max_size)
         except ProtocolError as exc:
             if isinstance(exc, RefusedFrame):
-                self.stats["png_refused"] += 1
+                self.stats.png_refused += 1
             self.bad.report("png", str(exc))
-            return
-        self.other(inner)

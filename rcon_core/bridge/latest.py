@@ -13,7 +13,7 @@ Decision: where a camera backlog builds and how the client ends it
     the kernel's buffers, which the loop reads 256 kB per turn, so before deciding the read loop gives the
     event loop up to ``READ_AHEAD`` (4) turns to read what the kernel already holds (about one more
     640x480 rgb8 frame; it stops as soon as a newer frame shows up).  A stale frame is not decoded
-    and not delivered, and it is counted (``stats["stale_skipped"]`` and the entry's ``skipped``) as
+    and not delivered, and it is counted (``stats.stale_skipped`` and the entry's ``skipped``) as
     deliberately dropped.  The newest frame is always delivered; order between topics is unchanged; small
     frames (values) cost one length comparison.
 
@@ -29,6 +29,8 @@ import asyncio
 import re
 from collections.abc import Callable, Iterable
 from typing import Any
+
+from .stats import BridgeStats
 
 #: frames smaller than this are never looked at (values, small messages): skipping saves nothing
 MIN_SIZE = 32 * 1024
@@ -89,7 +91,7 @@ class LatestOnly:
 
     __slots__ = ("topics", "stats", "min_size")
 
-    def __init__(self, topics: dict[str, Any], stats: dict[str, int], min_size: int = MIN_SIZE) -> None:
+    def __init__(self, topics: dict[str, Any], stats: BridgeStats, min_size: int = MIN_SIZE) -> None:
         self.topics = topics  # the session's TopicEntry by name (``latest_only`` and ``skipped``)
         self.stats = stats
         self.min_size = min_size
@@ -108,7 +110,7 @@ class LatestOnly:
         for turn in range(READ_AHEAD + 1):
             if self._newer_waiting(topic, waiting):
                 entry.skipped += 1
-                self.stats["stale_skipped"] += 1
+                self.stats.stale_skipped += 1
                 return True
             if turn < READ_AHEAD:
                 await _sleep(0)

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 from .errors import BridgeError, ServiceError
 from .params_ros2 import NodeParams
+from .safety import bounded_repr, json_text_value
 
 if TYPE_CHECKING:
     from .host import RosClient
@@ -155,9 +156,10 @@ class Params:
         else:
             text = (await self._call("get_param", {"name": name})).get("value", "")
             try:
-                value = json.loads(text) if text else None
-            except ValueError:
-                raise ServiceError(f"parameter {name} is not JSON text: {text[:80]!r}", "/rosapi/get_param") from None
+                value = json_text_value(text) if text else None
+            except ValueError as exc:
+                raise ServiceError(f"parameter {name} is not JSON text ({exc}): {bounded_repr(text, 80)}",
+                                   "/rosapi/get_param") from None
             found = value is not None
         if not found:
             if default is MISSING:

@@ -23,8 +23,11 @@ Decisions (the recordings in ``shared/rosbridge-ros1`` are the ground truth):
 * ``fragment`` frames: ``total`` may be a float (rosbridge 0.11 computes it that way); the number of
   fragments is ``floor(total)``, ``num`` runs from 0.  ``id`` is 0 for every message, so fragments are
   reassembled by arrival order per id: a ``num == 0`` starts a new message and drops any unfinished
-  one.  Unfinished messages older than ``timeout`` are dropped, and a message may not exceed
-  ``max_bytes`` nor ``max_fragments``.
+  one.  Unfinished messages not added to for ``timeout`` are dropped (the client also sweeps them on a
+  timer, so they go without new fragments too), a message may not exceed ``max_bytes`` nor
+  ``max_fragments``, all unfinished messages together may not exceed ``max_total`` bytes (the oldest
+  are dropped first; 64 unfinished 32 MB messages held 2 GB), and a lost connection drops them all
+  (``clear``: the next connection never completes a message the last one started).
 """
 
 from __future__ import annotations
@@ -54,13 +57,15 @@ loads = orjson.loads
 COMPRESSIONS = ("none", "png", "cbor", "cbor-raw")
 
 
-def loads_text(raw: str | bytes) -> Any:
+def loads_text(raw: str | bytes | memoryview) -> Any:
     """Parse one text frame: orjson, else -- only for text holding bare ``NaN``/``Infinity`` tokens, as
     rosbridge 2.x writes them (see the module docstring) -- Python's ``json``.  Raises ProtocolError."""
     try:
         return loads(raw)
     except orjson.JSONDecodeError as exc:
         error = exc
+    if isinstance(raw, memoryview):  # a png frame's text, read in place from the decoded image
+        raw = raw.tobytes()
     text = raw.decode("utf-8", "replace") if isinstance(raw, bytes | bytearray) else raw
     if "NaN" in text or "Infinity" in text:
         try:
@@ -122,24 +127,83 @@ def _tag_hook_numpy(a: Any, b: Any) -> Any:
     return np.frombuffer(tag.value, dtype=dtype)
 
 
-def decode_cbor(data: bytes, typed_arrays: str = "list") -> Any:
-    """Decode one CBOR frame; typed arrays become lists (or numpy arrays with ``typed_arrays="numpy"``)."""
+def decode_cbor(data: bytes, typed_arrays: str = "list", budget: int | None = None) -> Any:
+    """Decode one CBOR frame; typed arrays become lists (or numpy arrays with ``typed_arrays="numpy"``).
+    ``budget``: the bytes of Python objects the decoded frame may take; the typed arrays made lists and
+    the maps are counted as they are decoded, and going over raises :class:`RefusedFrame`."""
     hook = _tag_hook_numpy if typed_arrays == "numpy" else _tag_hook_list
-    return cbor2.loads(data, tag_hook=hook)
+    if budget is None:
+        return cbor2.loads(data, tag_hook=hook)
+    spent = [len(data)]
+
+    def spend(n: int) -> None:
+        spent[0] += n
+        if spent[0] > budget:
+            raise DecodedTooBig(f"CBOR frame of {len(data)} bytes decodes to more than the {budget >> 20} MB of "
+                               "objects the client allows for one frame; refused")
+
+    def counted_tag(a: Any, b: Any) -> Any:
+        tag = a if a.__class__ is cbor2.CBORTag else b
+        dtype = typed_array_dtype(tag.tag)
+        if typed_arrays != "numpy" and dtype is not None and isinstance(tag.value, bytes | bytearray) \
+                and tag.tag not in (64, 68):
+            spend(len(tag.value) // dtype.itemsize * (32 if dtype.kind == "f" else 36))
+        return hook(a, b)
+
+    def counted_map(a: Any, b: Any) -> Any:  # cbor2 5.x: (decoder, value); 6.x: (value, immutable)
+        value = b if isinstance(b, dict) else a
+        spend(100 + 16 * len(value))
+        return value
+
+    try:
+        return cbor2.loads(data, tag_hook=counted_tag, object_hook=counted_map)
+    except cbor2.CBORDecodeError as exc:
+        if isinstance(exc.__cause__, RefusedFrame):
+            raise exc.__cause__ from None
+        raise
 
 
-def decode_binary(data: bytes, typed_arrays: str = "list") -> Any:
-    """Decode a binary frame: CBOR, or JSON text sent in a binary frame.  Raises ProtocolError."""
+def json_decoded_size(raw: str | bytes) -> int:
+    """About how many bytes of Python objects a JSON frame decodes to, counted in its text before
+    parsing: its length, plus a slot per ``,``, a float per ``.`` or exponent, a dict per ``{``, a list
+    per ``[``, a string object per pair of ``"``. An upper estimate but for integers above 256 (each
+    counted as a slot, 8 bytes, where it takes 36): a frame of big integers may take up to about four
+    times the estimate."""
+    if isinstance(raw, str):
+        c = raw.count
+        exps = c("e-") + c("e+") + c("E-") + c("E+")
+        return (len(raw) + 8 * c(",") + 24 * (c(".") + exps) + 200 * c("{") + 56 * c("[") + 25 * c('"'))
+    b = raw.count
+    exps = b(b"e-") + b(b"e+") + b(b"E-") + b(b"E+")
+    return (len(raw) + 8 * b(b",") + 24 * (b(b".") + exps) + 200 * b(b"{") + 56 * b(b"[") + 25 * b(b'"'))
+
+
+def check_json_size(raw: str | bytes, budget: int | None) -> None:
+    """Refuse (:class:`RefusedFrame`) a JSON frame whose objects would take more than ``budget`` bytes."""
+    if budget is None:
+        return
+    size = json_decoded_size(raw)
+    if size > budget:
+        raise DecodedTooBig(f"JSON frame of {len(raw)} bytes would decode to about {size >> 20} MB of objects, "
+                           f"more than the {budget >> 20} MB the client allows for one frame; refused")
+
+
+def decode_binary(data: bytes, typed_arrays: str = "list", budget: int | None = None) -> Any:
+    """Decode a binary frame: CBOR, or JSON text sent in a binary frame.  Raises ProtocolError
+    (:class:`RefusedFrame` when the decoded objects would take more than ``budget`` bytes)."""
     if not data:
         raise ProtocolError("empty binary frame")
     first = data[0]
     if first in (0x7B, 0x5B):  # '{' or '[': JSON text in a binary frame (a CBOR map never starts so)
+        check_json_size(data, budget)
         try:
             return loads_text(data)
         except ProtocolError:
             pass
     try:
-        return decode_cbor(data, typed_arrays)
+        return decode_cbor(data, typed_arrays, budget)
+    except RefusedFrame:
+        raise
     except Exception as exc:  # cbor2 raises several types (CBORDecodeError, ValueError, ...)
         raise ProtocolError(f"binary frame is neither CBOR nor JSON ({exc})") from None
 
@@ -151,9 +215,20 @@ class RefusedFrame(ProtocolError):
     """A frame refused because it would need more memory than the client accepts (e.g. a PNG bomb)."""
 
 
+class DecodedTooBig(RefusedFrame):
+    """A frame whose decoded objects would take more than the client's decoded-size budget."""
+
+
 
 def png_to_text(data_b64: str, max_bytes: int = 64 << 20) -> bytes:
-    """The JSON bytes hidden in a ``png`` frame's ``data`` (base64 PNG of the text's bytes as RGB pixels).
+    """The JSON bytes hidden in a ``png`` frame's ``data`` (base64 PNG of the text's bytes as RGB pixels);
+    see :func:`png_view`."""
+    return bytes(png_view(data_b64, max_bytes))
+
+
+def png_view(data_b64: str, max_bytes: int = 64 << 20) -> memoryview:
+    """The JSON bytes hidden in a ``png`` frame's ``data``, as a view onto the decoded image (one copy of
+    the pixels in all, where there were four).
 
     The trailing ``\\n`` padding is stripped.  Raises ProtocolError when the data is not a PNG, or when its
     header declares pixels of more than ``max_bytes`` (checked before decoding: a PNG bomb is refused).
@@ -174,17 +249,35 @@ def png_to_text(data_b64: str, max_bytes: int = 64 << 20) -> bytes:
         raise ProtocolError(f"png frame: OpenCV cannot decode the image ({safe_text(exc, 120)})") from None
     if img is None:
         raise ProtocolError("png frame: data is not a PNG image")
-    if img.ndim == 3 and img.shape[2] == 3:
-        img = img[:, :, ::-1]  # OpenCV gives BGR; the payload bytes are in RGB order
-    elif img.ndim == 3 and img.shape[2] == 4:
-        img = img[:, :, [2, 1, 0, 3]]
-    return np.ascontiguousarray(img).tobytes().rstrip(b"\n\x00")
+    # OpenCV gives BGR(A); the payload bytes are in RGB(A) order: swapped in place, no copy of the image
+    if img.ndim == 3 and img.shape[2] == 3 and img.dtype == np.uint8:
+        cv2.cvtColor(img, cv2.COLOR_BGR2RGB, dst=img)
+    elif img.ndim == 3 and img.shape[2] == 4 and img.dtype == np.uint8:
+        cv2.cvtColor(img, cv2.COLOR_BGRA2RGBA, dst=img)
+    elif img.ndim == 3:
+        img = img[:, :, [2, 1, 0, 3][: img.shape[2]]] if img.shape[2] in (3, 4) else img
+    flat = np.ascontiguousarray(img).reshape(-1).view(np.uint8)
+    return memoryview(flat.data)[: _text_end(flat)]
+
+
+def _text_end(flat: np.ndarray) -> int:
+    """Where the text ends in the decoded bytes: before the trailing ``\\n`` / NUL padding (looked for
+    from the end, a chunk at a time, without a copy of the whole image)."""
+    end = len(flat)
+    step = 1 << 16
+    while end > 0:
+        tail = flat[max(0, end - step):end]
+        keep = np.flatnonzero((tail != 10) & (tail != 0))
+        if len(keep):
+            return end - len(tail) + int(keep[-1]) + 1
+        end -= len(tail)
+    return 0
 
 
 def decode_png(data_b64: str, max_bytes: int = 64 << 20) -> Any:
     """Decode a (complete) ``png`` frame's payload into the frame it carries (``max_bytes``: see
     :func:`png_to_text`)."""
-    text = png_to_text(data_b64, max_bytes)
+    text = png_view(data_b64, max_bytes)
     try:
         return loads_text(text)
     except ProtocolError as exc:
@@ -214,10 +307,14 @@ class FragmentAssembler:
     """
 
     def __init__(self, timeout: float = 10.0, max_bytes: int = 64 << 20, max_fragments: int = 100_000,
-                 max_partials: int = 64, warn: Callable[[str], None] | None = None) -> None:
+                 max_partials: int = 64, warn: Callable[[str], None] | None = None,
+                 max_total: int | None = None) -> None:
         self.warn = warn or log.warning
         self.timeout = timeout
         self.max_bytes = max_bytes
+        #: bytes of every unfinished message together (default: twice ``max_bytes``)
+        self.max_total = 2 * max_bytes if max_total is None else max_total
+        self._total = 0
         self.max_fragments = max_fragments
         self.max_partials = max_partials
         self._partials: dict[Any, _Partial] = {}
@@ -229,14 +326,31 @@ class FragmentAssembler:
 
     @property
     def buffered_bytes(self) -> int:
-        return sum(p.size for p in self._partials.values())
+        return self._total
+
+    def _drop(self, fid: Any) -> _Partial:
+        part = self._partials.pop(fid)
+        self._total -= part.size
+        return part
+
+    def clear(self) -> int:
+        """Drop every unfinished message (the connection they came on is gone); returns how many."""
+        n = len(self._partials)
+        self._partials.clear()
+        self._total = 0
+        self.dropped += n
+        return n
+
+    def oldest_update(self) -> float | None:
+        """``time.monotonic()`` of the least recently added-to unfinished message, or None."""
+        return min((p.updated for p in self._partials.values()), default=None)
 
     def expire(self, now: float | None = None) -> int:
         """Drop unfinished messages not updated for ``timeout`` seconds; returns how many were dropped."""
         now = time.monotonic() if now is None else now
         stale = [k for k, p in self._partials.items() if now - p.updated > self.timeout]
         for k in stale:
-            del self._partials[k]
+            self._drop(k)
         self.dropped += len(stale)
         if stale:
             self.warn(f"dropped {len(stale)} unfinished fragmented message(s) after {self.timeout:g} s "
@@ -268,31 +382,39 @@ class FragmentAssembler:
         part = self._partials.get(fid)
         if num == 0:
             if part is not None:
+                self._drop(fid)
                 self.dropped += 1
                 self.warn(f"fragment id={fid!r}: a new message started before the previous one was complete "
                           f"({len(part.parts)} of {part.count} fragments); dropped the incomplete one")
-            if len(self._partials) >= self.max_partials and fid not in self._partials:
+            if len(self._partials) >= self.max_partials:
                 oldest = min(self._partials, key=lambda k: self._partials[k].updated)
-                del self._partials[oldest]
+                self._drop(oldest)
                 self.dropped += 1
                 self.warn(f"too many unfinished fragmented messages; dropped the oldest (id={oldest!r})")
             part = self._partials[fid] = _Partial(count, now)
         elif part is None:
             raise ProtocolError(f"fragment id={fid!r} num={num}: no message was started (num 0 missing); ignored")
         elif num != len(part.parts) or count != part.count:
-            del self._partials[fid]
+            self._drop(fid)
             self.dropped += 1
             raise ProtocolError(f"fragment id={fid!r}: expected num {len(part.parts)} of {part.count}, got "
                                 f"num {num} of {count}; dropped the incomplete message")
-        part.size += len(data)
-        if part.size > self.max_bytes:
-            del self._partials[fid]
+        if part.size + len(data) > self.max_bytes:
+            self._drop(fid)
             self.dropped += 1
             raise ProtocolError(f"fragment id={fid!r}: message exceeds {self.max_bytes} bytes; dropped")
+        while self._total + len(data) > self.max_total and len(self._partials) > 1:
+            oldest = min((k for k in self._partials if k != fid), key=lambda k: self._partials[k].updated)
+            self._drop(oldest)
+            self.dropped += 1
+            self.warn(f"unfinished fragmented messages hold more than {self.max_total} bytes; dropped the "
+                      f"oldest (id={oldest!r})")
+        part.size += len(data)
+        self._total += len(data)
         part.parts.append(data)
         part.updated = now
         if len(part.parts) == part.count:
-            del self._partials[fid]
+            self._drop(fid)
             self.completed += 1
             return "".join(part.parts)
         return None

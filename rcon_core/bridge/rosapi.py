@@ -4,6 +4,14 @@ Quirks handled (``rosapi.jsonl:47-49``): parameter values travel as JSON text in
 returns ``"7"``, ``"\\"hi\\""``; ``set_param`` needs JSON text); unknown names give empty results, not
 failures (``topic_type`` of an unknown topic is ``""``, returned here as ``None``).
 
+Decision: asking a type per service, in bounded batches
+    rosapi has no call that lists services with their types, so :meth:`Rosapi.services_with_types` asks
+    ``service_type`` once per name. A robot with 10^5 services got 10^5 calls at once (a 22 s stall of the
+    loop, the link cut by the stall watchdog): now at most ``TYPE_CALLS_IN_FLIGHT`` are in flight and
+    ``TYPE_CALLS_PER_S`` start per second, and with ``known`` (the types learned before, kept by the
+    caller between refreshes) only the names not seen yet are asked. ``calls`` counts the calls made, by
+    rosapi service.
+
 Decision: ask only for services the server lists
     A service rosapi does not have is not "no answer": rosbridge answers ``result: false`` ("Service
     /rosapi/action_type does not exist") *and logs an ERROR into the robot's own /rosout* for every call
@@ -21,12 +29,15 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
+from collections import Counter
+from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, Any
 
 from rcon_core.msgs.names import normalize, pkg_type
 
 from . import rosapi_guard
-from .errors import RosapiRefusedError, ServiceError
+from .errors import BridgeError, ConnectionLostError, RosapiRefusedError, ServiceError
+from .safety import bounded_repr, json_text_value
 
 if TYPE_CHECKING:
     from .host import ServiceCaller
@@ -35,10 +46,16 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
+#: ``service_type`` calls in flight at once, and started per second, while listing services' types
+TYPE_CALLS_IN_FLIGHT = 8
+TYPE_CALLS_PER_S = 2000.0
+
 
 class Rosapi:
     def __init__(self, client: ServiceCaller) -> None:
         self._client = client
+        #: calls made, by rosapi service name (``"service_type"``...)
+        self.calls: Counter[str] = Counter()
 
     async def profile(self) -> RosInfo | None:
         """What the server's rosapi lists (``client.rosapi_profile()``, once per connection); None when the
@@ -52,6 +69,7 @@ class Rosapi:
         return info is None or f"/rosapi/{name}" in info.rosapi_services
 
     async def _call(self, name: str, args: dict[str, Any] | None = None, timeout: float | None = None) -> Any:
+        self.calls[name] += 1
         values = await self._client.call_service(f"/rosapi/{name}", args or {}, timeout=timeout)
         if not isinstance(values, dict):
             raise ServiceError(f"unexpected answer {values!r}", f"/rosapi/{name}")
@@ -62,18 +80,72 @@ class Rosapi:
     async def topics(self) -> dict[str, str]:
         """``{topic: type}`` for every topic the server knows."""
         v = await self._call("topics")
-        topics = v.get("topics", [])
-        types = v.get("types") or [""] * len(topics)
-        return dict(zip(topics, types, strict=False))
+        topics = _listed(v.get("topics"))
+        types = _listed(v.get("types")) or [""] * len(topics)
+        return {t: (ty if isinstance(ty, str) else "") for t, ty in zip(topics, types, strict=False)
+                if isinstance(t, str)}
 
     async def services(self) -> list[str]:
-        return list((await self._call("services")).get("services", []))
+        return [s for s in _listed((await self._call("services")).get("services")) if isinstance(s, str)]
 
-    async def services_with_types(self) -> dict[str, str]:
-        """``{service: type}``; types are asked for concurrently (rosapi has no combined call)."""
-        names = await self.services()
-        types = await asyncio.gather(*(self.service_type(n) for n in names), return_exceptions=True)
-        return {n: (t if isinstance(t, str) else "") for n, t in zip(names, types, strict=True)}
+    async def services_with_types(self, known: dict[str, str] | None = None,
+                                  listed: Callable[[list[str]], None] | None = None) -> dict[str, str]:
+        """``{service: type}`` in name order (``""`` where the type could not be had). rosapi has no combined
+        call: one ``service_type`` per name, in bounded batches (see the module docstring). ``known``: types
+        learned before, by name; only the other names are asked, and it is updated in place with the
+        answers as they come (names no longer listed are dropped from it). ``listed(names)`` is called once
+        the names are known, before their types are asked (a caller may show them meanwhile)."""
+        names = sorted(await self.services())
+        await asyncio.sleep(0)  # a long list: every step of it gives the loop a turn
+        known = {} if known is None else known
+        present = set(names)
+        for gone in [n for n in known if n not in present]:
+            del known[gone]
+        await asyncio.sleep(0)
+        todo = [n for n in names if n not in known]
+        if listed is not None:
+            listed(names)
+        await asyncio.sleep(0)
+        await self.ask_each(todo, self.service_type, known)
+        return {n: known.get(n, "") for n in names}
+
+    async def ask_each(self, names: Iterable[str], ask: Callable[[str], Any], into: dict[str, str]) -> None:
+        """``into[name] = await ask(name)`` for every name, ``TYPE_CALLS_IN_FLIGHT`` at a time and at most
+        ``TYPE_CALLS_PER_S`` started per second; a name whose call fails (``ServiceError``) is left out
+        (asked again next time); a lost link ends it all (raised)."""
+        names = list(names)
+        if not names:
+            return
+        loop = asyncio.get_running_loop()
+        todo = iter(names)
+        gap = 1.0 / TYPE_CALLS_PER_S
+        pace = {"next": loop.time()}
+        failed: list[BaseException] = []
+
+        async def worker() -> None:
+            for name in todo:
+                if failed:
+                    return
+                now = loop.time()
+                wait, pace["next"] = pace["next"] - now, max(now, pace["next"]) + gap
+                if wait > 0:
+                    await asyncio.sleep(wait)
+                try:
+                    answer = await ask(name)
+                except ConnectionLostError as exc:
+                    failed.append(exc)
+                    return
+                except ServiceError as exc:  # this name only: asked again at the next refresh
+                    log.debug("type of %s not known: %s", name, exc)
+                    continue
+                except BridgeError as exc:  # not connected: nothing more can be asked
+                    failed.append(exc)
+                    return
+                into[name] = answer if isinstance(answer, str) else ""
+
+        await asyncio.gather(*(worker() for _ in range(min(TYPE_CALLS_IN_FLIGHT, len(names)))))
+        if failed:
+            raise failed[0]
 
     async def topic_type(self, topic: str) -> str | None:
         return (await self._call("topic_type", {"topic": topic})).get("type") or None
@@ -213,9 +285,10 @@ class Rosapi:
             args["default"] = json.dumps(default)
         text = (await self._call("get_param", args)).get("value", "null")
         try:
-            value = json.loads(text) if text else None
-        except ValueError:
-            raise ServiceError(f"parameter {name} is not valid JSON text: {text[:80]!r}", "/rosapi/get_param") from None
+            value = json_text_value(text) if text else None
+        except ValueError as exc:
+            raise ServiceError(f"parameter {name} is not valid JSON text ({exc}): {bounded_repr(text, 80)}",
+                               "/rosapi/get_param") from None
         return default if value is None else value
 
     async def set_param(self, name: str, value: Any) -> None:
@@ -229,3 +302,9 @@ class Rosapi:
 
     async def param_names(self) -> list[str]:
         return list((await self._call("get_param_names")).get("names", []))
+
+
+def _listed(value: Any) -> list[Any]:
+    """A list the server sent, or an empty one when it sent something else (names are checked by the
+    caller: a server's answer is never trusted to have the documented shape)."""
+    return value if isinstance(value, list) else []

@@ -16,12 +16,12 @@ The shapes that differ and who picks them by ``client.ros_version``: parameter n
 
 from __future__ import annotations
 
-import json
 import logging
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from .errors import BridgeError
+from .safety import json_text_value
 
 if TYPE_CHECKING:
     from .host import ServiceCaller
@@ -75,9 +75,11 @@ def _json_text(value: object) -> str:
     if not isinstance(value, str):
         return ""
     try:
-        decoded = json.loads(value)
+        decoded = json_text_value(value)
     except ValueError:
         decoded = value
+    if not isinstance(decoded, str | int | float):
+        return ""
     return str(decoded).strip() if decoded is not None else ""
 
 

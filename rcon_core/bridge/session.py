@@ -17,10 +17,10 @@ Decision: after every (re)connect
 Decision: publishing while the link is down or stalled
     Nothing is queued for later, so a robot never receives a burst of stale commands.  For a **latched**
     topic only the latest value is kept and sent right after the advertisement is restored; every other
-    publish made while down is dropped and counted (``Publisher.dropped``, ``stats["dropped_while_down"]``).
-    Frames still in the outgoing queue when the link drops are dropped too (``stats["dropped_on_disconnect"]``).
+    publish made while down is dropped and counted (``Publisher.dropped``, ``stats.dropped_while_down``).
+    Frames still in the outgoing queue when the link drops are dropped too (``stats.dropped_on_disconnect``).
     A publisher's ``max_age`` (0.25 s by default for non-latched topics) is its freshness limit: a publish
-    is never written after it (``wslink.Link.send_command``, ``freshness.py``; ``stats["stale_dropped"]``).
+    is never written after it (``wslink.Link.send_command``, ``freshness.py``; ``stats.stale_dropped``).
     The frame around a message is encoded once per advertisement (``AdvertEntry.head``); ``latch`` is
     repeated in every publish (``client_publish.jsonl:26-30``: otherwise the topic is re-registered).
 
@@ -63,8 +63,9 @@ from .goals import Goals
 from .guard import LinkGuard, ViewOnlyError, describe_call
 from .inbound import BadFrames
 from .protocol import encode
-from .safety import bounded_repr, safe_text
+from .safety import MAX_ANSWER_DEPTH, LogBudget, bounded_repr, clip, nested_deeper, safe_text
 from .services import ProvidedServices
+from .stats import BridgeStats
 from .subscribe import Subscriber
 from .tap import OperatorTap
 from .topics import AdvertEntry, TopicEntry
@@ -74,6 +75,8 @@ if TYPE_CHECKING:
     from .wslink import Link
 
 log = logging.getLogger(__name__)
+#: characters of a server's ``status`` text that are logged and shown (a server sent 10 MB lines)
+STATUS_TEXT = 500
 
 _dumps = orjson.dumps
 _NUMPY = orjson.OPT_SERIALIZE_NUMPY
@@ -85,7 +88,7 @@ class Host(Protocol):
     call_timeout: float
     registry: Any
     rosapi: Any
-    stats: dict[str, int]
+    stats: BridgeStats
 
     @property
     def ros_version(self) -> int | None: ...
@@ -133,6 +136,8 @@ class Session:
         self.guard = LinkGuard(host.url)
         self.guard.add_listener(self._guard_changed)
         self._status_listeners: list[Callable[[dict[str, Any]], None]] = []
+        #: the rate at which the server's ``status`` messages are logged (see ``_on_status``)
+        self.status_log = LogBudget()
         self._ops: dict[str, Callable[[dict[str, Any]], None]] = {
             "publish": self._on_publish, "service_response": self._on_service_response,
             "call_service": self.services.on_call, "status": self._on_status,
@@ -196,7 +201,7 @@ class Session:
         if link is not None:
             dropped = link.drop_queue()
             if dropped:
-                self.stats["dropped_on_disconnect"] += dropped
+                self.stats.dropped_on_disconnect += dropped
         for advert in self.adverts.values():
             advert.active = False
         for topic in self.topics.values():
@@ -260,7 +265,7 @@ class Session:
             return
         msg = m["msg"]
         if not isinstance(msg, dict):
-            self.stats["non_object_msgs"] += 1
+            self.stats.non_object_msgs += 1
             self.bad.report("msg", f"publish on {topic}: 'msg' is a JSON {type(msg).__name__}, not an object; "
                                    "dropped")
             return
@@ -277,8 +282,14 @@ class Session:
         if fut.done():
             return
         values = m.get("values")
-        if m.get("result", True) is False:
-            fut.set_exception(ServiceError(_failure_text(values), m.get("service")))
+        service = m.get("service") if isinstance(m.get("service"), str) else None
+        if nested_deeper(values):  # bounded for everything that walks an answer (see safety.py)
+            self.bad.report("depth", f"answer of {bounded_repr(service, 80)} nested deeper than "
+                                     f"{MAX_ANSWER_DEPTH} levels; the call failed")
+            fut.set_exception(ServiceError(f"the answer is nested deeper than {MAX_ANSWER_DEPTH} levels; refused",
+                                           service))
+        elif m.get("result", True) is False:
+            fut.set_exception(ServiceError(_failure_text(values), service))
         else:
             fut.set_result({} if values is None else values)
 
@@ -287,20 +298,28 @@ class Session:
         return lambda: self._status_listeners.remove(fn) if fn in self._status_listeners else None
 
     def _on_status(self, m: dict[str, Any]) -> None:
+        """A ``status`` op: logged cut to ``STATUS_TEXT`` characters and at most ``status_log``'s rate (the
+        rest counted in ``stats["status_not_logged"]`` and said with the next line); an error naming a call
+        or goal fails it with the same cut text."""
         level = m.get("level", "info")
         text = m.get("msg", "")
         sid = m.get("id")
         if not isinstance(level, str):
             level = bounded_repr(level, 40)
-        if not isinstance(text, str):
-            text = bounded_repr(text, 200)
-        pylevel = {"error": logging.ERROR, "warning": logging.WARNING}.get(level, logging.INFO)
-        log.log(pylevel, "server status (%s)%s: %s", level, f" for {bounded_repr(sid, 80)}" if sid else "", text)
+        text = clip(text, STATUS_TEXT) if isinstance(text, str) else bounded_repr(text, 200)
+        held = self.status_log.take()
+        if held is None:
+            self.stats.status_not_logged += 1
+        else:
+            pylevel = {"error": logging.ERROR, "warning": logging.WARNING}.get(clip(level, 20), logging.INFO)
+            more = f" ({held} more status messages were not logged)" if held else ""
+            log.log(pylevel, "server status (%s)%s: %s%s", clip(level, 20),
+                    f" for {bounded_repr(sid, 80)}" if sid else "", text, more)
         if level == "error" and isinstance(sid, str):
             fut = self.pending.pop(sid, None)
             if fut is not None and not fut.done():
-                fut.set_exception(ServiceError(str(text)))
-            self.goals.on_error_status(sid, str(text))
+                fut.set_exception(ServiceError(text))
+            self.goals.on_error_status(sid, text)
         for fn in list(self._status_listeners):
             try:
                 fn(m)
@@ -389,7 +408,7 @@ class Session:
             return True
         pub.dropped += 1
         entry.dropped += 1
-        self.stats["dropped_while_down"] += 1
+        self.stats.dropped_while_down += 1
         return False
 
     def drop_stale(self, pub: Publisher, counted_sent: bool = False) -> None:
@@ -397,7 +416,7 @@ class Session:
         if counted_sent:
             pub.sent -= 1
         pub.dropped += 1
-        self.stats["stale_dropped"] += 1
+        self.stats.stale_dropped += 1
 
     def stale_in_queue(self, pub: Publisher) -> None:
         """A queued command passed its deadline (the link's writer drops it)."""

@@ -25,6 +25,7 @@ import logging
 from typing import Any
 
 from .errors import BridgeError, ConnectionLostError, RosapiRefusedError, ServiceError, ServiceTimeoutError
+from .safety import bounded_repr
 
 __all__ = ["UNKNOWN_TYPE", "unknown_type_sentence", "is_standard", "robot_knows", "TypeChecker",
            "status_failure"]
@@ -136,7 +137,8 @@ def status_failure(frame: dict[str, Any]) -> tuple[str, str] | None:
     sid = frame.get("id")
     if not isinstance(sid, str):
         return None
-    text = str(frame.get("msg", ""))[:300] or "the robot refused it"
+    msg = frame.get("msg", "")
+    text = (msg[:300] if isinstance(msg, str) else bounded_repr(msg, 300)) or "the robot refused it"
     if sid.startswith("sub:"):
         return sid[4:].rsplit(":", 1)[0], text
     if sid.startswith("adv:"):

@@ -4,7 +4,7 @@ No Qt. ``runtime`` (imported on demand) starts and stops the widget models of a 
 """
 
 from .autosave import AutoSaver
-from .document import CanvasLocked, Change, Command, Document, EditError
+from .document import CanvasLocked, Change, ChangeKind, Command, Document, EditError
 from .store import (
     NewerVersionError,
     WorkspaceFileError,
@@ -23,6 +23,7 @@ __all__ = [
     "Canvas",
     "CanvasLocked",
     "Change",
+    "ChangeKind",
     "Command",
     "Document",
     "EditError",

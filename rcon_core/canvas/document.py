@@ -18,6 +18,7 @@ caller's thread; a listener that raises is reported on stderr and does not stop 
 from __future__ import annotations
 
 import copy
+import enum
 import sys
 import traceback
 from collections.abc import Callable
@@ -31,7 +32,7 @@ from .retarget import rename_settings
 from .robots import Robot, UnknownRobot, default_robot, resolve_robot
 from .workspace import Canvas, Geometry, WidgetInstance, Workspace, new_id
 
-__all__ = ["Document", "Change", "Command", "CanvasLocked", "EditError"]
+__all__ = ["Document", "Change", "ChangeKind", "Command", "CanvasLocked", "EditError"]
 
 
 class EditError(ValueError):
@@ -42,13 +43,28 @@ class CanvasLocked(EditError):
     """The canvas is locked; unlock it first."""
 
 
+class ChangeKind(enum.StrEnum):
+    """What kind of change a :class:`Change` is (a ``str``: ``change.what == "robots-changed"`` still holds)."""
+
+    CANVAS_ADDED = "canvas-added"
+    CANVAS_REMOVED = "canvas-removed"
+    CANVAS_RENAMED = "canvas-renamed"
+    CANVAS_LOCKED = "canvas-locked"
+    CANVAS_VIEW_ONLY = "canvas-view-only"
+    CANVAS_SWITCHED = "canvas-switched"
+    WIDGET_ADDED = "widget-added"
+    WIDGET_REMOVED = "widget-removed"
+    WIDGET_CHANGED = "widget-changed"
+    WORKSPACE_REPLACED = "workspace-replaced"
+    PLUGIN_SETTINGS_CHANGED = "plugin-settings-changed"
+    ROBOTS_CHANGED = "robots-changed"
+
+
 @attrs.frozen
 class Change:
-    """What changed. ``what``: canvas-added, canvas-removed, canvas-renamed, canvas-locked, canvas-view-only,
-    canvas-switched, widget-added, widget-removed, widget-changed, workspace-replaced,
-    plugin-settings-changed, robots-changed."""
+    """What changed: ``what`` (a :class:`ChangeKind`; its value is taken too) and which canvas and widget."""
 
-    what: str
+    what: ChangeKind = attrs.field(converter=ChangeKind)
     canvas_id: str | None = None
     widget_id: str | None = None
 
@@ -142,7 +158,7 @@ class Document:
         self.workspace = workspace
         self._undo.clear()
         self._redo.clear()
-        self._notify([Change("workspace-replaced")])
+        self._notify([Change(ChangeKind.WORKSPACE_REPLACED)])
 
     # -- canvases ------------------------------------------------------------------------------------
     @property
@@ -172,14 +188,14 @@ class Document:
 
         def do() -> list[Change]:
             ws.canvases.insert(pos, canvas)
-            return [Change("canvas-added", canvas.id)]
+            return [Change(ChangeKind.CANVAS_ADDED, canvas.id)]
 
         def undo() -> list[Change]:
             ws.canvases.remove(canvas)
-            changes = [Change("canvas-removed", canvas.id)]
+            changes = [Change(ChangeKind.CANVAS_REMOVED, canvas.id)]
             if ws.current == canvas.id:
                 ws.current = ws.canvases[min(pos, len(ws.canvases) - 1)].id
-                changes.append(Change("canvas-switched", ws.current))
+                changes.append(Change(ChangeKind.CANVAS_SWITCHED, ws.current))
             return changes
 
         return Command(f"add canvas {canvas.name}", do, undo)
@@ -219,7 +235,7 @@ class Document:
         def set_to(value: str) -> Callable[[], list[Change]]:
             def fn() -> list[Change]:
                 canvas.name = value
-                return [Change("canvas-renamed", canvas.id)]
+                return [Change(ChangeKind.CANVAS_RENAMED, canvas.id)]
 
             return fn
 
@@ -236,18 +252,18 @@ class Document:
 
         def do() -> list[Change]:
             ws.canvases.remove(canvas)
-            changes = [Change("canvas-removed", canvas.id)]
+            changes = [Change(ChangeKind.CANVAS_REMOVED, canvas.id)]
             if ws.current == canvas.id:
                 ws.current = ws.canvases[min(pos, len(ws.canvases) - 1)].id
-                changes.append(Change("canvas-switched", ws.current))
+                changes.append(Change(ChangeKind.CANVAS_SWITCHED, ws.current))
             return changes
 
         def undo() -> list[Change]:
             ws.canvases.insert(pos, canvas)
-            changes = [Change("canvas-added", canvas.id)]
+            changes = [Change(ChangeKind.CANVAS_ADDED, canvas.id)]
             if was_current:
                 ws.current = canvas.id
-                changes.append(Change("canvas-switched", canvas.id))
+                changes.append(Change(ChangeKind.CANVAS_SWITCHED, canvas.id))
             return changes
 
         self._run(Command(f"delete canvas {canvas.name}", do, undo))
@@ -268,7 +284,7 @@ class Document:
         canvas = self._canvas(canvas_id)
         if self.workspace.current != canvas.id:
             self.workspace.current = canvas.id
-            self._notify([Change("canvas-switched", canvas.id)])
+            self._notify([Change(ChangeKind.CANVAS_SWITCHED, canvas.id)])
         return canvas
 
     def set_locked(self, canvas_id: str, locked: bool, *, undoable: bool = True) -> None:
@@ -281,13 +297,13 @@ class Document:
         old = canvas.locked
         if not undoable:
             canvas.locked = locked
-            self._notify([Change("canvas-locked", canvas.id)])
+            self._notify([Change(ChangeKind.CANVAS_LOCKED, canvas.id)])
             return
 
         def set_to(value: bool) -> Callable[[], list[Change]]:
             def fn() -> list[Change]:
                 canvas.locked = value
-                return [Change("canvas-locked", canvas.id)]
+                return [Change(ChangeKind.CANVAS_LOCKED, canvas.id)]
 
             return fn
 
@@ -300,7 +316,7 @@ class Document:
         canvas = self._canvas(canvas_id)
         if canvas.view_only != view_only:
             canvas.view_only = view_only
-            self._notify([Change("canvas-view-only", canvas.id)])
+            self._notify([Change(ChangeKind.CANVAS_VIEW_ONLY, canvas.id)])
 
     def set_plugin_settings(self, kind: str, settings: dict[str, Any]) -> None:
         """Replace the shared settings of one widget kind."""
@@ -310,14 +326,14 @@ class Document:
 
         def do() -> list[Change]:
             ps[kind] = copy.deepcopy(new)
-            return [Change("plugin-settings-changed")]
+            return [Change(ChangeKind.PLUGIN_SETTINGS_CHANGED)]
 
         def undo() -> list[Change]:
             if had:
                 ps[kind] = copy.deepcopy(old)  # type: ignore[arg-type]
             else:
                 ps.pop(kind, None)
-            return [Change("plugin-settings-changed")]
+            return [Change(ChangeKind.PLUGIN_SETTINGS_CHANGED)]
 
         self._run(Command(f"settings of {kind}", do, undo))
 
@@ -337,7 +353,7 @@ class Document:
         def set_to(value: list[Robot]) -> Callable[[], list[Change]]:
             def fn() -> list[Change]:
                 ws.robots = copy.deepcopy(value)
-                return [Change("robots-changed")]
+                return [Change(ChangeKind.ROBOTS_CHANGED)]
 
             return fn
 
@@ -403,11 +419,11 @@ class Document:
 
         def do() -> list[Change]:
             canvas.widgets.append(w)
-            return [Change("widget-added", canvas.id, w.id)]
+            return [Change(ChangeKind.WIDGET_ADDED, canvas.id, w.id)]
 
         def undo() -> list[Change]:
             canvas.widgets.remove(w)
-            return [Change("widget-removed", canvas.id, w.id)]
+            return [Change(ChangeKind.WIDGET_REMOVED, canvas.id, w.id)]
 
         self._run(Command(f"add {kind}", do, undo))
         return w
@@ -418,11 +434,11 @@ class Document:
 
         def do() -> list[Change]:
             canvas.widgets.remove(w)
-            return [Change("widget-removed", canvas.id, w.id)]
+            return [Change(ChangeKind.WIDGET_REMOVED, canvas.id, w.id)]
 
         def undo() -> list[Change]:
             canvas.widgets.insert(pos, w)
-            return [Change("widget-added", canvas.id, w.id)]
+            return [Change(ChangeKind.WIDGET_ADDED, canvas.id, w.id)]
 
         self._run(Command(f"remove {w.kind}", do, undo))
 
@@ -437,7 +453,7 @@ class Document:
             def fn() -> list[Change]:
                 for k, v in values.items():
                     setattr(w, k, copy.deepcopy(v))
-                return [Change("widget-changed", canvas.id, w.id)]
+                return [Change(ChangeKind.WIDGET_CHANGED, canvas.id, w.id)]
 
             return fn
 

@@ -25,9 +25,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 from typing import Any, Protocol
 
-import attrs
-
-from rcon_core.plugins.model import BridgePort, Publisher, Subscription
+from rcon_core.plugins.api import BridgePort, Publisher, RobotPort, Subscription
 
 from .robots import Robot, UnknownRobot, resolve_robot, robot_colour
 
@@ -54,16 +52,6 @@ class RobotClient(Protocol):
     are optional: a client without them is taken to be connected."""
 
     def node(self, label: str) -> BridgeNode: ...
-
-
-@attrs.frozen
-class RobotPort:
-    """One robot as a fleet-wide widget sees it: who it is and the port (a node of its client)."""
-
-    id: str
-    name: str
-    colour: str
-    port: BridgePort
 
 
 class Fleet:

@@ -43,11 +43,13 @@ import asyncio
 import inspect
 import logging
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 from rcon_core.bridge.guard import READ_ONLY_SERVICES, ViewOnlyError, read_only_service
 
 if TYPE_CHECKING:
+    from rcon_core.bridge.envelope import Envelope
+
     from .fleet import BridgeNode
 
 __all__ = ["GuardedPort", "ViewOnlyError", "READ_ONLY_SERVICES"]
@@ -80,10 +82,10 @@ class _Goal:
     __slots__ = ("result", "cancel", "_status", "_done")
 
     def __init__(self, goal: Any) -> None:
-        self.result = lambda timeout=None: goal.result(timeout)
-        self.cancel = lambda: goal.cancel()
-        self._status = lambda: goal.status
-        self._done = lambda: goal.done
+        self.result: Callable[..., Any] = lambda timeout=None: goal.result(timeout)
+        self.cancel: Callable[[], Any] = lambda: goal.cancel()
+        self._status: Callable[[], Any] = lambda: goal.status
+        self._done: Callable[[], Any] = lambda: goal.done
 
     @property
     def status(self) -> Any:
@@ -113,6 +115,9 @@ class GuardedPort:
 
     __slots__ = ("_ops", "_notify", "view_only", "refused", "link", "widget_id")
 
+    #: what a model publishes through this port goes to the robot (a Compound's child port composes)
+    composes = False
+
     def __init__(
         self,
         node: BridgeNode,
@@ -131,9 +136,10 @@ class GuardedPort:
         self._ops = _operations(self, node, notify, view_only, on_refused)
 
     @property
-    def envelope(self) -> Any:
+    def envelope(self) -> Envelope | None:
         """The robot's safety envelope now (an ``Envelope``, or None: no limit); read it at each use."""
-        return self._ops["envelope"]()
+        envelope: Envelope | None = self._ops["envelope"]()
+        return envelope
 
     def changed(self) -> None:
         """The model has something new to show (any thread): the front end repaints it at once.  Called
@@ -255,5 +261,17 @@ def _operations(port: GuardedPort, node: BridgeNode, notify: Callable[[], None] 
         "advertise_service": advertise_service,
         "send_action_goal": send_action_goal,
         "close": lambda: node.close(),
-        "envelope": lambda: getattr(getattr(node, "client", None), "envelope", None),
+        "envelope": lambda: _envelope_of(node),
     }
+
+
+@runtime_checkable
+class _HasEnvelope(Protocol):
+    @property
+    def envelope(self) -> Envelope | None: ...
+
+
+def _envelope_of(node: Any) -> Envelope | None:
+    """The envelope of the node's client (a ``BridgeClient``); None for a node without one (a test's fake)."""
+    client = getattr(node, "client", None)
+    return client.envelope if isinstance(client, _HasEnvelope) else None

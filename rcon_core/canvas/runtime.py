@@ -52,14 +52,16 @@ from collections.abc import Callable
 from typing import Any
 
 from rcon_core.bridge.client import ConnectionState
+from rcon_core.bridge.safety import safe_text
 from rcon_core.bridge.typecheck import TypeChecker, status_failure
+from rcon_core.plugins.api import Binding, HostedModel, Port, RobotPort
 from rcon_core.plugins.context import SharedResources, WidgetContext
 from rcon_core.plugins.manager import PluginManager, UnknownWidget
-from rcon_core.plugins.model import Binding, BridgePort, WidgetModel
 from rcon_core.plugins.model_types import ModelTypes
 from rcon_core.plugins.spec import SettingsError
 
-from .fleet import BridgeNode, Fleet, RobotClient, RobotPort
+from .fleet import BridgeNode, Fleet, RobotClient
+from .placeholders import BrokenWidgetModel, MissingWidgetModel, UnconfiguredWidgetModel
 from .port import GuardedPort
 from .robots import UnknownRobot
 from .workspace import Canvas, WidgetInstance
@@ -90,59 +92,6 @@ def _is_up(state: ConnectionState | str) -> bool:
     return state is ConnectionState.CONNECTED or state == ConnectionState.CONNECTED.value
 
 
-class _NoPort:
-    """The port of a placeholder: refuses every use (but being told its state changed)."""
-
-    def changed(self) -> None:
-        """A placeholder's error text is set once, when it is built; nothing to wake the front end for."""
-
-    def __getattr__(self, name: str) -> Any:
-        raise RuntimeError("a placeholder widget has no bridge port")
-
-
-class MissingWidgetModel(WidgetModel):
-    """Stands in for a widget whose plugin is not installed (or disabled). Never subscribes."""
-
-    stale_after = None
-
-    def __init__(self, instance: WidgetInstance, reason: str) -> None:
-        super().__init__(None, instance.binding, _NoPort())
-        self.kind = instance.kind
-        self.reason = reason
-        self.set_error(reason)
-
-    def start(self) -> None:
-        with self._lock:
-            self._running = True
-            self._seq += 1
-
-    def stop(self) -> None:
-        with self._lock:
-            self._running = False
-            self._seq += 1
-
-    def problems(self) -> list[str]:
-        return [self.reason]
-
-
-class BrokenWidgetModel(MissingWidgetModel):
-    """Stands in for a widget whose model could not be built; ``reason`` says why."""
-
-
-class UnconfiguredWidgetModel(MissingWidgetModel):
-    """Stands in for a widget whose stored settings cannot be read (a value of the wrong type): not an
-    error but the "not configured" warning, one sentence per bad value (``problems()``)."""
-
-    def __init__(self, instance: WidgetInstance, problems: list[str]) -> None:
-        WidgetModel.__init__(self, None, instance.binding, _NoPort())
-        self.kind = instance.kind
-        self.reason = "; ".join(problems)
-        self._problems = list(problems)
-
-    def problems(self) -> list[str]:
-        return list(self._problems)
-
-
 class CanvasRuntime:
     """Creates, starts and stops the models of one canvas at a time."""
 
@@ -164,11 +113,13 @@ class CanvasRuntime:
         self.on_activity = on_activity
         #: robot id -> client; a bare client is a fleet of one robot
         self.fleet = client if isinstance(client, Fleet) else Fleet.single(client)
-        self.types = types
+        #: the type registry every model gets (the runtime always passes one: the plugin manager's standard
+        #: registry with every contributed type when none is given)
+        self.types: ModelTypes = types if types is not None else plugin_manager.type_registry()
         self.plugin_settings = plugin_settings if plugin_settings is not None else {}
         self.dispatch = dispatch
         self.canvas: Canvas | None = None
-        self.models: dict[str, WidgetModel] = {}
+        self.models: dict[str, HostedModel] = {}
         self._nodes: dict[str, list[Any]] = {}  # widget id -> its node, then its other robots' nodes
         self._robot_of: dict[str, str] = {}  # widget id -> robot id (resolved)
         self._fleet_wide: set[str] = set()  # widgets whose model has on_fleet
@@ -178,6 +129,8 @@ class CanvasRuntime:
         self.shared = SharedResources()
         self._checkers: dict[str, TypeChecker] = {}
         self._checks: set[asyncio.Task[Any]] = set()
+        #: hooks of the widgets' models that raised (logged once per widget and text; the others went on)
+        self.hook_errors = 0
 
     @property
     def client(self) -> RobotClient:
@@ -211,7 +164,7 @@ class CanvasRuntime:
         for robot_id in list(self._remove):
             self._unlisten(robot_id)
 
-    def restart_widget(self, inst: WidgetInstance) -> WidgetModel:
+    def restart_widget(self, inst: WidgetInstance) -> HostedModel:
         """Rebuild one widget's model (after its settings or binding changed)."""
         self._stop_widget(inst.id)
         return self._start_widget(inst)
@@ -242,25 +195,25 @@ class CanvasRuntime:
                 self.restart_widget(inst)
         self.shared.forget(id(old))  # nobody is on the old link any more
 
-    def add_widget(self, inst: WidgetInstance) -> WidgetModel:
+    def add_widget(self, inst: WidgetInstance) -> HostedModel:
         return self._start_widget(inst)
 
     def remove_widget(self, widget_id: str) -> None:
         self._stop_widget(widget_id)
 
     def focus_lost(self) -> None:
-        """Call the optional ``on_focus_lost()`` of every model (the window lost focus, the canvas is
-        being left): a teleop widget stops driving. A model that raises is logged, the others still run."""
+        """Call ``on_focus_lost()`` of every model and of its child widgets (the window lost focus, the
+        canvas is being left): a teleop widget stops driving. A model that raises is logged, the others
+        still run."""
         for widget_id, model in list(self.models.items()):
-            hook = getattr(model, "on_focus_lost", None)
-            if callable(hook):
+            for m in (model, *model.child_models()):
                 try:
-                    hook()
+                    m.on_focus_lost()
                 except Exception as exc:
                     log.warning("widget %s failed on focus loss: %s", widget_id, exc)
 
     # -- one widget ----------------------------------------------------------------------------------
-    def build_model(self, inst: WidgetInstance, port: BridgePort) -> WidgetModel:
+    def build_model(self, inst: WidgetInstance, port: Port) -> HostedModel:
         """The model for one instance (a placeholder when the plugin is missing or the build fails)."""
         try:
             spec = self.pm.widget(inst.kind)
@@ -283,11 +236,12 @@ class CanvasRuntime:
             if binding.role not in spec.roles:
                 roles = ", ".join(sorted(r.value for r in spec.roles))
                 raise ValueError(f"{spec.title} cannot {binding.role.value} (it can: {roles})")
-            context = WidgetContext(self.pm.widget, getattr(port, "link", None), self.shared)
+            context = WidgetContext(self.pm, port.link, self.shared)
             kwargs: dict[str, Any] = {"types": self.types, "plugin_settings": shared, "context": context}
             if self.dispatch is not None:
                 kwargs["dispatch"] = self.dispatch
-            return model_cls(settings, binding, port, **kwargs)
+            model: HostedModel = model_cls(settings, binding, port, **kwargs)
+            return model
         except Exception as exc:
             log.warning("widget %s (%s) could not be built: %s", inst.id, inst.kind, exc)
             return BrokenWidgetModel(inst, f"{inst.kind}: {exc}")
@@ -308,7 +262,7 @@ class CanvasRuntime:
             return f"canvas “{canvas.name}” is view-only"
         return None
 
-    def _port(self, node: BridgeNode, widget_id: str, robot_id: str, built: list[WidgetModel]) -> GuardedPort:
+    def _port(self, node: BridgeNode, widget_id: str, robot_id: str, built: list[HostedModel]) -> GuardedPort:
         """The model's only way to the robot (view-only enforced there, see canvas.port)."""
         notify = None
         if self.on_activity is not None:
@@ -324,42 +278,52 @@ class CanvasRuntime:
         return GuardedPort(node, notify=notify, view_only=self.view_only_reason(robot_id=robot_id),
                            on_refused=refused, link=id(self.fleet.client(robot_id)), widget_id=widget_id)
 
-    def _start_widget(self, inst: WidgetInstance) -> WidgetModel:
+    def _start_widget(self, inst: WidgetInstance) -> HostedModel:
         try:
             rid = self.fleet.resolve(inst.binding.robot)
         except UnknownRobot as exc:
-            model: WidgetModel = BrokenWidgetModel(inst, str(exc))
+            model: HostedModel = BrokenWidgetModel(inst, str(exc))
             self.models[inst.id] = model
             model.start()
             return model
         node = self.fleet.client(rid).node(inst.id)
-        built: list[WidgetModel] = []
+        built: list[HostedModel] = []
         port = self._port(node, inst.id, rid, built)
         model = self.build_model(inst, port)
         built.append(model)
         self._nodes[inst.id] = [node]
         self._robot_of[inst.id] = rid
         self.models[inst.id] = model
-        model.set_link(self._link_up.get(rid, True))
-        try:
+        self._hook(inst.id, "set_link", model.set_link, self._link_up.get(rid, True))
+        try:  # the widget boundary: every hook of a plugin's model may raise (see _hook)
             self._give_fleet(inst.id, model, rid, port, built)
             model.start()
         except Exception as exc:
-            log.warning("widget %s (%s) failed to start: %s", inst.id, inst.kind, exc)
-            model.set_error(f"could not start: {exc}")
+            log.warning("widget %s (%s) failed to start: %s", inst.id, inst.kind, safe_text(exc))
+            self._hook(inst.id, "set_error", model.set_error, f"could not start: {safe_text(exc)}")
             return model
-        self._check_type(inst.id, model)
+        self._hook(inst.id, "the type check", self._check_type, inst.id, model)
         return model
 
-    def _give_fleet(self, widget_id: str, model: WidgetModel, own: str, own_port: Any,
-                    built: list[WidgetModel]) -> None:
-        """A fleet-wide model (``on_fleet``) gets a port on every robot, and each robot's link state."""
-        hook = getattr(model, "on_fleet", None)
-        if not callable(hook) or isinstance(model, MissingWidgetModel):
+    def _hook(self, widget_id: str, what: str, fn: Callable[..., Any], *args: Any) -> None:
+        """Call one hook of one widget's model; what it raises is logged (bounded) and counted in
+        ``hook_errors``, and the caller goes on with the other widgets."""
+        try:
+            fn(*args)
+        except Exception as exc:
+            self.hook_errors += 1
+            _log_once(logging.WARNING, "widget %s failed in %s: %s", widget_id, what, safe_text(exc))
+
+    def _give_fleet(self, widget_id: str, model: HostedModel, own: str, own_port: Port,
+                    built: list[HostedModel]) -> None:
+        """A fleet-wide model (it overrides ``on_fleet``) gets a port on every robot, and each robot's link
+        state."""
+        if not model.fleet_wide:
             return
         self._fleet_wide.add(widget_id)
         ports = []
         for robot, client in self.fleet.items():
+            port: Port
             if robot.id == own:
                 port = own_port
             else:
@@ -367,14 +331,14 @@ class CanvasRuntime:
                 self._nodes[widget_id].append(node)
                 port = self._port(node, widget_id, robot.id, built)
             ports.append(RobotPort(robot.id, robot.label, self.fleet.colour(robot.id), port))
-        hook(ports)
+        model.on_fleet(ports)
         self._tell_robot_link(model, None)
 
     # -- does the robot know the type? ---------------------------------------------------------------
-    def _check_type(self, widget_id: str, model: WidgetModel) -> None:
+    def _check_type(self, widget_id: str, model: HostedModel) -> None:
         """Ask the robot (once per type and connection) whether it knows a non-standard bound type."""
         b = model.binding
-        if isinstance(model, MissingWidgetModel) or b.problems() or getattr(model, "dry_run", False):
+        if isinstance(model, MissingWidgetModel) or b.problems() or model.dry_run:
             return
         rid = self._robot_of.get(widget_id, "")
         client = self.fleet.client(rid)
@@ -412,8 +376,9 @@ class CanvasRuntime:
         for widget_id, model in list(self.models.items()):
             if self._robot_of.get(widget_id) != robot_id:
                 continue
-            if model.binding.name == topic and not model.binding.role.is_service:
-                model.set_error(f"the robot refused {topic}: {text}")
+            b = model.binding
+            if b.name == topic and not b.role.is_service:
+                self._hook(widget_id, "set_error", model.set_error, f"the robot refused {topic}: {text}")
                 self._notify(widget_id)
 
     def _notify(self, widget_id: str) -> None:
@@ -471,16 +436,14 @@ class CanvasRuntime:
         self._link_up[robot_id] = up
         for widget_id, model in list(self.models.items()):
             if self._robot_of.get(widget_id) == robot_id:
-                model.set_link(up)
+                for m in (model, *model.child_models()):
+                    self._hook(widget_id, "set_link", m.set_link, up)
             if widget_id in self._fleet_wide:
                 self._tell_robot_link(model, robot_id)
 
-    def _tell_robot_link(self, model: WidgetModel, robot_id: str | None) -> None:
-        hook = getattr(model, "on_robot_link", None)
-        if not callable(hook):
-            return
+    def _tell_robot_link(self, model: HostedModel, robot_id: str | None) -> None:
         for rid in [robot_id] if robot_id is not None else self.fleet.ids:
             try:
-                hook(rid, self._link_up.get(rid, True))
+                model.on_robot_link(rid, self._link_up.get(rid, True))
             except Exception as exc:
                 log.warning("a widget failed on robot %s's link state: %s", rid, exc)

@@ -62,7 +62,7 @@ import cattrs.gen
 import cattrs.v
 
 from rcon_core.bridge.envelope import Envelope
-from rcon_core.plugins.model import Binding, Role
+from rcon_core.plugins.api import Binding, Role
 
 from . import checks
 from .files import atomic_write, backup, clean_stale_temps, real_path, same_backup

@@ -88,6 +88,13 @@ def run(name: str, args: argparse.Namespace) -> int:
         return asyncio.run(handler(url, args))
     except KeyboardInterrupt:
         return 0
+    except BrokenPipeError:  # the reader went away (`| head`): the entry point stops quietly (main.py)
+        raise
+    except Exception as exc:  # the boundary: an answer the command could not use is one line, not a traceback
+        from rcon_core.bridge.safety import safe_text
+
+        _err(f"the robot's answer could not be used: {safe_text(exc)}")
+        return 1
 
 
 # ---------------------------------------------------------------------------------------------- helpers
@@ -128,6 +135,12 @@ def _registry() -> Any:
     pm = PluginManager()
     pm.load_entry_points()
     return pm.type_registry()
+
+
+def _yaml(value: Any) -> str:
+    import yaml
+
+    return str(yaml.safe_dump(orjson.loads(_json(value)), sort_keys=False, allow_unicode=True))
 
 
 def _parse_text(text: str) -> Any:
@@ -268,12 +281,13 @@ async def _echo(url: str, args: argparse.Namespace) -> int:
             return
         count += 1
         last_seen = loop.time()
-        if args.json:
-            text = _json(msg)
-        else:
-            import yaml
+        try:
+            text = _json(msg) if args.json else _yaml(msg) + "---"
+        except (TypeError, ValueError, RecursionError) as exc:  # nested too deep to print, not JSON...
+            from rcon_core.bridge.safety import safe_text
 
-            text = yaml.safe_dump(orjson.loads(_json(msg)), sort_keys=False, allow_unicode=True) + "---"
+            _err(f"message {count} could not be printed: {safe_text(exc)}")
+            return
         try:
             print(text, flush=True)
         except BrokenPipeError:  # the reader went away (`rcon echo ... | head`): stop quietly
@@ -376,7 +390,7 @@ def saved_envelope(layout: str, robot: str | None, url: str) -> tuple[Any, str]:
 
 async def _pub(url: str, args: argparse.Namespace) -> int:
     envelope, robot_name = None, ""
-    if getattr(args, "envelope", None) is not None:
+    if vars(args).get("envelope") is not None:  # only `rcon pub` has the option
         try:
             envelope, robot_name = saved_envelope(args.envelope, args.robot, url)
         except ValueError as exc:
@@ -482,10 +496,5 @@ async def _call(url: str, args: argparse.Namespace) -> int:
         return 1
     finally:
         await client.close()
-    if args.json:
-        print(_json(values, indent=True))
-    else:
-        import yaml
-
-        print(yaml.safe_dump(orjson.loads(_json(values)), sort_keys=False, allow_unicode=True).rstrip())
+    print(_json(values, indent=True) if args.json else _yaml(values).rstrip())
     return 0

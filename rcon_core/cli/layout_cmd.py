@@ -104,6 +104,8 @@ def check_layout(path: Path, pm: Any) -> tuple[list[str], str]:
 
 
 def _widget_problems(w: Any, pm: Any, types: Any) -> list[str]:
+    from rcon_core.plugins.api import stored_settings_problems
+
     out: list[str] = []
     g = w.geometry
     if not (g.w > 0 and g.h > 0):
@@ -118,7 +120,7 @@ def _widget_problems(w: Any, pm: Any, types: Any) -> list[str]:
     if not w.binding.problems() and w.binding.role in spec.roles:
         out += _type_problems(w.binding, spec, pm, types)
     try:
-        out += spec.settings_problems(w.settings)
+        out += stored_settings_problems(spec, w.settings, pm)
     except Exception as exc:  # a plugin's problems() that raises is reported, not fatal
         out.append(f"settings could not be checked: {type(exc).__name__}: {exc}")
     return out

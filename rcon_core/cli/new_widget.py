@@ -124,6 +124,8 @@ def write_package(target: Path, dist: str, kind: str, msg_type: str, role: str =
     """Write the package's files under ``target``; returns them."""
     import json
 
+    from rcon_core.plugins.api import API_VERSION
+
     from . import scaffold
 
     module = dist.replace("-", "_")
@@ -145,6 +147,7 @@ def write_package(target: Path, dist: str, kind: str, msg_type: str, role: str =
         "types_hook": "" if standard else scaffold.TYPES_HOOK.format(type=msg_type, kind_word=kind_word, ext=ext,
                                                                      definition=definition),
         "types_note": "" if standard else f" and the definition of `{msg_type}` (fill in your own)",
+        "api_version": API_VERSION,
     }
     written: list[Path] = []
     for rel, text in scaffold.files_for(role).items():

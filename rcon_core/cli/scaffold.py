@@ -4,7 +4,11 @@ Each template is ``str.format`` text; ``{{``/``}}`` are literal braces. The name
 ``dist`` (rcon-lab-winch), ``module`` (rcon_lab_winch), ``kind`` (lab.winch), ``cls`` (Winch),
 ``title`` (Winch), ``type`` (the bound message or service type), ``types_hook`` (the type contribution,
 or ""), ``ep`` (the entry-point name), ``role`` (subscribe, publish or call), ``name`` (the topic or
-service the canvas template binds), ``what`` (what the widget does, in words).
+service the canvas template binds), ``what`` (what the widget does, in words), ``api_version`` (the widget
+API the package is written against: ``rcon_core.plugins.api.API_VERSION`` when it was generated).
+
+A generated package uses RCON's public widget API only (``rcon_core.plugins.api.PUBLIC_API``;
+``tests/test_plugin_api.py`` holds every template to it).
 
 The subscriber's model, view and tests are here; the publisher's and the service caller's are in
 :mod:`rcon_core.cli.scaffold_roles`. :func:`files_for` gives the files of one role.
@@ -69,6 +73,7 @@ def rcon_register_widgets(registry):
             description="{what_cap}",
             roles={{Role.{role_upper}}},
             accepts=Accepts({accepts}),
+            api_version="{api_version}",  # the widget API this package is written against
             settings="{module}.model:{cls}Settings",
             model="{module}.model:{cls}Model",
             view="{module}.view:{cls}View",
@@ -119,7 +124,7 @@ MODEL = '''\
 
 import attrs
 
-from rcon_core.plugins import WidgetModel, get_path
+from rcon_core.plugins import WidgetModel
 
 
 @attrs.define
@@ -135,14 +140,12 @@ class {cls}Settings:
 class {cls}Model(WidgetModel):
     """Value: the bound field as text, e.g. "1.50 m". Runs on the bridge thread."""
 
-    def on_message(self, msg):
-        path = self.binding.field_path
-        value = get_path(msg, path) if path else msg
+    def to_value(self, value, msg):  # the bound field of each message -> what the view shows
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             text = str(value)
         else:
             text = f"{{value:.{{self.settings.decimals}}f}}"
-        self.set_value(f"{{text}} {{self.settings.unit}}".strip(), message=msg)
+        return f"{{text}} {{self.settings.unit}}".strip()
 '''
 
 VIEW = '''\
@@ -239,6 +242,21 @@ def test_view_shows_the_value(qapp, tmp_path):
     assert (tmp_path / "view.png").stat().st_size > 0
 '''
 
+TEST_CONFORMANCE = '''\
+"""The widget against RCON's widget API: what the app relies on (the same check RCON runs on its own)."""
+
+from {module}.plugin import KIND
+
+from rcon_core.plugins import PluginManager
+from rcon_core.testing import check_conformance
+
+
+def test_the_widget_conforms_to_the_widget_api(qapp):
+    pm = PluginManager()
+    pm.load_entry_points()
+    check_conformance(pm.widget(KIND), catalog=pm)
+'''
+
 README = '''\
 # {dist}
 
@@ -258,7 +276,8 @@ rcon match {type}                 # the widget is offered for the type
   model (no Qt; it runs on the bridge thread).
 - `{module}/view.py`: the Qt view; `refresh(state)` shows what the model computed.
 - `tests/`: `conftest.py` loads RCON's fixtures; the model is tested against the embedded robot (which
-  also {robot_part}), the view with `rcon_core.testing.grab_view`.
+  also {robot_part}), the view with `rcon_core.testing.grab_view`, the whole widget against RCON's widget
+  API with `rcon_core.testing.check_conformance`.
 
 RCON's guide: `docs/writing-a-widget-plugin.md` and `docs/hooks.md` in RCON's repository.
 '''
@@ -271,6 +290,7 @@ COMMON = {
     "{module}/plugin.py": PLUGIN,
     "{module}/template.json": TEMPLATE_JSON,
     "tests/conftest.py": CONFTEST,
+    "tests/test_conformance.py": TEST_CONFORMANCE,
 }
 #: the subscriber's own files (the default role)
 FILES = {**COMMON, "{module}/model.py": MODEL, "{module}/view.py": VIEW, "tests/test_model.py": TEST_MODEL,

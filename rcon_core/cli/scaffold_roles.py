@@ -34,7 +34,8 @@ class {cls}Model(WidgetModel):
         """The view's Send button (GUI thread; the publish itself runs on the bridge thread). Returns
         False when nothing was sent (the widget is not running: the error says so)."""
         path = self.binding.field_path
-        current = get_path(self.types.default(self.binding.type), path) if self.types is not None else 0.0
+        known = self.types.has(self.binding.type)  # a test may build the model without your type's definition
+        current = get_path(self.types.default(self.binding.type), path) if known else 0.0
         value = round(number) if isinstance(current, int) and not isinstance(current, bool) else float(number)
         if not self.publish_value(value):
             return False

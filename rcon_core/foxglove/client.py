@@ -51,6 +51,7 @@ from rcon_core.bridge.nodes import Node
 from rcon_core.bridge.reasons import Failure, describe
 from rcon_core.bridge.rosinfo import RosInfo
 from rcon_core.bridge.secure import ssl_context
+from rcon_core.bridge.stats import FoxgloveStats
 
 from . import wire
 from .catalog import FoxgloveCatalog, FoxgloveParams
@@ -96,10 +97,7 @@ class FoxgloveClient:
         self.latency: float | None = None
         self.last_error: BaseException | None = None
         self.failure: Failure | None = None
-        self.stats: dict[str, int] = {"connects": 0, "bad_frames": 0, "frame_errors": 0, "dropped_while_down": 0,
-                                      "dropped_on_disconnect": 0, "stale_dropped": 0, "degraded": 0,
-                                      "stall_cuts": 0, "undecodable": 0, "unknown_subscription": 0,
-                                      "envelope_clamped": 0, "envelope_refused": 0}
+        self.stats = FoxgloveStats()
         self._state = ConnectionState.CLOSED
         self._state_listeners: list[Callable[[ConnectionState], None]] = []
         self._failure_listeners: list[Callable[[Failure], None]] = []
@@ -375,7 +373,7 @@ class FoxgloveClient:
                         raise
                     wait = random.uniform(self.backoff_min / 2, delay)
                     self._report(failure.retrying(wait))
-                    self._set_state(ConnectionState.RECONNECTING if self.stats["connects"] else
+                    self._set_state(ConnectionState.RECONNECTING if self.stats.connects else
                                     ConnectionState.CONNECTING)
                     await asyncio.sleep(wait)
                     delay = min(delay * 2, self.backoff_max)
@@ -400,7 +398,7 @@ class FoxgloveClient:
         session = self.session
         link = self.link = FrameLink(ws, session.stale_in_queue)
         self.subprotocol = ws.subprotocol
-        self.stats["connects"] += 1
+        self.stats.connects += 1
         writer = asyncio.create_task(link.run_writer())
         pinger = asyncio.create_task(self._pinger(link))
         session.attached(link.write, link.send_command)
@@ -433,7 +431,7 @@ class FoxgloveClient:
             pinger.cancel()
             dropped = link.drop_queue()
             if dropped:
-                self.stats["dropped_on_disconnect"] += dropped
+                self.stats.dropped_on_disconnect += dropped
             calls = list(session.calls.values())
             session.calls.clear()
             session.param_requests.clear()
@@ -469,14 +467,14 @@ class FoxgloveClient:
         elif event == "stalled":
             if self._state is not ConnectionState.CONNECTED:
                 return False
-            self.stats["degraded"] += 1
+            self.stats.degraded += 1
             log.warning("link to %s is degraded: %s", self.url, detail)
             self._set_state(ConnectionState.DEGRADED)
         elif event == "recovered":
             if self._state is ConnectionState.DEGRADED:
                 self._set_state(ConnectionState.CONNECTED)
         elif event == "cut":
-            self.stats["stall_cuts"] += 1
+            self.stats.stall_cuts += 1
             log.warning("link to %s stalled (%s) with commands in flight; cut it", self.url, detail)
         else:
             log.warning("%s from %s; dropping the link", detail, self.url)

@@ -34,7 +34,7 @@ Decision: publishing and stale commands
 
 Decision: bad frames
     Every frame that does not follow the protocol (``wire.WireError``), an unknown op, a message for an
-    unknown subscription, a payload that does not decode: counted in ``stats["bad_frames"]`` through the
+    unknown subscription, a payload that does not decode: counted in ``stats.bad_frames`` through the
     rosbridge link's ``BadFrames`` (logged with a bounded text), the frame dropped, the link kept.
 
 Decision: what the protocol cannot do
@@ -55,6 +55,7 @@ from rcon_core.bridge.envelope import Envelope, enforce
 from rcon_core.bridge.errors import BridgeError
 from rcon_core.bridge.inbound import BadFrames
 from rcon_core.bridge.safety import bounded_repr, safe_text
+from rcon_core.bridge.stats import FoxgloveStats
 from rcon_core.bridge.tap import OperatorTap
 from rcon_core.bridge.topics import TopicEntry
 
@@ -79,11 +80,9 @@ Command = Callable[[bytes, Any, float], bool]
 class FoxgloveSession:
     """The protocol state of one Foxglove client (see the module docstring)."""
 
-    def __init__(self, url: str, stats: dict[str, int], bad: BadFrames, codecs: Codecs | None = None) -> None:
+    def __init__(self, url: str, stats: FoxgloveStats, bad: BadFrames, codecs: Codecs | None = None) -> None:
         self.url = url
         self.stats = stats
-        for key in ("unknown_subscription", "undecodable", "dropped_while_down", "stale_dropped"):
-            stats.setdefault(key, 0)
         self.bad = bad
         self.codecs = codecs or Codecs()
         self.guard = FoxgloveGuard(url)
@@ -188,7 +187,7 @@ class FoxgloveSession:
         if frame.__class__ is bytes and len(frame) >= 13 and frame[0] == 1:
             found = self.subs.get(_SUB_ID(frame, 1)[0])  # type: ignore[arg-type]
             if found is None:
-                self.stats["unknown_subscription"] += 1  # still in flight after an unsubscribe: not an error
+                self.stats.unknown_subscription += 1  # still in flight after an unsubscribe: not an error
                 return
             entry, decode = found
             try:
@@ -410,7 +409,7 @@ class FoxgloveSession:
         try:
             decode = self.codecs.decoder(ch.encoding, ch.schema_name, ch.schema_encoding, ch.schema, offset=13)
         except CodecError as exc:
-            self.stats["undecodable"] = self.stats.get("undecodable", 0) + 1
+            self.stats.undecodable += 1
             log.warning("not subscribing to %s on %s: %s", entry.topic, self.url, exc)
             self._on_status({"level": 1, "message": f"{entry.topic}: {exc}"})
             if not entry.raw_subs:
@@ -489,7 +488,7 @@ class FoxgloveSession:
             return True
         pub.dropped += 1
         adv.dropped += 1
-        self.stats["dropped_while_down"] += 1
+        self.stats.dropped_while_down += 1
         return False
 
     def _write_message(self, adv: ClientChannel, msg: dict[str, Any], pub: Any = None) -> bytes | None:
@@ -500,7 +499,7 @@ class FoxgloveSession:
         if pub is not None and pub.max_age is not None and self._command is not None:
             if not self._command(data, pub, pub.max_age):
                 pub.dropped += 1
-                self.stats["stale_dropped"] += 1
+                self.stats.stale_dropped += 1
                 return None
         elif self._write is not None:
             self._write(data)
@@ -509,7 +508,7 @@ class FoxgloveSession:
     def stale_in_queue(self, pub: Any) -> None:
         pub.sent -= 1
         pub.dropped += 1
-        self.stats["stale_dropped"] += 1
+        self.stats.stale_dropped += 1
 
     def node_closed(self, node: Node) -> None:
         if self.nodes.get(node.id) is node:

@@ -4,9 +4,32 @@
 
     from rcon_core.plugins import PluginManager, WidgetSpec, Role, Accepts, hookimpl, WidgetModel, Binding
 
-See ``docs/hooks.md`` (the hooks) and ``docs/writing-a-widget-plugin.md`` (a guide).
+The contract itself is stated in :mod:`rcon_core.plugins.api`. See ``docs/hooks.md`` (the hooks) and
+``docs/writing-a-widget-plugin.md`` (a guide).
 """
 
+from .api import (
+    API_VERSION,
+    ActionGoal,
+    ApiVersionError,
+    CallPhase,
+    CatalogSettings,
+    CommandBounds,
+    GoalPhase,
+    HostedModel,
+    ModelHooks,
+    NotAValue,
+    Port,
+    RobotPort,
+    SizedSettings,
+    StaleAfterSettings,
+    WidgetSettings,
+    WidgetView,
+    as_port,
+    settings_commands,
+    settings_problems,
+    settings_size,
+)
 from .context import SharedResources, SpecLookup, WidgetCatalog, WidgetContext
 from .hookspecs import hookimpl, hookspec
 from .manager import DISABLE_ENV, ENTRY_POINT_GROUP, PluginInfo, PluginManager, PluginStatus, UnknownWidget
@@ -31,8 +54,31 @@ from .spec import (
     WidgetSpec,
     resolve,
 )
+from .staleness import NO_DATA_AFTER, Staleness
 
 __all__ = [
+    "API_VERSION",
+    "ApiVersionError",
+    "ActionGoal",
+    "CallPhase",
+    "GoalPhase",
+    "CatalogSettings",
+    "CommandBounds",
+    "HostedModel",
+    "ModelHooks",
+    "NotAValue",
+    "Port",
+    "RobotPort",
+    "SizedSettings",
+    "StaleAfterSettings",
+    "WidgetSettings",
+    "WidgetView",
+    "as_port",
+    "settings_commands",
+    "settings_problems",
+    "settings_size",
+    "NO_DATA_AFTER",
+    "Staleness",
     "hookimpl",
     "hookspec",
     "PluginManager",

@@ -26,6 +26,8 @@ import attrs
 
 from rcon_core.matcher import Match, Rank, match
 from rcon_core.msgs import names, walk_fields
+from rcon_core.plugins.api import settings_problems as api_settings_problems
+from rcon_core.plugins.api import stored_settings_problems
 from rcon_core.plugins.context import WidgetCatalog
 from rcon_core.plugins.model import Binding
 from rcon_core.plugins.model_types import ModelTypes
@@ -254,7 +256,7 @@ class ChildCatalog:
 
     def settings_problems(self, item: Any) -> list[str]:
         spec = self.spec_of(item.kind)
-        return spec.settings_problems(item.settings) if spec is not None else []
+        return stored_settings_problems(spec, item.settings, self.plugins) if spec is not None else []
 
     def child_binding(self, index: int, item: Any) -> Binding | None:
         """The binding the child's model gets (part type, child role, path inside the part)."""
@@ -320,12 +322,7 @@ def paths_overlap(a: str, b: str) -> bool:
         f"{b}[") or b.startswith(f"{a}[")
 
 
-def settings_problems(settings: Any) -> list[str]:
-    """``settings.problems()`` if the class has it, else no problems."""
-    fn = getattr(settings, "problems", None)
-    if fn is None:
-        return []
-    try:
-        return [str(p) for p in fn()]
-    except Exception as exc:  # a broken problems() is itself a problem to show, not a crash
-        return [f"settings check failed: {exc}"]
+def settings_problems(settings: Any, catalog: WidgetCatalog | None = None) -> list[str]:
+    """The settings' own ``problems()`` (:func:`rcon_core.plugins.api.settings_problems`: checked against
+    ``catalog`` when they need the other kinds, a broken one reported, not raised)."""
+    return api_settings_problems(settings, catalog)

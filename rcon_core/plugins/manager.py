@@ -30,8 +30,15 @@ import attrs
 import pluggy
 
 from . import hookspecs
-from .registry import CanvasTemplate, TemplateRegistry, TypeContributions, TypeDefinition, WidgetRegistry
-from .spec import WidgetSpec
+from .registry import (
+    CanvasTemplate,
+    TemplateRegistry,
+    TypeContributions,
+    TypeDefinition,
+    TypeKind,
+    WidgetRegistry,
+)
+from .spec import UnknownWidget, WidgetSpec
 
 if TYPE_CHECKING:
     from rcon_core.msgs import TypeRegistry
@@ -45,13 +52,6 @@ ENTRY_POINT_GROUP = "rcon.widgets"
 DISABLE_ENV = "RCON_DISABLE_PLUGINS"
 
 log = logging.getLogger(__name__)
-
-
-class UnknownWidget(KeyError):
-    """No installed (and enabled) plugin offers this widget kind."""
-
-    def __str__(self) -> str:  # KeyError quotes its argument; we want a sentence
-        return str(self.args[0]) if self.args else "unknown widget"
 
 
 class PluginStatus(enum.StrEnum):
@@ -327,7 +327,7 @@ class PluginManager:
             mine: list[str] = []
             try:
                 for d in info.types:
-                    if d.kind == "typedefs":
+                    if d.kind is TypeKind.TYPEDEFS:
                         mine += types.add_typedefs(list(d.typedefs))
                     else:
                         mine += types.add_msg_text(_interface_name(d.name, d.kind), d.text)
@@ -348,10 +348,10 @@ class PluginManager:
                 continue
             for d in info.types:
                 try:
-                    if d.kind == "srv":
+                    if d.kind is TypeKind.SRV:
                         for part in ("request", "response"):
                             types.service_typedefs(_interface_name(d.name, d.kind), part)
-                    elif d.kind == "msg":
+                    elif d.kind is TypeKind.MSG:
                         types.typedefs(d.name)
                 except Exception as exc:
                     out.setdefault(info.name, []).append(f"type {d.name}: {exc}")

@@ -17,21 +17,14 @@ Compare ``state.seq`` with the last painted one to skip repaints: it increases o
 A subclass usually overrides only :meth:`on_message` (turn a message into a value and call
 :meth:`set_value`), and, for a server, :meth:`handle_request`. Everything else has a sensible default.
 
-Staleness (decided here for every widget, see :attr:`WidgetState.stale`). A subscriber is stale when no
-value came for ``stale_after`` seconds, except on a *static* topic, which delivers once and then stays
-quiet by design (a latched ``/map``, a robot description):
+A subscriber that only turns the bound field into what its view paints overrides the small hook
+:meth:`WidgetModel.to_value` instead (raise :class:`~rcon_core.plugins.api.NotAValue` to skip a message with
+a sentence as the error). The optional capabilities (``on_focus_lost``, ``on_fleet``, ``on_robot_link``,
+``shown_message``, ``dry_run``) are documented no-ops here; the runtime calls them directly
+(:class:`~rcon_core.plugins.api.ModelHooks`).
 
-- a topic that delivered exactly one message since subscribing, that one within :data:`NO_DATA_AFTER`
-  seconds (or ``stale_after`` when longer; what a latched topic does: it sends its message on
-  subscribe, a big map over a slow link taking a few seconds), counts as static until a second message
-  arrives. rosbridge does not say
-  whether a topic is latched; this is what it looks like from the client. A stream that dies right
-  after its first message looks the same: the value's age still shows how old it is.
-- the operator can say so: a settings object with ``stale_after = 0`` means "static: never stale once
-  a value came" (the widget still shows NO DATA when nothing came for :data:`NO_DATA_AFTER` seconds).
-
-After the link comes back the subscription is made again and a latched topic delivers again, so the
-count of deliveries starts over.
+Staleness is decided here for every widget (see :attr:`WidgetState.stale`), by the rules of
+:mod:`rcon_core.plugins.staleness`.
 """
 
 from __future__ import annotations
@@ -41,128 +34,39 @@ import concurrent.futures
 import threading
 import time
 from collections.abc import Awaitable, Callable
-from typing import Any, Protocol
+from typing import Any
 
-import attrs
+from rcon_core.msgs.names import part_name
 
-from rcon_core.msgs.names import normalize
-
+from .api import (
+    Binding,
+    BridgePort,
+    NotAValue,
+    Port,
+    Publisher,
+    RobotPort,
+    ServiceServer,
+    StaleAfterSettings,
+    Subscription,
+    WidgetState,
+    as_port,
+    settings_problems,
+)
 from .context import WidgetContext
 from .model_types import ModelTypes
 from .paths import PathError, get_path, set_path, split_service_path
 from .spec import Role
+from .staleness import NO_DATA_AFTER, Staleness
 
 __all__ = [
     "Binding",
     "BridgePort",
+    "Port",
     "WidgetModel",
     "WidgetState",
     "Dispatch",
+    "NO_DATA_AFTER",
 ]
-
-
-def _paths(value: Any) -> tuple[str, ...]:
-    if value is None:
-        return ()
-    if isinstance(value, str):
-        return (value,) if value else ()
-    return tuple(value)
-
-
-def _role(value: str | Role) -> Role:
-    # a plain function: mypy's attrs plugin cannot follow a classmethod (Role.parse) as a converter
-    return Role.parse(value)
-
-
-@attrs.frozen
-class Binding:
-    """What a widget instance is bound to.
-
-    ``name``: the topic, service or action name (``""`` = not bound yet). ``type``: its type, either
-    spelling. ``role``: how the widget uses it. ``field_paths``: the field(s) the widget shows or sets,
-    e.g. ``("percentage",)``; empty means the whole message. On a service, paths begin with ``request``
-    or ``response`` (``"request.data"``); on an action with ``goal``, ``feedback`` or ``result``.
-    ``robot``: the id of the workspace's robot it talks to (``""`` = the first robot, so one-robot
-    layouts and plugins never set it; see ``rcon_core.canvas.robots``).
-    """
-
-    name: str = ""
-    type: str = ""
-    role: Role = attrs.field(default=Role.SUBSCRIBE, converter=_role)
-    field_paths: tuple[str, ...] = attrs.field(default=(), converter=_paths)
-    robot: str = ""
-
-    @property
-    def field_path(self) -> str:
-        """The first (main) field path, ``""`` for the whole message."""
-        return self.field_paths[0] if self.field_paths else ""
-
-    @property
-    def canonical_type(self) -> str:
-        """The type in RCON's canonical spelling (``sensor_msgs/msg/Imu``); unchanged when it is not a
-        type name (a problem the binding reports elsewhere), ``""`` when unset."""
-        if not self.type:
-            return ""
-        try:
-            return normalize(self.type)
-        except ValueError:
-            return self.type
-
-    def problems(self) -> list[str]:
-        """What is missing before this binding can work; ``[]`` when complete."""
-        out = []
-        what = self.role.noun
-        if not self.name:
-            out.append(f"no {what} chosen")
-        elif not self.name.startswith("/") and not self.name[0].isalpha():
-            out.append(f"{what} name {self.name!r} is not a valid ROS name")
-        if not self.type and self.name:  # no name: "no topic chosen" already says it (and no type)
-            out.append(f"no {what} type set")
-        return out
-
-
-class Subscription(Protocol):
-    def unsubscribe(self) -> None: ...
-
-
-class Publisher(Protocol):
-    #: a bridge node's publisher returns False when the message was dropped (link down, not latched)
-    def publish(self, msg: dict[str, Any]) -> bool | None: ...
-    def unadvertise(self) -> None: ...
-
-
-class ServiceServer(Protocol):
-    def unadvertise(self) -> None: ...
-
-
-class BridgePort(Protocol):
-    """The slice of a bridge client node (``client.node(id)``) a model may use. Tests may pass a fake or a
-    node; in the app it is a ``rcon_core.canvas.port.GuardedPort`` (sealed; refuses to send when view-only).
-
-    Besides these methods the app's port carries plain attributes a model may read with
-    ``getattr(port, name, None)`` (a fake may lack them): ``view_only`` (None or why nothing may be sent),
-    ``envelope`` (the robot's safety envelope, ``rcon_core.bridge.envelope.Envelope``, or None; read it at
-    each use: it may change while the widget runs),
-    ``link`` (an opaque key, the same for every widget on one robot; to share per-robot objects use
-    ``WidgetContext.shared``, which is keyed by it) and
-    ``widget_id`` (the widget instance's id, the same across rebuilds of its model)."""
-
-    def subscribe(
-        self, topic: str, callback: Callable[[dict[str, Any]], Any], **options: Any
-    ) -> Subscription: ...
-    def advertise(self, topic: str, type: str, **options: Any) -> Publisher: ...
-    def call_service(
-        self, name: str, args: Any = None, timeout: float | None = None
-    ) -> Awaitable[dict[str, Any]]: ...
-    def advertise_service(
-        self, name: str, type: str, handler: Callable[[dict[str, Any]], Any]
-    ) -> ServiceServer: ...
-    def close(self) -> None: ...
-
-
-#: with ``stale_after = 0`` (a static topic), how long nothing at all may come before NO DATA; also how
-#: long a latched topic's one message may take to arrive after subscribing (at least)
-NO_DATA_AFTER = 5.0
 
 #: runs a plain function on the bridge loop thread (e.g. ``BridgeThread.call``); default: call it now
 Dispatch = Callable[[Callable[[], Any]], Any]
@@ -172,32 +76,6 @@ def _call_now(fn: Callable[[], Any]) -> Any:
     return fn()
 
 
-@attrs.frozen
-class WidgetState:
-    """A snapshot of what the view paints, taken at one instant.
-
-    ``value``: the widget's value (the bound field, or whatever the model's ``set_value`` gave).
-    ``message``: the last whole message (or service response) the value came from, or None.
-    ``count``: values received so far. ``age``: seconds since the last value, None if never.
-    ``stale``: True when ``age`` exceeds the model's ``stale_after`` (or nothing came since start);
-    never for a static topic that delivered (see the module docstring). ``static``: the value came from
-    a topic that looks latched or that the settings call static (``stale_after = 0``).
-    ``link_down``: the bridge connection is down. ``error``: last problem as a sentence, or None.
-    ``running``: the model is started. ``seq``: increases on every change (not on mere ageing).
-    """
-
-    value: Any = None
-    message: Any = None
-    count: int = 0
-    age: float | None = None
-    stale: bool = False
-    link_down: bool = False
-    error: str | None = None
-    running: bool = False
-    seq: int = 0
-    static: bool = False
-
-
 class WidgetModel:
     """Base class of every widget model. See the module docstring for the threading rules.
 
@@ -205,18 +83,22 @@ class WidgetModel:
 
     - ``settings``: the per-instance settings object (``spec.make_settings(dict)``), or None.
     - ``binding``: a :class:`Binding`.
-    - ``port``: a :class:`BridgePort`: in the app a ``GuardedPort`` onto ``client.node(instance_id)``.
-    - ``types``: an ``rcon_core.msgs.TypeRegistry`` (for default messages), or None.
+    - ``port``: a :class:`~rcon_core.plugins.api.Port`: in the app a ``GuardedPort`` onto
+      ``client.node(instance_id)``. A partial one (a bare bridge node, a test's fake) is completed with the
+      defaults of a widget outside any canvas (:func:`~rcon_core.plugins.api.as_port`): ``self.port`` is
+      always a complete ``Port``.
+    - ``types``: the app's type registry (``rcon_core.msgs.TypeRegistry``); the runtime always passes one.
+      Without it (a bare test) the model gets a standard registry of its own: ``self.types`` is never None.
     - ``plugin_settings``: the per-kind shared settings object, or None.
     - ``dispatch``: runs a function on the bridge loop thread; default runs it immediately.
     - ``clock``: monotonic seconds, for ages (tests may pass a fake).
-    - ``context``: a :class:`~rcon_core.plugins.context.WidgetContext` (other kinds' specs through the
-      app's plugin manager, objects shared per robot link); default :meth:`WidgetContext.standalone`.
+    - ``context``: a :class:`~rcon_core.plugins.context.WidgetContext` (the catalog of other kinds, child
+      widgets, objects shared per robot link); default: one that knows no other kind.
     """
 
     #: seconds without a value after which ``state.stale`` is True; None disables; 0 = a static topic
     #: (never stale once a value came). A settings object with a ``stale_after`` attribute overrides it
-    #: per instance.
+    #: per instance (:class:`~rcon_core.plugins.api.StaleAfterSettings`).
     stale_after: float | None = 5.0
     #: timeout (seconds) for :meth:`call`; None uses the client's default
     call_timeout: float | None = None
@@ -231,7 +113,7 @@ class WidgetModel:
         self,
         settings: Any,
         binding: Binding,
-        port: BridgePort,
+        port: BridgePort | Port,
         *,
         types: ModelTypes | None = None,
         plugin_settings: Any = None,
@@ -240,11 +122,15 @@ class WidgetModel:
         context: WidgetContext | None = None,
     ) -> None:
         self.settings = settings
-        self.context = context if context is not None else WidgetContext.standalone()
+        self.context = context if context is not None else WidgetContext()
         self.binding = binding
         self.port = port
-        #: the app's type registry (None: a model that needs no definitions, e.g. in a bare test)
-        self.types: ModelTypes | None = types
+        if types is None:  # a bare test: the standard types (ROS 1 spelling), as `rcon type` knows them
+            from rcon_core.msgs import TypeRegistry
+
+            types = TypeRegistry.standard()
+        #: the app's type registry (the standard types when none was given; never None)
+        self.types: ModelTypes = types
         self.plugin_settings = plugin_settings
         self._dispatch: Dispatch = dispatch or _call_now
         self._clock = clock
@@ -253,10 +139,7 @@ class WidgetModel:
         self._message: Any = None
         self._count = 0
         self._stamp: float | None = None
-        self._started_at: float | None = None
-        self._subscribed_at: float | None = None  # when the subscription was (re)made
-        self._deliveries = 0  # messages since then
-        self._first_delivery: float | None = None  # seconds from subscribing to the first of them
+        self._staleness = Staleness()
         self._link_down = False
         self._error: str | None = None
         self._seq = 0
@@ -265,18 +148,63 @@ class WidgetModel:
         self._pub: Publisher | None = None
         self._srv: ServiceServer | None = None
         self._tasks: set[asyncio.Task[Any]] = set()
-        if settings is not None and getattr(settings, "stale_after", None) is not None:
+        if isinstance(settings, StaleAfterSettings) and settings.stale_after is not None:
             self.stale_after = float(settings.stale_after)
+
+    @property
+    def port(self) -> Port:
+        """The model's port, always a complete :class:`~rcon_core.plugins.api.Port` (one assigned later, a
+        test's fake, is completed too)."""
+        return self._port
+
+    @port.setter
+    def port(self, port: BridgePort | Port) -> None:
+        self._port = as_port(port)
 
     @property
     def view_only(self) -> str | None:
         """Why this widget may not send anything (its port is view-only), or None. Views show their
         controls disabled with this reason; the port refuses regardless (see ``rcon_core.canvas.port``)."""
-        try:
-            reason = getattr(self.port, "view_only", None)
-        except Exception:  # a port that refuses every use (a placeholder's) sends nothing either way
-            return None
+        reason = self.port.view_only
         return reason if isinstance(reason, str) and reason else None
+
+    @property
+    def clock(self) -> Callable[[], float]:
+        """The model's clock (monotonic seconds; a test's fake)."""
+        return self._clock
+
+    @property
+    def dispatch(self) -> Dispatch:
+        """Runs a function on the bridge loop thread (what the model was given)."""
+        return self._dispatch
+
+    # -- optional capabilities (documented no-ops; see rcon_core.plugins.api.ModelHooks) --------------
+    def on_focus_lost(self) -> None:
+        """The window lost focus or the canvas is being left (bridge thread, before the models stop). A
+        model that moves the robot stops commanding here (publishes its zero). Keep it quick."""
+
+    def on_fleet(self, robots: list[RobotPort]) -> None:
+        """One :class:`~rcon_core.plugins.api.RobotPort` per robot of the workspace (bridge thread, before
+        :meth:`start`). Override it to show every robot: the model is then :attr:`fleet_wide`, subscribes on
+        each port itself, and sets :attr:`shows_every_robot` when it took the others on."""
+
+    def on_robot_link(self, robot_id: str, up: bool) -> None:
+        """A fleet-wide model hears each robot's link state here (bridge thread)."""
+
+    def shown_message(self) -> dict[str, Any] | None:
+        """As a Compound's input child: a message of the bound type holding the value the widget shows
+        (bridge thread); raise ``ValueError`` with the problem when it cannot say (the send is blocked, the
+        child named). None: the compound takes what the child last published."""
+        return None
+
+    @property
+    def fleet_wide(self) -> bool:
+        """Whether the model takes every robot (it overrides :meth:`on_fleet`)."""
+        return type(self).on_fleet is not WidgetModel.on_fleet
+
+    def child_models(self) -> list[Any]:
+        """The child widgets' models built through ``context.build_child`` (a Compound's children)."""
+        return list(self.context.children)
 
     # -- lifecycle (bridge loop thread) --------------------------------------------------------------
     @property
@@ -304,8 +232,7 @@ class WidgetModel:
                 self._srv = self.port.advertise_service(b.name, b.type, self._serve)
         with self._lock:
             self._running = True
-            self._started_at = self._subscribed_at = self._clock()
-            self._deliveries, self._first_delivery = 0, None
+            self._staleness.started(self._clock())
             self._seq += 1
         self.on_start()
 
@@ -348,23 +275,31 @@ class WidgetModel:
     # -- incoming (bridge loop thread) ---------------------------------------------------------------
     def _receive(self, msg: dict[str, Any]) -> None:
         with self._lock:
-            self._deliveries += 1
-            if self._deliveries == 1 and self._subscribed_at is not None:
-                self._first_delivery = self._clock() - self._subscribed_at
+            self._staleness.delivered(self._clock())
         try:
             self.on_message(msg)
+        except NotAValue as exc:  # the model's own sentence: the message gives no value
+            self.set_error(str(exc))
         except Exception as exc:  # a bad message must not break the bridge's callback loop
             self.set_error(f"{type(exc).__name__}: {exc}")
 
     def on_message(self, msg: dict[str, Any]) -> None:
-        """A message arrived (subscribers). Default: the bound field becomes the value."""
+        """A message arrived (subscribers). Default: the bound field, turned by :meth:`to_value`, becomes
+        the value (a missing field is the widget's error). Override this only to use the whole message."""
         path = self.binding.field_path
         try:
             value = get_path(msg, path) if path else msg
         except PathError as exc:
             self.set_error(str(exc))
             return
-        self.set_value(value, message=msg)
+        self.set_value(self.to_value(value, msg), message=msg)
+
+    def to_value(self, field_value: Any, msg: dict[str, Any]) -> Any:
+        """The small hook (bridge thread): what the view gets for the bound field's ``field_value`` (``msg``
+        is the whole message). Default: the field as it came. Raise
+        :class:`~rcon_core.plugins.api.NotAValue` with a sentence to skip the message and show the sentence
+        as the error; any other exception shows as ``TypeError: ...``."""
+        return field_value
 
     def _serve(self, request: dict[str, Any]) -> Any:
         return self.handle_request(request)
@@ -373,15 +308,19 @@ class WidgetModel:
         """Answer a service request (role SERVE). Default: an all-default response, and the request
         becomes the value (so a view can show the last request)."""
         self.set_value(request, message=request)
-        if self.types is not None:
-            return self.types.default(self._service_part_type("response"))
-        return {}
+        response = self._service_part_type("response")
+        return self.types.default(response) if self.types.has(response) else {}
 
     def _service_part_type(self, part: str) -> str:
-        # registries name service parts by the service type plus the part; ask the registry if it can
-        if self.types is not None:
+        # registries name service parts by the service type plus the part; one that does not know the
+        # service yet: the canonical part name
+        try:
             return self.types.service_part_name(self.binding.type, part)
-        return f"{self.binding.type}_{part.capitalize()}"
+        except (KeyError, ValueError):
+            try:
+                return part_name(self.binding.type, part)
+            except ValueError:
+                return f"{self.binding.type}_{part.capitalize()}"
 
     # -- outgoing (any thread) -----------------------------------------------------------------------
     def publish(self, msg: dict[str, Any]) -> bool:
@@ -411,13 +350,12 @@ class WidgetModel:
     def _misfit(self, msg: Any) -> str:
         """The first problems of ``msg`` as a message of the bound type; "" when it fits or cannot be
         checked (no registry, a type it does not know)."""
-        check = getattr(self.types, "validate", None)
-        if check is None or not self.binding.type:
+        if not self.binding.type:
             return ""
         try:
-            if not self.types.has(self.binding.type):  # type: ignore[union-attr]
+            if not self.types.has(self.binding.type):
                 return ""
-            problems = check(self.binding.type, msg)
+            problems = self.types.validate(self.binding.type, msg)
         except Exception:  # a registry that cannot tell must not stop the publish
             return ""
         return "; ".join(str(p) for p in problems[:3])
@@ -425,14 +363,15 @@ class WidgetModel:
     def build_message(self, value: Any, path: str | None = None) -> dict[str, Any]:
         """A message of the bound type with ``value`` at ``path`` (default: the bound field path).
 
-        The rest of the message is the type's default (needs ``types``), else an empty dict.
+        The rest of the message is the type's default when the registry knows the type, else an empty dict
+        (the robot fills in defaults).
         """
         path = self.binding.field_path if path is None else path
         if not path:
             if not isinstance(value, dict):
                 raise PathError("the whole message must be a dict")
             return value
-        base = self.types.default(self.binding.type) if self.types is not None else {}
+        base = self.types.default(self.binding.type) if self.types.has(self.binding.type) else {}
         return set_path(base, path, value)
 
     def publish_value(self, value: Any) -> bool:
@@ -505,11 +444,16 @@ class WidgetModel:
         self.announce()
 
     def announce(self) -> None:
-        """Tell the front end this model has something new to show (any thread; the port's ``changed``,
-        when it has one: the app's ports wake the GUI, which repaints within the frame)."""
-        changed = getattr(self.port, "changed", None)
-        if changed is not None:
-            changed()
+        """Tell the front end this model has something new to show (any thread; the port's ``changed``:
+        the app's ports wake the GUI, which repaints within the frame)."""
+        self.port.changed()
+
+    def touch(self) -> None:
+        """What the view shows changed without a new value (a child widget's state, any thread): ``seq``
+        moves so the view repaints; the value, count, age and error stay."""
+        with self._lock:
+            self._seq += 1
+        self.announce()
 
     def replace_value(self, value: Any) -> None:
         """Change what the view shows without counting a new value from the robot (any thread).
@@ -538,8 +482,7 @@ class WidgetModel:
                 self._link_down = not up
                 self._seq += 1
                 if up:  # subscribed again: a latched topic delivers again
-                    self._subscribed_at = self._clock()
-                    self._deliveries, self._first_delivery = 0, None
+                    self._staleness.resubscribed(self._clock())
 
     @property
     def state(self) -> WidgetState:
@@ -547,13 +490,8 @@ class WidgetModel:
         with self._lock:
             now = self._clock()
             age = None if self._stamp is None else max(0.0, now - self._stamp)
-            static = self._static()
-            stale = False
-            if self.stale_after is not None and self._running and self.binding.role is Role.SUBSCRIBE:
-                if age is None:  # nothing yet: NO DATA
-                    stale = now - (self._started_at or now) > (self.stale_after or NO_DATA_AFTER)
-                elif not static:
-                    stale = age > self.stale_after
+            stale, static = self._staleness.judge(
+                now, age, self.stale_after, self._running and self.binding.role is Role.SUBSCRIBE)
             return WidgetState(
                 value=self._value,
                 message=self._message,
@@ -567,19 +505,7 @@ class WidgetModel:
                 static=static,
             )
 
-    def _static(self) -> bool:
-        """Whether the value came from a static topic (under the lock): the settings say so, or it looks
-        latched (one delivery, right after subscribing)."""
-        if self._stamp is None:
-            return False
-        if self.stale_after == 0:
-            return True
-        window = max(NO_DATA_AFTER, self.stale_after or 0.0)
-        return self._deliveries == 1 and self._first_delivery is not None and self._first_delivery <= window
-
     def problems(self) -> list[str]:
-        """Everything that keeps this widget from working, as sentences (binding + settings)."""
-        out = list(self.binding.problems())
-        if self.settings is not None and hasattr(self.settings, "problems"):
-            out += list(self.settings.problems())
-        return out
+        """Everything that keeps this widget from working, as sentences (binding + settings, the settings
+        checked against the context's catalog)."""
+        return list(self.binding.problems()) + settings_problems(self.settings, self.context.catalog)

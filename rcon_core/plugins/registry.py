@@ -2,15 +2,16 @@
 
 from __future__ import annotations
 
+import enum
 import os
 from pathlib import Path
 from typing import Any
 
 import attrs
 
-from .spec import SpecError, WidgetSpec
+from .spec import SpecError, WidgetSpec, check_api_version
 
-__all__ = ["WidgetRegistry", "TypeContributions", "TypeDefinition", "DuplicateWidget", "TemplateRegistry",
+__all__ = ["WidgetRegistry", "TypeContributions", "TypeDefinition", "TypeKind", "DuplicateWidget", "TemplateRegistry",
            "CanvasTemplate"]
 
 
@@ -35,9 +36,11 @@ class WidgetRegistry:
         return self._package
 
     def add(self, spec: WidgetSpec) -> WidgetSpec:
-        """Register one widget; returns the spec with ``package`` filled in."""
+        """Register one widget; returns the spec with ``package`` filled in. A spec built for another major
+        version of the widget API raises ``ApiVersionError`` (the plugin is refused with that sentence)."""
         if not isinstance(spec, WidgetSpec):
             raise SpecError(f"registry.add() takes a WidgetSpec, got {type(spec).__name__}")
+        check_api_version(spec.api_version, spec.kind, self._package)
         if spec.kind in self._taken or any(s.kind == spec.kind for s in self.specs):
             owner = self._taken[spec.kind].package if spec.kind in self._taken else self._package
             raise DuplicateWidget(f"widget kind {spec.kind!r} is already registered by {owner!r}")
@@ -46,11 +49,19 @@ class WidgetRegistry:
         return spec
 
 
+class TypeKind(enum.StrEnum):
+    """How a contributed definition is given (a ``str``: ``d.kind == "msg"`` still holds)."""
+
+    MSG = "msg"  #: ``.msg`` text
+    SRV = "srv"  #: ``.srv`` text
+    TYPEDEFS = "typedefs"  #: rosapi ``message_details`` typedefs
+
+
 @attrs.frozen
 class TypeDefinition:
-    """One contributed definition: ``kind`` is "msg", "srv" or "typedefs"."""
+    """One contributed definition: ``kind`` says how it is given (:class:`TypeKind`)."""
 
-    kind: str
+    kind: TypeKind = attrs.field(converter=TypeKind)
     name: str
     text: str = ""
     typedefs: tuple[dict[str, Any], ...] = ()
@@ -71,14 +82,14 @@ class TypeContributions:
     def add_msg(self, name: str, text: str) -> None:
         """A message type from ``.msg`` text, e.g. ``add_msg("lab_msgs/Gripper", "float64 opening\\n")``."""
         self._check(name, "msg", text)
-        self.definitions.append(TypeDefinition("msg", name, text=text, package=self._package))
+        self.definitions.append(TypeDefinition(TypeKind.MSG, name, text=text, package=self._package))
 
     def add_srv(self, name: str, text: str) -> None:
         """A service type from ``.srv`` text (request fields, a ``---`` line, response fields)."""
         self._check(name, "srv", text)
         if not any(line.strip() == "---" for line in text.splitlines()):
             raise SpecError(f"service definition {name!r} has no '---' line between request and response")
-        self.definitions.append(TypeDefinition("srv", name, text=text, package=self._package))
+        self.definitions.append(TypeDefinition(TypeKind.SRV, name, text=text, package=self._package))
 
     def add_typedefs(self, typedefs: list[dict[str, Any]]) -> None:
         """Types in rosapi ``message_details`` layout (list of {"type", "fieldnames", "fieldtypes", ...})."""
@@ -86,7 +97,7 @@ class TypeContributions:
             raise SpecError("add_typedefs() takes a list of rosapi typedef dicts, each with a 'type' key")
         name = typedefs[0]["type"] if typedefs else ""
         self.definitions.append(
-            TypeDefinition("typedefs", name, typedefs=tuple(typedefs), package=self._package)
+            TypeDefinition(TypeKind.TYPEDEFS, name, typedefs=tuple(typedefs), package=self._package)
         )
 
     @staticmethod

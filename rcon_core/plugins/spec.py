@@ -32,7 +32,7 @@ from __future__ import annotations
 import enum
 import importlib
 from collections.abc import Callable, Iterable, Mapping
-from typing import Any, Protocol
+from typing import Any, Protocol, runtime_checkable
 
 import attrs
 
@@ -47,6 +47,11 @@ __all__ = [
     "MESSAGE_PREDICATES",
     "SpecError",
     "SettingsError",
+    "UnknownWidget",
+    "API_VERSION",
+    "ApiVersionError",
+    "check_api_version",
+    "WidgetSettings",
     "resolve",
     "NUMERIC_BASES",
     "ACTION_PARTS",
@@ -57,6 +62,55 @@ __all__ = [
 
 class SpecError(ValueError):
     """A widget spec is malformed (bad kind, unknown predicate name, bad reference...)."""
+
+
+#: the version of this contract: a package built for another *major* version is refused; a newer minor
+#: version only adds (a package built for 1.0 runs on 1.1)
+API_VERSION = "1.1"
+
+
+class ApiVersionError(SpecError):
+    """A widget package was built for a widget API this RCON does not offer (another major version)."""
+
+
+def _parse_version(text: str) -> tuple[int, int] | None:
+    parts = text.strip().split(".")
+    if not 1 <= len(parts) <= 2 or not all(p.isdigit() for p in parts):
+        return None
+    return int(parts[0]), int(parts[1]) if len(parts) == 2 else 0
+
+
+def check_api_version(declared: str, kind: str, package: str = "") -> None:
+    """Refuse (:class:`ApiVersionError`, one sentence) a widget built for another major version of this
+    API, or one whose ``api_version`` is not a version. ``""``: written before the version existed (1.0)."""
+    if not declared:
+        return
+    who = f"{kind!r}" + (f" (package {package})" if package else "")
+    version = _parse_version(declared)
+    if version is None:
+        raise ApiVersionError(f"widget {who} declares api_version {declared!r}, which is not a version "
+                              f"such as {API_VERSION!r}")
+    major = _parse_version(API_VERSION)[0]  # type: ignore[index]
+    if version[0] != major:
+        raise ApiVersionError(
+            f"widget {who} was built for RCON's widget API {declared}, but this RCON offers API "
+            f"{API_VERSION}: install a version of the package built for API {major}.x"
+            + (", or a newer rcon-core" if version[0] > major else ""))
+
+
+class UnknownWidget(KeyError):
+    """No installed (and enabled) plugin offers this widget kind."""
+
+    def __str__(self) -> str:  # KeyError quotes its argument; we want a sentence
+        return str(self.args[0]) if self.args else "unknown widget"
+
+
+@runtime_checkable
+class WidgetSettings(Protocol):
+    """Per-instance settings: ``problems()`` lists what keeps the widget from working, one sentence each
+    (``[]``: configured); the frame shows them as the "not configured" warning."""
+
+    def problems(self) -> list[str]: ...
 
 
 class SettingsError(ValueError):
@@ -318,7 +372,10 @@ class WidgetSpec:
     ``"module:attr"`` string or the object itself; ``view`` must be a ``"module:attr"`` string (it
     imports Qt). ``package`` is filled in by the plugin manager from the distribution name; leave it empty.
     ``default_size`` is (w, h) in canvas units (device-independent pixels). Higher ``priority`` wins ties
-    in the matcher between widgets of the same rank.
+    in the matcher between widgets of the same rank. ``api_version``: the widget API the package was
+    written against (``rcon_core.plugins.api.API_VERSION`` at the time, written out: ``"1.1"``); the plugin
+    manager refuses a package built for another major version. Empty: written before the version existed
+    (1.0).
     """
 
     kind: str = attrs.field(validator=_check_kind)
@@ -335,6 +392,7 @@ class WidgetSpec:
     default_size: tuple[float, float] = (160.0, 80.0)
     priority: int = 0
     package: str = ""
+    api_version: str = ""
 
     @view.validator
     def _view_is_lazy(self, _attr: Any, value: Any) -> None:
@@ -349,13 +407,15 @@ class WidgetSpec:
     # -- lazy loading ------------------------------------------------------------------------------
     def load_model(self) -> type:
         """The model class (imports the model module; never Qt)."""
-        return resolve(self.model)
+        model: type = resolve(self.model)
+        return model
 
     def load_view(self) -> type:
         """The Qt view class (imports Qt). Only the front end calls this."""
         if self.view is None:
             raise SpecError(f"widget {self.kind!r} has no view")
-        return resolve(self.view)
+        view: type = resolve(self.view)
+        return view
 
     def load_settings_class(self) -> type | None:
         return resolve(self.settings) if self.settings is not None else None
@@ -377,12 +437,14 @@ class WidgetSpec:
         return _structure(self.load_plugin_settings_class(), data, self.kind)
 
     def settings_problems(self, data: Mapping[str, Any] | None = None) -> list[str]:
-        """Everything wrong with these stored settings, as sentences; ``[]`` means configured."""
+        """Everything wrong with these stored settings, as sentences; ``[]`` means configured. (Settings whose
+        checks need the other installed kinds, a Compound's, get them through
+        ``rcon_core.plugins.api.stored_settings_problems(spec, data, catalog)``.)"""
         try:
             obj = self.make_settings(data)
         except SettingsError as exc:
             return list(exc.problems)
-        if obj is None or not hasattr(obj, "problems"):
+        if not isinstance(obj, WidgetSettings):
             return []
         return list(obj.problems())
 
@@ -390,7 +452,8 @@ class WidgetSpec:
         """The dict stored in a layout for a settings object."""
         if settings is None:
             return {}
-        return _converter().unstructure(settings)
+        stored: dict[str, Any] = _converter().unstructure(settings)
+        return stored
 
 
 _CONVERTER: Any = None

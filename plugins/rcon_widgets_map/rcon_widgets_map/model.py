@@ -376,15 +376,13 @@ class MapModel(WidgetModel):
         publishing = self.binding.role is Role.PUBLISH
         type_name = self.binding.type if publishing else NAVSATFIX
         path = self.binding.field_path if publishing else ""
-        base: dict[str, Any] = {}
-        if self.types is not None:
-            base = self.types.default(type_name)
-        ros2 = bool(getattr(self.types, "ros2", False))
+        base: dict[str, Any] = self.types.default(type_name)
+        ros2 = self.types.ros2
         geo = get_path(base, path) if path else base
         geo = dict(geo) if isinstance(geo, dict) else {}
         geo.update(latitude=float(lat), longitude=float(lon))
         if names.normalize(type_name) == names.normalize(NAVSATFIX):
-            header = {"stamp": rcon_time.now(ros2), "frame_id": "map"}
+            header: dict[str, Any] = {"stamp": rcon_time.now(ros2), "frame_id": "map"}
             if not ros2:
                 header = {"seq": 0, **header}
             geo.update(

@@ -18,9 +18,11 @@ from typing import Any
 
 import attrs
 
+from rcon_core.plugins import GoalPhase
+
 __all__ = ["Navigation", "Navigator", "geo_goal_path"]
 
-STATUS_PHASE = {4: "succeeded", 5: "canceled", 6: "aborted"}
+STATUS_PHASE = {4: GoalPhase.SUCCEEDED, 5: GoalPhase.CANCELED, 6: GoalPhase.ABORTED}
 REMAINING_WORDS = ("distance_remaining", "remaining", "distance_left", "distance")
 
 
@@ -29,13 +31,13 @@ class Navigation:
     lat: float
     lon: float
     action: str
-    phase: str  #: active, canceling, succeeded, canceled, aborted, failed, unknown
+    phase: GoalPhase = attrs.field(converter=GoalPhase)  #: active, canceling, then a final one
     text: str = ""
     remaining_m: float | None = None
 
     @property
     def running(self) -> bool:
-        return self.phase in ("active", "canceling")
+        return self.phase.running
 
 
 def geo_goal_path(types: Any, action_type: str) -> str:
@@ -140,10 +142,10 @@ class Navigator:
         try:
             handle = self.port.send_action_goal(self.action, self.action_type, args, feedback=self._feedback)
         except Exception as exc:
-            self._show(Navigation(lat, lon, self.action, "failed", f"not sent: {exc}"))
+            self._show(Navigation(lat, lon, self.action, GoalPhase.FAILED, f"not sent: {exc}"))
             return
         self._goal = handle
-        self._show(Navigation(lat, lon, self.action, "active", "goal sent"))
+        self._show(Navigation(lat, lon, self.action, GoalPhase.ACTIVE, "goal sent"))
         task = asyncio.get_running_loop().create_task(self._wait(handle))
         self._tasks.add(task)
         task.add_done_callback(self._tasks.discard)
@@ -152,7 +154,7 @@ class Navigator:
         if self._goal is None or self._goal.done or self.state is None:
             return
         self._goal.cancel()
-        self._show(attrs.evolve(self.state, phase="canceling", text="cancel requested"))
+        self._show(attrs.evolve(self.state, phase=GoalPhase.CANCELING, text="cancel requested"))
 
     def _feedback(self, values: Any) -> None:
         if self.state is not None and self._goal is not None:
@@ -164,16 +166,16 @@ class Navigator:
         try:
             result = await handle.result()
         except ConnectionLostError:
-            self._end(handle, "unknown", "link lost while navigating: the goal's fate is unknown")
+            self._end(handle, GoalPhase.UNKNOWN, "link lost while navigating: the goal's fate is unknown")
             return
         except Exception as exc:
-            self._end(handle, "failed", str(exc) or type(exc).__name__)
+            self._end(handle, GoalPhase.FAILED, str(exc) or type(exc).__name__)
             return
-        phase = STATUS_PHASE.get(handle.status, "unknown")
+        phase = STATUS_PHASE.get(handle.status, GoalPhase.UNKNOWN)
         message = result.get("message") if isinstance(result, dict) else None
         self._end(handle, phase, message if isinstance(message, str) else "")
 
-    def _end(self, handle: Any, phase: str, text: str) -> None:
+    def _end(self, handle: Any, phase: GoalPhase, text: str) -> None:
         if handle is self._goal and self.state is not None:
             self._show(attrs.evolve(self.state, phase=phase, text=text))
 
@@ -182,7 +184,7 @@ class Navigator:
         if self._goal is not None and not self._goal.done:
             self._goal.cancel()
             if self.state is not None:
-                self.state = attrs.evolve(self.state, phase="canceled", text="cancelled: the map stopped")
+                self.state = attrs.evolve(self.state, phase=GoalPhase.CANCELED, text="cancelled: the map stopped")
         self._goal = None
         for task in list(self._tasks):
             task.cancel()

@@ -5,6 +5,9 @@ It must import without Qt: views are referenced lazily as `module:attr` strings.
 
 from rcon_core.plugins import Accepts, Role, WidgetSpec, hookimpl
 
+#: the widget API this package is written against (rcon_core.plugins.api.API_VERSION when it was written)
+API = "1.1"
+
 GPS_MAP = WidgetSpec(
     kind="map.gps",
     title="GPS Map",
@@ -22,6 +25,7 @@ GPS_MAP = WidgetSpec(
     view="rcon_widgets_map.view:MapView",
     default_size=(480, 400),
     priority=10,
+    api_version=API,
 )
 
 

@@ -599,7 +599,7 @@ class MapView(QtWidgets.QWidget):
                 at = QtCore.QPointF(8, block.bottom() + 8)
             _chip(p, at, chip[0], chip[1])
         main = self._follow_target()
-        y = self.height() - 8
+        y = float(self.height() - 8)
         lines = []
         if main is not None:
             lines.append(f"{main.lat:.6f}, {main.lon:.6f}"

@@ -311,7 +311,7 @@ def decode_compressed_sized(msg: dict[str, Any], depth_range: tuple[float, float
             return Decoded(shrink(depth_to_rgb(img, lo, hi), scale), width, height)
         return Decoded(cv2.cvtColor(shrink(img, scale), cv2.COLOR_GRAY2RGB), width, height)
     if img.dtype != np.uint8:
-        img = (img >> 8).astype(np.uint8)
+        img = (img.astype(np.uint16) >> 8).astype(np.uint8)
     img = shrink(img, scale)
     code = cv2.COLOR_BGRA2RGB if img.shape[2] == 4 else cv2.COLOR_BGR2RGB
     return Decoded(cv2.cvtColor(img, code), width, height)

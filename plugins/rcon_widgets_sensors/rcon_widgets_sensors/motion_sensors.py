@@ -108,16 +108,17 @@ _DEFAULT_PATHS: dict[str, dict[str, str]] = {
 }
 _COMMON_PATHS = {"geometry_msgs/msg/Vector3Stamped": "vector", "geometry_msgs/msg/Vector3": ""}
 _XYZ = {"x": 0.0, "y": 0.0, "z": 0.0}
-_HEADER = {"seq": 0, "stamp": {"secs": 0, "nsecs": 0}, "frame_id": ""}
-_FALLBACK = {
-    "sensor_msgs/msg/Imu": lambda: {"header": dict(_HEADER, stamp=dict(_HEADER["stamp"])),
+_STAMP: dict[str, Any] = {"secs": 0, "nsecs": 0}
+_HEADER: dict[str, Any] = {"seq": 0, "stamp": _STAMP, "frame_id": ""}
+_FALLBACK: dict[str, Callable[[], dict[str, Any]]] = {
+    "sensor_msgs/msg/Imu": lambda: {"header": dict(_HEADER, stamp=dict(_STAMP)),
                                     "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 0.0},
                                     "orientation_covariance": [0.0] * 9, "angular_velocity": dict(_XYZ),
                                     "angular_velocity_covariance": [0.0] * 9, "linear_acceleration": dict(_XYZ),
                                     "linear_acceleration_covariance": [0.0] * 9},
-    "sensor_msgs/msg/MagneticField": lambda: {"header": dict(_HEADER, stamp=dict(_HEADER["stamp"])),
+    "sensor_msgs/msg/MagneticField": lambda: {"header": dict(_HEADER, stamp=dict(_STAMP)),
                                               "magnetic_field": dict(_XYZ), "magnetic_field_covariance": [0.0] * 9},
-    "geometry_msgs/msg/Vector3Stamped": lambda: {"header": dict(_HEADER, stamp=dict(_HEADER["stamp"])),
+    "geometry_msgs/msg/Vector3Stamped": lambda: {"header": dict(_HEADER, stamp=dict(_STAMP)),
                                                  "vector": dict(_XYZ)},
     "geometry_msgs/msg/Vector3": lambda: dict(_XYZ),
 }
@@ -303,8 +304,8 @@ class MotionSensorModel(WidgetModel):
         if not isinstance(vec, dict):
             raise PathError(f"{path or 'the message'} is not an x/y/z vector")
         with self._feed_lock:
-            self._reading = tuple(float(vec.get(k) if vec.get(k) is not None else math.nan)
-                                  for k in ("x", "y", "z"))  # type: ignore[assignment]
+            x, y, z = (vec.get(k) for k in ("x", "y", "z"))
+            self._reading = tuple(float(v) if v is not None else math.nan for v in (x, y, z))  # type: ignore[assignment]
         self._show()
 
 

@@ -10,6 +10,8 @@ from rcon_core.plugins import Accepts, Role, WidgetSpec, hookimpl
 from .teleop import TELEOP_TYPES
 
 P = "rcon_widgets_sensors"
+#: the widget API this package is written against (rcon_core.plugins.api.API_VERSION when it was written)
+API = "1.1"
 
 IMAGE_TYPES = ["sensor_msgs/Image", "sensor_msgs/CompressedImage", "foxglove_msgs/CompressedVideo",
                "ffmpeg_image_transport_msgs/FFMPEGPacket", "sensor_msgs/LaserScan", "nav_msgs/OccupancyGrid"]
@@ -25,7 +27,7 @@ def specs() -> list[WidgetSpec]:
             roles={Role.SUBSCRIBE},
             accepts=Accepts(types=IMAGE_TYPES, messages=["image", "compressed_image"]),
             settings=f"{P}.image:ImageSettings", model=f"{P}.image:ImageModel",
-            view=f"{P}.image_view:ImageView", default_size=(480, 320), priority=10,
+            view=f"{P}.image_view:ImageView", default_size=(480, 320), priority=10, api_version=API,
         ),
         WidgetSpec(
             kind="sensors.teleop", title="Multi-Touch", icon="gamepad", category="Controls",
@@ -34,7 +36,7 @@ def specs() -> list[WidgetSpec]:
             roles={Role.PUBLISH},
             accepts=Accepts(types=list(TELEOP_TYPES)),
             settings=f"{P}.teleop:TeleopSettings", model=f"{P}.teleop:TeleopModel",
-            view=f"{P}.teleop_view:TeleopView", default_size=(320, 320), priority=10,
+            view=f"{P}.teleop_view:TeleopView", default_size=(320, 320), priority=10, api_version=API,
         ),
         WidgetSpec(
             kind="sensors.camera", title="Camera", icon="camera", category="Sensors",
@@ -43,7 +45,7 @@ def specs() -> list[WidgetSpec]:
             roles={Role.PUBLISH},
             accepts=Accepts(types=["sensor_msgs/CompressedImage", "sensor_msgs/Image"]),
             settings=f"{P}.camera:CameraSettings", model=f"{P}.camera:CameraModel",
-            view=f"{P}.camera_view:CameraView", default_size=(360, 280),
+            view=f"{P}.camera_view:CameraView", default_size=(360, 280), api_version=API,
         ),
     ] + [
         WidgetSpec(
@@ -53,7 +55,7 @@ def specs() -> list[WidgetSpec]:
             roles={Role.PUBLISH, Role.SUBSCRIBE},
             accepts=Accepts(types=[main, "geometry_msgs/Vector3Stamped", "geometry_msgs/Vector3"]),
             settings=f"{P}.motion_sensors:MotionSettings", model=f"{P}.motion_sensors:{model}",
-            view=f"{P}.motion_view:MotionSensorView", default_size=(260, 150),
+            view=f"{P}.motion_view:MotionSensorView", default_size=(260, 150), api_version=API,
         )
         for name, title, what, main, model in (
             ("accelerometer", "Accelerometer", "This device's acceleration (m/s²)", "sensor_msgs/Imu",

@@ -296,7 +296,7 @@ class TeleopModel(WidgetModel):
         s = self.settings
         linear, angular = float(s.max_linear), float(s.max_angular)
         lin_by = ang_by = ""
-        env = getattr(self.port, "envelope", None)
+        env = self.port.envelope
         if env is not None:
             lin_env = getattr(env, "max_linear", None)
             ang_env = getattr(env, "max_angular", None)

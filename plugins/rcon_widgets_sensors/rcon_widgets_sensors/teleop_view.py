@@ -327,7 +327,7 @@ class TeleopView(QtWidgets.QWidget):
     @property
     def dry_run(self) -> bool:
         """Whether the app runs this pad offline on purpose (a preview): nothing it does reaches a robot."""
-        return bool(getattr(self.model, "dry_run", False))
+        return bool(self.model.dry_run)
 
     def status_text(self) -> str:
         """The line under the pad: what the pad is doing, or why it is not driving."""

@@ -7,6 +7,7 @@ import math
 import time
 
 import pytest
+from rcon_widgets_sensors import plugin as sensors_plugin
 from rcon_widgets_sensors.motion_sensors import (
     AccelerometerModel,
     GyroscopeModel,
@@ -17,8 +18,8 @@ from rcon_widgets_sensors.motion_sensors import (
 )
 
 from rcon_core.msgs import TypeRegistry
-from rcon_core.plugins import Binding
-from rcon_core.testing import ManualClock, RecordingPort, until
+from rcon_core.plugins import Binding, WidgetContext
+from rcon_core.testing import ManualClock, RecordingPort, until, widget_catalog
 
 
 def make(cls, client, topic, type_name, role="publish", path=(), types=True, **settings):
@@ -142,7 +143,8 @@ async def test_children_of_the_std_compound_compose_one_imu(sim, client):
         compound.ChildSpec("sensors.gyroscope", "angular_velocity", {"source": "manual", "manual_z": -0.3}),
     ])
     m = compound.CompoundModel(settings, Binding("/phone/imu_full", "sensor_msgs/Imu", "publish"),
-                               client.node("compound"), types=TypeRegistry.standard())
+                               client.node("compound"), types=TypeRegistry.standard(),
+                               context=WidgetContext(widget_catalog(sensors_plugin)))  # only this package's kinds
     m.start()
     try:
         await until(lambda: m.children, 5.0, "children built")

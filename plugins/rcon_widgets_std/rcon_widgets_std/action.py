@@ -44,6 +44,7 @@ import attrs
 
 from rcon_core.msgs import MessageTextError
 from rcon_core.msgs.text import parse_text
+from rcon_core.plugins import GoalPhase
 from rcon_core.plugins.paths import PathError, get_path, set_path
 
 from .base import StdModel
@@ -51,8 +52,8 @@ from .base import StdModel
 __all__ = ["ActionSettings", "ActionModel", "ActionStatus", "GoalField", "FINAL_PHASES", "progress_of"]
 
 #: GoalStatus codes in ``action_result.status`` -> phase
-STATUS_PHASE = {4: "succeeded", 5: "canceled", 6: "aborted"}
-FINAL_PHASES = frozenset({"succeeded", "canceled", "aborted", "failed", "unknown"})
+STATUS_PHASE = {4: GoalPhase.SUCCEEDED, 5: GoalPhase.CANCELED, 6: GoalPhase.ABORTED}
+FINAL_PHASES = frozenset(p for p in GoalPhase if p.final)
 #: feedback field names (last path component) read as progress
 PROGRESS_WORDS = ("progress", "percent", "percentage", "completion", "complete")
 REMAINING_WORDS = ("distance_remaining", "remaining", "distance_left", "time_remaining")
@@ -119,7 +120,7 @@ class GoalField:
 
 @attrs.frozen
 class ActionStatus:
-    phase: str
+    phase: GoalPhase = attrs.field(converter=GoalPhase)
     text: str = ""
     feedback: Any = None
     feedback_count: int = 0
@@ -133,11 +134,11 @@ class ActionStatus:
 
     @property
     def final(self) -> bool:
-        return self.phase in FINAL_PHASES
+        return self.phase.final
 
     @property
     def running(self) -> bool:
-        return self.phase in ("active", "canceling")
+        return self.phase.running
 
 
 def _leaves(value: Any, prefix: str = "") -> list[tuple[str, Any]]:
@@ -191,8 +192,8 @@ class ActionModel(StdModel):
         super().__init__(settings if settings is not None else ActionSettings(), *args, **kwargs)
         self._goal: Any = None
         self._first_remaining: float | None = None
-        self._status = ActionStatus("idle")
-        widget_id = getattr(self.port, "widget_id", None)  # the instance's id, the same across rebuilds
+        self._status = ActionStatus(GoalPhase.IDLE)
+        widget_id = self.port.widget_id  # the instance's id, the same across rebuilds
         self._key = widget_id if isinstance(widget_id, str) else None
         with _LEFT_LOCK:
             left = _LEFT_BEHIND.pop(self._key, None) if isinstance(self._key, str) else None
@@ -374,10 +375,10 @@ class ActionModel(StdModel):
         try:
             handle = self.port.send_action_goal(b.name, b.type, goal, feedback=self._on_feedback)
         except Exception as exc:
-            self._show(ActionStatus("failed", f"not sent: {exc}"))
+            self._show(ActionStatus(GoalPhase.FAILED, f"not sent: {exc}"))
             return
         self._goal = handle
-        self._show(ActionStatus("active", f"goal sent to {b.name}", started=time.monotonic()))
+        self._show(ActionStatus(GoalPhase.ACTIVE, f"goal sent to {b.name}", started=time.monotonic()))
         self.spawn(self._wait(handle))
 
     def _cancel_now(self) -> None:
@@ -385,7 +386,7 @@ class ActionModel(StdModel):
         if goal is None or goal.done:
             return
         goal.cancel()
-        self._show(attrs.evolve(self._status, phase="canceling", text="cancel requested…"))
+        self._show(attrs.evolve(self._status, phase=GoalPhase.CANCELING, text="cancel requested…"))
 
     def _on_feedback(self, values: Any) -> None:
         if self._goal is None:
@@ -405,36 +406,36 @@ class ActionModel(StdModel):
         try:
             result = await handle.result()
         except ConnectionLostError:
-            self._end(handle, "unknown", "link lost while the goal ran: its fate is unknown "
+            self._end(handle, GoalPhase.UNKNOWN, "link lost while the goal ran: its fate is unknown "
                                          "(the robot may still be executing it)")
             return
         except ActionNoAnswerError as exc:
-            self._end(handle, "unknown", exc.message)
+            self._end(handle, GoalPhase.UNKNOWN, exc.message)
             return
         except Exception as exc:
-            self._end(handle, "failed", str(exc) or type(exc).__name__)
+            self._end(handle, GoalPhase.FAILED, str(exc) or type(exc).__name__)
             return
-        phase = STATUS_PHASE.get(handle.status, "unknown")
-        text = "" if phase != "unknown" else f"ended with status {handle.status}: its fate is unknown"
+        phase = STATUS_PHASE.get(handle.status, GoalPhase.UNKNOWN)
+        text = "" if phase is not GoalPhase.UNKNOWN else f"ended with status {handle.status}: its fate is unknown"
         message = result.get("message") if isinstance(result, dict) else None
         if isinstance(message, str) and message and message.strip().lower().rstrip(".") not in (phase, "cancelled"):
             # the server's own words ("arrived within 1.9 m"), unless they only repeat the status
             text = f"{text}: {message}" if text else message
         self._end(handle, phase, text, result)
 
-    def _end(self, handle: Any, phase: str, text: str, result: Any = None) -> None:
+    def _end(self, handle: Any, phase: GoalPhase, text: str, result: Any = None) -> None:
         if handle is not self._goal:
             return
         st = self._status
         took = time.monotonic() - st.started if st.started else None
         self._show(attrs.evolve(st, phase=phase, text=text, result=result, seconds=took, problem="",
-                                progress=1.0 if phase == "succeeded" and st.progress is not None else st.progress))
+                                progress=1.0 if phase is GoalPhase.SUCCEEDED and st.progress is not None else st.progress))
 
     def on_stop(self) -> None:
         goal = self._goal
         if goal is not None and not goal.done:
             goal.cancel()
-            left = attrs.evolve(self._status, phase="canceled",
+            left = attrs.evolve(self._status, phase=GoalPhase.CANCELED,
                                 text="cancelled: the widget stopped (canvas switched away) while the goal ran")
             self._status = left
             if isinstance(self._key, str):

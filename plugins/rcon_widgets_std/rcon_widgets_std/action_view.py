@@ -9,6 +9,7 @@ from typing import Any
 from qtpy import QtCore, QtWidgets
 
 from rcon_core.app.settings_form import form_label, tune_form
+from rcon_core.plugins import GoalPhase
 
 from .common import format_value
 from .view_common import BAD, MUTED, OK, STALE, Caption, vbox
@@ -130,8 +131,9 @@ class ActionView(QtWidgets.QWidget):
 
     def missing(self) -> list[str]:
         """The required entries still empty (Send waits for them)."""
-        return [f.path for f in self._fields if f.required and isinstance(self.editors.get(f.path), QtWidgets.QLineEdit)
-                and not self.editors[f.path].text().strip()]
+        return [f.path for f in self._fields if f.required and isinstance(editor := self.editors.get(f.path),
+                                                                          QtWidgets.QLineEdit)
+                and not editor.text().strip()]
 
     def _update_send(self, *_: Any) -> None:
         """Send only once every required entry is filled; the button says what it waits for."""
@@ -165,7 +167,7 @@ class ActionView(QtWidgets.QWidget):
         if not self._fields:
             self._build_form()
         st = state.value
-        phase = getattr(st, "phase", "idle")
+        phase = getattr(st, "phase", GoalPhase.IDLE)
         words, colour = PHASE_TEXT.get(phase, (phase, MUTED))
         detail = getattr(st, "text", "") or ""
         problem = state.error or getattr(st, "problem", "")  # e.g. "not sent: target.latitude: ..."
@@ -175,7 +177,7 @@ class ActionView(QtWidgets.QWidget):
             words, colour, detail = "? Link down", STALE, "the goal's fate is unknown until the link is back"
         self.status.show_text(f"{words}: {detail}" if detail else words, colour, tooltip=detail or words)
         running = st is not None and st.running
-        self.cancel_button.setEnabled(running and phase != "canceling")
+        self.cancel_button.setEnabled(running and phase is not GoalPhase.CANCELING)
         self.send_button.setText("Send new goal" if running else "Send goal")
         self._show_feedback(st)
         if problem and running:  # a new goal refused while one runs: said under it, the run stays in sight
@@ -200,7 +202,7 @@ class ActionView(QtWidgets.QWidget):
         else:
             self.feedback.show_text("")
         if st.result is not None:
-            colour = OK if st.phase == "succeeded" else BAD if st.phase == "aborted" else STALE
+            colour = OK if st.phase is GoalPhase.SUCCEEDED else BAD if st.phase is GoalPhase.ABORTED else STALE
             took = f" after {st.seconds:.1f} s" if st.seconds else ""
             one_line = " ".join(format_value(st.result).split())
             self.result.show_text(f"result{took}: {one_line}", colour, tooltip=format_value(st.result))

@@ -18,7 +18,7 @@ class StdModel(WidgetModel):
 
     When the registry it was given lacks the bound type (a lab's own message, a type never seen), the
     model asks the robot for its typedefs (``/rosapi/message_details`` or the service details) when it
-    starts, then calls :meth:`on_types_ready`. Without a registry it makes an empty one of its own.
+    starts, then calls :meth:`on_types_ready`.
     """
 
     #: False for models that never need the definition (a Label only reads what arrives)
@@ -26,10 +26,6 @@ class StdModel(WidgetModel):
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
-        if self.types is None:
-            from rcon_core.msgs import TypeRegistry
-
-            self.types = TypeRegistry.empty()
         self._types_ready = False
 
     # -- types ---------------------------------------------------------------------------------------

@@ -12,10 +12,10 @@ import attrs
 
 from rcon_core.msgs import MessageTextError
 from rcon_core.msgs.text import parse_text, to_text
-from rcon_core.plugins import Role
+from rcon_core.plugins import CallPhase, Role
 
 from .base import StdModel
-from .common import format_value, learn_type, types_part_name
+from .common import format_value, learn_type, shorten_text, types_part_name
 
 __all__ = ["ButtonSettings", "ButtonModel", "CallStatus"]
 
@@ -67,10 +67,11 @@ class ButtonSettings:
 
 @attrs.frozen
 class CallStatus:
-    """One press (or release): ``phase`` is ``"busy"``, ``"ok"`` or ``"failed"``; ``text`` is the
-    result (the response's message, or a YAML summary of it) or the server's error."""
+    """One press (or release): ``phase`` is a :class:`~rcon_core.plugins.CallPhase` (busy, ok, failed; a
+    ``str``, so ``"ok"`` is taken too); ``text`` is the result (the response's message, or a YAML summary of
+    it) or the server's error."""
 
-    phase: str
+    phase: CallPhase = attrs.field(converter=CallPhase)
     target: str
     text: str = ""
     started: float = 0.0
@@ -78,7 +79,7 @@ class CallStatus:
 
     @property
     def busy(self) -> bool:
-        return self.phase == "busy"
+        return self.phase is CallPhase.BUSY
 
 
 class ButtonModel(StdModel):
@@ -166,10 +167,10 @@ class ButtonModel(StdModel):
                 self.set_error(f"message: {exc}")
                 return
             if self.publish(msg):
-                self.set_value(CallStatus("ok", target, "published", time.time(), 0.0), message=msg)
+                self.set_value(CallStatus(CallPhase.OK, target, "published", time.time(), 0.0), message=msg)
             return
         started = time.time()
-        self.set_value(CallStatus("busy", target, "", started))
+        self.set_value(CallStatus(CallPhase.BUSY, target, "", started))
         self._dispatch(lambda: self.spawn(self._call_one(target, release, started)))
 
     async def _call_one(self, target: str, release: bool, started: float) -> None:
@@ -179,19 +180,19 @@ class ButtonModel(StdModel):
                 await learn_type(self.port, self.types, self.settings.release_type, service=True)
             args = self.build(release) if self.types_ready else None
         except (MessageTextError, KeyError, ValueError) as exc:
-            self._finish(CallStatus("failed", target, f"request: {exc}", started, 0.0), None, error=True)
+            self._finish(CallStatus(CallPhase.FAILED, target, f"request: {exc}", started, 0.0), None, error=True)
             return
         try:
             resp = await self.port.call_service(target, args, timeout=self.call_timeout)
         except Exception as exc:
-            self._finish(CallStatus("failed", target, str(exc), started, self._clock() - t0), None, error=True)
+            self._finish(CallStatus(CallPhase.FAILED, target, str(exc), started, self._clock() - t0), None, error=True)
             return
         seconds = self._clock() - t0
         if isinstance(resp, dict) and resp.get("success") is False:
             text = str(resp.get("message") or "success: false")
-            self._finish(CallStatus("failed", target, text, started, seconds), resp, error=True)
+            self._finish(CallStatus(CallPhase.FAILED, target, text, started, seconds), resp, error=True)
             return
-        self._finish(CallStatus("ok", target, describe_response(resp), started, seconds), resp)
+        self._finish(CallStatus(CallPhase.OK, target, describe_response(resp), started, seconds), resp)
 
     def _finish(self, status: CallStatus, resp: Any, error: bool = False) -> None:
         self.set_value(status, message=resp)
@@ -204,5 +205,5 @@ def describe_response(resp: Any) -> str:
     if not isinstance(resp, dict) or not resp:
         return "done"
     if isinstance(resp.get("message"), str) and resp["message"]:
-        return resp["message"]
-    return format_value(resp)
+        return shorten_text(resp["message"])[0]  # a status line never holds a megabyte (issue 22.1)
+    return shorten_text(format_value(resp))[0]

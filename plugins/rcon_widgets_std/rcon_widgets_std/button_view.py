@@ -9,6 +9,8 @@ from typing import Any
 
 from qtpy import QtCore, QtWidgets
 
+from rcon_core.plugins import CallPhase
+
 from .send_guard import SendGuard
 from .view_common import BAD, MUTED, OK, ButtonFace, Caption, fit_caption, vbox
 
@@ -56,7 +58,7 @@ class ButtonView(QtWidgets.QWidget):
             if st.busy:
                 self.face.busy()
             else:
-                self.face.answer(st.phase != "failed", st.text)
+                self.face.answer(st.phase is not CallPhase.FAILED, st.text)
         elif error and error != seen_error and (st is None or not st.busy):
             self.face.answer(False, error)  # refused before any call (a bad request, no binding)
 
@@ -67,7 +69,7 @@ class ButtonView(QtWidgets.QWidget):
             return
         if st.busy:
             self.result.show_text(f"calling {st.target}…", MUTED)
-        elif st.phase == "failed":
+        elif st.phase is CallPhase.FAILED:
             self.result.show_text(f"✗ {st.text}", BAD, tooltip=state.error or st.text)
         else:
             took = f" ({st.seconds * 1000:.0f} ms)" if st.seconds else ""

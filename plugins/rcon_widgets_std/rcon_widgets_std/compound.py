@@ -14,14 +14,18 @@ Roles and what the children do:
 
 Child composition lives in the model: ``settings.children`` is a list of (kind, field_path, settings).
 
-Children from other packages. A child is an ordinary widget model, built exactly as the app builds one
-(``Model(settings, binding, port, types=..., dispatch=...)``) but given a *child port*: an input child is
+Children from other packages. A child is an ordinary widget model, built by the runtime's context
+(``context.build_child(kind, binding, port=..., parent=self)``) exactly as the app builds any widget, so the
+runtime tells it focus loss and link state and the app its preview flag, but given a *child port*: an input
+child is
 bound with role PUBLISH to the compound's (part) type and its field path, and what it publishes through
 the port is captured, not sent: the compound takes the value at the child's path out of it. A display
 child is bound with role SUBSCRIBE and receives the response (CALL) or request (SERVE) through the
 callback it subscribed with. So any widget whose model publishes through its port (``publish`` /
 ``publish_value``) provides a value and can be a child, whichever package it comes from; its kind is
-found through the ``rcon.widgets`` entry points like any widget.
+found in the context's catalog (the app's plugin manager) like any widget. A child's state changes wake the
+front end through its port like any widget's (the compound's ``seq`` moves, its view repaints the children
+whose own ``seq`` moved): no clock of the compound's own.
 
 What the Compound sends is what its children show, decided. Just before sending, the compound asks every
 input child that defines ``shown_message()`` (loop thread) for a message of the child's bound type holding
@@ -29,10 +33,14 @@ the value the child shows: the Slider and Stepper their shown number (also befor
 Text Field the operator's typed text, parsed. A child that cannot say (text unsent-and-invalid, or
 nothing typed) raises ``ValueError`` (``MessageTextError`` is one) with the problem: the send is blocked
 and the status names the child (``not published: child 2 (Text Field) on angular: angular.z: expected a
-number, got 'fast'``); no type default is ever sent in a child's place. A child without the method gives
-what it last published through its port. A child can tell it is inside a compound from its port's
-``composes`` attribute (True on :class:`ChildPort`): nothing it publishes reaches the robot until the
-compound sends, so it should say what *will* be sent, not what was.
+number, got 'fast'``); no type default is ever sent in a child's place. A child whose ``shown_message``
+is the base class's (None) gives what it last published through its port. A child can tell it is inside a
+compound from its port's ``composes`` (True on :class:`ChildPort`): nothing it publishes reaches the robot
+until the compound sends, so it should say what *will* be sent, not what was.
+
+The settings' checks need the other installed kinds (each child's own settings): :class:`CompoundSettings`
+is a ``CatalogSettings``, so the app passes its catalog in (``problems(catalog)``); without one it knows
+this package's own kinds only and claims nothing about others.
 """
 
 from __future__ import annotations
@@ -44,13 +52,23 @@ from typing import Any
 import attrs
 
 from rcon_core.msgs import MessageTextError
-from rcon_core.plugins import Binding, Role, WidgetContext, WidgetModel, WidgetSpec
+from rcon_core.plugins import (
+    ActionGoal,
+    Binding,
+    CallPhase,
+    CatalogSettings,
+    Role,
+    WidgetCatalog,
+    WidgetModel,
+    WidgetSpec,
+    settings_commands,
+)
 from rcon_core.plugins.children import child_name, child_problems, child_role, role_problem
 from rcon_core.plugins.paths import PathError, get_path, parse_path, set_path, split_service_path
 
 from .base import StdModel
 from .button import CallStatus, describe_response
-from .common import RateLimiter, field_at, held_to_envelope
+from .common import RateLimiter, copy_message, field_at, held_to_envelope
 
 __all__ = ["ChildSpec", "CompoundSettings", "CompoundModel", "Child", "CompoundValue", "find_spec"]
 
@@ -66,7 +84,7 @@ class ChildSpec:
 
 
 @attrs.define
-class CompoundSettings:
+class CompoundSettings(CatalogSettings):
     #: a children field: the app's settings form edits it with its children editor (field, fitting
     #: widget, the child's own settings); stored as a list of {kind, field_path, settings, title}
     children: list[ChildSpec] = attrs.field(factory=list, metadata={
@@ -77,7 +95,7 @@ class CompoundSettings:
     rate_hz: float = attrs.field(default=5.0, metadata={"label": "Update rate (Hz)", "min": 0.1, "max": 50.0})
     columns: int = attrs.field(default=1, metadata={"label": "Columns", "min": 1, "max": 6})
 
-    def problems(self) -> list[str]:
+    def problems(self, catalog: WidgetCatalog | None = None) -> list[str]:
         out = []
         if not self.children:
             out.append("add at least one child widget")
@@ -91,33 +109,32 @@ class CompoundSettings:
             except PathError as exc:
                 out.append(f"child {i}: {exc}")
             if c.kind and c.kind != "std.compound":
-                out += _child_settings_problems(i, c)
+                out += _child_settings_problems(i, c, catalog)
         if not self.rate_hz > 0:
             out.append("update rate must be more than 0 Hz")
         if not 1 <= self.columns <= 6:
             out.append("columns must be between 1 and 6")
         return out
 
-    def commands(self, binding: Binding) -> list[tuple[str, float]]:
+    def commands(self, binding: Binding, catalog: WidgetCatalog | None = None) -> list[tuple[str, float]]:
         """What the input children may send, each at its path in the compound's message (a slider child on
         ``linear.x`` up to 5: ``("linear.x", 5.0)``): checked against the robot's safety envelope."""
         if binding.role is not Role.PUBLISH:
             return []
         out: list[tuple[str, float]] = []
         for c in self.children:
-            spec = _spec_or_none(c.kind)
+            spec = _spec_or_none(c.kind, catalog)
             if spec is None:
                 continue
             try:
                 settings = spec.make_settings(c.settings)
-                commands = getattr(settings, "commands", None)
-                if callable(commands):
-                    out += commands(Binding(binding.name, binding.type, Role.PUBLISH, (c.field_path,)))
             except Exception:  # a child's bad settings are its own problem, said elsewhere
                 continue
+            out += settings_commands(settings, Binding(binding.name, binding.type, Role.PUBLISH, (c.field_path,)),
+                                     catalog)
         return out
 
-    def preferred_size(self) -> tuple[float, float]:
+    def preferred_size(self, catalog: WidgetCatalog | None = None) -> tuple[float, float]:
         """The size (w, h) a new Compound with these children should be placed at, so that no child is
         squeezed: the children in ``columns`` columns, each as large as its own kind's default size (a
         box title above it), the button and the status line below. No Qt: computed from the children's
@@ -126,10 +143,8 @@ class CompoundSettings:
         cols = max(1, min(6, int(self.columns)))
         sizes = []
         for c in self.children:
-            try:
-                w, h = find_spec(c.kind).default_size
-            except KeyError:
-                w, h = 160.0, 80.0
+            spec = _spec_or_none(c.kind, catalog)
+            w, h = spec.default_size if spec is not None else (160.0, 80.0)
             sizes.append((max(float(w), CHILD_MIN[0]) + CHILD_PAD, max(float(h), CHILD_MIN[1]) + CHILD_TITLE))
         if not sizes:
             return DEFAULT_SIZE
@@ -156,30 +171,35 @@ CHILD_GAP = 6.0
 CHILD_MIN = (160.0, 96.0)
 
 
-def _spec_or_none(kind: str) -> WidgetSpec | None:
+def _spec_or_none(kind: str, catalog: WidgetCatalog | None) -> WidgetSpec | None:
     try:
-        return find_spec(kind)
+        return find_spec(kind, catalog)
     except KeyError:
         return None
 
 
-def _child_settings_problems(number: int, child: ChildSpec) -> list[str]:
-    """The child's kind and own settings problems, the child named (``child 2 (Slider) on linear.x: …``)."""
-    spec = _spec_or_none(child.kind)
+def _child_settings_problems(number: int, child: ChildSpec, catalog: WidgetCatalog | None) -> list[str]:
+    """The child's kind and own settings problems, the child named (``child 2 (Slider) on linear.x: …``).
+    Without a catalog, a kind of another package cannot be judged: nothing is claimed about it."""
+    spec = _spec_or_none(child.kind, catalog)
+    if spec is None and catalog is None:
+        return []
     return [f"{child_name(number, child, spec)}: {p}" for p in child_problems(child, spec)]
 
 
-def find_spec(kind: str) -> WidgetSpec:
-    """The spec of a child kind where no model's context is at hand (settings checks, sizes): this
-    package's own directly, others through :meth:`WidgetContext.standalone` (the installed entry points,
-    honouring ``RCON_DISABLE_PLUGINS``). A model asks its context instead (:meth:`CompoundModel.find_spec`),
-    which is the app's plugin manager. Raises KeyError (UnknownWidget) when nobody offers it."""
+def find_spec(kind: str, catalog: WidgetCatalog | None = None) -> WidgetSpec:
+    """The spec of a child kind where no model's context is at hand (settings checks, sizes): from
+    ``catalog`` (the app's plugin manager: a disabled plugin's kind is unknown there), or, without one, this
+    package's own kinds only. A model asks its context instead (:meth:`CompoundModel.find_spec`). Raises
+    KeyError (UnknownWidget) when nobody offers it."""
+    if catalog is not None:
+        return catalog.widget(kind)
     from .plugin import specs
 
     for spec in specs():
         if spec.kind == kind:
             return spec
-    return WidgetContext.standalone().spec(kind)
+    raise KeyError(f"{kind!r} is not a standard widget (no catalog to look further)")
 
 
 @attrs.frozen
@@ -230,19 +250,45 @@ class _Feed:
 
 
 class ChildPort:
-    """The port a child model gets (see the module docstring). Service calls go to the real robot."""
+    """The port a child model gets (see the module docstring): a complete ``Port``. Service calls go to the
+    real robot; what the child publishes is composed; its changes wake the front end through the compound."""
 
     #: what a child publishes goes into the compound's message, not to the robot (until the compound sends)
     composes = True
 
-    def __init__(self, compound: CompoundModel, child: Child | None = None) -> None:
+    def __init__(self, compound: CompoundModel, child: Child | None = None, number: int = 0) -> None:
         self.compound = compound
         self.child = child
+        self.number = number  #: the child's number (from 1)
 
     @property
     def envelope(self) -> Any:
         """The robot's safety envelope, as the compound's own port tells it (a child's range follows it)."""
-        return getattr(self.compound.port, "envelope", None)
+        return self.compound.port.envelope
+
+    @property
+    def view_only(self) -> str | None:
+        """The compound's: a child of a view-only compound sends nothing either."""
+        return self.compound.port.view_only
+
+    @property
+    def link(self) -> Any:
+        return self.compound.port.link
+
+    @property
+    def widget_id(self) -> str | None:
+        """The compound's id and the child's number (``w-3#2``): the same across rebuilds."""
+        wid = self.compound.port.widget_id
+        return f"{wid}#{self.number}" if wid is not None else None
+
+    def changed(self) -> None:
+        """The child has something new to show: the compound's view repaints it (the compound's ``seq``
+        moves, its port wakes the front end like any widget's)."""
+        self.compound.touch()
+
+    def send_action_goal(self, action: str, action_type: str, args: Any = None, feedback: Any = None,
+                         **options: Any) -> ActionGoal:
+        raise RuntimeError("a child widget cannot send action goals; bind an Action widget on its own")
 
     def advertise(self, topic: str, type: str, **options: Any) -> _Captured:
         assert self.child is not None
@@ -335,10 +381,8 @@ class CompoundModel(StdModel):
             raise ValueError(f"{role_problem(spec, role)} (it offers {', '.join(sorted(spec.roles))})")
         field_at(self.types, self._part_type(part), rest)  # PathError naming the missing part
         binding = Binding(f"{self.binding.name}#{index + 1}", self._part_type(part), role, (rest,) if rest else ())
-        settings = spec.make_settings(cfg.settings)
-        port = ChildPort(self)
-        model = spec.load_model()(settings, binding, port, types=self.types, dispatch=self._dispatch,
-                                  clock=self._clock, context=self.context)
+        port = ChildPort(self, number=index + 1)
+        model = self.context.build_child(cfg.kind, binding, port=port, parent=self, settings=cfg.settings)
         child = Child(index, spec, model, cfg, role is Role.PUBLISH, part)
         port.child = child
         return child
@@ -349,6 +393,7 @@ class CompoundModel(StdModel):
                 child.model.stop()
             except Exception as exc:  # a child that fails to stop must not keep the others running
                 self.set_error(f"child {child.index + 1}: {exc}")
+        self.context.drop_children()
 
     def on_stop(self) -> None:
         self._limiter.cancel()
@@ -403,11 +448,13 @@ class CompoundModel(StdModel):
     def composed(self) -> dict[str, Any]:
         """A copy of the composed message (services: ``{"request", "response"}``)."""
         with self._lock:
-            return copy.deepcopy(self._composed)
+            return copy_message(self._composed)
 
     def _show_state(self) -> None:
-        """Set the value the views show (composed message, status); sends nothing (:meth:`send` does)."""
-        self.set_value(CompoundValue(self.composed(), self._status, self._served), message=self.composed())
+        """Set the value the views show (composed message, status); sends nothing (:meth:`send` does).
+        One copy serves as both (the state is read, never changed)."""
+        composed = self.composed()
+        self.set_value(CompoundValue(composed, self._status, self._served), message=composed)
 
     # -- sending -------------------------------------------------------------------------------------
     def send(self) -> None:
@@ -419,13 +466,12 @@ class CompoundModel(StdModel):
         problems of the children that cannot say, each child named. Loop thread."""
         problems: list[str] = []
         for child in self.children:
-            shown = getattr(child.model, "shown_message", None)
-            if not child.is_input or shown is None:
+            if not child.is_input:
                 continue
             path = child.cfg.field_path
             _part, rest = self._split(path)
             try:
-                msg = shown()
+                msg = child.model.shown_message()
                 if msg is None:
                     continue
                 value = copy.deepcopy(get_path(msg, rest) if rest else msg)
@@ -463,11 +509,11 @@ class CompoundModel(StdModel):
                 self.set_error(note)
                 return
             if self.publish(msg):
-                self._status = CallStatus("ok", self.binding.name, f"published, {note}" if note else "published",
+                self._status = CallStatus(CallPhase.OK, self.binding.name, f"published, {note}" if note else "published",
                                           time.time(), 0.0)
                 self._show_state()
         elif role is Role.CALL:
-            self._status = CallStatus("busy", self.binding.name, "", time.time())
+            self._status = CallStatus(CallPhase.BUSY, self.binding.name, "", time.time())
             self._show_state()
             self.spawn(self._call(self.composed()["request"]))
         else:
@@ -479,13 +525,13 @@ class CompoundModel(StdModel):
         try:
             response = await self.port.call_service(self.binding.name, request, timeout=self.call_timeout)
         except Exception as exc:
-            self._status = CallStatus("failed", self.binding.name, str(exc), started, self._clock() - t0)
+            self._status = CallStatus(CallPhase.FAILED, self.binding.name, str(exc), started, self._clock() - t0)
             self._show_state()
             self.set_error(f"{self.binding.name}: {exc}")
             return
         ok = not (isinstance(response, dict) and response.get("success") is False)
         text = describe_response(response) if ok else str(response.get("message") or "success: false")
-        self._status = CallStatus("ok" if ok else "failed", self.binding.name, text, started, self._clock() - t0)
+        self._status = CallStatus(CallPhase.OK if ok else CallPhase.FAILED, self.binding.name, text, started, self._clock() - t0)
         with self._lock:
             self._composed["response"] = copy.deepcopy(response)
         self._feed_display("response", response)
@@ -494,9 +540,14 @@ class CompoundModel(StdModel):
             self.set_error(f"{self.binding.name}: {text}")
 
     def _feed_display(self, part: str, msg: dict[str, Any]) -> None:
+        """One copy of ``msg`` for every display child (they share it, as the consumers of one topic share
+        a message), not one per child."""
+        shared = None
         for child in self.children:
             if not child.is_input and child.part == part and child.feed is not None:
-                child.feed(copy.deepcopy(msg))
+                if shared is None:
+                    shared = copy_message(msg)
+                child.feed(shared)
 
     # -- serving -------------------------------------------------------------------------------------
     def handle_request(self, request: dict[str, Any]) -> dict[str, Any]:
@@ -506,18 +557,18 @@ class CompoundModel(StdModel):
         blocked = self._take_shown()
         if blocked:  # the caller gets a failed call, never a default in a child's place
             problem = "; ".join(blocked)
-            self._status = CallStatus("failed", self.binding.name, f"not answered: {problem}", time.time(), 0.0)
+            self._status = CallStatus(CallPhase.FAILED, self.binding.name, f"not answered: {problem}", time.time(), 0.0)
             self._show_state()
             self.set_error(f"not answered: {problem}")
             raise ValueError(problem)
         with self._lock:
-            self._composed["request"] = copy.deepcopy(request)
+            self._composed["request"] = copy_message(request)
             response = copy.deepcopy(self._composed.get("response", {}))
             self._served += 1
         try:
             response = self.types.complete(self._part_type("response"), response)
         except MessageTextError as exc:
             self.set_error(f"response: {exc}")
-        self._status = CallStatus("ok", self.binding.name, f"answered request {self._served}", time.time(), 0.0)
+        self._status = CallStatus(CallPhase.OK, self.binding.name, f"answered request {self._served}", time.time(), 0.0)
         self._show_state()
         return response

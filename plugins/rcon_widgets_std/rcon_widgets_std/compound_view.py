@@ -1,6 +1,8 @@
 """Compound's Qt view: each child's own view under a small title (its field), in a grid; a Publish or
 Call button and the result underneath. Child views are built from their specs, like the app builds any
-widget view, and refreshed when their model's ``seq`` moves.
+widget view, and refreshed when their model's ``seq`` moves: a child's change wakes the front end through
+the compound (its ``seq`` moves too), so the host's ``refresh`` reaches them within the frame; the view
+keeps no clock of its own.
 
 A child is never painted below its minimum size: the grid sits in a scroll area, which never makes it
 smaller than its minimum (each child's own), so a frame smaller than the children scrolls (the button
@@ -14,7 +16,7 @@ from typing import Any
 
 from qtpy import QtCore, QtWidgets
 
-from rcon_core.plugins import Role
+from rcon_core.plugins import CallPhase, Role, WidgetView
 
 from .view_common import BAD, MUTED, OK, Caption, vbox
 
@@ -29,12 +31,12 @@ class CompoundView(QtWidgets.QWidget):
         self.grid = QtWidgets.QGridLayout(self.content)
         self.grid.setContentsMargins(0, 0, 0, 0)
         self.grid.setSpacing(6)
-        self.scroll = QtWidgets.QScrollArea()
-        self.scroll.setWidgetResizable(True)
-        self.scroll.setFrameShape(QtWidgets.QFrame.Shape.NoFrame)
-        self.scroll.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAsNeeded)
-        self.scroll.setWidget(self.content)
-        layout.addWidget(self.scroll, 1)
+        self.scroll_area = QtWidgets.QScrollArea()
+        self.scroll_area.setWidgetResizable(True)
+        self.scroll_area.setFrameShape(QtWidgets.QFrame.Shape.NoFrame)
+        self.scroll_area.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAsNeeded)
+        self.scroll_area.setWidget(self.content)
+        layout.addWidget(self.scroll_area, 1)
         role = model.binding.role
         self.button = None
         if role is not Role.SERVE:
@@ -50,10 +52,6 @@ class CompoundView(QtWidgets.QWidget):
         self.child_boxes: list[QtWidgets.QGroupBox] = []
         self._version = -1
         self._painted: dict[int, int] = {}
-        self._timer = QtCore.QTimer(self)  # children's own changes (a display child ageing, ...)
-        self._timer.setInterval(100)
-        self._timer.timeout.connect(self._refresh_children)
-        self._timer.start()
         self._build()
 
     def _build(self) -> None:
@@ -90,6 +88,7 @@ class CompoundView(QtWidgets.QWidget):
     def _chrome(self) -> QtCore.QSize:
         """What the view needs besides the children: margins, the button and the status line."""
         layout = self.layout()
+        assert layout is not None  # vbox(self) in __init__
         m = layout.contentsMargins()
         h = m.top() + m.bottom()
         for w in (self.button, self.status):
@@ -100,14 +99,14 @@ class CompoundView(QtWidgets.QWidget):
     def sizeHint(self) -> QtCore.QSize:  # noqa: N802 - Qt override
         """Every child at its preferred size, the button and the status line: nothing scrolls."""
         chrome, content = self._chrome(), self.content.sizeHint()
-        bar = self.scroll.verticalScrollBar().sizeHint().width()
+        bar = self.scroll_area.verticalScrollBar().sizeHint().width()
         return QtCore.QSize(max(content.width() + bar, 160) + chrome.width(), content.height() + chrome.height())
 
     def minimumSizeHint(self) -> QtCore.QSize:  # noqa: N802 - Qt override
         """The smallest child and the button: anything more scrolls."""
         chrome = self._chrome()
         low = [b.minimumSizeHint() for b in self.child_boxes] or [QtCore.QSize(120, 40)]
-        w = max(q.width() for q in low) + self.scroll.verticalScrollBar().sizeHint().width()
+        w = max(q.width() for q in low) + self.scroll_area.verticalScrollBar().sizeHint().width()
         return QtCore.QSize(w + chrome.width(), min(q.height() for q in low) + chrome.height())
 
     def _refresh_children(self) -> None:
@@ -116,9 +115,10 @@ class CompoundView(QtWidgets.QWidget):
             if self._painted.get(child.index) == st.seq:
                 continue
             self._painted[child.index] = st.seq
-            refresh = getattr(view, "refresh", None)
-            if refresh is not None:
-                refresh(st)
+            if isinstance(view, WidgetView):
+                view.refresh(st)
+            else:
+                view.update()
 
     def refresh(self, state: Any) -> None:
         self._build()
@@ -132,7 +132,7 @@ class CompoundView(QtWidgets.QWidget):
             self.status.show_text("; ".join(problems) if problems else "", BAD if problems else MUTED)
         elif st.busy:
             self.status.show_text(f"calling {st.target}…", MUTED)
-        elif st.phase == "failed":
+        elif st.phase is CallPhase.FAILED:
             self.status.show_text(f"✗ {st.text}", BAD)
         else:
             self.status.show_text(f"✓ {st.text}", OK)

@@ -13,10 +13,9 @@ from typing import Any
 import attrs
 
 from rcon_core.msgs.names import pkg_type
-from rcon_core.plugins.paths import PathError, get_path
 
 from .base import StdModel
-from .common import format_value
+from .common import format_value, shorten_text
 
 __all__ = ["LabelSettings", "LabelModel", "LabelValue"]
 
@@ -73,14 +72,8 @@ class LabelModel(StdModel):
         #: the bound field is a fraction of 1 (BatteryState.percentage): shown in % (see the module docstring)
         self.fraction = (pkg_type(b.type), b.field_path) in FRACTIONS if b.type else False
 
-    def on_message(self, msg: dict[str, Any]) -> None:
-        path = self.binding.field_path
-        try:
-            value = get_path(msg, path) if path else msg
-        except PathError as exc:
-            self.set_error(str(exc))
-            return
-        self.set_value(self.make_value(value), message=msg)
+    def to_value(self, field_value: Any, msg: dict[str, Any]) -> LabelValue:
+        return self.make_value(field_value)
 
     def make_value(self, value: Any) -> LabelValue:
         s = self.settings
@@ -91,4 +84,7 @@ class LabelModel(StdModel):
             return LabelValue(format_value(percent, decimals, "%"), percent, True)
         if numeric and s.scale != 1.0:
             value = value * s.scale
-        return LabelValue(format_value(value, s.decimals, s.units), value, numeric)
+        # a value of any size shows at most SHOW_CHARS / SHOW_ROWS (a 1 MB String took the GUI 1 s to
+        # measure per value); "Copy value" still copies a whole string (``raw``)
+        text, _whole = shorten_text(format_value(value, s.decimals, s.units))
+        return LabelValue(text, value, numeric)

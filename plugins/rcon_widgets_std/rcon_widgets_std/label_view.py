@@ -35,8 +35,12 @@ class LabelView(QtWidgets.QWidget):
         self._timer = age_timer(self, self._tick)
 
     def copy_value(self) -> None:
-        """Put the value's full text on the clipboard (with units, as shown)."""
-        QtWidgets.QApplication.clipboard().setText(self.value.text())
+        """Put the value's full text on the clipboard (with units, as shown; a string shown shortened:
+        all of it)."""
+        v = self.model.state.value
+        raw = getattr(v, "raw", None)
+        whole = raw if isinstance(raw, str) and len(raw) > len(self.value.text()) else self.value.text()
+        QtWidgets.QApplication.clipboard().setText(whole)
 
     def refresh(self, state: Any) -> None:
         v = state.value

@@ -11,12 +11,15 @@ from rcon_core.plugins import Accepts, Role, WidgetSpec, hookimpl
 from .common import NUMERIC_TYPES
 
 PKG = "rcon_widgets_std"
+#: the widget API this package is written against (rcon_core.plugins.api.API_VERSION when it was written)
+API = "1.1"
 
 LOG_TYPES = ("rosgraph_msgs/Log", "rcl_interfaces/msg/Log")
 
 
 def _refs(module: str, name: str) -> dict[str, str]:
     return {
+        "api_version": API,
         "settings": f"{PKG}.{module}:{name}Settings",
         "model": f"{PKG}.{module}:{name}Model",
         "view": f"{PKG}.{module}_view:{name}View",

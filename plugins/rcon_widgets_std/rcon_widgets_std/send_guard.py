@@ -26,7 +26,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from qtpy import QtCore, QtWidgets
+from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.plugins.send_guard import HOLD_S, Outcome, SendGate, describe_send
 
@@ -81,15 +81,15 @@ class SendGuard(QtCore.QObject):
     def eventFilter(self, obj: QtCore.QObject, event: QtCore.QEvent) -> bool:  # noqa: N802 - Qt's name
         kind = event.type()
         E = QtCore.QEvent.Type
-        if kind in (E.MouseButtonPress, E.MouseButtonDblClick):
+        if kind in (E.MouseButtonPress, E.MouseButtonDblClick) and isinstance(event, QtGui.QMouseEvent):
             if event.button() == QtCore.Qt.MouseButton.LeftButton and self.button.isEnabled():
                 self._press()
             return True
-        if kind == E.MouseButtonRelease:
+        if kind == E.MouseButtonRelease and isinstance(event, QtGui.QMouseEvent):
             if event.button() == QtCore.Qt.MouseButton.LeftButton:
                 self._release()
             return True
-        if kind in (E.KeyPress, E.KeyRelease) and event.key() in (
+        if kind in (E.KeyPress, E.KeyRelease) and isinstance(event, QtGui.QKeyEvent) and event.key() in (
                 QtCore.Qt.Key.Key_Space, QtCore.Qt.Key.Key_Return, QtCore.Qt.Key.Key_Enter, QtCore.Qt.Key.Key_Select):
             if kind == E.KeyRelease and not event.isAutoRepeat() and not self.hold:
                 self._confirm()  # a key is a click: asked like one; it cannot hold

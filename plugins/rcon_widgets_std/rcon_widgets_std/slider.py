@@ -229,7 +229,7 @@ class NumericModel(StdModel):
     def in_compound(self) -> bool:
         """A Compound's child (its port ``composes``): nothing goes out until the compound sends, and it
         shows the number the compound *will* send (before it is touched: the start value), never "not set"."""
-        return bool(getattr(self.port, "composes", False))
+        return self.port.composes
 
     def shown_number(self) -> float | int | None:
         """The number the widget shows (None before it shows one)."""

@@ -15,6 +15,7 @@ from qtpy import QtCore, QtGui, QtWidgets
 from rcon_core.plugins import Role
 
 from .common import format_number
+from .slider import NumberRange, SliderModel
 from .view_common import STALE, Caption, style_text, vbox
 
 #: what a publish slider's value reads before anything was sent or heard on its topic
@@ -53,7 +54,7 @@ class TapSlider(QtWidgets.QSlider):
 
 
 class SliderView(QtWidgets.QWidget):
-    def __init__(self, model: Any, parent: QtWidgets.QWidget | None = None) -> None:
+    def __init__(self, model: SliderModel, parent: QtWidgets.QWidget | None = None) -> None:
         super().__init__(parent)
         self.model = model
         self.publishing = model.binding.role is Role.PUBLISH
@@ -75,10 +76,10 @@ class SliderView(QtWidgets.QWidget):
         ends.addWidget(self.low)
         ends.addWidget(self.high)
         layout.addLayout(ends)
-        self._range = None
-        self._apply_range()
+        self._range: NumberRange = model.range
+        self._set_range(self._range)
         # nothing sent or received yet: the handle rests at the start value, the value says "not set"
-        resting = getattr(model, "resting", None) if self.publishing else None
+        resting = model.resting if self.publishing else None
         self.slider.blockSignals(True)
         self.slider.setValue(self.position_of(resting if resting is not None else self._range.coerce(0)))
         self.slider.blockSignals(False)
@@ -111,18 +112,21 @@ class SliderView(QtWidgets.QWidget):
         if r == self._range:
             return
         self._range = r
+        self._set_range(r)
+
+    def _set_range(self, r: NumberRange) -> None:
         self.slider.blockSignals(True)
         self.slider.setRange(0, min(r.steps, 100000))
         self.slider.blockSignals(False)
         units = getattr(self.model.settings, "units", "")
         self.low.show_text(f"{self._fmt(r.minimum)} {units}".strip())
-        held = "envelope" in getattr(r, "why", "")
+        held = "envelope" in r.why
         # a range the robot's safety envelope holds in says so at its ends: what the slider can send
         self.high.show_text(f"{self._fmt(r.maximum)} {units}".strip() + (" · envelope" if held else ""),
                             tooltip=f"limited to {r.why}" if r.clamped else "")
 
     def _fmt(self, v: float) -> str:
-        return format_number(v, -1 if self._range and self._range.integer else self.model.settings.decimals)
+        return format_number(v, -1 if self._range.integer else self.model.settings.decimals)
 
     def position_value(self, pos: int | None = None) -> float:
         r = self._range
@@ -157,7 +161,7 @@ class SliderView(QtWidgets.QWidget):
     def _show_unset(self) -> None:
         """Nothing was sent or heard on the topic: no number that could pass for the robot's setting.
         Inside a Compound the number the compound will send (the start value), said as such."""
-        if getattr(self.model, "in_compound", False):
+        if self.model.in_compound:
             self._show(self.model.resting)
             self.value.setToolTip("the compound sends this value (the start value) until you move the slider")
             return

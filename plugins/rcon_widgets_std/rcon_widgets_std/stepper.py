@@ -55,7 +55,7 @@ class StepperModel(NumericModel):
     @property
     def in_compound(self) -> bool:
         """A Compound's child: it shows the number the compound will send (the start value until stepped)."""
-        return bool(getattr(self.port, "composes", False))
+        return self.port.composes
 
     def up(self) -> float | int:
         return self.set_to(self.current + self.range.step)

@@ -10,11 +10,12 @@ from qtpy import QtCore, QtWidgets
 
 from .common import format_number
 from .slider_view import NOT_SET
+from .stepper import StepperModel
 from .view_common import BAD, MUTED, Caption, style_text, vbox
 
 
 class StepperView(QtWidgets.QWidget):
-    def __init__(self, model: Any, parent: QtWidgets.QWidget | None = None) -> None:
+    def __init__(self, model: StepperModel, parent: QtWidgets.QWidget | None = None) -> None:
         super().__init__(parent)
         self.model = model
         layout = vbox(self)
@@ -41,8 +42,8 @@ class StepperView(QtWidgets.QWidget):
         self.plus.clicked.connect(lambda: self._show(model.up()))
         # nothing sent yet: no number that passes for the robot's -- except inside a Compound, which sends the
         # number shown (the start value until stepped): there it is shown, as what will be sent
-        self._show(model.current, shown=bool(getattr(model, "in_compound", False)))
-        if getattr(model, "in_compound", False):
+        self._show(model.current, shown=model.in_compound)
+        if model.in_compound:
             self.value.setToolTip("the compound sends this value (the start value) until you step it")
 
     def _show(self, v: float, shown: bool = True) -> None:

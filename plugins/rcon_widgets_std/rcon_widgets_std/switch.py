@@ -14,7 +14,7 @@ from typing import Any
 import attrs
 
 from rcon_core.msgs.text import to_text
-from rcon_core.plugins import Role
+from rcon_core.plugins import NotAValue, Role
 from rcon_core.plugins.paths import PathError, get_path, set_path, split_service_path
 
 from .base import StdModel
@@ -102,18 +102,11 @@ class SwitchModel(StdModel):
             reply, reply_for = "", None  # the state moved on (changed elsewhere): the old answer no longer applies
         self.set_value(SwitchValue(on, cur.busy, cur.wanted if cur.busy else None, reply, reply_for), message=msg)
 
-    def on_message(self, msg: dict[str, Any]) -> None:
-        path = self.binding.field_path
-        try:
-            value = get_path(msg, path) if path else msg
-        except PathError as exc:
-            self.set_error(str(exc))
-            return
-        if not isinstance(value, bool):
-            self.set_error(f"{path or 'the message'} is not a bool: {value!r}")
-            return
-        self._on = value
-        self.set_value(SwitchValue(value), message=msg)
+    def to_value(self, field_value: Any, msg: dict[str, Any]) -> SwitchValue:
+        if not isinstance(field_value, bool):
+            raise NotAValue(f"{self.binding.field_path or 'the message'} is not a bool: {field_value!r}")
+        self._on = field_value
+        return SwitchValue(field_value)
 
     # -- actions (any thread) -----------------------------------------------------------------------
     def toggle(self) -> None:

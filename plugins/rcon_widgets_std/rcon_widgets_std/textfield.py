@@ -18,10 +18,10 @@ import attrs
 from rcon_core.msgs import MessageTextError
 from rcon_core.msgs.text import parse_text
 from rcon_core.plugins import Role
-from rcon_core.plugins.paths import PathError, get_path, set_path
+from rcon_core.plugins.paths import PathError, set_path
 
 from .base import StdModel
-from .common import field_at, format_value, held_to_envelope
+from .common import field_at, format_value, held_to_envelope, shorten_text
 
 __all__ = ["TextFieldSettings", "TextFieldModel", "TextValue"]
 
@@ -66,20 +66,15 @@ class TextFieldModel(StdModel):
     @property
     def in_compound(self) -> bool:
         """True when this is a Compound's child: what it publishes is composed, not sent to the robot."""
-        return bool(getattr(self.port, "composes", False))
+        return self.port.composes
 
     @property
     def needs_types(self) -> bool:  # type: ignore[override]
         return self.binding.role is Role.PUBLISH
 
-    def on_message(self, msg: dict[str, Any]) -> None:
-        path = self.binding.field_path
-        try:
-            value = get_path(msg, path) if path else msg
-        except PathError as exc:
-            self.set_error(str(exc))
-            return
-        self.set_value(TextValue(format_value(value, self.settings.decimals)), message=msg)
+    def to_value(self, field_value: Any, msg: dict[str, Any]) -> TextValue:
+        # shown at most SHOW_CHARS / SHOW_ROWS: Qt lays out a megabyte-long line for seconds (issue 22.1)
+        return TextValue(shorten_text(format_value(field_value, self.settings.decimals))[0])
 
     # -- typed text -> message -----------------------------------------------------------------------
     def _is_string_field(self) -> bool:

@@ -274,7 +274,7 @@ def age_timer(view: QtWidgets.QWidget, fn: Any, ms: int = 500) -> QtCore.QTimer:
     return timer
 
 
-def style_text(label: QtWidgets.QLabel, px: int, colour: str = "", bold: bool = True) -> None:
+def style_text(label: QtWidgets.QWidget, px: int, colour: str = "", bold: bool = True) -> None:
     """Size and colour through a style sheet (the app's theme sets font sizes by style sheet too, which
     would override ``setFont``). Does nothing when the label already has exactly this style (setting a
     style sheet re-polishes the widget, even an identical one)."""

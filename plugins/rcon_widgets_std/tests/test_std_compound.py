@@ -164,7 +164,9 @@ async def test_a_child_from_another_package(sim):
         m = build(CompoundModel, settings, "/speed_limit", "std_msgs/Float64", "publish", client=client,
                   context=WidgetContext(pm.widget))
         m.start()
-        assert m.children[0].model.context is m.context  # a child is built with the compound's context
+        knob = m.children[0].model
+        assert knob.context.catalog is m.context.catalog  # a child finds kinds where the compound does
+        assert m.child_models() == [knob]  # built through the context: the runtime and the host know it
         m.children[0].model.turn(1.5)
         m.send()
         await sim.wait_for_published("/speed_limit", lambda msg: msg["data"] == 1.5, timeout=10)

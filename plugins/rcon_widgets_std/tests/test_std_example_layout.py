@@ -8,7 +8,7 @@ from std_testkit import bridge
 from rcon_core.canvas.runtime import CanvasRuntime, MissingWidgetModel
 from rcon_core.canvas.store import WorkspaceStore, dumps_workspace
 from rcon_core.msgs import TypeRegistry
-from rcon_core.plugins import PluginManager
+from rcon_core.plugins import PluginManager, WidgetContext
 from rcon_core.testing import until
 
 LAYOUT = Path(__file__).resolve().parents[1] / "examples" / "std_widgets_layout.json"
@@ -33,7 +33,8 @@ def test_the_example_layout_loads_and_is_configured():
         spec = pm.widget(w.kind)
         assert w.binding.role in spec.roles, w.id
         assert spec.settings_problems(w.settings) == [], w.id
-        model = spec.load_model()(spec.make_settings(w.settings), w.binding, None, types=types)
+        model = spec.load_model()(spec.make_settings(w.settings), w.binding, None, types=types,
+                                  context=WidgetContext(pm))
         assert model.problems() == [], (w.id, model.problems())
 
 

@@ -11,10 +11,10 @@ from rcon_widgets_std.textfield_view import TextFieldView
 from rcon_widgets_std.textview import TextViewModel, TextViewSettings
 from rcon_widgets_std.textview_view import TextViewView
 from std_qtkit import LiveBridge, shoot, wait_until
-from std_testkit import build
+from std_testkit import STD, build
 
 from rcon_core.msgs import TypeRegistry
-from rcon_core.plugins import Binding
+from rcon_core.plugins import Binding, WidgetContext
 
 
 @pytest.fixture
@@ -26,7 +26,7 @@ def live(sim_url):
 
 def live_model(cls, settings, live, binding, node, types=None):
     return cls(settings, binding, live.node(node), types=types or TypeRegistry.standard(),
-               dispatch=live.thread.call)
+               dispatch=live.thread.call, context=WidgetContext(STD))
 
 
 def test_textfield_view_sends_and_reports_errors(qtbot, live, sim_thread, tmp_path):

@@ -18,13 +18,13 @@ from rcon_widgets_std.slider_view import SliderView
 from rcon_widgets_std.switch import SwitchModel, SwitchSettings, SwitchValue
 from rcon_widgets_std.switch_view import SwitchView
 from std_qtkit import LiveBridge, wait_until
-from std_testkit import build
+from std_testkit import STD, build
 
 from rcon_core.app.geometry import on_grid
 from rcon_core.app.theme import stylesheet
 from rcon_core.app.widget_frame import WidgetFrame, frame_min_size
 from rcon_core.msgs import TypeRegistry
-from rcon_core.plugins import Binding
+from rcon_core.plugins import Binding, WidgetContext
 
 SPECS = {spec.kind: spec for spec in specs()}
 
@@ -241,7 +241,7 @@ def test_label_default_size_fits_a_typical_title(qtbot, title):
 def _compound(children, columns=1):
     settings = CompoundSettings(columns=columns, children=children)
     m = CompoundModel(settings, Binding("/cmd_vel", "geometry_msgs/Twist", "publish"), None,
-                      types=TypeRegistry.standard())
+                      types=TypeRegistry.standard(), context=WidgetContext(STD))
     m.build_children()
     return m
 
@@ -252,7 +252,7 @@ THREE = [*TWO, ChildSpec("std.textfield", "linear.y"), ChildSpec("std.slider", "
 
 def _fits_without_scrolling(view: CompoundView, what: str) -> None:
     """Every child at least its minimum and all of them inside the scroll area's viewport."""
-    port = view.scroll.viewport()
+    port = view.scroll_area.viewport()
     for box in view.child_boxes:
         corner = box.mapTo(port, QtCore.QPoint(box.width(), box.height()))
         assert corner.x() <= port.width() and corner.y() <= port.height(), f"{what}: a child needs scrolling"
@@ -266,13 +266,13 @@ def test_compound_in_a_small_frame_keeps_children_at_their_minimum_and_scrolls(q
     for box in view.child_boxes:
         need = box.minimumSizeHint()
         assert box.height() >= need.height() and box.width() >= need.width(), "a child squeezed below its minimum"
-    bar = view.scroll.verticalScrollBar()
+    bar = view.scroll_area.verticalScrollBar()
     assert bar.maximum() > 0, "what does not fit scrolls"
     bar.setValue(bar.maximum())
     QtWidgets.QApplication.processEvents()
     last = view.child_boxes[-1]
-    bottom = last.mapTo(view.scroll.viewport(), QtCore.QPoint(0, last.height()))
-    assert bottom.y() <= view.scroll.viewport().height(), "the last child can be scrolled into view"
+    bottom = last.mapTo(view.scroll_area.viewport(), QtCore.QPoint(0, last.height()))
+    assert bottom.y() <= view.scroll_area.viewport().height(), "the last child can be scrolled into view"
     assert view.button.isVisible() and frame.isVisible()
 
 

@@ -31,6 +31,7 @@ def rcon_register_widgets(registry):
             settings="rcon_example_lab.gripper:GripperSettings",
             model="rcon_example_lab.gripper:GripperModel",
             view="rcon_example_lab.gripper_view:GripperView",
+            api_version="1.1",  # the widget API this package is written against
         )
     )
 
