@@ -55,9 +55,18 @@ class FoxgloveCatalog:
         await self._ready()
         return sorted(self._s.service_by_name)
 
-    async def services_with_types(self) -> dict[str, str]:
+    async def services_with_types(self, known: dict[str, str] | None = None,
+                                  listed: Callable[[list[str]], None] | None = None) -> dict[str, str]:
+        """``{service: type}`` in name order, as ``Rosapi.services_with_types`` gives it (``known`` updated in
+        place, ``listed(names)`` called first); the advertisement says every type, nothing is asked."""
         await self._ready()
-        return {name: srv.type for name, srv in sorted(self._s.service_by_name.items())}
+        types = {name: srv.type for name, srv in sorted(self._s.service_by_name.items())}
+        if listed is not None:
+            listed(list(types))
+        if known is not None:
+            known.clear()
+            known.update(types)
+        return types
 
     async def topic_type(self, topic: str) -> str | None:
         await self._ready()
