@@ -32,10 +32,13 @@ The ``foxglove`` client is RCON's Foxglove link (``rcon_core.foxglove``): the se
 channels with ``ros2msg`` schemas, binary MessageData frames carrying CDR (the same Float64 and 640x480
 Image), the round trip as a client channel echoed on a subscription.  Its image row is CDR (binary, like
 CBOR), so it runs the ``image_cbor`` phase; the issue's targets compare it with the rosbridge link's best
-encoding (``foxglove`` targets below).  Read the image row with this in mind: the rcon client's CBOR phase
-runs after its JSON phase in the same process, whose larger allocations raise glibc's dynamic mmap threshold,
-so its 0.9 MB frames then come from the heap; the foxglove client has no JSON phase and pays about 200 page
-faults per frame (``ru_minflt``) for the same buffers -- a difference of the run's order, not of the links.
+encoding (``foxglove`` targets below).  Both image columns run warmed the same way: the rcon client's CBOR
+phase comes after its JSON phase in the same process, whose larger allocations raise glibc's dynamic mmap
+threshold (so its 0.9 MB frames then come from the heap, not from fresh pages); the foxglove client has no
+JSON phase of its own, so before its first round it runs that very phase once, unreported, through the
+rosbridge client on a second connection (:func:`_same_warmup`).  Without it the foxglove column paid about
+200 page faults per frame (``ru_minflt``) for the same buffers -- a difference of the run's order, not of
+the links.
 
 Two kinds of figure.  *Wall* figures (messages/s, frames/s, round-trip ms) are what a user sees, but on a
 shared machine they swing with whatever else runs.  *CPU* figures -- the client process's own user+sys
@@ -436,11 +439,32 @@ async def client_rcon(url: str, n: dict[str, int], transport: str | None = "pico
     await c.close()
 
 
+async def _same_warmup(url: str, n: dict[str, int]) -> None:
+    """The rcon client's image JSON phase, once, unreported (a rosbridge connection to the same server): the
+    foxglove column's image phase then runs on the allocator the rcon column's CBOR phase runs on."""
+    from rcon_core.bridge import BridgeClient
+
+    c = BridgeClient(url, latency_interval=3600)
+    await c.connect(timeout=10)
+    done = asyncio.get_running_loop().create_future()
+    seen = [0]
+
+    def cb(_msg: dict[str, Any]) -> None:
+        seen[0] += 1
+        if seen[0] == n["image_json"] and not done.done():
+            done.set_result(None)
+
+    c.node("warmup").subscribe("/bench/image", cb, type="sensor_msgs/Image")
+    await asyncio.wait_for(done, 120)
+    await c.close()
+
+
 async def client_foxglove(url: str, n: dict[str, int]) -> None:
     """RCON's Foxglove link: the same node API as the rosbridge client, CDR in binary frames."""
     sys.path.insert(0, str(HERE.parent))
     from rcon_core.foxglove import FoxgloveClient
 
+    await _same_warmup(url, n)
     c = FoxgloveClient(url, latency_interval=3600)
     await c.connect(timeout=10)
     loop = asyncio.get_running_loop()

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 from app_helpers import TIMEOUT_MS, choose_kind, entry_point_plugins, open_window, tap, tap_item, tap_topic
-from qtpy import QtWidgets
+from qtpy import QtGui, QtWidgets
 from qtpy.QtTest import QTest
 
 from rcon_core.bridge import ConnectionState
@@ -210,5 +210,50 @@ def test_one_canvas_with_a_rosbridge_robot_and_a_foxglove_robot(qtbot, tmp_path,
         except Exception:
             raise AssertionError(f"{hosted_state(win, battery.id)} {hosted_state(win, pose.id)}") from None
         snap(win, "fleet-rosbridge-and-foxglove")
+    finally:
+        win.shutdown()
+
+
+def test_the_protocol_line_is_information_and_a_failure_is_a_problem(window, qtbot):
+    """Found by a person: the bar showed "Foxglove WebSocket · fox-peer …" in the red bold problem style."""
+    from rcon_core.app.theme import colour
+
+    bar = window.connection
+    assert bar.message.text().startswith("Foxglove WebSocket")
+    assert bar.message.property("role") == "info"
+    info_colour = bar.message.palette().color(bar.message.foregroundRole()).name()
+    assert info_colour == QtGui.QColor(colour("TEXT")).name() and not bar.message.font().bold()
+    window.connect_to("ws://127.0.0.1:9")  # nothing listens there: a problem, in the problem style
+    qtbot.waitUntil(lambda: "refused" in bar.message.text(), timeout=TIMEOUT_MS)
+    assert bar.message.property("role") == "problem"
+    problem_colour = bar.message.palette().color(bar.message.foregroundRole()).name()
+    assert problem_colour == QtGui.QColor(colour("PROBLEM")).name() != info_colour and bar.message.font().bold()
+
+
+def test_a_foxglove_url_enters_the_history_once_server_info_arrived(qtbot, tmp_path, peer, plugins, monkeypatch):
+    """Found by a person: with a rosauth secret in force (the environment's, or one saved for the URL), a
+    Foxglove URL entered the URL history only after the auth probe -- a service call that waits out the link's
+    service grace period (about 1 s).  Foxglove has no rosauth: serverInfo is the answer, no probe is made.
+    Here the probe never ends (as a robot that never answers it), so only a link that makes none remembers."""
+    import asyncio
+
+    import rcon_core.app.link as app_link
+    from rcon_core.app.link import LinkSettings
+
+    probed: list[str] = []
+
+    async def endless_probe(client, timeout: float = 5.0) -> None:
+        probed.append(client.protocol)
+        await asyncio.sleep(3600)
+
+    monkeypatch.setattr(app_link, "confirm_auth", endless_probe)
+    win = open_window(qtbot, tmp_path / "config", plugins)
+    try:
+        win.connection.overrides = LinkSettings(secret="a-rosauth-secret")
+        win.connect_to(peer.url)
+        qtbot.waitUntil(lambda: win.connection.state is ConnectionState.CONNECTED, timeout=TIMEOUT_MS)
+        assert win.link.client.protocol == "foxglove"
+        qtbot.waitUntil(lambda: peer.url in win.config.url_history, timeout=TIMEOUT_MS)
+        assert "foxglove" not in probed
     finally:
         win.shutdown()

@@ -10,7 +10,8 @@ core = ["rcon_core", "rcon_core.msgs", "rcon_core.bridge", "rcon_core.sim", "rco
         "rcon_core.matcher", "rcon_core.canvas", "rcon_core.canvas.runtime", "rcon_core.cli.main",
         "rcon_core.cli.plugin_cmds", "rcon_core.testing", "rcon_core.record.writer", "rcon_core.record.ingest",
         "rcon_core.record.files", "rcon_core.record.recover", "rcon_core.record.session", "rcon_core.sim.playback",
-        "rcon_core.link", "rcon_core.foxglove", "rcon_core.foxglove.gateway", "rcon_core.foxglove.testing"]
+        "rcon_core.link", "rcon_core.foxglove", "rcon_core.foxglove.gateway", "rcon_core.foxglove.testing",
+        "rcon_core.foxglove.flatbuf", "rcon_core.record.foxglove_source"]
 checked, missing = [], []
 for name in core:
     if importlib.util.find_spec(name) is None:

@@ -65,12 +65,60 @@ def test_rcon_sim_refuses_rosauth_on_the_foxglove_protocol(capsys, monkeypatch):
     assert "has no rosauth" in capsys.readouterr().err
 
 
-def test_rcon_sim_says_a_recording_is_played_over_rosbridge_only(capsys):
-    """Found merging: ``--play`` with ``--protocol foxglove`` served the recording on the loopback-only port
-    the gateway would sit in front of, and said nothing."""
+@pytest.fixture
+def fox_player_url():
+    """``rcon sim --play demo.bag --protocol foxglove --loop --rate 4``: the recording over the Foxglove
+    protocol (the player's bare sim on loopback behind the gateway); its URL."""
     bag = Path(__file__).parent / "fixtures" / "recordings" / "demo.bag"
-    assert main(["sim", "--port", "0", "--protocol", "foxglove", "--play", str(bag)]) == 2
-    assert "over rosbridge only" in capsys.readouterr().err
+    proc = subprocess.Popen([sys.executable, "-m", "rcon_core.cli.main", "sim", "--port", "0", "--protocol", "foxglove",
+                             "--play", str(bag), "--loop", "--rate", "4"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    try:
+        line = proc.stdout.readline()
+        match = re.search(r"over the Foxglove WebSocket protocol on (ws://127\.0\.0\.1:\d+)", line)
+        assert match and "playing" in line, (line, proc.stderr.read() if proc.poll() is not None else "")
+        yield match.group(1)
+    finally:
+        proc.terminate()
+        proc.wait(10)
+
+
+async def test_a_recording_plays_over_the_foxglove_protocol(fox_player_url):
+    """Was refused in words ("over rosbridge only") until the gateway could front the player: now the
+    recording's topics are channels with the file's own definitions, each message arrives with the recorded
+    bytes (checked by a bare WebSocket client against the file), RCON's Foxglove link decodes them, the latched
+    map reaches a late subscriber, and the server time is the recording's."""
+    from fox_raw import RawFoxClient, run_of
+
+    from rcon_core.foxglove import FoxgloveClient
+    from rcon_core.record.files import open_recording
+    from rcon_core.testing import until
+
+    bag = Path(__file__).parent / "fixtures" / "recordings" / "demo.bag"
+    with open_recording(bag) as rec:
+        recorded: dict[str, list[bytes]] = {}
+        for topic, _t, data in rec.messages():
+            recorded.setdefault(topic, []).append(data)
+        start, end = rec.start_ns, rec.end_ns
+    topics = ["/odom", "/gps/fix", "/battery", "/map"]
+    async with RawFoxClient(fox_player_url, topics) as raw:
+        await until(lambda: all(len(raw.payloads[t]) >= 3 for t in ("/odom", "/gps/fix")) and raw.payloads["/battery"]
+                    and raw.payloads["/map"], timeout=30, what="the played messages")
+    for topic in topics:
+        adv = raw.channels[topic]
+        assert (adv["encoding"], adv["schemaEncoding"]) == ("ros1", "ros1msg"), adv
+        assert all(p in recorded[topic] for p in raw.payloads[topic]), f"{topic}: not the recorded bytes"
+    assert run_of(raw.payloads["/odom"][:3], recorded["/odom"] * 2)  # in the recorded order (it loops)
+    client = FoxgloveClient(fox_player_url, call_timeout=5)
+    await client.connect(timeout=10)
+    try:
+        got: list[dict] = []
+        client.node("test").subscribe("/gps/fix", got.append)
+        await until(lambda: got and client.server_time is not None, timeout=30, what="a fix and the server time")
+        assert 40 < got[0]["latitude"] < 70
+        assert start <= client.server_time <= end  # the recording's time, not the wall clock
+    finally:
+        await client.close()
 
 
 @pytest.mark.usefixtures("qapp")

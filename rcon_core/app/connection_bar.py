@@ -354,9 +354,13 @@ class ConnectionBar(QtWidgets.QFrame):
             self.latency_label.setText(text)
         self.bandwidth.poll()
 
-    def _say(self, text: str) -> None:
-        """The one-line message (the reason comes first, then the countdown)."""
+    def _say(self, text: str, role: str = "problem") -> None:
+        """The one-line message (the reason comes first, then the countdown).  ``role``: "problem" (red,
+        bold: why the link is not up) or "info" (the plain text colour: which protocol and server)."""
         self.message.setText(text)
+        if text and self.message.property("role") != role:  # an empty line keeps its style
+            self.message.setProperty("role", role)
+            repolish(self.message)
 
     def _show_state(self, state: ConnectionState) -> None:
         self.state = state
@@ -369,7 +373,7 @@ class ConnectionBar(QtWidgets.QFrame):
         self._hold_latency_room()
         if connected:
             self.failure, self.note = None, ""
-            self._say(self.link.protocol_text())  # "" on rosbridge; a Foxglove link says so
+            self._say(self.link.protocol_text(), "info")  # "" on rosbridge; a Foxglove link says so
             if self._remember is not None and self._remember == self.link.url and not self._remember_on_answer:
                 self._keep_url()
         self.state_changed.emit(state)

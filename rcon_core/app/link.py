@@ -315,10 +315,11 @@ class Link:
         if gen == self._generation:
             self.state_box.put(as_state(client.state))
             self._start_catalog(client, gen)
-        try:  # the robot answers a call: it accepted the link (and the auth op, if any)
-            await confirm_auth(client)
-        except Exception:  # refused: the client reports it as a fatal failure
-            return
+        if getattr(client, "protocol", "rosbridge") != "foxglove":  # Foxglove: no rosauth; serverInfo answered
+            try:  # the robot answers a call: it accepted the link (and the auth op, if any)
+                await confirm_auth(client)
+            except Exception:  # refused: the client reports it as a fatal failure
+                return
         if gen == self._generation:
             self.answered_box.put(client.url)
 

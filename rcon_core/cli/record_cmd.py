@@ -3,7 +3,9 @@
     rcon record -o run.mcap [TOPIC ...|--all] [--exclude RE] [--duration S] [--split-size MB] [--url URL]
 
 Raw bytes (``cbor-raw``) and the robot's own definitions where it offers them (``record/ingest.py``),
-profile ``ros1`` or ``ros2`` from the robot. Progress on stderr (topics, messages, MB, rate) about once
+profile ``ros1`` or ``ros2`` from the robot; a Foxglove robot (detected, or ``--protocol foxglove``) is
+recorded with each channel's own schema and encoding and the payloads unchanged
+(``record/foxglove_source.py``). Progress on stderr (topics, messages, MB, rate) about once
 a second; Ctrl-C or SIGTERM closes the file properly (summary and footer). The link reconnects on its
 own while recording; each change is written on ``/rcon/link``. Exit status: 0 when the file was closed
 properly, 1 when the robot could not be reached or the recording stopped on an error (said on stderr).
@@ -36,7 +38,8 @@ def configure(name: str, parser: argparse.ArgumentParser) -> None:
                         help="stop (closing the file properly) when the recording reaches MB megabytes")
     parser.add_argument("--compression", choices=("zstd", "lz4", "none"), default="zstd",
                         help="chunk compression (default zstd)")
-    parser.add_argument("--url", dest="bridge_url", metavar="URL", help=f"rosbridge URL (default {DEFAULT_URL})")
+    parser.add_argument("--url", dest="bridge_url", metavar="URL",
+                        help=f"the robot's URL, rosbridge or Foxglove (default {DEFAULT_URL})")
     parser.add_argument("--recover", metavar="FILE",
                         help="instead of recording: rewrite FILE, cut short by a crash, with every complete "
                         "chunk and a summary, to -o (default FILE-recovered.mcap)")
@@ -88,15 +91,23 @@ def _recover(args: argparse.Namespace) -> int:
 
 
 async def _connect(url: str, args: argparse.Namespace) -> Any:
-    from rcon_core.bridge import BridgeClient, LinkSettingsError
+    from rcon_core.bridge import LinkSettingsError
     from rcon_core.bridge.reasons import describe
     from rcon_core.cli.link_options import link_settings
+    from rcon_core.link import detect, make_client
 
     try:
         settings = link_settings(args, url)
-        client = BridgeClient(url, reconnect=True, **settings)
+        protocol = getattr(args, "protocol", None)
+        if protocol is None:  # rosbridge or Foxglove, from the server's answer (rcon_core/link/detect.py)
+            protocol = await asyncio.wait_for(detect(url, ca_file=settings["ca_file"], client_cert=settings[
+                "client_cert"], client_key=settings["client_key"]), 10.0)
+        client = make_client(url, str(protocol), reconnect=True, **settings)
     except (LinkSettingsError, ValueError) as exc:
         print(f"rcon record: {exc}", file=sys.stderr)
+        return None
+    except Exception as exc:  # noqa: BLE001 - the handshake failed: said as any connection failure
+        print(f"rcon record: cannot connect to {url}: {describe(exc).reason}", file=sys.stderr)
         return None
     try:
         await asyncio.wait_for(client.connect(), 10.0)
@@ -108,20 +119,23 @@ async def _connect(url: str, args: argparse.Namespace) -> Any:
 
 
 async def _record(url: str, args: argparse.Namespace) -> int:
-    from rcon_core.record.ingest import RobotRecorder
+    from rcon_core.record.foxglove_source import is_foxglove, recorder_for, wait_profile
     from rcon_core.record.writer import McapSink
 
     client = await _connect(url, args)
     if client is None:
         return 1
-    try:
-        info = await client.detect_ros()
-        ros2 = info.version == 2
-    except Exception:  # noqa: BLE001 - the typedefs will tell per topic; ROS 1 is the default profile
-        ros2 = False
+    if is_foxglove(client):  # the channels' own encodings say (record/foxglove_source.py)
+        profile = await wait_profile(client, None if args.all else list(args.topics))
+    else:
+        try:
+            info = await client.detect_ros()
+            profile = "ros2" if info.version == 2 else "ros1"
+        except Exception:  # noqa: BLE001 - the typedefs will tell per topic; ROS 1 is the default profile
+            profile = "ros1"
     mb = 1_000_000
     try:
-        sink = McapSink(args.output, "ros2" if ros2 else "ros1", compression=args.compression,
+        sink = McapSink(args.output, profile, compression=args.compression,
                         split_size=int(args.split_size * mb) if args.split_size else None,
                         budget=int(args.budget * mb) if args.budget else None,
                         metadata={"url": url, "recorder": "rcon record", "started": time.strftime("%FT%T%z")})
@@ -129,8 +143,8 @@ async def _record(url: str, args: argparse.Namespace) -> int:
         await client.close()
         print(f"rcon record: cannot write {args.output}: {exc.strerror or exc}", file=sys.stderr)
         return 1
-    recorder = RobotRecorder(client, sink, ros2=ros2, robot=url, topics=list(args.topics), all_topics=args.all,
-                             exclude=args.exclude, operator=False)
+    recorder = recorder_for(client, sink, ros2=profile == "ros2", robot=url, topics=list(args.topics),
+                            all_topics=args.all, exclude=args.exclude, operator=False)
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
     for sig in (signal.SIGINT, signal.SIGTERM):

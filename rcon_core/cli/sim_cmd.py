@@ -1,6 +1,7 @@
 """``rcon sim``: run the embedded simulated robot as a rosbridge v2 server until interrupted; with
 ``--protocol foxglove`` the same vessel is served over the Foxglove WebSocket protocol (through
-foxglove-sdk: ``rcon_core/foxglove/gateway.py``), its rosbridge port then on loopback only.
+foxglove-sdk: ``rcon_core/foxglove/gateway.py``), its rosbridge port then on loopback only.  ``--play FILE``
+serves a recording instead (``sim/playback.py``), over either protocol.
 
 With ``--auth`` it requires a rosauth ``auth`` op signed with the secret in ``RCON_AUTH_SECRET``, or in the
 file ``--auth-secret-file`` names (its first line), as the client reads it: never from the command line,
@@ -198,9 +199,6 @@ async def _serve(args: argparse.Namespace, tls: ssl.SSLContext | None = None, se
             print(f"rcon sim: cannot play {exc}", file=sys.stderr)
             return 2
     foxglove = getattr(args, "protocol", "rosbridge") == "foxglove"
-    if foxglove and recording is not None:
-        print("rcon sim: --play serves a recording over rosbridge only (drop --protocol foxglove)", file=sys.stderr)
-        return 2
     # over Foxglove the sim's own rosbridge port stays on loopback, behind the gateway (foxglove/gateway.py)
     server = SimServer(host="127.0.0.1" if foxglove else args.host, port=0 if foxglove else args.port,
                        ros2=args.ros2 or bool(recording and recording.ros2), rate_scale=args.rate_scale,
@@ -219,7 +217,7 @@ async def _serve(args: argparse.Namespace, tls: ssl.SSLContext | None = None, se
         for key, value in getattr(args, "video_params", {}).items():  # checked in run()
             server.params_tree.set(f"{server.robot_node.node}/video/{key}", value)
     if recording is not None:
-        return await _play(server, recording, args)
+        return await _play(server, recording, args, _gateway_options(args) if foxglove else None)
     flavour = "ROS 2" if args.ros2 else "ROS 1"
     ns = server.identity.namespace
     who = f"Kingfisher '{server.name}'" + (f" (topics under {ns})" if ns else "") if server.name else "Kingfisher"
@@ -227,8 +225,7 @@ async def _serve(args: argparse.Namespace, tls: ssl.SSLContext | None = None, se
     if foxglove:
         from rcon_core.foxglove.gateway import FoxgloveGateway
 
-        pem = (open(args.tls_cert, "rb").read(), open(args.tls_key, "rb").read()) if args.tls_cert else None
-        gateway = FoxgloveGateway(server.url, host=args.host, port=args.port, name=server.name or "rcon-sim", tls=pem)
+        gateway = FoxgloveGateway(server.url, name=server.name or "rcon-sim", **_gateway_options(args))
         try:
             await asyncio.to_thread(gateway.start)
         except Exception as exc:
@@ -260,15 +257,43 @@ async def _serve(args: argparse.Namespace, tls: ssl.SSLContext | None = None, se
 
 
 
-async def _play(server: Any, recording: Any, args: argparse.Namespace) -> int:
-    """Serve ``recording`` as the robot until interrupted (``sim/playback.py``)."""
+def _gateway_options(args: argparse.Namespace) -> dict[str, Any]:
+    """Where the Foxglove gateway listens (the sim's own rosbridge port is then on loopback behind it)."""
+    pem = None
+    if args.tls_cert:
+        with open(args.tls_cert, "rb") as cert, open(args.tls_key, "rb") as key:
+            pem = (cert.read(), key.read())
+    return {"host": args.host, "port": args.port, "tls": pem}
+
+
+async def _play(server: Any, recording: Any, args: argparse.Namespace,
+                foxglove: dict[str, Any] | None = None) -> int:
+    """Serve ``recording`` as the robot until interrupted (``sim/playback.py``); with ``foxglove`` (the
+    gateway's options) over the Foxglove protocol, the player's bare sim on loopback behind the gateway,
+    the server time the recording's."""
     from rcon_core.sim.playback import Player
 
     player = Player(server, recording, rate=args.rate, loop=args.loop, start=args.start)
     player.install()
     flavour = "ROS 2" if server.ros2 else "ROS 1"
+    url, over = server.url, ""
+    gateway = None
+    if foxglove is not None:
+        from rcon_core.foxglove.gateway import FoxgloveGateway
+
+        gateway = FoxgloveGateway(server.url, name="rcon-player", clock=lambda: recording.start_ns + player.position_ns,
+                                  **foxglove)
+        try:
+            await asyncio.to_thread(gateway.start)
+        except Exception as exc:
+            print(f"rcon sim: cannot serve the Foxglove protocol on {args.host}:{args.port}: {exc}")
+            await player.stop()
+            await server.stop()
+            recording.close()
+            return 1
+        url, over = gateway.url, " over the Foxglove WebSocket protocol"
     print(f"rcon sim: playing {recording.path} ({recording.kind}, {flavour}, {len(recording.tracks)} topics, "
-          f"{recording.message_count} messages, {recording.duration:.1f} s) on {server.url} at {args.rate:g}x"
+          f"{recording.message_count} messages, {recording.duration:.1f} s){over} on {url} at {args.rate:g}x"
           f"{' in a loop' if args.loop else ''} (Ctrl+C to stop)", flush=True)
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
@@ -278,6 +303,8 @@ async def _play(server: Any, recording: Any, args: argparse.Namespace) -> int:
     try:
         await stop.wait()
     finally:
+        if gateway is not None:
+            await asyncio.to_thread(gateway.stop)
         await player.stop()
         await server.stop()
         recording.close()

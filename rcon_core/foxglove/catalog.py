@@ -215,6 +215,19 @@ class FoxgloveParams:
         return default
 
     async def set(self, name: str, value: Any, verify: bool = True) -> None:
+        """Set ``name`` (see the module docstring); told to the operator tap as on rosbridge (``bridge/tap.py``:
+        the flight recorder writes it on ``/rcon/operator/param``)."""
+        tap = self._client.session.tap
+        if not tap.listeners:
+            return await self._set(name, value, verify)
+        try:
+            await self._set(name, value, verify)
+        except Exception as exc:
+            tap.emit("param", "params", name, "", value, f"error: {exc}")
+            raise
+        tap.emit("param", "params", name, "", value, "ok" if verify else "sent")
+
+    async def _set(self, name: str, value: Any, verify: bool) -> None:
         item = {"name": name, **_wire_value(value)}
         got = await self._ask(lambda done: self._client.session.set_params([item], done))
         if not verify:

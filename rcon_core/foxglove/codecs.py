@@ -10,8 +10,10 @@ Decision: which encodings and schemas
     ``FileDescriptorSet``, base64 in the advertisement: Foxglove's own types such as
     ``foxglove.CompressedImage``) are read with the ``protobuf`` package: fields by their proto names,
     ``bytes`` fields as ``bytes``, ``google.protobuf.Timestamp`` as ``{"sec", "nsec"}``.  ``flatbuffer``
-    and any other encoding are listed with their type and refused at subscribe time in words
-    (:class:`CodecError`), never delivered as garbage.
+    messages of Foxglove's own schemas are read with the classes Foxglove publishes
+    (``foxglove-schemas-flatbuffer``: ``flatbuf.py``) into the same dicts as the protobuf ones; any other
+    flatbuffer schema and any other encoding are listed with their type and refused at subscribe time in
+    words (:class:`CodecError`), never delivered as garbage.
 
 Decision: publishing and calling
     A client channel uses ``cdr`` (with the type's ``ros2msg`` text) when the server supports it and the
@@ -111,6 +113,16 @@ class Codecs:
             if foreign.ros_equivalent(schema_name) is not None:  # matched as a ROS type: give its header too
                 return lambda data: with_header(proto_to_dict(cls.FromString(bytes(data))))
             return lambda data: proto_to_dict(cls.FromString(bytes(data)))
+        if encoding == "flatbuffer" and schema_encoding in ("flatbuffer", ""):
+            from . import flatbuf  # Foxglove's own types only: foxglove-schemas-flatbuffer (flatbuf.py)
+
+            fb = flatbuf.decoder(schema_name)
+            if fb is None:
+                raise CodecError(f"RCON reads flatbuffer messages of Foxglove's own schemas only (foxglove.*, "
+                                 f"from foxglove-schemas-flatbuffer), not {schema_name or 'one without a name'}")
+            if foreign.ros_equivalent(schema_name) is not None:
+                return lambda data: with_header(fb(data))
+            return fb
         raise CodecError(f"RCON cannot read {encoding!r} messages with a {schema_encoding or 'missing'!r} schema "
                          f"({schema_name or 'no schema name'})")
 

@@ -7,9 +7,16 @@ Foxglove link open the gateway's URL and see the same vessel.
 Decision: one channel per topic, in the robot's own encoding
     Every topic the robot lists becomes a channel with the robot's ``.msg`` text as its schema
     (``ros1msg`` with ``ros1`` encoding for a ROS 1 robot, ``ros2msg`` with ``cdr`` for ROS 2), the types
-    learned from rosapi.  A channel is subscribed on the robot (CBOR, binary arrays as bytes) while a
-    Foxglove client subscribes to it, and each message is serialized once and logged to the channel.
-    Topics the robot lists later are not added (the sim's topics are fixed).
+    learned from rosapi.  A channel is subscribed on the robot (``cbor-raw``: the robot's own ROS 1 or CDR
+    bytes) while a Foxglove client subscribes to it, and each payload is logged to the channel as it came
+    (serialized by RCON only when the robot sent it decoded).  Topics the robot lists later are not added
+    (the sim's topics are fixed).
+
+Decision: a recording as the robot
+    ``rcon sim --play FILE --protocol foxglove`` puts the gateway in front of the player's bare sim
+    (``sim/playback.py``): its topics are the recording's, each message's bytes the recorded ones (the
+    player sends them unchanged to ``cbor-raw`` subscribers), and ``clock`` makes the server ``time`` the
+    recording's time at the player's position.  What clients publish reaches the player, which absorbs it.
 
 Decision: the rest of the protocol
     Client channels (``clientPublish``) are advertised on the robot with their schema's type and each
@@ -25,10 +32,12 @@ from __future__ import annotations
 import logging
 import threading
 import time
+from collections.abc import Callable
 from typing import Any
 
 from rcon_core.bridge import BridgeClient
 from rcon_core.bridge.threaded import BridgeThread
+from rcon_core.bridge.topics import RawPayload
 from rcon_core.msgs import TypeRegistry, names
 
 log = logging.getLogger(__name__)
@@ -83,9 +92,12 @@ class FoxgloveGateway:
     """A Foxglove server in front of the rosbridge robot at ``source_url`` (see the module docstring)."""
 
     def __init__(self, source_url: str, *, host: str = "127.0.0.1", port: int = 0, name: str = "rcon-sim",
-                 tls: tuple[bytes, bytes] | None = None) -> None:
+                 tls: tuple[bytes, bytes] | None = None, clock: Callable[[], int] | None = None) -> None:
         self.source_url = source_url
         self.host, self.port, self.name, self.tls = host, port, name, tls
+        #: the server ``time`` broadcast every second, in ns (default the wall clock; a recording being
+        #: played: the recording's time at the player's position)
+        self.clock = clock or time.time_ns
         self.thread = BridgeThread("rcon-foxglove-gateway")
         self.client: BridgeClient | None = None
         self.ros2 = False
@@ -199,7 +211,7 @@ class FoxgloveGateway:
     def _tick(self) -> None:
         while not self._stop.wait(1.0):
             try:
-                self.server.broadcast_time(time.time_ns())
+                self.server.broadcast_time(self.clock())
             except Exception:  # stopped meanwhile
                 return
 
@@ -235,13 +247,13 @@ class FoxgloveGateway:
             return
         type_name, channel = self.types[topic], self.channels[topic]
 
-        def forward(msg: dict[str, Any]) -> None:
+        def forward(msg: Any) -> None:
             try:
-                channel.log(self._serialize(type_name, msg))
+                channel.log(msg.data if msg.__class__ is RawPayload else self._serialize(type_name, msg))
             except Exception as exc:  # one message that does not fit its type is dropped, in the log
                 log.warning("gateway: a %s message on %s was not forwarded: %s", type_name, topic, exc)
 
-        self.subs[topic] = self.node.subscribe(topic, forward, type=type_name, compression="cbor")
+        self.subs[topic] = self.node.subscribe(topic, forward, type=type_name, raw=True)
 
     def unsubscribe(self, topic: str) -> None:
         sub = self.subs.pop(topic, None)

@@ -8,7 +8,8 @@ there is no connection), and events to the shell through callbacks (a service an
 the catalogue changed).  No asyncio here: ``client.py`` is the async shell (connect, reconnect, stall
 watch, futures and timeouts).  The nodes (``rcon_core.bridge.nodes``: the same ``Node`` the rosbridge link
 hands out) call :meth:`add_subscription`, :meth:`add_publisher`, :meth:`publish`... exactly as they call the
-rosbridge session, so a widget cannot tell the protocols apart.
+rosbridge session, so a widget cannot tell the protocols apart; a ``raw=True`` consumer (the flight
+recorder) gets each payload's bytes unchanged, even of a channel RCON cannot decode (``delivery.py``).
 
 Decision: the catalogue
     ``advertise``/``unadvertise`` keep ``channels`` (id -> :class:`Channel`); a topic offered on several
@@ -60,6 +61,7 @@ from rcon_core.bridge.topics import TopicEntry
 
 from . import wire
 from .codecs import CodecError, Codecs, Decode
+from .delivery import frame_decoder
 from .entries import CANNOT, STATUS_LEVELS, Channel, ClientChannel, Service, _NoActions, _NoServices
 from .guard import FoxgloveGuard
 
@@ -381,6 +383,8 @@ class FoxgloveSession:
         entry.rebuild()
         if entry.sid is None:
             self._subscribe(entry)
+        else:
+            self._refit(entry)
 
     def remove_subscription(self, sub: Subscription) -> None:
         entry = self.topics.get(sub.topic)
@@ -389,6 +393,7 @@ class FoxgloveSession:
         entry.subs.remove(sub)
         entry.rebuild()
         if entry.subs:
+            self._refit(entry)
             return
         del self.topics[sub.topic]
         if entry.sid is not None:
@@ -400,17 +405,26 @@ class FoxgloveSession:
         ch = self.by_topic.get(entry.topic)
         if ch is None or self._write is None:
             return  # sent when the channel is advertised
+        decode: Decode | None
         try:
             decode = self.codecs.decoder(ch.encoding, ch.schema_name, ch.schema_encoding, ch.schema, offset=13)
         except CodecError as exc:
             self.stats.undecodable += 1
             log.warning("not subscribing to %s on %s: %s", entry.topic, self.url, exc)
             self._on_status({"level": 1, "message": f"{entry.topic}: {exc}"})
-            return
+            if not entry.raw_subs:
+                return
+            decode = None  # the payload bytes still reach raw consumers (the recorder): delivery.py
         sid = next(self._sub_ids)
         if self._send("subscribe", entry.topic, wire.subscribe_frame([(sid, ch.id)])):
             entry.sid = str(sid)  # TopicEntry keeps rosbridge's string ids
-            self.subs[sid] = (entry, decode)
+            entry.decoder = decode
+            self.subs[sid] = (entry, frame_decoder(entry, ch, decode))
+
+    def _refit(self, entry: TopicEntry) -> None:  # its consumers changed: raw or decoded delivery (delivery.py)
+        ch = self.by_topic.get(entry.topic)
+        if entry.sid is not None and ch is not None and int(entry.sid) in self.subs:
+            self.subs[int(entry.sid)] = (entry, frame_decoder(entry, ch, entry.decoder))
 
     # ================================================================== publishing
 

@@ -41,10 +41,14 @@ class Listener:
         self.peer = peer
 
     def on_subscribe(self, client: Any, channel: Any) -> None:
-        self.peer.subscribed.add(channel.topic)
+        with self.peer.lock:
+            self.peer.subscribed.add(channel.topic)
+            self.peer.subscribers[channel.topic] = self.peer.subscribers.get(channel.topic, 0) + 1
 
     def on_unsubscribe(self, client: Any, channel: Any) -> None:
-        self.peer.subscribed.discard(channel.topic)
+        with self.peer.lock:
+            self.peer.subscribed.discard(channel.topic)
+            self.peer.subscribers[channel.topic] = self.peer.subscribers.get(channel.topic, 1) - 1
 
     def on_client_advertise(self, client: Any, channel: Any) -> None:
         with self.peer.lock:
@@ -100,6 +104,7 @@ class FoxPeer:
         self.unadvertised: list[str] = []
         self.client_channels: dict[int, Any] = {}
         self.subscribed: set[str] = set()
+        self.subscribers: dict[str, int] = {}  # topic -> how many clients subscribe to it now
         self.param_subscribed: set[str] = set()
         self.graph_subscribed = False
         self.read_only = {"/boat.name"}

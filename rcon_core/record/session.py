@@ -6,6 +6,8 @@ that robot (what widgets read beside their binding, such as a button's state top
 and everything the operator sent to it
 through any widget or panel (the client's operator tap, ``bridge/tap.py``). One MCAP file per robot,
 ``<dir>/rcon-<time>-<robot>.mcap``, so each opens on its own in Foxglove, Lichtblick or ``rcon sim --play``.
+A robot on the Foxglove protocol is recorded by ``foxglove_source.py`` (its channels as advertised, the
+file's profile from every channel it advertises), each rosbridge robot as ``ingest.py`` says.
 
 Threading: ``start``/``stop``/``swap_client`` are called from the GUI thread and run their work on the
 bridge thread (``BridgeThread.run``); ``status()`` may be read from any thread (counters only).
@@ -25,6 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from .foxglove_source import is_foxglove, recorder_for, wait_profile
 from .ingest import RobotRecorder
 from .writer import McapSink
 
@@ -98,20 +101,24 @@ class AppRecording:
     async def _start_robot(self, robot_id: str, name: str, client: Any, topics: dict[str, str], path: Path,
                            budget: int | None) -> None:
         ros2 = False
-        if client is not None:
-            try:
-                ros2 = client.ros_version == 2 or (client.ros_version is None and
-                                                   (await client.detect_ros()).version == 2)
-            except Exception:  # noqa: BLE001 - not connected yet: ROS 1 unless the robot says otherwise
-                ros2 = False
-        sink = McapSink(str(path), "ros2" if ros2 else "ros1", compression=self.compression, budget=budget,
+        if is_foxglove(client):  # the channels' own encodings say (foxglove_source.py)
+            profile = await wait_profile(client)
+        else:
+            if client is not None:
+                try:
+                    ros2 = client.ros_version == 2 or (client.ros_version is None and
+                                                       (await client.detect_ros()).version == 2)
+                except Exception:  # noqa: BLE001 - not connected yet: ROS 1 unless the robot says otherwise
+                    ros2 = False
+            profile = "ros2" if ros2 else "ros1"
+        sink = McapSink(str(path), profile, compression=self.compression, budget=budget,
                         metadata={"robot": name, "recorder": "rcon app",
                                   "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")},
                         on_problem=self.problems.append)
         rec = None
         if client is not None and hasattr(client, "session"):
-            rec = RobotRecorder(client, sink, ros2=ros2, robot=name, topics=list(topics), types=topics,
-                                follow_session=True)
+            rec = recorder_for(client, sink, ros2=ros2, robot=name, topics=list(topics), types=topics,
+                               follow_session=True)
             await rec.start()
         self.robots[robot_id] = (client, rec, sink)
         self._topics[robot_id] = (name, dict(topics))
@@ -130,8 +137,8 @@ class AppRecording:
         name, topics = self._topics[robot_id]
         new = None
         if client is not None and hasattr(client, "session") and not sink.stopped:
-            new = RobotRecorder(client, sink, ros2=sink.profile == "ros2", robot=name, topics=list(topics),
-                                types=topics, follow_session=True)
+            new = recorder_for(client, sink, ros2=sink.profile == "ros2", robot=name, topics=list(topics),
+                               types=topics, follow_session=True)
             await new.start()
         self.robots[robot_id] = (client, new, sink)
 
