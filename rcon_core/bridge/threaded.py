@@ -12,11 +12,18 @@ import threading
 from collections.abc import Awaitable, Callable
 from typing import Any, TypeVar
 
+from rcon_core import priority
+
 T = TypeVar("T")
 
 
 class BridgeThread:
-    """An asyncio loop running in a daemon thread."""
+    """An asyncio loop running in a daemon thread.
+
+    The thread asks the OS to run it as soon as it wakes (:func:`rcon_core.priority.raise_this_thread`):
+    it reads the robots' frames and times and writes the teleop pad's commands, the work that must not
+    wait behind bulk work (see "who waits when the CPU is short" in ``rcon_core/priority.py``).
+    """
 
     def __init__(self, name: str = "rcon-bridge") -> None:
         self.name = name
@@ -33,6 +40,7 @@ class BridgeThread:
         return self
 
     def _main(self) -> None:
+        priority.raise_this_thread()
         loop = asyncio.new_event_loop()
         asyncio.set_event_loop(loop)
         self.loop = loop
