@@ -41,6 +41,7 @@ it is.
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import logging
 import os
@@ -50,8 +51,8 @@ import threading
 
 log = logging.getLogger(__name__)
 
-#: the nice value background threads get on Linux (0 normal .. 19 lowest)
-BACKGROUND_NICE = 10
+#: the nice value background threads get on Linux (0 normal .. 19 lowest), with SCHED_BATCH
+BACKGROUND_NICE = 5
 #: the scheduling slice a raised thread asks for on Linux (ns; the kernel's default is 0.7-3 ms)
 LATENCY_SLICE_NS = 300_000
 #: the GIL's switch interval in a process that serves an operator or a robot (s; CPython's default 0.005)
@@ -101,6 +102,8 @@ def lower_this_thread(nice: int = BACKGROUND_NICE) -> bool:
     try:
         if sys.platform.startswith("linux"):
             tid = threading.get_native_id()
+            with contextlib.suppress(OSError):  # a kernel without SCHED_BATCH: the nice value alone
+                os.sched_setscheduler(tid, os.SCHED_BATCH | _SCHED_RESET_ON_FORK, os.sched_param(0))
             current = os.getpriority(os.PRIO_PROCESS, tid)
             os.setpriority(os.PRIO_PROCESS, tid, max(current, nice))
             _linux_slice(0)  # the default slice, should it have been raised
