@@ -68,7 +68,11 @@ def fleet_processes(n: int, hz: float, latency_policy: bool = True):
         for proc in procs:
             proc.terminate()
         for proc in procs:
-            proc.wait(10)
+            try:
+                proc.wait(10)
+            except subprocess.TimeoutExpired:  # a vessel starved of CPU: never left running
+                proc.kill()
+                proc.wait(5)
 
 
 def fleet_plugins() -> Any:
