@@ -14,7 +14,11 @@ Figures (latencies p50/p95/p99, from the publish time stamp carried in the messa
 ``--view label`` (default) shows each value in a plain QLabel subclass under the app's theme;
 ``--view std.label`` uses the real Label widget of ``rcon_widgets_std`` (value + age caption).
 Usage: ``QT_QPA_PLATFORM=offscreen python benchmarks/bench_app.py [--widgets 50] [--hz 20] [--seconds 8]
-[--view label|std.label] [--operator] [--no-gc-policy] [--out FILE.json]``.
+[--view label|std.label] [--operator] [--no-gc-policy] [--no-latency-policy] [--background-load N]
+[--out FILE.json]``.
+
+``--background-load N`` runs N busy processes (one core each, ``background_load.py``) for the whole run,
+as other work on the machine would; they are ended when the benchmark ends, however it ends.
 
 ``--robots N`` runs the fleet benchmark instead (``bench_fleet.py``: N vessels, each a sim in its own
 process with two cameras and 20 values at 20 Hz, one window, a held teleop pad; the JSON has ``robots``).
@@ -217,14 +221,40 @@ def main(argv: list[str] | None = None) -> int:
                         help="run the simulated robot in this process (its memory and CPU then count too)")
     parser.add_argument("--no-gc-policy", action="store_true",
                         help="leave the garbage collector at Python's defaults (rcon_core/gcpolicy.py)")
+    parser.add_argument("--no-latency-policy", action="store_true",
+                        help="leave thread priorities and the GIL's switch interval as they were before "
+                             "rcon_core/priority.py's favour_latency (the GUI, bridge and sim loop threads not "
+                             "raised); bulk threads are still lowered")
     parser.add_argument("--robots", type=int, metavar="N",
                         help="the fleet benchmark: N vessels in their own processes (see bench_fleet.py)")
+    parser.add_argument("--background-load", type=int, default=0, metavar="N",
+                        help="N busy processes (0-8) beside the benchmark for the whole run, ended with it")
     args = parser.parse_args(argv)
     os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from background_load import MAX_PROCESSES, busy_processes
+
+    if not 0 <= args.background_load <= MAX_PROCESSES:
+        parser.error(f"--background-load must be from 0 to {MAX_PROCESSES}")
+    if args.robots is not None and not 1 <= args.robots <= 6:
+        parser.error("--robots must be from 1 to 6")
+    with busy_processes(args.background_load, max_seconds=3 * args.seconds + 180):
+        return run(args)
+
+
+def latency_policy(off: bool) -> None:
+    """What the app's entry point does (rcon_core/priority.py), or with ``off`` what it did before."""
+    from rcon_core import priority
+
+    if off:
+        priority.raise_this_thread = lambda: False  # the bridge thread and the sim's loop thread too
+    else:
+        priority.favour_latency()
+
+
+def run(args: argparse.Namespace) -> int:
+    latency_policy(args.no_latency_policy)
     if args.robots is not None:
-        if not 1 <= args.robots <= 6:
-            parser.error("--robots must be from 1 to 6")
-        sys.path.insert(0, str(Path(__file__).resolve().parent))
         import bench_fleet
 
         figures = bench_fleet.run(args)
@@ -245,6 +275,7 @@ def main(argv: list[str] | None = None) -> int:
 
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication([])
     figures: dict = {"widgets": args.widgets, "hz": args.hz, "view": args.view,
+                     "background_load": args.background_load,
                      "mode": "operator" if args.operator else "edit",
                      "sim": "in process" if args.in_process_sim else "own process"}
     with tempfile.TemporaryDirectory() as tmp, sim_url(args.in_process_sim) as url:

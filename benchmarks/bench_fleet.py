@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 import bench_app as ba
+from wake_probes import WakeProbes
 
 TARGETS = {"frame_p95_ms": 16.0, "paint_latency_p99_ms": 33.0, "camera_publish_to_painted_p99_ms": 33.0,
            "idle_rss_mb": 250.0, "teleop_jitter_p99_ms": 5.0}
@@ -44,7 +45,7 @@ ROW_H = 400
 
 
 @contextlib.contextmanager
-def fleet_processes(n: int, hz: float):
+def fleet_processes(n: int, hz: float, latency_policy: bool = True):
     """N ``fleet_sim.py`` processes (boat1..); yields [(name, url, pid)]."""
     here = Path(__file__).resolve().parent
     procs: list[subprocess.Popen] = []
@@ -53,7 +54,8 @@ def fleet_processes(n: int, hz: float):
         for k in range(1, n + 1):
             name = f"boat{k}"
             proc = subprocess.Popen([sys.executable, str(here / "fleet_sim.py"), "--name", name, "--values",
-                                     str(VALUES), "--hz", str(hz)], stdout=subprocess.PIPE,
+                                     str(VALUES), "--hz", str(hz), *([] if latency_policy else ["--no-latency-policy"])],
+                                    stdout=subprocess.PIPE,
                                     stderr=subprocess.STDOUT, text=True)
             procs.append(proc)
             line = proc.stdout.readline() if proc.stdout else ""
@@ -66,7 +68,11 @@ def fleet_processes(n: int, hz: float):
         for proc in procs:
             proc.terminate()
         for proc in procs:
-            proc.wait(10)
+            try:
+                proc.wait(10)
+            except subprocess.TimeoutExpired:  # a vessel starved of CPU: never left running
+                proc.kill()
+                proc.wait(5)
 
 
 def fleet_plugins() -> Any:
@@ -144,9 +150,12 @@ def run(args: Any) -> dict:
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication([])
     figures: dict[str, Any] = {"robots": n, "values_per_robot": VALUES, "hz": args.hz,
                                "cameras_per_robot": {c: t for c, t, _ in CAMERAS}, "seconds": args.seconds,
-                               "teleop_hz": TELEOP_HZ, "load_average_before": [round(v, 2) for v in os.getloadavg()]}
+                               "teleop_hz": TELEOP_HZ,
+                               "background_load": getattr(args, "background_load", 0),
+                               "load_average_before": [round(v, 2) for v in os.getloadavg()]}
     plugins = fleet_plugins()
-    with tempfile.TemporaryDirectory() as tmp, fleet_processes(n, args.hz) as sims:
+    figures["latency_policy"] = not getattr(args, "no_latency_policy", False)
+    with tempfile.TemporaryDirectory() as tmp, fleet_processes(n, args.hz, figures["latency_policy"]) as sims:
         # the collector policy the app's entry point gives its window (rcon_core/app/main.py)
         collector = None if args.no_gc_policy else CollectorPolicy()
         window = MainWindow(AppConfig(Path(tmp) / "cfg"), plugins, collector=collector)
@@ -218,17 +227,12 @@ def run(args: Any) -> dict:
 
             return bt.run(get()).result(15)
 
-        app_lags: list[float] = []  # how late a 5 ms sleep wakes on the app's bridge loop (the teleop's)
-
-        async def lag_probe() -> None:
-            import asyncio
-
-            while True:
-                t = time.perf_counter()
-                await asyncio.sleep(0.005)
-                app_lags.append((time.perf_counter() - t - 0.005) * 1000)
-
-        lag_task = bt.run(lag_probe())
+        # how late a thread of the app wakes for something due (wake_probes.py): BENCH_PROBES=all adds the
+        # raised thread and the hand-off to the loop beside the loop timer and the plain thread
+        kinds = ("loop_timer", "thread") + (("thread_raised", "raised_to_loop")
+                                           if os.environ.get("BENCH_PROBES") == "all" else ())
+        probes = WakeProbes(bt.loop, kinds)
+        probes.start()
         if os.environ.get("BENCH_SLOW_CALLBACKS"):  # diagnosis: log what holds the bridge loop over 4 ms
             import logging
 
@@ -282,7 +286,7 @@ def run(args: Any) -> dict:
             profiler.disable()
             profiler.dump_stats(os.environ["BENCH_PROFILE"])
         check.stop()
-        lag_task.cancel()
+        probes.stop()
         gc.callbacks.remove(gc_watch)
         wall = time.perf_counter() - wall0
         cpu = (time.process_time() - cpu0) / wall
@@ -357,6 +361,7 @@ def run(args: Any) -> dict:
         app_jitter = [abs((b - a) * 1000 - period_ms) for a, b in zip(sent, sent[1:], strict=False)]
         sim_lags = [ms for t, ms in after[0]["loop_lag"] if wall0 <= t <= wall0 + wall]
         frames = [b * 1000 for b in frame_busy[1:]]
+        wake = probes.figures()
 
         def lat(name: str, values: list[float]) -> dict:
             return {f"{name}_p{q}_ms": round(ba.pct(values, q), 2) for q in (50, 95, 99)}
@@ -383,7 +388,8 @@ def run(args: Any) -> dict:
             "teleop_jitter_at_the_app_p99_ms": round(ba.pct(app_jitter, 99), 2),
             "teleop_jitter_at_the_app_max_ms": round(max(app_jitter), 2) if app_jitter else float("nan"),
             # what delays a command: the app's bridge loop (where the pad's ticker runs) and boat1's sim loop
-            "app_bridge_loop_lag_p99_ms": round(ba.pct(app_lags, 99), 2),
+            "app_bridge_loop_lag_p99_ms": wake["loop_timer"]["p99_ms"],
+            "wake_lateness": wake,
             "sim1_loop_lag_p99_ms": round(ba.pct(sim_lags, 99), 2),
             "app_cpu_share": round(cpu, 3),
             # the garbage collector stops every thread of the app while it runs

@@ -21,6 +21,8 @@ import json
 import signal
 import time
 
+from background_load import die_with_parent
+
 from rcon_core.gcpolicy import keep_settled
 from rcon_core.sim import SimServer
 
@@ -98,7 +100,15 @@ def main() -> int:
     parser.add_argument("--name", required=True)
     parser.add_argument("--values", type=int, default=20)
     parser.add_argument("--hz", type=float, default=20.0)
+    parser.add_argument("--no-latency-policy", action="store_true", help="as before favour_latency (priority.py)")
     args = parser.parse_args()
+    from rcon_core import priority
+
+    if args.no_latency_policy:
+        priority.raise_this_thread = lambda: False
+    else:
+        priority.favour_latency()  # as `rcon sim` does: its loop thread raised, a short GIL switch interval
+    die_with_parent()  # a benchmark killed outright leaves no vessel running
     asyncio.run(serve(args.name, args.values, args.hz))
     return 0
 

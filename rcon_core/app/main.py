@@ -103,6 +103,7 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
     from rcon_core.app.link import BadUrl, check_url
     from rcon_core.app.main_window import MainWindow
     from rcon_core.gcpolicy import CollectorPolicy
+    from rcon_core.priority import favour_latency
 
     url = getattr(args, "url", None)
     if url:
@@ -213,6 +214,7 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
         def demo_factory() -> Any:
             return demo_workspace(plugins)
 
+    favour_latency()  # the GUI thread raised, the GIL's switch interval short (rcon_core/priority.py)
     # the demo layout is built on its first start only (or when it cannot be read); edits persist
     # the collector's pauses kept short while robots stream (rcon_core/gcpolicy.py)
     # with --canvas: the embedded robot under the canvas given, never the demo's layout

@@ -20,6 +20,8 @@ import threading
 from collections.abc import Awaitable, Callable
 from typing import Any, TypeVar
 
+from rcon_core import priority
+
 T = TypeVar("T")
 #: ``asyncio`` keeps asyncio's own event loop on the bridge thread (see the module docstring)
 LOOP_ENV = "RCON_EVENT_LOOP"
@@ -41,7 +43,12 @@ def new_event_loop() -> asyncio.AbstractEventLoop:
 
 
 class BridgeThread:
-    """An asyncio loop running in a daemon thread."""
+    """An asyncio loop running in a daemon thread.
+
+    The thread asks the OS to run it as soon as it wakes (:func:`rcon_core.priority.raise_this_thread`):
+    it reads the robots' frames and times and writes the teleop pad's commands, the work that must not
+    wait behind bulk work (see "who waits when the CPU is short" in ``rcon_core/priority.py``).
+    """
 
     def __init__(self, name: str = "rcon-bridge") -> None:
         self.name = name
@@ -58,6 +65,7 @@ class BridgeThread:
         return self
 
     def _main(self) -> None:
+        priority.raise_this_thread()
         loop = new_event_loop()
         asyncio.set_event_loop(loop)
         self.loop = loop

@@ -29,6 +29,7 @@ from typing import Any
 from websockets.asyncio.server import Server, ServerConnection, serve
 from websockets.exceptions import ConnectionClosed
 
+from rcon_core import priority
 from rcon_core.msgs.names import pkg_type
 
 from . import assembly, fanout, gate, ros2_clients
@@ -195,7 +196,11 @@ class SimServer:
         """Run a SimServer on its own event loop in a daemon thread (for sync code)."""
         server = cls(host=host, port=port, **kwargs)
         loop = asyncio.new_event_loop()
-        thread = threading.Thread(target=loop.run_forever, name="rcon-sim", daemon=True)
+        def run() -> None:
+            priority.raise_this_thread()  # the loop that receives commands (rcon_core/priority.py)
+            loop.run_forever()
+
+        thread = threading.Thread(target=run, name="rcon-sim", daemon=True)
         thread.start()
         try:
             asyncio.run_coroutine_threadsafe(server.start(), loop).result(timeout=30)
