@@ -3,10 +3,18 @@
 The parts live in their own modules: the connection bar (``connection_bar.py``), the side panel's lists
 (``catalog_panel.py``, ``params_panel.py``, ``palette_panel.py``) and whether it shows (``side_panel.py``),
 the canvas bar (``canvas_bar.py``), the canvases (``canvas_controller.py``), the add panel
-(``add_panel.py``), the Configure dialog (``configure_dialog.py``), canvas export/import
-(``canvas_files.py``), the layout file's messages (``layout_file.py``), the robots (``fleet_ui.py``) and the
-operator lock (``operator_lock.py``, ``lock_controls.py``). Problems go to the notice bar (``notice_bar.py``)
-floating over the canvas column.
+(``add_panel.py``) and adding from it (``adding.py``), the Configure dialog (``configure_dialog.py``),
+canvas export/import (``canvas_files.py``) and the canvas menu's questions (``canvas_dialogs.py``,
+``confirm.py``), the layout file's messages (``layout_file.py``), the robots (``fleet_ui.py``, with their
+recordings: ``robot_recordings.py``), the operator lock (``operator_lock.py``, ``lock_controls.py``), the
+safety envelope (``envelope_dialog.py``), the flight recorder (``record_control.py``) and the display
+settings (``display_settings.py``). Problems go to the notice bar (``notice_bar.py``) floating over the
+canvas column.
+
+Each part is given the few objects it works with, typed, never the window, and talks back through Qt
+signals that the window connects here (``_wire``). The operator lock is composed in: its ``guard`` is
+given to the canvas bar (with the actions it gates), the connection bar, the Parameters panel, the robots'
+and the envelope's menu entries when they are built.
 """
 
 from __future__ import annotations
@@ -22,19 +30,22 @@ from rcon_core.app import theme
 from rcon_core.app.accessibility import install as install_accessibility
 from rcon_core.app.accessibility import name_side_panel
 from rcon_core.app.add_panel import AddPanel
+from rcon_core.app.adding import Adding
 from rcon_core.app.canvas_bar import COMPACT_BELOW, CanvasBar
 from rcon_core.app.canvas_controller import CanvasController
+from rcon_core.app.canvas_dialogs import delete_current, rename_current
 from rcon_core.app.canvas_files import CanvasFiles
 from rcon_core.app.catalog_panel import CatalogList
 from rcon_core.app.children_editor import link_learner
 from rcon_core.app.config import AppConfig
 from rcon_core.app.configure_dialog import WidgetConfigurer
+from rcon_core.app.confirm import ask
 from rcon_core.app.connection_bar import ConnectionBar
 from rcon_core.app.display_settings import DisplayMenu
 from rcon_core.app.draft import Candidate, Target, rank_widgets, targets_for
 from rcon_core.app.envelope_dialog import EnvelopeControl
 from rcon_core.app.fleet_ui import FleetUi
-from rcon_core.app.focus import focus_into, has_focus_inside
+from rcon_core.app.focus import has_focus_inside
 from rcon_core.app.frame_clock import FrameClock, Waker
 from rcon_core.app.layout_file import LayoutFile
 from rcon_core.app.link import Link
@@ -167,7 +178,6 @@ class MainWindow(QtWidgets.QMainWindow):
                                   child_context=self.child_context)
         self.add_panel.setMinimumWidth(PANEL_MIN)
         self.add_panel.hide()
-        self.add_panel.place_requested.connect(self.place_draft)
         self.center = center = QtWidgets.QWidget()
         ccol = QtWidgets.QVBoxLayout(center)
         ccol.setContentsMargins(0, 0, 0, 0)
@@ -228,17 +238,18 @@ class MainWindow(QtWidgets.QMainWindow):
         self.controller = CanvasController(self.doc, self.store, self.host, self.live, self.stack)
         self.controller.client = self.fleet_ui.fleet()
         self.controller.save_failed.connect(self.layout_file.save_failed)
-        self.controller.on_drop = self._dropped
         self.side_policy.hint_changed.connect(self.controller.set_hint)
-        self.canvas_files = CanvasFiles(self, self.controller, self.notice, self.plugins, self._in_edit_mode,
+        # Canvas ▾ → Safety envelope… (the PIN first while locked); the check of a widget just placed
+        self.envelope = EnvelopeControl(self.doc, self.notice, guard, self.canvas_bar, self)
+        self.adding = Adding(self.add_panel, self.controller, self.operator_lock, self.notice, self.side_policy,
+                             self.fleet_ui.bind, self.envelope.check_placed)
+        self.canvas_files = CanvasFiles(self, self.controller, self.notice, self.plugins, self.adding.in_edit_mode,
                                         self._dialog_closed)
         self.configurer = WidgetConfigurer(self, self.doc, self.plugins, self.types, self.child_context,
                                            self._dialog_closed)
         self.controller.on_configure = self.configurer.open
         self.lock_controls = LockControls(self.operator_lock, self.canvas_bar, self.connection, self.controller,
                                           self.config, self.notice, self.fleet_ui.side_target)
-        # Canvas ▾ → Safety envelope… (the PIN first while locked); the check of a widget just placed
-        self.envelope = EnvelopeControl(self.doc, self.notice, guard, self.canvas_bar, self)
         recordings = self.fleet_ui.recordings
         #: the Record control on the connection bar (the flight recorder: record_control.py)
         self.record_control = install_record_control(
@@ -273,12 +284,11 @@ class MainWindow(QtWidgets.QMainWindow):
         controller.run_current()  # offline (LINK DOWN) until a robot is connected
         if self._fresh or self.layout_file.demo_rebuilt:
             controller.saver.flush()  # the demo layout is on disk from its first start on
-        self.topics.picked.connect(lambda n, t: self._start_adding(lambda: self.add_panel.start_from_topic(n, t)))
-        self.services.picked.connect(
-            lambda n, t: self._start_adding(lambda: self.add_panel.start_from_service(n, t)))
-        self.actions_list.picked.connect(
-            lambda n, t: self._start_adding(lambda: self.add_panel.start_from_action(n, t)))
-        self.palette_panel.picked.connect(self._palette_picked)
+        add, panel = self.adding.start, self.add_panel
+        self.topics.picked.connect(lambda n, t: add(lambda: panel.start_from_topic(n, t)))
+        self.services.picked.connect(lambda n, t: add(lambda: panel.start_from_service(n, t)))
+        self.actions_list.picked.connect(lambda n, t: add(lambda: panel.start_from_action(n, t)))
+        self.palette_panel.picked.connect(lambda kind: add(lambda: panel.start_from_widget(self.plugins.widget(kind))))
         self.connection.state_changed.connect(self._link_state)
         QtGui.QShortcut(QtGui.QKeySequence.StandardKey.Undo, self, self.undo)
         QtGui.QShortcut(QtGui.QKeySequence.StandardKey.Redo, self, self.redo)
@@ -333,26 +343,10 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def confirm(self, question: str, detail: str, yes: str,
                 then: Callable[[], object]) -> QtWidgets.QMessageBox:
-        """A window-modal question with two large buttons (``yes`` and Cancel); ``then`` runs on yes.
-        Returns at once (the dialog is open), so the event loop and the robot link keep running."""
-        box = QtWidgets.QMessageBox(self)
-        box.setObjectName("confirmDialog")
-        box.setIcon(QtWidgets.QMessageBox.Icon.Warning)
-        box.setWindowTitle(question)
-        box.setText(question)
-        box.setInformativeText(detail)
-        ok = box.addButton(yes, QtWidgets.QMessageBox.ButtonRole.DestructiveRole)
-        ok.setObjectName("confirmYes")
-        cancel = box.addButton(QtWidgets.QMessageBox.StandardButton.Cancel)
-        cancel.setObjectName("confirmCancel")
-        box.setDefaultButton(cancel)
-        for button in (ok, cancel):
-            button.setMinimumWidth(max(button.sizeHint().width(), 160))
-        box.buttonClicked.connect(lambda button: then() if button is ok else None)
-        box.finished.connect(lambda _result: self._confirm_closed())
-        self.confirm_dialog = box
-        box.open()
-        return box
+        """A window-modal question with two large buttons (``yes`` and Cancel; ``confirm.py``); ``then``
+        runs on yes. Returns at once (the dialog is open), so the event loop and the robot link keep running."""
+        self.confirm_dialog = ask(self, question, detail, yes, then, self._confirm_closed)
+        return self.confirm_dialog
 
     def _sync_tabs(self, *_: Any) -> None:
         canvases = self.controller.workspace.canvases
@@ -369,37 +363,14 @@ class MainWindow(QtWidgets.QMainWindow):
         self.controller.add_canvas("Canvas")
 
     def rename_canvas_dialog(self) -> None:
-        index = self.controller.index
-        name, ok = QtWidgets.QInputDialog.getText(
-            self, "Rename canvas", "Name", text=self.controller.canvas.name
-        )
-        if ok:
-            try:
-                self.controller.rename_canvas(index, name)
-            except ValueError as exc:
-                self.notice.show_notice(f"⚠ {exc}")
+        rename_current(self, self.controller, self.notice)
 
     def duplicate_canvas(self) -> None:
         self.controller.duplicate_canvas(self.controller.index)
 
     def delete_canvas(self) -> None:
         """Delete the current canvas; one with widgets is deleted only after the operator confirms."""
-        canvas = self.controller.canvas
-
-        def delete() -> None:
-            if canvas in self.controller.workspace.canvases:
-                try:
-                    self.controller.delete_canvas(self.controller.workspace.canvases.index(canvas))
-                except ValueError as exc:
-                    self.notice.show_notice(f"⚠ {exc}")
-
-        if not canvas.widgets or len(self.controller.workspace.canvases) < 2:
-            delete()  # nothing to lose (or refused with a message: the last canvas stays)
-            return
-        count = len(canvas.widgets)
-        self.confirm(f"Delete canvas “{canvas.name}”?",
-                     f"It holds {count} widget{'s' if count != 1 else ''}. Undo (↶, Ctrl+Z) brings it back.",
-                     "Delete", delete)
+        delete_current(self.controller, self.notice, self.confirm)
 
     def undo(self) -> None:
         self.controller.undo()
@@ -460,32 +431,6 @@ class MainWindow(QtWidgets.QMainWindow):
             self.add_panel.cancel()
 
     # -------------------------------------------------------------------------------------- adding
-    def _palette_picked(self, kind: str) -> None:
-        self._start_adding(lambda: self.add_panel.start_from_widget(self.plugins.widget(kind)))
-
-    def _start_adding(self, start: Callable[[], object]) -> None:
-        """Open the add panel; on a locked canvas say why not and offer to switch to Edit mode."""
-        self._in_edit_mode("add widgets", start)
-
-    def _in_edit_mode(self, what: str, start: Callable[[], object]) -> None:
-        """Run ``start`` now in Edit mode; in Operate mode the notice says why not and offers to switch
-        (then runs it)."""
-        if not self.controller.canvas.locked:
-            start()
-            return
-
-        def unlock_and_start() -> None:
-            if self.operator_lock.engaged:
-                self.operator_lock.guard(what, unlock_and_start)
-                return
-            self.notice.dismiss()
-            self.controller.set_locked(False)
-            start()
-            self.focus_work_area()  # the tapped notice button is gone: not the URL field next in line
-
-        self.notice.show_notice(f"ℹ Switch to Edit mode to {what}: this canvas is in Operate mode "
-                                "(locked).", kind="info", actions=[("Switch to Edit mode", unlock_and_start)])
-
     def rank_widgets(self, type_name: str, role: Role) -> list[Candidate]:
         return rank_widgets(type_name, role, self.types, self.plugins)
 
@@ -493,32 +438,7 @@ class MainWindow(QtWidgets.QMainWindow):
         return targets_for(spec, role, self.catalog.get(f"{role.noun}s", []), self.types, self.plugins)
 
     def place_draft(self) -> None:
-        draft = self.fleet_ui.bind(self.add_panel.take_draft())  # the panel closes
-        if draft is not None:
-            self._settle_layout()  # the free spot is looked for in the canvas as it is without the panel
-            try:
-                self.controller.add_draft(draft)
-            except ValueError as exc:
-                self.notice.show_notice(f"⚠ {exc}")
-                return
-            self.envelope.check_placed(draft)  # beyond the robot's safety envelope: kept only when the operator says
-
-    def _settle_layout(self) -> None:
-        """Apply pending layout changes now (the add panel just closed, the side panel may be back), so
-        the canvas view has its new size."""
-        for _ in range(3):
-            QtWidgets.QApplication.sendPostedEvents(None, QtCore.QEvent.Type.LayoutRequest)
-
-    def _dropped(self, _surface: Any, point: QtCore.QPoint) -> None:
-        side_hidden = not self.side.isVisibleTo(self)
-        draft = self.fleet_ui.bind(self.add_panel.take_draft())  # the panel closes
-        if side_hidden and self.side.isVisibleTo(self):
-            # the side panel gave its room to the add panel; coming back now it would push the canvas
-            # (and the widget just dropped under the finger) sideways: it stays hidden until ▶ is tapped
-            self.side_policy.keep_hidden()
-        if draft is not None:
-            self.controller.add_draft(draft, point)
-            self.envelope.check_placed(draft)  # beyond the robot's safety envelope: kept only when the operator says
+        self.adding.place()
 
     def child_context(self, binding: Callable[[], Binding | None]) -> ChildContext:
         """What a settings form's children editor needs: types, widgets, the parent's binding, and a way to
@@ -529,16 +449,7 @@ class MainWindow(QtWidgets.QMainWindow):
         """After a confirm dialog (either answer) the keyboard is the window's again: Ctrl+Z, Ctrl+Q work."""
         self.activateWindow()
         if not has_focus_inside(self):
-            self.focus_work_area()
-
-    def focus_work_area(self) -> None:
-        """Give the keyboard to what the operator works on: the add panel's page when it is open, else
-        the canvas."""
-        if self.add_panel.isVisible():
-            page = self.add_panel.stack.currentWidget()
-            focus_into(page if page is not None else self.add_panel)
-        else:
-            self.controller.surface.setFocus(QtCore.Qt.FocusReason.OtherFocusReason)
+            self.adding.focus_work_area()
 
     def _dialog_closed(self, dialog: QtWidgets.QDialog) -> None:
         """The keyboard goes back to the window (Ctrl+Z right after OK undoes it), the dialog goes away."""
