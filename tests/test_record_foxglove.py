@@ -31,6 +31,8 @@ from rcon_core.record.foxglove_source import FoxgloveRecorder, profile_of, recor
 from rcon_core.record.writer import McapSink
 from rcon_core.testing import until
 
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each WebSocket transport
+
 PEER_TOPICS = ["/chatter", "/rosout_str", "/pose", "/gps", "/camera/compressed"]
 N = 20
 
@@ -134,6 +136,7 @@ async def test_raw_and_decoding_consumers_share_one_foxglove_subscription(fox: F
     await until(lambda: got and got_raw, what="both consumers")
     assert got[0] == {"data": "one"}
     assert got_raw[0].data == REG.serialize_cdr("std_msgs/msg/String", {"data": "one"})
+    assert type(got_raw[0].data) is bytes  # a copy: on picows the frame is a view into its read buffer
     assert got_raw[0].type == "std_msgs/msg/String" and got_raw[0].secs > 0
     recorder.unsubscribe()
     fox.log_string("two")
