@@ -70,7 +70,7 @@ class FoxgloveReceiver(Receiver):
     as ``str``, ``binary(raw)`` a binary one as a bytes-like valid during the call only; neither may raise
     (an exception is counted as a bad frame through ``failed``)."""
 
-    __slots__ = ()
+    __slots__ = ("binary",)
 
     def __init__(self, text: Callable[[str], None], binary: Callable[[Any], None],
                  failed: Callable[[BaseException], None]) -> None:
@@ -91,6 +91,7 @@ class FoxgloveReceiver(Receiver):
                 failed(exc)
 
         super().__init__(_Counts(take, failed))
+        self.binary = binary
         self.busy = True  # messages are held until start(): the session is not attached yet
 
     def start(self) -> None:
@@ -110,8 +111,13 @@ class FoxgloveReceiver(Receiver):
         n = self.n = self.n + 1
         if n > 1 and (len(raw) >= self.heavy or (n > self.check and self._spent())):
             self._yield(raw, text)
-        else:
+        elif text:
             self._take(raw, text)  # never returns a job: nothing here waits
+        else:  # the hot path: MessageData, decoded from the buffer in place
+            try:
+                self.binary(raw)
+            except Exception as exc:  # the frame boundary: one frame never ends the link
+                self.failed(exc)
         if last:
             self.flood = self.n >= YIELD_EVERY or self.busy
             self.n = 0
