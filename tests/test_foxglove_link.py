@@ -364,3 +364,46 @@ async def test_a_silent_stall_is_degraded_and_a_command_is_never_delivered_late(
             assert fox.received == []  # the command of the stall never reached the robot
         finally:
             await client.close()
+
+
+async def test_text_and_binary_frames_keep_their_kind_and_order_through_the_writers_queue(transport):
+    """The Foxglove link writes text (JSON ops) and binary frames (client messages, service calls) through the
+    bridge's adapters: written at once, or -- while the transport is above its high-water mark -- queued and
+    drained by the writer in order, each still of its own kind (a queued binary command too)."""
+    import websockets
+
+    from rcon_core.foxglove.ws import FoxgloveReceiver, open_connection
+
+    got: list = []
+    done = asyncio.Event()
+
+    async def serve(ws):
+        async for m in ws:
+            got.append(m)
+            if len(got) == 6:
+                done.set()
+
+    async with websockets.serve(serve, "127.0.0.1", 0, subprotocols=["foxglove.sdk.v1"]) as server:
+        url = f"ws://127.0.0.1:{server.sockets[0].getsockname()[1]}"
+        receiver = FoxgloveReceiver(got.append, got.append, got.append)
+        link = await open_connection(transport, url, ["foxglove.sdk.v1"], receiver, got.append, ssl_context=None,
+                                     open_timeout=10, max_size=1 << 20)
+        writer = asyncio.create_task(link.run_writer())
+        try:
+            assert link.subprotocol == "foxglove.sdk.v1"
+            link.write(b'{"op":"a"}')
+            link.write_binary(b"\x01now")
+            link.drain.pause()  # as the transport says when its buffer is above the high-water mark
+            link.write(b'{"op":"b"}')
+            link.write_binary(b"\x01queued")
+            assert link.send_command(b"\x01command", None, 5.0, binary=True)
+            link.write(b'{"op":"c"}')
+            assert link.queued == 4
+            link.drain.resume()
+            link.event.set()
+            await asyncio.wait_for(done.wait(), 10)
+            assert got == ['{"op":"a"}', b"\x01now", '{"op":"b"}', b"\x01queued", b"\x01command", '{"op":"c"}']
+        finally:
+            writer.cancel()
+            await link.close()
+            link.release()
