@@ -51,8 +51,8 @@ HEAVY = MIN_SIZE
 
 
 class _Counts:
-    """What the Receiver's constructor reads from a rosbridge ``Inbound``: the Foxglove link has no
-    rosbridge topics table and counts its traffic in the session."""
+    """What the Receiver's constructor reads from a rosbridge ``Inbound``; the Foxglove link has no rosbridge
+    topics table and no per-topic traffic count (:meth:`FoxgloveReceiver.message` never reaches them)."""
 
     def __init__(self, take: Callable[[Any, bool], None], failed: Callable[[BaseException], None]) -> None:
         self.take = take
