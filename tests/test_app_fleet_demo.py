@@ -124,6 +124,19 @@ def test_rcon_demo_robots_opens_and_quits(tmp_path):
     assert shot.exists() and shot.stat().st_size > 10_000
 
 
+def test_screenshot_alone_writes_the_picture_then_exits(tmp_path):
+    """`rcon --demo --screenshot PATH` says "write a PNG of the window, then exit": it kept running until
+    killed unless --quit-after was given too (found running it by hand)."""
+    shot = tmp_path / "demo.png"
+    code = ("import sys; from rcon_core.cli.main import main; "
+            f"sys.exit(main(['--demo', '--screenshot', {str(shot)!r}]))")
+    env = {**__import__("os").environ, "QT_QPA_PLATFORM": "offscreen", "XDG_CONFIG_HOME": str(tmp_path),
+           "RCON_CONFIG_DIR": str(tmp_path / "cfg")}
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=90, env=env)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert shot.exists() and shot.stat().st_size > 10_000
+
+
 def test_robots_needs_demo_and_a_sane_count(capsys):
     from rcon_core.cli.main import main
 

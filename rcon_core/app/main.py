@@ -78,12 +78,14 @@ def run_app(args: Any) -> int:
             return window
         app = QtWidgets.QApplication.instance()
         assert isinstance(app, QtWidgets.QApplication)
-        if getattr(args, "quit_after", None):
+        # --screenshot alone: the picture is taken 0.3 s before the 3 s mark (open_app), then the app quits
+        quit_after = getattr(args, "quit_after", None) or (3.0 if getattr(args, "screenshot", None) else None)
+        if quit_after:
             def quit_now() -> None:  # Qt's quit asks the windows, and a locked one would refuse
                 window.close_now()
                 app.quit()
 
-            QtCore.QTimer.singleShot(int(args.quit_after * 1000), quit_now)
+            QtCore.QTimer.singleShot(int(quit_after * 1000), quit_now)
         try:
             rc = app.exec()
         finally:
