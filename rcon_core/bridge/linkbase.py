@@ -108,15 +108,21 @@ class Link:
     def send_command(self, data: bytes, pub: Any, max_age: float) -> bool:
         """Write a frame with a freshness limit (see the module docstring); False when it was refused
         because the link cannot carry it in time."""
+        return self.send_by(data, pub, _monotonic() + max_age)
+
+    def send_by(self, data: bytes, pub: Any, deadline: float) -> bool:
+        """Write a command that must not be written after ``deadline`` (``time.monotonic()``): refused (False)
+        at once while the link is degraded or its unanswered probe is older than the time left, else written
+        now or queued with its deadline (the writer drops it past that)."""
         now = _monotonic()
         watch = self.watch
-        if self.degraded or (watch is not None and watch.overdue(now) > max_age):
+        if self.degraded or (watch is not None and watch.overdue(now) > deadline - now):
             return False
         if not self.queue and self.write_now(data):
             if watch is not None:
                 watch.command(now)
         else:
-            self.queue.append(TimedFrame(data, now + max_age, pub))
+            self.queue.append(TimedFrame(data, deadline, pub))
             self.event.set()
         return True
 
