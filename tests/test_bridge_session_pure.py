@@ -17,6 +17,7 @@ from typing import Any
 
 import orjson
 import pytest
+from replay_server import ROS1, ROS2, load
 
 from rcon_core.bridge.errors import ConnectionLostError, ServiceError, ServiceTimeoutError
 from rcon_core.bridge.inbound import BadFrames
@@ -25,8 +26,6 @@ from rcon_core.bridge.session import DOWN, KEPT, Outgoing, Session
 from rcon_core.bridge.shell import SessionShell
 from rcon_core.bridge.stats import BridgeStats
 from rcon_core.testing import ManualClock
-
-from replay_server import ROS1, ROS2, load
 
 BRIDGE = Path(__file__).resolve().parent.parent / "rcon_core" / "bridge"
 
@@ -114,7 +113,7 @@ def test_restore_after_reconnect_resends_everything_in_order(recording: str, nam
         assert ops == want, f"connection {conn}"
         assert frames[0] == {"op": "set_level", "level": "warning"}
         restored = [f for f in frames if f["op"] == "advertise"]
-        for f, (topic, rec) in zip(restored, advs.items(), strict=True):
+        for f, rec in zip(restored, advs.values(), strict=True):
             assert strip(f, "id", "queue_size", "latch") == strip(rec, "id", "queue_size", "latch")
             assert f["latch"] is bool(rec.get("latch"))
         for t in latched:  # the latest value only, right after its advertisement, "latch": true (:26-30)
