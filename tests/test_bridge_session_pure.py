@@ -214,16 +214,18 @@ def test_stale_command_is_dropped_not_delivered(recording: str, max_age: float |
 @pytest.mark.parametrize(("refused", "result", "sent_", "dropped"), [(False, True, 1, 0), (True, False, 0, 1)])
 def test_a_command_the_link_refuses_at_its_limit_is_counted_dropped(refused: bool, result: bool, sent_: int,
                                                                    dropped: int) -> None:
-    """The shell's ``deliver`` says False when the link is degraded or stalling: publish returns False, counted."""
+    """The link's ``send_by`` (lent by the shell) says False when the link is degraded or stalling: publish
+    returns False, counted."""
     robot = Robot()
     session, node = robot.session, robot.node("teleop")
     pub = node.advertise("/cmd_vel", "geometry_msgs/Twist")
     session.attached()
     robot.frames()
-    handed: list[Outgoing] = []
-    session.deliver = lambda out: handed.append(out) or not refused
+    handed: list[tuple[bytes, Any, float, float]] = []
+    session.send_by = lambda data, p, deadline, now: handed.append((data, p, deadline, now)) or not refused
     assert pub.publish({"linear": {"x": 0.5}}) is result
-    assert len(handed) == 1 and handed[0].deadline == robot.clock() + 0.25 and handed[0].pub is pub
+    assert len(handed) == 1 and handed[0][1:] == (pub, robot.clock() + 0.25, robot.clock())
+    assert orjson.loads(handed[0][0])["topic"] == "/cmd_vel"
     assert (pub.sent, pub.dropped, robot.stats.stale_dropped) == (sent_, dropped, dropped)
 
 

@@ -1,10 +1,10 @@
 """``BridgeClient``: one rosbridge v2 connection, shared by many nodes, on one asyncio loop.
 
 The client is the connection: connect, reconnect, auth, ping, stall watch and the writer task.  What the
-protocol is about -- nodes, topics, advertisements, services, calls, goals, provided actions -- is the
-:class:`~rcon_core.bridge.session.Session` (``client.session``), which the client attaches to each fresh
-link; messages come in through ``receive.py`` to ``inbound.py`` and frames go out through the link
-(``transport.py``), over picows (``pwlink.py``) or websockets (``wslink.py``).  Where each behaviour is decided:
+protocol is about is the sans-I/O :class:`~rcon_core.bridge.session.Session` (``client.session``); its async
+side, :class:`~rcon_core.bridge.shell.SessionShell` (``client.shell``: writing its outbox, futures, tasks), is
+attached to each fresh link; messages come in through ``receive.py`` to ``inbound.py``, frames go out through
+the link (``transport.py``, over ``pwlink.py`` or ``wslink.py``).  Where each behaviour is decided:
 
 * reconnect, state, latency and stall detection: here (and ``freshness.py``, ``reasons.py``, ``secure.py``);
 * the transport, direct writes and command freshness on the wire: ``transport.py`` (adapters ``pwlink.py``,
@@ -20,9 +20,9 @@ link; messages come in through ``receive.py`` to ``inbound.py`` and frames go ou
   ``cdrdecode.py``; which rosapi calls may be sent at all: ``rosapi_guard.py`` (checked here, in
   :meth:`BridgeClient.call_service`, for every caller: widgets, the CLI, discovery, type lookups).
 
-Test hooks (public, documented): ``client.session`` (``session.topics``, ``session.pending``,
-``session.outbox``...), ``client.shell``, ``client.inbound`` (``inbound.fragments``), ``client.link`` (the
-current ``transport.Link`` or None: ``queued``, ``buffered()``, ``socket``, ``name``), ``client.transport`` (``picows`` or ``websockets``).
+Test hooks (public, documented): ``client.session`` (``topics``, ``pending``, ``outbox``...), ``client.shell``,
+``client.inbound`` (``inbound.fragments``), ``client.link`` (the current ``transport.Link`` or None: ``queued``,
+``buffered()``, ``socket``, ``name``), ``client.transport`` (``picows`` or ``websockets``).
 
 Reconnect
     One attempt at a time through the chosen transport (``transport.open_link``: picows or websockets, see
@@ -191,10 +191,8 @@ class BridgeClient:
         self._profile_link: Link | None = None
         self.params = Params(self)  # ROS 1 and ROS 2 parameters; see params.py
         bad = BadFrames(url, self.stats)
-        #: the protocol state: nodes, topics, advertisements, services, calls, goals (``session.py``, sans-I/O)
-        self.session = Session(self, bad, schedule=later)
-        #: its async side: writes its outbox to the link, keeps its futures and tasks (``shell.py``)
-        self.shell = SessionShell(self.session, self)
+        self.session = Session(self, bad, schedule=later)  # the protocol state, sans-I/O (session.py)
+        self.shell = SessionShell(self.session, self)  # its async side (shell.py)
         #: frames in (``inbound.py``)
         self.inbound = Inbound(self.session, bad, self.stats, typed_arrays=typed_arrays,
                                max_size=self.max_message_size, big_frame=self.big_frame,

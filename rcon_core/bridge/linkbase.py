@@ -110,11 +110,13 @@ class Link:
         because the link cannot carry it in time."""
         return self.send_by(data, pub, _monotonic() + max_age)
 
-    def send_by(self, data: bytes, pub: Any, deadline: float) -> bool:
-        """Write a command that must not be written after ``deadline`` (``time.monotonic()``): refused (False)
-        at once while the link is degraded or its unanswered probe is older than the time left, else written
-        now or queued with its deadline (the writer drops it past that)."""
-        now = _monotonic()
+    def send_by(self, data: bytes, pub: Any, deadline: float, now: float | None = None) -> bool:
+        """Write a command that must not be written after ``deadline`` (``time.monotonic()``; ``now``: the
+        time, when the caller has it): refused (False) at once while the link is degraded or its unanswered
+        probe is older than the time left, else written now or queued with its deadline (the writer drops it
+        past that)."""
+        if now is None:
+            now = _monotonic()
         watch = self.watch
         if self.degraded or (watch is not None and watch.overdue(now) > deadline - now):
             return False

@@ -12,10 +12,12 @@ timer and never touches a socket (``tests/test_bridge_session_pure.py`` holds th
   which the async shell drains (``shell.py``: it is told through ``wake`` right away, so frames keep their
   order and nothing waits); a publish is decided by :meth:`command`, which returns an :class:`Outgoing`
   (the bytes and, for a command, its deadline), :data:`KEPT` (a latched value held for the restore) or a
-  :class:`Dropped` -- the nodes' ``publish`` hands an :class:`Outgoing` to the shell's ``deliver``;
+  :class:`Dropped`; the nodes' ``publish`` decides the same way and hands the frame to the link's
+  ``write``/``send_by`` the shell lent while attached (one call on the hot path), else to the outbox;
 * time in: the ``now`` of :meth:`command`, and the injectable ``clock`` the commands-held watch reads;
-* service calls as data: :meth:`start_call` returns the frame's id, the answer (or the failure) comes back
-  through the ``done`` callback the caller gave; futures and timeouts live in the shell (``shell.py``).
+* service calls as data: :meth:`open_call` makes a :class:`Call`, :meth:`start_call` sends it, the answer (or
+  the failure) comes back through its ``done`` callback; futures and timeouts live in the shell (``shell.py``).
+  (:class:`Outgoing`, :class:`Dropped`, :data:`KEPT` and :class:`Call` are defined in ``effects.py``.)
 
 What runs user code or waits on the server -- services this client provides (``services.py``), action goals
 (``goals.py``), actions this client provides (``action_server.py``) and the type lookups behind a cbor or
@@ -77,6 +79,7 @@ import orjson
 
 from rcon_core.msgs import names
 
+from .effects import DOWN, KEPT, Call, Done, Dropped, Kept, Outgoing
 from .envelope import Envelope, enforce
 from .errors import BridgeError, ConnectionLostError, ServiceError, ServiceTimeoutError
 from .guard import LinkGuard, ViewOnlyError, describe_call
@@ -104,10 +107,7 @@ UNANSWERED_KEPT = 32
 _dumps = orjson.dumps
 _NUMPY = orjson.OPT_SERIALIZE_NUMPY
 LOG_LEVELS = ("info", "warning", "error", "none")
-
-#: ``done(values, error)``: how a call's answer (``error`` None) or failure reaches its caller
-Done = Callable[[Any, "BaseException | None"], None]
-
+__all__ = ["DOWN", "KEPT", "LOG_LEVELS", "Call", "Dropped", "Kept", "Outgoing", "Session"]
 
 class Host(Protocol):
     url: str
@@ -115,66 +115,6 @@ class Host(Protocol):
 
     @property
     def ros_version(self) -> int | None: ...
-
-
-class Outgoing:
-    """One frame to write: its bytes and, for a command, the monotonic time after which it must not be
-    written (``deadline``, None: none) and the publisher it counts against (``pub``)."""
-
-    __slots__ = ("data", "deadline", "pub")
-
-    def __init__(self, data: bytes, deadline: float | None = None, pub: Any = None) -> None:
-        self.data = data
-        self.deadline = deadline
-        self.pub = pub
-
-    def __repr__(self) -> str:
-        return f"Outgoing({bounded_repr(self.data, 60)}, deadline={self.deadline})"
-
-
-class Dropped:
-    """A publish that was not written, and why (counted where it was decided)."""
-
-    __slots__ = ("reason",)
-
-    def __init__(self, reason: str) -> None:
-        self.reason = reason
-
-    def __repr__(self) -> str:
-        return f"Dropped({self.reason!r})"
-
-
-class Kept:
-    """A latched value published while down: held, sent right after the advertisement is restored."""
-
-    __slots__ = ()
-
-    def __repr__(self) -> str:
-        return "KEPT"
-
-
-#: the publish was made while the link was down (or before its advertisement was accepted)
-DOWN = Dropped("link down")
-#: the command passed its deadline before it could be written
-STALE = Dropped("stale")
-KEPT = Kept()
-
-
-class Call:
-    """One service call: its id, service, frame, and where its answer goes (``done``)."""
-
-    __slots__ = ("id", "name", "op", "done")
-
-    def __init__(self, cid: str, name: str, op: dict[str, Any], done: Done | None) -> None:
-        self.id = cid
-        self.name = name
-        self.op = op
-        self.done = done
-
-    def settle(self, values: Any, error: BaseException | None) -> None:
-        done, self.done = self.done, None  # once
-        if done is not None:
-            done(values, error)
 
 
 def _failure_text(values: Any) -> str:
@@ -209,9 +149,11 @@ class Session:
         self.outbox: deque[Outgoing] = deque()
         #: ``wake()``: called after a frame was added to the outbox (the shell drains it at once)
         self.wake: Callable[[], None] | None = None
-        #: ``deliver(outgoing) -> bool``: write a command now (False: refused at its freshness limit);
-        #: None: commands go to the outbox like every other frame
-        self.deliver: Callable[[Outgoing], bool] | None = None
+        #: the link's ``write(data)`` and ``send_by(data, pub, deadline, now) -> bool`` (False: refused at its
+        #: freshness limit), lent by the shell while a connection is attached, so a publish is one call to
+        #: the link (as the Foxglove session's ``write``/``command``); None: publishes go to the outbox
+        self.write: Callable[[bytes], Any] | None = None
+        self.send_by: Callable[[bytes, Any, float, float], bool] | None = None
         self.nodes: dict[str, Node] = {}
         self.topics: dict[str, TopicEntry] = {}
         self.adverts: dict[str, AdvertEntry] = {}
@@ -497,37 +439,56 @@ class Session:
         """Decide one publish at ``now`` (see "publishing while the link is down"): the frame to write (with
         ``now + max_age`` as its deadline), :data:`KEPT` or :data:`DOWN` (counted).  Raises ``ViewOnlyError``
         on a view-only link; a motion command is first held to the safety envelope (``envelope.py``;
-        raises ``EnvelopeRefused``)."""
+        raises ``EnvelopeRefused``).  :meth:`publish` decides the same way, inlined (the hot path)."""
         if self.guard.reason is not None:
             raise self.guard.refuse(f"publishing on {pub.topic}")
         entry = self.adverts[pub.topic]
         msg = enforce(self.envelope, entry.type, msg, self.stats)
-        if self.up and entry.active:
-            max_age = pub.max_age
-            return Outgoing(b"".join((entry.head, _dumps(msg, option=_NUMPY), entry.tail)),
-                            None if max_age is None else now + max_age, pub)
+        if not (self.up and entry.active):
+            return self._not_written(entry, pub, msg)
+        max_age = pub.max_age
+        return Outgoing(b"".join((entry.head, _dumps(msg, option=_NUMPY), entry.tail)),
+                        None if max_age is None else now + max_age, pub)
+
+    def publish(self, pub: Publisher, msg: dict[str, Any]) -> bool:
+        """The nodes' publish: decided as :meth:`command` decides, the frame handed to the link's ``write``
+        (or ``send_by`` with its deadline) the shell lent, else put in the outbox; True when it was written
+        or kept, False when it was dropped (counted)."""
+        if self.guard.reason is not None:
+            raise self.guard.refuse(f"publishing on {pub.topic}")
+        entry = self.adverts[pub.topic]
+        msg = enforce(self.envelope, entry.type, msg, self.stats)
+        if not (self.up and entry.active):
+            return self._not_written(entry, pub, msg) is KEPT
+        data = b"".join((entry.head, _dumps(msg, option=_NUMPY), entry.tail))
+        max_age = pub.max_age
+        if max_age is None:
+            write = self.write
+            if write is None:
+                self._put(Outgoing(data, None, pub))
+            else:
+                write(data)
+        else:
+            send_by = self.send_by
+            now = self.clock()
+            if send_by is None:
+                self._put(Outgoing(data, now + max_age, pub))
+            elif not send_by(data, pub, now + max_age, now):  # the link is degraded or stalling (freshness.py)
+                self.drop_stale(pub)
+                return False
+        pub.sent += 1
+        return True
+
+    def _not_written(self, entry: AdvertEntry, pub: Publisher, msg: dict[str, Any]) -> Dropped | Kept:
+        """A publish while the link is down (or the advertisement not accepted): a latched value is kept,
+        latest wins, and sent after the advertisement is restored; anything else is dropped, counted."""
         if entry.latch:
-            entry.pending = msg  # latest value wins; sent after the advertisement is restored
+            entry.pending = msg
             return KEPT
         pub.dropped += 1
         entry.dropped += 1
         self.stats.dropped_while_down += 1
         return DOWN
-
-    def publish(self, pub: Publisher, msg: dict[str, Any]) -> bool:
-        """The nodes' publish: :meth:`command` now, then the frame to the shell's ``deliver`` (or the
-        outbox); True when it was written or kept, False when it was dropped (counted)."""
-        out = self.command(pub, msg, self.clock())
-        if not isinstance(out, Outgoing):
-            return out is KEPT
-        deliver = self.deliver
-        if deliver is None:
-            self._put(out)
-        elif not deliver(out):
-            self.drop_stale(pub)
-            return False
-        pub.sent += 1
-        return True
 
     def drop_stale(self, pub: Publisher, counted_sent: bool = False) -> None:
         """Count a command dropped at its freshness limit (``counted_sent``: it was already counted sent)."""

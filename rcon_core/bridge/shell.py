@@ -3,8 +3,8 @@
 The session (``session.py``) is sans-I/O: it decides, the shell does.  What lives here and only here:
 
 * writing: the session's outbox is drained to the current link as soon as a frame is put in it
-  (``session.wake``), in order; a command goes through ``session.deliver`` to ``Link.send_by`` with its
-  deadline (refused at once while the link is degraded or stalling, dropped by the writer when it waited
+  (``session.wake``), in order; a publish goes straight to the link's ``write``, or ``send_by`` with its
+  deadline for a command, which the shell lends the session while the link is attached (refused at once while the link is degraded or stalling, dropped by the writer when it waited
   too long: ``linkbase.py``, ``freshness.py``);
 * the link coming and going: :meth:`attached` hands the guard the loop (a view-only mark set from another
   thread is applied there) and lets the session restore; :meth:`detached` drops what the link still
@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 from .action_server import ProvidedActions
 from .goals import Goals
 from .services import ProvidedServices
-from .session import Outgoing, Session
+from .session import Session
 from .subscribe import Subscriber
 
 if TYPE_CHECKING:
@@ -53,7 +53,6 @@ class SessionShell:
         self.link: Link | None = None
         self.tasks: set[asyncio.Task[Any]] = set()
         session.wake = self.flush
-        session.deliver = self.deliver
         self.build_parts(session, host, self.spawn)
 
     @staticmethod
@@ -73,30 +72,23 @@ class SessionShell:
         for out in session.take():
             if out.deadline is None:
                 link.write(out.data)
-            elif not link.send_by(out.data, out.pub, out.deadline):
+            elif not link.send_by(out.data, out.pub, out.deadline):  # its own now: the frame may have waited
                 session.drop_stale(out.pub, counted_sent=True)
-
-    def deliver(self, out: Outgoing) -> bool:
-        """Write one command now; False when the link refuses it at its freshness limit."""
-        link = self.link
-        if link is None:
-            return False
-        if out.deadline is None:
-            link.write(out.data)
-            return True
-        return link.send_by(out.data, out.pub, out.deadline)
 
     # ================================================================== the link comes and goes
 
     def attached(self, link: Link) -> None:
         """A fresh connection, ``auth`` sent: the session restores through it."""
         self.link = link
-        self.session.guard.attached(asyncio.get_running_loop())
-        self.session.attached()
+        session = self.session
+        session.write, session.send_by = link.write, link.send_by  # a publish: one call to the link
+        session.guard.attached(asyncio.get_running_loop())
+        session.attached()
 
     def detached(self, link: Link) -> None:
         """The link is gone: what it still queued is dropped; the session fails what waited."""
         self.link = None
+        self.session.write = self.session.send_by = None
         dropped = link.drop_queue()
         if dropped:
             self.session.stats.dropped_on_disconnect += dropped
