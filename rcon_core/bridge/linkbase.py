@@ -105,11 +105,6 @@ class Link:
         self.queue.append(data)
         self.event.set()
 
-    def send_command(self, data: bytes, pub: Any, max_age: float) -> bool:
-        """Write a frame with a freshness limit (see the module docstring); False when it was refused
-        because the link cannot carry it in time."""
-        return self.send_by(data, pub, _monotonic() + max_age)
-
     def send_by(self, data: bytes, pub: Any, deadline: float, now: float | None = None) -> bool:
         """Write a command that must not be written after ``deadline`` (``time.monotonic()``; ``now``: the
         time, when the caller has it): refused (False) at once while the link is degraded or its unanswered
