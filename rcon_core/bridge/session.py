@@ -14,7 +14,8 @@ timer and never touches a socket (``tests/test_bridge_session_pure.py`` holds th
   (the bytes and, for a command, its deadline), :data:`KEPT` (a latched value held for the restore) or a
   :class:`Dropped`; the nodes' ``publish`` decides the same way and hands the frame to the link's
   ``write``/``send_by`` the shell lent while attached (one call on the hot path), else to the outbox;
-* time in: the ``now`` of :meth:`command`, and the injectable ``clock`` the commands-held watch reads;
+* time in: the ``now`` of :meth:`command` and :meth:`take`, and the injectable ``clock`` (a publish's deadline,
+  the commands-held watch);
 * service calls as data: :meth:`open_call` makes a :class:`Call`, :meth:`start_call` sends it, the answer (or
   the failure) comes back through its ``done`` callback; futures and timeouts live in the shell (``shell.py``).
   (:class:`Outgoing`, :class:`Dropped`, :data:`KEPT` and :class:`Call` are defined in ``effects.py``.)
