@@ -64,11 +64,12 @@ class SessionShell:
     # ================================================================== frames out
 
     def flush(self) -> None:
-        """Write every frame of the session's outbox to the link (dropped when there is none)."""
+        """Write every frame of the session's outbox to the link; without one they stay, and the session drops
+        and counts them when it is detached."""
         link = self.link
         session = self.session
         if link is None:
-            return  # left for the session to count when it is detached
+            return
         for out in session.take():
             if out.deadline is None:
                 link.write(out.data)
