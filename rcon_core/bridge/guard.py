@@ -169,7 +169,7 @@ class LinkGuard:
         loop = self.loop
         if loop is None or loop.is_closed():
             return  # never connected: nothing was offered, the next connection starts under the new mark
-        if threading.get_ident() == self._thread:
+        if threading.get_ident() == self._thread and loop.is_running():  # on the loop, inside it
             self._changed()
         else:
             try:
