@@ -59,8 +59,9 @@ Decision: service calls
     time is reported as commands held.
 
 Decision: a view-only link (``guard.py``)
-    ``self.guard`` (``client.guard``) decides what a view-only link may send: :meth:`publish` and
-    :meth:`start_call` refuse with ``ViewOnlyError`` before anything is written, every frame of
+    ``self.guard`` (``client.guard``) decides what a view-only link may send: :meth:`publish`,
+    :meth:`command` and :meth:`open_call` refuse with ``ViewOnlyError`` before anything is written (and
+    :meth:`start_call`, when the mark came while the call waited for the link), every frame of
     :meth:`send` passes ``guard.admit``, and setting or lifting the mark withdraws or offers again this
     link's advertisements, services and actions (:meth:`_guard_changed`).
 
