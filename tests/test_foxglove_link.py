@@ -10,6 +10,7 @@ import base64
 import hashlib
 import json
 import ssl
+import time
 
 import pytest
 
@@ -396,7 +397,7 @@ async def test_text_and_binary_frames_keep_their_kind_and_order_through_the_writ
             link.drain.pause()  # as the transport says when its buffer is above the high-water mark
             link.write(b'{"op":"b"}')
             link.write_binary(b"\x01queued")
-            assert link.send_command(b"\x01command", None, 5.0, binary=True)
+            assert link.send_by(b"\x01command", None, time.monotonic() + 5.0, binary=True)
             link.write(b'{"op":"c"}')
             assert link.queued == 4
             link.drain.resume()

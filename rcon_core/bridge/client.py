@@ -1,10 +1,10 @@
 """``BridgeClient``: one rosbridge v2 connection, shared by many nodes, on one asyncio loop.
 
 The client is the connection: connect, reconnect, auth, ping, stall watch and the writer task.  What the
-protocol is about -- nodes, topics, advertisements, services, calls, goals, provided actions -- is the
-:class:`~rcon_core.bridge.session.Session` (``client.session``), which the client attaches to each fresh
-link; messages come in through ``receive.py`` to ``inbound.py`` and frames go out through the link
-(``transport.py``), over picows (``pwlink.py``) or websockets (``wslink.py``).  Where each behaviour is decided:
+protocol is about is the sans-I/O :class:`~rcon_core.bridge.session.Session` (``client.session``); its async
+side, :class:`~rcon_core.bridge.shell.SessionShell` (``client.shell``: writing its outbox, futures, tasks), is
+attached to each fresh link; messages come in through ``receive.py`` to ``inbound.py``, frames go out through
+the link (``transport.py``, over ``pwlink.py`` or ``wslink.py``).  Where each behaviour is decided:
 
 * reconnect, state, latency and stall detection: here (and ``freshness.py``, ``reasons.py``, ``secure.py``);
 * the transport, direct writes and command freshness on the wire: ``transport.py`` (adapters ``pwlink.py``,
@@ -20,7 +20,7 @@ link; messages come in through ``receive.py`` to ``inbound.py`` and frames go ou
   ``cdrdecode.py``; which rosapi calls may be sent at all: ``rosapi_guard.py`` (checked here, in
   :meth:`BridgeClient.call_service`, for every caller: widgets, the CLI, discovery, type lookups).
 
-Test hooks (public, documented): ``client.session`` (``session.topics``, ``session.pending``...),
+Test hooks (public, documented): ``client.session`` (``topics``, ``pending``, ``outbox``...), ``client.shell``,
 ``client.inbound`` (``inbound.fragments``), ``client.link`` (the current ``transport.Link`` or None: ``queued``,
 ``buffered()``, ``socket``, ``name``), ``client.transport`` (``picows`` or ``websockets``).
 
@@ -84,6 +84,7 @@ from .rosinfo import detect as detect_ros
 from .safety import without_traceback
 from .secure import ssl_context
 from .session import LOG_LEVELS, Session
+from .shell import SessionShell, later
 from .stats import BridgeStats
 from .traffic import Traffic
 from .transport import choose, open_link
@@ -117,11 +118,11 @@ class _Unguarded:
 
     def __init__(self, client: BridgeClient) -> None:
         self.call_timeout = client.call_timeout
-        self._session = client.session
+        self._shell = client.shell
 
     async def call_service(self, name: str, args: dict[str, Any] | list | None = None,
                            timeout: float | None = None) -> Any:
-        return await self._session.call_service(name, args, timeout)
+        return await self._shell.call_service(name, args, timeout)
 
 
 class BridgeClient:
@@ -190,8 +191,8 @@ class BridgeClient:
         self._profile_link: Link | None = None
         self.params = Params(self)  # ROS 1 and ROS 2 parameters; see params.py
         bad = BadFrames(url, self.stats)
-        #: the protocol state: nodes, topics, advertisements, services, calls, goals (``session.py``)
-        self.session = Session(self, bad)
+        self.session = Session(self, bad, schedule=later)  # the protocol state, sans-I/O (session.py)
+        self.shell = SessionShell(self.session, self)  # its async side (shell.py)
         #: frames in (``inbound.py``)
         self.inbound = Inbound(self.session, bad, self.stats, typed_arrays=typed_arrays,
                                max_size=self.max_message_size, big_frame=self.big_frame,
@@ -353,7 +354,7 @@ class BridgeClient:
         kill the server's rosapi (``rosapi_guard.py``)."""
         if rosapi_guard.rosapi_name(name) is not None:
             await self._check_rosapi_call(name, args, timeout)
-        return await self.session.call_service(name, args, timeout)
+        return await self.shell.call_service(name, args, timeout)
 
     async def _check_rosapi_call(self, name: str, args: Any, timeout: float | None) -> None:
         """Refuse a rosapi call the server's release cannot survive (``rosapi_guard.refusal``); a lookup
@@ -366,10 +367,10 @@ class BridgeClient:
         if reason is None and need is not None and isinstance(what, str):
             try:
                 if need == "node":
-                    found = await self.session.call_service("/rosapi/nodes", {}, timeout)
+                    found = await self.shell.call_service("/rosapi/nodes", {}, timeout)
                     listed = what in (found or {}).get("nodes", [])
                 else:
-                    found = await self.session.call_service("/rosapi/services_for_type", {"type": what}, timeout)
+                    found = await self.shell.call_service("/rosapi/services_for_type", {"type": what}, timeout)
                     listed = bool((found or {}).get("services"))
             except ServiceError as exc:
                 raise RosapiRefusedError(f"not sent: could not check it is safe for this rosapi ({exc.message})",
@@ -467,7 +468,7 @@ class BridgeClient:
                 await task
             except (asyncio.CancelledError, Exception):
                 pass
-        self.session.cancel_tasks()
+        self.shell.cancel_tasks()
         self.inbound.close()
         self._set_state(ConnectionState.CLOSED)
 
@@ -524,7 +525,7 @@ class BridgeClient:
         pinger = asyncio.create_task(self._pinger(link))
         try:
             await self._send_auth(link)
-            self.session.attached(link)
+            self.shell.attached(link)
             self._connected.set()
             self._set_state(ConnectionState.CONNECTED)
             await link.wait_closed()
@@ -541,7 +542,7 @@ class BridgeClient:
             pinger.cancel()
             self.inbound.disconnected()
             self.inbound.waiting = None
-            self.session.detached()
+            self.shell.detached(link)
             link.release()  # its buffers go now, not at the collector's next full pass (wslink.py)
             if final:
                 self._set_state(ConnectionState.CLOSED)

@@ -33,8 +33,8 @@ writes none of the changing ones.
 
 from __future__ import annotations
 
-import asyncio
 import logging
+import threading
 from collections.abc import Callable
 from typing import Any
 
@@ -129,8 +129,10 @@ class LinkGuard:
         self.refused = 0
         #: (offering op, name) this link offered the robot on the current connection (loop thread only)
         self.offered: set[tuple[str, str]] = set()
-        #: the loop of the current connection (listeners run there)
-        self.loop: asyncio.AbstractEventLoop | None = None
+        #: the asyncio loop of the current connection (listeners run there; handed over by the shell, so this
+        #: module, which the sans-I/O session uses, imports no asyncio)
+        self.loop: Any = None
+        self._thread: int | None = None  # the thread that loop runs on
         self._listeners: list[Callable[[bool], None]] = []
 
     @property
@@ -156,20 +158,18 @@ class LinkGuard:
         """``fn(view_only)`` on the link's loop after the mark changed (the session withdraws or offers)."""
         self._listeners.append(fn)
 
-    def attached(self, loop: asyncio.AbstractEventLoop) -> None:
-        """A fresh connection: nothing is offered on it yet."""
+    def attached(self, loop: Any) -> None:
+        """A fresh connection on ``loop`` (the running asyncio loop, called on its thread): nothing is
+        offered on it yet."""
         self.loop = loop
+        self._thread = threading.get_ident()
         self.offered.clear()
 
     def _notify(self) -> None:
         loop = self.loop
         if loop is None or loop.is_closed():
             return  # never connected: nothing was offered, the next connection starts under the new mark
-        try:
-            running = asyncio.get_running_loop()
-        except RuntimeError:
-            running = None
-        if running is loop:
+        if threading.get_ident() == self._thread and loop.is_running():  # on the loop, inside it
             self._changed()
         else:
             try:

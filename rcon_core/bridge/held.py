@@ -69,8 +69,8 @@ class HeldWatch:
     def __init__(self, *, threshold: float = HOLD_AFTER, clock: Callable[[], float] = time.monotonic,
                  may_hold: Callable[[], bool] = lambda: True,
                  schedule: Callable[[float, Callable[[], Any]], Any] | None = None, limit: int = 64) -> None:
-        """``schedule(delay, fn)`` arranges a later :meth:`check` (default: the running asyncio loop's
-        ``call_later``; none without a loop: then only the next call, answer or reset checks)."""
+        """``schedule(delay, fn)`` arranges a later :meth:`check` (the session's shell passes the running
+        loop's timer, ``shell.later``; None: only the next call, answer or reset checks)."""
         self.threshold = threshold
         self.clock = clock
         self.may_hold = may_hold
@@ -146,11 +146,5 @@ class HeldWatch:
 
     def _later(self, delay: float) -> None:
         schedule = self.schedule
-        if schedule is None:
-            try:
-                import asyncio
-
-                schedule = asyncio.get_running_loop().call_later
-            except RuntimeError:
-                return
-        schedule(delay + 0.01, self.check)  # just past the threshold
+        if schedule is not None:
+            schedule(delay + 0.01, self.check)  # just past the threshold

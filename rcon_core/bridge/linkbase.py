@@ -125,18 +125,22 @@ class Link:
         self.queue.append(Binary(data))
         self.event.set()
 
-    def send_command(self, data: bytes, pub: Any, max_age: float, binary: bool = False) -> bool:
-        """Write a frame (a binary one when ``binary``) with a freshness limit (see the module docstring);
-        False when it was refused because the link cannot carry it in time."""
-        now = _monotonic()
+    def send_by(self, data: bytes, pub: Any, deadline: float, now: float | None = None,
+                binary: bool = False) -> bool:
+        """Write a command (a binary frame when ``binary``) that must not be written after ``deadline``
+        (``time.monotonic()``; ``now``: the time, when the caller has it): refused (False) at once while the
+        link is degraded or its unanswered probe is older than the time left, else written now or queued
+        with its deadline (the writer drops it past that)."""
+        if now is None:
+            now = _monotonic()
         watch = self.watch
-        if self.degraded or (watch is not None and watch.overdue(now) > max_age):
+        if self.degraded or (watch is not None and watch.overdue(now) > deadline - now):
             return False
         if not self.queue and self.write_now(data, binary):
             if watch is not None:
                 watch.command(now)
         else:
-            self.queue.append(TimedFrame(Binary(data) if binary else data, now + max_age, pub))
+            self.queue.append(TimedFrame(Binary(data) if binary else data, deadline, pub))
             self.event.set()
         return True
 

@@ -1,13 +1,31 @@
-"""``Session``: the rosbridge protocol state of one client, apart from the transport.
+"""``Session``: the rosbridge protocol state of one client, apart from the transport: sans-I/O.
 
-As ``websockets`` keeps its protocol apart from asyncio, the session keeps what the protocol is about --
-nodes, topics and their shared subscriptions (``topics.py``), advertisements, services this client provides
-(``services.py``), service calls waiting for their answer, action goals (``goals.py``) and actions this
-client provides (``action_server.py``) -- and none of the connection: events in (:meth:`Session.handle` for
-each op from the server, :meth:`attached` / :meth:`detached` when a link comes and goes), frames out through
-the :class:`~rcon_core.bridge.linkbase.Link` the client attached (nothing is written while there is none),
-and public methods for the nodes.  ``BridgeClient`` (``client.py``) keeps connect, reconnect, ping, stall
-watch and writing; ``inbound.py`` reads.
+A state machine in the manner of h11 and websockets' ``protocol.py`` (and of the Foxglove link's
+``rcon_core/foxglove/session.py``): it keeps what the protocol is about -- nodes, topics and their shared
+subscriptions (``topics.py``), advertisements, service calls waiting for their answer, the commands-held
+watch, the view-only guard -- and none of the connection.  It imports no asyncio, makes no future, task or
+timer and never touches a socket (``tests/test_bridge_session_pure.py`` holds that):
+
+* frames in: :meth:`Session.handle` for each op from the server; :meth:`attached` / :meth:`detached` when a
+  connection comes and goes;
+* frames out as data: every frame the protocol sends is an :class:`Outgoing` appended to :attr:`outbox`,
+  which the async shell drains (``shell.py``: it is told through ``wake`` right away, so frames keep their
+  order and nothing waits); a publish is decided by :meth:`command`, which returns an :class:`Outgoing`
+  (the bytes and, for a command, its deadline), :data:`KEPT` (a latched value held for the restore) or a
+  :class:`Dropped`; the nodes' ``publish`` decides the same way and hands the frame to the link's
+  ``write``/``send_by`` the shell lent while attached (one call on the hot path), else to the outbox;
+* time in: the ``now`` of :meth:`command` and :meth:`take`, and the injectable ``clock`` (a publish's deadline,
+  the commands-held watch);
+* service calls as data: :meth:`open_call` makes a :class:`Call`, :meth:`start_call` sends it, the answer (or
+  the failure) comes back through its ``done`` callback; futures and timeouts live in the shell (``shell.py``).
+  (:class:`Outgoing`, :class:`Dropped`, :data:`KEPT` and :class:`Call` are defined in ``effects.py``.)
+
+What runs user code or waits on the server -- services this client provides (``services.py``), action goals
+(``goals.py``), actions this client provides (``action_server.py``) and the type lookups behind a cbor or
+png subscription (``subscribe.py``) -- are the session's *parts*: the shell builds them
+(:meth:`~rcon_core.bridge.shell.SessionShell.build_parts`) with its ``spawn`` and hands them over
+(:meth:`Session.use_parts`); the session only dispatches frames to them and restores them in order.
+``BridgeClient`` (``client.py``) keeps connect, reconnect, ping, stall watch; ``inbound.py`` reads.
 
 Decision: after every (re)connect
     rosbridge forgets everything with the connection (``reconnect.jsonl:8``), so :meth:`attached` sends, after
@@ -19,10 +37,12 @@ Decision: publishing while the link is down or stalled
     topic only the latest value is kept and sent right after the advertisement is restored; every other
     publish made while down is dropped and counted (``Publisher.dropped``, ``stats.dropped_while_down``).
     Frames still in the outgoing queue when the link drops are dropped too (``stats.dropped_on_disconnect``).
-    A publisher's ``max_age`` (0.25 s by default for non-latched topics) is its freshness limit: a publish
-    is never written after it (``linkbase.Link.send_command``, ``freshness.py``; ``stats.stale_dropped``).
-    The frame around a message is encoded once per advertisement (``AdvertEntry.head``); ``latch`` is
-    repeated in every publish (``client_publish.jsonl:26-30``: otherwise the topic is re-registered).
+    A publisher's ``max_age`` (0.25 s by default for non-latched topics) is its freshness limit: the
+    :class:`Outgoing` of a command carries ``now + max_age`` as its deadline and is never written after it
+    (``linkbase.Link.send_by``, ``freshness.py``; ``stats.stale_dropped``); a frame left in :attr:`outbox`
+    past its deadline is dropped by :meth:`take` as well.  The frame around a message is encoded once per
+    advertisement (``AdvertEntry.head``); ``latch`` is repeated in every publish (``client_publish.jsonl:26-30``:
+    otherwise the topic is re-registered).
 
 Decision: service calls
     Every call has a client-side timeout (``timeout`` or ``call_timeout``) even though rosbridge 0.11 and
@@ -31,72 +51,72 @@ Decision: service calls
     mistyped field, text that is not JSON -- with silence (``rosbridge-ros2-2.1.0/malformed.jsonl``), and
     2.1.0 runs one call at a time per connection with no timeout, so one unanswered call holds up every
     later call on that connection (``services.jsonl:20-25``): a timeout that follows an earlier call still
-    unanswered says so, naming it.  A late answer to a call that timed out is dropped quietly.  A call made
-    while reconnecting waits for the link inside the same budget.  Calls waiting when the link drops fail
-    with ``ConnectionLostError``.  ``result: false`` raises ``ServiceError`` carrying the server's string.
-    Every call written is watched until its answer arrives (``held.py``, :attr:`Session.held`): one
-    unanswered past 0.5 s on a server that may run calls one at a time is reported as commands held.
+    unanswered says so, naming it (:meth:`timed_out`).  A late answer to a call that timed out is dropped
+    quietly.  A call made while reconnecting waits for the link inside the same budget (the shell).  Calls
+    waiting when the link drops fail with ``ConnectionLostError``.  ``result: false`` fails with
+    ``ServiceError`` carrying the server's string.  Every call written is watched until its answer arrives
+    (``held.py``, :attr:`Session.held`): one unanswered past 0.5 s on a server that may run calls one at a
+    time is reported as commands held.
 
 Decision: a view-only link (``guard.py``)
-    ``self.guard`` (``client.guard``) decides what a view-only link may send: :meth:`publish` and
-    :meth:`call_service` refuse with ``ViewOnlyError`` before anything is written, every frame of
+    ``self.guard`` (``client.guard``) decides what a view-only link may send: :meth:`publish`,
+    :meth:`command` and :meth:`open_call` refuse with ``ViewOnlyError`` before anything is written (and
+    :meth:`start_call`, when the mark came while the call waited for the link), every frame of
     :meth:`send` passes ``guard.admit``, and setting or lifting the mark withdraws or offers again this
     link's advertisements, services and actions (:meth:`_guard_changed`).
 
-What the session needs of its host (the client), by public names only: ``url``, ``call_timeout``,
-``registry``, ``rosapi``, ``ros_version``, ``stats`` and ``await wait_connected()``.
+What the session needs of its host (the client), by public names only: ``url``, ``stats`` and
+``ros_version``.
 """
 
 from __future__ import annotations
 
-import asyncio
 import logging
-from collections.abc import Awaitable, Callable
+import time
+from collections import deque
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, Protocol
 
 import orjson
 
 from rcon_core.msgs import names
 
-from .action_server import ProvidedActions
+from .effects import DOWN, KEPT, Call, Done, Dropped, Kept, Outgoing
 from .envelope import Envelope, enforce
 from .errors import BridgeError, ConnectionLostError, ServiceError, ServiceTimeoutError
-from .goals import Goals
 from .guard import LinkGuard, ViewOnlyError, describe_call
 from .held import HeldWatch
-from .inbound import BadFrames
 from .protocol import encode
 from .safety import MAX_ANSWER_DEPTH, LogBudget, bounded_repr, clip, nested_deeper, safe_text
-from .services import ProvidedServices
 from .stats import BridgeStats
-from .subscribe import Subscriber
 from .tap import OperatorTap
 from .topics import AdvertEntry, TopicEntry
 
 if TYPE_CHECKING:
-    from .linkbase import Link
+    from .action_server import ProvidedActions
+    from .goals import Goals
+    from .inbound import BadFrames
     from .nodes import Node, Publisher, Subscription
+    from .services import ProvidedServices
+    from .subscribe import Subscriber
 
 log = logging.getLogger(__name__)
 #: characters of a server's ``status`` text that are logged and shown (a server sent 10 MB lines)
 STATUS_TEXT = 500
+#: calls that timed out unanswered and are remembered, to name them in the next timeout's text
+UNANSWERED_KEPT = 32
 
 _dumps = orjson.dumps
 _NUMPY = orjson.OPT_SERIALIZE_NUMPY
 LOG_LEVELS = ("info", "warning", "error", "none")
-
+__all__ = ["DOWN", "KEPT", "LOG_LEVELS", "Call", "Dropped", "Kept", "Outgoing", "Session"]
 
 class Host(Protocol):
     url: str
-    call_timeout: float
-    registry: Any
-    rosapi: Any
     stats: BridgeStats
 
     @property
     def ros_version(self) -> int | None: ...
-
-    async def wait_connected(self) -> None: ...
 
 
 def _failure_text(values: Any) -> str:
@@ -112,29 +132,43 @@ def _failure_text(values: Any) -> str:
 class Session:
     """The protocol state of one client (see the module docstring)."""
 
-    def __init__(self, host: Host, bad: BadFrames) -> None:
+    services: ProvidedServices
+    goals: Goals
+    provided_actions: ProvidedActions
+    subscriber: Subscriber
+
+    def __init__(self, host: Host, bad: BadFrames, *, clock: Callable[[], float] = time.monotonic,
+                 schedule: Callable[[float, Callable[[], Any]], Any] | None = None) -> None:
+        """``clock``: monotonic seconds (the deadlines of commands, the held watch); ``schedule(delay, fn)``:
+        a later check of the held watch (the shell's timer; None: checked at the next event only)."""
         self.host = host
         self.bad = bad
         self.stats = host.stats
-        self.link: Link | None = None
+        self.clock = clock
+        #: whether a connection is attached (frames are written only then)
+        self.up = False
+        #: frames to write, oldest first: the shell drains it (:meth:`take`)
+        self.outbox: deque[Outgoing] = deque()
+        #: ``wake()``: called after a frame was added to the outbox (the shell drains it at once)
+        self.wake: Callable[[], None] | None = None
+        #: the link's ``write(data)`` and ``send_by(data, pub, deadline, now) -> bool`` (False: refused at its
+        #: freshness limit), lent by the shell while a connection is attached, so a publish is one call to
+        #: the link (as the Foxglove session's ``write``/``command``); None: publishes go to the outbox
+        self.write: Callable[[bytes], Any] | None = None
+        self.send_by: Callable[[bytes, Any, float, float], bool] | None = None
         self.nodes: dict[str, Node] = {}
         self.topics: dict[str, TopicEntry] = {}
         self.adverts: dict[str, AdvertEntry] = {}
-        self.pending: dict[str, asyncio.Future[Any]] = {}  # service calls waiting for their answer
+        #: service calls waiting for their answer, oldest first: id -> :class:`Call`
+        self.pending: dict[str, Call] = {}
         #: calls that timed out and were never answered on this link: id -> service (bounded)
         self.unanswered: dict[str, str] = {}
-        self._pending_names: dict[str, str] = {}  # id -> service of the calls in self.pending
         #: calls written and not answered yet: commands may be held behind them (``held.py``)
-        self.held = HeldWatch(may_hold=lambda: host.ros_version != 1)
+        self.held = HeldWatch(clock=clock, may_hold=lambda: host.ros_version != 1, schedule=schedule)
         self.level: str | None = None
         #: the robot's safety envelope (``envelope.py``): every publish is held to it (``client.envelope``)
         self.envelope: Envelope | None = None
-        self.tasks: set[asyncio.Task[Any]] = set()
         self._seq = 0
-        self.services = ProvidedServices(self.send, self.spawn, host)
-        self.goals = Goals(self.send, self.spawn, host)
-        self.provided_actions = ProvidedActions(self.send)  # actions this client serves (ROS 2)
-        self.subscriber = Subscriber(self, host)
         #: what the nodes send, told to listeners (the flight recorder): ``tap.py``
         self.tap = OperatorTap()
         #: whether this link is view-only, and what it offered the robot (``guard.py``)
@@ -144,11 +178,17 @@ class Session:
         #: the rate at which the server's ``status`` messages are logged (see ``_on_status``)
         self.status_log = LogBudget()
         self._ops: dict[str, Callable[[dict[str, Any]], None]] = {
-            "publish": self._on_publish, "service_response": self._on_service_response,
-            "call_service": self.services.on_call, "status": self._on_status,
-            "action_feedback": self.goals.on_feedback, "action_result": self.goals.on_result,
-            "send_action_goal": self.provided_actions.on_goal, "cancel_action_goal": self.provided_actions.on_cancel,
+            "publish": self._on_publish, "service_response": self._on_service_response, "status": self._on_status,
         }
+
+    def use_parts(self, services: ProvidedServices, goals: Goals, provided_actions: ProvidedActions,
+                  subscriber: Subscriber) -> None:
+        """The parts that run user code or wait on the server (built by the shell; see the module docstring)."""
+        self.services, self.goals, self.provided_actions, self.subscriber = services, goals, provided_actions, subscriber
+        self._ops.update({
+            "call_service": services.on_call, "action_feedback": goals.on_feedback, "action_result": goals.on_result,
+            "send_action_goal": provided_actions.on_goal, "cancel_action_goal": provided_actions.on_cancel,
+        })
 
     def next_id(self, kind: str, name: str) -> str:
         self._seq += 1
@@ -157,41 +197,48 @@ class Session:
     # ================================================================== frames out
 
     def send(self, op: dict[str, Any]) -> bool:
-        """Send one frame on the current link; False when there is none."""
-        link = self.link
-        if link is None or not self.guard.admit(op):
+        """Put one frame in the outbox; False when no connection is attached or the guard refuses it."""
+        if not self.up or not self.guard.admit(op):
             return False
-        link.write(encode(op))
+        self._put(Outgoing(encode(op)))
         return True
 
-    def spawn(self, coro: Awaitable[Any]) -> asyncio.Task[Any]:
-        task = asyncio.ensure_future(coro)
-        self.tasks.add(task)
-        task.add_done_callback(self._task_done)
-        return task
+    def _put(self, out: Outgoing) -> None:
+        self.outbox.append(out)
+        wake = self.wake
+        if wake is not None:
+            wake()
 
-    def _task_done(self, task: asyncio.Task[Any]) -> None:
-        self.tasks.discard(task)
-        if not task.cancelled() and task.exception() is not None:
-            log.error("background task failed: %s", task.exception(), exc_info=task.exception())
-
-    def cancel_tasks(self) -> None:
-        for t in list(self.tasks):
-            t.cancel()
+    def take(self, now: float | None = None) -> list[Outgoing]:
+        """Every frame of the outbox, oldest first, and empty it; a command past its deadline at ``now`` is
+        dropped and counted instead (``stats.stale_dropped``)."""
+        out = self.outbox
+        if not out:
+            return []
+        items = list(out)
+        out.clear()
+        if now is None:
+            now = self.clock()
+        fresh = []
+        for item in items:
+            if item.deadline is not None and now > item.deadline:
+                self.drop_stale(item.pub, counted_sent=True)
+                continue
+            fresh.append(item)
+        return fresh
 
     # ================================================================== the link comes and goes
 
-    def attached(self, link: Link) -> None:
-        """A fresh connection (after the client sent ``auth``): restore everything rosbridge forgot."""
-        self.link = link
-        self.guard.attached(asyncio.get_running_loop())
+    def attached(self) -> None:
+        """A fresh connection (after the client sent ``auth``): restore everything rosbridge forgot, in order."""
+        self.up = True
         if self.level is not None:
             self.send({"op": "set_level", "level": self.level})
         for advert in self.adverts.values():
             advert.active = False
             advert.active = self.send(advert.advertise_op())  # not on a view-only link (guard.py)
             if advert.pending is not None and advert.active:
-                link.write(b"".join((advert.head, _dumps(advert.pending, option=_NUMPY), advert.tail)))
+                self._put(Outgoing(b"".join((advert.head, _dumps(advert.pending, option=_NUMPY), advert.tail))))
             advert.pending = None
         self.services.restore()
         self.provided_actions.restore()
@@ -201,21 +248,20 @@ class Session:
             self.subscriber.sync(topic)
 
     def detached(self) -> None:
-        """The link is gone: frames still queued are dropped, calls and goals fail, served goals end."""
-        link, self.link = self.link, None
-        if link is not None:
-            dropped = link.drop_queue()
-            if dropped:
-                self.stats.dropped_on_disconnect += dropped
+        """The link is gone: frames not written are dropped, calls and goals fail, served goals end."""
+        self.up = False
+        if self.outbox:
+            self.stats.dropped_on_disconnect += len(self.outbox)
+            self.outbox.clear()
         for advert in self.adverts.values():
             advert.active = False
         for topic in self.topics.values():
             topic.sid = None
             topic.sent_options = None
-        for fut in list(self.pending.values()):
-            if not fut.done():
-                fut.set_exception(ConnectionLostError("connection lost before the answer arrived"))
+        calls = list(self.pending.values())
         self.pending.clear()
+        for call in calls:
+            call.settle(None, ConnectionLostError("connection lost before the answer arrived"))
         self.unanswered.clear()
         self.held.reset()
         self.goals.disconnected()
@@ -224,7 +270,7 @@ class Session:
     def _guard_changed(self, view_only: bool) -> None:
         """The link was marked view-only (withdraw what it offered the robot) or the mark was lifted
         (offer it again); on the loop thread."""
-        if self.link is None:
+        if not self.up:
             return  # the next connection restores under the mark as it is then
         if view_only:
             for op in self.guard.withdrawals():
@@ -281,25 +327,23 @@ class Session:
         cid = m.get("id")
         if isinstance(cid, str):
             self.held.answered(cid)  # the server is free again, whoever still waits for the answer
-        fut = self.pending.pop(cid, None) if isinstance(cid, str) else None
-        if fut is None:
+        call = self.pending.pop(cid, None) if isinstance(cid, str) else None
+        if call is None:
             late = self.unanswered.pop(cid, None) if isinstance(cid, str) else None
             log.debug("service_response for unknown or finished call %r%s", cid,
                       f" (a late answer from {late})" if late else "")
-            return
-        if fut.done():
             return
         values = m.get("values")
         service = m.get("service") if isinstance(m.get("service"), str) else None
         if nested_deeper(values):  # bounded for everything that walks an answer (see safety.py)
             self.bad.report("depth", f"answer of {bounded_repr(service, 80)} nested deeper than "
                                      f"{MAX_ANSWER_DEPTH} levels; the call failed")
-            fut.set_exception(ServiceError(f"the answer is nested deeper than {MAX_ANSWER_DEPTH} levels; refused",
+            call.settle(None, ServiceError(f"the answer is nested deeper than {MAX_ANSWER_DEPTH} levels; refused",
                                            service))
         elif m.get("result", True) is False:
-            fut.set_exception(ServiceError(_failure_text(values), service))
+            call.settle(None, ServiceError(_failure_text(values), service))
         else:
-            fut.set_result({} if values is None else values)
+            call.settle({} if values is None else values, None)
 
     def add_status_listener(self, fn: Callable[[dict[str, Any]], None]) -> Callable[[], None]:
         self._status_listeners.append(fn)
@@ -324,9 +368,9 @@ class Session:
             log.log(pylevel, "server status (%s)%s: %s%s", clip(level, 20),
                     f" for {bounded_repr(sid, 80)}" if sid else "", text, more)
         if level == "error" and isinstance(sid, str):
-            fut = self.pending.pop(sid, None)
-            if fut is not None and not fut.done():
-                fut.set_exception(ServiceError(text))
+            call = self.pending.pop(sid, None)
+            if call is not None:
+                call.settle(None, ServiceError(text))
             self.goals.on_error_status(sid, text)
         for fn in list(self._status_listeners):
             try:
@@ -378,7 +422,7 @@ class Session:
             raise BridgeError(f"{pub.topic} is already advertised as {entry.type}, not {pub.type}")
         entry.pubs.append(pub)
         changed = entry.merge()
-        if self.link is not None and (not entry.active or changed):
+        if self.up and (not entry.active or changed):
             entry.active = self.send(entry.advertise_op())  # False on a view-only link
 
     def remove_publisher(self, pub: Publisher) -> None:
@@ -393,31 +437,60 @@ class Session:
             return
         entry.merge()
 
-    def publish(self, pub: Publisher, msg: dict[str, Any]) -> bool:
-        """Write one message now, or drop it (counted) -- see "publishing while the link is down".
-        Raises ``ViewOnlyError`` on a view-only link. A motion command is first held to the safety envelope
-        (``envelope.py``; raises ``EnvelopeRefused``)."""
+    def command(self, pub: Publisher, msg: dict[str, Any], now: float) -> Outgoing | Dropped | Kept:
+        """Decide one publish at ``now`` (see "publishing while the link is down"): the frame to write (with
+        ``now + max_age`` as its deadline), :data:`KEPT` or :data:`DOWN` (counted).  Raises ``ViewOnlyError``
+        on a view-only link; a motion command is first held to the safety envelope (``envelope.py``;
+        raises ``EnvelopeRefused``).  :meth:`publish` decides the same way, inlined (the hot path)."""
         if self.guard.reason is not None:
             raise self.guard.refuse(f"publishing on {pub.topic}")
         entry = self.adverts[pub.topic]
         msg = enforce(self.envelope, entry.type, msg, self.stats)
-        link = self.link
-        if link is not None and entry.active:
-            data = b"".join((entry.head, _dumps(msg, option=_NUMPY), entry.tail))
-            if pub.max_age is None:
-                link.write(data)
-            elif not link.send_command(data, pub, pub.max_age):
+        if not (self.up and entry.active):
+            return self._not_written(entry, pub, msg)
+        max_age = pub.max_age
+        return Outgoing(b"".join((entry.head, _dumps(msg, option=_NUMPY), entry.tail)),
+                        None if max_age is None else now + max_age, pub)
+
+    def publish(self, pub: Publisher, msg: dict[str, Any]) -> bool:
+        """The nodes' publish: decided as :meth:`command` decides, the frame handed to the link's ``write``
+        (or ``send_by`` with its deadline) the shell lent, else put in the outbox; True when it was written
+        or kept, False when it was dropped (counted)."""
+        if self.guard.reason is not None:
+            raise self.guard.refuse(f"publishing on {pub.topic}")
+        entry = self.adverts[pub.topic]
+        msg = enforce(self.envelope, entry.type, msg, self.stats)
+        if not (self.up and entry.active):
+            return self._not_written(entry, pub, msg) is KEPT
+        data = b"".join((entry.head, _dumps(msg, option=_NUMPY), entry.tail))
+        max_age = pub.max_age
+        if max_age is None:
+            write = self.write
+            if write is None:
+                self._put(Outgoing(data, None, pub))
+            else:
+                write(data)
+        else:
+            send_by = self.send_by
+            now = self.clock()
+            if send_by is None:
+                self._put(Outgoing(data, now + max_age, pub))
+            elif not send_by(data, pub, now + max_age, now):  # the link is degraded or stalling (freshness.py)
                 self.drop_stale(pub)
                 return False
-            pub.sent += 1
-            return True
+        pub.sent += 1
+        return True
+
+    def _not_written(self, entry: AdvertEntry, pub: Publisher, msg: dict[str, Any]) -> Dropped | Kept:
+        """A publish while the link is down (or the advertisement not accepted): a latched value is kept,
+        latest wins, and sent after the advertisement is restored; anything else is dropped, counted."""
         if entry.latch:
-            entry.pending = msg  # latest value wins; sent after the advertisement is restored
-            return True
+            entry.pending = msg
+            return KEPT
         pub.dropped += 1
         entry.dropped += 1
         self.stats.dropped_while_down += 1
-        return False
+        return DOWN
 
     def drop_stale(self, pub: Publisher, counted_sent: bool = False) -> None:
         """Count a command dropped at its freshness limit (``counted_sent``: it was already counted sent)."""
@@ -430,45 +503,56 @@ class Session:
         """A queued command passed its deadline (the link's writer drops it)."""
         self.drop_stale(pub, counted_sent=True)
 
-    async def call_service(self, name: str, args: dict[str, Any] | list | None = None,
-                           timeout: float | None = None) -> Any:
-        """Call a service; returns its ``values``.  Raises ServiceError / ServiceTimeoutError."""
+    # ================================================================== service calls, as data
+
+    def open_call(self, name: str, args: dict[str, Any] | list | None = None, timeout: float | None = None,
+                  done: Done | None = None) -> Call:
+        """A new call (checked, not yet sent): ``ValueError``/``TypeError`` for a bad name or args,
+        ``ViewOnlyError`` on a view-only link unless it only reads (``guard.check_call``)."""
         if not isinstance(name, str) or not name:
             raise ValueError(f"service name must be a non-empty string, got {name!r}")
         if args is not None and not isinstance(args, dict | list):
             raise TypeError(f"args must be a dict or list, got {type(args).__name__}")
-        self.guard.check_call(name, args)  # ViewOnlyError on a view-only link, unless it only reads
-        budget = self.host.call_timeout if timeout is None else timeout
+        self.guard.check_call(name, args)
         cid = self.next_id("call", name)
         op: dict[str, Any] = {"op": "call_service", "id": cid, "service": name}
         if args is not None:
             op["args"] = args
         if timeout is not None:
             op["timeout"] = timeout
-        fut: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
-        try:
-            async with asyncio.timeout(budget):
-                await self.host.wait_connected()
-                self.pending[cid] = fut
-                self._pending_names[cid] = name
-                if self.send(op):
-                    self.held.started(cid, name)  # until its answer arrives, however late
-                elif self.guard.view_only:  # marked while it waited for the link
-                    raise ViewOnlyError(self.guard.sentence(describe_call(name, args)))
-                return await fut
-        except TimeoutError:
-            before = list(self._pending_names)[: list(self._pending_names).index(cid)] \
-                if cid in self._pending_names else []
-            earlier = list(self.unanswered.values()) + [self._pending_names[c] for c in before]
-            text = f"no answer to call_service within {budget:g} s"
-            if earlier:
-                text += (f"; an earlier call on this connection ({earlier[0]}) is still unanswered, and rosbridge "
-                         "2.1.0 runs calls one at a time")
-            if self.link is not None:
-                self.unanswered[cid] = name
-                while len(self.unanswered) > 32:
-                    self.unanswered.pop(next(iter(self.unanswered)))
-            raise ServiceTimeoutError(text, name) from None
-        finally:
-            self.pending.pop(cid, None)
-            self._pending_names.pop(cid, None)
+        return Call(cid, name, op, done)
+
+    def start_call(self, call: Call) -> bool:
+        """Wait for ``call``'s answer and send it (once a connection is attached: the shell waits for one);
+        True when it was written.  Raises ``ViewOnlyError`` when the link was marked view-only meanwhile."""
+        self.pending[call.id] = call
+        if self.send(call.op):
+            self.held.started(call.id, call.name)  # until its answer arrives, however late
+            return True
+        if self.guard.view_only:
+            del self.pending[call.id]
+            raise ViewOnlyError(self.guard.sentence(describe_call(call.name, call.op.get("args"))))
+        return False
+
+    def timed_out(self, call: Call, budget: float) -> ServiceTimeoutError:
+        """``call`` got no answer within ``budget`` s: forget it (a late answer is dropped quietly) and say
+        so, naming an earlier call still unanswered on this connection."""
+        ids = list(self.pending)
+        before = ids[: ids.index(call.id)] if call.id in self.pending else []
+        earlier = list(self.unanswered.values()) + [self.pending[c].name for c in before]
+        self.forget_call(call)
+        text = f"no answer to call_service within {budget:g} s"
+        if earlier:
+            text += (f"; an earlier call on this connection ({earlier[0]}) is still unanswered, and rosbridge "
+                     "2.1.0 runs calls one at a time")
+        if self.up:
+            self.unanswered[call.id] = call.name
+            while len(self.unanswered) > UNANSWERED_KEPT:
+                self.unanswered.pop(next(iter(self.unanswered)))
+        return ServiceTimeoutError(text, call.name)
+
+    def forget_call(self, call: Call) -> None:
+        """The caller stopped waiting (answered, timed out or cancelled)."""
+        if self.pending.get(call.id) is call:
+            del self.pending[call.id]
+        call.done = None

@@ -26,6 +26,7 @@ Decisions:
 from __future__ import annotations
 
 import logging
+from collections.abc import Awaitable, Callable
 from typing import TYPE_CHECKING, Any
 
 from rcon_core.msgs import names
@@ -43,8 +44,9 @@ log = logging.getLogger(__name__)
 class Subscriber:
     """Subscribes the session's topics on the server and picks each cbor-raw topic's decoder."""
 
-    def __init__(self, session: Any, host: Any) -> None:
+    def __init__(self, session: Any, host: Any, spawn: Callable[[Awaitable[Any]], Any]) -> None:
         self.session = session
+        self._spawn = spawn  # the shell's (shell.py): the session makes no task
         self.host = host  # rosapi, registry, ros_version (see session.Host)
         self.typedef_cache: dict[str, list[dict[str, Any]]] = {}
         self.ros1 = RawDecoder()  # cbor-raw from ROS 1 servers, learned from their typedefs
@@ -53,16 +55,16 @@ class Subscriber:
 
     def sync(self, entry: TopicEntry) -> None:
         """Make the server-side subscription match what the nodes want (resubscribe when it changed)."""
-        if self.session.link is None or not entry.subs:
+        if not self.session.up or not entry.subs:
             return
         wanted = entry.wanted()
         if wanted == entry.sent_options:
             return
         entry.sent_options = wanted
         if wanted["compression"] in ("cbor", "cbor-raw"):
-            self.session.spawn(self._resolve_and_subscribe(entry, wanted))
+            self._spawn(self._resolve_and_subscribe(entry, wanted))
         elif wanted["compression"] == "png" and getattr(self.host, "rosapi_profile", None) is not None:
-            self.session.spawn(self._png_unless_ros2(entry, wanted))
+            self._spawn(self._png_unless_ros2(entry, wanted))
         else:
             self._subscribe_now(entry, wanted)
 
@@ -78,7 +80,7 @@ class Subscriber:
                      entry.topic)
             opts["compression"] = "none"
         session = self.session
-        if session.topics.get(entry.topic) is not entry or entry.sent_options is not wanted or session.link is None:
+        if session.topics.get(entry.topic) is not entry or entry.sent_options is not wanted or not session.up:
             return  # superseded while we were asking the server
         self._subscribe_now(entry, opts)
 
@@ -101,7 +103,7 @@ class Subscriber:
                         entry.topic, opts["compression"], exc)
             opts["compression"] = "none"
         session = self.session
-        if session.topics.get(entry.topic) is not entry or entry.sent_options is not wanted or session.link is None:
+        if session.topics.get(entry.topic) is not entry or entry.sent_options is not wanted or not session.up:
             return  # superseded while we were asking the server
         self._subscribe_now(entry, opts)
 

@@ -26,8 +26,9 @@ Decision: direct writes
     drains as the transport drains, so frames always leave in order.  Nagle is off on the socket.
 
 Decision: commands and their freshness limit (see ``freshness.py``)
-    A frame with a freshness limit (:meth:`Link.send_command`) is refused at once while the link is
-    DEGRADED or a ping has been unanswered for longer than the limit; when it has to wait in the queue it
+    A frame with a freshness limit (:meth:`Link.send_by`: its deadline, now + ``max_age``, decided by the
+    session) is refused at once while the link is DEGRADED or a ping has been unanswered for longer than
+    the time left before it; when it has to wait in the queue it
     carries its deadline (:class:`~rcon_core.bridge.freshness.TimedFrame`) and the writer drops it once
     the deadline passed (``on_stale(pub)`` counts it).  The writer checks the deadline after the
     transport drained, just before writing.

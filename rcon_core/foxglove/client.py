@@ -500,9 +500,10 @@ def _text_or_binary(link: Link) -> Callable[[str | bytes], None]:
 
 def _binary_command(link: Link) -> Callable[[bytes, Any, float], bool]:
     """The session's ``command``: a client message with a freshness limit, a binary frame."""
-    send = link.send_command
+    send = link.send_by
 
     def command(data: bytes, pub: Any, max_age: float) -> bool:
-        return send(data, pub, max_age, True)
+        now = _monotonic()
+        return send(data, pub, now + max_age, now, True)
 
     return command

@@ -7,12 +7,12 @@ Decision: the same two transports as the rosbridge link, through the same adapte
     (``pwlink.py``, ``wslink.py``) and their transport-neutral half (``linkbase.Link``: direct writes in
     order, the writer task, commands with a freshness limit, pings, abort and the TCP-reset cut) are the
     rosbridge link's own; this protocol adds what it needs through their small, general additions: binary
-    frames out (``Link.write_binary``, ``send_command(binary=True)``) and the subprotocols offered in the
+    frames out (``Link.write_binary``, ``send_by(..., binary=True)``) and the subprotocols offered in the
     handshake, the server's pick read back as ``link.subprotocol`` (picows offers them as a
     ``Sec-WebSocket-Protocol`` request header and reads the response's; websockets through its Sans-I/O
     ``ClientProtocol``).  Text frames (JSON ops) go out with ``Link.write``; binary frames (client
     messages, service call requests) with ``write_binary``; a client message with a freshness limit with
-    ``send_command(binary=True)``.
+    ``send_by(..., binary=True)``.
 
 Decision: messages are pushed, parsed from the transport's buffer
     Like the rosbridge link, messages arrive through a :class:`~rcon_core.bridge.receive.Receiver`:
