@@ -171,6 +171,9 @@ def test_a_canvas_is_re_targeted_to_another_robot_in_one_undo_step(qtbot, tmp_pa
     try:
         original = win.controller.canvas
         assert not win.fleet_ui.chips.chips["r-2"].isChecked()
+        # Bravo's catalogue holds both names: else the copy waits for the operator's answer (a name missing)
+        qtbot.waitUntil(lambda: {"/battery", "/speed_limit"} <= {
+            n for n, _t in (win.fleet_ui.catalogs.get("r-2") or {}).get("topics", [])}, timeout=TIMEOUT_MS)
         action = win.fleet_ui.retarget_menu.findChild(QtGui.QAction, "retarget-r-2")
         action.trigger()  # Canvas ▾ → Duplicate for robot → Bravo
         copy = win.controller.canvas
