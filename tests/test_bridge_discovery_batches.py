@@ -11,7 +11,7 @@ import time
 import pytest
 
 from rcon_core.app import link as link_mod
-from rcon_core.app.link import Link
+from rcon_core.app.link import RobotConnection
 from rcon_core.bridge import rosapi as rosapi_mod
 from rcon_core.bridge.rosapi import Rosapi
 from rcon_core.testing import connected
@@ -81,7 +81,7 @@ async def test_a_lost_link_ends_the_asking_at_once(sim):
 def test_the_link_lists_again_without_asking_again_and_publishes_only_changes(sim_thread, monkeypatch):
     monkeypatch.setattr(link_mod, "CATALOG_PERIOD", 0.2)
     sim_thread.run_sync(lambda: add_services(sim_thread))
-    link = Link()
+    link = RobotConnection()
     try:
         link.connect_to(sim_thread.url)
         deadline = time.monotonic() + 30
@@ -109,7 +109,7 @@ def test_a_long_listing_is_published_as_it_goes(sim_thread, monkeypatch):
     monkeypatch.setattr(rosapi_mod, "TYPE_CALLS_PER_S", 300.0)  # 1500 types: about 5 s
     monkeypatch.setattr(link_mod, "CATALOG_PROGRESS_EVERY", 0.5)
     sim_thread.run_sync(lambda: add_services(sim_thread))
-    link = Link()
+    link = RobotConnection()
     try:
         link.connect_to(sim_thread.url)
         known_counts: list[int] = []

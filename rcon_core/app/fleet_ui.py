@@ -291,7 +291,8 @@ class FleetUi(QtCore.QObject):
         return [(robot.label if len(pairs) > 1 else "", link) for robot, link in pairs]
 
     def catalog_state(self) -> str:
-        """What the side robot's lists wait for (``Link.catalog_state``: "connecting", "listing", "lost"...)."""
+        """What the side robot's lists wait for (``RobotConnection.catalog_state``: "connecting",
+        "listing", "lost"...)."""
         try:
             return str(self.links.link(self.side_robot).catalog_state)
         except KeyError:

@@ -97,7 +97,7 @@ def _children(head: QtWidgets.QTreeWidgetItem) -> list[QtWidgets.QTreeWidgetItem
 
 
 class ParamsPanel(QtWidgets.QWidget):
-    """The Parameters tab. ``link`` is the app's :class:`~rcon_core.app.link.Link`."""
+    """The Parameters tab. ``link`` is the app's :class:`~rcon_core.app.link.RobotConnection`."""
 
     def __init__(self, link: Any, confirm: Confirm, parent: QtWidgets.QWidget | None = None) -> None:
         super().__init__(parent)
