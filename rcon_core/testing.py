@@ -19,7 +19,8 @@ service types every installed widget plugin contributes (``rcon_register_types``
 is tested on its own type with no extra step.
 
 A package loads these fixtures with ``pytest_plugins = ["rcon_core.testing"]`` in its ``conftest.py``.
-:func:`until` waits for a condition without sleeping a fixed time; :class:`ManualClock` is a clock (and a
+:func:`until` (async) and :func:`until_sync` (threads, Qt) wait for a condition without sleeping a fixed
+time, the one pair every test uses; :class:`ManualClock` is a clock (and a
 timer loop) that moves only when the test advances it, so rates are tested without the wall clock.
 
 View tests: :class:`RecordingPort` (a port that reaches no robot: it records publishes and calls, answers
@@ -58,6 +59,23 @@ async def until(predicate: Callable[[], Any], timeout: float = 10.0, what: str =
             raise AssertionError(f"timed out after {timeout} s waiting for {what}")
         await asyncio.sleep(0.01)
 
+
+def until_sync(predicate: Callable[[], Any], timeout: float = 10.0, what: str = "condition",
+               qtbot: Any = None) -> Any:
+    """:func:`until` for sync code (threads, Qt): wait until ``predicate()`` is truthy and return its value;
+    fail with an ``AssertionError`` naming ``what`` after ``timeout`` s. Between polls it sleeps 10 ms, or,
+    given a Qt test's ``qtbot``, runs the Qt event loop for 20 ms so events keep flowing."""
+    deadline = time.monotonic() + timeout
+    while True:
+        got = predicate()
+        if got:
+            return got
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+        if qtbot is None:
+            time.sleep(0.01)
+        else:
+            qtbot.wait(20)
 
 
 class ManualClock:

@@ -10,7 +10,6 @@ import os
 import signal
 import subprocess
 import sys
-import time
 
 import pytest
 from app_helpers import open_window as open_app_window
@@ -23,6 +22,7 @@ from rcon_core.app.config import AppConfig
 from rcon_core.app.main_window import MainWindow
 from rcon_core.bridge import ConnectionState
 from rcon_core.canvas import Binding, Canvas, Geometry, WidgetInstance, Workspace, new_id
+from rcon_core.testing import until_sync
 
 pytestmark = pytest.mark.usefixtures("qapp")
 
@@ -206,11 +206,12 @@ def test_rcon_demo_exits_cleanly_on_a_signal_and_saves(tmp_path, sig):
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
     layout = tmp_path / "demo-workspace.json"
     try:
-        deadline = time.monotonic() + 60
-        while not layout.exists():  # written when the window is built: the signal handler is in place
+
+        def started() -> bool:  # the layout is written when the window is built: the signal handler is in place
             assert proc.poll() is None, proc.stdout.read().decode()
-            assert time.monotonic() < deadline, "rcon --demo did not start"
-            time.sleep(0.05)
+            return layout.exists()
+
+        until_sync(started, 60, what="rcon --demo to start")
         layout.unlink()  # the shutdown must write it again
         proc.send_signal(sig)
         rc = proc.wait(timeout=30)

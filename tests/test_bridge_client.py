@@ -24,18 +24,11 @@ from rcon_core.bridge import (
 )
 from rcon_core.bridge.protocol import png_to_text
 from rcon_core.msgs.values import as_bytes
+from rcon_core.testing import until
 
 pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
 
 pytestmark = pytest.mark.recordings
-
-
-async def until(pred, timeout: float = 5.0) -> None:
-    async def poll():
-        while not pred():
-            await asyncio.sleep(0.01)
-
-    await asyncio.wait_for(poll(), timeout)
 
 
 @pytest.fixture

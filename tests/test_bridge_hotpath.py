@@ -10,16 +10,9 @@ import socket
 import pytest
 
 from rcon_core.bridge import BridgeClient
+from rcon_core.testing import until
 
 pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
-
-
-async def until(pred, timeout: float = 10.0) -> None:
-    async def poll():
-        while not pred():
-            await asyncio.sleep(0.02)
-
-    await asyncio.wait_for(poll(), timeout)
 
 
 @pytest.fixture
