@@ -20,7 +20,8 @@ is tested on its own type with no extra step.
 
 A package loads these fixtures with ``pytest_plugins = ["rcon_core.testing"]`` in its ``conftest.py``.
 :func:`until` (async) and :func:`until_sync` (threads, Qt) wait for a condition without sleeping a fixed
-time, the one pair every test uses; :class:`ManualClock` is a clock (and a
+time, the one pair every test uses; :func:`flushed` (and :func:`flushed_sync`) is the barrier before asserting
+that a client sent nothing (a marker sent after it through the same client reaches the sim); :class:`ManualClock` is a clock (and a
 timer loop) that moves only when the test advances it, so rates are tested without the wall clock.
 
 View tests: :class:`RecordingPort` (a port that reaches no robot: it records publishes and calls, answers
@@ -32,6 +33,7 @@ with a state, rendered to a ``QImage`` and optionally a PNG). Only these import 
 from __future__ import annotations
 
 import asyncio
+import itertools
 import time
 from collections.abc import AsyncIterator, Callable, Iterator
 from contextlib import asynccontextmanager
@@ -76,6 +78,45 @@ def until_sync(predicate: Callable[[], Any], timeout: float = 10.0, what: str = 
             time.sleep(0.01)
         else:
             qtbot.wait(20)
+
+
+#: the topic :func:`flushed` sends its markers on
+FLUSH_TOPIC = "/rcon_test/flushed"
+_flush_ids = itertools.count(1)
+
+
+async def flushed(client: Any, sim: SimServer, timeout: float = 10.0) -> None:
+    """A barrier for "nothing was sent": publish a marker through ``client`` (again every poll until one
+    arrives) and wait until ``sim`` has it. Everything ``client`` wrote before it has reached the sim by then
+    (one connection, frames in order), so a test asserts what did *not* arrive without sleeping first::
+
+        model.press()                     # refused: nothing may go out
+        await flushed(client, sim)
+        assert sim.published("/speed_limit") == []
+
+    Run it on the client's loop (:func:`flushed_sync` for a client on a ``BridgeThread``)."""
+    token = f"flush-{next(_flush_ids)}"
+    node = client.node("rcon_test_flush")
+    pub = node.advertise(FLUSH_TOPIC, "std_msgs/String")
+
+    def arrived() -> bool:
+        if any(m.get("data") == token for m in sim.published(FLUSH_TOPIC)):
+            return True
+        pub.publish({"data": token})
+        return False
+
+    try:
+        await until(arrived, timeout, f"a marker sent through the client reaching the sim ({token})")
+    finally:
+        node.close()
+
+
+def flushed_sync(thread: Any, client: Any, sim: SimServer, timeout: float = 10.0, qtbot: Any = None) -> None:
+    """:func:`flushed` for a client on a ``BridgeThread`` (``thread``), waited on from sync code (a Qt test
+    passes its ``qtbot`` so events keep flowing)."""
+    done = thread.run(flushed(client, sim, timeout))
+    until_sync(done.done, timeout + 5.0, "the marker barrier", qtbot=qtbot)
+    done.result()
 
 
 class ManualClock:
