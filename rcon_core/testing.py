@@ -80,6 +80,22 @@ def until_sync(predicate: Callable[[], Any], timeout: float = 10.0, what: str = 
             qtbot.wait(20)
 
 
+def qt_flushed(qtbot: Any, timeout: float = 10.0) -> None:
+    """A barrier for Qt: every event posted before the call (layouts, updates, queued signals, and the
+    events those post in turn) has been handled. Two zero-time single-shot timers posted one after the other
+    have run; the test then asserts, say, that a widget did *not* move, without a fixed wait."""
+    from qtpy import QtCore
+
+    for _ in range(2):
+        ran: list[int] = []
+
+        def mark(ran: list[int] = ran) -> None:
+            ran.append(1)
+
+        QtCore.QTimer.singleShot(0, mark)
+        until_sync(ran.__len__, timeout, "Qt's pending events", qtbot=qtbot)
+
+
 #: the topic :func:`flushed` sends its markers on
 FLUSH_TOPIC = "/rcon_test/flushed"
 _flush_ids = itertools.count(1)
