@@ -25,7 +25,7 @@ from rcon_core.app.theme import stylesheet
 from rcon_core.app.widget_frame import WidgetFrame, frame_min_size
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding, WidgetContext
-from rcon_core.testing import until_sync
+from rcon_core.testing import flushed_sync, qt_flushed, until_sync
 
 SPECS = {spec.kind: spec for spec in specs()}
 
@@ -101,7 +101,8 @@ def test_tapping_the_slider_track_jumps_there_and_publishes_on_release(qtbot, li
     qtbot.mousePress(view.slider, left, pos=_track_point(view, 0.8))
     assert view.slider.value() == 16, "a tap moves to where it lands, not one page step"
     assert view.slider.isSliderDown() and view.value.text() == "1.60"
-    qtbot.wait(300)
+    qt_flushed(qtbot)  # what the press set going has run, and a marker sent after it reached the robot
+    flushed_sync(live.thread, live.client, sim_thread, qtbot=qtbot)
     assert not _sent(sim_thread, "/rcon_test/tap_release", 1.6), "on-release mode sent while the finger is down"
     qtbot.mouseRelease(view.slider, left, pos=_track_point(view, 0.8))
     until_sync(lambda: _sent(sim_thread, "/rcon_test/tap_release", 1.6),
