@@ -3,7 +3,6 @@ and a raising callback on the one-consumer delivery path."""
 
 from __future__ import annotations
 
-import asyncio
 import logging
 import socket
 
@@ -30,7 +29,7 @@ async def test_nagle_is_off_on_the_client_socket(client):
 
 async def test_a_publish_is_handed_to_the_transport_before_publish_returns(sim, client):
     pub = client.node("teleop").advertise("/rcon_test/now", "std_msgs/String")
-    await asyncio.sleep(0.1)
+    await until(lambda: sim.topics.get("/rcon_test/now") is not None, what="the advertisement at the sim")
     sent_before = client.link.buffered(), client.link.queued
     assert sent_before == (0, 0)
     pub.publish({"data": "at once"})
@@ -42,7 +41,7 @@ async def test_a_publish_is_handed_to_the_transport_before_publish_returns(sim, 
 
 async def test_publishes_keep_their_order_when_the_transport_backs_up(sim, client):
     pub = client.node("bulk").advertise("/rcon_test/bulk", "std_msgs/String")
-    await asyncio.sleep(0.1)
+    await until(lambda: sim.topics.get("/rcon_test/bulk") is not None, what="the advertisement at the sim")
     n, pad = 200, "x" * (64 << 10)
     for i in range(n):  # ~13 MB without yielding: the transport fills up, the rest waits in the queue
         pub.publish({"data": f"{i:06d}{pad}"})
