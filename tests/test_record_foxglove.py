@@ -140,6 +140,9 @@ async def test_raw_and_decoding_consumers_share_one_foxglove_subscription(fox: F
     await until(lambda: len(got) == 2, what="the widget's next message")
     assert got[1] == {"data": "two"} and len(got_raw) == 1
     widget.unsubscribe()
+    # gone at the server first: else "subscribed again" below can still see the widget's subscription, and
+    # "three" goes out on it while it is being dropped
+    await until(lambda: not fox.subscribers.get("/rosout_str"), what="the last subscription gone")
     only_raw = fox_client.node("recorder-2").subscribe("/rosout_str", got_raw.append, raw=True)
     await until(lambda: fox.subscribers.get("/rosout_str") == 1, what="subscribed again")
     fox.log_string("three")
