@@ -80,11 +80,17 @@ def until_sync(predicate: Callable[[], Any], timeout: float = 10.0, what: str = 
             qtbot.wait(20)
 
 
-def qt_flushed(qtbot: Any, timeout: float = 10.0) -> None:
+def qt_flushed(qtbot: Any = None, timeout: float = 10.0) -> None:
     """A barrier for Qt: every event posted before the call (layouts, updates, queued signals, and the
     events those post in turn) has been handled. Two zero-time single-shot timers posted one after the other
-    have run; the test then asserts, say, that a widget did *not* move, without a fixed wait."""
+    have run; the test then asserts, say, that a widget did *not* move, without a fixed wait. (Without a
+    ``qtbot``, Qt's own ``QTest.qWait`` runs the event loop meanwhile.)"""
     from qtpy import QtCore
+
+    if qtbot is None:
+        from qtpy.QtTest import QTest
+
+        qtbot = type("_QtWait", (), {"wait": staticmethod(QTest.qWait)})()
 
     for _ in range(2):
         ran: list[int] = []
