@@ -27,7 +27,9 @@ load from elsewhere on a shared machine lands on all clients alike.  Phases:
   CBOR decoding, so it only runs the JSON case;
 * peak RSS of the client process at the end (resource.getrusage).
 
-The ``foxglove`` client is RCON's Foxglove link (``rcon_core.foxglove``): the server picks the
+The ``foxglove`` client is RCON's Foxglove link (``rcon_core.foxglove``) on picows, ``foxglove_ws`` the same
+on websockets (the rosbridge link's transports, on the loop the app's links run on, as the ``rcon`` and
+``rcon_ws`` columns; each is judged against the rosbridge link on its own transport): the server picks the
 ``foxglove.sdk.v1`` subprotocol when a client offers it and then speaks that protocol -- ``serverInfo``,
 channels with ``ros2msg`` schemas, binary MessageData frames carrying CDR (the same Float64 and 640x480
 Image), the round trip as a client channel echoed on a subscription.  Its image row is CDR (binary, like
@@ -78,7 +80,7 @@ import orjson
 
 HERE = Path(__file__).resolve().parent
 WIDTH, HEIGHT = 640, 480
-CLIENTS = ("bare", "bare_picows", "rcon", "rcon_ws", "roslibpy", "roslibjs", "foxglove_js", "foxglove")
+CLIENTS = ("bare", "bare_picows", "rcon", "rcon_ws", "roslibpy", "roslibjs", "foxglove_js", "foxglove", "foxglove_ws")
 OPTIONAL = ("rcon_asyncio", "rcon_base")
 #: the source tree ``rcon_base`` runs (``--base TREE``): RCON as it was, for figures side by side
 BASE_ENV = "RCON_BENCH_BASE"
@@ -459,13 +461,14 @@ async def _same_warmup(url: str, n: dict[str, int]) -> None:
     await c.close()
 
 
-async def client_foxglove(url: str, n: dict[str, int]) -> None:
-    """RCON's Foxglove link: the same node API as the rosbridge client, CDR in binary frames."""
+async def client_foxglove(url: str, n: dict[str, int], transport: str | None = None) -> None:
+    """RCON's Foxglove link: the same node API as the rosbridge client, CDR in binary frames, on ``transport``
+    (the rosbridge link's transports; None: as ``rcon_core.bridge.transport.choose`` picks)."""
     sys.path.insert(0, str(HERE.parent))
     from rcon_core.foxglove import FoxgloveClient
 
     await _same_warmup(url, n)
-    c = FoxgloveClient(url, latency_interval=3600)
+    c = FoxgloveClient(url, latency_interval=3600, **({"transport": transport} if transport else {}))
     await c.connect(timeout=10)
     loop = asyncio.get_running_loop()
     perf, cpu = time.perf_counter, time.process_time
@@ -733,8 +736,12 @@ def run_client(kind: str, url: str, n: dict[str, int]) -> None:
         asyncio.run(client_bare_picows(url, n))
     elif kind == "bare":
         asyncio.run(client_bare(url, n))
-    elif kind == "foxglove":
-        asyncio.run(client_foxglove(url, n))
+    elif kind in ("foxglove", "foxglove_ws"):  # on the loop the app's links run on, as the rcon columns
+        sys.path.insert(0, str(HERE.parent))
+        from rcon_core.bridge.threaded import new_event_loop
+
+        with asyncio.Runner(loop_factory=new_event_loop) as runner:
+            runner.run(client_foxglove(url, n, "picows" if kind == "foxglove" else "websockets"))
     else:
         client_roslibpy(url, n)
 
@@ -895,21 +902,23 @@ def targets(summary: dict[str, Any]) -> list[tuple[str, float, float, str, bool]
     return out
 
 
-def foxglove_targets(rounds: list[dict[str, dict[str, float]]]) -> list[tuple[str, float, float, str, bool]]:
-    """The Foxglove link against the rosbridge link's best encoding, per round then the median: small ingest
+def foxglove_targets(rounds: list[dict[str, dict[str, float]]], fox: str = "foxglove",
+                     rcon: str = "rcon") -> list[tuple[str, float, float, str, bool]]:
+    """The Foxglove link against the rosbridge link's best encoding on the same transport (``foxglove`` and
+    ``rcon``: picows; ``foxglove_ws`` and ``rcon_ws``: websockets), per round then the median: small ingest
     CPU per message (rosbridge_us / foxglove_us >= 1/1.2) and image frames/s (foxglove / the better of
     rosbridge JSON and CBOR >= 1/1.2)."""
     small, image = [], []
     for rnd in rounds:
-        fx, rc = rnd.get("foxglove", {}), rnd.get("rcon", {})
+        fx, rc = rnd.get(fox, {}), rnd.get(rcon, {})
         if fx.get("small_cpu_us") and rc.get("small_cpu_us"):
             small.append(rc["small_cpu_us"] / fx["small_cpu_us"])
         best = max(rc.get("image_json_rate", 0.0), rc.get("image_cbor_rate", 0.0))
         if fx.get("image_cbor_rate") and best:
             image.append(fx["image_cbor_rate"] / best)
     out = []
-    for what, vals in (("foxglove small ingest CPU within 1.2x of rosbridge (rcon_us/foxglove_us) >= 0.83", small),
-                       ("foxglove image frames/s within 1.2x of rosbridge's best encoding (ratio) >= 0.83", image)):
+    for what, vals in ((f"{fox} small ingest CPU within 1.2x of rosbridge ({rcon}_us/{fox}_us) >= 0.83", small),
+                       (f"{fox} image frames/s within 1.2x of rosbridge's best encoding ({rcon}) >= 0.83", image)):
         value = _med(vals)
         out.append((what, value, 1 / 1.2, _spread(vals), bool(vals) and value >= 1 / 1.2))
     return out
@@ -957,7 +966,8 @@ def print_report(summary: dict[str, Any], kinds: list[str]) -> None:
 #: what each client can do (roslibpy has no CBOR decoding)
 ALL_PHASES = ("small", "rtt", "image_json", "image_cbor")
 PHASES = {k: ALL_PHASES for k in CLIENTS + OPTIONAL} | {"roslibpy": ("small", "rtt", "image_json"),
-                                                         "foxglove": ("small", "rtt", "image_cbor")}
+                                                         "foxglove": ("small", "rtt", "image_cbor"),
+                                                         "foxglove_ws": ("small", "rtt", "image_cbor")}
 
 
 def node_ready() -> str | None:
@@ -1110,6 +1120,8 @@ def main(argv: list[str] | None = None) -> int:
     checks = targets(summary)
     if {"rcon", "foxglove"} <= set(kinds):
         checks += foxglove_targets(rounds)
+    if {"rcon_ws", "foxglove_ws"} <= set(kinds):
+        checks += foxglove_targets(rounds, "foxglove_ws", "rcon_ws")
     if checks:
         print("targets:")
         for what, value, threshold, spread, met in checks:

@@ -47,7 +47,6 @@ def main(argv: list[str] | None = None) -> int:
     from rcon_core.app.demo import demo_workspace
     from rcon_core.app.main import load_plugins
     from rcon_core.app.main_window import MainWindow
-    from rcon_core.app.replay_bar import install_replay_bar
     from rcon_core.bridge import ConnectionState
     from rcon_core.sim import SimServer
     from rcon_core.sim.playback import played_in_thread
@@ -94,7 +93,7 @@ def main(argv: list[str] | None = None) -> int:
             win = MainWindow(AppConfig(Path(tmp) / "cfg2"), plugins, layout_path=layout)
             win.resize(*SIZE)
             win.show()
-            bar = install_replay_bar(win, server, player)
+            bar = win.fleet_ui.recordings.play_first(server, player)
             wait_until(lambda: win.connection.state is ConnectionState.CONNECTED, "the recording's robot")
             settle(1000)
             bar.seek(player.duration / 2)

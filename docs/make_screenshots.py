@@ -472,7 +472,7 @@ def display(out: Path) -> list[Path]:
             win.show()
             QTest.qWaitForWindowExposed(win)
             try:
-                set_display(win, look, text_size)
+                set_display(win.config, win.notice, look, text_size)
                 win.connect_to(robot.url, remember=False)
                 wait_until(lambda win=win: win.connection.state is ConnectionState.CONNECTED, "the connection")
                 shown = {w.id for w in win.controller.canvas.widgets}

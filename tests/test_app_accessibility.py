@@ -62,8 +62,8 @@ def test_the_demo_has_no_nameless_control(qtbot, tmp_path, bundled):
             window.add_panel.cancel()
             # the dialogs
             window.canvas_actions["display"].trigger()
-            walk(window.display_dialog, "Display dialog", found)
-            window.display_dialog.close()
+            walk(window.display.dialog, "Display dialog", found)
+            window.display.dialog.close()
             window.canvas_actions["robots"].trigger()
             walk(window.fleet_ui.robots_dialog, "Robots dialog", found)
             window.fleet_ui.robots_dialog.close()

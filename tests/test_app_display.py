@@ -45,7 +45,7 @@ def standard_look():
 def display(window, qtbot, button: str) -> None:
     """Canvas ▾ → Display…, tap ``button`` (an object name: "theme-night", "text-200"), close."""
     window.canvas_actions["display"].trigger()
-    dialog = window.display_dialog
+    dialog = window.display.dialog
     qtbot.waitUntil(dialog.isVisible, timeout=TIMEOUT_MS)
     tap(dialog.findChild(QtWidgets.QPushButton, button))
     snap(dialog, f"display-{button}")
@@ -166,7 +166,7 @@ def test_the_whole_window_follows_the_text_size_without_a_cut_at_1024x600(qtbot,
             assert window.size() == QtCore.QSize(1024, 600) and problems(window) == []
             window.canvas_actions["display"].trigger()  # the dialog itself
             settle(200)
-            assert problems(window.display_dialog) == []
-            window.display_dialog.close()
+            assert problems(window.display.dialog) == []
+            window.display.dialog.close()
         finally:
             window.shutdown()

@@ -36,9 +36,9 @@ def window(qtbot, tmp_path, sim_thread, plugins):
 
 
 def envelope_dialog(window, qtbot):
-    qtbot.waitUntil(lambda: getattr(window, "envelope_dialog", None) is not None
-                    and window.envelope_dialog.isVisible(), timeout=TIMEOUT_MS)
-    return window.envelope_dialog
+    qtbot.waitUntil(lambda: window.envelope.dialog is not None
+                    and window.envelope.dialog.isVisible(), timeout=TIMEOUT_MS)
+    return window.envelope.dialog
 
 
 def type_into(edit: QtWidgets.QLineEdit, text: str) -> None:
@@ -109,7 +109,7 @@ def test_while_the_operator_lock_is_on_the_envelope_needs_the_pin(window, qtbot)
     window.canvas_actions["envelope"].trigger()
     pin = pin_dialog(window, qtbot)
     assert "change the safety envelope" in pin.findChild(type(pin.message), "pinPrompt").text()
-    assert getattr(window, "envelope_dialog", None) is None
+    assert window.envelope.dialog is None
     type_pin(pin, "2468", pad=True)
     tap(pin.ok)
     dialog = envelope_dialog(window, qtbot)  # the right PIN opens it
@@ -283,9 +283,9 @@ def test_a_widget_placed_beyond_the_envelope_is_kept_only_when_the_operator_says
         panel.form.editor("maximum").setValue(5.0)
         before = len(window.controller.canvas.widgets)
         tap(panel.place_button)
-        qtbot.waitUntil(lambda: getattr(window, "beyond_dialog", None) is not None
-                        and window.beyond_dialog.isVisible(), timeout=TIMEOUT_MS)
-        box = window.beyond_dialog
+        qtbot.waitUntil(lambda: window.envelope.beyond_dialog is not None
+                        and window.envelope.beyond_dialog.isVisible(), timeout=TIMEOUT_MS)
+        box = window.envelope.beyond_dialog
         assert "linear.x up to 5 m/s: the safety envelope holds it to 1 m/s" in box.informativeText()
         assert len(window.controller.canvas.widgets) == before + 1
         [button] = [b for b in box.buttons() if b.objectName() == answer]

@@ -23,7 +23,7 @@ from rcon_core.foxglove.testing import FoxPeer
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Role
 
-pytestmark = pytest.mark.usefixtures("qapp")
+pytestmark = pytest.mark.usefixtures("qapp", "transport")  # every test runs on each WebSocket transport
 pytest.importorskip("rcon_widgets_std")
 pytest.importorskip("rcon_widgets_sensors")
 pytest.importorskip("rcon_widgets_map")

@@ -75,14 +75,12 @@ def test_record_control_records_the_canvas_topics_and_what_the_operator_sent(qtb
 
 
 def test_a_recording_opened_as_the_robot_plays_seeks_and_sends_nothing(qtbot, tmp_path, plugins):
-    from rcon_core.app.replay_bar import install_replay_bar
-
     with played_in_thread(str(DEMO_BAG), paused=True) as (server, player):
         win = next(window_session(qtbot, tmp_path / "cfg", plugins))
         odom = place(win, "std.label", Binding("/odom", "nav_msgs/Odometry", "subscribe",
                                                ("pose.pose.position.x",)), 24, "x")
         rogue = place(win, "test.rogue", Binding("/cmd_vel", "geometry_msgs/Twist", "publish"), 288, "Teleop")
-        bar = install_replay_bar(win, server, player)
+        bar = win.fleet_ui.recordings.play_first(server, player)
         assert win.replay is bar and "commands go nowhere" in bar.words.text()
         qtbot.waitUntil(lambda: win.connection.state.value == "connected", timeout=10_000)
         qtbot.waitUntil(lambda: bool(hosted(win, qtbot, rogue.id).model.view_only), timeout=10_000)

@@ -14,7 +14,14 @@ import numpy as np
 import orjson
 import pytest
 
-from rcon_core.bridge.protocol import DecodedTooBig, decode_binary, json_decoded_size
+from rcon_core.bridge import protocol
+from rcon_core.bridge.protocol import (
+    JSON_MOST_PER_BYTE,
+    DecodedTooBig,
+    check_json_size,
+    decode_binary,
+    json_decoded_size,
+)
 from rcon_core.loopback import HostileServer
 from rcon_core.testing import connected, until
 
@@ -42,6 +49,34 @@ def measured(text: bytes) -> int:
 def test_the_estimate_covers_what_parsing_makes(text):
     assert json_decoded_size(text) >= 0.9 * measured(text)
     assert json_decoded_size(text.decode()) == json_decoded_size(text)
+
+
+@pytest.mark.parametrize("text", [
+    b"[" + b",".join([b"{}"] * 10_000) + b"]",
+    b'{"":' * 5_000 + b"1" + b"}" * 5_000,
+    b"[" * 5_000 + b"]" * 5_000,
+    b"[" + b",".join([b'""'] * 10_000) + b"]",
+    b"[" + b",".join([b"0.5"] * 10_000) + b"]",
+], ids=["empty-objects", "nested-objects", "nested-lists", "empty-strings", "floats"])
+def test_no_frame_counts_for_more_than_the_most_per_byte(text):
+    """The shortcut in check_json_size (a frame shorter than budget / JSON_MOST_PER_BYTE is not counted)
+    is sound only if no JSON text's estimate is above that many bytes per byte."""
+    assert json_decoded_size(text) <= JSON_MOST_PER_BYTE * len(text)
+
+
+def test_a_short_frame_is_not_counted_a_long_one_is(monkeypatch):
+    """Counting cost ten times the parse of a 1.2 MB JSON camera frame (6 ms against 0.6; bench_bridge's
+    image JSON phase: 7.1 ms a frame against 1.2 before the budget)."""
+    counted: list[int] = []
+    real = protocol.json_decoded_size
+    monkeypatch.setattr(protocol, "json_decoded_size", lambda raw: counted.append(len(raw)) or real(raw))
+    frame = orjson.dumps({"data": base64.b64encode(bytes(900_000)).decode()})
+    check_json_size(frame, 128 << 20)  # 1.2 MB under a 128 MB budget: cannot be over it
+    assert counted == []
+    check_json_size(frame, len(frame) * JSON_MOST_PER_BYTE - 1)  # could be: counted, and well under it
+    assert counted == [len(frame)]
+    with pytest.raises(DecodedTooBig):
+        check_json_size(b"[" + b",".join([b"{}"] * 10_000) + b"]", 1 << 20)
 
 
 def test_cbor_typed_arrays_and_maps_are_counted_as_they_are_decoded():

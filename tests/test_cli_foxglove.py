@@ -13,6 +13,8 @@ from rcon_core.cli.main import main
 from rcon_core.foxglove.testing import FoxPeer
 from rcon_core.msgs import TypeRegistry
 
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each WebSocket transport
+
 REG = TypeRegistry.standard(ros2=True)
 
 

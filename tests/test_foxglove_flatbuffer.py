@@ -26,6 +26,8 @@ from rcon_core.record.foxglove_source import recorder_for, wait_profile
 from rcon_core.record.writer import McapSink
 from rcon_core.testing import until
 
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each WebSocket transport
+
 
 def get_schema(name: str) -> bytes:
     """The ``.bfbs`` Foxglove ships beside its generated class."""

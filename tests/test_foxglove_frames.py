@@ -7,11 +7,14 @@ from __future__ import annotations
 import base64
 import json
 
+import pytest
 from fox_legacy import LegacyServer, recorded
 
 from rcon_core.foxglove import FoxgloveClient, wire
 from rcon_core.link import detect
 from rcon_core.testing import until
+
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each WebSocket transport
 
 
 def _frames(direction: str) -> list[str | bytes]:

@@ -17,6 +17,8 @@ from rcon_core.foxglove import FoxgloveClient
 from rcon_core.foxglove.fuzz import CHANNEL_ID, fuzz_frames
 from rcon_core.testing import until
 
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each WebSocket transport
+
 SEEDS = (11, 2026)
 FRAMES = 2500
 INFO = {"op": "serverInfo", "name": "hostile", "capabilities": ["parameters", "services", "connectionGraph"],

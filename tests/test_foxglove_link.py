@@ -6,6 +6,9 @@ what the protocol cannot do."""
 from __future__ import annotations
 
 import asyncio
+import base64
+import hashlib
+import json
 import ssl
 
 import pytest
@@ -19,12 +22,15 @@ from rcon_core.bridge import (
     NotConnectedError,
     ServiceError,
 )
+from rcon_core.bridge.errors import HandshakeError, LinkSettingsError
 from rcon_core.bridge.params import ParamNotFoundError, ParamRejectedError
 from rcon_core.foxglove import CANNOT, FoxgloveClient, NotFoxgloveError
 from rcon_core.foxglove.testing import FoxPeer
 from rcon_core.link import RobotLink, detect, open_client
 from rcon_core.msgs import TypeRegistry
 from rcon_core.testing import until
+
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each WebSocket transport
 
 REG = TypeRegistry.standard(ros2=True)
 
@@ -37,6 +43,71 @@ async def test_the_server_picks_the_sdk_subprotocol_and_says_what_it_is(fox, fox
     assert {"clientPublish", "parameters", "services", "connectionGraph", "time"} <= set(info["capabilities"])
     assert info["encodings"] == ["cdr", "json"]
     assert isinstance(fox_client, RobotLink) and fox_client.state is ConnectionState.CONNECTED
+
+
+async def test_the_link_runs_on_the_chosen_transport(fox, fox_client, transport):
+    """``RCON_TRANSPORT`` (the ``transport`` fixture) picks the WebSocket library, as for the rosbridge link; the
+    ``transport=`` parameter overrides it; the server's pick of subprotocol is read on either."""
+    assert fox_client.transport == transport and fox_client.link.name == transport
+    assert fox_client.link.subprotocol == "foxglove.sdk.v1"
+    assert await detect(fox.url, transport=transport) == "foxglove"
+    other = "websockets" if transport == "picows" else transport
+    forced = FoxgloveClient(fox.url, reconnect=False, transport=other)
+    await forced.connect(timeout=10)
+    try:
+        assert forced.link.name == other and forced.subprotocol == "foxglove.sdk.v1"
+    finally:
+        await forced.close()
+    with pytest.raises(LinkSettingsError, match="unknown transport"):
+        FoxgloveClient(fox.url, transport="carrier-pigeon")
+
+
+def _raw_server(picked: bytes, then: bytes = b""):
+    """A bare WebSocket server that answers the handshake picking ``picked`` and writes ``then`` (server
+    frames) in the same write as the answer, then waits for the client to go."""
+    async def answer(reader, writer):
+        head = (await reader.readuntil(b"\r\n\r\n")).decode()
+        key = next(line.split(":", 1)[1].strip() for line in head.split("\r\n")
+                   if line.lower().startswith("sec-websocket-key:"))
+        accept = base64.b64encode(hashlib.sha1((key + "258EAFA5-E914-47DA-95CA-C5AB0DC85B11").encode()).digest())
+        writer.write(b"HTTP/1.1 101 Switching Protocols\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+                     b"Sec-WebSocket-Accept: " + accept + b"\r\nSec-WebSocket-Protocol: " + picked + b"\r\n\r\n"
+                     + then)
+        await writer.drain()
+        await reader.read()
+        writer.close()
+
+    return asyncio.start_server(answer, "127.0.0.1", 0)
+
+
+async def test_a_subprotocol_that_was_not_offered_fails_the_handshake(transport):
+    """A server that answers with a subprotocol RCON did not offer is refused (RFC 6455), on both transports."""
+    server = await _raw_server(b"something.else")
+    try:
+        client = FoxgloveClient(f"ws://127.0.0.1:{server.sockets[0].getsockname()[1]}", reconnect=False)
+        with pytest.raises(HandshakeError):
+            await client.connect(timeout=10)
+    finally:
+        server.close()
+
+
+async def test_server_info_in_the_same_read_as_the_handshake_answer_is_not_lost(transport):
+    """picows hands over the frames that came in the read that brought the handshake's answer before the
+    connection is handed to the client: they are held until the session is attached, then delivered."""
+    info = json.dumps({"op": "serverInfo", "name": "eager", "capabilities": []}).encode()
+    status = json.dumps({"op": "status", "level": 1, "message": "hello", "id": "s1"}).encode()
+    frames = b"".join(bytes([0x81, len(p)]) + p for p in (info, status))
+    server = await _raw_server(b"foxglove.sdk.v1", frames)
+    try:
+        client = FoxgloveClient(f"ws://127.0.0.1:{server.sockets[0].getsockname()[1]}", reconnect=False)
+        await client.connect(timeout=10)
+        try:
+            assert client.describe()["server"] == "eager"
+            await until(lambda: "s1" in client.session.statuses, what="the status after serverInfo")
+        finally:
+            await client.close()
+    finally:
+        server.close()
 
 
 async def test_a_rosbridge_server_is_detected_as_rosbridge_and_refused_by_a_forced_foxglove_client(sim):
@@ -295,3 +366,46 @@ async def test_a_silent_stall_is_degraded_and_a_command_is_never_delivered_late(
             assert REG.deserialize_cdr("geometry_msgs/msg/Twist", data)["linear"]["x"] == 0.25
         finally:
             await client.close()
+
+
+async def test_text_and_binary_frames_keep_their_kind_and_order_through_the_writers_queue(transport):
+    """The Foxglove link writes text (JSON ops) and binary frames (client messages, service calls) through the
+    bridge's adapters: written at once, or -- while the transport is above its high-water mark -- queued and
+    drained by the writer in order, each still of its own kind (a queued binary command too)."""
+    import websockets
+
+    from rcon_core.foxglove.ws import FoxgloveReceiver, open_connection
+
+    got: list = []
+    done = asyncio.Event()
+
+    async def serve(ws):
+        async for m in ws:
+            got.append(m)
+            if len(got) == 6:
+                done.set()
+
+    async with websockets.serve(serve, "127.0.0.1", 0, subprotocols=["foxglove.sdk.v1"]) as server:
+        url = f"ws://127.0.0.1:{server.sockets[0].getsockname()[1]}"
+        receiver = FoxgloveReceiver(got.append, got.append, got.append)
+        link = await open_connection(transport, url, ["foxglove.sdk.v1"], receiver, got.append, ssl_context=None,
+                                     open_timeout=10, max_size=1 << 20)
+        writer = asyncio.create_task(link.run_writer())
+        try:
+            assert link.subprotocol == "foxglove.sdk.v1"
+            link.write(b'{"op":"a"}')
+            link.write_binary(b"\x01now")
+            link.drain.pause()  # as the transport says when its buffer is above the high-water mark
+            link.write(b'{"op":"b"}')
+            link.write_binary(b"\x01queued")
+            assert link.send_command(b"\x01command", None, 5.0, binary=True)
+            link.write(b'{"op":"c"}')
+            assert link.queued == 4
+            link.drain.resume()
+            link.event.set()
+            await asyncio.wait_for(done.wait(), 10)
+            assert got == ['{"op":"a"}', b"\x01now", '{"op":"b"}', b"\x01queued", b"\x01command", '{"op":"c"}']
+        finally:
+            writer.cancel()
+            await link.close()
+            link.release()

@@ -151,3 +151,28 @@ async def test_client_reads_cdr_of_a_type_that_does_not_tell_its_ros(sim_ros2: S
     finally:
         await a.close()
         await b.close()
+
+
+@pytest.mark.parametrize(("name", "msg"), [("std_msgs/msg/Float64", {"data": 1.5}), ("std_msgs/msg/Bool", {"data": True}),
+                                           ("std_msgs/msg/UInt16", {"data": 513}), ("std_msgs/msg/Int8", {"data": -3}),
+                                           ("geometry_msgs/msg/Vector3", {"x": 1.0, "y": -2.0, "z": 3.5})])
+def test_the_frame_reader_of_one_scalar_reads_in_place_as_the_general_path_does(name, msg):
+    """``frame_reader``'s short way for a message of one plain scalar (the Foxglove link's hot path) gives
+    what rosbags' CDR gives, at an offset, from bytes and from a view; any other length or a big-endian
+    header takes the general path, with its checks."""
+    from rcon_core.msgs.cdr import frame_reader
+
+    wire_type = STORE.types[name]
+    data = bytes(STORE.serialize_cdr(wire_type(**msg), name))
+    assert data == REG.serialize_cdr(name, msg)
+    read = frame_reader(REG.cdr_codec(), REG.resolve(name), 13)
+    head = b"\x01" + bytes(12)
+    assert read(head + data) == msg
+    assert read(memoryview(bytearray(head + data + b"junk"))[:13 + len(data)]) == msg
+    assert read(head + data + b"\x00\x00") == msg  # padding after the message: the general path's rule
+    big = bytes(STORE.serialize_cdr(wire_type(**msg), name, little_endian=False))
+    assert read(head + big) == msg
+    with pytest.raises(CdrError):
+        read(head + data[:-1] if len(data) > 5 else head + data[:4])
+    with pytest.raises(CdrError):
+        read(head + data + b"\x01\x02\x03\x04\x05")

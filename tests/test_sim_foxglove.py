@@ -20,6 +20,8 @@ from rcon_core.foxglove.gateway import FoxgloveGateway
 from rcon_core.sim import SimServer
 from rcon_core.testing import TEST_RATE_SCALE
 
+pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each WebSocket transport
+
 
 @pytest.fixture(scope="module")
 def fox_sim_url():

@@ -4,17 +4,20 @@ mode control (``✎ Edit | Operate``), kept out of ``main_window.py``.
 The bar only shows and reports: the window tells it the canvases (:meth:`CanvasBar.show_canvases`), the
 mode (:meth:`CanvasBar.show_mode`) and whether to be compact (:meth:`CanvasBar.set_compact`); a tab tap
 arrives as ``tabs.currentChanged``, a segment tap as :attr:`CanvasBar.mode_tapped` ``(locked, checked)``.
-The menu's actions run the slots the window passes in (``menu``: name -> (text, slot)).
+The menu's actions run the slots the window passes in (``menu``: name -> (text, slot)); those named in
+``gated`` (name -> what it does, in words) go through ``guard`` first: the operator lock's PIN while it is
+engaged (:data:`~rcon_core.app.operator_lock.Guard`), composed in when the bar is built.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 
 from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app import theme
 from rcon_core.app.canvas_tabs import CanvasTabs
+from rcon_core.app.operator_lock import Guard, no_guard
 
 __all__ = ["CanvasBar"]
 
@@ -29,7 +32,8 @@ class CanvasBar(QtWidgets.QFrame):
     mode_tapped = QtCore.Signal(bool, bool)  #: (the tapped segment's mode is locked, it is now checked)
 
     def __init__(self, menu: dict[str, tuple[str, Callable[[], object]]], undo: Callable[[], object],
-                 redo: Callable[[], object], parent: QtWidgets.QWidget | None = None) -> None:
+                 redo: Callable[[], object], parent: QtWidgets.QWidget | None = None, *,
+                 guard: Guard = no_guard, gated: Mapping[str, str] | None = None) -> None:
         super().__init__(parent)
         self.setObjectName("modeBar")
         self.tabs = CanvasTabs()  # whole names, scrolling when they do not all fit
@@ -64,10 +68,15 @@ class CanvasBar(QtWidgets.QFrame):
         self._locked = False
         self._padlock = False
         self.menu = QtWidgets.QMenu(self.menu_button)
+        gated = gated or {}
         for name, (text, slot) in menu.items():
             action = self.menu.addAction(text)
             action.setObjectName(f"canvas_{name}")
-            action.triggered.connect(lambda _checked=False, slot=slot: slot())
+            what = gated.get(name)
+            if what is None:
+                action.triggered.connect(lambda _checked=False, slot=slot: slot())
+            else:
+                action.triggered.connect(lambda _checked=False, slot=slot, what=what: guard(what, slot))
             self.canvas_actions[name] = action
         self.menu_button.setMenu(self.menu)
         row.addWidget(self.menu_button)

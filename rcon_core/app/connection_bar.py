@@ -25,6 +25,7 @@ from rcon_core.app.config import AppConfig
 from rcon_core.app.elided_label import ElidedLabel
 from rcon_core.app.link import BadUrl, LinkSettings, RobotConnection, check_url
 from rcon_core.app.link_settings import LinkSettingsDialog
+from rcon_core.app.operator_lock import Guard, no_guard
 from rcon_core.app.secret_store import SecretStore
 from rcon_core.app.theme import colour as theme_colour
 from rcon_core.app.theme import repolish, tinted_icon
@@ -60,10 +61,13 @@ class ConnectionBar(QtWidgets.QFrame):
 
     state_changed = QtCore.Signal(object)  # a ConnectionState
 
-    def __init__(self, link: RobotConnection, config: AppConfig, parent: QtWidgets.QWidget | None = None) -> None:
+    def __init__(self, link: RobotConnection, config: AppConfig, parent: QtWidgets.QWidget | None = None, *,
+                 guard: Guard = no_guard) -> None:
         super().__init__(parent)
         self.setObjectName("connectionBar")
         self.link, self.config = link, config
+        #: the operator lock's PIN gate on changing the robot (Connect/Disconnect, the Security dialog)
+        self.guard = guard
         self.secrets = SecretStore()
         #: settings from the command line (--ca-file, --client-cert/--client-key, the secret from
         #: RCON_AUTH_SECRET or --auth-secret-file): they apply to every robot of this run
@@ -111,7 +115,7 @@ class ConnectionBar(QtWidgets.QFrame):
         self.connect_button = QtWidgets.QPushButton("Connect")
         self.connect_button.setObjectName("connectButton")
         self.connect_button.setProperty("primary", True)
-        self.connect_button.clicked.connect(self.toggle)
+        self.connect_button.clicked.connect(lambda: self.guard("change the robot", self.toggle))
 
         # a square lock button (a word would not fit a 1024 px bar): the robot's connection settings
         self.settings_button = QtWidgets.QPushButton()
@@ -180,6 +184,11 @@ class ConnectionBar(QtWidgets.QFrame):
         QtCore.QTimer.singleShot(0, lambda: setattr(self, "_return_seen", False))
         self.connect_clicked()
 
+    def connect_to(self, url: str, *, remember: bool = True) -> None:
+        """Connect to ``url``; ``remember=False`` keeps it out of the URL history (the demo's robot)."""
+        self.url.setCurrentText(url)
+        self.connect_clicked(remember=remember)
+
     def connect_clicked(self, remember: bool = True) -> None:
         """Connect to the URL in the field (``remember=False``: not put in the URL history, e.g. the
         demo's embedded robot, whose port is gone after the run)."""
@@ -229,7 +238,14 @@ class ConnectionBar(QtWidgets.QFrame):
                             client_key=cli.client_key or saved["client_key"] or None, secret=secret)
 
     def open_settings(self, ask_secret: bool = False) -> LinkSettingsDialog | None:
-        """Open the Security dialog for the URL in the field; saving it connects with the new settings."""
+        """Open the Security dialog for the URL in the field (after the operator PIN while the lock is on:
+        it holds the robot's TLS files and secret); saving it connects with the new settings."""
+        opened: list[LinkSettingsDialog | None] = [None]
+        self.guard("change the robot's connection settings",
+                   lambda: opened.__setitem__(0, self._settings_dialog(ask_secret)))
+        return opened[0]
+
+    def _settings_dialog(self, ask_secret: bool) -> LinkSettingsDialog | None:
         try:
             url = check_url(normalize_url(self.url.currentText()))
         except BadUrl as exc:

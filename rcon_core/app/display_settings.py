@@ -8,21 +8,23 @@ switches to Sunlight without calling a supervisor).
 
 from __future__ import annotations
 
-from typing import Any
-
 from qtpy import QtGui, QtWidgets
 
 from rcon_core.app import theme
+from rcon_core.app.canvas_bar import CanvasBar
+from rcon_core.app.config import AppConfig
+from rcon_core.app.notice_bar import NoticeBar
 
-__all__ = ["DisplayDialog", "install", "set_display"]
+__all__ = ["DisplayDialog", "DisplayMenu", "set_display"]
 
 
-def set_display(window: Any, theme_name: str | None = None, text_size: int | None = None) -> None:
-    """Apply ``theme_name`` and/or ``text_size`` to the app now and save them in ``window``'s config."""
+def set_display(config: AppConfig, notice: NoticeBar | None, theme_name: str | None = None,
+                text_size: int | None = None) -> None:
+    """Apply ``theme_name`` and/or ``text_size`` to the app now and save them in ``config`` (a failure to
+    save is said on ``notice``)."""
     app = QtWidgets.QApplication.instance()
     if not isinstance(app, QtWidgets.QApplication):
         return
-    config = window.config
     chosen_theme = theme.check_theme(theme_name if theme_name is not None else config.theme)
     chosen_size = theme.check_text_size(text_size if text_size is not None else config.text_size)
     theme.apply(app, chosen_theme, chosen_size)
@@ -34,17 +36,18 @@ def set_display(window: Any, theme_name: str | None = None, text_size: int | Non
     try:
         config.set_display(chosen_theme, chosen_size)
     except OSError as exc:  # applied all the same; the next start may look different
-        window.notice.show_notice(f"⚠ The display settings could not be saved: {exc}")
+        if notice is not None:
+            notice.show_notice(f"⚠ The display settings could not be saved: {exc}")
 
 
 class DisplayDialog(QtWidgets.QDialog):
     """Two theme buttons and a row of text sizes: large, checkable, one tap each."""
 
-    def __init__(self, window: Any) -> None:
-        super().__init__(window)
+    def __init__(self, config: AppConfig, notice: NoticeBar | None, parent: QtWidgets.QWidget | None = None) -> None:
+        super().__init__(parent)
         self.setObjectName("displayDialog")
         self.setWindowTitle("Display")
-        self.window_ = window
+        self.config, self.notice = config, notice
         col = QtWidgets.QVBoxLayout(self)
         heading = QtWidgets.QLabel("Theme")
         heading.setProperty("role", "heading")
@@ -88,7 +91,7 @@ class DisplayDialog(QtWidgets.QDialog):
         self._show_current()
 
     def _pick(self, theme_name: str | None = None, text_size: int | None = None) -> None:
-        set_display(self.window_, theme_name, text_size)
+        set_display(self.config, self.notice, theme_name, text_size)
         self._show_current()
         self.adjustSize()
 
@@ -97,23 +100,27 @@ class DisplayDialog(QtWidgets.QDialog):
         self.size_buttons[theme.current_text_size()].setChecked(True)
 
 
-def install(window: Any) -> QtGui.QAction:
-    """Add *Display…* to ``window``'s Canvas menu (after the canvas actions, never PIN-gated)."""
-    menu = window.menu_button.menu()
-    action = QtGui.QAction("Display…", menu)
-    action.setObjectName("canvas_display")
-    before = window.canvas_actions.get("lock")
-    if before is not None:
-        menu.insertAction(before, action)
-    else:
-        menu.addAction(action)
-    window.canvas_actions["display"] = action
+class DisplayMenu:
+    """*Display…* in the canvas bar's menu (after the canvas actions, never PIN-gated); ``dialog``: the
+    last one opened."""
 
-    def open_dialog() -> None:
-        dialog = DisplayDialog(window)
+    def __init__(self, config: AppConfig, notice: NoticeBar, bar: CanvasBar, parent: QtWidgets.QWidget) -> None:
+        self.config, self.notice, self.parent = config, notice, parent
+        self.dialog: DisplayDialog | None = None
+        menu = bar.menu
+        self.action = action = QtGui.QAction("Display…", menu)
+        action.setObjectName("canvas_display")
+        before = bar.canvas_actions.get("lock")
+        if before is not None:
+            menu.insertAction(before, action)
+        else:
+            menu.addAction(action)
+        bar.canvas_actions["display"] = action
+        action.triggered.connect(self.open_dialog)
+
+    def open_dialog(self) -> DisplayDialog:
+        dialog = DisplayDialog(self.config, self.notice, self.parent)
         dialog.finished.connect(lambda _r: dialog.deleteLater())
-        window.display_dialog = dialog
+        self.dialog = dialog
         dialog.open()
-
-    action.triggered.connect(open_dialog)
-    return action
+        return dialog

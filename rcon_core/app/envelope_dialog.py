@@ -25,12 +25,16 @@ from typing import Any
 import attrs
 from qtpy import QtGui, QtWidgets
 
+from rcon_core.app.canvas_bar import CanvasBar
+from rcon_core.app.notice_bar import NoticeBar
+from rcon_core.app.operator_lock import Guard
 from rcon_core.bridge.envelope import MAX_ANGULAR, MAX_LINEAR, Envelope
+from rcon_core.canvas import Document
 from rcon_core.canvas.robots import Robot
 from rcon_core.plugins import WidgetCatalog
 from rcon_core.plugins.api import settings_commands
 
-__all__ = ["EnvelopeDialog", "beyond_envelope", "check_placed", "install", "parse_limit"]
+__all__ = ["EnvelopeControl", "EnvelopeDialog", "ask_beyond", "beyond_envelope", "parse_limit"]
 
 COLUMNS = ("Robot", "Max linear (m/s)", "Max angular (rad/s)")
 
@@ -152,63 +156,66 @@ class EnvelopeDialog(QtWidgets.QDialog):
         self.accept()
 
 
-def install(window: Any) -> None:
-    """Canvas ▾ → Safety envelope… (``canvas_envelope``): the PIN first while the operator lock is on."""
-    menu = window.menu_button.menu()
-    if menu is None:
-        return
-    action = QtGui.QAction("Safety envelope…", menu)
-    action.setObjectName("canvas_envelope")
-    before = window.canvas_actions.get("robots")
-    if before is not None and before in menu.actions():
-        idx = menu.actions().index(before)
-        after = menu.actions()[idx + 1] if idx + 1 < len(menu.actions()) else None
-        if after is not None:
-            menu.insertAction(after, action)
+class EnvelopeControl:
+    """Canvas ▾ → Safety envelope… (``canvas_envelope``, the PIN first while the operator lock is on) and
+    the check of a widget just placed; given the document, the notice bar, the lock's guard, the canvas
+    bar (its menu) and the dialogs' parent. ``dialog`` and ``beyond_dialog``: the last ones opened."""
+
+    def __init__(self, doc: Document, notice: NoticeBar, guard: Guard, bar: CanvasBar,
+                 parent: QtWidgets.QWidget) -> None:
+        self.doc, self.notice, self.parent = doc, notice, parent
+        self.dialog: EnvelopeDialog | None = None
+        self.beyond_dialog: QtWidgets.QMessageBox | None = None
+        menu = bar.menu
+        action = QtGui.QAction("Safety envelope…", menu)
+        action.setObjectName("canvas_envelope")
+        before = bar.canvas_actions.get("robots")
+        if before is not None and before in menu.actions():
+            idx = menu.actions().index(before)
+            after = menu.actions()[idx + 1] if idx + 1 < len(menu.actions()) else None
+            if after is not None:
+                menu.insertAction(after, action)
+            else:
+                menu.addAction(action)
         else:
             menu.addAction(action)
-    else:
-        menu.addAction(action)
-    action.triggered.connect(lambda: window.operator_lock.guard("change the safety envelope",
-                                                                lambda: open_dialog(window)))
-    window.canvas_actions["envelope"] = action
+        action.triggered.connect(lambda: guard("change the safety envelope", self.open_dialog))
+        bar.canvas_actions["envelope"] = action
 
+    def open_dialog(self) -> EnvelopeDialog:
+        """Open the dialog (window-modal; returns at once). OK replaces the robots in one undo step."""
+        dialog = EnvelopeDialog(self.doc.workspace.robots, self.parent)
 
-def open_dialog(window: Any) -> EnvelopeDialog:
-    """Open the dialog (window-modal; returns at once). OK replaces the robots in one undo step."""
-    dialog = EnvelopeDialog(window.doc.workspace.robots, window)
+        def apply() -> None:
+            from rcon_core.canvas import EditError
 
-    def apply() -> None:
-        from rcon_core.canvas import EditError
+            try:
+                self.doc.set_robots(dialog.robots())
+            except (EditError, ValueError) as exc:
+                self.notice.show_notice(f"⚠ {exc}")
 
+        dialog.accepted.connect(apply)
+        dialog.finished.connect(lambda _r: dialog.deleteLater())
+        self.dialog = dialog
+        dialog.open()
+        return dialog
+
+    def check_placed(self, draft: Any) -> QtWidgets.QMessageBox | None:
+        """After a widget from the add panel was placed: when its settings could command more than its
+        robot's safety envelope, ask whether to keep it (Cancel takes it away again, one undo). None when
+        nothing is beyond (nothing asked)."""
+        if draft is None:
+            return None
         try:
-            window.doc.set_robots(dialog.robots())
-        except (EditError, ValueError) as exc:
-            window.notice.show_notice(f"⚠ {exc}")
-
-    dialog.accepted.connect(apply)
-    dialog.finished.connect(lambda _r: dialog.deleteLater())
-    window.envelope_dialog = dialog
-    dialog.open()
-    return dialog
-
-
-def check_placed(window: Any, draft: Any) -> QtWidgets.QMessageBox | None:
-    """After a widget from the add panel was placed: when its settings could command more than its robot's
-    safety envelope, ask whether to keep it (Cancel takes it away again, one undo). None when nothing is
-    beyond (nothing asked)."""
-    if draft is None:
-        return None
-    try:
-        envelope = window.doc.workspace.robot(draft.robot).envelope
-    except KeyError:
-        return None
-    beyond = beyond_envelope(envelope, draft.binding, draft.settings, draft.catalog)
-    if not beyond:
-        return None
-    box = ask_beyond(window, beyond, lambda: None, otherwise=window.doc.undo, save="Keep it")
-    window.beyond_dialog = box
-    return box
+            envelope = self.doc.workspace.robot(draft.robot).envelope
+        except KeyError:
+            return None
+        beyond = beyond_envelope(envelope, draft.binding, draft.settings, draft.catalog)
+        if not beyond:
+            return None
+        box = ask_beyond(self.parent, beyond, lambda: None, otherwise=self.doc.undo, save="Keep it")
+        self.beyond_dialog = box
+        return box
 
 
 def ask_beyond(parent: QtWidgets.QWidget, problems: list[str], then: Any, otherwise: Any = None,

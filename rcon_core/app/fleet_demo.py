@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import contextlib
 from collections.abc import Iterator
-from typing import Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import attrs
 
@@ -37,6 +37,20 @@ from rcon_core.canvas.robots import Robot
 from rcon_core.plugins import Binding, PluginManager, Role
 
 from .demo import DEMO_ENVELOPE, DRIVE, pick_kind
+
+if TYPE_CHECKING:  # the window's side (Qt) only where there is a window
+    from .canvas_controller import CanvasController
+    from .fleet_ui import FleetUi
+
+
+class FleetWindow(Protocol):
+    """What the helpers below use of a window: its canvases and its robots."""
+
+    @property
+    def controller(self) -> CanvasController: ...
+
+    @property
+    def fleet_ui(self) -> FleetUi: ...
 
 MAX_ROBOTS = 6  #: the sim has six distinct camera scenes
 GAP = 16  #: between tiles and from the canvas's edge (the canvas grid: every rect below stays on it)
@@ -242,7 +256,7 @@ def fleet_workspace(n: int, plugins: PluginManager, room: tuple[int, int] | None
     return ws
 
 
-def fleet_room(window: Any) -> tuple[tuple[int, int], int]:
+def fleet_room(window: FleetWindow) -> tuple[tuple[int, int], int]:
     """The room the Fleet canvas gets in ``window`` as it is now (once its layout has settled): the canvas
     view's size without scroll bars, and the width a vertical scroll bar takes from it."""
     from qtpy import QtCore, QtWidgets  # the window's side: Qt only when there is a window
@@ -250,22 +264,24 @@ def fleet_room(window: Any) -> tuple[tuple[int, int], int]:
     for _ in range(3):
         QtWidgets.QApplication.sendPostedEvents(None, QtCore.QEvent.Type.LayoutRequest)
     scroll = window.controller.surface.scroll_area
+    if scroll is None:
+        raise RuntimeError("the canvas view is not built yet")
     size = scroll.maximumViewportSize()
     bar = scroll.verticalScrollBar().sizeHint().width()
     return (size.width(), size.height()), bar
 
 
-def fit_fleet(window: Any, n: int, plugins: PluginManager) -> None:
+def fit_fleet(window: FleetWindow, n: int, plugins: PluginManager) -> None:
     """Lay the fleet demo's workspace out afresh for ``window``'s canvas room (its first start: the layout
     fills the screen it is on). Replaces the workspace: call it before the robots connect."""
     room, bar = fleet_room(window)
-    window.open_workspace(fleet_workspace(n, plugins, room, bar))
+    window.controller.doc.replace_workspace(fleet_workspace(n, plugins, room, bar))
 
 
-def connect_fleet(window: Any, urls: list[str]) -> None:
+def connect_fleet(window: FleetWindow, urls: list[str]) -> None:
     """Connect the window's robots to the sims: the first through the connection bar, the others with
     run-time URLs. None of them is remembered (the ports are gone after this run)."""
-    window.connect_to(urls[0], remember=False)
+    window.fleet_ui.connect_robot("", urls[0])  # the first robot: the connection bar, not remembered
     for k, url in enumerate(urls[1:], start=2):
         window.fleet_ui.connect_robot(robot_id(k), url)
 

@@ -14,28 +14,46 @@ before the canvas controller does) and polled once per frame. It
   Parameters tab shows its parameters, new widgets are bound to it, the add panel's preview runs on it;
 - marks the widgets of a canvas that mixes robots (:mod:`rcon_core.app.robot_marks`);
 - adds "Robots…" and "Duplicate for robot ▸" to the Canvas menu.
+
+It is given the few parts it works with, typed (the document, the window's own link, the connection bar,
+the widget host and runtime, the side panel's lists, the canvas bar, the notice bar, the app config, the
+operator lock's guard and the window's question), and talks back through signals: ``fleet_changed`` (the
+runtime's clients or marks changed), ``rerun`` (the current canvas's widgets start again),
+``preview_stale``, ``side_robot_changed``, ``side_link_changed``/``side_client_changed`` (the Parameters
+tab follows the side panel's robot) and ``link_up`` (a robot's link came up). The window places
+:attr:`FleetUi.chips` under the connection bar and wires the signals.
 """
 
 from __future__ import annotations
 
 import logging
+from collections.abc import Sequence
+from functools import partial
+from pathlib import Path
 from typing import Any
 
 from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app import view_only
-from rcon_core.app.connection_bar import LIVE_STATES
+from rcon_core.app.canvas_bar import CanvasBar
+from rcon_core.app.catalog_panel import CatalogList
+from rcon_core.app.config import AppConfig
+from rcon_core.app.connection_bar import LIVE_STATES, ConnectionBar
 from rcon_core.app.fleet_links import FleetLinks
-from rcon_core.app.link import EMPTY_CATALOG, OFFLINE, BadUrl, as_state
+from rcon_core.app.link import EMPTY_CATALOG, OFFLINE, BadUrl, RobotConnection, as_state
+from rcon_core.app.live import LiveCanvas
+from rcon_core.app.notice_bar import NoticeBar
+from rcon_core.app.operator_lock import Guard
+from rcon_core.app.params_panel import Confirm
 from rcon_core.app.robot_chips import RobotChips, RobotPicker
 from rcon_core.app.robot_marks import apply_marks
 from rcon_core.app.robot_recordings import RobotRecordings
-from rcon_core.app.widget_host import RateMeter
+from rcon_core.app.widget_host import WidgetHost
 from rcon_core.bridge import ConnectionState
-from rcon_core.canvas import Change, ChangeKind, EditError
+from rcon_core.canvas import Change, ChangeKind, Document, EditError
 from rcon_core.canvas.fleet import Fleet
 from rcon_core.canvas.retarget import plan_retarget, setting_names
-from rcon_core.canvas.robots import robot_colour
+from rcon_core.canvas.robots import Robot, robot_colour
 
 log = logging.getLogger(__name__)
 
@@ -45,23 +63,34 @@ __all__ = ["FleetUi"]
 class FleetUi(QtCore.QObject):
     """Several robots in the main window (see the module docstring)."""
 
+    #: the side panel's robot (a robot id): its lists, parameters and new widgets
     side_robot_changed = QtCore.Signal(str)
+    #: the runtime's clients or view-only marks changed (the canvas runtime takes :meth:`fleet`)
+    fleet_changed = QtCore.Signal()
+    #: the current canvas's widgets start again (another robot list or mark)
+    rerun = QtCore.Signal()
+    #: the add panel's preview starts again (on another robot or client)
+    preview_stale = QtCore.Signal()
+    #: the side panel's robot's link (the Parameters tab follows it)
+    side_link_changed = QtCore.Signal(object)
+    #: the side panel's robot got a new client (or None: disconnected)
+    side_client_changed = QtCore.Signal(object)
+    #: a robot's link (not the first's: the connection bar says that one) came up
+    link_up = QtCore.Signal(str)
 
-    def __init__(self, window: Any) -> None:
-        super().__init__(window)
-        self.window = window
-        self.links = FleetLinks(window.link, secret_for=window.connection.secrets.get,
-                                overrides=lambda: window.connection.overrides)
+    def __init__(self, doc: Document, link: RobotConnection, connection: ConnectionBar, host: WidgetHost,
+                 live: LiveCanvas, lists: Sequence[CatalogList], bar: CanvasBar, notice: NoticeBar, config: AppConfig,
+                 guard: Guard, confirm: Confirm, parent: QtWidgets.QWidget) -> None:
+        super().__init__(parent)
+        self.doc, self.connection, self.host, self.live, self.bar = doc, connection, host, live, bar
+        self.notice, self.config, self.guard, self.confirm, self.dialog_parent = notice, config, guard, confirm, parent
+        self.links = FleetLinks(link, secret_for=connection.secrets.get, overrides=lambda: connection.overrides)
         # the bandwidth readout lists every robot's link (named when there are several)
-        window.connection.bandwidth.sources = self._bandwidth_sources
-        self.chips = RobotChips()
+        connection.bandwidth.sources = self._bandwidth_sources
+        self.chips = RobotChips()  # right under the connection bar (the window puts it there)
         self.chips.picked.connect(self.pick_side_robot)
-        root = window.centralWidget()
-        layout = root.layout() if root is not None else None
-        if isinstance(layout, QtWidgets.QBoxLayout):
-            layout.insertWidget(1, self.chips)  # right under the connection bar
         self.pickers = []
-        for lst in (window.topics, window.services, window.actions_list):
+        for lst in lists:
             picker = RobotPicker(lst.what)
             picker.picked.connect(self.pick_side_robot)
             col = lst.layout()
@@ -80,8 +109,8 @@ class FleetUi(QtCore.QObject):
         #: robot id -> why its link is not up (words of rcon_core.bridge.reasons), for its chip
         self.why: dict[str, str] = {}
         #: the players of the robots whose source is a recording file (robot_recordings.py)
-        self.recordings = RobotRecordings(window)
-        self._remove = window.doc.add_listener(self._doc_changed)
+        self.recordings = RobotRecordings(self.links, notice, self.why, Path(config.dir) / "recordings", self)
+        self._remove = doc.add_listener(self._doc_changed)
         self.links.on_client_changed(self._client_changed)
         self._sync_robots()
         self._add_menu()
@@ -91,7 +120,7 @@ class FleetUi(QtCore.QObject):
     # ------------------------------------------------------------------------------------ reading
     @property
     def robots(self) -> list[Any]:
-        return self.window.doc.workspace.robots
+        return self.doc.workspace.robots
 
     @property
     def first_id(self) -> str:
@@ -112,16 +141,28 @@ class FleetUi(QtCore.QObject):
     def robot_url(self, robot_id: str) -> str | None:
         """Where the robot is: the first robot's is the connection bar's (connected, else the field)."""
         if not robot_id or robot_id == self.first_id:
-            return self.window.connection.robot_url() or None
+            return self.connection.robot_url() or None
         return self.links.url_of(robot_id)
 
-    def config_view_only(self, robot_id: str) -> str | None:
-        """Why the robot may not be commanded, naming it (its URL's mark or its own flag; view_only.py)."""
-        return view_only.reason(self, robot_id)
+    def config_view_only(self, robot_id: str, url: str | None = None) -> str | None:
+        """Why the robot (at ``url``, default: where it is) may not be commanded, naming it (its URL's
+        mark, its own flag, or a recording played as it; view_only.py)."""
+        robot = view_only.find_robot(self.robots, robot_id)
+        if robot is not None and url is None and not robot.recording:
+            url = self.robot_url(robot.id)
+        return view_only.reason(robot, url, self.config, self.recordings.replay)
 
     def apply_guards(self) -> None:
-        """Each robot's link takes its view-only mark (rcon_core.bridge.guard; view_only.py)."""
-        view_only.guard_links(self)
+        """Each robot's link refuses, or stops refusing, to send anything that changes the robot
+        (rcon_core.bridge.guard); each asks again for every new client (a new URL may carry another mark)."""
+        for robot, link in self.links.items():
+            link.guard_for = partial(self.config_view_only, robot.id)
+            link.apply_guard()
+
+    def side_target(self) -> tuple[Robot | None, str]:
+        """The side panel's robot and its URL ("" when none yet): what the robot view-only action acts on."""
+        robot = view_only.find_robot(self.robots, self.side_robot)
+        return robot, (self.robot_url(robot.id) or "") if robot is not None else ""
 
     def side_fleet(self) -> Fleet:
         """The same, the side panel's robot first (a preview's binding names no robot or that one)."""
@@ -152,10 +193,10 @@ class FleetUi(QtCore.QObject):
         with nothing changed keeps every form, trail and value as it was."""
         now = self._seen
         if [(rid, vo) for rid, _n, vo in before] != [(rid, vo) for rid, _n, vo in now]:
-            self.window.controller.run_current()
+            self.rerun.emit()
         elif before != now:
-            host, live = self.window.host, self.window.live
-            for widget in self.window.controller.canvas.widgets:
+            host, live = self.host, self.live
+            for widget in self.doc.current.widgets:
                 hosted = host.hosted.get(widget.id)
                 if hosted is not None and hosted.model is not None and hosted.model.shows_every_robot:
                     live.restart(widget)
@@ -168,10 +209,8 @@ class FleetUi(QtCore.QObject):
         new = self.links.sync(robots)
         self.recordings.sync(robots)  # a robot gone, or given another file: its player stops
         self.apply_guards()  # a robot's own view-only flag may have changed, a new link needs its mark
-        self.window.host.first_robot = robots[0].id
-        controller = getattr(self.window, "controller", None)
-        if controller is not None:
-            controller.client = self.fleet()
+        self.host.first_robot = robots[0].id
+        self.fleet_changed.emit()
         if self.side_robot not in [r.id for r in robots]:
             self.side_robot = robots[0].id
             self._catalog_dirty = True
@@ -200,7 +239,7 @@ class FleetUi(QtCore.QObject):
                 elif rid != first:
                     self.links.connect_robot(rid)
                 elif self.first_url():  # the first robot's URL was set: the connection bar goes there
-                    self.window.connect_to(self.first_url())
+                    self.connection.connect_to(self.first_url())
             except (BadUrl, KeyError) as exc:
                 log.warning("robot %s: %s", rid, exc)
 
@@ -218,18 +257,17 @@ class FleetUi(QtCore.QObject):
         if not robot_id or robot_id == self.first_id:
             target = url or self.first_url()
             if target:
-                self.window.connect_to(target, remember=url is None)
+                self.connection.connect_to(target, remember=url is None)
             return
         self.links.connect_robot(robot_id, url)
 
     def _client_changed(self, robot_id: str, client: Any) -> None:
         """A new client for one robot: only its widgets are rebuilt on it. Disconnect (no client) keeps its
         running widgets and their last values, LINK DOWN then STALE, like a lost link."""
-        window = self.window
-        window.controller.client = self.fleet()
-        live = window.live
+        self.fleet_changed.emit()
+        live = self.live
         if not live.running:
-            window.controller.run_current()
+            self.rerun.emit()
         elif client is None:
             live.set_client(robot_id, OFFLINE, keep=True)
         else:
@@ -237,8 +275,8 @@ class FleetUi(QtCore.QObject):
         if robot_id == self.side_robot:
             self.catalogs.pop(robot_id, None)
             self._catalog_dirty = True
-            window.params_panel.client_changed(client)
-        window.preview.restart()
+            self.side_client_changed.emit(client)
+        self.preview_stale.emit()
 
     # ---------------------------------------------------------------------------------- side panel
     def bind(self, draft: Any) -> Any:
@@ -253,24 +291,17 @@ class FleetUi(QtCore.QObject):
             self.chips.set_current(self.side_robot)
             return
         self.side_robot = robot_id
-        self.window.rates = RateMeter()  # the topic rates of the robot now listed start afresh
         self.chips.set_current(robot_id)
         for picker in self.pickers:
             picker.set_current(robot_id)
         self._catalog_dirty = True
         self._params_follow()
-        self.window.preview.restart()
-        self.side_robot_changed.emit(robot_id)
+        self.preview_stale.emit()
+        self.side_robot_changed.emit(robot_id)  # the window's topic rates start afresh
 
     def _params_follow(self) -> None:
         """The Parameters tab shows the side panel's robot's parameters."""
-        panel = getattr(self.window, "params_panel", None)
-        if panel is None:
-            return
-        link = self.links.link(self.side_robot)
-        if panel.link is not link:
-            panel.link = link
-            panel.client_changed(link.client)
+        self.side_link_changed.emit(self.links.link(self.side_robot))
 
     def take_catalog(self) -> dict[str, list[tuple[str, str]]] | None:
         """Every robot's new catalogue is kept; the side robot's is returned when it changed (else None)."""
@@ -301,12 +332,11 @@ class FleetUi(QtCore.QObject):
     # ------------------------------------------------------------------------------------- polling
     def poll(self, _now: float = 0.0) -> None:
         """Once per frame: each robot's link state on its chip and its widgets; the marks."""
-        window = self.window
         first = self.first_id
         for robot, link in self.links.items():
             if robot.id == first:
-                state = window.connection.state  # the connection bar takes the first link's mailboxes
-                failure = window.connection.failure
+                state = self.connection.state  # the connection bar takes the first link's mailboxes
+                failure = self.connection.failure
                 self.why[first] = failure.text() if failure is not None else ""
             else:
                 ok, taken = link.state_box.take()
@@ -316,17 +346,17 @@ class FleetUi(QtCore.QObject):
             state = as_state(state)
             if self._states.get(robot.id) != state:
                 self._states[robot.id] = state
-                window.host.set_link_up(state is ConnectionState.CONNECTED, robot.id)
+                self.host.set_link_up(state is ConnectionState.CONNECTED, robot.id)
                 if state is ConnectionState.CONNECTED and robot.id != first:
-                    window.link_came_up()
+                    self.link_up.emit(robot.id)
             latency = link.latency if state in LIVE_STATES else None
             mark = self.config_view_only(robot.id)  # its URL's mark or its own flag, naming it
             self.chips.show_state(robot.id, state, latency,
                                   None if state is ConnectionState.CONNECTED else self.why.get(robot.id) or None, mark)
-        if self._marks_dirty or window.host.models_version != self._marked_models:
+        if self._marks_dirty or self.host.models_version != self._marked_models:
             self._marks_dirty = False
-            self._marked_models = window.host.models_version
-            apply_marks(window.host, window.doc.workspace)
+            self._marked_models = self.host.models_version
+            apply_marks(self.host, self.doc.workspace)
 
     def _take_failure(self, robot_id: str, link: Any) -> None:
         """Why a robot's link is not up, in words (its chip's tooltip); a failure that retrying cannot fix
@@ -346,18 +376,15 @@ class FleetUi(QtCore.QObject):
 
     # ----------------------------------------------------------------------------------- canvas menu
     def _add_menu(self) -> None:
-        window = self.window
-        menu = window.menu_button.menu()
-        if menu is None:
-            return
-        before = window.canvas_actions.get("delete")
+        menu = self.bar.menu
+        before = self.bar.canvas_actions.get("delete")
         self.retarget_menu = QtWidgets.QMenu("Duplicate for robot", menu)
         self.retarget_menu.setObjectName("retargetMenu")
         self.retarget_menu.aboutToShow.connect(self._fill_retarget_menu)
         retarget = menu.insertMenu(before, self.retarget_menu) if before is not None else menu.addMenu(
             self.retarget_menu)
         retarget.setObjectName("canvas_retarget")
-        window.canvas_actions["retarget"] = retarget
+        self.bar.canvas_actions["retarget"] = retarget
         self._fill_retarget_menu()
         robots = QtGui.QAction("Robots…", menu)
         if before is not None:
@@ -365,9 +392,8 @@ class FleetUi(QtCore.QObject):
         else:
             menu.addAction(robots)
         robots.setObjectName("canvas_robots")
-        robots.triggered.connect(lambda: self.window.operator_lock.guard("edit the robots",
-                                                                         self.open_robots_dialog))
-        window.canvas_actions["robots"] = robots
+        robots.triggered.connect(lambda: self.guard("edit the robots", self.open_robots_dialog))
+        self.bar.canvas_actions["robots"] = robots
 
     def _fill_retarget_menu(self) -> None:
         self.retarget_menu.clear()
@@ -382,7 +408,7 @@ class FleetUi(QtCore.QObject):
         widgets use are mapped into the robot's namespace and checked against the robot's topics, services
         and actions (``rcon_core.canvas.retarget``); when a name changes or the robot lacks one, the
         operator is told which before the copy is made (returns that question's dialog)."""
-        canvas = self.window.controller.canvas
+        canvas = self.doc.current
         label = next((r.label for r in self.robots if r.id == robot_id), robot_id)
         names = [n for w in canvas.widgets for n in (w.binding.name, *setting_names(w.settings))]
         catalog = self.catalogs.get(robot_id)
@@ -394,23 +420,23 @@ class FleetUi(QtCore.QObject):
             return self._duplicate(canvas.id, robot_id, {})
         if not plan.renames and not plan.missing:  # not connected: nothing to check, said, copied as it is
             self._duplicate(canvas.id, robot_id, {})
-            self.window.notice.show_notice(f"⚠ {plan.describe(label)}")
+            self.notice.show_notice(f"⚠ {plan.describe(label)}")
             return None
-        return self.window.confirm(f"Duplicate “{canvas.name}” for {label}?", plan.describe(label), "Duplicate",
+        return self.confirm(f"Duplicate “{canvas.name}” for {label}?", plan.describe(label), "Duplicate",
                                    lambda: self._duplicate(canvas.id, robot_id, plan.renames))
 
     def _duplicate(self, canvas_id: str, robot_id: str, renames: dict[str, str]) -> None:
         try:
-            dup = self.window.doc.duplicate_for_robot(canvas_id, robot_id, renames=renames)
+            dup = self.doc.duplicate_for_robot(canvas_id, robot_id, renames=renames)
         except EditError as exc:
-            self.window.notice.show_notice(f"⚠ {exc}")
+            self.notice.show_notice(f"⚠ {exc}")
             return
-        self.window.doc.switch_canvas(dup.id)
+        self.doc.switch_canvas(dup.id)
 
     def open_robots_dialog(self) -> QtWidgets.QDialog:
         from rcon_core.app.robots_dialog import RobotsDialog
 
-        dialog = RobotsDialog(self.robots, self.window)
+        dialog = RobotsDialog(self.robots, self.dialog_parent)
         dialog.accepted.connect(lambda: self._robots_edited(dialog))
         dialog.finished.connect(lambda _r: dialog.deleteLater())
         self.robots_dialog = dialog
@@ -419,9 +445,9 @@ class FleetUi(QtCore.QObject):
 
     def _robots_edited(self, dialog: Any) -> None:
         try:
-            self.window.doc.set_robots(dialog.robots())
+            self.doc.set_robots(dialog.robots())
         except EditError as exc:
-            self.window.notice.show_notice(f"⚠ {exc}")
+            self.notice.show_notice(f"⚠ {exc}")
 
     def shutdown(self) -> None:
         self._remove()

@@ -244,9 +244,7 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
     if fleet_urls:  # the demo's vessels: run-time URLs, never saved
         connect_fleet(window, fleet_urls)
     elif replay is not None:  # the recording's robot: view-only, its timeline under the connection bar
-        from rcon_core.app.replay_bar import install_replay_bar
-
-        install_replay_bar(window, *replay)
+        window.fleet_ui.recordings.play_first(*replay)
     else:
         window.connect_to(url or window.fleet_ui.first_url() or config.last_url, remember=not demo)
     if getattr(args, "screenshot", None):

@@ -3,10 +3,18 @@
 The parts live in their own modules: the connection bar (``connection_bar.py``), the side panel's lists
 (``catalog_panel.py``, ``params_panel.py``, ``palette_panel.py``) and whether it shows (``side_panel.py``),
 the canvas bar (``canvas_bar.py``), the canvases (``canvas_controller.py``), the add panel
-(``add_panel.py``), the Configure dialog (``configure_dialog.py``), canvas export/import
-(``canvas_files.py``), the layout file's messages (``layout_file.py``), the robots (``fleet_ui.py``) and the
-operator lock (``operator_lock.py``, ``lock_controls.py``). Problems go to the notice bar (``notice_bar.py``)
-floating over the canvas column.
+(``add_panel.py``) and adding from it (``adding.py``), the Configure dialog (``configure_dialog.py``),
+canvas export/import (``canvas_files.py``) and the canvas menu's questions (``canvas_dialogs.py``,
+``confirm.py``), the layout file's messages (``layout_file.py``), the robots (``fleet_ui.py``, with their
+recordings: ``robot_recordings.py``), the operator lock (``operator_lock.py``, ``lock_controls.py``), the
+safety envelope (``envelope_dialog.py``), the flight recorder (``record_control.py``) and the display
+settings (``display_settings.py``). Problems go to the notice bar (``notice_bar.py``) floating over the
+canvas column.
+
+Each part is given the few objects it works with, typed, never the window, and talks back through Qt
+signals that the window connects here (``_wire``). The operator lock is composed in: its ``guard`` is
+given to the canvas bar (with the actions it gates), the connection bar, the Parameters panel, the robots'
+and the envelope's menu entries when they are built.
 """
 
 from __future__ import annotations
@@ -22,31 +30,34 @@ from rcon_core.app import theme
 from rcon_core.app.accessibility import install as install_accessibility
 from rcon_core.app.accessibility import name_side_panel
 from rcon_core.app.add_panel import AddPanel
+from rcon_core.app.adding import Adding
 from rcon_core.app.canvas_bar import COMPACT_BELOW, CanvasBar
 from rcon_core.app.canvas_controller import CanvasController
+from rcon_core.app.canvas_dialogs import delete_current, rename_current
 from rcon_core.app.canvas_files import CanvasFiles
 from rcon_core.app.catalog_panel import CatalogList
 from rcon_core.app.children_editor import link_learner
 from rcon_core.app.config import AppConfig
 from rcon_core.app.configure_dialog import WidgetConfigurer
+from rcon_core.app.confirm import ask
 from rcon_core.app.connection_bar import ConnectionBar
-from rcon_core.app.display_settings import install as install_display
+from rcon_core.app.display_settings import DisplayMenu
 from rcon_core.app.draft import Candidate, Target, rank_widgets, targets_for
-from rcon_core.app.envelope_dialog import check_placed
-from rcon_core.app.envelope_dialog import install as install_envelope
+from rcon_core.app.envelope_dialog import EnvelopeControl
 from rcon_core.app.fleet_ui import FleetUi
-from rcon_core.app.focus import focus_into, has_focus_inside
+from rcon_core.app.focus import has_focus_inside
 from rcon_core.app.frame_clock import FrameClock, Waker
 from rcon_core.app.layout_file import LayoutFile
 from rcon_core.app.link import RobotConnection
 from rcon_core.app.live import LiveCanvas
-from rcon_core.app.lock_controls import install as install_lock_controls
+from rcon_core.app.lock_controls import GATED_ACTIONS, LockControls
 from rcon_core.app.notice_bar import NoticeBar
 from rcon_core.app.operator_lock import OperatorLock
 from rcon_core.app.palette_panel import PalettePanel
 from rcon_core.app.params_panel import ParamsPanel
 from rcon_core.app.preview import PreviewHost
-from rcon_core.app.record_control import install_record_control
+from rcon_core.app.record_control import install_record_control, small_screen
+from rcon_core.app.replay_bar import ReplayBar
 from rcon_core.app.side_panel import PANEL_MIN, SIDE_MIN, SidePanelPolicy
 from rcon_core.app.template_menu import add_template_menu
 from rcon_core.app.widget_host import RateMeter, WidgetHost
@@ -90,12 +101,12 @@ class MainWindow(QtWidgets.QMainWindow):
             theme.apply(app, config.theme, config.text_size)
         self.setAttribute(QtCore.Qt.WidgetAttribute.WA_AcceptTouchEvents)
         self.setWindowTitle("RCON")
-        self.config = config
+        self.config, self.plugins = config, plugins
         self._shut = False  #: shutdown() ran (closing is idempotent)
         self._close_now = False  #: close without asking for the PIN (after it, or on a signal)
-        #: the operator lock (PIN) over Operate mode; its controls are installed at the end (lock_controls)
+        #: the operator lock (PIN) over Operate mode, composed into every part that changes the robot or
+        #: the layout (their ``guard``); its menu controls: lock_controls
         self.operator_lock = OperatorLock(config, self)
-        self.plugins = plugins
         #: builds the demo layout (``rcon --demo``): used when there is none yet, or it cannot be read
         self.demo = demo
         self.types = types if types is not None else plugins.type_registry()  # with plugins' types
@@ -121,65 +132,65 @@ class MainWindow(QtWidgets.QMainWindow):
         self._last_rate_sample = 0.0
         self.catalog: dict[str, list[tuple[str, str]]] = {"topics": [], "services": [], "actions": []}
         self.first_paint_at: float | None = None
+        self._build_widgets()
+        self._open_workspace(layout_path)
+        self._build_parts()
+        self._wire()
+        self.resize(self.initial_size())
 
-        # ---- widgets
-        self.connection = ConnectionBar(self.link, config)
+    def _build_widgets(self) -> None:
+        """The connection bar, the side panel, the canvas bar, the add panel and the notice bar, laid out."""
+        guard = self.operator_lock.guard
+        self.connection = ConnectionBar(self.link, self.config, guard=guard)
         self.topics = CatalogList("topics", with_rate=True)
         self.services = CatalogList("services", with_rate=False)
         self.actions_list = CatalogList("actions", with_rate=False, empty=ACTIONS_EMPTY)
         self.palette_panel = PalettePanel()
-        self.palette_panel.set_specs(plugins.widgets())
+        self.palette_panel.set_specs(self.plugins.widgets())
+        self.params_panel = ParamsPanel(self.link, self.confirm, gate=guard)
         self.side = QtWidgets.QTabWidget()
         self.side.setObjectName("sidePanel")
-        self.side.addTab(self.topics, "Topics")
-        self.side.addTab(self.services, "Services")
-        self.side.addTab(self.actions_list, "Actions")
-        self.params_panel = ParamsPanel(self.link, self.confirm)
-        self.side.addTab(self.params_panel, "Params")
-        self.side.addTab(self.palette_panel, "Widgets")
+        for tab, name in ((self.topics, "Topics"), (self.services, "Services"), (self.actions_list, "Actions"),
+                          (self.params_panel, "Params"), (self.palette_panel, "Widgets")):
+            self.side.addTab(tab, name)
         self.side.setTabPosition(QtWidgets.QTabWidget.TabPosition.West)  # five tabs: all in sight
         self.side.setMinimumWidth(SIDE_MIN)
-
-        self.canvas_bar = CanvasBar({
+        self.canvas_bar = bar = CanvasBar({
             "new": ("New canvas", self.new_canvas),
             "rename": ("Rename…", self.rename_canvas_dialog),
             "duplicate": ("Duplicate", self.duplicate_canvas),
             "delete": ("Delete…", self.delete_canvas),
             "export": ("Export canvas…", lambda: self.canvas_files.export_dialog()),
             "import": ("Import canvas…", lambda: self.canvas_files.import_dialog()),
-            **({"reset_demo": ("Reset demo layout…", self.reset_demo_dialog)} if demo is not None else {}),
-        }, self.undo, self.redo)
-        bar = self.canvas_bar  # its parts, by the names the lock controls and the tests use
+            **({"reset_demo": ("Reset demo layout…", self.reset_demo_dialog)} if self.demo is not None else {}),
+        }, self.undo, self.redo, guard=guard, gated=GATED_ACTIONS)
+        # its parts, by the names the tests use
         self.tabs, self.menu_button, self.edit_button, self.lock_button = (
             bar.tabs, bar.menu_button, bar.edit_button, bar.lock_button)
         self.canvas_actions, self.canvas_buttons = bar.canvas_actions, bar.canvas_buttons
         self.tabs.currentChanged.connect(self._tab_changed)
         bar.mode_tapped.connect(self._mode_toggled)
-        self.template_menu = add_template_menu(self, bar.menu, before=self.canvas_actions["rename"])
-
+        self.template_menu = add_template_menu(self.plugins.canvas_templates(),
+                                               lambda path: self.canvas_files.import_from(path),
+                                               bar.menu, before=self.canvas_actions["rename"])
         self.stack = QtWidgets.QStackedWidget()
         self.add_panel = AddPanel(self.rank_widgets, self.targets_for, self.preview.build, self.preview.release,
                                   child_context=self.child_context)
         self.add_panel.setMinimumWidth(PANEL_MIN)
         self.add_panel.hide()
-        self.add_panel.place_requested.connect(self.place_draft)
-
-        center = QtWidgets.QWidget()
+        self.center = center = QtWidgets.QWidget()
         ccol = QtWidgets.QVBoxLayout(center)
         ccol.setContentsMargins(0, 0, 0, 0)
         ccol.setSpacing(0)
         ccol.addWidget(self.canvas_bar)
         ccol.addWidget(self.stack, 1)
-        split = QtWidgets.QSplitter()
+        self.split = split = QtWidgets.QSplitter()
         split.setHandleWidth(12)
-        split.addWidget(self.side)
-        split.addWidget(center)
-        split.addWidget(self.add_panel)
+        for part in (self.side, center, self.add_panel):
+            split.addWidget(part)
         split.setStretchFactor(1, 1)
         split.setSizes([SIDE_MIN, 900, 380])
         split.setChildrenCollapsible(False)
-        self.split = split
-        self.center = center
         # shows or hides the side panel (topics, services, widgets): room for the canvas on a small screen;
         # first on the connection bar, above the side panel
         self.side_toggle = QtWidgets.QPushButton()
@@ -192,54 +203,92 @@ class MainWindow(QtWidgets.QMainWindow):
         if isinstance(conn_row, QtWidgets.QBoxLayout):
             conn_row.insertWidget(0, self.side_toggle)
         root = QtWidgets.QWidget()
-        rcol = QtWidgets.QVBoxLayout(root)
-        rcol.setContentsMargins(0, 0, 0, 0)
-        rcol.setSpacing(0)
-        rcol.addWidget(self.connection)
+        self.rows = QtWidgets.QVBoxLayout(root)  # the connection bar, replay bars, robot chips, the rest
+        self.rows.setContentsMargins(0, 0, 0, 0)
+        self.rows.setSpacing(0)
+        self.rows.addWidget(self.connection)
         #: a layout file that could not be read: says so, that it will not be overwritten, and the way out
         self.notice = NoticeBar("fileBanner")
         self.banner = self.notice.label
-        rcol.addWidget(split, 1)
+        self.rows.addWidget(split, 1)
         self.setCentralWidget(root)
         # over the bottom edge of the canvas column: a notice never pushes a control away, and it leaves the
         # bars, the side panel and the add panel (its Place button) uncovered
         self.notice.float_over(center)
 
-        # ---- workspace
-        self.layout_path = Path(layout_path) if layout_path is not None else config.workspace_path
-        self.layout_file = LayoutFile(self.layout_path, self.notice, demo, lambda: self.controller.saver.flush())
+    def _open_workspace(self, layout_path: Path | None) -> None:
+        """The layout file, read (or the demo's first start), into the document."""
+        self.layout_path = Path(layout_path) if layout_path is not None else self.config.workspace_path
+        self.layout_file = LayoutFile(self.layout_path, self.notice, self.demo,
+                                      lambda: self.controller.saver.flush())
         self.store = self.layout_file.store
-        if not config.claim():  # one writer per config folder (config_lock.py): this window saves nothing
-            self.store.read_only_reason = config.read_only_reason
-        fresh = self.demo is not None and not self.layout_path.exists()  # the demo's first start
-        self.doc = Document(self.demo() if fresh and self.demo is not None else self.layout_file.load())
-        self.fleet_ui = FleetUi(self)  # one link per robot; hears a change of robots before the controller
+        if not self.config.claim():  # one writer per config folder (config_lock.py): this window saves nothing
+            self.store.read_only_reason = self.config.read_only_reason
+        self._fresh = self.demo is not None and not self.layout_path.exists()  # the demo's first start
+        self.doc = Document(self.demo() if self._fresh and self.demo is not None else self.layout_file.load())
+
+    def _build_parts(self) -> None:
+        """The robots, the canvases and the parts that add to the canvas menu, in the menu's order."""
+        guard = self.operator_lock.guard
+        # one link per robot; hears a change of robots before the controller
+        self.fleet_ui = FleetUi(self.doc, self.link, self.connection, self.host, self.live,
+                                (self.topics, self.services, self.actions_list), self.canvas_bar, self.notice,
+                                self.config, guard, self.confirm, self)
+        self.rows.insertWidget(1, self.fleet_ui.chips)  # right under the connection bar
         self.controller = CanvasController(self.doc, self.store, self.host, self.live, self.stack)
         self.controller.client = self.fleet_ui.fleet()
         self.controller.save_failed.connect(self.layout_file.save_failed)
-        self.controller.on_drop = self._dropped
         self.side_policy.hint_changed.connect(self.controller.set_hint)
-        self.canvas_files = CanvasFiles(self, self.controller, self.notice, plugins, self._in_edit_mode,
+        # Canvas ▾ → Safety envelope… (the PIN first while locked); the check of a widget just placed
+        self.envelope = EnvelopeControl(self.doc, self.notice, guard, self.canvas_bar, self)
+        self.adding = Adding(self.add_panel, self.controller, self.operator_lock, self.notice, self.side_policy,
+                             self.fleet_ui.bind, self.envelope.check_placed)
+        self.canvas_files = CanvasFiles(self, self.controller, self.notice, self.plugins, self.adding.in_edit_mode,
                                         self._dialog_closed)
-        self.configurer = WidgetConfigurer(self, self.doc, plugins, self.types, self.child_context,
+        self.configurer = WidgetConfigurer(self, self.doc, self.plugins, self.types, self.child_context,
                                            self._dialog_closed)
         self.controller.on_configure = self.configurer.open
-        self.controller.canvases_changed.connect(self._sync_tabs)
-        self.controller.current_changed.connect(self._sync_tabs)
-        self.controller.lock_changed.connect(self._show_lock)
-        self._sync_tabs()
-        self._show_lock(self.controller.canvas.locked)
-        self.controller.run_current()  # offline (LINK DOWN) until a robot is connected
-        if fresh or self.layout_file.demo_rebuilt:
-            self.controller.saver.flush()  # the demo layout is on disk from its first start on
+        self.lock_controls = LockControls(self.operator_lock, self.canvas_bar, self.connection, self.controller,
+                                          self.config, self.notice, self.fleet_ui.side_target)
+        recordings = self.fleet_ui.recordings
+        #: the Record control on the connection bar (the flight recorder: record_control.py)
+        self.record_control = install_record_control(
+            self.link.thread, Path(self.config.dir) / "recordings", self.doc, self.fleet_ui.fleet, self.notice,
+            self.connection, self.canvas_bar, self.clock, lambda: recordings.open_dialog(self),
+            compact=small_screen(self))
+        self.display = DisplayMenu(self.config, self.notice, self.canvas_bar, self)  # theme and text size
+        install_accessibility()  # the roles of the widgets that paint themselves
+        name_side_panel(self.side)
 
-        # ---- signals and the frame clock
-        self.topics.picked.connect(lambda n, t: self._start_adding(lambda: self.add_panel.start_from_topic(n, t)))
-        self.services.picked.connect(
-            lambda n, t: self._start_adding(lambda: self.add_panel.start_from_service(n, t)))
-        self.actions_list.picked.connect(
-            lambda n, t: self._start_adding(lambda: self.add_panel.start_from_action(n, t)))
-        self.palette_panel.picked.connect(self._palette_picked)
+    def _wire(self) -> None:
+        """The parts' signals, the shortcuts and the frame clock."""
+        controller, fleet, recordings = self.controller, self.fleet_ui, self.fleet_ui.recordings
+        controller.canvases_changed.connect(self._sync_tabs)
+        controller.current_changed.connect(self._sync_tabs)
+        controller.lock_changed.connect(self._show_lock)
+        fleet.fleet_changed.connect(lambda: setattr(controller, "client", fleet.fleet()))
+        fleet.rerun.connect(controller.run_current)
+        fleet.preview_stale.connect(self.preview.restart)
+        fleet.side_link_changed.connect(self.params_panel.follow)
+        fleet.side_client_changed.connect(self.params_panel.client_changed)
+        fleet.side_robot_changed.connect(self._side_robot_changed)
+        fleet.link_up.connect(lambda _robot: self.link_came_up())
+        recordings.bar_shown.connect(self._show_replay_bar)
+        recordings.bar_gone.connect(lambda bar: self.clock.remove(bar.poll))
+        recordings.connect_first.connect(lambda url: self.connect_to(url, remember=False))
+        recordings.marks_changed.connect(self.apply_view_only)
+        recordings.seeked.connect(controller.run_current)
+        self.lock_controls.robot_view_only_changed.connect(self.apply_view_only)
+        self._sync_tabs()
+        self._show_lock(controller.canvas.locked)
+        controller.run_current()  # offline (LINK DOWN) until a robot is connected
+        if self._fresh or self.layout_file.demo_rebuilt:
+            controller.saver.flush()  # the demo layout is on disk from its first start on
+        add, panel = self.adding.start, self.add_panel
+        self.topics.picked.connect(lambda n, t: add(lambda: panel.start_from_topic(n, t)))
+        self.services.picked.connect(lambda n, t: add(lambda: panel.start_from_service(n, t)))
+        self.actions_list.picked.connect(lambda n, t: add(lambda: panel.start_from_action(n, t)))
+        self.palette_panel.picked.connect(lambda kind: add(lambda: panel.start_from_widget(self.plugins.widget(kind))))
         self.connection.state_changed.connect(self._link_state)
         QtGui.QShortcut(QtGui.QKeySequence.StandardKey.Undo, self, self.undo)
         QtGui.QShortcut(QtGui.QKeySequence.StandardKey.Redo, self, self.redo)
@@ -250,29 +299,30 @@ class MainWindow(QtWidgets.QMainWindow):
         self.quit_action.setShortcutContext(QtCore.Qt.ShortcutContext.ApplicationShortcut)
         self.quit_action.triggered.connect(self.close)
         self.addAction(self.quit_action)
-        self.clock.add(self.connection.poll)
-        self.clock.add(self.fleet_ui.poll)
-        self.clock.add(self._poll_catalog)
-        self.clock.add(self._ageing_pass)
-        if collector is not None:
-            collector.soon(1.0, full=True)  # once the window is built and shown
-            self.clock.add(collector.poll)
+        for poll in (self.connection.poll, fleet.poll, self._poll_catalog, self._ageing_pass):
+            self.clock.add(poll)
+        if self.collector is not None:
+            self.collector.soon(1.0, full=True)  # once the window is built and shown
+            self.clock.add(self.collector.poll)
             self._remove_gc_listener = self.doc.add_listener(self._settle_after)
         self.clock.start()
         app = QtWidgets.QApplication.instance()
         if isinstance(app, QtGui.QGuiApplication):
             app.applicationStateChanged.connect(self._app_state_changed)
-        install_lock_controls(self)  # the operator lock's and the view-only controls
-        install_envelope(self)  # Canvas ▾ → Safety envelope… (the PIN first while locked)
-        #: the Record control on the connection bar (the flight recorder: record_control.py)
-        self.record_control: Any = install_record_control(self)
-        #: the timeline of a recording played as the robot (replay_bar.py), or None
-        self.replay: Any = None
-        self.replay_stack: Any = None  # what plays a recording opened from the menu (closed at shutdown)
-        install_display(self)  # Canvas ▾ → Display…: theme and text size
-        install_accessibility()  # the roles of the widgets that paint themselves
-        name_side_panel(self.side)
-        self.resize(self.initial_size())
+
+    @property
+    def replay(self) -> ReplayBar | None:
+        """The timeline of a recording played as the first robot (replay_bar.py), or None."""
+        return self.fleet_ui.recordings.replay
+
+    def _show_replay_bar(self, bar: ReplayBar) -> None:
+        """A recording's timeline: under the connection bar, on the frame clock."""
+        self.rows.insertWidget(self.rows.indexOf(self.connection) + 1, bar)
+        self.clock.add(bar.poll)
+
+    def _side_robot_changed(self, _robot: str) -> None:
+        self.rates = RateMeter()  # the topic rates of the robot now listed start afresh
+        self.lock_controls.show()
 
     # ------------------------------------------------------------------------------------ workspace
     def open_workspace(self, workspace: Workspace) -> None:
@@ -293,26 +343,10 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def confirm(self, question: str, detail: str, yes: str,
                 then: Callable[[], object]) -> QtWidgets.QMessageBox:
-        """A window-modal question with two large buttons (``yes`` and Cancel); ``then`` runs on yes.
-        Returns at once (the dialog is open), so the event loop and the robot link keep running."""
-        box = QtWidgets.QMessageBox(self)
-        box.setObjectName("confirmDialog")
-        box.setIcon(QtWidgets.QMessageBox.Icon.Warning)
-        box.setWindowTitle(question)
-        box.setText(question)
-        box.setInformativeText(detail)
-        ok = box.addButton(yes, QtWidgets.QMessageBox.ButtonRole.DestructiveRole)
-        ok.setObjectName("confirmYes")
-        cancel = box.addButton(QtWidgets.QMessageBox.StandardButton.Cancel)
-        cancel.setObjectName("confirmCancel")
-        box.setDefaultButton(cancel)
-        for button in (ok, cancel):
-            button.setMinimumWidth(max(button.sizeHint().width(), 160))
-        box.buttonClicked.connect(lambda button: then() if button is ok else None)
-        box.finished.connect(lambda _result: self._confirm_closed())
-        self.confirm_dialog = box
-        box.open()
-        return box
+        """A window-modal question with two large buttons (``yes`` and Cancel; ``confirm.py``); ``then``
+        runs on yes. Returns at once (the dialog is open), so the event loop and the robot link keep running."""
+        self.confirm_dialog = ask(self, question, detail, yes, then, self._confirm_closed)
+        return self.confirm_dialog
 
     def _sync_tabs(self, *_: Any) -> None:
         canvases = self.controller.workspace.canvases
@@ -329,37 +363,14 @@ class MainWindow(QtWidgets.QMainWindow):
         self.controller.add_canvas("Canvas")
 
     def rename_canvas_dialog(self) -> None:
-        index = self.controller.index
-        name, ok = QtWidgets.QInputDialog.getText(
-            self, "Rename canvas", "Name", text=self.controller.canvas.name
-        )
-        if ok:
-            try:
-                self.controller.rename_canvas(index, name)
-            except ValueError as exc:
-                self.notice.show_notice(f"⚠ {exc}")
+        rename_current(self, self.controller, self.notice)
 
     def duplicate_canvas(self) -> None:
         self.controller.duplicate_canvas(self.controller.index)
 
     def delete_canvas(self) -> None:
         """Delete the current canvas; one with widgets is deleted only after the operator confirms."""
-        canvas = self.controller.canvas
-
-        def delete() -> None:
-            if canvas in self.controller.workspace.canvases:
-                try:
-                    self.controller.delete_canvas(self.controller.workspace.canvases.index(canvas))
-                except ValueError as exc:
-                    self.notice.show_notice(f"⚠ {exc}")
-
-        if not canvas.widgets or len(self.controller.workspace.canvases) < 2:
-            delete()  # nothing to lose (or refused with a message: the last canvas stays)
-            return
-        count = len(canvas.widgets)
-        self.confirm(f"Delete canvas “{canvas.name}”?",
-                     f"It holds {count} widget{'s' if count != 1 else ''}. Undo (↶, Ctrl+Z) brings it back.",
-                     "Delete", delete)
+        delete_current(self.controller, self.notice, self.confirm)
 
     def undo(self) -> None:
         self.controller.undo()
@@ -420,32 +431,6 @@ class MainWindow(QtWidgets.QMainWindow):
             self.add_panel.cancel()
 
     # -------------------------------------------------------------------------------------- adding
-    def _palette_picked(self, kind: str) -> None:
-        self._start_adding(lambda: self.add_panel.start_from_widget(self.plugins.widget(kind)))
-
-    def _start_adding(self, start: Callable[[], object]) -> None:
-        """Open the add panel; on a locked canvas say why not and offer to switch to Edit mode."""
-        self._in_edit_mode("add widgets", start)
-
-    def _in_edit_mode(self, what: str, start: Callable[[], object]) -> None:
-        """Run ``start`` now in Edit mode; in Operate mode the notice says why not and offers to switch
-        (then runs it)."""
-        if not self.controller.canvas.locked:
-            start()
-            return
-
-        def unlock_and_start() -> None:
-            if self.operator_lock.engaged:
-                self.operator_lock.guard(what, unlock_and_start)
-                return
-            self.notice.dismiss()
-            self.controller.set_locked(False)
-            start()
-            self.focus_work_area()  # the tapped notice button is gone: not the URL field next in line
-
-        self.notice.show_notice(f"ℹ Switch to Edit mode to {what}: this canvas is in Operate mode "
-                                "(locked).", kind="info", actions=[("Switch to Edit mode", unlock_and_start)])
-
     def rank_widgets(self, type_name: str, role: Role) -> list[Candidate]:
         return rank_widgets(type_name, role, self.types, self.plugins)
 
@@ -453,32 +438,7 @@ class MainWindow(QtWidgets.QMainWindow):
         return targets_for(spec, role, self.catalog.get(f"{role.noun}s", []), self.types, self.plugins)
 
     def place_draft(self) -> None:
-        draft = self.fleet_ui.bind(self.add_panel.take_draft())  # the panel closes
-        if draft is not None:
-            self._settle_layout()  # the free spot is looked for in the canvas as it is without the panel
-            try:
-                self.controller.add_draft(draft)
-            except ValueError as exc:
-                self.notice.show_notice(f"⚠ {exc}")
-                return
-            check_placed(self, draft)  # beyond the robot's safety envelope: kept only when the operator says
-
-    def _settle_layout(self) -> None:
-        """Apply pending layout changes now (the add panel just closed, the side panel may be back), so
-        the canvas view has its new size."""
-        for _ in range(3):
-            QtWidgets.QApplication.sendPostedEvents(None, QtCore.QEvent.Type.LayoutRequest)
-
-    def _dropped(self, _surface: Any, point: QtCore.QPoint) -> None:
-        side_hidden = not self.side.isVisibleTo(self)
-        draft = self.fleet_ui.bind(self.add_panel.take_draft())  # the panel closes
-        if side_hidden and self.side.isVisibleTo(self):
-            # the side panel gave its room to the add panel; coming back now it would push the canvas
-            # (and the widget just dropped under the finger) sideways: it stays hidden until ▶ is tapped
-            self.side_policy.keep_hidden()
-        if draft is not None:
-            self.controller.add_draft(draft, point)
-            check_placed(self, draft)  # beyond the robot's safety envelope: kept only when the operator says
+        self.adding.place()
 
     def child_context(self, binding: Callable[[], Binding | None]) -> ChildContext:
         """What a settings form's children editor needs: types, widgets, the parent's binding, and a way to
@@ -489,16 +449,7 @@ class MainWindow(QtWidgets.QMainWindow):
         """After a confirm dialog (either answer) the keyboard is the window's again: Ctrl+Z, Ctrl+Q work."""
         self.activateWindow()
         if not has_focus_inside(self):
-            self.focus_work_area()
-
-    def focus_work_area(self) -> None:
-        """Give the keyboard to what the operator works on: the add panel's page when it is open, else
-        the canvas."""
-        if self.add_panel.isVisible():
-            page = self.add_panel.stack.currentWidget()
-            focus_into(page if page is not None else self.add_panel)
-        else:
-            self.controller.surface.setFocus(QtCore.Qt.FocusReason.OtherFocusReason)
+            self.adding.focus_work_area()
 
     def _dialog_closed(self, dialog: QtWidgets.QDialog) -> None:
         """The keyboard goes back to the window (Ctrl+Z right after OK undoes it), the dialog goes away."""
@@ -589,8 +540,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def connect_to(self, url: str, *, remember: bool = True) -> None:
         """Connect to ``url``; ``remember=False`` keeps it out of the URL history (the demo's robot)."""
-        self.connection.url.setCurrentText(url)
-        self.connection.connect_clicked(remember=remember)
+        self.connection.connect_to(url, remember=remember)
 
     # -------------------------------------------------------------------------------------- closing
     def closeEvent(self, event: QtGui.QCloseEvent) -> None:
@@ -624,8 +574,7 @@ class MainWindow(QtWidgets.QMainWindow):
                 pass
         self.add_panel.cancel()
         self.record_control.close_files()  # closed properly before the links go
-        if self.replay_stack is not None:
-            self.replay_stack.close()  # a recording opened from the menu stops playing
+        self.fleet_ui.recordings.close_menu_replay()  # a recording opened from the menu stops playing
         self.controller.shutdown()
         self.preview_live.stop()
         self.fleet_ui.shutdown()

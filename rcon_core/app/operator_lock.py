@@ -35,6 +35,15 @@ from rcon_core.app.pin import PIN_MAX, PIN_MIN, check_pin, make_record, needs_up
 MAX_TRIES = 5
 BACKOFF_S = 30.0
 
+#: ``guard(what, then)``: runs ``then`` now, or after the operator PIN while the lock is engaged
+#: (:meth:`OperatorLock.guard`); the parts that change the robot or the layout are built with one
+Guard = Callable[[str, Callable[[], object]], object]
+
+
+def no_guard(_what: str, then: Callable[[], object]) -> object:
+    """The guard of a part built without the operator lock (tests, embedders): runs ``then`` now."""
+    return then()
+
 
 class PinDialog(QtWidgets.QDialog):
     """Asks for a PIN (twice with ``repeat``), with a digit pad for a touch screen. ``check(pin)`` decides

@@ -29,6 +29,7 @@ from typing import Any
 from qtpy import QtCore, QtWidgets
 
 from rcon_core.app.frame_clock import Waker
+from rcon_core.app.operator_lock import Guard, no_guard
 from rcon_core.bridge import ViewOnlyError
 from rcon_core.bridge import params as P
 from rcon_core.bridge.params import ParamRejectedError
@@ -41,11 +42,7 @@ CONCURRENT_GETS = 16
 #: confirm(question, detail, yes, then): the main window's two-button question
 Confirm = Callable[[str, str, str, Callable[[], object]], object]
 #: gate(what, then): runs ``then`` now, or after the operator PIN while the lock is on
-Gate = Callable[[str, Callable[[], object]], object]
-
-
-def _now(_what: str, then: Callable[[], object]) -> object:
-    return then()
+Gate = Guard
 
 
 async def fetch_params(client: Any) -> tuple[bool, dict[str, dict[str, Any]]]:
@@ -99,12 +96,13 @@ def _children(head: QtWidgets.QTreeWidgetItem) -> list[QtWidgets.QTreeWidgetItem
 class ParamsPanel(QtWidgets.QWidget):
     """The Parameters tab. ``link`` is the app's :class:`~rcon_core.app.link.RobotConnection`."""
 
-    def __init__(self, link: Any, confirm: Confirm, parent: QtWidgets.QWidget | None = None) -> None:
+    def __init__(self, link: Any, confirm: Confirm, parent: QtWidgets.QWidget | None = None, *,
+                 gate: Gate = no_guard) -> None:
         super().__init__(parent)
         self.link = link
         self.confirm = confirm
-        #: the operator lock's PIN gate (the window sets it; by default nothing is asked)
-        self.gate: Gate = _now
+        #: the operator lock's PIN gate (the window's lock; by default nothing is asked)
+        self.gate: Gate = gate
         self.ros2 = False
         self.values: dict[str, Any] = {}
         self.loaded_for: Any = None  # the client the list was fetched from
@@ -204,6 +202,12 @@ class ParamsPanel(QtWidgets.QWidget):
                 handler(outcome)
             except Exception:  # one bad answer must not stop the others
                 log.exception("parameters panel: handling an answer failed")
+
+    def follow(self, link: Any) -> None:
+        """Show ``link``'s robot's parameters (the side panel's robot changed)."""
+        if self.link is not link:
+            self.link = link
+            self.client_changed(link.client)
 
     def client_changed(self, client: Any) -> None:
         """A new robot (or none): the old list goes; fetched again at once when the panel is in sight."""

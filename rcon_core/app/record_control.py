@@ -5,7 +5,7 @@ A button ("● Rec"; also Canvas ▾ → Record every robot) and, while recordin
 frame clock. On a screen narrower than 1000 px the bar has no room for more: the button is left out (the
 menu starts and stops), and the indicator, ``REC 01:23`` (the size in its tooltip), takes the round-trip
 time's place while recording. Each robot gets its own MCAP file
-in the recordings folder (``AppConfig.dir / "recordings"`` unless ``window.record_control.directory`` is
+in the recordings folder (``AppConfig.dir / "recordings"`` unless ``RecordControl.directory`` is
 set): the topics every canvas's widgets show, and on ``/rcon/operator/...`` every publish, call and
 answer, action goal, feedback, result and cancel, and parameter set that left the app for it, with the
 widget and the robot (``rcon_core/record/session.py``, tapped below every widget: ``bridge/tap.py``).
@@ -16,19 +16,28 @@ disk, a type without definition) is said on the notice bar too. A robot that is 
 recording is recorded from its new link into the same file; a dropped link shows as a gap (and on
 ``/rcon/link``).
 
-Installed by ``install_record_control(window)`` from the window's composition root; no other module of
-the app knows it.
+Installed by :func:`install_record_control` from the window's composition root, given the few parts it
+works with (the bridge thread, the document, the fleet's clients, the notice bar, the connection bar, the
+canvas bar, the frame clock); no other module of the app knows it.
 """
 
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from qtpy import QtGui, QtWidgets
 
+from rcon_core.app.canvas_bar import CanvasBar
+from rcon_core.app.connection_bar import ConnectionBar
+from rcon_core.app.frame_clock import FrameClock
+from rcon_core.app.notice_bar import NoticeBar
 from rcon_core.app.theme import repolish
+from rcon_core.bridge.threaded import BridgeThread
+from rcon_core.canvas import Document
+from rcon_core.canvas.fleet import Fleet
 from rcon_core.record.session import DEFAULT_BUDGET, AppRecording, topics_of
 
 log = logging.getLogger(__name__)
@@ -47,14 +56,18 @@ def _clock(seconds: float) -> str:
 class RecordControl(QtWidgets.QWidget):
     """The button and the indicator (see the module docstring)."""
 
-    def __init__(self, window: Any, parent: QtWidgets.QWidget | None = None, *, compact: bool = False) -> None:
+    def __init__(self, thread: BridgeThread, directory: Path, doc: Document, fleet: Callable[[], Fleet],
+                 notice: NoticeBar, latency_label: QtWidgets.QWidget, parent: QtWidgets.QWidget | None = None, *,
+                 compact: bool = False) -> None:
         super().__init__(parent)
         #: a small screen: no button on the bar (Canvas ▾ → Record every robot), and while recording a
         #: short indicator in the place of the round-trip time, so the bar is no wider than without it
         self.compact = compact
         self.action: QtGui.QAction | None = None
-        self.main = window
-        self.directory = Path(window.config.dir) / "recordings"
+        self.bridge_thread, self.doc, self.fleet, self.notice = thread, doc, fleet, notice
+        #: the round-trip time on the connection bar: while recording, the compact indicator takes its place
+        self.latency_label = latency_label
+        self.directory = directory
         self.budget: int | None = DEFAULT_BUDGET
         self.recording: AppRecording | None = None
         self._said: set[str] = set()
@@ -85,16 +98,16 @@ class RecordControl(QtWidgets.QWidget):
         self.compact = compact
         self.button.setVisible(not compact)
         recording = self.recording is not None and self.recording.active
-        self.main.connection.latency_label.setVisible(not (compact and recording))
+        self.latency_label.setVisible(not (compact and recording))
         self._show()
 
     # ------------------------------------------------------------------ start and stop
 
     def robots(self) -> list[tuple[str, str, Any, dict[str, str]]]:
-        ws = self.main.doc.workspace
+        ws = self.doc.workspace
         first = ws.robots[0].id
         out = []
-        for robot, client in self.main.fleet_ui.fleet().items():
+        for robot, client in self.fleet().items():
             live = client if hasattr(client, "session") else None
             out.append((robot.id, robot.label if hasattr(robot, "label") else robot.name, live,
                         topics_of(ws, robot.id, first)))
@@ -107,13 +120,13 @@ class RecordControl(QtWidgets.QWidget):
             self.start()
 
     def start(self) -> None:
-        rec = AppRecording(self.main.link.thread, self.directory, budget=self.budget)
+        rec = AppRecording(self.bridge_thread, self.directory, budget=self.budget)
         try:
             rec.start(self.robots())
         except Exception as exc:  # noqa: BLE001 - said, never raised into Qt
             rec.stop()
             self.button.setChecked(False)
-            self.main.notice.show_notice(f"Cannot record: {exc}")
+            self.notice.show_notice(f"Cannot record: {exc}")
             return
         self.recording = rec
         self._said.clear()
@@ -122,7 +135,7 @@ class RecordControl(QtWidgets.QWidget):
         if self.action is not None:
             self.action.setText("■ Stop recording")
         if self.compact:
-            self.main.connection.latency_label.hide()
+            self.latency_label.hide()
         self.indicator.show()
         self._show(force=True)
 
@@ -138,9 +151,9 @@ class RecordControl(QtWidgets.QWidget):
             self.action.setText("● Record every robot")
         self.indicator.hide()
         if self.compact:
-            self.main.connection.latency_label.show()
+            self.latency_label.show()
         files = ", ".join(Path(f).name for f in status.files)
-        self.main.notice.show_notice(f"ℹ Recorded {_clock(status.seconds)}, {status.size / 1e6:.1f} MB: {files} "
+        self.notice.show_notice(f"ℹ Recorded {_clock(status.seconds)}, {status.size / 1e6:.1f} MB: {files} "
                                        f"in {self.directory}", kind="info")
 
     # ------------------------------------------------------------------ the frame clock
@@ -174,37 +187,39 @@ class RecordControl(QtWidgets.QWidget):
         for text in (st.warning, st.problem):
             if text and text not in self._said:
                 self._said.add(text)
-                self.main.notice.show_notice(f"Recording: {text}")
+                self.notice.show_notice(f"Recording: {text}")
         if not st.recording and rec.active:
             self.stop()
 
 
-def install_record_control(window: Any) -> RecordControl:
+def install_record_control(thread: BridgeThread, directory: Path, doc: Document, fleet: Callable[[], Fleet],
+                           notice: NoticeBar, connection: ConnectionBar, bar: CanvasBar, clock: FrameClock,
+                           replay_dialog: Callable[[], object], *, compact: bool) -> RecordControl:
     """Put the Record control on the connection bar, before the link state, and on the frame clock; and
-    Canvas ▾ → Record every robot / Replay a recording…"""
-    screen = window.screen() or QtGui.QGuiApplication.primaryScreen()
-    compact = screen is not None and screen.availableGeometry().width() < COMPACT_BELOW
-    control = RecordControl(window, compact=compact)
-    row = window.connection.layout()
+    Canvas ▾ → Record every robot / Replay a recording… (``replay_dialog``). ``compact``: a small screen."""
+    control = RecordControl(thread, directory, doc, fleet, notice, connection.latency_label, compact=compact)
+    row = connection.layout()
     if isinstance(row, QtWidgets.QBoxLayout):
-        row.insertWidget(max(0, row.indexOf(window.connection.state_label)), control)
-    window.clock.add(control.poll)
-    window.record_control = control  # MainWindow.shutdown closes its files before the links go
-    menu = getattr(getattr(window, "canvas_bar", None), "menu", None)
-    if menu is not None:
-        from rcon_core.app.replay_bar import open_replay_dialog
-
-        record = QtGui.QAction("● Record every robot", menu)
-        record.setObjectName("record")
-        record.triggered.connect(control.toggle)
-        control.action = record
-        action = QtGui.QAction("Replay a recording…", menu)
-        action.setObjectName("replay_recording")
-        export = getattr(window, "canvas_actions", {}).get("export")
-        for a in (record, action):
-            if export is not None:  # beside the other file actions, before Export / Import
-                menu.insertAction(export, a)
-            else:
-                menu.addAction(a)
-        action.triggered.connect(lambda: open_replay_dialog(window))
+        row.insertWidget(max(0, row.indexOf(connection.state_label)), control)
+    clock.add(control.poll)
+    menu = bar.menu
+    record = QtGui.QAction("● Record every robot", menu)
+    record.setObjectName("record")
+    record.triggered.connect(control.toggle)
+    control.action = record
+    action = QtGui.QAction("Replay a recording…", menu)
+    action.setObjectName("replay_recording")
+    export = bar.canvas_actions.get("export")
+    for a in (record, action):
+        if export is not None:  # beside the other file actions, before Export / Import
+            menu.insertAction(export, a)
+        else:
+            menu.addAction(a)
+    action.triggered.connect(lambda: replay_dialog())
     return control
+
+
+def small_screen(widget: QtWidgets.QWidget) -> bool:
+    """``widget``'s screen is narrower than :data:`COMPACT_BELOW` (the compact control)."""
+    screen = widget.screen() or QtGui.QGuiApplication.primaryScreen()
+    return screen is not None and screen.availableGeometry().width() < COMPACT_BELOW

@@ -8,15 +8,17 @@ the current time and the length, and the words "REPLAY ... commands go nowhere".
 Seeking sends each topic's latest message before that time (the player) and restarts the canvas's widgets,
 so each shows the state at that time, not a trail from before (the map's track starts again there).
 
+The bar only drives the player and says ``seeked``; :class:`~rcon_core.app.robot_recordings.RobotRecordings`
+places it (``play_first``, ``open_dialog``) and the window restarts the widgets on ``seeked``.
+
 Commands go nowhere, three times over: the recording's robot is view-only in the app
-(``window.replay.reason`` is its view-only reason, ``view_only.reason``): its link refuses every command
+(``ReplayBar.reason`` is its view-only reason, ``view_only.reason``): its link refuses every command
 (``bridge/guard.py``) and its control widgets show the sentence and send nothing; and the player absorbs
 whatever reaches it anyway (``Player.absorbed``).
 """
 
 from __future__ import annotations
 
-import contextlib
 import logging
 from pathlib import Path
 from typing import Any
@@ -25,7 +27,7 @@ from qtpy import QtCore, QtWidgets
 
 log = logging.getLogger(__name__)
 
-__all__ = ["ReplayBar", "install_replay_bar", "SPEEDS", "open_replay_dialog"]
+__all__ = ["ReplayBar", "SPEEDS"]
 
 SPEEDS = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)
 STEPS = 1000  # slider resolution
@@ -39,10 +41,12 @@ def _time(seconds: float) -> str:
 class ReplayBar(QtWidgets.QFrame):
     """Drives ``player`` (thread-safe calls) and shows where it is; ``poll`` from the frame clock."""
 
-    def __init__(self, main: Any, server: Any, player: Any, parent: QtWidgets.QWidget | None = None) -> None:
+    #: the player went to another time (the widgets start again there)
+    seeked = QtCore.Signal()
+
+    def __init__(self, server: Any, player: Any, parent: QtWidgets.QWidget | None = None) -> None:
         super().__init__(parent)
         self.setObjectName("replayBar")
-        self.main = main
         self.server = server
         self.player = player
         self.url = server.url
@@ -105,9 +109,7 @@ class ReplayBar(QtWidgets.QFrame):
         """Go to ``seconds``: the player sends the state there and the widgets start again on it."""
         self.seeks += 1
         self.player.seek(seconds)
-        controller = getattr(self.main, "controller", None)
-        if controller is not None:
-            controller.run_current()  # fresh widgets: the state at that time, not a trail from before
+        self.seeked.emit()  # fresh widgets: the state at that time, not a trail from before
 
     def _slider_seconds(self) -> float:
         return self.slider.value() / STEPS * self.duration
@@ -133,44 +135,3 @@ class ReplayBar(QtWidgets.QFrame):
                 self.slider.setValue(value)
                 self.slider.blockSignals(False)
             self.time_label.setText(f"{_time(p.position)} / {_time(self.duration)}")
-
-
-def install_replay_bar(window: Any, server: Any, player: Any) -> ReplayBar:
-    """Put the timeline under the connection bar, mark the recording's robot view-only, and connect the
-    first robot to it (never kept in the URL history)."""
-    old = getattr(window, "replay", None)
-    if old is not None:
-        old.hide()
-    bar = ReplayBar(window, server, player)
-    root = window.centralWidget().layout()
-    if isinstance(root, QtWidgets.QBoxLayout):
-        root.insertWidget(root.indexOf(window.connection) + 1, bar)
-    window.replay = bar
-    window.clock.add(bar.poll)
-    window.connect_to(server.url, remember=False)
-    # the link refuses to send (bridge/guard.py), and widgets already running are rebuilt on ports that say so
-    window.apply_view_only()
-    return bar
-
-
-def open_replay_dialog(window: Any) -> None:
-    """Canvas ▾ → Replay a recording…: pick an .mcap, a .bag or a rosbag2 folder's file and play it."""
-    from rcon_core.record.files import RecordingError
-    from rcon_core.sim.playback import played_in_thread
-
-    path, _filter = QtWidgets.QFileDialog.getOpenFileName(
-        window, "Replay a recording", str(Path(window.config.dir) / "recordings"),
-        "Recordings (*.mcap *.bag *.db3 metadata.yaml);;All files (*)")
-    if not path:
-        return
-    if path.endswith(("metadata.yaml", ".db3")):
-        path = str(Path(path).parent)
-    stack = window.replay_stack
-    if stack is None:
-        stack = window.replay_stack = contextlib.ExitStack()
-    try:
-        server, player = stack.enter_context(played_in_thread(path))
-    except (RecordingError, OSError) as exc:
-        window.notice.show_notice(f"Cannot replay {exc}")
-        return
-    install_replay_bar(window, server, player)

@@ -2,6 +2,11 @@
 now or queued in order, the writer task, commands and their freshness limit, the end of the connection --
 and two helpers the adapters share, :class:`Drain` (write flow control) and :class:`Pings`.
 
+A link carries text frames (``write``, the rosbridge protocol's JSON) and binary frames (``write_binary``;
+the Foxglove protocol's client messages and service calls): a binary frame that has to wait in the queue
+waits as a :class:`Binary`.  ``link.subprotocol`` is the WebSocket subprotocol the server picked among those
+offered (``transport.open_link(subprotocols=...)``), or None.
+
 Test hooks (public, documented): ``link.queued`` (frames waiting for the writer), ``link.buffered()`` (bytes
 in the transport's write buffer), ``link.socket`` (the TCP socket), ``link.name`` (the transport).
 """
@@ -21,6 +26,12 @@ from .freshness import LinkWatch, TimedFrame, cut
 _monotonic = time.monotonic
 
 
+class Binary(bytes):
+    """A binary frame waiting in a link's queue (a text frame waits as its plain ``bytes``)."""
+
+    __slots__ = ()
+
+
 class Link:
     """One open connection: frames out (now or queued, in order), the writer task, the stall watch.
 
@@ -31,7 +42,7 @@ class Link:
     name = ""
 
     def __init__(self, on_stale: Callable[[Any], None]) -> None:
-        self.queue: deque[bytes | TimedFrame] = deque()
+        self.queue: deque[bytes | TimedFrame] = deque()  # a binary frame waits as a ``Binary``
         self.event = asyncio.Event()
         self.watch: LinkWatch | None = None  # set by the client's pinger when stall detection is on
         self.degraded = False  # the client's state is DEGRADED: commands are refused
@@ -40,17 +51,19 @@ class Link:
         self.receiver: Any = None  # the ``receive.Receiver`` its messages go to
         self.close_code: int | None = None
         self.close_reason = ""
+        #: the subprotocol the server picked in the handshake (None: none offered, or none picked)
+        self.subprotocol: str | None = None
         self._closed: asyncio.Future[None] = asyncio.get_running_loop().create_future()
 
     # -- what an adapter provides ------------------------------------------------------------------
 
-    def write_now(self, data: bytes) -> bool:
-        """Write one text frame now and return True, or False when it cannot right now (the connection is
-        not open, or the transport is above its high-water mark)."""
+    def write_now(self, data: bytes, binary: bool = False) -> bool:
+        """Write one text frame (a binary one when ``binary``) now and return True, or False when it cannot
+        right now (the connection is not open, or the transport is above its high-water mark)."""
         raise NotImplementedError
 
-    def send_queued(self, data: bytes) -> None:
-        """Write one text frame whatever the buffer holds (the writer task waited for :meth:`drained`);
+    def send_queued(self, data: bytes, binary: bool = False) -> None:
+        """Write one text frame (a binary one when ``binary``) whatever the buffer holds (the writer task waited for :meth:`drained`);
         raises :class:`LinkClosedError` when the connection is gone."""
         raise NotImplementedError
 
@@ -105,18 +118,25 @@ class Link:
         self.queue.append(data)
         self.event.set()
 
-    def send_command(self, data: bytes, pub: Any, max_age: float) -> bool:
-        """Write a frame with a freshness limit (see the module docstring); False when it was refused
-        because the link cannot carry it in time."""
+    def write_binary(self, data: bytes) -> None:
+        """:meth:`write` for a binary frame."""
+        if not self.queue and self.write_now(data, True):
+            return
+        self.queue.append(Binary(data))
+        self.event.set()
+
+    def send_command(self, data: bytes, pub: Any, max_age: float, binary: bool = False) -> bool:
+        """Write a frame (a binary one when ``binary``) with a freshness limit (see the module docstring);
+        False when it was refused because the link cannot carry it in time."""
         now = _monotonic()
         watch = self.watch
         if self.degraded or (watch is not None and watch.overdue(now) > max_age):
             return False
-        if not self.queue and self.write_now(data):
+        if not self.queue and self.write_now(data, binary):
             if watch is not None:
                 watch.command(now)
         else:
-            self.queue.append(TimedFrame(data, now + max_age, pub))
+            self.queue.append(TimedFrame(Binary(data) if binary else data, now + max_age, pub))
             self.event.set()
         return True
 
@@ -137,7 +157,10 @@ class Link:
                         if self.watch is not None:
                             self.watch.command(now)
                         item = item.data
-                    self.send_queued(item)
+                    if item.__class__ is Binary:
+                        self.send_queued(item, True)
+                    else:
+                        self.send_queued(item)
                 event.clear()
                 await event.wait()
         except LinkClosedError:

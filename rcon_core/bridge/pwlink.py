@@ -195,16 +195,16 @@ class PicowsLink(Link):
 
     # -- Link --------------------------------------------------------------------------------------
 
-    def write_now(self, data: bytes) -> bool:
+    def write_now(self, data: bytes, binary: bool = False) -> bool:
         if self.drain.paused or self.is_closed or self.ws.is_close_frame_sent:
             return False
-        self.ws.send(_TEXT, data)
+        self.ws.send(_BINARY if binary else _TEXT, data)
         return True
 
-    def send_queued(self, data: bytes) -> None:
+    def send_queued(self, data: bytes, binary: bool = False) -> None:
         if self.is_closed or self.ws.is_close_frame_sent:
             raise self.closed_error()
-        self.ws.send(_TEXT, data)
+        self.ws.send(_BINARY if binary else _TEXT, data)
 
     async def drained(self) -> None:
         if self.is_closed:
@@ -239,16 +239,20 @@ class PicowsLink(Link):
 
 
 async def open_picows(url: str, receiver: Any, on_stale: Any, *, ssl: _ssl.SSLContext | None,
-                      open_timeout: float, max_size: int) -> PicowsLink:
-    """Open one connection (see ``transport.open_link``)."""
+                      open_timeout: float, max_size: int, subprotocols: list[str] | None = None) -> PicowsLink:
+    """Open one connection (see ``transport.open_link``).  ``subprotocols`` are offered in the
+    ``Sec-WebSocket-Protocol`` request header (picows passes extra headers as they are) and the server's
+    pick is read from its response (``link.subprotocol``); a pick that was not offered fails the handshake,
+    as websockets does."""
     link = PicowsLink(receiver, on_stale, max_size)
     secure = url.startswith("wss://")
+    headers = {"Sec-WebSocket-Protocol": ", ".join(subprotocols)} if subprotocols else None
     try:
         ws, listener = await asyncio.wait_for(picows.ws_connect(
             lambda: link.listener, url, ssl_context=(ssl or _ssl.create_default_context()) if secure else None,
             websocket_handshake_timeout=open_timeout, enable_auto_ping=False, enable_auto_pong=True,
-            max_frame_size=max_size, logger_name="rcon", use_aiofastnet=False if secure else None),
-            open_timeout)
+            max_frame_size=max_size, logger_name="rcon", use_aiofastnet=False if secure else None,
+            extra_headers=headers), open_timeout)
     except picows.WSInvalidURL as exc:
         raise BadUrlError(f"not a valid rosbridge URL: {exc}") from None
     except picows.WSHandshakeError as exc:
@@ -260,6 +264,13 @@ async def open_picows(url: str, receiver: Any, on_stale: Any, *, ssl: _ssl.SSLCo
         raise
     if listener is None or link.is_closed:  # picows returns no listener when the server hung up
         raise HandshakeError("connection closed during the handshake", closed=True)
+    picked = ws.response.headers.getall("Sec-WebSocket-Protocol", []) if ws.response is not None else []
+    if picked:
+        if len(picked) > 1 or picked[0] not in (subprotocols or ()):
+            link.abort()
+            raise HandshakeError(f"the server picked the subprotocol {', '.join(picked)[:100]!r}, "
+                                 f"which was not offered")
+        link.subprotocol = picked[0]
     return link
 
 

@@ -74,14 +74,17 @@ def choose(setting: str | None = None) -> str:
 
 
 async def open_link(name: str, url: str, receiver: Any, on_stale: Callable[[Any], None], *,
-                    ssl: Any, open_timeout: float, max_size: int) -> Link:
+                    ssl: Any, open_timeout: float, max_size: int, subprotocols: list[str] | None = None) -> Link:
     """Open one connection with transport ``name`` (see :func:`choose`): returns once the WebSocket is open.
-    ``receiver`` gets every message (``receive.Receiver``); ``max_size`` bounds a frame and a message."""
+    ``receiver`` gets every message (``receive.Receiver``, or one with its interface: the Foxglove link's
+    ``rcon_core/foxglove/ws.py``); ``max_size`` bounds a frame and a message; ``subprotocols`` are offered in
+    the handshake and the server's pick is ``link.subprotocol``."""
     if name == "picows":
         from .pwlink import open_picows
 
         return await open_picows(url, receiver, on_stale, ssl=ssl, open_timeout=open_timeout,
-                                 max_size=max_size)
+                                 max_size=max_size, subprotocols=subprotocols)
     from .wslink import open_websockets
 
-    return await open_websockets(url, receiver, on_stale, ssl=ssl, open_timeout=open_timeout, max_size=max_size)
+    return await open_websockets(url, receiver, on_stale, ssl=ssl, open_timeout=open_timeout, max_size=max_size,
+                                 subprotocols=subprotocols)

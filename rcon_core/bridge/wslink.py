@@ -25,6 +25,7 @@ from websockets.exceptions import InvalidHandshake, InvalidMessage, InvalidStatu
 from websockets.frames import Frame, Opcode
 from websockets.http11 import Response
 from websockets.protocol import State
+from websockets.typing import Subprotocol
 from websockets.uri import parse_uri
 
 from .errors import BadUrlError, HandshakeError, LinkClosedError
@@ -138,18 +139,24 @@ class WebsocketsLink(Link):
 
     # -- Link --------------------------------------------------------------------------------------
 
-    def write_now(self, data: bytes) -> bool:
+    def write_now(self, data: bytes, binary: bool = False) -> bool:
         if self.protocol.state is not _OPEN or self.drain.paused or self.transport.is_closing():
             return False
-        self.protocol.send_text(data)
+        if binary:
+            self.protocol.send_binary(data)
+        else:
+            self.protocol.send_text(data)
         for chunk in self.protocol.data_to_send():
             self.transport.write(chunk)
         return True
 
-    def send_queued(self, data: bytes) -> None:
+    def send_queued(self, data: bytes, binary: bool = False) -> None:
         if self.protocol.state is not _OPEN or self.transport.is_closing():
             raise self.closed_error()
-        self.protocol.send_text(data)
+        if binary:
+            self.protocol.send_binary(data)
+        else:
+            self.protocol.send_text(data)
         self._flush()
 
     async def drained(self) -> None:
@@ -248,13 +255,15 @@ def handshake_error(exc: BaseException) -> BaseException:
 
 
 async def open_websockets(url: str, receiver: Any, on_stale: Any, *, ssl: _ssl.SSLContext | None,
-                          open_timeout: float, max_size: int) -> WebsocketsLink:
-    """Open one connection (see ``transport.open_link``)."""
+                          open_timeout: float, max_size: int, subprotocols: list[str] | None = None) -> WebsocketsLink:
+    """Open one connection (see ``transport.open_link``); ``subprotocols`` are offered, the server's pick
+    is ``link.subprotocol`` (websockets refuses a pick that was not offered)."""
     try:
         uri = parse_uri(url)
     except InvalidURI as exc:
         raise BadUrlError(f"not a valid rosbridge URL: {exc}") from None
-    protocol = ClientProtocol(uri, max_size=max_size)
+    protocol = ClientProtocol(uri, max_size=max_size,
+                              subprotocols=[Subprotocol(s) for s in subprotocols] if subprotocols else None)
     link = WebsocketsLink(protocol, receiver, on_stale)
     loop = asyncio.get_running_loop()
     tls = (ssl or _ssl.create_default_context()) if uri.secure else None
@@ -269,6 +278,7 @@ async def open_websockets(url: str, receiver: Any, on_stale: Any, *, ssl: _ssl.S
     except BaseException:
         link.abort()
         raise
+    link.subprotocol = protocol.subprotocol
     return link
 
 

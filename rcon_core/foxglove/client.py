@@ -4,7 +4,9 @@ The async shell around :class:`~rcon_core.foxglove.session.FoxgloveSession` (the
 connect, reconnect, the stall watch, the read loop, futures and timeouts.  It offers the robot-link
 interface (``rcon_core.link.RobotLink``) as ``BridgeClient`` does, so the app, the CLI, the canvas and the
 widgets use either without knowing which (``client.protocol`` says).  The connection goes through the
-WebSocket seam in ``ws.py``.
+WebSocket seam in ``ws.py``: the rosbridge link's transports (picows where it imports, else websockets;
+``transport=`` or ``RCON_TRANSPORT`` picks one, as for ``BridgeClient``), messages pushed into a
+``FoxgloveReceiver``.
 
 Reconnect
     Capped exponential backoff with full jitter (``backoff_min`` doubling to ``backoff_max``), as the
@@ -46,7 +48,7 @@ from rcon_core.bridge.errors import (
 )
 from rcon_core.bridge.freshness import LinkWatch, watch_link
 from rcon_core.bridge.guard import LinkGuard, ViewOnlyError
-from rcon_core.bridge.inbound import YIELD_EVERY, BadFrames
+from rcon_core.bridge.inbound import BadFrames
 from rcon_core.bridge.nodes import Node
 from rcon_core.bridge.reasons import Failure, describe
 from rcon_core.bridge.rosinfo import RosInfo
@@ -56,7 +58,7 @@ from rcon_core.bridge.stats import FoxgloveStats
 from . import wire
 from .catalog import FoxgloveCatalog, FoxgloveParams
 from .session import CANNOT, FoxgloveSession
-from .ws import ConnectionClosed, FrameLink, open_connection
+from .ws import FoxgloveReceiver, Link, LinkClosedError, choose, open_connection
 
 log = logging.getLogger(__name__)
 _monotonic = time.monotonic
@@ -78,10 +80,13 @@ class FoxgloveClient:
                  call_timeout: float = 10.0, backoff_min: float = 0.25, backoff_max: float = 10.0,
                  latency_interval: float = 2.0, pong_timeout: float = 10.0, open_timeout: float = 10.0,
                  max_size: int = 64 << 20, stall_timeout: float | None = 1.0,
-                 subprotocols: tuple[str, ...] = wire.SUBPROTOCOLS, **_ignored: Any) -> None:
+                 subprotocols: tuple[str, ...] = wire.SUBPROTOCOLS, transport: str | None = None,
+                 **_ignored: Any) -> None:
         if not isinstance(url, str) or not url.startswith(("ws://", "wss://")):
             raise ValueError(f"url must start with ws:// or wss://, got {url!r}")
         self.url = url
+        #: the WebSocket library carrying the link: ``picows`` or ``websockets`` (``transport.choose``)
+        self.transport = choose(transport)
         self.reconnect = reconnect
         self.ca_file, self.client_cert, self.client_key = ca_file, client_cert, client_key
         #: a rosauth secret cannot be used on this protocol: kept, never sent, said in ``notices``
@@ -101,7 +106,7 @@ class FoxgloveClient:
         self._state = ConnectionState.CLOSED
         self._state_listeners: list[Callable[[ConnectionState], None]] = []
         self._failure_listeners: list[Callable[[Failure], None]] = []
-        self.link: FrameLink | None = None
+        self.link: Link | None = None
         self._task: asyncio.Task[None] | None = None
         self._connected = asyncio.Event()
         self._up_at = 0.0
@@ -263,6 +268,11 @@ class FoxgloveClient:
     def _session_event(self, kind: str) -> None:
         if kind == "catalog" and self._services_changed is not None:
             self._services_changed.set()
+        elif kind == "server" and self.link is not None and not self._connected.is_set():
+            self._up_at = _monotonic()  # serverInfo arrived: the link is up
+            self._connected.set()
+            self.failure = None
+            self._set_state(ConnectionState.CONNECTED)
 
     # ================================================================== connecting
 
@@ -291,15 +301,20 @@ class FoxgloveClient:
             except Exception:
                 log.exception("state listener raised")
 
-    async def _open(self) -> Any:
+    async def _open(self) -> Link:
         ctx = ssl_context(self.ca_file, self.client_cert, self.client_key) if self.url.startswith("wss://") else None
-        ws = await open_connection(self.url, list(self.subprotocols), ssl_context=ctx,
-                                   open_timeout=self.open_timeout, max_size=self.max_size)
-        if ws.subprotocol not in self.subprotocols:
-            await ws.close()
+        session = self.session
+        receiver = FoxgloveReceiver(session.receive_text, session.receive_binary, self.bad.failed)
+        link = await open_connection(self.transport, self.url, list(self.subprotocols), receiver,
+                                     session.stale_in_queue, ssl_context=ctx, open_timeout=self.open_timeout,
+                                     max_size=self.max_size)
+        if link.subprotocol not in self.subprotocols:
+            receiver.cancel()
+            await link.close()
+            link.release()
             raise NotFoxgloveError(f"{self.url} picked none of the Foxglove subprotocols "
                                    f"({', '.join(self.subprotocols)}): it is not a Foxglove server (rosbridge?)")
-        return ws
+        return link
 
     async def connect(self, timeout: float | None = None) -> None:
         """Connect; returns once ``serverInfo`` arrived.  With ``reconnect=False`` the first failure is
@@ -394,37 +409,24 @@ class FoxgloveClient:
         finally:
             self._set_state(ConnectionState.CLOSED)
 
-    async def _serve_once(self, ws: Any, final: bool = True) -> None:
+    async def _serve_once(self, link: Link, final: bool = True) -> None:
         session = self.session
-        link = self.link = FrameLink(ws, session.stale_in_queue)
-        self.subprotocol = ws.subprotocol
+        self.link = link
+        receiver: FoxgloveReceiver = link.receiver
+        self.subprotocol = link.subprotocol
         self.stats.connects += 1
         writer = asyncio.create_task(link.run_writer())
         pinger = asyncio.create_task(self._pinger(link))
-        session.attached(link.write, link.send_command)
+        session.attached(_text_or_binary(link), _binary_command(link))
         session.guard.attached(asyncio.get_running_loop())
+        receiver.start()
         try:
-            recv = link.recv
-            receive = session.receive
-            n = 0
-            while True:
-                frame = await recv()
-                n += 1
-                if n >= YIELD_EVERY:  # a flood on this link never starves the loop's other links and timers
-                    n = 0
-                    await asyncio.sleep(0)
-                try:
-                    receive(frame)
-                except Exception as exc:  # the boundary: one frame never ends the link
-                    self.bad.failed(exc)
-                if session.server is not None and not self._connected.is_set():
-                    self._up_at = _monotonic()
-                    self._connected.set()
-                    self.failure = None
-                    self._set_state(ConnectionState.CONNECTED)
-        except ConnectionClosed as exc:
-            self.last_error = exc
+            await link.wait_closed()  # messages are pushed into the receiver meanwhile (ws.py)
+            self.last_error = link.closed_error().with_traceback(None)
+            if receiver.task is not None:  # messages that arrived before the close are still delivered
+                await asyncio.shield(receiver.task)
         finally:
+            receiver.cancel()
             self.link = None
             self._connected.clear()
             writer.cancel()
@@ -438,12 +440,14 @@ class FoxgloveClient:
             session.detached()
             for _srv, done, _dec in calls:
                 done(None, ConnectionLostError("connection lost before the answer arrived"))
+            link.release()  # its buffers go now, not at the collector's next full pass (linkbase.py)
             if final:
                 self._set_state(ConnectionState.CLOSED)
         if not self._closing:
-            log.warning("connection to %s lost (%s)", self.url, link.close_reason[:200])
+            log.warning("connection to %s lost (%s)", self.url,
+                        (link.close_reason or str(link.close_code or "no close frame"))[:200])
 
-    async def _pinger(self, link: FrameLink) -> None:
+    async def _pinger(self, link: Link) -> None:
         if self.stall_timeout is not None:
             probe = min(self.latency_interval, self.stall_timeout / 4)
             link.watch = LinkWatch(self.stall_timeout, probe, _monotonic())
@@ -458,7 +462,7 @@ class FoxgloveClient:
                     link.abort()
                     return
                 await asyncio.sleep(self.latency_interval)
-        except ConnectionClosed:
+        except LinkClosedError:
             pass
 
     def _link_event(self, event: str, detail: Any) -> bool:
@@ -479,3 +483,26 @@ class FoxgloveClient:
         else:
             log.warning("%s from %s; dropping the link", detail, self.url)
         return True
+
+
+def _text_or_binary(link: Link) -> Callable[[str | bytes], None]:
+    """The session's ``write``: a ``str`` goes out as a text frame (a JSON op), ``bytes`` as a binary one."""
+    write, write_binary = link.write, link.write_binary
+
+    def write_frame(frame: str | bytes) -> None:
+        if frame.__class__ is str:
+            write(frame.encode())  # type: ignore[union-attr]
+        else:
+            write_binary(frame)  # type: ignore[arg-type]
+
+    return write_frame
+
+
+def _binary_command(link: Link) -> Callable[[bytes, Any, float], bool]:
+    """The session's ``command``: a client message with a freshness limit, a binary frame."""
+    send = link.send_command
+
+    def command(data: bytes, pub: Any, max_age: float) -> bool:
+        return send(data, pub, max_age, True)
+
+    return command

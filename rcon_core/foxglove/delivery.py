@@ -38,10 +38,11 @@ _STAMP = struct.Struct("<Q").unpack_from
 HEAD = 13  # opcode (1), subscription id (4), log time (8)
 
 
-def payload_of(frame: bytes, schema_name: str) -> RawPayload:
-    """A MessageData frame as a :class:`RawPayload` (see the module docstring)."""
+def payload_of(frame: bytes | memoryview, schema_name: str) -> RawPayload:
+    """A MessageData frame as a :class:`RawPayload` (see the module docstring); the payload is a copy, ``bytes``
+    (the frame may be a view into the transport's read buffer, valid only while it is handled)."""
     ns = _STAMP(frame, 5)[0]
-    return RawPayload(schema_name, ns // 1_000_000_000, ns % 1_000_000_000, frame[HEAD:])
+    return RawPayload(schema_name, ns // 1_000_000_000, ns % 1_000_000_000, bytes(frame[HEAD:]))
 
 
 def frame_decoder(entry: TopicEntry, ch: Channel, decode: Callable[[Any], Any] | None) -> Callable[[Any], Any]:

@@ -182,10 +182,18 @@ class FoxgloveSession:
     # ================================================================== frames in
 
     def receive(self, frame: str | bytes) -> None:
-        """One frame from the server; a bad one is counted and dropped, never raised.  A MessageData frame of
-        a subscription takes the short way (no parse into a tuple; the decoder reads the frame at offset 13)."""
-        if frame.__class__ is bytes and len(frame) >= 13 and frame[0] == 1:
-            found = self.subs.get(_SUB_ID(frame, 1)[0])  # type: ignore[arg-type]
+        """One frame from the server (a text frame as ``str``); a bad one is counted and dropped, never raised."""
+        if isinstance(frame, str):
+            self.receive_text(frame)
+        else:
+            self.receive_binary(frame)
+
+    def receive_binary(self, frame: bytes | memoryview) -> None:
+        """One binary frame (bytes-like; a view into the transport's read buffer is read during this call
+        only: whatever is kept is copied).  A MessageData frame of a subscription takes the short way (no
+        parse into a tuple; the decoder reads the frame at offset 13)."""
+        if len(frame) >= 13 and frame[0] == 1:
+            found = self.subs.get(_SUB_ID(frame, 1)[0])
             if found is None:
                 self.stats.unknown_subscription += 1  # still in flight after an unsubscribe: not an error
                 return
@@ -200,16 +208,20 @@ class FoxgloveSession:
             except Exception:
                 entry.callback_failed()
             return
+        self.receive_text(frame, False)
+
+    def receive_text(self, frame: Any, text: bool = True) -> None:
+        """One text frame (a JSON op; with ``text`` False: a binary frame that is not a MessageData one)."""
         try:
-            if isinstance(frame, str):
-                m = wire.parse_text(frame)
-                handler = self._ops.get(m["op"])
-                if handler is None:
-                    self.bad.report("op", f"unknown op {bounded_repr(m['op'], 60)} ignored")
-                    return
-                handler(m)
-            else:
+            if not text:
                 self._on_binary(wire.parse_binary(frame))
+                return
+            m = wire.parse_text(frame)
+            handler = self._ops.get(m["op"])
+            if handler is None:
+                self.bad.report("op", f"unknown op {bounded_repr(m['op'], 60)} ignored")
+                return
+            handler(m)
         except wire.WireError as exc:
             self.bad.report("frame", str(exc))
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
@@ -354,9 +366,7 @@ class FoxgloveSession:
 
     def _on_binary(self, frame: tuple[Any, ...]) -> None:
         kind = frame[0]
-        if kind == "message":  # a frame that did not take the short way in receive(): a bytearray, a memoryview
-            self.receive(bytes(frame[4]))
-        elif kind == "time":
+        if kind == "time":  # ("message", ...) is not reached: receive_binary takes MessageData the short way
             self.time_ns = frame[1]
         elif kind == "service_response":
             _, sid, cid, encoding, payload = frame

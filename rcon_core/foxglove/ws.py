@@ -1,145 +1,141 @@
-"""The seam between the Foxglove link and its WebSocket library (``websockets`` today).
+"""The seam between the Foxglove link and its WebSocket library: the rosbridge link's transports, reused.
 
-Everything the Foxglove client does with the connection goes through :func:`open_connection` and
-:class:`FrameLink`, so moving this link onto another WebSocket library (the bridge's transport adapters)
-touches this module alone.  Unlike the rosbridge link's ``wslink.Link`` it writes both text frames (JSON
-ops) and binary frames (client messages, service call requests).
+Decision: the same two transports as the rosbridge link, through the same adapters
+    The Foxglove link opens its connection with ``rcon_core.bridge.transport.open_link``: picows where it
+    imports, websockets as the fully supported second, chosen as the rosbridge client chooses
+    (``FoxgloveClient(transport=...)``, else ``RCON_TRANSPORT``, else ``auto``).  The adapters
+    (``pwlink.py``, ``wslink.py``) and their transport-neutral half (``linkbase.Link``: direct writes in
+    order, the writer task, commands with a freshness limit, pings, abort and the TCP-reset cut) are the
+    rosbridge link's own; this protocol adds what it needs through their small, general additions: binary
+    frames out (``Link.write_binary``, ``send_command(binary=True)``) and the subprotocols offered in the
+    handshake, the server's pick read back as ``link.subprotocol`` (picows offers them as a
+    ``Sec-WebSocket-Protocol`` request header and reads the response's; websockets through its Sans-I/O
+    ``ClientProtocol``).  Text frames (JSON ops) go out with ``Link.write``; binary frames (client
+    messages, service call requests) with ``write_binary``; a client message with a freshness limit with
+    ``send_command(binary=True)``.
 
-Decision: direct writes, in order
-    As ``rcon_core/bridge/wslink.py``: a frame is handed to the transport before the call that made it
-    returns unless frames are already queued or the transport is above its high-water mark; then it waits
-    in a queue the writer task drains with ``ws.send``.  A command (a publish with a freshness limit)
-    waiting in the queue carries its deadline and is dropped once it passed (``freshness.TimedFrame``).
+Decision: messages are pushed, parsed from the transport's buffer
+    Like the rosbridge link, messages arrive through a :class:`~rcon_core.bridge.receive.Receiver`:
+    :class:`FoxgloveReceiver` keeps its rules for sharing the loop (after 64 messages of one turn the
+    clock is read every 64 and more than 1 ms of them hands the rest to the next turn; a message of
+    32 kB or more that is not the first of its turn waits for the next turn; while more than 16 are held
+    the transport stops reading) and its 1007 rule (a text message that is not UTF-8 closes the link),
+    with its own hot path: a binary message goes to ``FoxgloveSession.receive_binary`` as it is -- on
+    picows a ``memoryview`` of picows' read buffer, so a ``MessageData`` frame is decoded straight from
+    that buffer in the callback that brought it (every decoder copies what it keeps: CDR, ROS 1, JSON,
+    protobuf, flatbuffer; a raw consumer's payload is copied out, ``delivery.payload_of``).  Held
+    messages are copies (the Receiver copies what it holds).  A text message is decoded to ``str`` (its
+    UTF-8 checked) and handed to ``FoxgloveSession.receive_text``.  Until the client attached the session
+    to the new connection (:meth:`FoxgloveReceiver.start`) every message is held: the server's
+    ``serverInfo`` can come in the same read as the handshake's answer.
 """
 
 from __future__ import annotations
 
 import asyncio
 import ssl
-import time
-from collections import deque
-from collections.abc import Awaitable, Callable
+from collections.abc import Callable
 from typing import Any
 
-from websockets.asyncio.client import ClientConnection, connect
-from websockets.exceptions import ConnectionClosed, InvalidHandshake, InvalidURI
-from websockets.protocol import State
+from rcon_core.bridge.errors import LinkClosedError, NotUtf8
+from rcon_core.bridge.inbound import YIELD_EVERY
+from rcon_core.bridge.latest import MIN_SIZE
+from rcon_core.bridge.linkbase import Link
+from rcon_core.bridge.receive import Receiver
+from rcon_core.bridge.transport import choose, open_link
 
-from rcon_core.bridge.freshness import LinkWatch, TimedFrame, cut
-from rcon_core.bridge.wslink import handshake_error
+__all__ = ["FoxgloveReceiver", "LinkClosedError", "Link", "choose", "open_connection"]
 
-_OPEN = State.OPEN
-_monotonic = time.monotonic
-
-__all__ = ["ConnectionClosed", "FrameLink", "open_connection"]
-
-
-async def open_connection(url: str, subprotocols: list[str] | None, *, ssl_context: ssl.SSLContext | None,
-                          open_timeout: float, max_size: int) -> ClientConnection:
-    """Open one WebSocket connection offering ``subprotocols`` (the server's pick is ``ws.subprotocol``).
-    What websockets raises about the URL or the handshake comes out as RCON's own error
-    (``wslink.handshake_error``), which ``reasons.describe`` words."""
-    try:
-        return await connect(url, ssl=ssl_context, compression=None, ping_interval=None, open_timeout=open_timeout,
-                             max_size=max_size, close_timeout=2,
-                             subprotocols=[s for s in subprotocols] if subprotocols else None)  # type: ignore[misc]
-    except (InvalidURI, InvalidHandshake) as exc:
-        raise handshake_error(exc)  # noqa: B904 -- its __cause__ is set: the TLS error behind it, if any
+#: messages of this size or more wait for a turn of their own (as the rosbridge link's)
+HEAVY = MIN_SIZE
 
 
-def chosen_subprotocol(ws: ClientConnection) -> str | None:
-    return ws.subprotocol
+class _Counts:
+    """What the Receiver's constructor reads from a rosbridge ``Inbound``; the Foxglove link has no rosbridge
+    topics table and no per-topic traffic count (:meth:`FoxgloveReceiver.message` never reaches them)."""
+
+    def __init__(self, take: Callable[[Any, bool], None], failed: Callable[[BaseException], None]) -> None:
+        self.take = take
+        self.deliver = _nothing
+        self.topics: dict[str, Any] = {}
+        self.counts: dict[str, list[int]] = {}
+        self.traffic = self
+        self.bad = self
+        self.failed = failed
+        self.heavy = HEAVY
 
 
-class FrameLink:
-    """One open connection: text and binary frames out (now or queued, in order), the writer task."""
+class FoxgloveReceiver(Receiver):
+    """One Foxglove connection's messages in (see the module docstring).  ``text(s)`` gets a text message
+    as ``str``, ``binary(raw)`` a binary one as a bytes-like valid during the call only; neither may raise
+    (an exception is counted as a bad frame through ``failed``)."""
 
-    def __init__(self, ws: ClientConnection, on_stale: Callable[[Any], None]) -> None:
-        self.ws = ws
-        self.recv: Callable[[], Awaitable[str | bytes]] = ws.recv
-        self.queue: deque[str | bytes | TimedFrame] = deque()
-        self.event = asyncio.Event()
-        self.watch: LinkWatch | None = None
-        self.degraded = False
-        self.on_stale = on_stale
-        protocol = getattr(ws, "protocol", None)
-        transport = getattr(ws, "transport", None)
-        self._direct = protocol is not None and transport is not None and hasattr(ws, "send_data")
-        self._high = transport.get_write_buffer_limits()[1] if transport is not None else 0
+    __slots__ = ("binary",)
 
-    def _write_now(self, data: str | bytes) -> bool:
-        if not self._direct:
-            return False
-        ws = self.ws
-        transport = ws.transport
-        if ws.protocol.state is not _OPEN or transport.is_closing() or transport.get_write_buffer_size() > self._high:
-            return False
-        if isinstance(data, str):
-            ws.protocol.send_text(data.encode())
+    def __init__(self, text: Callable[[str], None], binary: Callable[[Any], None],
+                 failed: Callable[[BaseException], None]) -> None:
+        def take(raw: Any, is_text: bool) -> None:
+            if is_text:
+                try:
+                    s = str(raw, "utf-8")
+                except UnicodeDecodeError as exc:
+                    raise NotUtf8(f"text message is not UTF-8 ({exc})") from None
+                try:
+                    text(s)
+                except Exception as exc:  # the frame boundary: one frame never ends the link
+                    failed(exc)
+                return
+            try:
+                binary(raw)
+            except Exception as exc:
+                failed(exc)
+
+        super().__init__(_Counts(take, failed))
+        self.binary = binary
+        self.busy = True  # messages are held until start(): the session is not attached yet
+
+    def start(self) -> None:
+        """The session is attached: hand it what arrived with the handshake (held, in order), then every
+        message as it comes.  Messages can arrive before the connection is handed over: picows delivers the
+        frames that came in the same read as the handshake's answer."""
+        if self.held:
+            self.task = asyncio.ensure_future(self._drain(None))
         else:
-            ws.protocol.send_binary(data)
-        ws.send_data()
-        return True
+            self.busy = False
 
-    def write(self, data: str | bytes) -> None:
-        if not self.queue and self._write_now(data):
+    def message(self, raw: Any, text: bool, last: bool) -> None:
+        """One whole message (see ``Receiver.message``); the hot path hands it to the session at once."""
+        if self.busy:
+            Receiver.message(self, raw, text, last)  # held, in order, as the rosbridge link holds them
             return
-        self.queue.append(data)
-        self.event.set()
+        n = self.n = self.n + 1
+        if n > 1 and (len(raw) >= self.heavy or (n > self.check and self._spent())):
+            self._yield(raw, text)
+        elif text:
+            self._take(raw, text)  # never returns a job: nothing here waits
+        else:  # the hot path: MessageData, decoded from the buffer in place
+            try:
+                self.binary(raw)
+            except Exception as exc:  # the frame boundary: one frame never ends the link
+                self.failed(exc)
+        if last:
+            self.flood = self.n >= YIELD_EVERY or self.busy
+            self.n = 0
+            self.check = YIELD_EVERY
+            self.started = 0.0
 
-    def send_command(self, data: bytes, pub: Any, max_age: float) -> bool:
-        now = _monotonic()
-        watch = self.watch
-        if self.degraded or (watch is not None and watch.overdue(now) > max_age):
-            return False
-        if not self.queue and self._write_now(data):
-            if watch is not None:
-                watch.command(now)
-        else:
-            self.queue.append(TimedFrame(data, now + max_age, pub))
-            self.event.set()
-        return True
 
-    async def run_writer(self) -> None:
-        out, event, ws = self.queue, self.event, self.ws
-        try:
-            while True:
-                while out:
-                    item = out.popleft()
-                    if isinstance(item, TimedFrame):
-                        now = _monotonic()
-                        if now > item.deadline or self.degraded:
-                            self.on_stale(item.pub)
-                            continue
-                        if self.watch is not None:
-                            self.watch.command(now)
-                        item = item.data
-                    await ws.send(item)
-                event.clear()
-                await event.wait()
-        except ConnectionClosed:
-            pass
+async def open_connection(transport: str, url: str, subprotocols: list[str] | None, receiver: Any,
+                          on_stale: Callable[[Any], None], *, ssl_context: ssl.SSLContext | None,
+                          open_timeout: float, max_size: int) -> Link:
+    """Open one connection with ``transport`` (``transport.choose``) offering ``subprotocols``; the server's
+    pick is ``link.subprotocol``.  What the library raises about the URL or the handshake comes out as
+    RCON's own errors (``HandshakeError``, ``BadUrlError``), which ``reasons.describe`` words."""
+    link = await open_link(transport, url, receiver, on_stale, ssl=ssl_context, open_timeout=open_timeout,
+                           max_size=max_size, subprotocols=subprotocols)
+    link.receiver = receiver
+    return link
 
-    def drop_queue(self) -> int:
-        n = len(self.queue)
-        self.queue.clear()
-        return n
 
-    async def ping(self) -> Awaitable[float]:
-        return await self.ws.ping()
-
-    async def close(self) -> None:
-        await self.ws.close()
-
-    def abort(self) -> None:
-        self.ws.transport.abort()
-
-    def cut(self) -> None:
-        cut(self.ws.transport)
-
-    def buffered(self) -> int:
-        return self.ws.transport.get_write_buffer_size()
-
-    @property
-    def close_reason(self) -> str:
-        return self.ws.close_reason or str(self.ws.close_code or "no close frame")
+def _nothing(*_args: Any) -> None:
+    return None

@@ -6,7 +6,9 @@ Decision: one URL, no setting to get wrong
     speaks rosbridge.  :func:`detect` makes that one handshake and closes (a connection the robot sees
     come and go, nothing sent on it); the client for the answer then connects as usual.  ``--protocol``
     (``protocol=`` here) skips the question.  A URL that cannot be reached raises what connecting raised
-    (the caller words it with ``rcon_core.bridge.reasons.describe``).
+    (the caller words it with ``rcon_core.bridge.reasons.describe``).  The handshake goes through the
+    transport the client would use (``transport=``, else ``RCON_TRANSPORT``, else picows where it imports):
+    both offer subprotocols and read the server's pick (``rcon_core/foxglove/ws.py``).
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from typing import Any
 
 from rcon_core.bridge.secure import ssl_context
 from rcon_core.foxglove.wire import SUBPROTOCOLS
-from rcon_core.foxglove.ws import open_connection
+from rcon_core.foxglove.ws import FoxgloveReceiver, choose, open_connection
 
 from .iface import PROTOCOLS
 
@@ -27,14 +29,22 @@ def check_protocol(protocol: str | None) -> str | None:
 
 
 async def detect(url: str, *, ca_file: str | None = None, client_cert: str | None = None,
-                 client_key: str | None = None, open_timeout: float = 10.0) -> str:
+                 client_key: str | None = None, open_timeout: float = 10.0, transport: str | None = None) -> str:
     """``"foxglove"`` or ``"rosbridge"`` (see the module docstring)."""
     ctx = ssl_context(ca_file, client_cert, client_key) if url.startswith("wss://") else None
-    ws = await open_connection(url, list(SUBPROTOCOLS), ssl_context=ctx, open_timeout=open_timeout, max_size=1 << 20)
+    receiver = FoxgloveReceiver(_ignore, _ignore, _ignore)  # never started: what arrives is held, then dropped
+    link = await open_connection(choose(transport), url, list(SUBPROTOCOLS), receiver, _ignore, ssl_context=ctx,
+                                 open_timeout=open_timeout, max_size=1 << 20)
     try:
-        return "foxglove" if ws.subprotocol in SUBPROTOCOLS else "rosbridge"
+        return "foxglove" if link.subprotocol in SUBPROTOCOLS else "rosbridge"
     finally:
-        await ws.close()
+        receiver.cancel()
+        await link.close()
+        link.release()
+
+
+def _ignore(_item: Any) -> None:
+    return None
 
 
 def make_client(url: str, protocol: str, **options: Any) -> Any:
@@ -54,5 +64,5 @@ async def open_client(url: str, protocol: str | None = None, **options: Any) -> 
     check_protocol(protocol)
     if protocol is None:
         protocol = await detect(url, ca_file=options.get("ca_file"), client_cert=options.get("client_cert"),
-                                client_key=options.get("client_key"))
+                                client_key=options.get("client_key"), transport=options.get("transport"))
     return make_client(url, protocol, **options)

@@ -112,6 +112,8 @@ class _Dec:
                 run = []
             steps.append(self._step(f.name, self._field(f)))
         if run:
+            if not steps and len(run) == 1 and run[0][1] != "T":
+                return self._one(*run[0])  # one plain scalar (std_msgs/Float64...): no loop over steps
             steps.append(self._run(run))
 
         def decode(buf: Any, pos: int) -> tuple[dict[str, Any], int]:
@@ -162,6 +164,17 @@ class _Dec:
             return pos + st.size
 
         return read_run
+
+    def _one(self, fname: str, code: str) -> Reader:
+        """The reader of a message of one plain fixed-size scalar (its padding depends on where it starts)."""
+        size = _SIZES[code]
+        structs = [struct.Struct(self.order + "x" * (-mod % size) + code) for mod in range(8)]
+
+        def read_one(buf: Any, pos: int) -> tuple[dict[str, Any], int]:
+            st = structs[pos & 7]
+            return {fname: st.unpack_from(buf, pos)[0]}, pos + st.size
+
+        return read_one
 
     def _element(self, f: FieldDef) -> Reader:
         if f.base in TIME_TYPES:
@@ -422,6 +435,7 @@ def frame_reader(reg: CdrCodec, name: str, offset: int = 0) -> Callable[[bytes],
         dec = reg.cache[("cdr_decoder", 1)] = _Dec(reg, little=True)
     read = dec.message(name)
     start = offset + 4
+    flat = _flat_layout(reg, name)
 
     def decode(data: bytes) -> dict[str, Any]:
         if len(data) < start or data[offset] != 0 or data[offset + 1] != 1:
@@ -436,4 +450,36 @@ def frame_reader(reg: CdrCodec, name: str, offset: int = 0) -> Callable[[bytes],
             raise CdrError(f"{left} bytes left over after a {reg.wire_name(name)} ({end} bytes): wrong type?")
         return out
 
-    return decode
+    if flat is None or len(flat[0]) != 1:
+        return decode
+    (only,), st = flat
+    need = start + st.size
+
+    def decode_one(data: bytes) -> dict[str, Any]:
+        """A message of one plain scalar (``std_msgs/Float64``...) of exactly its size, read in place (no
+        view of the body); anything else (another size, a big-endian header) takes the general path."""
+        if len(data) != need or data[offset] != 0 or data[offset + 1] != 1:
+            return decode(data)
+        return {only: st.unpack_from(data, start)[0]}
+
+    return decode_one
+
+
+def _flat_layout(reg: CdrCodec, name: str) -> tuple[tuple[str, ...], struct.Struct] | None:
+    """A message made of plain fixed-size scalars only: its field names and the little-endian ``struct`` of
+    its body (starting 8-aligned, as a top-level body does); None for any other message."""
+    items = []
+    for f in reg.msgdef(name).fields:
+        p = primitive(f.base, True)
+        if f.array_len is not None or f.base in TIME_TYPES or p is None or not p.code:
+            return None
+        items.append((f.name, p.code))
+    if not items:
+        return None
+    fmt, pos = ["<"], 0
+    for _fname, code in items:
+        size = _SIZES[code]
+        pad = -pos % size
+        fmt.append("x" * pad + code)
+        pos += pad + size
+    return tuple(fname for fname, _code in items), struct.Struct("".join(fmt))
