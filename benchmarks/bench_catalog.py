@@ -5,7 +5,7 @@ Usage: ``python benchmarks/bench_catalog.py [--names 100000] [--quick] [--out FI
 
 The robot is the embedded sim in its own process (``--serve``), with ``--names`` extra topics and services
 added through its graph API (``advertise_internal``, ``add_service``: no test hook in the sim). The app
-side runs the real :class:`rcon_core.app.link.Link` (its bridge thread, its catalogue loop) and, in the GUI
+side runs the real :class:`rcon_core.app.link.RobotConnection` (its bridge thread, its catalogue loop) and, in the GUI
 thread, the real side-panel lists (:class:`rcon_core.app.catalog_panel.CatalogList`).
 
 Figures:
@@ -76,10 +76,10 @@ class Robot:
 
 
 def bench_bridge(url: str, names: int, seconds: float) -> dict[str, Any]:
-    """The app's Link lists the robot: time to the full catalogue, calls, loop lateness, stall cuts."""
-    from rcon_core.app.link import Link
+    """The app's RobotConnection lists the robot: time to the full catalogue, calls, loop lateness, stall cuts."""
+    from rcon_core.app.link import RobotConnection
 
-    link = Link()
+    link = RobotConnection()
     lateness: list[float] = []
 
     async def ticker() -> None:

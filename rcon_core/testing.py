@@ -19,7 +19,9 @@ service types every installed widget plugin contributes (``rcon_register_types``
 is tested on its own type with no extra step.
 
 A package loads these fixtures with ``pytest_plugins = ["rcon_core.testing"]`` in its ``conftest.py``.
-:func:`until` waits for a condition without sleeping a fixed time; :class:`ManualClock` is a clock (and a
+:func:`until` (async) and :func:`until_sync` (threads, Qt) wait for a condition without sleeping a fixed
+time, the one pair every test uses; :func:`flushed` (and :func:`flushed_sync`) is the barrier before asserting
+that a client sent nothing (a marker sent after it through the same client reaches the sim); :class:`ManualClock` is a clock (and a
 timer loop) that moves only when the test advances it, so rates are tested without the wall clock.
 
 View tests: :class:`RecordingPort` (a port that reaches no robot: it records publishes and calls, answers
@@ -31,6 +33,7 @@ with a state, rendered to a ``QImage`` and optionally a PNG). Only these import 
 from __future__ import annotations
 
 import asyncio
+import itertools
 import time
 from collections.abc import AsyncIterator, Callable, Iterator
 from contextlib import asynccontextmanager
@@ -58,6 +61,84 @@ async def until(predicate: Callable[[], Any], timeout: float = 10.0, what: str =
             raise AssertionError(f"timed out after {timeout} s waiting for {what}")
         await asyncio.sleep(0.01)
 
+
+def until_sync(predicate: Callable[[], Any], timeout: float = 10.0, what: str = "condition",
+               qtbot: Any = None) -> Any:
+    """:func:`until` for sync code (threads, Qt): wait until ``predicate()`` is truthy and return its value;
+    fail with an ``AssertionError`` naming ``what`` after ``timeout`` s. Between polls it sleeps 10 ms, or,
+    given a Qt test's ``qtbot``, runs the Qt event loop for 20 ms so events keep flowing."""
+    deadline = time.monotonic() + timeout
+    while True:
+        got = predicate()
+        if got:
+            return got
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+        if qtbot is None:
+            time.sleep(0.01)
+        else:
+            qtbot.wait(20)
+
+
+def qt_flushed(qtbot: Any = None, timeout: float = 10.0) -> None:
+    """A barrier for Qt: every event posted before the call (layouts, updates, queued signals, and the
+    events those post in turn) has been handled. Two zero-time single-shot timers posted one after the other
+    have run; the test then asserts, say, that a widget did *not* move, without a fixed wait. (Without a
+    ``qtbot``, Qt's own ``QTest.qWait`` runs the event loop meanwhile.)"""
+    from qtpy import QtCore
+
+    if qtbot is None:
+        from qtpy.QtTest import QTest
+
+        qtbot = type("_QtWait", (), {"wait": staticmethod(QTest.qWait)})()
+
+    for _ in range(2):
+        ran: list[int] = []
+
+        def mark(ran: list[int] = ran) -> None:
+            ran.append(1)
+
+        QtCore.QTimer.singleShot(0, mark)
+        until_sync(ran.__len__, timeout, "Qt's pending events", qtbot=qtbot)
+
+
+#: the topic :func:`flushed` sends its markers on
+FLUSH_TOPIC = "/rcon_test/flushed"
+_flush_ids = itertools.count(1)
+
+
+async def flushed(client: Any, sim: SimServer, timeout: float = 10.0) -> None:
+    """A barrier for "nothing was sent": publish a marker through ``client`` (again every poll until one
+    arrives) and wait until ``sim`` has it. Everything ``client`` wrote before it has reached the sim by then
+    (one connection, frames in order), so a test asserts what did *not* arrive without sleeping first::
+
+        model.press()                     # refused: nothing may go out
+        await flushed(client, sim)
+        assert sim.published("/speed_limit") == []
+
+    Run it on the client's loop (:func:`flushed_sync` for a client on a ``BridgeThread``)."""
+    token = f"flush-{next(_flush_ids)}"
+    node = client.node("rcon_test_flush")
+    pub = node.advertise(FLUSH_TOPIC, "std_msgs/String")
+
+    def arrived() -> bool:
+        if any(m.get("data") == token for m in sim.published(FLUSH_TOPIC)):
+            return True
+        pub.publish({"data": token})
+        return False
+
+    try:
+        await until(arrived, timeout, f"a marker sent through the client reaching the sim ({token})")
+    finally:
+        node.close()
+
+
+def flushed_sync(thread: Any, client: Any, sim: SimServer, timeout: float = 10.0, qtbot: Any = None) -> None:
+    """:func:`flushed` for a client on a ``BridgeThread`` (``thread``), waited on from sync code (a Qt test
+    passes its ``qtbot`` so events keep flowing)."""
+    done = thread.run(flushed(client, sim, timeout))
+    until_sync(done.done, timeout + 5.0, "the marker barrier", qtbot=qtbot)
+    done.result()
 
 
 class ManualClock:

@@ -4,7 +4,6 @@ the end in words, failures that are never a success."""
 
 from __future__ import annotations
 
-import asyncio
 from collections.abc import AsyncIterator
 
 import pytest
@@ -16,6 +15,7 @@ from rcon_core.msgs import MessageTextError, TypeRegistry
 from rcon_core.plugins import Accepts, Binding, PluginManager, Role, WidgetSpec
 from rcon_core.plugins.spec import SpecError
 from rcon_core.sim import SimServer
+from rcon_core.testing import until
 
 pytest.importorskip("rcon_widgets_std")
 from rcon_widgets_std import plugin as std_plugin  # noqa: E402
@@ -132,17 +132,11 @@ async def client() -> AsyncIterator[BridgeClient]:
         await server.stop()
 
 
-async def _until(fn, timeout: float = 10.0) -> None:
-    async with asyncio.timeout(timeout):
-        while not fn():
-            await asyncio.sleep(0.02)
-
-
 async def test_fibonacci_goal_runs_to_success_with_feedback(client, types):
     model = ActionModel(ActionSettings(), Binding(FIB, FIB_TYPE, Role.ACTION), client.node("w1"), types=types)
     model.start()
     assert model.send({"order": "4"})
-    await _until(lambda: model.state.value is not None and model.state.value.final)
+    await until(lambda: model.state.value is not None and model.state.value.final)
     st = model.state.value
     assert st.phase == "succeeded" and st.result == {"sequence": [0, 1, 1, 2, 3]}
     assert st.feedback_count >= 2 and st.feedback == {"partial_sequence": [0, 1, 1, 2, 3]}
@@ -153,7 +147,7 @@ async def test_goal_to_a_missing_server_fails_not_succeeds(client, types):
     model = ActionModel(ActionSettings(), Binding("/nowhere", FIB_TYPE, Role.ACTION), client.node("w2"), types=types)
     model.start()
     model.send({"order": "3"})
-    await _until(lambda: model.state.value is not None and model.state.value.final)
+    await until(lambda: model.state.value is not None and model.state.value.final)
     assert model.state.value.phase == "failed" and "does not exist" in model.state.value.text
     model.stop()
 
@@ -166,7 +160,7 @@ async def test_stop_with_a_goal_in_flight_cancels_it_and_the_next_model_says_so(
     model = ActionModel(ActionSettings(), binding, GuardedPort(node, widget_id="w3"), types=types)
     model.start()
     model.send({"order": "40"})
-    await _until(lambda: model.state.value is not None and model.state.value.feedback_count >= 1)
+    await until(lambda: model.state.value is not None and model.state.value.feedback_count >= 1)
     model.stop()
     node.close()
     again = ActionModel(ActionSettings(), binding, GuardedPort(client.node("w3"), widget_id="w3"), types=types)
@@ -180,7 +174,7 @@ async def test_an_unknown_action_type_is_learned_from_the_robot(client):
     model = ActionModel(ActionSettings(), Binding(NAV, NAV_TYPE, Role.ACTION), client.node("w4"), types=fresh)
     assert model.goal_fields() == []
     model.start()
-    await _until(lambda: model.goal_fields() != [] or model.state.error is not None)
+    await until(lambda: model.goal_fields() != [] or model.state.error is not None)
     assert model.state.error is None
     assert [f.path for f in model.goal_fields()][:2] == ["target.latitude", "target.longitude"]
     assert fresh.fields(fresh.action_part_name(NAV_TYPE, "feedback"))[0].name == "distance_remaining"

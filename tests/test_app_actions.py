@@ -130,7 +130,8 @@ def test_cancel_stops_the_vessel_and_says_canceled(window, sim2, qtbot, plugins)
     v = sim2.robot
     assert v.cmd_surge == 0.0  # the cancel stopped the drive at once
     qtbot.waitUntil(lambda: abs(v.surge) < 0.02, timeout=TIMEOUT_MS)  # and it coasts to a stop
-    QTest.qWait(500)
+    goal = sim2.navigate_action.goal
+    qtbot.waitUntil(lambda: goal.task.done(), timeout=TIMEOUT_MS)  # the drive that commands the thrusters ended
     assert v.cmd_surge == 0.0 and abs(v.surge) < 0.02  # no command after the cancel
 
 

@@ -23,6 +23,7 @@ from rcon_core.app.new_topic import NEW_TOPIC
 from rcon_core.app.theme import touch_px
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Role
+from rcon_core.testing import qt_flushed
 
 pytest.importorskip("rcon_widgets_std")
 pytest.importorskip("rcon_widgets_sensors")
@@ -307,7 +308,7 @@ def test_a_new_settings_page_opens_at_its_top(window, qtbot):
         wheel(window, viewport, -1)
     _visible_button(panel, "cancelButton").click()
     panel = open_from_topic(window, "/cmd_vel", Role.PUBLISH, "std.compound")
-    qtbot.wait(50)
+    qt_flushed(qtbot)
     assert bar.value() == 0
 
 

@@ -16,6 +16,7 @@ from rcon_core.app.geometry import snap
 from rcon_core.app.main_window import MainWindow
 from rcon_core.bridge import ConnectionState
 from rcon_core.plugins import Role
+from rcon_core.testing import qt_flushed
 
 pytestmark = pytest.mark.usefixtures("qapp")
 
@@ -235,12 +236,12 @@ def test_a_small_window_or_the_add_panel_scrolls_the_canvas_and_never_moves_a_wi
         saved = {i: rect_of(window, i) for i in (a.id, b.id)}
         shown = {i: surface.frames[i].geometry() for i in (a.id, b.id)}
         window.resize(1024, 600)
-        qtbot.wait(50)
+        qt_flushed(qtbot)
         # the add panel takes room from the canvas too
         window.add_panel.start_from_widget(window.plugins.widget("apptest.probe"))
         scroll = surface.scroll_area
         qtbot.waitUntil(lambda: window.add_panel.isVisible() and scroll.viewport().width() < 640 + 192)
-        qtbot.wait(50)  # the far widget is out of view...
+        qt_flushed(qtbot)  # the far widget is out of view...
         assert {i: surface.frames[i].geometry() for i in (a.id, b.id)} == shown  # ...and was not moved
         assert {i: rect_of(window, i) for i in (a.id, b.id)} == saved
         assert not overlapping(list(shown.values()))
@@ -258,7 +259,7 @@ def test_a_drop_lands_where_it_was_aimed_in_a_scrolled_canvas(qtbot, tmp_path):
         add_probe(window, "/battery", "sensor_msgs/BatteryState", "percentage", QtCore.QPoint(1200, 800))
         surface = window.controller.surface
         scroll = surface.scroll_area
-        qtbot.wait(50)
+        qt_flushed(qtbot)
         scroll.horizontalScrollBar().setValue(400)
         scroll.verticalScrollBar().setValue(200)
         aimed = QtCore.QPoint(100, 100)  # in the viewport

@@ -97,8 +97,7 @@ def test_a_lost_link_empties_the_lists_and_they_say_why(window, qtbot, own_sim, 
     real = link_mod.fetch_catalog
 
     async def slow_fetch(*args, **kwargs):
-        while not listed.is_set():
-            await asyncio.sleep(0.01)
+        await asyncio.get_running_loop().run_in_executor(None, listed.wait)
         return await real(*args, **kwargs)
 
     monkeypatch.setattr(link_mod, "fetch_catalog", slow_fetch)

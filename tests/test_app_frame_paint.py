@@ -9,6 +9,7 @@ from qtpy import QtCore, QtWidgets
 
 from rcon_core.app.theme import stylesheet
 from rcon_core.app.widget_frame import CornerMark, WidgetFrame
+from rcon_core.testing import qt_flushed
 
 
 class PaintCounter(QtCore.QObject):
@@ -47,7 +48,7 @@ def canvas(qtbot):
 def test_value_change_repaints_only_the_view(qtbot, canvas, editable):
     surface, frame, view = canvas
     frame.set_editable(editable)
-    qtbot.wait(50)
+    qt_flushed(qtbot)  # the repaints the switch asked for are done before counting
     counter = PaintCounter({"surface": surface, "frame": frame, "shield": frame.shield, "view": view,
                             "body": frame.body})
     for i in range(1, 6):
@@ -62,7 +63,7 @@ def test_value_change_repaints_only_the_view(qtbot, canvas, editable):
 def test_body_stays_opaque_after_the_theme_is_applied_again(qtbot, canvas):
     surface, frame, view = canvas
     surface.setStyleSheet(stylesheet(touch=56))  # re-polishes every child
-    qtbot.wait(20)
+    qt_flushed(qtbot)
     assert frame.body.autoFillBackground()
     assert frame.body.palette().color(frame.body.backgroundRole()).name() == "#ffffff"
 

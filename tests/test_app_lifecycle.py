@@ -10,7 +10,6 @@ import os
 import signal
 import subprocess
 import sys
-import time
 
 import pytest
 from app_helpers import open_window as open_app_window
@@ -23,6 +22,7 @@ from rcon_core.app.config import AppConfig
 from rcon_core.app.main_window import MainWindow
 from rcon_core.bridge import ConnectionState
 from rcon_core.canvas import Binding, Canvas, Geometry, WidgetInstance, Workspace, new_id
+from rcon_core.testing import qt_flushed, until_sync
 
 pytestmark = pytest.mark.usefixtures("qapp")
 
@@ -172,13 +172,14 @@ def test_picking_a_widget_in_operate_mode_says_why_and_offers_edit_mode(qtbot, t
         window.side.setCurrentWidget(window.palette_panel)
         tree = window.palette_panel.tree
         tap_item(tree, tree.indexFromItem(window.palette_panel.item("apptest.probe")))
-        qtbot.wait(50)
-        assert not window.add_panel.isVisible()  # never a silent no-op: the notice says why
-        assert window.notice.isVisible() and "Switch to Edit mode to add widgets" in window.banner.text()
+        qtbot.waitUntil(window.notice.isVisible)  # never a silent no-op: the notice says why
+        qt_flushed(qtbot)
+        assert not window.add_panel.isVisible()
+        assert "Switch to Edit mode to add widgets" in window.banner.text()
         tap(window.notice.buttons["Switch to Edit mode"])
         assert not window.controller.canvas.locked and window.edit_button.isChecked()
         qtbot.waitUntil(window.add_panel.isVisible)
-        qtbot.wait(100)  # the panel stays open (it used to close itself at once)
+        qt_flushed(qtbot)  # the panel stays open (it used to close itself at once)
         assert window.add_panel.isVisible() and not window.notice.isVisible()
         assert window.add_panel.stack.currentWidget() is window.add_panel.settings_page
     finally:
@@ -206,11 +207,12 @@ def test_rcon_demo_exits_cleanly_on_a_signal_and_saves(tmp_path, sig):
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
     layout = tmp_path / "demo-workspace.json"
     try:
-        deadline = time.monotonic() + 60
-        while not layout.exists():  # written when the window is built: the signal handler is in place
+
+        def started() -> bool:  # the layout is written when the window is built: the signal handler is in place
             assert proc.poll() is None, proc.stdout.read().decode()
-            assert time.monotonic() < deadline, "rcon --demo did not start"
-            time.sleep(0.05)
+            return layout.exists()
+
+        until_sync(started, 60, what="rcon --demo to start")
         layout.unlink()  # the shutdown must write it again
         proc.send_signal(sig)
         rc = proc.wait(timeout=30)

@@ -16,6 +16,7 @@ from rcon_core.app.config import AppConfig
 from rcon_core.bridge import ConnectionState
 from rcon_core.plugins import PluginManager
 from rcon_core.sim import SimServer
+from rcon_core.testing import qt_flushed
 
 pytestmark = pytest.mark.usefixtures("qapp")
 
@@ -28,7 +29,7 @@ def type_url(window, text: str) -> None:
     line.selectAll()
     QTest.keyClicks(line, text)
     QTest.keyClick(line, QtCore.Qt.Key.Key_Return)
-    QTest.qWait(20)  # a person's next key press comes later: the bar's one-Return-per-press guard resets
+    qt_flushed()  # a person's next key press comes later: the bar's one-Return-per-press guard resets
 
 
 @pytest.fixture

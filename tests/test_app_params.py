@@ -11,7 +11,7 @@ from qtpy.QtTest import QTest
 
 from rcon_core.plugins import PluginManager
 from rcon_core.sim import SimServer
-from rcon_core.testing import TEST_RATE_SCALE
+from rcon_core.testing import TEST_RATE_SCALE, flushed_sync, qt_flushed
 
 pytestmark = pytest.mark.usefixtures("qapp")
 
@@ -103,7 +103,8 @@ def test_browse_search_and_edit_with_confirmation(window, robot, qtbot):
     qtbot.waitUntil(lambda: window.confirm_dialog.isVisible(), timeout=TIMEOUT_MS)
     assert max_speed in window.confirm_dialog.text() and "1.25" in window.confirm_dialog.informativeText()
     tap(window.confirm_dialog.findChild(QtWidgets.QPushButton, "confirmCancel"))
-    QTest.qWait(200)
+    qt_flushed(qtbot)  # what the Cancel set going has started; then a marker after it reaches the robot
+    flushed_sync(window.link.thread, window.link.client, sim, qtbot=qtbot)
     assert value_on_robot(version, sim, "max_speed") == 2.0
     # confirmed: written, read back, shown
     tap(panel.set_button)

@@ -12,7 +12,7 @@ from qtpy import QtWidgets
 from rcon_core.app.canvas_bar import CanvasBar
 from rcon_core.app.config import AppConfig
 from rcon_core.app.connection_bar import ConnectionBar
-from rcon_core.app.link import Link
+from rcon_core.app.link import RobotConnection
 
 pytestmark = pytest.mark.usefixtures("qapp")
 APP = Path(__file__).resolve().parent.parent / "rcon_core" / "app"
@@ -51,7 +51,7 @@ def test_a_canvas_bar_without_a_guard_runs_every_action() -> None:
 
 def test_the_connection_bar_asks_its_guard_before_changing_the_robot(tmp_path: Path) -> None:
     guard = Refusing()
-    link = Link()
+    link = RobotConnection()
     try:
         bar = ConnectionBar(link, AppConfig(tmp_path / "cfg"), guard=guard)
         bar.url.setCurrentText("ws://127.0.0.1:9")
@@ -64,7 +64,7 @@ def test_the_connection_bar_asks_its_guard_before_changing_the_robot(tmp_path: P
 
 
 def test_without_the_lock_the_security_dialog_opens(tmp_path: Path) -> None:
-    link = Link()
+    link = RobotConnection()
     try:
         bar = ConnectionBar(link, AppConfig(tmp_path / "cfg"))
         bar.url.setCurrentText("ws://127.0.0.1:9")

@@ -15,6 +15,7 @@ from qtpy.QtTest import QTest
 
 from rcon_core.canvas import Binding, Geometry
 from rcon_core.plugins import Role
+from rcon_core.testing import qt_flushed
 
 pytest.importorskip("rcon_widgets_std")
 pytest.importorskip("rcon_widgets_sensors")
@@ -136,7 +137,7 @@ def test_a_short_press_on_hold_to_send_says_so_in_full_at_the_default_size(windo
                                                                            settings):
     wid = place(window, kind, binding, plugins.widget(kind).default_size, settings)
     view = operate(window, qtbot, wid).view
-    QTest.qWait(50)
+    qt_flushed(qtbot)
     tap(view.button)  # a short press: nothing is sent, the face says why
     qtbot.waitUntil(lambda: view.face.flashing is not None, timeout=TIMEOUT_MS)
     shown = view.button.text()

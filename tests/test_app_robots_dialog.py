@@ -13,6 +13,7 @@ from test_app_fleet import fleet_layout
 from rcon_core.bridge import ConnectionState
 from rcon_core.canvas import Binding
 from rcon_core.canvas.robots import Robot
+from rcon_core.testing import qt_flushed
 
 pytestmark = pytest.mark.usefixtures("qapp")
 
@@ -79,7 +80,11 @@ def test_ok_keeps_the_running_widgets_unless_what_changed_concerns_them(qtbot, w
             dialog.set_row(1, **row)
         tap(ok_button(dialog))
         qtbot.waitUntil(lambda: not dialog.isVisible(), timeout=TIMEOUT_MS)
-        QTest.qWait(300)  # a restart, if one were made, would have reached the window by now
+        # a restart, if one were made, would have reached the window by now: the GUI's events, then the
+        # bridge thread's (every link runs there), then what that posted back to the GUI
+        qt_flushed(qtbot)
+        window.link.thread.call(lambda: None).result(5)
+        qt_flushed(qtbot)
         window._pump()
 
     trail = len(map_.model.state.value.main.points)

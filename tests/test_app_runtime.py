@@ -15,6 +15,7 @@ from rcon_core.app.main_window import MainWindow
 from rcon_core.app.widget_host import FRAME_INTERVAL, WidgetHost
 from rcon_core.canvas import Binding, Canvas, Geometry, WidgetInstance, Workspace, dumps_workspace
 from rcon_core.plugins import Accepts, PluginManager, Role, WidgetModel, WidgetSpec, WidgetState, hookimpl
+from rcon_core.testing import flushed_sync
 
 pytestmark = pytest.mark.usefixtures("qapp")
 
@@ -245,7 +246,8 @@ def test_previews_of_controls_never_reach_the_robot(qtbot, tmp_path, robot):  # 
         hosted = running(window, qtbot, preview_id)
         qtbot.waitUntil(lambda: hosted.frame.badge.text() == "PREVIEW ONLY", timeout=5_000)
         assert hosted.model.publish({"linear": {"x": 1.0}})  # what a touch on the pad would do
-        qtbot.wait(300)
+        # a marker through the window's (only) link to the robot arrives; the preview's command did not
+        flushed_sync(window.link.thread, window.link.client, robot, qtbot=qtbot)
         assert robot.published("/cmd_vel") == []
         # placed, the same widget is live
         window.place_draft()

@@ -19,6 +19,7 @@ from rcon_core.app.secret_store import SERVICE
 from rcon_core.bridge import ConnectionState
 from rcon_core.plugins import PluginManager
 from rcon_core.sim import SimServer
+from rcon_core.testing import qt_flushed
 
 keyring = pytest.importorskip("keyring")
 pytest.importorskip("cryptography")
@@ -93,7 +94,7 @@ def type_into(line: QtWidgets.QLineEdit, text: str) -> None:
 def type_url(window, url: str) -> None:
     type_into(window.connection.url.lineEdit(), url)
     QTest.keyClick(window.connection.url.lineEdit(), QtCore.Qt.Key.Key_Return)
-    QTest.qWait(20)
+    qt_flushed()  # the bar's one-Return-per-press guard resets (a person's next key press comes later)
 
 
 def fill_settings(qtbot, window, url: str, *, ca: Path | None, secret: str | None):

@@ -5,6 +5,7 @@ import pytest
 from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app.theme import stylesheet
+from rcon_core.testing import qt_flushed
 
 TOUCH = 48
 
@@ -39,7 +40,7 @@ def test_tab_scroll_buttons_are_touch_sized_with_arrows(themed, qtbot):
         inner = QtCore.QRect(b.width() // 3, b.height() // 3, b.width() // 3, b.height() // 3)
         assert _ink_pixels(img, inner) > 20, "no arrow drawn in the scroll button"
     tabs.setCurrentIndex(4)  # the last tab is reachable
-    qtbot.wait(50)
+    qt_flushed(qtbot)
     assert tabs.tabRect(4).right() <= tabs.width()
 
 

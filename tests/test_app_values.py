@@ -115,7 +115,9 @@ def test_the_demo_speed_limit_reads_not_set_until_a_limit_is_sent(qtbot, tmp_pat
         qtbot.waitUntil(lambda: hosted.view.value.isVisible() and hosted.view.value.text() == "not set",
                         timeout=5_000)
         assert sim_thread.robot.speed_limit is None  # the robot has none: a number here would be a lie
-        qtbot.wait(300)
+        # a round trip on the link: whatever the robot sent before its answer has been received
+        link = window.link
+        assert link.thread.run(link.client.call_service("/rosapi/get_time", {})).result(10)
         window.host.refresh()
         assert hosted.view.value.text() == "not set"
         snap(window, f"speed-limit-not-set-{size[0]}")

@@ -24,18 +24,11 @@ from rcon_core.bridge import (
 )
 from rcon_core.bridge.protocol import png_to_text
 from rcon_core.msgs.values import as_bytes
+from rcon_core.testing import until
 
 pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
 
 pytestmark = pytest.mark.recordings
-
-
-async def until(pred, timeout: float = 5.0) -> None:
-    async def poll():
-        while not pred():
-            await asyncio.sleep(0.01)
-
-    await asyncio.wait_for(poll(), timeout)
 
 
 @pytest.fixture
@@ -396,9 +389,10 @@ async def test_an_auth_that_takes_time_goes_first_and_calls_wait_for_it():
     """The socket is open while an awaitable auth is being made: nothing may go out before the auth op,
     and a call made meanwhile waits for the restored link (not for its timeout)."""
     auth = {"mac": "m", "client": "127.0.0.1", "dest": "127.0.0.1", "rand": "r", "t": 1, "level": "admin", "end": 2}
-    gate = asyncio.Event()
+    gate, asked = asyncio.Event(), []
 
     async def slow_auth():
+        asked.append(1)
         await gate.wait()
         return auth
 
@@ -409,8 +403,8 @@ async def test_an_auth_that_takes_time_goes_first_and_calls_wait_for_it():
         connecting = asyncio.ensure_future(c.connect(timeout=5))
         await until(lambda: c.connected)  # the socket is open; the auth is not made yet
         call = asyncio.ensure_future(c.call_service("/ok", {}, timeout=5))
-        await asyncio.sleep(0.2)
-        assert not call.done() and server.received == []
+        await until(lambda: asked, what="the auth being made")
+        assert not call.done() and server.received == []  # (the order check below is the one that counts)
         gate.set()
         assert await asyncio.wait_for(call, 3) == {"v": 1}
         await connecting

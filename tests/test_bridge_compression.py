@@ -10,7 +10,6 @@ float32; JSON as the shortest double), NaN equal to the ``None`` JSON gives for 
 
 from __future__ import annotations
 
-import asyncio
 import math
 from collections.abc import AsyncIterator
 from typing import Any
@@ -21,6 +20,7 @@ import pytest_asyncio
 from rcon_core.bridge import BridgeClient
 from rcon_core.msgs.values import as_bytes
 from rcon_core.sim import SimServer
+from rcon_core.testing import until
 
 pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
 
@@ -107,13 +107,9 @@ async def test_every_compression_equals_none_on_every_topic(sim: SimServer, comp
         def paired() -> dict[str, list[Any]]:
             return {t: [k for k in got[t] if k in ref[t]] for t in TOPICS}
 
-        async def all_paired() -> None:
-            while not all(paired().values()):
-                await asyncio.sleep(0.02)
-
         try:
-            await asyncio.wait_for(all_paired(), 15)
-        except TimeoutError:
+            await until(lambda: all(paired().values()), 15, "a message paired on every topic")
+        except AssertionError:
             missing = sorted(t for t, keys in paired().items() if not keys)
             pytest.fail(f"no {compression} message paired with a reference one on {missing} "
                         f"(received: { {t: len(got[t]) for t in missing} })")

@@ -11,10 +11,10 @@ import time
 import pytest
 
 from rcon_core.app import link as link_mod
-from rcon_core.app.link import Link
+from rcon_core.app.link import RobotConnection
 from rcon_core.bridge import rosapi as rosapi_mod
 from rcon_core.bridge.rosapi import Rosapi
-from rcon_core.testing import connected
+from rcon_core.testing import connected, until, until_sync
 
 SERVICES = 1500
 
@@ -67,8 +67,7 @@ async def test_a_lost_link_ends_the_asking_at_once(sim):
     async with connected(sim.url, reconnect=False) as client:
         api = client.rosapi
         task = asyncio.ensure_future(api.services_with_types({}))
-        while api.calls["service_type"] < 20:
-            await asyncio.sleep(0.005)
+        await until(lambda: api.calls["service_type"] >= 20, what="the type calls under way")
         started = time.monotonic()
         await client.link.close()
         with pytest.raises(Exception) as err:
@@ -81,22 +80,19 @@ async def test_a_lost_link_ends_the_asking_at_once(sim):
 def test_the_link_lists_again_without_asking_again_and_publishes_only_changes(sim_thread, monkeypatch):
     monkeypatch.setattr(link_mod, "CATALOG_PERIOD", 0.2)
     sim_thread.run_sync(lambda: add_services(sim_thread))
-    link = Link()
+    link = RobotConnection()
     try:
         link.connect_to(sim_thread.url)
-        deadline = time.monotonic() + 30
-        catalog = None
-        while catalog is None and time.monotonic() < deadline:
+
+        def full_catalog() -> bool:
             ok, got = link.catalog_box.take()
-            if ok and any(n == "/many/service_01499" and t for n, t in got["services"]):
-                catalog = got
-            time.sleep(0.02)
-        assert catalog is not None and link.catalog_state == "listed"
+            return ok and any(n == "/many/service_01499" and t for n, t in got["services"])
+
+        until_sync(full_catalog, 30, what="the whole catalogue, types and all")
+        assert link.catalog_state == "listed"
         api = link.client.rosapi
         asked, listings = api.calls["service_type"], api.calls["services"]
-        while api.calls["services"] < listings + 3 and time.monotonic() < deadline:
-            time.sleep(0.05)
-        assert api.calls["services"] >= listings + 3  # three more listings ...
+        until_sync(lambda: api.calls["services"] >= listings + 3, 30, what="three more listings")
         assert api.calls["service_type"] == asked  # ... without one type asked again
         ok, _ = link.catalog_box.take()
         assert not ok  # nothing changed: nothing published again
@@ -109,21 +105,21 @@ def test_a_long_listing_is_published_as_it_goes(sim_thread, monkeypatch):
     monkeypatch.setattr(rosapi_mod, "TYPE_CALLS_PER_S", 300.0)  # 1500 types: about 5 s
     monkeypatch.setattr(link_mod, "CATALOG_PROGRESS_EVERY", 0.5)
     sim_thread.run_sync(lambda: add_services(sim_thread))
-    link = Link()
+    link = RobotConnection()
     try:
         link.connect_to(sim_thread.url)
         known_counts: list[int] = []
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline:
+
+        def every_type_known() -> bool:
             ok, got = link.catalog_box.take()
             if ok and got["services"]:
                 mine = [t for n, t in got["services"] if n.startswith("/many/")]
                 assert len(mine) == SERVICES  # every name, from the first partial catalogue on
                 known_counts.append(sum(1 for t in mine if t))
-                if known_counts[-1] == SERVICES:
-                    break
-            time.sleep(0.02)
-        assert known_counts[-1] == SERVICES and len(known_counts) >= 3
+            return bool(known_counts) and known_counts[-1] == SERVICES
+
+        until_sync(every_type_known, 60, what="every service's type")
+        assert len(known_counts) >= 3
         assert known_counts[0] < SERVICES and known_counts == sorted(known_counts)
     finally:
         link.shutdown()

@@ -3,23 +3,15 @@ and a raising callback on the one-consumer delivery path."""
 
 from __future__ import annotations
 
-import asyncio
 import logging
 import socket
 
 import pytest
 
 from rcon_core.bridge import BridgeClient
+from rcon_core.testing import until
 
 pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
-
-
-async def until(pred, timeout: float = 10.0) -> None:
-    async def poll():
-        while not pred():
-            await asyncio.sleep(0.02)
-
-    await asyncio.wait_for(poll(), timeout)
 
 
 @pytest.fixture
@@ -37,7 +29,7 @@ async def test_nagle_is_off_on_the_client_socket(client):
 
 async def test_a_publish_is_handed_to_the_transport_before_publish_returns(sim, client):
     pub = client.node("teleop").advertise("/rcon_test/now", "std_msgs/String")
-    await asyncio.sleep(0.1)
+    await until(lambda: sim.topics.get("/rcon_test/now") is not None, what="the advertisement at the sim")
     sent_before = client.link.buffered(), client.link.queued
     assert sent_before == (0, 0)
     pub.publish({"data": "at once"})
@@ -49,7 +41,7 @@ async def test_a_publish_is_handed_to_the_transport_before_publish_returns(sim, 
 
 async def test_publishes_keep_their_order_when_the_transport_backs_up(sim, client):
     pub = client.node("bulk").advertise("/rcon_test/bulk", "std_msgs/String")
-    await asyncio.sleep(0.1)
+    await until(lambda: sim.topics.get("/rcon_test/bulk") is not None, what="the advertisement at the sim")
     n, pad = 200, "x" * (64 << 10)
     for i in range(n):  # ~13 MB without yielding: the transport fills up, the rest waits in the queue
         pub.publish({"data": f"{i:06d}{pad}"})

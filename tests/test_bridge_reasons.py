@@ -13,6 +13,7 @@ from rcon_core.bridge import AuthRefusedError, BridgeClient, ConnectionState, Li
 from rcon_core.bridge.errors import HandshakeError
 from rcon_core.bridge.secure import confirm_auth, read_secret, rosauth
 from rcon_core.sim import SimServer
+from rcon_core.testing import until
 
 pytest.importorskip("cryptography")
 from tls_certs import make_pki  # noqa: E402
@@ -42,8 +43,7 @@ async def _first_failure(url: str, **options) -> tuple[reasons.Failure, BridgeCl
     client.add_failure_listener(seen.append)
     start = time.monotonic()
     task = asyncio.ensure_future(client.connect())
-    while not seen:
-        await asyncio.sleep(0.01)
+    await until(lambda: seen, what="the first failure")
     took = time.monotonic() - start
     task.cancel()
     await client.close()
@@ -87,8 +87,7 @@ async def test_retry_times_follow_the_backoff():
     seen: list[reasons.Failure] = []
     client.add_failure_listener(seen.append)
     task = asyncio.ensure_future(client.connect())
-    while len(seen) < 4:
-        await asyncio.sleep(0.01)
+    await until(lambda: len(seen) >= 4, what="four failures")
     task.cancel()
     await client.close()
     times = [f.retry_at for f in seen]

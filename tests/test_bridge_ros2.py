@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import asyncio
 import math
 import time
 from collections.abc import AsyncIterator
@@ -12,7 +11,7 @@ import pytest_asyncio
 
 from rcon_core.bridge import ActionError, BridgeClient, GoalStatus
 from rcon_core.sim import SimServer
-from rcon_core.testing import connected
+from rcon_core.testing import connected, until
 
 pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
 
@@ -56,11 +55,7 @@ async def test_cancel_mid_way(sim_ros2: SimServer, client: BridgeClient) -> None
     goal = client.node("nav").send_action_goal(ACTION, ACTION_TYPE, {"target": target_ahead(sim_ros2, 500.0)},
                                                feedback.append)
 
-    async def first_feedback() -> None:
-        while not feedback:
-            await asyncio.sleep(0.01)
-
-    await asyncio.wait_for(first_feedback(), 10)
+    await until(lambda: feedback, what="the first feedback")
     goal.cancel()
     result = await goal.result(timeout=10)
     assert goal.status == GoalStatus.CANCELED and not goal.succeeded
@@ -70,7 +65,9 @@ async def test_cancel_mid_way(sim_ros2: SimServer, client: BridgeClient) -> None
 
 async def test_goal_without_feedback_callback_gets_no_feedback(sim_ros2: SimServer, client: BridgeClient) -> None:
     goal = client.node("nav").send_action_goal(ACTION, ACTION_TYPE, {"target": target_ahead(sim_ros2, 500.0)})
-    await asyncio.sleep(0.5)
+    # the robot drives: a feedback frame goes out with each step, and the result comes after them
+    await until(lambda: sim_ros2.navigate_action.goal is not None and sim_ros2.robot.cmd_surge > 0,
+                what="the robot driving to the goal")
     goal.cancel()
     await goal.result(timeout=10)
     assert goal.feedback_count == 0 and goal.status == GoalStatus.CANCELED
@@ -108,11 +105,7 @@ async def test_failing_handler_on_ros2_answers_with_the_response_default(sim_ros
     other = BridgeClient(sim_ros2.url, call_timeout=5)
     await other.connect(timeout=5)
     try:
-        async def advertised() -> None:
-            while "/rcon/dock" not in sim_ros2.services:
-                await asyncio.sleep(0.01)
-
-        await asyncio.wait_for(advertised(), 5)
+        await until(lambda: "/rcon/dock" in sim_ros2.services, what="the service advertised")
         answer = await other.call_service("/rcon/dock", {}, timeout=5)
     finally:
         await other.close()

@@ -33,8 +33,7 @@ async def test_subscribe_every_compression_on_the_sim(sim, client):
 
 async def test_publish_and_services_on_the_sim(sim, client):
     node = client.node("teleop")
-    pub = node.advertise("/cmd_vel", "geometry_msgs/Twist")
-    await asyncio.sleep(0.1)
+    pub = node.advertise("/cmd_vel", "geometry_msgs/Twist")  # (the publish follows it on the same connection)
     pub.publish({"linear": {"x": 0.4, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.1}})
     msg = await sim.wait_for_published("/cmd_vel", lambda m: m["linear"]["x"] == 0.4, timeout=5)
     assert msg["angular"]["z"] == 0.1
@@ -70,7 +69,7 @@ async def test_advertised_service_called_by_roslibpy_through_the_sim(sim, client
     roslibpy = pytest.importorskip("roslibpy")
     client.node("provider").advertise_service("/rcon/echo", "std_srvs/SetBool",
                                               lambda req: {"success": req["data"], "message": "from rcon"})
-    await asyncio.sleep(0.2)
+    await until(lambda: "/rcon/echo" in sim.services, what="the service advertised")
 
     def call():
         ros = roslibpy.Ros("127.0.0.1", sim.port)

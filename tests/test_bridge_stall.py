@@ -14,7 +14,7 @@ import pytest
 from rcon_core.bridge import BridgeClient, ConnectionState
 from rcon_core.bridge.freshness import DEFAULT_MAX_AGE, LinkWatch, resolve_max_age
 from rcon_core.loopback import StallProxy
-from rcon_core.testing import until
+from rcon_core.testing import flushed, until
 
 pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
 
@@ -78,7 +78,7 @@ async def test_commands_are_never_delivered_late_after_a_silent_stall(sim, proxy
     resumed_at = time.monotonic()
     await until(lambda: client.state is ConnectionState.CONNECTED, 5)
     await drive(1.0)
-    await asyncio.sleep(0.3)
+    await flushed(client, sim)  # every command written has arrived (or died with the cut connection)
 
     degraded = first(client.states, ConnectionState.DEGRADED, stalled_at)
     assert degraded is not None and degraded - stalled_at <= 1.5

@@ -10,6 +10,7 @@ from replay_server import ScriptedServer
 
 from rcon_core.bridge import BridgeClient
 from rcon_core.bridge.threaded import BridgeThread, LatestValue
+from rcon_core.testing import until_sync
 
 pytestmark = pytest.mark.usefixtures("transport")  # every test runs on each transport
 
@@ -109,11 +110,7 @@ def test_client_on_the_thread_feeds_a_mailbox_decoded():
             return c
 
         client = bt.run(setup()).result(5)
-        for _ in range(500):
-            ok, msg = box.take()
-            if ok:
-                break
-            threading.Event().wait(0.01)
+        ok, msg = until_sync(lambda: (got := box.take())[0] and got, what="the message in the box")
         assert ok and "café" in msg["data"]
         assert threads == {"rcon-bridge"}
         bt.run(client.close()).result(5)

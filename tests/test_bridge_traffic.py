@@ -3,8 +3,6 @@ sim counting what came off its socket."""
 
 from __future__ import annotations
 
-import asyncio
-
 from rcon_core.bridge.traffic import MAX_KEYS, OTHER, Traffic, TrafficRates, rate_text
 from rcon_core.testing import ManualClock, until
 
@@ -55,7 +53,7 @@ async def test_a_client_counts_what_its_subscriptions_cost(sim, client):
     for topic in got:
         node.subscribe(topic, lambda m, topic=topic: got[topic].append(1), compression="cbor")
     await until(lambda: all(len(v) >= 5 for v in got.values()), 15, "both topics delivering")
-    await asyncio.sleep(0.2)
+    await until(lambda: all(client.traffic.snapshot()[1].get(t, (0, 0))[1] >= 5 for t in got), what="counted")
     _total, counts = client.traffic.snapshot()
     cam, odom = counts["/camera/rear/image_raw/compressed"], counts["/odom"]
     assert cam[1] >= 5 and odom[1] >= 5

@@ -7,14 +7,14 @@ from __future__ import annotations
 import asyncio
 
 from rcon_core.app.fleet_links import FleetLinks, robot_link_settings
-from rcon_core.app.link import Link, LinkSettings
+from rcon_core.app.link import LinkSettings, RobotConnection
 from rcon_core.canvas.robots import Robot
 from rcon_core.testing import until
 
 SECRET = "fleet-secret-0123456789"
 
 
-def state_of(link: Link) -> str:
+def state_of(link: RobotConnection) -> str:
     client = link.client
     return getattr(getattr(client, "state", None), "value", "closed") if client is not None else "closed"
 
@@ -22,7 +22,7 @@ def state_of(link: Link) -> str:
 async def test_each_robot_connects_with_its_own_settings_and_a_removed_one_is_closed(sim_fleet):
     alpha, bravo = await sim_fleet(2)
     [charlie] = await sim_fleet(1, auth_secret=SECRET)
-    first = Link()  # the links run on their own bridge thread; the sims on the test's loop
+    first = RobotConnection()  # the links run on their own bridge thread; the sims on the test's loop
     kept = {charlie.url: SECRET}
     links = FleetLinks(first, secret_for=kept.get)
     robots = [Robot("r-1", "Alpha"), Robot("r-2", "Bravo", url=bravo.url),

@@ -2,7 +2,6 @@
 its pad (one zero, then silence) while the other robot's pad keeps driving; focus loss stops every pad.
 Two sims on free ports, the real teleop model of rcon_widgets_sensors."""
 
-import time
 
 import pytest
 
@@ -56,9 +55,7 @@ async def test_losing_one_robot_stops_only_its_teleop_and_focus_loss_stops_all(s
         assert a.state.value.reason == "link down" and a.state.link_down
         assert b.active and not b.state.link_down  # Bravo's pad still drives Bravo
         sent = len(b.send_times)
-        deadline = time.monotonic() + 0.6
-        await until(lambda: time.monotonic() > deadline)
-        assert len(b.send_times) > sent + 2
+        await until(lambda: len(b.send_times) > sent + 2, what="Bravo's pad sending on")
         last_b = bravo.published("/cmd_vel")[-1]
         assert moving(last_b)
 

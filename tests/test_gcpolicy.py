@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from rcon_core.gcpolicy import CollectorPolicy, keep_settled
-from rcon_core.testing import ManualClock
+from rcon_core.testing import ManualClock, until
 
 
 class Node:
@@ -94,8 +94,7 @@ def test_keep_settled_settles_fully_at_once_then_lightly_on_its_period():
 
     async def run() -> None:
         task = asyncio.get_running_loop().create_task(keep_settled(policy))
-        while policy.settles < 3:
-            await asyncio.sleep(0.005)
+        await until(lambda: policy.settles >= 3, what="three settles")
         task.cancel()
 
     asyncio.run(asyncio.wait_for(run(), 10))

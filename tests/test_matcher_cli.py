@@ -2,6 +2,8 @@
 
 import json
 
+import pytest
+
 from rcon_core.cli.main import main
 
 
@@ -11,15 +13,35 @@ def run(capsys, *argv):
     return code, out.out, out.err
 
 
-def test_match_with_url_fetches_definitions(capsys, sim_url):
-    code, out, err = run(capsys, "match", "sensor_msgs/BatteryState", "--url", sim_url, "--json")
+#: a lab's own message: the robot has its package, this machine does not (neither the standard registry nor
+#: any installed widget plugin knows it), so only ``--url`` can give its fields
+TANK = "lab_msgs/TankLevel"
+TANK_MSG = "string tank\nfloat64 level_percent\nbool refilling\n"
+
+
+def fits(data):
+    return {(m["kind"], m["rank"], m["field_path"]) for m in data["matches"]}
+
+
+def test_match_with_url_fetches_definitions(capsys, sim_thread, sim_url):
+    pytest.importorskip("rcon_widgets_std", reason="the matches asserted are the standard widgets'")
+    sim_thread.run_sync(lambda: sim_thread.types.registry.add_msg_text(TANK, TANK_MSG))
+    code, out, err = run(capsys, "match", TANK, "--json")  # offline: the type is unknown here
+    assert code == 0 and f"{TANK} is unknown" in err
+    assert all(m["rank"] == "generic" and m["field_path"] == "" for m in json.loads(out)["matches"])
+    code, out, err = run(capsys, "match", TANK, "--url", sim_url, "--json")
     assert code == 0, err
     data = json.loads(out)
-    assert data["type"] == "sensor_msgs/BatteryState" and data["role"] == "subscribe"
-    assert isinstance(data["matches"], list)
+    assert data["type"] == TANK and data["role"] == "subscribe"
+    assert "unknown" not in err  # the robot's definition was fetched: each widget fits a field of it
+    assert {("std.slider", "structural", "level_percent"), ("std.switch", "structural", "refilling"),
+            ("std.label", "structural", "tank")} <= fits(data)
+    assert not any(m["rank"] == "generic" for m in data["matches"])
     code, out, err = run(capsys, "match", "std_srvs/SetBool", "--url", sim_url, "--json")
     assert code == 0, err
-    assert json.loads(out)["role"] == "call"  # a service defaults to the call role
+    data = json.loads(out)
+    assert data["role"] == "call"  # a service defaults to the call role
+    assert ("std.switch", "exact", "request.data") in fits(data)
 
 
 def test_match_unknown_type_on_the_server_is_a_clear_error(capsys, sim_url):

@@ -255,10 +255,11 @@ async def test_rcon_record_on_the_sim_over_foxglove(fox_sim_ros2: str, tmp_path:
     topics = ["/odom", "/battery", "/gps/fix"]
     async with RawFoxClient(fox_sim_ros2, topics) as raw:
         rc, err = await record_until(fox_sim_ros2, out, lambda n: n >= 40, *topics)
-        await until(lambda: all(raw.payloads[t] for t in topics), what="the bare client's messages")
-        await asyncio.sleep(0.2)  # the bare client is still subscribed: let what the recorder got arrive here too
-    assert rc == 0, err
-    header, chans, msgs = read_mcap(out)
+        assert rc == 0, err
+        header, chans, msgs = read_mcap(out)
+        # the bare client is still subscribed: what the recorder got reaches it too (it may lag the recorder)
+        await until(lambda: all(run_of([m.data for m in msgs[t]], raw.payloads[t]) for t in topics),
+                    what="the bare client to have received every message the recorder wrote")
     assert header.profile == "ros2"
     for topic in topics:
         assert run_of([m.data for m in msgs[topic]], raw.payloads[topic]), topic

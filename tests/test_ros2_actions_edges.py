@@ -10,6 +10,7 @@ import websockets
 
 from rcon_core.bridge import BridgeClient, GoalStatus
 from rcon_core.sim import SimServer
+from rcon_core.testing import until
 
 ACTION = "/edge_action"
 TYPE = "example_interfaces/action/Fibonacci"
@@ -76,18 +77,12 @@ async def test_a_provided_action_survives_a_reconnect() -> None:
     caller = BridgeClient(first.url, call_timeout=3, reconnect=False)
     await caller.connect(timeout=5)
     hanging = caller.node("c").send_action_goal(ACTION, TYPE, {"order": 99}, check=False)
-    for _ in range(100):
-        if started:
-            break
-        await asyncio.sleep(0.02)
+    await until(lambda: started)
     await first.stop()  # the robot goes away with a goal in flight
     second = SimServer(ros2=True, rate_scale=4.0, port=port)
     try:
         await second.start()
-        for _ in range(250):
-            if provider.connected and ACTION in second.action_hub.names():
-                break
-            await asyncio.sleep(0.02)
+        await until(lambda: provider.connected and ACTION in second.action_hub.names())
         # abandoned, not answered late; its fate is unknown, not success
         assert started[0].done and started[0].task.done() and started[0].status == GoalStatus.UNKNOWN
         assert not srv.goals

@@ -17,6 +17,7 @@ from rcon_core.bridge.cdrdecode import flavour_from_typedefs
 from rcon_core.msgs import TypeRegistry
 from rcon_core.msgs.cdr import CdrError
 from rcon_core.sim import SimServer
+from rcon_core.testing import until
 
 STORE = get_typestore(Stores.ROS2_HUMBLE)
 REG = TypeRegistry.standard(ros2=True)
@@ -90,10 +91,7 @@ async def test_client_decodes_cdr_like_json(sim_ros2: SimServer, topic: str) -> 
         await other.connect(timeout=5)
         try:
             other.node("json").subscribe(topic, plain.append)
-            for _ in range(300):
-                if len(raw) >= 3 and len(plain) >= 3:
-                    break
-                await asyncio.sleep(0.02)
+            await until(lambda: len(raw) >= 3 and len(plain) >= 3)
         finally:
             await other.close()
     finally:
@@ -143,17 +141,10 @@ async def test_client_reads_cdr_of_a_type_that_does_not_tell_its_ros(sim_ros2: S
         got_b: list[dict[str, Any]] = []
         a.node("s").subscribe("/a_topic", got_a.append, type="std_msgs/String", compression="cbor-raw")
         b.node("s").subscribe("/a_topic", got_b.append, type="std_msgs/msg/String", compression="cbor-raw")
-        for _ in range(200):
-            if sim_ros2.topic_subscriber_count("/a_topic") == 2:
-                break
-            await asyncio.sleep(0.02)
-        await asyncio.sleep(0.1)
+        await until(lambda: sim_ros2.topic_subscriber_count("/a_topic") == 2)
         pub = a.node("p").advertise("/a_topic", "std_msgs/msg/String")
         pub.publish({"data": "hello"})
-        for _ in range(200):
-            if got_a and got_b:
-                break
-            await asyncio.sleep(0.02)
+        await until(lambda: got_a and got_b)
         assert got_a == got_b == [{"data": "hello"}]
         assert a.stats["bad_frames"] == b.stats["bad_frames"] == 0
         assert a.ros_version is None  # nothing was asked

@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import asyncio
 import math
 
 import orjson
@@ -12,19 +11,12 @@ from replay_server import ROS2, ScriptedServer, load, recorded
 
 from rcon_core.bridge import ActionError, ActionNoAnswerError, BridgeClient, GoalStatus, ServiceTimeoutError
 from rcon_core.msgs.values import as_bytes
+from rcon_core.testing import until
 
 pytestmark = pytest.mark.recordings
 
 FIB, FIB_TYPE = "/fibonacci", "example_interfaces/action/Fibonacci"
 ACTIONS = load("actions.jsonl", ROS2)
-
-
-async def until(pred, timeout: float = 5.0) -> None:
-    async def poll():
-        while not pred():
-            await asyncio.sleep(0.01)
-
-    await asyncio.wait_for(poll(), timeout)
 
 
 @pytest.fixture

@@ -22,6 +22,7 @@ from rcon_core.bridge import BridgeClient
 from rcon_core.msgs.values import as_bytes
 from rcon_core.sim import SimServer
 from rcon_core.sim.identity import Identity, index_of
+from rcon_core.testing import until
 
 ROBOT_TOPICS = ["/odom", "/gps/fix", "/imu/data", "/imu/mag", "/camera/front/image_raw",
                 "/camera/rear/image_raw/compressed", "/scan", "/battery", "/depth", "/lights/state", "/cmd_vel",
@@ -116,10 +117,7 @@ async def test_named_sim_lists_its_topics_services_nodes_and_rosout_under_its_na
         await ws.send(json.dumps({"op": "publish", "topic": "/boat2/cmd_vel",
                                   "msg": {"linear": {"x": 0.7}, "angular": {"z": 0.0}}}))
         await boat2.wait_for_published("/boat2/cmd_vel")
-        for _ in range(100):
-            if boat2.robot.cmd_surge:
-                break
-            await asyncio.sleep(0.02)
+        await until(lambda: boat2.robot.cmd_surge)
         assert boat2.robot.cmd_surge == pytest.approx(0.7)
         ok = await call(ws, "/boat2/lights/set", {"data": True}, "l")
         assert ok["result"] is True and boat2.robot.lights is True
@@ -152,10 +150,7 @@ async def test_each_vessel_has_its_own_fix_and_camera_scene_through_our_client(f
             node = c.node("test")
             node.subscribe(sim.topic("/gps/fix"), lambda m, k=key: fixes.setdefault(k, m))
             node.subscribe(sim.topic("/camera/front/image_raw"), lambda m, k=key: frames.setdefault(k, m))
-        for _ in range(300):
-            if len(fixes) == 3 and len(frames) == 3:
-                break
-            await asyncio.sleep(0.02)
+        await until(lambda: len(fixes) == 3 and len(frames) == 3)
         assert set(fixes) == set(frames) == {"unnamed", "boat1", "boat2"}
         positions = [(f["latitude"], f["longitude"]) for f in fixes.values()]
         for i, a in enumerate(positions):

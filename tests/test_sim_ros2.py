@@ -10,6 +10,7 @@ import websockets
 
 from rcon_core.msgs import TypeRegistry
 from rcon_core.sim import SimServer
+from rcon_core.testing import until
 
 
 async def recv_until(ws: Any, pred: Any, timeout: float = 5.0) -> dict[str, Any]:
@@ -86,11 +87,14 @@ async def test_cancel_action_goal(sim_ros2: SimServer) -> None:
 
 async def test_feedback_only_when_asked(sim_ros2: SimServer) -> None:
     """ROSBRIDGE_PROTOCOL.md: ``feedback`` defaults to false, so a goal without it gets no feedback frames."""
+    nav, steps = sim_ros2.navigate_action, []
+    real_distance = nav._distance  # called once per step of the drive, where a feedback frame would go out
+    nav._distance = lambda goal: steps.append(goal) or real_distance(goal)
     async with websockets.connect(sim_ros2.url, max_size=None, max_queue=None) as ws:
         await ws.send(json.dumps({"op": "send_action_goal", "id": "quiet", "action": "/navigate_to_fix",
                                   "action_type": "rcon_sim/action/NavigateToFix",
                                   "args": {"target": {"latitude": 43.70, "longitude": -79.30}}}))
-        await asyncio.sleep(0.6)  # three feedback periods at rate_scale 4
+        await until(lambda: len(steps) >= 3, what="three steps of the drive")  # the result comes after them
         await ws.send(json.dumps({"op": "cancel_action_goal", "id": "quiet", "action": "/navigate_to_fix"}))
         seen: list[dict[str, Any]] = []
         result = await recv_until(ws, lambda m: seen.append(m) or m.get("op") == "action_result")

@@ -16,6 +16,7 @@ import websockets
 
 from rcon_core.bridge import BridgeClient, GoalStatus
 from rcon_core.sim import SimServer
+from rcon_core.testing import until
 
 CONVERSATIONS = Path(__file__).parent / "recordings" / "rosbridge-ros2"
 FILES = sorted(p.name for p in CONVERSATIONS.glob("*.jsonl"))
@@ -116,7 +117,8 @@ async def pair(sim_ros2: SimServer) -> AsyncIterator[tuple[BridgeClient, BridgeC
 
 
 async def until_listed(client: BridgeClient, action: str) -> None:
-    for _ in range(100):
+    """Ask rosapi again (every 20 ms, 10 s at most) until it lists ``action``."""
+    for _ in range(500):
         if action in await client.rosapi.action_servers():
             return
         await asyncio.sleep(0.02)
@@ -143,10 +145,7 @@ async def test_client_provides_an_action_with_two_concurrent_goals(pair: tuple[B
     g3 = caller.node("ui").send_action_goal(ACTION, "example_interfaces/action/Fibonacci", {"order": 3},
                                             feedback3.append)
     g5 = caller.node("ui").send_action_goal(ACTION, "example_interfaces/action/Fibonacci", {"order": 5})
-    for _ in range(100):
-        if len(seen) == 2:
-            break
-        await asyncio.sleep(0.02)
+    await until(lambda: len(seen) == 2)
     assert [args for _, args in seen] == [{"order": 3}, {"order": 5}]
     assert [gid for gid, _ in seen] == [f"action_goal:{ACTION}:1", f"action_goal:{ACTION}:2"]
     release.set()
@@ -162,7 +161,10 @@ async def test_client_provides_an_action_with_two_concurrent_goals(pair: tuple[B
 async def test_cancel_reaches_the_client_provider(pair: tuple[BridgeClient, BridgeClient]) -> None:
     provider, caller = pair
 
+    running: list[Any] = []
+
     async def wait_for_cancel(goal: Any) -> dict[str, Any]:
+        running.append(goal)
         await goal.cancelled.wait()
         goal.status = GoalStatus.CANCELED
         return {"sequence": [0]}
@@ -170,7 +172,7 @@ async def test_cancel_reaches_the_client_provider(pair: tuple[BridgeClient, Brid
     provider.node("fib").advertise_action(ACTION, "example_interfaces/action/Fibonacci", wait_for_cancel)
     await until_listed(caller, ACTION)
     goal = caller.node("ui").send_action_goal(ACTION, "example_interfaces/action/Fibonacci", {"order": 9})
-    await asyncio.sleep(0.2)
+    await until(lambda: running, what="the goal running at the provider")
     goal.cancel()
     assert goal.outcome == "canceling"
     assert await goal.result(timeout=5) == {"sequence": [0]}
@@ -190,9 +192,10 @@ async def test_a_failing_handler_aborts_the_callers_goal(pair: tuple[BridgeClien
 
 async def test_unadvertise_aborts_goals_and_unlists(pair: tuple[BridgeClient, BridgeClient]) -> None:
     provider, caller = pair
-    never = asyncio.Event()
+    never, running = asyncio.Event(), []
 
     async def hang(goal: Any) -> dict[str, Any]:
+        running.append(goal)
         await never.wait()
         return {}
 
@@ -200,7 +203,7 @@ async def test_unadvertise_aborts_goals_and_unlists(pair: tuple[BridgeClient, Br
     node.advertise_action(ACTION, "example_interfaces/action/Fibonacci", hang)
     await until_listed(caller, ACTION)
     goal = caller.node("ui").send_action_goal(ACTION, "example_interfaces/action/Fibonacci", {"order": 2})
-    await asyncio.sleep(0.2)
+    await until(lambda: running, what="the goal running at the provider")
     node.close()
     await goal.result(timeout=5)
     assert goal.status == GoalStatus.ABORTED
@@ -274,10 +277,7 @@ async def test_services_and_subscribers_with_our_client(sim_ros2: SimServer, pai
     a, b = pair
     a.node("srv").advertise_service("/test_service", "std_srvs/srv/SetBool",
                                     lambda req: {"success": True, "message": f"Hello {req['data']}"})
-    for _ in range(100):
-        if "/test_service" in sim_ros2.services:
-            break
-        await asyncio.sleep(0.02)
+    await until(lambda: "/test_service" in sim_ros2.services)
     r1, r2 = await asyncio.gather(b.call_service("/test_service", {"data": True}),
                                   b.call_service("/test_service", {"data": False}))
     assert (r1, r2) == ({"success": True, "message": "Hello True"}, {"success": True, "message": "Hello False"})
@@ -286,26 +286,17 @@ async def test_services_and_subscribers_with_our_client(sim_ros2: SimServer, pai
     got_b: list[dict[str, Any]] = []
     a.node("sub").subscribe("/a_topic", got_a.append, type="std_msgs/msg/String")
     b.node("sub").subscribe("/a_topic", got_b.append, type="std_msgs/msg/String")
-    for _ in range(100):
-        if sim_ros2.topic_subscriber_count("/a_topic") == 2:
-            break
-        await asyncio.sleep(0.02)
+    await until(lambda: sim_ros2.topic_subscriber_count("/a_topic") == 2)
     pub = a.node("pub").advertise("/a_topic", "std_msgs/msg/String", latch=True)
     pub.publish({"data": "hello"})
-    for _ in range(100):
-        if got_a and got_b:
-            break
-        await asyncio.sleep(0.02)
+    await until(lambda: got_a and got_b)
     assert got_a == got_b == [{"data": "hello"}]
     late = BridgeClient(sim_ros2.url, call_timeout=5)
     await late.connect(timeout=5)
     try:
         box: list[dict[str, Any]] = []
         late.node("late").subscribe("/a_topic", box.append)
-        for _ in range(100):
-            if box:
-                break
-            await asyncio.sleep(0.02)
+        await until(lambda: box)
     finally:
         await late.close()
     assert box == [{"data": "hello"}]

@@ -13,6 +13,7 @@ import roslibpy
 
 from rcon_core.sim import SimServer
 from rcon_core.sim.graph import BRIDGE_NODE
+from rcon_core.testing import until_sync
 
 TIMEOUT = 10.0
 
@@ -131,9 +132,7 @@ def test_one_client_serves_another(sim_thread: SimServer) -> None:
 
         service = roslibpy.Service(provider, "/operator/arm", "std_srvs/SetBool")
         service.advertise(handler)
-        deadline = time.monotonic() + TIMEOUT
-        while "/operator/arm" not in sim_thread.services and time.monotonic() < deadline:
-            time.sleep(0.02)
+        until_sync(lambda: "/operator/arm" in sim_thread.services, TIMEOUT, what="the service advertised")
         client = roslibpy.Service(caller, "/operator/arm", "std_srvs/SetBool")
         answer = client.call(roslibpy.ServiceRequest({"data": True}), timeout=TIMEOUT)
         assert answer == {"success": True, "message": "armed=True"}
@@ -147,10 +146,14 @@ def test_one_client_serves_another(sim_thread: SimServer) -> None:
 def test_published_messages_are_visible_to_the_server(ros: roslibpy.Ros, sim_thread: SimServer) -> None:
     note = roslibpy.Topic(ros, "/operator/note", "std_msgs/String")
     note.advertise()
-    deadline = time.monotonic() + TIMEOUT
-    while not sim_thread.published("/operator/note") and time.monotonic() < deadline:
-        note.publish(roslibpy.Message({"data": "checked"}))
-        time.sleep(0.05)
+
+    def heard() -> bool:  # roslibpy's advertise has no answer: publish until the robot hears one
+        if not sim_thread.published("/operator/note"):
+            note.publish(roslibpy.Message({"data": "checked"}))
+            return False
+        return True
+
+    until_sync(heard, TIMEOUT, what="the note heard by the robot")
     assert sim_thread.wait_for_published_sync("/operator/note", lambda m: m["data"] == "checked") == {"data": "checked"}
     note.unadvertise()
 
@@ -164,19 +167,21 @@ def test_state_topics_are_latched_for_a_client_that_comes_later(sim_thread: SimS
     try:
         limit = roslibpy.Topic(setter, "/speed_limit", "std_msgs/Float64")
         limit.advertise()
-        deadline = time.monotonic() + TIMEOUT
-        while sim_thread.robot.speed_limit != 0.7 and time.monotonic() < deadline:
-            limit.publish(roslibpy.Message({"data": 0.7}))
-            time.sleep(0.05)
+
+        def limit_set() -> bool:  # publish until the robot takes it (advertise has no answer)
+            if sim_thread.robot.speed_limit != 0.7:
+                limit.publish(roslibpy.Message({"data": 0.7}))
+                return False
+            return True
+
+        until_sync(limit_set, TIMEOUT, what="the speed limit taken")
         lights = roslibpy.Service(setter, "/lights/set", "std_srvs/SetBool")
         assert lights.call(roslibpy.ServiceRequest({"data": True}), timeout=TIMEOUT)["success"] is True
     finally:
         setter.close()
     topic = sim_thread.topics["/speed_limit"]
-    deadline = time.monotonic() + TIMEOUT
-    while topic.publishers.get(BRIDGE_NODE) and time.monotonic() < deadline:
-        time.sleep(0.02)
-    assert not topic.publishers.get(BRIDGE_NODE)  # the setter's publisher is gone: what is latched is the robot's
+    # the setter's publisher is gone: what is latched is the robot's
+    until_sync(lambda: not topic.publishers.get(BRIDGE_NODE), TIMEOUT, what="the setter's publisher gone")
     later = roslibpy.Ros(host="127.0.0.1", port=sim_thread.port)
     later.run(timeout=TIMEOUT)
     try:

@@ -16,6 +16,7 @@ import websockets
 from rcon_core.msgs import TypeRegistry
 from rcon_core.sim import SimServer
 from rcon_core.sim.auth import make_mac
+from rcon_core.testing import until
 
 
 async def recv_until(ws: Any, pred: Any, timeout: float = 5.0, binary: bool = False) -> Any:
@@ -57,6 +58,26 @@ async def call(ws: Any, service: str, args: Any = None, call_id: Any = "c1", **e
         frame["args"] = args
     await ws.send(json.dumps(frame))
     return await recv_until(ws, lambda m: m.get("op") == "service_response" and m.get("id") == call_id)
+
+
+async def synced(ws: Any, tag: str = "sync") -> list[Any]:
+    """A round trip on ``ws`` (``/rosapi/get_time``): the sim has handled every frame sent on it before, and
+    every frame it sent before the answer has been read. Returns those frames (text parsed), answer last."""
+    await ws.send(json.dumps({"op": "call_service", "id": tag, "service": "/rosapi/get_time"}))
+    frames: list[Any] = []
+
+    def answered(m: Any) -> bool:
+        frames.append(m)
+        return m.get("op") == "service_response" and m.get("id") == tag
+
+    await recv_until(ws, answered, timeout=10.0)
+    return frames
+
+
+async def robot_ticks(sim: SimServer, topic: str, n: int) -> None:
+    """Wait until the simulated robot has published ``topic`` ``n`` more times."""
+    start = sim.robot_published().get(topic, 0)
+    await until(lambda: sim.robot_published().get(topic, 0) >= start + n, what=f"{n} more {topic} messages")
 
 
 def publishes(frames: list[Any], topic: str) -> list[dict[str, Any]]:
@@ -226,7 +247,7 @@ async def test_dock_and_reset_pose(sim: SimServer) -> None:
 async def test_client_topic_reaches_other_clients_and_rosapi(sim: SimServer) -> None:
     async with connect(sim) as a, connect(sim) as b:
         await a.send(json.dumps({"op": "advertise", "topic": "/operator/note", "type": "std_msgs/String"}))
-        await asyncio.sleep(0.05)
+        await synced(a)
         await b.send(json.dumps({"op": "subscribe", "topic": "/operator/note"}))
         topics = await call(b, "/rosapi/topics", {})
         assert "/operator/note" in topics["values"]["topics"]
@@ -239,7 +260,7 @@ async def test_client_topic_reaches_other_clients_and_rosapi(sim: SimServer) -> 
         assert sim.topic_subscriber_count("/operator/note") == 1
         await a.send(json.dumps({"op": "unadvertise", "topic": "/operator/note"}))
         await b.send(json.dumps({"op": "unsubscribe", "topic": "/operator/note"}))
-        await asyncio.sleep(0.05)
+        await synced(a)
         topics = await call(b, "/rosapi/topics", {}, "t2")
         assert "/operator/note" not in topics["values"]["topics"]
         assert sim.topic_subscriber_count("/operator/note") == 0
@@ -249,7 +270,7 @@ async def test_client_publish_conversion(sim: SimServer) -> None:
     async with connect(sim) as a, connect(sim) as b:
         await a.send(json.dumps({"op": "advertise", "topic": "/op/twist", "type": "geometry_msgs/Twist"}))
         await b.send(json.dumps({"op": "subscribe", "topic": "/op/twist"}))
-        await asyncio.sleep(0.05)
+        await synced(b)
         await a.send(json.dumps({"op": "publish", "topic": "/op/twist", "msg": {"linear": {"x": "fast"}}}))
         await a.send(json.dumps({"op": "publish", "topic": "/op/twist", "msg": {"linear": {"x": 1}, "bogus": 1}}))
         await a.send(json.dumps({"op": "publish", "topic": "/op/twist", "msg": {"linear": {"x": 1}}}))
@@ -278,7 +299,7 @@ async def test_client_provided_service_is_routed(sim: SimServer) -> None:
     async with connect(sim) as provider, connect(sim) as caller:
         await provider.send(json.dumps({"op": "advertise_service", "service": "/op/confirm",
                                         "type": "std_srvs/SetBool"}))
-        await asyncio.sleep(0.05)
+        await synced(provider)
         listed = await call(caller, "/rosapi/service_type", {"service": "/op/confirm"}, "st")
         assert listed["values"] == {"type": "std_srvs/SetBool"}
         await caller.send(json.dumps({"op": "call_service", "id": "q1", "service": "/op/confirm",
@@ -309,12 +330,8 @@ async def test_disconnect_cleans_up_client_state(sim: SimServer) -> None:
         await a.send(json.dumps({"op": "advertise_service", "service": "/op/x", "type": "std_srvs/Trigger"}))
         await recv_until(a, lambda m: m.get("topic") == "/odom")
         assert sim.topic_subscriber_count("/odom") == 1
-    for _ in range(50):
-        if sim.topic_subscriber_count("/odom") == 0 and "/op/x" not in sim.services:
-            break
-        await asyncio.sleep(0.05)
-    assert sim.topic_subscriber_count("/odom") == 0
-    assert "/op/x" not in sim.services
+    await until(lambda: sim.topic_subscriber_count("/odom") == 0 and "/op/x" not in sim.services,
+                what="the closed connection's subscription and service gone")
 
 
 async def test_client_count_follows_connections(sim: SimServer) -> None:
@@ -346,25 +363,33 @@ async def test_throttle_drops_and_lowest_rate_wins(sim: SimServer) -> None:
 
 
 async def test_unsubscribe_one_id_keeps_the_stream(sim: SimServer) -> None:
-    async with connect(sim) as ws:
+    async with connect(sim) as ws, connect(sim) as witness:
+        # another client keeps /odom published throughout (the robot publishes only what someone reads)
+        await witness.send(json.dumps({"op": "subscribe", "topic": "/odom"}))
+        await synced(witness)
         for sub_id in ("a", "b"):
             await ws.send(json.dumps({"op": "subscribe", "id": sub_id, "topic": "/odom"}))
-        frames = publishes(await collect(ws, 0.4), "/odom")
+        await synced(ws, "subscribed")
+        await robot_ticks(sim, "/odom", 6)
+        frames = publishes(await synced(ws, "s1"), "/odom")
         seqs = [f["msg"]["header"]["seq"] for f in frames]
         assert len(seqs) == len(set(seqs)) > 3  # one frame per message, whatever the number of ids
         await ws.send(json.dumps({"op": "unsubscribe", "id": "a", "topic": "/odom"}))
         await ws.send(json.dumps({"op": "unsubscribe", "id": "nope", "topic": "/odom"}))
-        assert publishes(await collect(ws, 0.3), "/odom")
+        await synced(ws, "s2")  # both handled
+        await robot_ticks(sim, "/odom", 3)
+        assert publishes(await synced(ws, "s3"), "/odom")  # "b" keeps the stream
         await ws.send(json.dumps({"op": "unsubscribe", "topic": "/odom"}))
-        await asyncio.sleep(0.1)
-        assert publishes(await collect(ws, 0.3), "/odom") == []
+        await synced(ws, "s4")  # handled: what was sent before it is read and dropped here
+        await robot_ticks(sim, "/odom", 3)  # the robot goes on publishing (for the witness)...
+        assert publishes(await synced(ws, "s5"), "/odom") == []  # ...and none of it reaches this client
 
 
 async def test_subscribe_before_topic_exists_with_type(sim: SimServer) -> None:
     async with connect(sim) as sub, connect(sim) as pub:
         await sub.send(json.dumps({"op": "subscribe", "topic": "/later", "type": "std_msgs/Int32"}))
         await sub.send(json.dumps({"op": "subscribe", "topic": "/untyped/unknown"}))  # silently fails
-        await asyncio.sleep(0.05)
+        await synced(sub)
         await pub.send(json.dumps({"op": "publish", "topic": "/later", "msg": {"data": 5}}))
         got = await recv_until(sub, lambda m: m.get("topic") == "/later")
     assert got["msg"] == {"data": 5}

@@ -23,7 +23,7 @@ from qtpy import QtCore, QtGui, QtWidgets
 from rcon_core.app.bandwidth import BandwidthButton
 from rcon_core.app.config import AppConfig
 from rcon_core.app.elided_label import ElidedLabel
-from rcon_core.app.link import BadUrl, Link, LinkSettings, check_url
+from rcon_core.app.link import BadUrl, LinkSettings, RobotConnection, check_url
 from rcon_core.app.link_settings import LinkSettingsDialog
 from rcon_core.app.operator_lock import Guard, no_guard
 from rcon_core.app.secret_store import SecretStore
@@ -57,11 +57,11 @@ LIVE_STATES = (ConnectionState.CONNECTED, ConnectionState.DEGRADED)
 
 
 class ConnectionBar(QtWidgets.QFrame):
-    """Shows and drives the :class:`Link`; call :meth:`poll` once per frame."""
+    """Shows and drives the :class:`RobotConnection`; call :meth:`poll` once per frame."""
 
     state_changed = QtCore.Signal(object)  # a ConnectionState
 
-    def __init__(self, link: Link, config: AppConfig, parent: QtWidgets.QWidget | None = None, *,
+    def __init__(self, link: RobotConnection, config: AppConfig, parent: QtWidgets.QWidget | None = None, *,
                  guard: Guard = no_guard) -> None:
         super().__init__(parent)
         self.setObjectName("connectionBar")

@@ -2,15 +2,15 @@
 
 ::
 
-    links = FleetLinks(first_link)            # the window's Link: the first robot's (the connection bar's)
-    links.sync(workspace.robots)              # a Link per robot; robots gone are closed
-    links.link("r-2")                         # that robot's Link ("" = the first robot's)
+    links = FleetLinks(first_link)            # the window's RobotConnection: the first robot's (the connection bar's)
+    links.sync(workspace.robots)              # a RobotConnection per robot; robots gone are closed
+    links.link("r-2")                         # that robot's RobotConnection ("" = the first robot's)
     links.connect_robot("r-2", url=None)      # connect it to its saved URL (or ``url``, not saved)
     links.connect_saved()                     # every robot but the first that has a URL
     links.fleet(OFFLINE)                      # a canvas Fleet of the current clients (offline: OFFLINE)
     links.on_client_changed(fn)               # fn(robot_id, client or None) when a robot's client changes
 
-The first robot keeps the window's own :class:`~rcon_core.app.link.Link`, which the connection bar's URL
+The first robot keeps the window's own :class:`~rcon_core.app.link.RobotConnection`, which the connection bar's URL
 field drives as before; a first robot whose ``url`` is ``""`` (every migrated one-robot layout) follows
 that field. Every other robot connects to its own ``url`` with its own connection settings (CA file,
 client certificate and key, and the rosauth secret the OS credential store keeps for that URL when
@@ -29,7 +29,7 @@ from typing import Any
 from rcon_core.canvas.fleet import Fleet
 from rcon_core.canvas.robots import Robot
 
-from .link import Link, LinkSettings
+from .link import LinkSettings, RobotConnection
 
 log = logging.getLogger(__name__)
 
@@ -62,7 +62,7 @@ def _reach(robot: Robot) -> tuple[Any, ...]:
 class FleetLinks:
     """The links of the workspace's robots, by robot id, in the workspace's order."""
 
-    def __init__(self, first: Link, *, secret_for: Callable[[str], str | None] | None = None,
+    def __init__(self, first: RobotConnection, *, secret_for: Callable[[str], str | None] | None = None,
                  overrides: Callable[[], LinkSettings] | None = None) -> None:
         self.first = first
         self.thread = first.thread
@@ -70,7 +70,7 @@ class FleetLinks:
         #: the command line's link settings (they apply to every robot of the run), read when connecting
         self.overrides = overrides or LinkSettings
         self.robots: list[Robot] = []
-        self._links: dict[str, Link] = {}
+        self._links: dict[str, RobotConnection] = {}
         self._listeners: list[Callable[[str, Any], None]] = []
         #: URLs given at run time (``connect_robot(rid, url)``: the demo's sims), not saved in the layout
         self.run_urls: dict[str, str] = {}
@@ -81,7 +81,7 @@ class FleetLinks:
     def ids(self) -> list[str]:
         return [r.id for r in self.robots]
 
-    def link(self, robot_id: str = "") -> Link:
+    def link(self, robot_id: str = "") -> RobotConnection:
         """The link of ``robot_id`` (``""``: the first robot). KeyError for a robot not synced."""
         if not robot_id and self.robots:
             robot_id = self.robots[0].id
@@ -100,7 +100,7 @@ class FleetLinks:
         link = self.link(robot_id)
         return link.url or self.run_urls.get(robot_id) or self.robot(robot_id).url or None
 
-    def items(self) -> list[tuple[Robot, Link]]:
+    def items(self) -> list[tuple[Robot, RobotConnection]]:
         return [(r, self.link(r.id)) for r in self.robots]
 
     def fleet(self, offline: Any) -> Fleet:
@@ -113,7 +113,7 @@ class FleetLinks:
         """``fn(robot_id, client)`` on the GUI thread when a robot's client changes (None: disconnected)."""
         self._listeners.append(fn)
 
-    def _changed(self, link: Link, client: Any) -> None:
+    def _changed(self, link: RobotConnection, client: Any) -> None:
         for r in self.robots:
             if self.link(r.id) is link:
                 for fn in self._listeners:
@@ -134,7 +134,7 @@ class FleetLinks:
         new = []
         for r in robots[1:]:
             if r.id not in self._links:
-                link = Link(self.thread)
+                link = RobotConnection(self.thread)
                 link.on_client_changed(partial(self._changed, link))
                 self._links[r.id] = link
                 new.append(r.id)

@@ -40,7 +40,7 @@ from rcon_core.app.catalog_panel import CatalogList
 from rcon_core.app.config import AppConfig
 from rcon_core.app.connection_bar import LIVE_STATES, ConnectionBar
 from rcon_core.app.fleet_links import FleetLinks
-from rcon_core.app.link import EMPTY_CATALOG, OFFLINE, BadUrl, Link, as_state
+from rcon_core.app.link import EMPTY_CATALOG, OFFLINE, BadUrl, RobotConnection, as_state
 from rcon_core.app.live import LiveCanvas
 from rcon_core.app.notice_bar import NoticeBar
 from rcon_core.app.operator_lock import Guard
@@ -78,8 +78,8 @@ class FleetUi(QtCore.QObject):
     #: a robot's link (not the first's: the connection bar says that one) came up
     link_up = QtCore.Signal(str)
 
-    def __init__(self, doc: Document, link: Link, connection: ConnectionBar, host: WidgetHost, live: LiveCanvas,
-                 lists: Sequence[CatalogList], bar: CanvasBar, notice: NoticeBar, config: AppConfig,
+    def __init__(self, doc: Document, link: RobotConnection, connection: ConnectionBar, host: WidgetHost,
+                 live: LiveCanvas, lists: Sequence[CatalogList], bar: CanvasBar, notice: NoticeBar, config: AppConfig,
                  guard: Guard, confirm: Confirm, parent: QtWidgets.QWidget) -> None:
         super().__init__(parent)
         self.doc, self.connection, self.host, self.live, self.bar = doc, connection, host, live, bar
@@ -322,7 +322,8 @@ class FleetUi(QtCore.QObject):
         return [(robot.label if len(pairs) > 1 else "", link) for robot, link in pairs]
 
     def catalog_state(self) -> str:
-        """What the side robot's lists wait for (``Link.catalog_state``: "connecting", "listing", "lost"...)."""
+        """What the side robot's lists wait for (``RobotConnection.catalog_state``: "connecting",
+        "listing", "lost"...)."""
         try:
             return str(self.links.link(self.side_robot).catalog_state)
         except KeyError:

@@ -105,8 +105,10 @@ def as_state(state: ConnectionState | str) -> ConnectionState:
     return state if isinstance(state, ConnectionState) else ConnectionState(str(state).lower())
 
 
-class Link:
-    """Owns the bridge thread and the current client; safe to drive from the GUI thread."""
+class RobotConnection:
+    """The app's connection to one robot: owns the bridge thread and the current client; safe to drive
+    from the GUI thread. (Not the bridge's :class:`rcon_core.bridge.linkbase.Link`, one WebSocket
+    connection's frames out; this holds a client across reconnects and robots.)"""
 
     def __init__(self, bridge_thread: BridgeThread | None = None) -> None:
         self.thread = bridge_thread or BridgeThread()

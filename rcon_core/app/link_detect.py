@@ -1,14 +1,14 @@
 """Which protocol a robot's URL speaks, found on the bridge thread and handed to the GUI thread.
 
-The app connects to a URL without asking the operator which protocol.  ``Link.connect_to`` starts a
+The app connects to a URL without asking the operator which protocol.  ``RobotConnection.connect_to`` starts a
 rosbridge client at once (the connection bar shows its attempts and failures as always) while
 :class:`ProtocolFinder` makes the one handshake of ``rcon_core.link.detect`` on the bridge thread (retrying
 quietly with backoff while the robot is not up), keeps the answer per URL, and wakes the GUI thread (a posted event, :class:`~rcon_core.app.frame_clock.Waker`),
 which then switches to a Foxglove client when the robot picked a Foxglove subprotocol (the rosbridge client
-never connected: such a server refuses a handshake without it); a user of ``Link`` without a running Qt
+never connected: such a server refuses a handshake without it); a user of ``RobotConnection`` without a running Qt
 loop gets it at its next look at ``link.client`` (:meth:`ProtocolFinder.take`, on the thread that called
 ``connect_to`` only).  The GUI never waits on the network.
-``--protocol`` (``Link.protocol``) skips the question; so does a URL whose answer is known.
+``--protocol`` (``RobotConnection.protocol``) skips the question; so does a URL whose answer is known.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ log = logging.getLogger(__name__)
 BACKOFF = (0.25, 5.0)
 
 
-#: the finders the GUI wake delivers to (weak: a finder goes with its Link)
+#: the finders the GUI wake delivers to (weak: a finder goes with its RobotConnection)
 _FINDERS: weakref.WeakSet[ProtocolFinder] = weakref.WeakSet()
 _WAKER: Any = None
 
@@ -42,7 +42,7 @@ def _deliver_all(_keys: set[str]) -> None:
 def _gui_waker() -> Any:
     """The one wake of the process, made on the GUI thread and owned by the application (parented to it:
     never deleted by Python's collector from another thread while an event is posted to it); None without a
-    Qt application (a headless user of ``Link``)."""
+    Qt application (a headless user of ``RobotConnection``)."""
     global _WAKER
     if _WAKER is None:
         from qtpy import QtCore

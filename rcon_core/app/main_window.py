@@ -48,7 +48,7 @@ from rcon_core.app.fleet_ui import FleetUi
 from rcon_core.app.focus import has_focus_inside
 from rcon_core.app.frame_clock import FrameClock, Waker
 from rcon_core.app.layout_file import LayoutFile
-from rcon_core.app.link import Link
+from rcon_core.app.link import RobotConnection
 from rcon_core.app.live import LiveCanvas
 from rcon_core.app.lock_controls import GATED_ACTIONS, LockControls
 from rcon_core.app.notice_bar import NoticeBar
@@ -91,7 +91,7 @@ class MainWindow(QtWidgets.QMainWindow):
         *,
         layout_path: Path | None = None,
         types: Any = None,
-        link: Link | None = None,
+        link: RobotConnection | None = None,
         demo: Callable[[], Workspace] | None = None,
         collector: CollectorPolicy | None = None,
     ) -> None:
@@ -110,7 +110,7 @@ class MainWindow(QtWidgets.QMainWindow):
         #: builds the demo layout (``rcon --demo``): used when there is none yet, or it cannot be read
         self.demo = demo
         self.types = types if types is not None else plugins.type_registry()  # with plugins' types
-        self.link = link or Link()
+        self.link = link or RobotConnection()
         self.clock = FrameClock(self)
         self._last_full_pass = 0.0
         #: when the garbage collector may pause the process (``rcon_core/gcpolicy.py``); the app's entry

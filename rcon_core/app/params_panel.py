@@ -94,7 +94,7 @@ def _children(head: QtWidgets.QTreeWidgetItem) -> list[QtWidgets.QTreeWidgetItem
 
 
 class ParamsPanel(QtWidgets.QWidget):
-    """The Parameters tab. ``link`` is the app's :class:`~rcon_core.app.link.Link`."""
+    """The Parameters tab. ``link`` is the app's :class:`~rcon_core.app.link.RobotConnection`."""
 
     def __init__(self, link: Any, confirm: Confirm, parent: QtWidgets.QWidget | None = None, *,
                  gate: Gate = no_guard) -> None:

@@ -118,16 +118,15 @@ async def test_extra_fix_topics_and_imu_heading(sim, client):
         msg.update(latitude=lat, longitude=lon)
         return msg
 
-    async def have_extras():
+    def have_extras():  # the publishers' advertisements have no answer: publish until the map shows both
         v = model.state.value
-        return v is not None and v.track("/boat2/gps/fix").count and v.track("/operator/fix").count
-
-    for _ in range(200):
+        if v is not None and v.track("/boat2/gps/fix").count and v.track("/operator/fix").count:
+            return True
         boat2.publish(fix(43.6390, -79.3800))
         operator.publish(fix(43.6380, -79.3785))
-        if await have_extras():
-            break
-        await asyncio.sleep(0.05)
+        return False
+
+    await until(have_extras, what="the other two fixes on the map")
     await until(lambda: (v := model.state.value) is not None and v.main is not None and v.main.count
                 and v.main.heading_source == "sensor", what="main fix with IMU heading")
     value = model.state.value

@@ -17,6 +17,7 @@ from rcon_core.bridge.threaded import BridgeThread
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding
 from rcon_core.sim import SimServer
+from rcon_core.testing import flushed_sync, qt_flushed
 
 TYPES = TypeRegistry.standard()
 Qt = QtCore.Qt
@@ -71,7 +72,8 @@ def test_long_press_navigate_here_drives_and_stop_cancels(qtbot, ros2_bridge):
     assert view.bubble.isVisible() and "Navigate here" in view.bubble.label.text()
     assert view.bubble.send.text() == "Navigate here" and view.pending is None  # not a plain goal
     lat, lon = view.nav.pending
-    QTest.qWait(300)
+    qt_flushed(qtbot)  # what the press set going has run, and a marker after it reached the robot
+    flushed_sync(bt, client, sim, qtbot=qtbot)
     assert model.state.value.nav is None and sim.robot.cmd_surge == 0.0  # nothing sent before the tap
     qtbot.mouseClick(view.bubble.send, Qt.MouseButton.LeftButton)
     assert not view.bubble.isVisible()

@@ -6,7 +6,6 @@ from __future__ import annotations
 import http.server
 import sqlite3
 import threading
-import time
 
 import cv2
 import numpy as np
@@ -21,6 +20,8 @@ from rcon_widgets_map.http_tiles import (
 )
 from rcon_widgets_map.loader import TileLoader
 from rcon_widgets_map.mbtiles import MBTilesError, MBTilesReader, write_mbtiles
+
+from rcon_core.testing import until_sync
 
 
 def decode(data: bytes):
@@ -192,14 +193,6 @@ def test_unreachable_server_times_out_cleanly(tmp_path):
 
 # -- loader --------------------------------------------------------------------------------------------
 
-def wait_for(cond, timeout=10.0):
-    deadline = time.monotonic() + timeout
-    while not cond():
-        if time.monotonic() > deadline:
-            raise AssertionError("timed out")
-        time.sleep(0.01)
-
-
 def test_loader_serves_mbtiles_off_the_calling_thread(mbtiles_file, colour_of):
     ready_threads = []
     loader = TileLoader(decode, lambda key: ready_threads.append(threading.current_thread().name),
@@ -208,20 +201,20 @@ def test_loader_serves_mbtiles_off_the_calling_thread(mbtiles_file, colour_of):
         assert loader.ready.wait(5) and loader.max_zoom == 4 and loader.error is None
         x, y = mercator.tile_for(43.6385, -79.379, 3)
         assert loader.get((3, x, y)) is None  # queued, not read on this thread
-        wait_for(lambda: loader.get((3, x, y)) is not None)
+        until_sync(lambda: loader.get((3, x, y)) is not None)
         assert rgb_at(loader.get((3, x, y))) == pytest.approx(colour_of(3, x, y), abs=2)
         assert ready_threads and all(n == "map-tiles-local" for n in ready_threads)
         assert loader.get((3, 0, 0)) is None  # not in the file: absent, never retried
-        wait_for(lambda: loader.is_absent((3, 0, 0)))
+        until_sync(lambda: loader.is_absent((3, 0, 0)))
         # the memory cache is a bounded LRU
         x4, y4 = mercator.tile_for(43.6385, -79.379, 4)
         keys = [(4, x4 + dx, y4 + dy) for dx in (-1, 0, 1) for dy in (-1, 0, 1)]
         for k in keys:
             loader.get(k)
-        wait_for(lambda: loader.loaded >= 10)
+        until_sync(lambda: loader.loaded >= 10)
         assert loader.cached_count() == 4
         assert loader.get((3, x, y)) is None  # evicted: asked again
-        wait_for(lambda: loader.get((3, x, y)) is not None)
+        until_sync(lambda: loader.get((3, x, y)) is not None)
         assert loader.loaded == 11
     finally:
         loader.close()
@@ -235,7 +228,7 @@ def test_loader_reports_a_bad_file(tmp_path):
         assert loader.ready.wait(5)
         assert "not an SQLite file" in loader.error
         loader.get((0, 0, 0))
-        wait_for(lambda: loader.is_absent((0, 0, 0)))
+        until_sync(lambda: loader.is_absent((0, 0, 0)))
     finally:
         loader.close()
 
@@ -247,15 +240,15 @@ def test_loader_online_tiles_and_offline_fallback(tile_server, tmp_path, mbtiles
         # in the MBTiles file: never asks the network
         x, y = mercator.tile_for(43.6385, -79.379, 2)
         loader.get((2, x, y))
-        wait_for(lambda: loader.get((2, x, y)) is not None)
+        until_sync(lambda: loader.get((2, x, y)) is not None)
         assert tile_server.requests == []
         # not in the file: fetched online (the file has 3x3 tiles per zoom), then cached on disk
         loader.get((2, 3, 3))
-        wait_for(lambda: loader.get((2, 3, 3)) is not None)
+        until_sync(lambda: loader.get((2, 3, 3)) is not None)
         assert rgb_at(loader.get((2, 3, 3))) == pytest.approx(colour_of(2, 3, 3), abs=2)
         assert tile_server.requests == ["/2/3/3.png"] and http.cached(2, 3, 3)
         loader.get((7, 0, 0))  # 404 online
-        wait_for(lambda: loader.is_absent((7, 0, 0)))
+        until_sync(lambda: loader.is_absent((7, 0, 0)))
     finally:
         loader.close()
     # offline now: a new loader finds the downloaded tile in the disk cache
@@ -263,9 +256,9 @@ def test_loader_online_tiles_and_offline_fallback(tile_server, tmp_path, mbtiles
     loader = TileLoader(decode, lambda key: None, http=HttpTileSource(tile_server.template, tmp_path / "cache"))
     try:
         loader.get((2, 3, 3))
-        wait_for(lambda: loader.get((2, 3, 3)) is not None)
+        until_sync(lambda: loader.get((2, 3, 3)) is not None)
         loader.get((1, 1, 1))  # never downloaded: the network is gone, the loader says so and backs off
-        wait_for(lambda: loader.is_absent((1, 1, 1)))
+        until_sync(lambda: loader.is_absent((1, 1, 1)))
         assert loader.net_error
     finally:
         loader.close()

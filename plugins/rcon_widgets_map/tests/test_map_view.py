@@ -3,8 +3,6 @@ gestures (drag, wheel, pinch, follow) and the tap -> confirm -> publish path aga
 
 from __future__ import annotations
 
-import time
-
 import pytest
 from map_helpers import make_view
 from qtpy import QtCore, QtGui
@@ -15,6 +13,7 @@ from rcon_widgets_map.settings import MapPluginSettings, MapSettings
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding
 from rcon_core.sim import Vessel
+from rcon_core.testing import flushed_sync
 
 TYPES = TypeRegistry.standard()
 Qt = QtCore.Qt
@@ -193,8 +192,8 @@ def test_tap_confirm_publishes_to_the_robot(qtbot, sim_thread, threaded_client):
     assert view.bubble.isVisible() and "/goal/fix" in view.bubble.label.text()
     lat, lon = view.pending
     assert (lat, lon) == pytest.approx(view.viewport.to_latlon(330, 120))
-    time.sleep(0.3)
-    assert sim_thread.published("/goal/fix") == []  # a tap alone sends nothing
+    flushed_sync(bt, client, sim_thread, qtbot=qtbot)  # a marker after the tap reached the robot...
+    assert sim_thread.published("/goal/fix") == []  # ...and nothing before it: a tap alone sends nothing
     qtbot.mouseClick(view.bubble.send, Qt.MouseButton.LeftButton)
     got = sim_thread.wait_for_published_sync(
         "/goal/fix", lambda m: abs(m["latitude"] - lat) < 1e-9 and abs(m["longitude"] - lon) < 1e-9, timeout=10)

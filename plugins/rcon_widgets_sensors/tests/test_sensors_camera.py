@@ -15,7 +15,7 @@ from rcon_core.bridge import BridgeClient
 from rcon_core.msgs import TypeRegistry
 from rcon_core.msgs.values import as_bytes
 from rcon_core.plugins import Binding
-from rcon_core.testing import until
+from rcon_core.testing import flushed, until
 
 
 def loop_dispatch():
@@ -66,9 +66,10 @@ async def test_test_pattern_jpegs_reach_another_client(sim, clients):
     finally:
         model.stop()
     assert not model.capturing
-    n = len(received)
-    await asyncio.sleep(0.4)
-    assert len(received) == n  # stopped: nothing more
+    await flushed(pub_client, sim)  # what the capture thread sent before the stop has arrived
+    n = len(sim.published("/phone/camera/compressed"))
+    await flushed(pub_client, sim)  # and a marker after it: nothing more in between
+    assert len(sim.published("/phone/camera/compressed")) == n  # stopped: nothing more
 
 
 async def test_raw_rgb8(sim, clients):
@@ -95,7 +96,7 @@ async def test_no_camera_is_a_clear_error(sim, clients):
     try:
         await until(lambda: model.state.error, 10.0, "the error")
         assert model.state.error.startswith("no camera at index 63 on this device")
-        await asyncio.sleep(0.2)
+        await flushed(pub_client, sim)
         assert sim.published("/phone/camera/compressed") == []
     finally:
         model.stop()

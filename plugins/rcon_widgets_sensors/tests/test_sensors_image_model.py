@@ -11,7 +11,7 @@ from sensors_helpers import in_thread
 
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding, PluginManager
-from rcon_core.testing import until
+from rcon_core.testing import until, until_sync
 
 
 def sim_options(sim, topic):
@@ -115,10 +115,8 @@ def test_decoding_never_blocks_the_caller_and_latest_wins():
     caller.join(5)  # a deadline for a hang, not a speed measure: the decode stays held at the gate meanwhile
     assert not caller.is_alive(), "on_message waited for a decode"
     gate.set()
-    deadline = time.monotonic() + 5
-    while not (isinstance(model.state.value, Frame) and model.state.value.stamp == 50):
-        assert time.monotonic() < deadline, "the newest frame never arrived"
-        time.sleep(0.01)
+    until_sync(lambda: isinstance(model.state.value, Frame) and model.state.value.stamp == 50,
+               what="the newest frame")
     assert model.state.count < 50 and model.dropped >= 40
     model.on_stop()
 

@@ -2,7 +2,6 @@
 on the sim, subscribing to the robot's IMU, "no sensor" state, and two children of the std Compound
 composing one full Imu."""
 
-import asyncio
 import math
 import time
 
@@ -19,13 +18,13 @@ from rcon_widgets_sensors.motion_sensors import (
 
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding, WidgetContext
-from rcon_core.testing import ManualClock, RecordingPort, until, widget_catalog
+from rcon_core.testing import ManualClock, RecordingPort, flushed, until, widget_catalog
 
 
-def make(cls, client, topic, type_name, role="publish", path=(), types=True, **settings):
+def make(cls, client, topic, type_name, role="publish", path=(), types=True, ticker_clock=None, **settings):
     return cls(MotionSettings(**settings), Binding(topic, type_name, role, path),
                client.node(f"{cls.__name__}-{topic}") if client else None,
-               types=TypeRegistry.standard() if types else None)
+               types=TypeRegistry.standard() if types else None, ticker_clock=ticker_clock)
 
 
 def test_test_signal_publishes_at_the_set_rate_on_its_clock():
@@ -46,14 +45,14 @@ def test_test_signal_publishes_at_the_set_rate_on_its_clock():
 
 
 async def test_test_signal_publishes_imu_on_the_sim(sim, client):
-    got = []
+    got, clock = [], ManualClock()  # the publish timer runs on the test's clock: each poll moves it one period
     sim.subscribe_internal("/phone/imu", "sensor_msgs/Imu", "/rcon_test_rx", lambda m: got.append(time.monotonic()))
     m = make(AccelerometerModel, client, "/phone/imu", "sensor_msgs/Imu", source="test signal", rate_hz=20,
-             frame_id="phone")
+             frame_id="phone", ticker_clock=clock)
     assert m.problems() == []
     m.start()
     try:
-        await until(lambda: len(got) >= 5, 5.0, "a stream of messages")  # the rate is tested on a ManualClock
+        await until(lambda: clock.advance(0.05) or len(got) >= 5, 5.0, "a stream of messages")
         n = len(got)
         msg = sim.published("/phone/imu")[-1]
         acc = msg["linear_acceleration"]
@@ -66,8 +65,10 @@ async def test_test_signal_publishes_imu_on_the_sim(sim, client):
         assert isinstance(v, SensorValue) and v.available and v.sent >= n and "test signal" in v.status
     finally:
         m.stop()
+    await flushed(client, sim)  # what was sent before the stop has arrived
     count = len(sim.published("/phone/imu"))
-    await asyncio.sleep(0.3)
+    clock.advance(1.0)  # twenty periods: a timer left running would send now
+    await flushed(client, sim)
     assert len(sim.published("/phone/imu")) == count  # stopped: silent
 
 
@@ -85,16 +86,19 @@ async def test_manual_and_fed_values_magnetometer(sim, client):
 
 
 async def test_no_device_sensor_is_a_clear_state_and_publishes_nothing(sim, client):
-    m = make(GyroscopeModel, client, "/phone/gyro", "sensor_msgs/Imu", source="device")
+    clock = ManualClock()
+    m = make(GyroscopeModel, client, "/phone/gyro", "sensor_msgs/Imu", source="device", ticker_clock=clock)
     m.start()
     try:
         m.set_unavailable("no gyroscope on this device; choose the 'test signal' or 'manual' source")
-        await asyncio.sleep(0.4)
+        clock.advance(1.0)  # a timer sending anyway would send now
+        await flushed(client, sim)
         assert sim.published("/phone/gyro") == []
         v = m.state.value
         assert not v.available and v.vector is None and v.status.startswith("no gyroscope on this device")
         m.feed(0.0, 0.0, 0.5)  # a sensor appears (a backend starts feeding): publishing starts
-        got = await sim.wait_for_published("/phone/gyro", timeout=5)
+        await until(lambda: clock.advance(0.1) or sim.published("/phone/gyro"), 5.0, "the gyroscope publishing")
+        got = sim.published("/phone/gyro")[0]
         assert got["angular_velocity"]["z"] == 0.5 and got["linear_acceleration_covariance"][0] == -1
     finally:
         m.stop()

@@ -2,7 +2,10 @@
 (release, stop, link drop), then silence; two pads merge; the vessel moves.
 
 Exact rates and "the zero goes out at once" are checked on a manual clock in ``test_sensors_teleop_rate.py``;
-here the robot's side only checks what arrives, with no timing window a loaded machine could miss."""
+here the robot's side only checks what arrives, with no timing window a loaded machine could miss: where a
+test says "then silence", the pad's timer runs on a ``ManualClock`` (:func:`tick`: every command it would
+send in that time is sent at once) and :meth:`Receiver.barrier` sends a marker through the same client and
+waits for it at the robot, so anything the pad sent has arrived before the test looks."""
 
 import asyncio
 import time
@@ -13,9 +16,10 @@ from rcon_widgets_sensors.teleop import TeleopModel, TeleopSettings, TeleopValue
 from rcon_core.bridge import BridgeClient, ConnectionState
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding, SharedResources, WidgetContext
-from rcon_core.testing import until
+from rcon_core.testing import ManualClock, until
 
 TWIST = "geometry_msgs/Twist"
+MARKER = "/rcon_test/marker"
 
 
 class Receiver:
@@ -23,10 +27,30 @@ class Receiver:
 
     def __init__(self, sim, topic="/cmd_vel", type_name="geometry_msgs/Twist"):
         self.got = []
+        self.markers = set()
+        self._marker_pubs = {}
         sim.subscribe_internal(topic, type_name, "/rcon_test_receiver", self._on)
+        sim.subscribe_internal(MARKER, "std_msgs/String", "/rcon_test_receiver",
+                               lambda m: self.markers.add(m["data"]))
 
     def _on(self, msg):
         self.got.append((time.monotonic(), msg))
+
+    async def barrier(self, client):
+        """Send a marker through ``client`` (again every poll until one arrives) and wait until the robot has
+        it: everything ``client`` sent before has arrived by then (one connection, frames in order)."""
+        token = f"m{len(self.markers)}-{time.monotonic_ns()}"
+        pub = self._marker_pubs.get(id(client))
+        if pub is None:
+            pub = self._marker_pubs[id(client)] = client.node("rcon_test_marker").advertise(MARKER, "std_msgs/String")
+
+        def arrived():
+            if token in self.markers:
+                return True
+            pub.publish({"data": token})
+            return False
+
+        await until(arrived, 10.0, "the marker sent after the pad's commands")
 
     def since(self, t):
         return [m for when, m in self.got if when >= t]
@@ -51,9 +75,23 @@ async def client(sim):
     await c.close()
 
 
-def pad(client, settings=None, name="/cmd_vel", type_name=TWIST, node="pad", guarded=False, shared=None):
+async def tick(clock, seconds):
+    """Run a pad's timer ``seconds`` forward on its manual clock: every command it would send meanwhile is
+    sent now (on this loop, in order)."""
+    clock.advance(seconds)
+    await asyncio.sleep(0)
+
+
+async def ticking_until(clock, predicate, what, step=0.05):
+    """:func:`until` while the pad's manual clock moves ``step`` s per poll: a held pad keeps sending."""
+    await until(lambda: clock.advance(step) or predicate(), 10.0, what)
+
+
+def pad(client, settings=None, name="/cmd_vel", type_name=TWIST, node="pad", guarded=False, shared=None,
+        clock=None):
     """A pad on its own node of ``client``; ``shared``: the store of the runtime the pads share (pads on one
-    link merge through it, as the canvas runtime arranges with ``WidgetContext``)."""
+    link merge through it, as the canvas runtime arranges with ``WidgetContext``); ``clock``: a
+    ``ManualClock`` its publish timer runs on (None: the loop's)."""
     context = WidgetContext(link=id(client), resources=shared) if shared is not None else None
     port = client.node(node)
     if guarded:  # as the canvas runtime gives it: a GuardedPort naming the robot's link, no way to the client
@@ -61,19 +99,20 @@ def pad(client, settings=None, name="/cmd_vel", type_name=TWIST, node="pad", gua
 
         port = GuardedPort(port, link=id(client))
     return TeleopModel(settings or TeleopSettings(), Binding(name, type_name, "publish"), port,
-                       types=TypeRegistry.standard(), context=context)
+                       types=TypeRegistry.standard(), context=context, ticker_clock=clock)
 
 
 async def test_stream_while_held_zero_on_release_then_silence(sim, client):
-    rx = Receiver(sim)
-    model = pad(client, TeleopSettings(rate_hz=20, max_linear=2.0))
+    rx, clock = Receiver(sim), ManualClock()
+    model = pad(client, TeleopSettings(rate_hz=20, max_linear=2.0), clock=clock)
     model.start()
     try:
-        await asyncio.sleep(0.3)
+        await tick(clock, 0.3)
+        await rx.barrier(client)
         assert rx.got == []  # idle: nothing at all, not even zeros
         t0 = time.monotonic()
         model.set_axes(0.0, 0.5)  # half way up: linear.x = 2.0 * (0.5 - 0.1) / 0.9
-        await until(lambda: len(rx.since(t0)) >= 5, 5.0, "a stream of commands")  # the rate is not timed here
+        await ticking_until(clock, lambda: len(rx.since(t0)) >= 5, "a stream of commands")
         held = rx.since(t0)
         assert all(m["linear"]["x"] == pytest.approx(2.0 * 0.4 / 0.9) and m["angular"]["z"] == 0.0
                    for m in held)
@@ -81,10 +120,12 @@ async def test_stream_while_held_zero_on_release_then_silence(sim, client):
         t_rel = time.monotonic()
         model.release()
         await until(lambda: rx.first_zero_since(t_rel)[0], 2.0, "the zero")
-        await asyncio.sleep(0.5)
+        await tick(clock, 0.5)
+        await rx.barrier(client)
         assert rx.first_zero_since(t_rel)[1] == []  # one zero, then silence
         model.release()  # releasing an idle pad sends nothing
-        await asyncio.sleep(0.2)
+        await tick(clock, 0.2)
+        await rx.barrier(client)
         assert rx.first_zero_since(t_rel)[1] == []
     finally:
         model.stop()
@@ -92,44 +133,46 @@ async def test_stream_while_held_zero_on_release_then_silence(sim, client):
 
 async def test_runtime_focus_lost_sends_one_zero_then_silence(sim, client):
     # the app calls on_focus_lost() when its window goes inactive, whether or not the pad had focus
-    rx = Receiver(sim)
-    model = pad(client)
+    rx, clock = Receiver(sim), ManualClock()
+    model = pad(client, clock=clock)
     model.start()
     try:
         model.set_axes(0.0, 0.8)
-        await until(lambda: rx.got, 2.0, "driving")
+        await ticking_until(clock, lambda: rx.got, "driving")
         t = time.monotonic()
         model.on_focus_lost()
         await until(lambda: rx.first_zero_since(t)[0], 2.0, "the zero on focus loss")
-        await asyncio.sleep(0.4)
+        await tick(clock, 0.4)
+        await rx.barrier(client)
         assert rx.first_zero_since(t)[1] == []
     finally:
         model.stop()
 
 
 async def test_stop_sends_zero_and_locks_until_lift(sim, client):
-    rx = Receiver(sim)
-    model = pad(client)
+    rx, clock = Receiver(sim), ManualClock()
+    model = pad(client, clock=clock)
     model.start()
     model.set_axes(0.3, 0.9)
-    await until(lambda: rx.got, 2.0, "driving")
+    await ticking_until(clock, lambda: rx.got, "driving")
     t = time.monotonic()
     model.stop()  # the canvas is switched away
     await until(lambda: rx.first_zero_since(t)[0], 2.0, "the zero on stop")
-    await asyncio.sleep(0.4)
+    await tick(clock, 0.4)
+    await rx.barrier(client)
     assert rx.first_zero_since(t)[1] == []
     # back on the canvas: a fresh view sends a fresh touch; the lock ended with the stop
     model.release()
     model.start()
     model.set_axes(0.3, 0.9)
-    await until(lambda: len(rx.first_zero_since(t)[1]) > 0, 2.0, "driving after a restart")
+    await ticking_until(clock, lambda: len(rx.first_zero_since(t)[1]) > 0, "driving after a restart")
     model.release()
     model.stop()
 
 
 async def test_link_drop_zero_after_reconnect_then_silence(sim, client):
-    rx = Receiver(sim)
-    model = pad(client, TeleopSettings(rate_hz=10))
+    rx, clock = Receiver(sim), ManualClock()
+    model = pad(client, TeleopSettings(rate_hz=10), clock=clock)
     states = []
 
     def on_state(st):
@@ -140,7 +183,7 @@ async def test_link_drop_zero_after_reconnect_then_silence(sim, client):
     model.start()
     try:
         model.set_axes(0.0, 1.0)
-        await until(lambda: len(rx.got) >= 2, 3.0, "driving")
+        await ticking_until(clock, lambda: len(rx.got) >= 2, "driving")
         assert rx.got[-1][1]["linear"]["x"] == pytest.approx(1.0)
         t = time.monotonic()
         for conn in list(sim.connections):  # the network drops: the socket dies without a close frame
@@ -150,17 +193,20 @@ async def test_link_drop_zero_after_reconnect_then_silence(sim, client):
         value = model.state.value
         assert value.locked and not value.active and value.reason == "link down"
         await until(lambda: any(is_zero(m) for m in rx.since(t)), 3.0, "a zero after the drop")
+        await rx.barrier(client)
         _when, after = rx.first_zero_since(t)
         assert after == [] or all(is_zero(m) for m in after)  # never the old command again
         n = len(rx.since(t))
         model.set_axes(0.0, 1.0)  # the finger is still down: locked until it lifts
-        await asyncio.sleep(0.5)
+        await tick(clock, 0.5)
+        await rx.barrier(client)
         assert len(rx.since(t)) == n
         model.release()  # lift: unlocks, sends nothing (already idle)
-        await asyncio.sleep(0.2)
+        await tick(clock, 0.2)
+        await rx.barrier(client)
         assert len(rx.since(t)) == n
         model.set_axes(0.0, 1.0)  # a new touch drives again
-        await until(lambda: len(rx.since(t)) > n and not is_zero(rx.since(t)[-1]), 2.0, "driving again")
+        await ticking_until(clock, lambda: len(rx.since(t)) > n and not is_zero(rx.since(t)[-1]), "driving again")
         model.release()
     finally:
         model.stop()
@@ -168,12 +214,12 @@ async def test_link_drop_zero_after_reconnect_then_silence(sim, client):
 
 @pytest.mark.parametrize("guarded", [False, True], ids=["bare-nodes", "runtime-ports"])
 async def test_two_pads_merge_into_one_stream(sim, client, guarded):
-    rx = Receiver(sim)
+    rx, clock = Receiver(sim), ManualClock()
     shared = SharedResources()
     linear = pad(client, TeleopSettings(horizontal="", vertical="linear.x", rate_hz=10), node="left",
-                 guarded=guarded, shared=shared)
+                 guarded=guarded, shared=shared, clock=clock)
     angular = pad(client, TeleopSettings(horizontal="-angular.z", vertical="", rate_hz=10, dead_zone=0),
-                  node="right", guarded=guarded, shared=shared)
+                  node="right", guarded=guarded, shared=shared, clock=clock)
 
     def both(m):
         return m["linear"]["x"] == pytest.approx(1.0) and m["angular"]["z"] == pytest.approx(-0.5)
@@ -185,19 +231,20 @@ async def test_two_pads_merge_into_one_stream(sim, client, guarded):
         linear.set_axes(0.0, 1.0)
         angular.set_axes(0.5, 0.0)  # right: turn right (negative yaw rate)
         # one message carries both pads' axes: merged (two streams would each carry one axis)
-        await until(lambda: sum(1 for m in rx.since(t) if both(m)) >= 3, 5.0, "the merged stream")
+        await ticking_until(clock, lambda: sum(1 for m in rx.since(t) if both(m)) >= 3, "the merged stream")
         t2 = time.monotonic()
         linear.release()  # only its own axis drops to zero; the other pad keeps driving
 
         def later():  # (one sent before the release may still arrive after t2)
             return [m for m in rx.since(t2) if m["linear"]["x"] == 0]
 
-        await until(lambda: len(later()) >= 3, 5.0, "the other pad still driving")
+        await ticking_until(clock, lambda: len(later()) >= 3, "the other pad still driving")
         assert all(m["angular"]["z"] == pytest.approx(-0.5) for m in later())
         assert rx.since(t2)[-1]["linear"]["x"] == 0
         t3 = time.monotonic()
         angular.release()
-        await asyncio.sleep(0.4)
+        await tick(clock, 0.4)
+        await rx.barrier(client)
         when, after = rx.first_zero_since(t3)
         assert when is not None and after == []
     finally:
@@ -287,23 +334,24 @@ def test_set_axes_before_start_publishes_nothing():
 
 
 async def test_client_closed_then_reopened_sends_one_zero(sim):
-    rx = Receiver(sim)
+    rx, clock = Receiver(sim), ManualClock()
     client = BridgeClient(sim.url, reconnect=False)
     await client.connect()
-    model = pad(client)
+    model = pad(client, clock=clock)
     client.add_state_listener(lambda st: model.set_link(st is ConnectionState.CONNECTED))
     model.start()
     try:
         model.set_axes(0.0, 1.0)
-        await until(lambda: len(rx.got) >= 2, 3.0, "driving")
+        await ticking_until(clock, lambda: len(rx.got) >= 2, "driving")
         await client.close()  # the operator's side goes away
         t = time.monotonic()
-        await asyncio.sleep(0.5)
-        assert rx.since(t) == []  # nothing can (and nothing tries to) go out while down
+        await tick(clock, 0.5)  # the ticks due while down: nothing can (and nothing tries to) go out
+        assert rx.since(t) == []
         assert model.state.link_down and model.state.value.locked
         await client.connect()  # back: exactly one zero, then silence
         await until(lambda: rx.first_zero_since(t)[0], 3.0, "the zero after reconnecting")
-        await asyncio.sleep(0.4)
+        await tick(clock, 0.4)
+        await rx.barrier(client)
         assert rx.first_zero_since(t)[1] == [] and len(rx.since(t)) == 1
     finally:
         model.stop()

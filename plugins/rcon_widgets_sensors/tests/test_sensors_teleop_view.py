@@ -1,5 +1,9 @@
 """Teleop pads offscreen with a real bridge thread and the sim: two fingers on two pads at once, zero on
-lift, on focus loss and when hidden. (The README's pictures: docs/make_screenshots.py.)"""
+lift, on focus loss and when hidden. (The README's pictures: docs/make_screenshots.py.)
+
+The pads' publish timers run on a ``ManualClock`` (moved on the bridge thread): while a test waits for a
+stream the clock moves a period per poll (:func:`wait`), and before asserting "nothing more" :func:`settle`
+runs it half a second forward and waits for a marker sent after it through the same client."""
 
 import time
 
@@ -11,6 +15,7 @@ from rcon_widgets_sensors.teleop_view import TeleopView
 
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding, SharedResources, WidgetContext
+from rcon_core.testing import ManualClock, flushed_sync, until_sync
 
 
 class Robot:
@@ -29,19 +34,32 @@ def zero(m):
     return not any(m["linear"].values()) and not any(m["angular"].values())
 
 
+#: the clock the pads' publish timers run on (moved on the bridge thread only)
+CLOCK = ManualClock()
+
+
 def make_pad(threaded_client, settings, node, shared=None):
     """A pad and its view; pads given one ``shared`` store are on one robot link (as in the canvas runtime)."""
     bt, client = threaded_client
     context = WidgetContext(link=id(client), resources=shared) if shared is not None else None
     model = TeleopModel(settings, Binding("/cmd_vel", "geometry_msgs/Twist", "publish"), client.node(node),
-                        types=TypeRegistry.standard(), dispatch=bt.call, context=context)
+                        types=TypeRegistry.standard(), dispatch=bt.call, context=context, ticker_clock=CLOCK)
     bt.call(model.start).result(5)
     view = TeleopView(model)
     return model, view
 
 
-def wait(qtbot, pred, timeout=3000):
-    qtbot.waitUntil(lambda: bool(pred()), timeout=timeout)
+def wait(qtbot, bt, pred, timeout=10.0):
+    """Wait for ``pred`` while the pads' clock moves one 20 Hz period per poll (a held pad keeps sending)."""
+    until_sync(lambda: bt.call(CLOCK.advance, 0.05).result(5) or pred(), timeout, qtbot=qtbot)
+
+
+def settle(qtbot, threaded_client, sim):
+    """Before asserting "nothing more": half a second of the pads' timers, then a marker through the same
+    client reaching the robot (what the pads sent before it has arrived)."""
+    bt, client = threaded_client
+    bt.call(CLOCK.advance, 0.5).result(5)
+    flushed_sync(bt, client, sim, qtbot=qtbot)
 
 
 @pytest.fixture
@@ -70,8 +88,8 @@ def centre(view):
     return c.toPoint(), r
 
 
-def test_two_fingers_drive_two_pads_at_once(qtbot, sim_thread, two_pads):
-    robot = Robot(sim_thread)
+def test_two_fingers_drive_two_pads_at_once(qtbot, sim_thread, threaded_client, two_pads):
+    robot, bt = Robot(sim_thread), threaded_client[0]
     win, left, right = two_pads
     dev = QTest.createTouchDevice()
     lc, lr = centre(left)
@@ -80,48 +98,47 @@ def test_two_fingers_drive_two_pads_at_once(qtbot, sim_thread, two_pads):
     side = rc + QtCore.QPoint(int(rr * 0.5), 0)  # right thumb right: turn right
     QTest.touchEvent(win, dev).press(0, left.mapTo(win, lc), win).press(1, right.mapTo(win, rc), win).commit()
     QTest.touchEvent(win, dev).move(0, left.mapTo(win, up), win).move(1, right.mapTo(win, side), win).commit()
-    wait(qtbot, lambda: any(m["linear"]["x"] > 0.7 and m["angular"]["z"] < -0.4 for m in robot.since(0)))
+    wait(qtbot, bt, lambda: any(m["linear"]["x"] > 0.7 and m["angular"]["z"] < -0.4 for m in robot.since(0)))
     assert left.model.active and right.model.active
     left.refresh(left.model.state)
     right.refresh(right.model.state)
     t = time.monotonic()
     QTest.touchEvent(win, dev).release(0, left.mapTo(win, up), win).stationary(1).commit()
-    wait(qtbot, lambda: any(m["linear"]["x"] == 0 and m["angular"]["z"] < -0.4 for m in robot.since(t)))
+    wait(qtbot, bt, lambda: any(m["linear"]["x"] == 0 and m["angular"]["z"] < -0.4 for m in robot.since(t)))
     assert not left.model.active and right.model.active  # the right thumb still turns
     t2 = time.monotonic()
     QTest.touchEvent(win, dev).release(1, right.mapTo(win, side), win).commit()
-    wait(qtbot, lambda: any(zero(m) for m in robot.since(t2)))
-    qtbot.wait(400)
+    wait(qtbot, bt, lambda: any(zero(m) for m in robot.since(t2)))
+    settle(qtbot, threaded_client, sim_thread)
     after = robot.since(t2)
     assert zero(after[-1]) and sum(zero(m) for m in after) == 1
 
 
-def test_focus_loss_and_hiding_send_the_zero(qtbot, sim_thread, two_pads):
-    robot = Robot(sim_thread)
+def test_focus_loss_and_hiding_send_the_zero(qtbot, sim_thread, threaded_client, two_pads):
+    robot, bt = Robot(sim_thread), threaded_client[0]
     win, left, _right = two_pads
     lc, lr = centre(left)
     QTest.mousePress(left, QtCore.Qt.MouseButton.LeftButton, pos=lc)
     QTest.mouseMove(left, lc - QtCore.QPoint(0, int(lr * 0.9)))
-    wait(qtbot, lambda: any(m["linear"]["x"] > 0.8 for m in robot.since(0)))
+    wait(qtbot, bt, lambda: any(m["linear"]["x"] > 0.8 for m in robot.since(0)))
     t = time.monotonic()
     QtWidgets.QApplication.sendEvent(
         left, QtGui.QFocusEvent(QtCore.QEvent.Type.FocusOut, QtCore.Qt.FocusReason.ActiveWindowFocusReason))
-    wait(qtbot, lambda: any(zero(m) for m in robot.since(t)))
-    qtbot.wait(300)
+    wait(qtbot, bt, lambda: any(zero(m) for m in robot.since(t)))
     assert not left.model.active
     QTest.mouseMove(left, lc - QtCore.QPoint(0, int(lr * 0.5)))  # still dragging: ignored (no longer held)
-    qtbot.wait(300)
+    settle(qtbot, threaded_client, sim_thread)
     assert not any(m["linear"]["x"] > 0 for m in robot.since(t))
     QTest.mouseRelease(left, QtCore.Qt.MouseButton.LeftButton, pos=lc)
     # again, and this time the pad is hidden (its canvas goes to the background)
     QTest.mousePress(left, QtCore.Qt.MouseButton.LeftButton, pos=lc)
     QTest.mouseMove(left, lc - QtCore.QPoint(0, int(lr * 0.9)))
     t2 = time.monotonic()
-    wait(qtbot, lambda: any(m["linear"]["x"] > 0.8 for m in robot.since(t2)))
+    wait(qtbot, bt, lambda: any(m["linear"]["x"] > 0.8 for m in robot.since(t2)))
     t3 = time.monotonic()
     win.hide()
-    wait(qtbot, lambda: any(zero(m) for m in robot.since(t3)))
-    qtbot.wait(300)
+    wait(qtbot, bt, lambda: any(zero(m) for m in robot.since(t3)))
+    settle(qtbot, threaded_client, sim_thread)
     assert zero(robot.since(t3)[-1]) and not left.model.active
 
 

@@ -18,6 +18,7 @@ from rcon_widgets_sensors.slots import QueueWorker
 from sensors_helpers import in_thread
 
 from rcon_core.plugins import Binding
+from rcon_core.testing import until_sync
 
 HERE = Path(__file__).parent
 
@@ -125,13 +126,11 @@ def fed_model() -> ImageModel:
 
 
 def wait_decoded(model: ImageModel, n: int, timeout: float = 20.0) -> None:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
+    def taken() -> bool:
         dec = model.video
-        if dec is not None and dec.stream is not None and dec.stream.decoded + dec.stream.skipped >= n:
-            return
-        time.sleep(0.01)
-    raise AssertionError(f"the video worker did not take {n} packets within {timeout} s")
+        return dec is not None and dec.stream is not None and dec.stream.decoded + dec.stream.skipped >= n
+
+    until_sync(taken, timeout, what=f"the video worker taking {n} packets")
 
 
 def test_joined_mid_gop_the_widget_says_waiting_then_plays():
@@ -180,7 +179,7 @@ def test_garbage_messages_are_reported_and_the_stream_recovers():
     model = fed_model()
     try:
         model.on_message({"timestamp": vh.stamp_ros1(), "frame_id": "c", "format": "h264", "data": "%%%not base64"})
-        assert until_sync(lambda: model.state.error is not None)
+        until_sync(lambda: model.state.error is not None)
         assert model.state.error.startswith("video data:"), model.state.error
         model.on_message(vh.compressed_video(b"\x00\x00\x01\x65" + b"\x17" * 3000))
         for data, _key in stream[:12]:
@@ -204,26 +203,17 @@ def test_the_queue_overflowing_is_a_gap_never_a_growing_backlog():
     worker = QueueWorker("test-queue", handle, max_items=5)
     try:
         worker.submit(0)  # taken at once: the handler blocks on it
-        assert until_sync(lambda: worker.queued == 0)
+        until_sync(lambda: worker.queued == 0)
         for i in range(1, 13):
             worker.submit(i)
         assert worker.queued <= 5 and worker.dropped == 10 and worker.overflows == 2
         release.set()
-        assert until_sync(lambda: len(batches) == 2)
+        until_sync(lambda: len(batches) == 2)
         assert batches[0] == ([0], False) and batches[1] == ([11, 12], True)
     finally:
         release.set()
         worker.close()
     assert not worker.alive
-
-
-def until_sync(predicate, timeout: float = 10.0) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(0.005)
-    return False
 
 
 NO_HANG = textwrap.dedent("""
@@ -288,11 +278,12 @@ def test_garbage_and_mid_gop_streams_end_in_no_hang_within_a_timeout():
 
 
 NO_AV = textwrap.dedent("""
-    import sys, time
+    import sys
     sys.modules["av"] = None  # PyAV not installed: its import fails
     import numpy as np
     from rcon_widgets_sensors.image import ImageModel, ImageSettings
     from rcon_core.plugins import Binding
+    from rcon_core.testing import until_sync
 
     class Port:
         def subscribe(self, *a, **k): return self
@@ -302,9 +293,7 @@ NO_AV = textwrap.dedent("""
     video.start()
     video.on_message({"timestamp": {"secs": 1, "nsecs": 0}, "frame_id": "c", "format": "h264",
                       "data": b"\\x00\\x00\\x01\\x65"})
-    deadline = time.monotonic() + 30
-    while video.state.error is None and time.monotonic() < deadline:
-        time.sleep(0.01)
+    until_sync(lambda: video.state.error is not None, 30, what="the video widget's error")
     print("VIDEO:", video.state.error)
     video.on_message({"timestamp": {"secs": 1, "nsecs": 0}, "frame_id": "c", "format": "h264", "data": b"x"})
     raw = ImageModel(ImageSettings(), Binding("/i", "sensor_msgs/Image", "subscribe"), Port())

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import os
-import time
 from pathlib import Path
 
 from qtpy import QtGui, QtWidgets
@@ -56,11 +55,3 @@ class LiveBridge:
             self.thread.run(self.client.close()).result(10)
         finally:
             self.thread.stop()
-
-
-def wait_until(qtbot, predicate, timeout: float = 10.0, what: str = "condition"):
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        qtbot.wait(20)

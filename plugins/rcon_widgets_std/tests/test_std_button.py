@@ -7,7 +7,7 @@ from rcon_widgets_std.button import ButtonModel, ButtonSettings
 from std_testkit import bridge, build
 
 from rcon_core.msgs import TypeRegistry
-from rcon_core.testing import until
+from rcon_core.testing import flushed, until
 
 
 def status(m):
@@ -64,18 +64,19 @@ async def test_press_and_release_call_two_services_with_yaml_requests(sim):
 
 async def test_a_slow_service_never_blocks_the_caller(sim):
     async with bridge(sim) as client:
-        gate = asyncio.Event()
+        gate, asked = asyncio.Event(), []
 
         async def slow(req):
+            asked.append(req)
             await gate.wait()
             return {"success": True, "message": "finally"}
 
         client.node("robot-side").advertise_service("/rcon_test/slow", "std_srvs/Trigger", slow)
-        await asyncio.sleep(0.1)
+        await until(lambda: "/rcon_test/slow" in sim.services, what="the service advertised")
         b = build(ButtonModel, ButtonSettings(), "/rcon_test/slow", "std_srvs/Trigger", "call", client=client)
         b.start()
         b.press()  # returns at once
-        await asyncio.sleep(0.3)
+        await until(lambda: asked, what="the call reaching the (held) service")
         assert status(b).busy  # still waiting, and we got here: nothing blocked
         gate.set()
         await until(lambda: status(b).phase == "ok", what="the slow answer")
@@ -129,5 +130,5 @@ async def test_bad_message_publishes_nothing(sim):
         b.start()
         b.press()
         assert "data" in b.state.error and status(b) is None
-        await asyncio.sleep(0.2)
+        await flushed(client, sim)
         assert sim.published("/speed_limit") == []

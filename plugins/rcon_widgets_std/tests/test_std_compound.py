@@ -1,7 +1,6 @@
 """Compound: children composing a message, a service request and a service response, of types learned
 from the robot's typedefs; children from another package; problems."""
 
-import asyncio
 
 import pytest
 from rcon_widgets_std import compound as compound_mod
@@ -114,7 +113,7 @@ async def test_serve_a_lab_service_known_only_from_typedefs(sim):
         by_path(m, "response.accepted").set(True)
         by_path(m, "response.reason").submit("clear to lower")
         by_path(m, "response.eta_s").release(42)
-        await asyncio.sleep(0.1)
+        await until(lambda: "/rcon_test/winch" in sim.services, what="the service advertised")
         answer = await client.node("caller").call_service("/rcon_test/winch", {"target_m": 12.5}, timeout=10)
         assert answer == {"accepted": True, "reason": "clear to lower", "eta_s": 42.0}
         await until(lambda: by_path(m, "request.target_m").state.value is not None, what="the request shown")
@@ -130,13 +129,12 @@ async def test_serving_with_a_child_whose_text_does_not_parse_fails_the_call_nam
                   types=TypeRegistry.standard())
         m.start()
         by_path(m, "response.success").set_draft("maybe")
-        await asyncio.sleep(0.1)
+        await until(lambda: "/rcon_test/trigger2" in sim.services, what="the service advertised")
         failed = await client.node("caller").call_service("/rcon_test/trigger2", {}, timeout=10)
         # a failed handler is answered with the default response carrying the reason, not as if it were set
         assert "child 1 (Text Field) on response.success: success: expected true or false" in failed["message"]
         assert m.state.error.startswith("not answered: child 1 (Text Field) on response.success")
-        by_path(m, "response.success").set_draft("true")
-        await asyncio.sleep(0.1)
+        by_path(m, "response.success").set_draft("true")  # read when the next call comes: nothing to wait for
         answer = await client.node("caller").call_service("/rcon_test/trigger2", {}, timeout=10)
         assert answer == {"success": True, "message": ""}
         m.stop()

@@ -1,7 +1,6 @@
 """Slider: ranges clamped to the field type, step snapping, rate limiting, publish and subscribe against
 the robot, types learned from the robot, a numeric field inside a larger message."""
 
-import asyncio
 import math
 
 import pytest
@@ -230,10 +229,14 @@ async def test_publish_slider_follows_what_others_publish_on_its_topic(sim):
         stepper_console.publish({"data": 2.25})
         await until(lambda: follow.state.value == 2.25, what="the other publisher's value")
         assert deaf.state.value is None
+        echoes: list = []  # on the subscription the slider shares: its echo reaches the slider no later
+        probe = client.node("probe")
+        probe.subscribe("/rcon_test/limit_c", echoes.append)
         follow.release(1.0)  # and its own value still goes out and is shown
         await sim.wait_for_published("/rcon_test/limit_c", lambda msg: msg["data"] == 1.0, timeout=10)
-        await asyncio.sleep(0.2)
+        await until(lambda: {"data": 1.0} in echoes, what="the echo of the slider's own value")
         assert follow.state.value == 1.0
+        probe.close()
         follow.stop()
         deaf.stop()
         await until(lambda: sim.topic_subscriber_count("/rcon_test/limit_c") == 0, what="unsubscribed on stop")

@@ -1,6 +1,5 @@
 """Switch: publish a bool, reflect the robot's state, call /lights/set with /lights/state as the truth."""
 
-import asyncio
 
 from rcon_widgets_std.switch import SwitchModel, SwitchSettings, SwitchValue
 from std_testkit import bridge, build
@@ -50,7 +49,7 @@ async def test_a_failing_call_reverts_and_shows_the_servers_message(sim):
         node = client.node("robot-side")
         node.advertise_service("/rcon_test/arm", "std_srvs/SetBool",
                                lambda req: {"success": False, "message": "interlock open"})
-        await asyncio.sleep(0.1)
+        await until(lambda: "/rcon_test/arm" in sim.services, what="the service advertised")
         sw = build(SwitchModel, SwitchSettings(), "/rcon_test/arm", "std_srvs/SetBool", "call", "request.data",
                    client=client)
         sw.start()

@@ -1,14 +1,13 @@
 """Text Field: raw data of many types shown; typed YAML/JSON published as the topic's type; wrong text
 publishes nothing and names the field."""
 
-import asyncio
 
 import pytest
 from rcon_widgets_std.textfield import TextFieldModel, TextFieldSettings
 from std_testkit import bridge, build
 
 from rcon_core.msgs import MessageTextError, TypeRegistry
-from rcon_core.testing import until
+from rcon_core.testing import flushed, until
 
 
 @pytest.mark.parametrize(
@@ -82,7 +81,7 @@ async def test_whole_twist_typed_as_json_drives_cmd_vel(sim):
         assert got["linear"]["x"] == 0.3 and got["angular"]["z"] == 0.1
         m.submit("{linear: {x: 0.3}, angular: {q: 1}}")
         assert "angular" in m.state.error and "q" in m.state.error
-        await asyncio.sleep(0.2)
+        await flushed(client, sim)
         assert len(sim.published("/cmd_vel")) == 1
         m.stop()
 

@@ -83,7 +83,7 @@ async def test_chat_room_publishes_and_shows_the_topic(sim):
                       client=client, node="other")
         me.start()
         other.start()
-        await asyncio.sleep(0.2)
+        await until(lambda: sim.topic_subscriber_count("/rcon_test/chat") >= 1, what="the consoles subscribed")
         assert me.send("operator 1: heading to the dock")
         assert not me.send("   ")  # blank lines are not sent
         await sim.wait_for_published("/rcon_test/chat", lambda m: "dock" in m["data"], timeout=10)

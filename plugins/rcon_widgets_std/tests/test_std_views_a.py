@@ -11,12 +11,12 @@ from rcon_widgets_std.slider import SliderModel, SliderSettings
 from rcon_widgets_std.slider_view import SliderView
 from rcon_widgets_std.switch import SwitchModel, SwitchSettings, SwitchValue
 from rcon_widgets_std.switch_view import SwitchView
-from std_qtkit import LiveBridge, shoot, wait_until
+from std_qtkit import LiveBridge, shoot
 from std_testkit import build
 
 from rcon_core.app.theme import stylesheet
 from rcon_core.msgs import TypeRegistry
-from rcon_core.testing import ManualClock, RecordingPort
+from rcon_core.testing import ManualClock, RecordingPort, until_sync
 
 
 @pytest.fixture
@@ -97,9 +97,9 @@ def test_slider_view_drag_and_release_publish_through_the_bridge(qtbot, live, si
     view.slider.setValue(12)  # a drag: on-release mode publishes nothing yet
     assert view.value.text() == "1.20 m/s"
     view.slider.setSliderDown(False)  # the release
-    wait_until(qtbot, lambda: any(msg["data"] == 1.2 for msg in sim_thread.published("/speed_limit")),
-               what="1.2 on /speed_limit")
-    wait_until(qtbot, lambda: sim_thread.robot.speed_limit == 1.2, what="the robot's limit")
+    until_sync(lambda: any(msg["data"] == 1.2 for msg in sim_thread.published("/speed_limit")),
+               what="1.2 on /speed_limit", qtbot=qtbot)
+    until_sync(lambda: sim_thread.robot.speed_limit == 1.2, what="the robot's limit", qtbot=qtbot)
     view.refresh(m.state)
     shoot(qtbot, view, "Speed limit", (260, 150), "slider", tmp_path)
     live.thread.call(m.stop).result(5)
@@ -114,10 +114,11 @@ def test_publish_slider_view_says_not_set_until_a_value_is_sent_or_heard(qtbot, 
     qtbot.addWidget(view)
     view.refresh(m.state)
     assert view.value.text() == "not set" and view.slider.value() == 0  # no number passes for the robot's
-    wait_until(qtbot, lambda: sim_thread.topic_subscriber_count("/rcon_test/limit_v") >= 1, what="following")
+    until_sync(lambda: sim_thread.topic_subscriber_count("/rcon_test/limit_v") >= 1,
+               what="following", qtbot=qtbot)
     other = live.node("another-console")
     live.thread.call(lambda: other.advertise("/rcon_test/limit_v", "std_msgs/Float64").publish({"data": 1.5}))
-    wait_until(qtbot, lambda: m.state.value == 1.5, what="another console's value")
+    until_sync(lambda: m.state.value == 1.5, what="another console's value", qtbot=qtbot)
     view.refresh(m.state)
     assert view.value.text() == "1.50 m/s" and view.slider.value() == 10
     live.thread.call(m.stop).result(5)
@@ -140,14 +141,14 @@ def test_switch_view_call_lights_and_show_state(qtbot, live, sim_thread, tmp_pat
     live.thread.call(m.start).result(5)
     view = SwitchView(m)
     qtbot.addWidget(view)
-    wait_until(qtbot, lambda: getattr(m.state.value, "on", None) is False, what="the latched state")
+    until_sync(lambda: getattr(m.state.value, "on", None) is False, what="the latched state", qtbot=qtbot)
     view.refresh(m.state)
     assert view.button.text() == "○ Lights off" and not view.button.isChecked()
     view.button.click()
     # /lights/state may confirm "on" before the call's answer arrives: wait for the answer too (busy
     # over), not only the state, before reading the button's text
-    wait_until(qtbot, lambda: getattr(m.state.value, "on", None) is True and not m.state.value.busy,
-               what="lights on, and the answer")
+    until_sync(lambda: getattr(m.state.value, "on", None) is True and not m.state.value.busy,
+               what="lights on, and the answer", qtbot=qtbot)
     view.refresh(m.state)
     assert view.button.isChecked() and view.button.text() == "● Lights on" and view.reply.text() == "lights on"
     assert sim_thread.robot.lights is True
@@ -162,14 +163,14 @@ def test_switch_view_drops_an_old_reply_when_the_state_changes_elsewhere(qtbot, 
     live.thread.call(m.start).result(5)
     view = SwitchView(m)
     qtbot.addWidget(view)
-    wait_until(qtbot, lambda: getattr(m.state.value, "on", None) is False, what="the latched state")
+    until_sync(lambda: getattr(m.state.value, "on", None) is False, what="the latched state", qtbot=qtbot)
     view.button.click()
-    wait_until(qtbot, lambda: m.state.value.on is True and not m.state.value.busy, what="lights on")
+    until_sync(lambda: m.state.value.on is True and not m.state.value.busy, what="lights on", qtbot=qtbot)
     view.refresh(m.state)
     assert view.reply.text() == "lights on"
     other = live.node("another-console")  # someone else turns them off
     live.thread.run(other.call_service("/lights/set", {"data": False})).result(10)
-    wait_until(qtbot, lambda: m.state.value.on is False, what="the new state")
+    until_sync(lambda: m.state.value.on is False, what="the new state", qtbot=qtbot)
     view.refresh(m.state)
     assert view.button.text() == "○ Off" and view.reply.text() == "tap for On" and m.state.value.reply == ""
     live.thread.call(m.stop).result(5)
@@ -224,7 +225,7 @@ def test_button_view_progress_result_and_error(qtbot, live, sim_thread, tmp_path
     assert view.button.text() == "Dock"
     view.button.pressed.emit()
     view.refresh(m.state)
-    wait_until(qtbot, lambda: m.state.value is not None and not m.state.value.busy, what="the answer")
+    until_sync(lambda: m.state.value is not None and not m.state.value.busy, what="the answer", qtbot=qtbot)
     view.refresh(m.state)
     assert view.result.text().startswith("✓ dock")
     assert sim_thread.robot.docking or sim_thread.robot.docked

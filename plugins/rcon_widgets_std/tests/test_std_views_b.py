@@ -10,11 +10,12 @@ from rcon_widgets_std.textfield import TextFieldModel, TextFieldSettings
 from rcon_widgets_std.textfield_view import TextFieldView
 from rcon_widgets_std.textview import TextViewModel, TextViewSettings
 from rcon_widgets_std.textview_view import TextViewView
-from std_qtkit import LiveBridge, shoot, wait_until
+from std_qtkit import LiveBridge, shoot
 from std_testkit import STD, build
 
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding, WidgetContext
+from rcon_core.testing import until_sync
 
 
 @pytest.fixture
@@ -37,14 +38,14 @@ def test_textfield_view_sends_and_reports_errors(qtbot, live, sim_thread, tmp_pa
     qtbot.addWidget(view)
     view.edit.setText("linear: {x: slow}")
     view.button.click()
-    wait_until(qtbot, lambda: m.state.error, what="the error")
+    until_sync(lambda: m.state.error, what="the error", qtbot=qtbot)
     view.refresh(m.state)
     assert view.status.text().startswith("not sent: linear.x:")
     view.edit.setText("{linear: {x: 0.4}, angular: {z: 0.2}}")
     view.edit.returnPressed.emit()
-    wait_until(qtbot, lambda: any(msg["linear"]["x"] == 0.4 for msg in sim_thread.published("/cmd_vel")),
-               what="the twist on /cmd_vel")
-    wait_until(qtbot, lambda: m.state.value is not None, what="sent")
+    until_sync(lambda: any(msg["linear"]["x"] == 0.4 for msg in sim_thread.published("/cmd_vel")),
+               what="the twist on /cmd_vel", qtbot=qtbot)
+    until_sync(lambda: m.state.value is not None, what="sent", qtbot=qtbot)
     view.refresh(m.state)
     assert view.status.text().startswith("sent:")
     shoot(qtbot, view, "Command", (320, 130), "textfield", tmp_path)
@@ -71,7 +72,7 @@ def test_stepper_view_buttons_publish(qtbot, live, sim_thread, tmp_path):
     view.plus.click()  # the first step starts from the start value, 1.00
     view.plus.click()
     assert view.value.text() == "1.50 m/s"
-    wait_until(qtbot, lambda: sim_thread.robot.speed_limit == 1.5, what="the robot's limit")
+    until_sync(lambda: sim_thread.robot.speed_limit == 1.5, what="the robot's limit", qtbot=qtbot)
     for _ in range(5):
         view.plus.click()
     assert view.value.text() == "2.00 m/s" and not view.plus.isEnabled() and view.minus.isEnabled()
@@ -85,13 +86,13 @@ def test_textview_view_rosout_levels_filter_and_chat(qtbot, live, sim_thread, tm
                    Binding("/rosout", "rosgraph_msgs/Log", "subscribe"), "tv")
     live.thread.call(m.start).result(5)
     view = TextViewView(m)
-    wait_until(qtbot, lambda: sim_thread.topic_subscriber_count("/rosout") >= 1, what="subscribed")
+    until_sync(lambda: sim_thread.topic_subscriber_count("/rosout") >= 1, what="subscribed", qtbot=qtbot)
     for level, text in [("info", "Mission started"), ("debug", "Thruster PWM 1500/1500"),
                         ("warn", "Battery low: 18% (11.2 V); return to dock"), ("info", "Waypoint 3 reached"),
                         ("error", "Depth sensor timeout"), ("fatal", "Leak detected in the hull")]:
         sim_thread.run_sync(lambda lv=level, t=text: sim_thread.log("/vessel", lv, t))
-    wait_until(qtbot, lambda: m.state.value is not None and any("Leak" in x.text for x in m.state.value.lines),
-               what="the log lines")
+    until_sync(lambda: m.state.value is not None and any("Leak" in x.text for x in m.state.value.lines),
+               what="the log lines", qtbot=qtbot)
     view.refresh(m.state)
     text = view.history.toPlainText()
     assert "[ERROR] [/vessel] Depth sensor timeout" in text and "[WARN ]" in text
@@ -115,7 +116,7 @@ def test_textview_chat_input_line(qtbot, live, sim_thread):
     view.input.setText("hello from the console")
     view.input.returnPressed.emit()
     assert view.input.text() == ""
-    wait_until(qtbot, lambda: sim_thread.published("/rcon_test/chat"), what="the chat line")
+    until_sync(lambda: sim_thread.published("/rcon_test/chat"), what="the chat line", qtbot=qtbot)
     assert sim_thread.published("/rcon_test/chat")[-1] == {"data": "hello from the console"}
     live.thread.call(m.stop).result(5)
 
@@ -131,15 +132,15 @@ def test_compound_view_composes_and_publishes_an_imu(qtbot, live, sim_thread, tm
     m = live_model(CompoundModel, settings, live, Binding("/rcon_test/imu", "sensor_msgs/Imu", "publish"), "cp",
                    types=TypeRegistry.empty())
     live.thread.call(m.start).result(5)
-    wait_until(qtbot, lambda: m.children, what="children")
+    until_sync(lambda: m.children, what="children", qtbot=qtbot)
     view = CompoundView(m)
     assert len(view.child_views) == 3
     accel = view.child_views[0][1]
     accel.slider.setValue(accel.position_of(9.8))
     view.child_views[2][1].edit.setText("{w: 1.0}")
     view.child_views[2][1].send()
-    wait_until(qtbot, lambda: m.state.value is not None and m.state.value.message["orientation"]["w"] == 1.0,
-               what="composed")
+    until_sync(lambda: m.state.value is not None and m.state.value.message["orientation"]["w"] == 1.0,
+               what="composed", qtbot=qtbot)
     view.button.click()
     got = None
 
@@ -149,7 +150,7 @@ def test_compound_view_composes_and_publishes_an_imu(qtbot, live, sim_thread, tm
         got = msgs[-1] if msgs else None
         return got is not None
 
-    wait_until(qtbot, arrived, what="the IMU message")
+    until_sync(arrived, what="the IMU message", qtbot=qtbot)
     assert got["linear_acceleration"]["z"] == 9.8 and got["orientation"]["w"] == 1.0
     view.refresh(m.state)
     assert view.status.text() == "✓ published"

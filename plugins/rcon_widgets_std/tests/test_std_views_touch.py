@@ -17,7 +17,7 @@ from rcon_widgets_std.slider import SliderModel, SliderSettings
 from rcon_widgets_std.slider_view import SliderView
 from rcon_widgets_std.switch import SwitchModel, SwitchSettings, SwitchValue
 from rcon_widgets_std.switch_view import SwitchView
-from std_qtkit import LiveBridge, wait_until
+from std_qtkit import LiveBridge
 from std_testkit import STD, build
 
 from rcon_core.app.geometry import on_grid
@@ -25,6 +25,7 @@ from rcon_core.app.theme import stylesheet
 from rcon_core.app.widget_frame import WidgetFrame, frame_min_size
 from rcon_core.msgs import TypeRegistry
 from rcon_core.plugins import Binding, WidgetContext
+from rcon_core.testing import flushed_sync, qt_flushed, until_sync
 
 SPECS = {spec.kind: spec for spec in specs()}
 
@@ -100,10 +101,12 @@ def test_tapping_the_slider_track_jumps_there_and_publishes_on_release(qtbot, li
     qtbot.mousePress(view.slider, left, pos=_track_point(view, 0.8))
     assert view.slider.value() == 16, "a tap moves to where it lands, not one page step"
     assert view.slider.isSliderDown() and view.value.text() == "1.60"
-    qtbot.wait(300)
+    qt_flushed(qtbot)  # what the press set going has run, and a marker sent after it reached the robot
+    flushed_sync(live.thread, live.client, sim_thread, qtbot=qtbot)
     assert not _sent(sim_thread, "/rcon_test/tap_release", 1.6), "on-release mode sent while the finger is down"
     qtbot.mouseRelease(view.slider, left, pos=_track_point(view, 0.8))
-    wait_until(qtbot, lambda: _sent(sim_thread, "/rcon_test/tap_release", 1.6), what="1.6 sent on release")
+    until_sync(lambda: _sent(sim_thread, "/rcon_test/tap_release", 1.6),
+               what="1.6 sent on release", qtbot=qtbot)
     assert not view.slider.isSliderDown()
     live.thread.call(m.stop).result(5)
 
@@ -118,7 +121,7 @@ def test_tapping_the_slider_track_in_continuous_mode_publishes_while_held(qtbot,
     left = QtCore.Qt.MouseButton.LeftButton
     qtbot.mousePress(view.slider, left, pos=_track_point(view, 0.3))
     assert view.slider.value() == 6
-    wait_until(qtbot, lambda: _sent(sim_thread, "/rcon_test/tap_cont", 0.6), what="0.6 sent while held")
+    until_sync(lambda: _sent(sim_thread, "/rcon_test/tap_cont", 0.6), what="0.6 sent while held", qtbot=qtbot)
     assert view.slider.isSliderDown()
     qtbot.mouseRelease(view.slider, left, pos=_track_point(view, 0.3))
     live.thread.call(m.stop).result(5)
@@ -153,14 +156,15 @@ def test_button_face_says_calling_then_the_answer_then_its_label(qtbot, live, si
     view.refresh(pressed)
     if pressed.value.busy:
         assert view.button.text() == "Dock…", "the face shows the call in flight"
-    wait_until(qtbot, lambda: m.state.value is not None and not m.state.value.busy, what="the answer")
+    until_sync(lambda: m.state.value is not None and not m.state.value.busy, what="the answer", qtbot=qtbot)
     view.refresh(m.state)
     assert view.button.text().startswith("✓ dock"), view.button.text()
     assert view_common.OK in view.button.styleSheet(), "a success is green"
-    wait_until(qtbot, lambda: view.button.text() == "Dock", what="the label back after the flash")
+    until_sync(lambda: view.button.text() == "Dock", what="the label back after the flash", qtbot=qtbot)
     assert view.button.styleSheet() == ""
     view.button.pressed.emit()  # the sim is docking (or docked) now: a second dock is refused
-    wait_until(qtbot, lambda: m.state.value is not None and not m.state.value.busy, what="the second answer")
+    until_sync(lambda: m.state.value is not None and not m.state.value.busy,
+               what="the second answer", qtbot=qtbot)
     view.refresh(m.state)
     if m.state.value.phase == "failed":
         assert view.button.text().startswith("✗") and view_common.BAD in view.button.styleSheet()
@@ -215,7 +219,7 @@ def test_switch_flashes_the_answer_on_its_face_only_when_the_reply_line_is_hidde
         view.refresh(m.state)
     assert short.button.text() == "✓ lights on" and view_common.OK in short.button.styleSheet()
     assert roomy.button.text() == "● Lights on" and roomy.reply.text() == "lights on"
-    wait_until(qtbot, lambda: short.button.text() == "● Lights on", what="the state back on the face")
+    until_sync(lambda: short.button.text() == "● Lights on", what="the state back on the face", qtbot=qtbot)
     m.set_value(SwitchValue(True, True, False))
     short.refresh(m.state)
     m.set_value(SwitchValue(True, False, None, "interlock open"))
