@@ -23,7 +23,7 @@ from rcon_core.priority import (
     thread_nice,
     thread_slice_ns,
 )
-from rcon_core.testing import until
+from rcon_core.testing import until, until_sync
 
 linux = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="thread nice values are Linux's")
 #: the scheduler reports each thread's slice (Linux's EEVDF, 6.6 on): what raising a thread changes there
@@ -106,7 +106,11 @@ def test_the_sims_camera_threads_run_below_its_loop(sim_thread):
             await asyncio.wait_for(got.wait(), 10)
 
     asyncio.run(look())
-    cameras = [thread_nice(t.native_id) for t in threading.enumerate() if t.name.startswith("sim-camera")]
+    # a camera thread just started may not have its native id yet (threading sets it as the thread begins)
+    threads = [t for t in threading.enumerate() if t.name.startswith("sim-camera")]
+    until_sync(lambda: all(t.native_id is not None or not t.is_alive() for t in threads),
+               what="the camera threads running")
+    cameras = [thread_nice(t.native_id) for t in threads if t.native_id is not None]
     assert cameras and all(v is not None and v >= BACKGROUND_NICE for v in cameras), cameras
     loop_nice = thread_nice(sim_thread.run_sync(threading.get_native_id))
     assert loop_nice is not None and loop_nice < BACKGROUND_NICE
