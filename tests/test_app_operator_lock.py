@@ -10,6 +10,7 @@ import json
 import pytest
 from app_helpers import entry_point_plugins, open_window, snap_with, tap
 from qtpy.QtTest import QTest
+from test_operator_pin import shows_pin
 
 from rcon_core.app.config import AppConfig
 from rcon_core.app.main import open_app, run_app
@@ -65,7 +66,7 @@ def test_the_pin_lock_blocks_editing_leaving_operate_deleting_the_robot_and_quit
     lock, ctl = window.operator_lock, window.controller
     assert ctl.canvas.locked and not window.edit_button.icon().isNull()
     stored = (tmp_path / "app.json").read_text()
-    assert "2468" not in stored and check_pin(json.loads(stored)["operator_pin"], "2468")
+    assert not shows_pin(json.loads(stored), "2468") and check_pin(json.loads(stored)["operator_pin"], "2468")
 
     # leaving Operate mode: the PIN first; Cancel keeps Operate
     tap(window.edit_button)
