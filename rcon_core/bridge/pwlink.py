@@ -53,12 +53,17 @@ CLOSE_TIMEOUT = 2.0
 
 
 class _Listener(WSListener):  # type: ignore[misc]
-    """picows' callbacks for one :class:`PicowsLink`; the hot path is :meth:`on_ws_frame`."""
+    """picows' callbacks for one :class:`PicowsLink`; the hot path is :meth:`on_ws_frame`.  Slots, not a
+    ``__dict__``: a picows listener subclass's attributes are otherwise looked up the slow way, and
+    :meth:`on_ws_frame` reads one per message (``message``: ``Receiver.message``, or while a fragmented
+    message is being joined :meth:`PicowsLink.interrupted`, so the hot path needs no ``joining`` test)."""
+
+    __slots__ = ("link", "message", "joining")
 
     def __init__(self, link: PicowsLink) -> None:
         super().__init__()
         self.link = link
-        self.message = link.receiver.message
+        self.message: Any = link.receiver.message
         self.joining = False
 
     def on_ws_connected(self, transport: Any) -> None:
@@ -66,13 +71,13 @@ class _Listener(WSListener):  # type: ignore[misc]
 
     def on_ws_frame(self, transport: Any, frame: Any) -> None:
         t = frame.msg_type
-        if frame.fin and not self.joining:
-            if t is _TEXT:
+        if t is _TEXT:
+            if frame.fin:
                 self.message(frame.get_payload_as_memoryview(), True, frame.last_in_buffer)
                 return
-            if t is _BINARY:
-                self.message(frame.get_payload_as_memoryview(), False, frame.last_in_buffer)
-                return
+        elif t is _BINARY and frame.fin:
+            self.message(frame.get_payload_as_memoryview(), False, frame.last_in_buffer)
+            return
         self.link.other_frame(frame, t)
 
     def on_ws_disconnected(self, transport: Any) -> None:
@@ -151,15 +156,17 @@ class PicowsLink(Link):
 
     def other_frame(self, frame: Any, t: Any) -> None:
         """Everything but a whole data message: fragments, pongs, close."""
-        if self.listener is None:  # released: the connection is over, what still arrives goes nowhere
+        listener = self.listener
+        if listener is None:  # released: the connection is over, what still arrives goes nowhere
             return
         if t is _TEXT or t is _BINARY or t is _CONT:
             if t is not _CONT:
-                if self.listener.joining:
-                    self.fail(1002, "a new message began before the last one ended")
+                if listener.joining:
+                    self.interrupted()
                     return
-                self.listener.joining, self._text, self._parts, self._size = True, t is _TEXT, [], 0
-            elif not self.listener.joining:
+                listener.joining, self._text, self._parts, self._size = True, t is _TEXT, [], 0
+                listener.message = self.interrupted_message
+            elif not listener.joining:
                 self.fail(1002, "a continuation frame without a message")
                 return
             self._size += frame.payload_size
@@ -169,7 +176,8 @@ class PicowsLink(Link):
             self._parts.append(frame.get_payload_as_bytes())
             if frame.fin:
                 whole, self._parts = b"".join(self._parts), []
-                self.listener.joining = False
+                listener.joining = False
+                listener.message = self.receiver.message
                 self.receiver.message(whole, self._text, frame.last_in_buffer)
         elif t is _PONG:
             self.pings.pong(frame.get_payload_as_bytes())
@@ -179,6 +187,14 @@ class PicowsLink(Link):
             if not ws.is_close_frame_sent:
                 ws.send_close(code if code is not WSCloseCode.NO_INFO else WSCloseCode.OK)
             ws.disconnect()
+
+    def interrupted(self) -> None:
+        self.fail(1002, "a new message began before the last one ended")
+
+    def interrupted_message(self, raw: Any, text: bool, last: bool) -> None:
+        """The listener's ``message`` while a fragmented message is being joined: a whole data message
+        then is a protocol error."""
+        self.interrupted()
 
     def disconnected(self) -> None:
         self.drain.lost()

@@ -61,7 +61,7 @@ class Receiver:
     """One connection's messages in (see the module docstring).  ``take(raw, text)`` and
     ``heavy`` come from the client's ``Inbound``; the adapter sets ``pause``, ``resume`` and ``fail``."""
 
-    __slots__ = ("take", "deliver", "topics", "traffic", "counts", "failed", "heavy", "held", "busy", "n", "started", "check", "paused",
+    __slots__ = ("take", "deliver", "topics", "traffic", "failed", "heavy", "held", "busy", "n", "started", "check", "paused",
                  "pause", "resume", "fail", "task", "closed", "flood")
 
     def __init__(self, inbound: Any) -> None:
@@ -69,7 +69,6 @@ class Receiver:
         self.deliver: Callable[[Any], Awaitable[None] | None] = inbound.deliver
         self.topics: dict[str, Any] = inbound.topics
         self.traffic = inbound.traffic  # bytes in by topic (``traffic.py``), counted here on the hot path
-        self.counts: dict[str, list[int]] = inbound.traffic.counts
         self.failed: Callable[[BaseException], None] = inbound.bad.failed
         self.heavy: int = inbound.heavy
         self.held: deque[tuple[bytes | str, bool]] = deque()
@@ -96,8 +95,10 @@ class Receiver:
     def message(self, raw: Any, text: bool, last: bool) -> None:
         """One whole message (``raw``: bytes-like, a text message's UTF-8 bytes unchecked; valid only during
         this call); ``last``: the last one of this read.  The hot path: a small text message is parsed and,
-        when it is a publish of a subscribed topic, delivered here (``Inbound.take`` and ``Inbound.deliver``
-        inlined: one call less per message); everything else goes through ``Inbound.take``."""
+        when it is a publish of a subscribed topic, counted (the entry's ``tally``, ``traffic.py``) and
+        delivered here (``Inbound.take`` and ``Inbound.deliver`` inlined: one call less per message); the
+        turn's clock is read only past ``check`` (:meth:`_spent`); everything else goes through
+        :meth:`_other`."""
         if self.busy:
             held = self.held
             held.append((raw if raw.__class__ is bytes else bytes(raw), text))
@@ -107,45 +108,49 @@ class Receiver:
         else:
             n = self.n = self.n + 1
             size = len(raw)
-            if size < self.heavy:
-                if n > self.check and self._spent():
-                    self._yield(raw, text)
-                elif text:
-                    try:
-                        m = _loads(raw)
-                    except JSONDecodeError:
-                        self._start(self._take(raw, text))
-                    else:
-                        try:
-                            topic = m["topic"] if m["op"] == "publish" else None
-                            entry = self.topics[topic] if topic is not None else None
-                            msg = m["msg"]
-                        except (KeyError, TypeError):
-                            entry = None
-                        if entry is not None and msg.__class__ is dict:
-                            c = self.counts.get(topic)  # type: ignore[arg-type]  # Traffic.count_name inlined
-                            if c is None:
-                                self.traffic.count_name(topic, size)
-                            else:
-                                c[0] += size
-                                c[1] += 1
-                            try:
-                                entry.fast(msg)
-                            except Exception:
-                                entry.callback_failed()
-                        else:
-                            self._slow(m, size)
-                else:
+            if text and size < self.heavy and (n <= self.check or not self._spent()):
+                try:
+                    m = _loads(raw)
+                except JSONDecodeError:
                     self._start(self._take(raw, text))
-            elif n > 1:
-                self._yield(raw, text)
+                else:
+                    try:
+                        entry = self.topics[m["topic"]] if m["op"] == "publish" else None
+                        msg = m["msg"]
+                    except (KeyError, TypeError):
+                        entry = None
+                    if entry is not None and msg.__class__ is dict:
+                        c = entry.tally
+                        if c is None:  # the topic's first message: its row of the traffic counts
+                            c = entry.tally = self.traffic.row(entry.topic)
+                        c[0] += size
+                        c[1] += 1
+                        try:
+                            entry.fast(msg)
+                        except Exception:
+                            entry.callback_failed()
+                    else:
+                        self._slow(m, size)
             else:
-                self._start(self._take(raw, text))
+                self._other(raw, text, n, size)
         if last:
             self.flood = self.n >= YIELD_EVERY or self.busy
             self.n = 0
             self.check = YIELD_EVERY
             self.started = 0.0
+
+    def _other(self, raw: Any, text: bool, n: int, size: int) -> None:
+        """Not the hot path: a big message (``heavy`` or more: a turn of its own), a binary one, or a small
+        text message once the turn's budget is spent (:meth:`message` read the clock then)."""
+        if size >= self.heavy:
+            if n > 1:
+                self._yield(raw, text)
+            else:
+                self._start(self._take(raw, text))
+        elif text or (n > self.check and self._spent()):
+            self._yield(raw, text)
+        else:
+            self._start(self._take(raw, text))
 
     def _slow(self, m: Any, size: int) -> None:
         """A parsed message that is not a publish of a subscribed topic: counted, then ``Inbound.deliver``."""

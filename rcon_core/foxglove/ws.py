@@ -58,7 +58,6 @@ class _Counts:
         self.take = take
         self.deliver = _nothing
         self.topics: dict[str, Any] = {}
-        self.counts: dict[str, list[int]] = {}
         self.traffic = self
         self.bad = self
         self.failed = failed
