@@ -1,9 +1,10 @@
 """Messages in from a transport adapter (``pwlink.py``, ``wslink.py``), in order, on the event loop.
 
 Decision: messages are pushed, and most are finished in the callback that brought them
-    An adapter calls :meth:`Receiver.message` for every whole message as its parser finds it (a view into
-    the read buffer for picows, valid during the call only) and says when a read's last message came
-    (``last``).  The Receiver hands it to :meth:`Inbound.take <rcon_core.bridge.inbound.Inbound.take>`,
+    An adapter calls :meth:`Receiver.message` for every whole message as its parser finds it (bytes, or
+    for picows' binary messages a view into its read buffer, valid during the call only) and says when a
+    read's messages are all in (``last`` with the read's last message, or :meth:`Receiver.read_done` after
+    the read: picows' adapter, one argument less per message).  The Receiver hands it to :meth:`Inbound.take <rcon_core.bridge.inbound.Inbound.take>`,
     which parses and delivers a small publish at once.  What needs to wait -- a frame decoded in the
     worker thread (``offload.py``), a frame of a latest-only topic looking for a newer one
     (``latest.py``), a big message completed by fragments -- comes back as an awaitable: the Receiver
@@ -134,10 +135,15 @@ class Receiver:
             else:
                 self._other(raw, text, n, size)
         if last:
-            self.flood = self.n >= YIELD_EVERY or self.busy
-            self.n = 0
-            self.check = YIELD_EVERY
-            self.started = 0.0
+            self.read_done()
+
+    def read_done(self) -> None:
+        """The read's messages are all in (:meth:`message` with ``last``, or the transport says so after
+        each read: picows' adapter, one argument less per message): the next read is a new turn."""
+        self.flood = self.n >= YIELD_EVERY or self.busy
+        self.n = 0
+        self.check = YIELD_EVERY
+        self.started = 0.0
 
     def _other(self, raw: Any, text: bool, n: int, size: int) -> None:
         """Not the hot path: a big message (``heavy`` or more: a turn of its own), a binary one, or a small

@@ -38,7 +38,6 @@ from collections.abc import Callable
 from typing import Any
 
 from rcon_core.bridge.errors import LinkClosedError, NotUtf8
-from rcon_core.bridge.inbound import YIELD_EVERY
 from rcon_core.bridge.latest import MIN_SIZE
 from rcon_core.bridge.linkbase import Link
 from rcon_core.bridge.receive import Receiver
@@ -118,11 +117,7 @@ class FoxgloveReceiver(Receiver):
             except Exception as exc:  # the frame boundary: one frame never ends the link
                 self.failed(exc)
         if last:
-            self.flood = self.n >= YIELD_EVERY or self.busy
-            self.n = 0
-            self.check = YIELD_EVERY
-            self.started = 0.0
-
+            self.read_done()
 
 async def open_connection(transport: str, url: str, subprotocols: list[str] | None, receiver: Any,
                           on_stale: Callable[[Any], None], *, ssl_context: ssl.SSLContext | None,
