@@ -58,23 +58,30 @@ CLOSE_TIMEOUT = 2.0
 
 
 class _Listener(WSListener):  # type: ignore[misc]
-    """picows' callbacks for one :class:`PicowsLink`; the hot path is :meth:`on_ws_frame`.  Slots, not a
-    ``__dict__``: a picows listener subclass's attributes are otherwise looked up the slow way, and
-    :meth:`on_ws_frame` reads one per message (``message``: ``Receiver.message``, or while a fragmented
-    message is being joined :meth:`PicowsLink.interrupted`, so the hot path needs no ``joining`` test)."""
+    """picows' callbacks for one :class:`PicowsLink`.  The hot path is ``on_ws_frame``, an attribute (picows
+    calls what the listener's ``on_ws_frame`` attribute holds): the Receiver's own frame callback
+    (``Receiver.frame_callback``: one Python call a message less), which hands every frame it does not
+    finish to :meth:`frame`; :meth:`frame` itself while a fragmented message is being joined, or when the
+    Receiver has no callback of its own.  Slots, not a ``__dict__``: a picows listener subclass's attributes
+    are otherwise looked up the slow way.  :meth:`frame` calls ``message`` (``Receiver.message``, or while a
+    fragmented message is being joined :meth:`PicowsLink.interrupted_message`, so it needs no ``joining``
+    test)."""
 
-    __slots__ = ("link", "message", "joining")
+    __slots__ = ("link", "message", "joining", "on_ws_frame", "hot")
 
     def __init__(self, link: PicowsLink) -> None:
         super().__init__()
         self.link = link
         self.message: Any = link.receiver.message
         self.joining = False
+        frame = self.frame
+        self.hot: Any = link.receiver.frame_callback(_TEXT, frame) or frame
+        self.on_ws_frame: Any = self.hot
 
     def on_ws_connected(self, transport: Any) -> None:
         self.link.connected(transport)
 
-    def on_ws_frame(self, transport: Any, frame: Any) -> None:
+    def frame(self, transport: Any, frame: Any) -> None:
         t = frame.msg_type
         if t is _TEXT:
             if frame.fin:
@@ -148,6 +155,9 @@ class PicowsLink(Link):
         """Also the cycle through picows: the link holds picows' transport and listener, the listener holds
         the link."""
         super().release()
+        listener = self.listener
+        if listener is not None:  # and the listener's own: its frame callbacks hold it
+            listener.on_ws_frame = listener.hot = _dropped
         self.ws = self.listener = None
 
     # -- picows' events ------------------------------------------------------------------------------
@@ -172,6 +182,7 @@ class PicowsLink(Link):
                     return
                 listener.joining, self._text, self._parts, self._size = True, t is _TEXT, [], 0
                 listener.message = self.interrupted_message
+                listener.on_ws_frame = listener.frame
             elif not listener.joining:
                 self.fail(1002, "a continuation frame without a message")
                 return
@@ -184,6 +195,7 @@ class PicowsLink(Link):
                 whole, self._parts = b"".join(self._parts), []
                 listener.joining = False
                 listener.message = self.receiver.message
+                listener.on_ws_frame = listener.hot
                 self.receiver.message(whole, self._text, False)
         elif t is _PONG:
             self.pings.pong(frame.get_payload_as_bytes())
@@ -258,6 +270,10 @@ class PicowsLink(Link):
         if not ws.is_close_frame_sent:
             ws.send_close(WSCloseCode(code), reason.encode())
         ws.disconnect()
+
+
+def _dropped(transport: Any, frame: Any) -> None:
+    """A released link's listener: what still arrives goes nowhere."""
 
 
 async def open_picows(url: str, receiver: Any, on_stale: Any, *, ssl: _ssl.SSLContext | None,

@@ -101,6 +101,11 @@ class FoxgloveReceiver(Receiver):
         else:
             self.busy = False
 
+    def frame_callback(self, text_type: Any, other: Callable[[Any, Any], None]) -> None:
+        """None: picows' listener calls :meth:`message` for every frame (the rosbridge hot path is not this
+        link's)."""
+        return None
+
     def message(self, raw: Any, text: bool, last: bool) -> None:
         """One whole message (see ``Receiver.message``); the hot path hands it to the session at once."""
         if self.busy:
