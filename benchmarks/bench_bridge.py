@@ -10,7 +10,7 @@ orjson: the floor of the picows transport), ``rcon`` (RCON's client on picows, t
 ``foxglove_js`` (npm ``@foxglove/roslibjs``, a rosbridge client despite its name), the last two in Node 20 over ``ws`` (``benchmarks/node``: installed with
 ``npm ci`` on first use when ``node`` and ``npm`` are on the PATH, else their columns are left out with a
 sentence), ``rcon_base`` with ``--base TREE`` (RCON's client from another source tree, e.g. a checkout of
-before this change, on asyncio's loop: "today's figures" in the same interleaved rounds), and ``rcon_asyncio`` on
+before this change, on the loop that tree's bridge thread runs, ``threaded.new_event_loop`` where it has one: "today's figures" in the same interleaved rounds), and ``rcon_asyncio`` on
 request (RCON on picows on asyncio's own event loop: ``rcon`` runs on
 the loop the app's bridge thread runs, uvloop where installed, see ``rcon_core/bridge/threaded.py``).
 
@@ -728,8 +728,14 @@ def run_client(kind: str, url: str, n: dict[str, int]) -> None:
 
         with asyncio.Runner(loop_factory=new_event_loop) as runner:
             runner.run(client_rcon(url, n, "websockets"))
-    elif kind == "rcon_base":
-        asyncio.run(client_rcon(url, n, None))
+    elif kind == "rcon_base":  # on the loop that tree's bridge thread runs, as the rcon column
+        sys.path.insert(0, os.environ[BASE_ENV])
+        try:
+            from rcon_core.bridge.threaded import new_event_loop as base_loop
+        except ImportError:  # a tree of before the bridge thread picked its loop
+            base_loop = asyncio.new_event_loop
+        with asyncio.Runner(loop_factory=base_loop) as runner:
+            runner.run(client_rcon(url, n, None))
     elif kind == "rcon_asyncio":
         asyncio.run(client_rcon(url, n, "picows"))
     elif kind == "bare_picows":

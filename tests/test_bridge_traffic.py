@@ -3,6 +3,8 @@ sim counting what came off its socket."""
 
 from __future__ import annotations
 
+import pytest
+
 from rcon_core.bridge.traffic import MAX_KEYS, OTHER, Traffic, TrafficRates, rate_text
 from rcon_core.testing import ManualClock, until
 
@@ -60,3 +62,44 @@ async def test_a_client_counts_what_its_subscriptions_cost(sim, client):
     # a JPEG frame is tens of kB, an odometry message a few hundred bytes
     assert cam[0] / cam[1] > 10_000 and 100 < odom[0] / odom[1] < 2_000
     assert client.traffic.total_bytes >= cam[0] + odom[0]
+
+
+@pytest.mark.usefixtures("transport")  # on each transport
+async def test_the_hot_path_counts_exact_sizes_per_topic_across_resubscribing_and_past_the_name_limit():
+    """Small publishes are counted where they are delivered (``receive.py``, the entry's ``tally`` row): the
+    bytes as they came off the socket, the same row after the topic was dropped and taken again, and under
+    ``(other topics)`` for a topic first seen once MAX_KEYS names are kept."""
+    import orjson
+
+    from rcon_core.loopback import HostileServer
+    from rcon_core.testing import connected
+
+    def frame(topic: str, i: int) -> bytes:
+        return orjson.dumps({"op": "publish", "topic": topic, "msg": {"i": i}})
+
+    async with HostileServer() as srv, connected(srv.url) as client:
+        got: list = []
+        node = client.node("n")
+        node.subscribe("/a", got.append)
+        await srv.wait_for("subscribe", topic="/a")
+        for i in range(3):
+            await srv.send(frame("/a", i), text=True)
+        await until(lambda: len(got) == 3)
+        assert client.traffic.snapshot()[1]["/a"] == (3 * len(frame("/a", 0)), 3)
+        node.close()
+        await srv.wait_for("unsubscribe", topic="/a")
+        node = client.node("m")
+        node.subscribe("/a", got.append)
+        await srv.wait_for("subscribe", topic="/a", count=2)
+        await srv.send(frame("/a", 7), text=True)
+        await until(lambda: len(got) == 4)
+        assert client.traffic.snapshot()[1]["/a"] == (4 * len(frame("/a", 0)), 4)
+        for k in range(MAX_KEYS):
+            client.traffic.count_name(f"/filler{k}", 1)
+        node.subscribe("/b", got.append)
+        await srv.wait_for("subscribe", topic="/b")
+        before = client.traffic.snapshot()[1][OTHER]
+        await srv.send(frame("/b", 1), text=True)
+        await until(lambda: len(got) == 5)
+        counts = client.traffic.snapshot()[1]
+        assert "/b" not in counts and counts[OTHER] == (before[0] + len(frame("/b", 1)), before[1] + 1)

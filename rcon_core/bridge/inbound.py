@@ -1,8 +1,8 @@
 """Frames in: the hot path, frame decoding, fragments, ``png`` frames and bad-frame accounting.
 
 Decision: the hot path
-    Per message: one ``orjson.loads`` straight from the transport's buffer (CBOR for binary frames), a few
-    dict lookups and a direct call of the topic's ``fast`` function -- for a topic with one consumer, its
+    Per message: one ``orjson.loads`` of the message's bytes (CBOR for binary frames), a few dict lookups,
+    two additions to the topic's traffic row and a direct call of the topic's ``fast`` function -- for a topic with one consumer, its
     callback -- all inside the transport's callback (:meth:`Inbound.take`, fed by ``receive.py``).
     Everything unusual (other ops, unknown topics, malformed frames) takes the slow path
     (:meth:`Inbound.other`), which unwraps ``fragment`` and ``png`` frames and hands every op to the

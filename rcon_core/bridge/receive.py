@@ -1,9 +1,13 @@
 """Messages in from a transport adapter (``pwlink.py``, ``wslink.py``), in order, on the event loop.
 
 Decision: messages are pushed, and most are finished in the callback that brought them
-    An adapter calls :meth:`Receiver.message` for every whole message as its parser finds it (a view into
-    the read buffer for picows, valid during the call only) and says when a read's last message came
-    (``last``).  The Receiver hands it to :meth:`Inbound.take <rcon_core.bridge.inbound.Inbound.take>`,
+    An adapter calls :meth:`Receiver.message` for every whole message as its parser finds it (bytes, or
+    for picows' binary messages a view into its read buffer, valid during the call only) and says when a
+    read's messages are all in (``last`` with the read's last message, or :meth:`Receiver.read_done` after
+    the read: picows' adapter, one argument less per message).  On picows the Receiver is called straight
+    from the parser for a whole text frame (:meth:`Receiver.frame_callback`, installed as the listener's
+    ``on_ws_frame``: the same steps as :meth:`Receiver.message`'s hot path, without the listener's call in
+    between).  The Receiver hands it to :meth:`Inbound.take <rcon_core.bridge.inbound.Inbound.take>`,
     which parses and delivers a small publish at once.  What needs to wait -- a frame decoded in the
     worker thread (``offload.py``), a frame of a latest-only topic looking for a newer one
     (``latest.py``), a big message completed by fragments -- comes back as an awaitable: the Receiver
@@ -61,7 +65,7 @@ class Receiver:
     """One connection's messages in (see the module docstring).  ``take(raw, text)`` and
     ``heavy`` come from the client's ``Inbound``; the adapter sets ``pause``, ``resume`` and ``fail``."""
 
-    __slots__ = ("take", "deliver", "topics", "traffic", "counts", "failed", "heavy", "held", "busy", "n", "started", "check", "paused",
+    __slots__ = ("take", "deliver", "topics", "traffic", "failed", "heavy", "held", "busy", "n", "started", "check", "paused",
                  "pause", "resume", "fail", "task", "closed", "flood")
 
     def __init__(self, inbound: Any) -> None:
@@ -69,7 +73,6 @@ class Receiver:
         self.deliver: Callable[[Any], Awaitable[None] | None] = inbound.deliver
         self.topics: dict[str, Any] = inbound.topics
         self.traffic = inbound.traffic  # bytes in by topic (``traffic.py``), counted here on the hot path
-        self.counts: dict[str, list[int]] = inbound.traffic.counts
         self.failed: Callable[[BaseException], None] = inbound.bad.failed
         self.heavy: int = inbound.heavy
         self.held: deque[tuple[bytes | str, bool]] = deque()
@@ -96,8 +99,10 @@ class Receiver:
     def message(self, raw: Any, text: bool, last: bool) -> None:
         """One whole message (``raw``: bytes-like, a text message's UTF-8 bytes unchecked; valid only during
         this call); ``last``: the last one of this read.  The hot path: a small text message is parsed and,
-        when it is a publish of a subscribed topic, delivered here (``Inbound.take`` and ``Inbound.deliver``
-        inlined: one call less per message); everything else goes through ``Inbound.take``."""
+        when it is a publish of a subscribed topic, counted (the entry's ``tally``, ``traffic.py``) and
+        delivered here (``Inbound.take`` and ``Inbound.deliver`` inlined: one call less per message); the
+        turn's clock is read only past ``check`` (:meth:`_spent`); everything else goes through
+        :meth:`_other`."""
         if self.busy:
             held = self.held
             held.append((raw if raw.__class__ is bytes else bytes(raw), text))
@@ -107,45 +112,105 @@ class Receiver:
         else:
             n = self.n = self.n + 1
             size = len(raw)
-            if size < self.heavy:
-                if n > self.check and self._spent():
-                    self._yield(raw, text)
-                elif text:
+            if text and size < self.heavy and (n <= self.check or not self._spent()):
+                try:
+                    m = _loads(raw)
+                except JSONDecodeError:
+                    self._start(self._take(raw, text))
+                else:
+                    try:
+                        entry = self.topics[m["topic"]] if m["op"] == "publish" else None
+                        msg = m["msg"]
+                    except (KeyError, TypeError):
+                        entry = None
+                    if entry is not None and msg.__class__ is dict:
+                        c = entry.tally
+                        if c is None:  # the topic's first message: its row of the traffic counts
+                            c = entry.tally = self.traffic.row(entry.topic)
+                        c[0] += size
+                        c[1] += 1
+                        try:
+                            entry.fast(msg)
+                        except Exception:
+                            entry.callback_failed()
+                    else:
+                        self._slow(m, size)
+            else:
+                self._other(raw, text, n, size)
+        if last:
+            self.read_done()
+
+    def frame_callback(self, text_type: Any, other: Callable[[Any, Any], None]) -> Callable[[Any, Any], None] | None:
+        """picows' per-frame callback bound straight to this Receiver (``pwlink.py`` installs it as its
+        listener's ``on_ws_frame``): :meth:`message`'s hot path with the listener's step folded in, one
+        Python call a message
+        less: about 0.1 us a small message in A/B floods of a million).  A whole small text frame of a subscribed topic's publish is
+        parsed, counted and delivered here; every other frame, and every frame while this Receiver holds
+        messages, goes to ``other`` (the listener's own ``on_ws_frame``, which calls :meth:`message`).  The
+        steps are :meth:`message`'s, in the same order: keep the two in step (every bridge test runs on both
+        transports).  ``frame`` is duck-typed (``msg_type``, ``fin``, ``get_payload_as_bytes``): this
+        module does not import picows."""
+        topics = self.topics
+        heavy = self.heavy
+        row = self.traffic.row
+        spent = self._spent
+        r = self
+
+        def on_frame(transport: Any, frame: Any) -> None:
+            if frame.msg_type is text_type and frame.fin and not r.busy:
+                raw = frame.get_payload_as_bytes()
+                n = r.n = r.n + 1
+                size = len(raw)
+                if size < heavy and (n <= r.check or not spent()):
                     try:
                         m = _loads(raw)
                     except JSONDecodeError:
-                        self._start(self._take(raw, text))
-                    else:
+                        r._start(r._take(raw, True))
+                        return
+                    try:
+                        entry = topics[m["topic"]] if m["op"] == "publish" else None
+                        msg = m["msg"]
+                    except (KeyError, TypeError):
+                        entry = None
+                    if entry is not None and msg.__class__ is dict:
+                        c = entry.tally
+                        if c is None:  # the topic's first message: its row of the traffic counts
+                            c = entry.tally = row(entry.topic)
+                        c[0] += size
+                        c[1] += 1
                         try:
-                            topic = m["topic"] if m["op"] == "publish" else None
-                            entry = self.topics[topic] if topic is not None else None
-                            msg = m["msg"]
-                        except (KeyError, TypeError):
-                            entry = None
-                        if entry is not None and msg.__class__ is dict:
-                            c = self.counts.get(topic)  # type: ignore[arg-type]  # Traffic.count_name inlined
-                            if c is None:
-                                self.traffic.count_name(topic, size)
-                            else:
-                                c[0] += size
-                                c[1] += 1
-                            try:
-                                entry.fast(msg)
-                            except Exception:
-                                entry.callback_failed()
-                        else:
-                            self._slow(m, size)
+                            entry.fast(msg)
+                        except Exception:
+                            entry.callback_failed()
+                    else:
+                        r._slow(m, size)
                 else:
-                    self._start(self._take(raw, text))
-            elif n > 1:
+                    r._other(raw, True, n, size)
+            else:
+                other(transport, frame)
+
+        return on_frame
+
+    def read_done(self) -> None:
+        """The read's messages are all in (:meth:`message` with ``last``, or the transport says so after
+        each read: picows' adapter, one argument less per message): the next read is a new turn."""
+        self.flood = self.n >= YIELD_EVERY or self.busy
+        self.n = 0
+        self.check = YIELD_EVERY
+        self.started = 0.0
+
+    def _other(self, raw: Any, text: bool, n: int, size: int) -> None:
+        """Not the hot path: a big message (``heavy`` or more: a turn of its own), a binary one, or a small
+        text message once the turn's budget is spent (:meth:`message` read the clock then)."""
+        if size >= self.heavy:
+            if n > 1:
                 self._yield(raw, text)
             else:
                 self._start(self._take(raw, text))
-        if last:
-            self.flood = self.n >= YIELD_EVERY or self.busy
-            self.n = 0
-            self.check = YIELD_EVERY
-            self.started = 0.0
+        elif text or (n > self.check and self._spent()):
+            self._yield(raw, text)
+        else:
+            self._start(self._take(raw, text))
 
     def _slow(self, m: Any, size: int) -> None:
         """A parsed message that is not a publish of a subscribed topic: counted, then ``Inbound.deliver``."""

@@ -50,7 +50,7 @@ class TopicEntry:
     """The client's one subscription to a topic, fanned out to every node's callback."""
 
     __slots__ = ("topic", "subs", "deliver", "fast", "sid", "sent_options", "raw_type", "decoder", "received",
-                 "report", "latest_only", "skipped", "raw_subs", "cooked_subs")
+                 "report", "latest_only", "skipped", "raw_subs", "cooked_subs", "tally")
 
     def __init__(self, topic: str, report: Callable[[str, str], None]) -> None:
         self.report = report  # ``report(kind, message)``: a payload that cannot be decoded (a bad frame)
@@ -73,6 +73,9 @@ class TopicEntry:
         #: consumer (no wrapper frame per message), else the same as ``deliver``.
         self.deliver: Callable[[Any], None] = self._deliver_none
         self.fast: Callable[[Any], None] = self._deliver_none
+        #: the topic's row of the connection's traffic counts (``Traffic.row``: ``[bytes, frames]``), which
+        #: the read loop adds to; set by the read loop at the topic's first message
+        self.tally: list[int] | None = None
 
     # --- options ---------------------------------------------------------------------------------
 

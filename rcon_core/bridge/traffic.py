@@ -2,7 +2,8 @@
 
 Decision: counted where messages come in, read by anyone
     :class:`Traffic` is written only on the bridge's loop as messages come in (``receive.py``,
-    ``inbound.py``; on the hot path the count is inlined: a dict lookup and two additions), by the frame's
+    ``inbound.py``; on the hot path the count is inlined: two additions to the topic's row, which its
+    ``TopicEntry`` keeps as ``tally``, no dict lookup), by the frame's
     size as it came off the socket (JSON text or CBOR, before decoding; a frame skipped as stale is counted too: it crossed the link). Publishes count under their
     topic, everything else under its op in brackets (``(fragment)``, ``(service_response)``...). At most
     :data:`MAX_KEYS` names are kept; the rest add up under ``(other topics)``, so a server inventing topic
@@ -52,13 +53,20 @@ class Traffic:
         self.count_name(key if isinstance(key, str) else "(other)", size)
 
     def count_name(self, key: str | None, size: int) -> None:
-        entry = self.counts.get(key or "(other)")
+        entry = self.row(key or "(other)")
+        entry[0] += size
+        entry[1] += 1
+
+    def row(self, key: str) -> list[int]:
+        """The ``[bytes, frames]`` that ``key``'s frames are added to (:data:`OTHER`'s once :data:`MAX_KEYS`
+        names are kept).  The hot path keeps a topic's row on its ``TopicEntry`` (``tally``) and adds to it
+        in place: no dict lookup per message."""
+        entry = self.counts.get(key)
         if entry is None:
             if len(self.counts) >= MAX_KEYS:
                 key = OTHER
-            entry = self.counts.setdefault(key or "(other)", [0, 0])
-        entry[0] += size
-        entry[1] += 1
+            entry = self.counts.setdefault(key, [0, 0])
+        return entry
 
     def snapshot(self) -> tuple[int, dict[str, tuple[int, int]]]:
         """``(total bytes, {name: (bytes, frames)})`` now (any thread)."""

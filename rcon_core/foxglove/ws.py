@@ -38,7 +38,6 @@ from collections.abc import Callable
 from typing import Any
 
 from rcon_core.bridge.errors import LinkClosedError, NotUtf8
-from rcon_core.bridge.inbound import YIELD_EVERY
 from rcon_core.bridge.latest import MIN_SIZE
 from rcon_core.bridge.linkbase import Link
 from rcon_core.bridge.receive import Receiver
@@ -58,7 +57,6 @@ class _Counts:
         self.take = take
         self.deliver = _nothing
         self.topics: dict[str, Any] = {}
-        self.counts: dict[str, list[int]] = {}
         self.traffic = self
         self.bad = self
         self.failed = failed
@@ -103,6 +101,11 @@ class FoxgloveReceiver(Receiver):
         else:
             self.busy = False
 
+    def frame_callback(self, text_type: Any, other: Callable[[Any, Any], None]) -> None:
+        """None: picows' listener calls :meth:`message` for every frame (the rosbridge hot path is not this
+        link's)."""
+        return None
+
     def message(self, raw: Any, text: bool, last: bool) -> None:
         """One whole message (see ``Receiver.message``); the hot path hands it to the session at once."""
         if self.busy:
@@ -119,11 +122,7 @@ class FoxgloveReceiver(Receiver):
             except Exception as exc:  # the frame boundary: one frame never ends the link
                 self.failed(exc)
         if last:
-            self.flood = self.n >= YIELD_EVERY or self.busy
-            self.n = 0
-            self.check = YIELD_EVERY
-            self.started = 0.0
-
+            self.read_done()
 
 async def open_connection(transport: str, url: str, subprotocols: list[str] | None, receiver: Any,
                           on_stale: Callable[[Any], None], *, ssl_context: ssl.SSLContext | None,
