@@ -1,0 +1,62 @@
+"""What a first-time operator met walking through the merged app on a 1024x600 tablet, against the sim: each
+test holds one thing found that way (it failed before its fix)."""
+
+from __future__ import annotations
+
+import pytest
+from app_helpers import TIMEOUT_MS, all_sent, tap, window_session
+from qtpy import QtCore
+from qtpy.QtTest import QTest
+
+from rcon_core.canvas import Binding, Geometry
+from rcon_core.plugins import Role
+
+pytest.importorskip("rcon_widgets_sensors")
+
+pytestmark = pytest.mark.usefixtures("qapp")
+LEFT = QtCore.Qt.MouseButton.LeftButton
+
+
+@pytest.fixture
+def window(qtbot, tmp_path, sim_url, plugins):
+    yield from window_session(qtbot, tmp_path / "cfg", plugins, url=sim_url, size=(1024, 600),
+                              wait_connected=True)
+
+
+def place_pad(window, qtbot):
+    spec = window.plugins.widget("sensors.teleop")
+    w = window.doc.add_widget(window.controller.canvas.id, "sensors.teleop",
+                              Binding("/cmd_vel", "geometry_msgs/Twist", Role.PUBLISH), Geometry(16, 16, 272, 320),
+                              spec.settings_to_dict(spec.make_settings({"max_linear": 1.0})), "Drive")
+    hosted = window.host.hosted[w.id]
+    qtbot.waitUntil(lambda: hosted.view is not None and hosted.view.isVisible(), timeout=TIMEOUT_MS)
+    return hosted.view
+
+
+def test_going_to_edit_mode_with_a_finger_on_the_pad_stops_the_robot(window, qtbot, sim_thread):
+    """A finger drives the pad; another taps *Edit*. The canvas is no longer operated (a shield now covers
+    the pad), so the robot gets a zero at once and nothing more while the finger stays down -- before, the
+    pad went on driving in Edit mode until the finger lifted."""
+    sim = sim_thread
+    pad = place_pad(window, qtbot)
+    tap(window.lock_button)  # Operate
+    qtbot.waitUntil(lambda: window.controller.canvas.locked, timeout=TIMEOUT_MS)
+    centre, radius = pad.pad()
+    c = centre.toPoint()
+    QTest.mousePress(pad, LEFT, pos=c)
+    QTest.mouseMove(pad, c - QtCore.QPoint(0, int(radius * 0.8)))
+    sim.wait_for_published_sync("/cmd_vel", lambda m: m["linear"]["x"] > 0.3, timeout=10)
+
+    driven = len(sim.published("/cmd_vel"))
+    tap(window.edit_button)  # the other finger
+    assert not window.controller.canvas.locked
+    qtbot.waitUntil(lambda: any(m["linear"]["x"] == 0.0 for m in sim.published("/cmd_vel")[driven:]),
+                    timeout=TIMEOUT_MS)
+    all_sent(qtbot, window, sim)
+    sent = len(sim.published("/cmd_vel"))
+    QTest.mouseMove(pad, c - QtCore.QPoint(0, int(radius * 0.9)))  # the first finger still moves on the pad
+    QTest.qWait(300)  # the pad streams at 10 Hz or more while driven: three periods
+    all_sent(qtbot, window, sim)
+    assert len(sim.published("/cmd_vel")) == sent
+    assert sim.published("/cmd_vel")[-1]["linear"]["x"] == 0.0
+    QTest.mouseRelease(pad, LEFT, pos=c)
