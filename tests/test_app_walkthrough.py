@@ -4,8 +4,8 @@ test holds one thing found that way (it failed before its fix)."""
 from __future__ import annotations
 
 import pytest
-from app_helpers import TIMEOUT_MS, all_sent, tap, window_session
-from qtpy import QtCore
+from app_helpers import TIMEOUT_MS, all_sent, settle, tap, window_session
+from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
 from rcon_core.canvas import Binding, Geometry
@@ -60,3 +60,29 @@ def test_going_to_edit_mode_with_a_finger_on_the_pad_stops_the_robot(window, qtb
     assert len(sim.published("/cmd_vel")) == sent
     assert sim.published("/cmd_vel")[-1]["linear"]["x"] == 0.0
     QTest.mouseRelease(pad, LEFT, pos=c)
+
+
+def test_the_configure_dialog_of_a_teleop_pad_fits_a_600_px_tablet_and_ok_can_be_tapped(window, qtbot):
+    """Long-press → *Configure…* on the Drive pad of a 1024x600 tablet: the pad has a dozen settings, and the
+    dialog grew to their full height (729 px), its OK and Cancel below the screen's edge, out of a finger's
+    reach. It now fits the window, the settings scroll, and OK is tapped where it is."""
+    pad = place_pad(window, qtbot)
+    widget_id = next(w.id for w in window.controller.canvas.widgets if window.host.hosted[w.id].view is pad)
+    frame = window.controller.surface.frames[widget_id]
+    menu = frame.request_menu(frame.mapToGlobal(QtCore.QPoint(10, 10)))
+    [configure] = [a for a in menu.actions() if a.objectName() == "configure"]
+    configure.trigger()
+    menu.close()
+    dialog = window.configurer.dialog
+    qtbot.waitUntil(dialog.isVisible, timeout=TIMEOUT_MS)
+    settle()
+    screen = QtCore.QRect(window.mapToGlobal(QtCore.QPoint(0, 0)), window.size())  # the tablet's whole screen
+    buttons = dialog.findChild(QtWidgets.QDialogButtonBox)
+    ok = buttons.button(QtWidgets.QDialogButtonBox.StandardButton.Ok)
+    assert dialog.frameGeometry().height() <= screen.height(), dialog.frameGeometry()
+    assert screen.contains(QtCore.QRect(ok.mapToGlobal(QtCore.QPoint(0, 0)), ok.size())), ok.geometry()
+    title = dialog.findChild(QtWidgets.QLineEdit, "configureTitle")
+    title.setText("Drive A")
+    tap(ok)
+    qtbot.waitUntil(lambda: not dialog.isVisible(), timeout=TIMEOUT_MS)
+    assert window.controller.canvas.widget(widget_id).title == "Drive A"
