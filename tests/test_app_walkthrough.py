@@ -86,3 +86,23 @@ def test_the_configure_dialog_of_a_teleop_pad_fits_a_600_px_tablet_and_ok_can_be
     tap(ok)
     qtbot.waitUntil(lambda: not dialog.isVisible(), timeout=TIMEOUT_MS)
     assert window.controller.canvas.widget(widget_id).title == "Drive A"
+
+
+def test_the_pin_keypad_keys_never_lie_over_each_other_on_a_600_px_tablet(window, qtbot):
+    """*Canvas ▾ → Operator PIN…* on a 1024x600 window: Qt sized the dialog to its layout's minimum, reckoned
+    for the prompt on wider lines than it gets, so each keypad row lay over the one above ("4" over "1"),
+    a finger aiming at "1" hitting "4". Every key now has its own place, and OK is in the window."""
+    window.canvas_actions["pin"].trigger()
+    dialog = window.operator_lock.dialog
+    qtbot.waitUntil(lambda: dialog is not None and dialog.isVisible(), timeout=TIMEOUT_MS)
+    settle()
+    keys = [dialog.keys[k] for k in "123456789⌫0"]
+    for i, a in enumerate(keys):
+        for b in keys[i + 1:]:
+            assert not a.geometry().intersects(b.geometry()), (a.text(), a.geometry(), b.text(), b.geometry())
+    screen = QtCore.QRect(window.mapToGlobal(QtCore.QPoint(0, 0)), window.size())
+    assert screen.contains(QtCore.QRect(dialog.ok.mapToGlobal(QtCore.QPoint(0, 0)), dialog.ok.size()))
+    for key in "2580":
+        tap(dialog.keys[key])
+    assert dialog.field.text() == "2580"
+    dialog.reject()

@@ -18,6 +18,7 @@ import attrs
 from qtpy import QtCore, QtWidgets
 
 from rcon_core.app.choosers import FieldChooser
+from rcon_core.app.dialog_fit import room_for
 from rcon_core.app.envelope_dialog import ask_beyond, beyond_envelope
 from rcon_core.app.settings_form import SettingsForm, form_label, tune_form
 from rcon_core.canvas import Document
@@ -171,13 +172,7 @@ def _fit_to_window(dialog: QtWidgets.QDialog, scroll: QtWidgets.QScrollArea, bod
                    parent: QtWidgets.QWidget) -> None:
     """Size ``dialog`` to show all of ``body`` when the window (and the screen) has the room, else as tall as
     the window, the settings scrolling; never wider than the window."""
-    window = parent.window()
-    screen = window.screen()
-    room = window.size()
-    if screen is not None:
-        room = room.boundedTo(screen.availableGeometry().size())
-    frame = window.frameGeometry().size() - window.size()  # the dialog's frame is as thick as the window's
-    room = QtCore.QSize(room.width() - frame.width(), room.height() - frame.height())
+    room = room_for(parent)
     bar = scroll.verticalScrollBar().sizeHint().width()
     layout = dialog.layout()
     margins = layout.contentsMargins().left() + layout.contentsMargins().right() if layout is not None else 0
