@@ -3,6 +3,11 @@ test holds one thing found that way (it failed before its fix)."""
 
 from __future__ import annotations
 
+import json
+import os
+import subprocess
+import sys
+
 import pytest
 from app_helpers import TIMEOUT_MS, all_sent, settle, tap, window_session
 from qtpy import QtCore, QtWidgets
@@ -106,3 +111,24 @@ def test_the_pin_keypad_keys_never_lie_over_each_other_on_a_600_px_tablet(window
         tap(dialog.keys[key])
     assert dialog.field.text() == "2580"
     dialog.reject()
+
+
+def test_on_a_real_1024x600_screen_the_bar_leaves_out_rec_and_the_window_fits_at_200_percent(tmp_path):
+    """The tests open 1024x600 windows on Qt's offscreen screen, 800 px wide: below the 1000 px where the
+    connection bar leaves out its ● Rec button. On a real 1024x600 tablet the button was there: at 100 %
+    text the URL field shrank to "ws:…971" (no host left), and at 200 % the window grew to 1093 px, its
+    right edge (Operate, the bandwidth) past the screen. Run here on a 1024x600 screen."""
+    pytest.importorskip("rcon_widgets_std", reason="the demo layout wants the widget packages")
+    screen = tmp_path / "screen.json"
+    screen.write_text(json.dumps({"screens": [{"name": "tablet", "x": 0, "y": 0, "width": 1024, "height": 600,
+                                               "logicalDpi": 96, "logicalBaseDpi": 96, "dpr": 1}]}))
+    (tmp_path / "app.json").write_text(json.dumps({"text_size": 200}))
+    png = tmp_path / "tablet.png"
+    env = dict(os.environ, RCON_CONFIG_DIR=str(tmp_path), QT_QPA_PLATFORM=f"offscreen:configfile={screen}")
+    done = subprocess.run([sys.executable, "-m", "rcon_core.cli.main", "--demo", "--window-size", "1024x600",
+                           "--screenshot", str(png)], env=env, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    from qtpy import QtGui
+
+    picture = QtGui.QImage(str(png))
+    assert (picture.width(), picture.height()) == (1024, 600)
