@@ -132,3 +132,25 @@ def test_on_a_real_1024x600_screen_the_bar_leaves_out_rec_and_the_window_fits_at
 
     picture = QtGui.QImage(str(png))
     assert (picture.width(), picture.height()) == (1024, 600)
+
+
+def test_the_safety_envelope_dialog_shows_its_column_headings_whole_at_150_percent_text(window, qtbot):
+    """*Canvas ▾ → Safety envelope…* with the text at 150 %: the dialog kept its fixed 600 px minimum, below
+    what its headings need, so "Max angular (rad/s)" was cut at the dialog's edge. It now takes the width it
+    asks for (the window has the room)."""
+    from rcon_core.app.display_settings import set_display
+
+    set_display(window.config, None, text_size=150)
+    try:
+        settle()
+        dialog = window.envelope.open_dialog()
+        qtbot.waitUntil(dialog.isVisible, timeout=TIMEOUT_MS)
+        settle()
+        inside = dialog.contentsRect()
+        for label in dialog.findChildren(QtWidgets.QLabel):
+            if label.isVisible() and not label.wordWrap() and label.text():
+                at = QtCore.QRect(label.mapTo(dialog, QtCore.QPoint(0, 0)), label.size())
+                assert label.width() >= label.sizeHint().width() and inside.contains(at), (label.text(), at, inside)
+        dialog.reject()
+    finally:
+        set_display(window.config, None, text_size=100)
