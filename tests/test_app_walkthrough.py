@@ -154,3 +154,26 @@ def test_the_safety_envelope_dialog_shows_its_column_headings_whole_at_150_perce
         dialog.reject()
     finally:
         set_display(window.config, None, text_size=100)
+
+
+def test_the_connection_settings_dialog_shows_all_its_words_at_200_percent_text(window, qtbot):
+    """The lock button (connection settings) with the text at 200 %: Qt sized the dialog to two thirds of
+    the screen, and the note under the secret ("no credential store on this system: kept in memory until
+    RCON quits, ...") was cut after its second line. It now takes the size it asks for within the window."""
+    from rcon_core.app.display_settings import set_display
+
+    set_display(window.config, None, text_size=200)
+    try:
+        settle()
+        dialog = window.connection.open_settings()
+        qtbot.waitUntil(dialog.isVisible, timeout=TIMEOUT_MS)
+        settle()
+        inside = dialog.contentsRect()
+        for label in dialog.findChildren(QtWidgets.QLabel):
+            if label.isVisible() and label.text():
+                at = QtCore.QRect(label.mapTo(dialog, QtCore.QPoint(0, 0)), label.size())
+                needed = label.heightForWidth(label.width()) if label.wordWrap() else label.sizeHint().height()
+                assert label.height() >= needed and inside.contains(at), (label.text(), at, needed, inside)
+        dialog.reject()
+    finally:
+        set_display(window.config, None, text_size=100)
