@@ -21,8 +21,8 @@ from typing import Any
 from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app.bandwidth import BandwidthButton
-from rcon_core.app.dialog_fit import fit_to_window
 from rcon_core.app.config import AppConfig
+from rcon_core.app.dialog_fit import fit_to_window
 from rcon_core.app.elided_label import ElidedLabel
 from rcon_core.app.link import BadUrl, LinkSettings, RobotConnection, check_url
 from rcon_core.app.link_settings import LinkSettingsDialog
