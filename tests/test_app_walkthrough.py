@@ -40,16 +40,18 @@ def place_pad(window, qtbot):
 
 def test_going_to_edit_mode_with_a_finger_on_the_pad_stops_the_robot(window, qtbot, sim_thread):
     """A finger drives the pad; another taps *Edit*. The canvas is no longer operated (a shield now covers
-    the pad), so the robot gets a zero at once and nothing more while the finger stays down -- before, the
-    pad went on driving in Edit mode until the finger lifted."""
+    the pad), so the robot gets a zero at once, and the first finger, still on the pad (its touch goes on
+    reaching the pad), drives nothing more until it lifts -- before, the pad drove on in Edit mode. Back in
+    Operate, a finger put down anew drives."""
     sim = sim_thread
     pad = place_pad(window, qtbot)
     tap(window.lock_button)  # Operate
     qtbot.waitUntil(lambda: window.controller.canvas.locked, timeout=TIMEOUT_MS)
     centre, radius = pad.pad()
     c = centre.toPoint()
-    QTest.mousePress(pad, LEFT, pos=c)
-    QTest.mouseMove(pad, c - QtCore.QPoint(0, int(radius * 0.8)))
+    finger = QTest.createTouchDevice()
+    QTest.touchEvent(pad, finger).press(0, c, pad)
+    QTest.touchEvent(pad, finger).move(0, c - QtCore.QPoint(0, int(radius * 0.8)), pad)
     sim.wait_for_published_sync("/cmd_vel", lambda m: m["linear"]["x"] > 0.3, timeout=10)
 
     driven = len(sim.published("/cmd_vel"))
@@ -59,12 +61,25 @@ def test_going_to_edit_mode_with_a_finger_on_the_pad_stops_the_robot(window, qtb
                     timeout=TIMEOUT_MS)
     all_sent(qtbot, window, sim)
     sent = len(sim.published("/cmd_vel"))
-    QTest.mouseMove(pad, c - QtCore.QPoint(0, int(radius * 0.9)))  # the first finger still moves on the pad
-    QTest.qWait(300)  # the pad streams at 10 Hz or more while driven: three periods
+    QTest.touchEvent(pad, finger).move(0, c - QtCore.QPoint(0, int(radius * 0.9)), pad)  # it moves on
+    moved = c.y() - radius * 0.85
+    qtbot.waitUntil(lambda: pad._finger is not None and pad._finger.y() < moved,  # the pad took the move
+                    timeout=TIMEOUT_MS)
+    QTest.qWait(300)  # a driving pad streams at 10 Hz: three periods
     all_sent(qtbot, window, sim)
     assert len(sim.published("/cmd_vel")) == sent
     assert sim.published("/cmd_vel")[-1]["linear"]["x"] == 0.0
-    QTest.mouseRelease(pad, LEFT, pos=c)
+    QTest.touchEvent(pad, finger).release(0, c, pad)
+
+    tap(window.lock_button)
+    qtbot.waitUntil(lambda: window.controller.canvas.locked, timeout=TIMEOUT_MS)
+    again = len(sim.published("/cmd_vel"))
+    QTest.touchEvent(pad, finger).press(0, c, pad)
+    QTest.touchEvent(pad, finger).move(0, c - QtCore.QPoint(0, int(radius * 0.8)), pad)
+    qtbot.waitUntil(lambda: any(m["linear"]["x"] > 0.3 for m in sim.published("/cmd_vel")[again:]),
+                    timeout=TIMEOUT_MS)
+    QTest.touchEvent(pad, finger).release(0, c, pad)
+    qtbot.waitUntil(lambda: sim.published("/cmd_vel")[-1]["linear"]["x"] == 0.0, timeout=TIMEOUT_MS)
 
 
 def test_the_configure_dialog_of_a_teleop_pad_fits_a_600_px_tablet_and_ok_can_be_tapped(window, qtbot):
