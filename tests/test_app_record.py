@@ -116,7 +116,7 @@ def test_rcon_play_rejects_a_file_that_is_not_a_recording(tmp_path: Path, capsys
 
 
 def test_the_compact_control_of_a_small_screen_keeps_the_bar_no_wider(qtbot, tmp_path, plugins, sim_thread):
-    """On a screen below 1000 px the button is left out (Canvas ▾ → Record every robot starts and stops)
+    """On a screen below 1100 px the button is left out (Canvas ▾ → Record every robot starts and stops)
     and the short indicator takes the round-trip time's place while recording."""
     win = next(window_session(qtbot, tmp_path / "cfg", plugins, url=sim_thread.url, wait_connected=True,
                               size=(1280, 800)))

@@ -15,9 +15,10 @@ from collections.abc import Callable
 from typing import Any
 
 import attrs
-from qtpy import QtWidgets
+from qtpy import QtCore, QtWidgets
 
 from rcon_core.app.choosers import FieldChooser
+from rcon_core.app.dialog_fit import room_for
 from rcon_core.app.envelope_dialog import ask_beyond, beyond_envelope
 from rcon_core.app.settings_form import SettingsForm, form_label, tune_form
 from rcon_core.canvas import Document
@@ -97,7 +98,16 @@ class WidgetConfigurer:
             body_col.addWidget(form)
             _align_with(top, (field_label, title_label), form)
         body_col.addStretch(1)  # a taller dialog leaves the rows as they are
-        col.addWidget(body, 1)
+        # the settings scroll inside a dialog that fits the window: a pad's dozen settings made it 729 px
+        # tall, its OK and Cancel below a 600 px tablet's edge
+        scroll = QtWidgets.QScrollArea()
+        scroll.setObjectName("configureScroll")
+        scroll.setWidgetResizable(True)
+        scroll.setFrameShape(QtWidgets.QFrame.Shape.NoFrame)
+        scroll.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        scroll.setWidget(body)
+        QtWidgets.QScroller.grabGesture(scroll.viewport(), QtWidgets.QScroller.ScrollerGestureType.TouchGesture)
+        col.addWidget(scroll, 1)
         buttons = QtWidgets.QDialogButtonBox(
             QtWidgets.QDialogButtonBox.StandardButton.Ok | QtWidgets.QDialogButtonBox.StandardButton.Cancel
         )
@@ -154,7 +164,23 @@ class WidgetConfigurer:
 
         dialog.accepted.connect(apply)
         dialog.finished.connect(lambda _result: self.dialog_closed(dialog))
+        _fit_to_window(dialog, scroll, body, self.parent)
         dialog.open()
+
+
+def _fit_to_window(dialog: QtWidgets.QDialog, scroll: QtWidgets.QScrollArea, body: QtWidgets.QWidget,
+                   parent: QtWidgets.QWidget) -> None:
+    """Size ``dialog`` to show all of ``body`` when the window (and the screen) has the room, else as tall as
+    the window, the settings scrolling; never wider than the window."""
+    room = room_for(parent)
+    bar = scroll.verticalScrollBar().sizeHint().width()
+    layout = dialog.layout()
+    margins = layout.contentsMargins().left() + layout.contentsMargins().right() if layout is not None else 0
+    width = min(body.sizeHint().width() + bar + margins, room.width())
+    scroll.setMinimumWidth(min(body.sizeHint().width() + bar, width))
+    dialog.setMaximumSize(room)
+    wanted = dialog.sizeHint().height() - scroll.sizeHint().height() + body.sizeHint().height()
+    dialog.resize(width, min(wanted, room.height()))
 
 
 def _align_with(top: QtWidgets.QFormLayout, labels: tuple[QtWidgets.QLabel, ...], form: QtWidgets.QWidget) -> None:

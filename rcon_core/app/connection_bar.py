@@ -22,6 +22,7 @@ from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app.bandwidth import BandwidthButton
 from rcon_core.app.config import AppConfig
+from rcon_core.app.dialog_fit import fit_to_window
 from rcon_core.app.elided_label import ElidedLabel
 from rcon_core.app.link import BadUrl, LinkSettings, RobotConnection, check_url
 from rcon_core.app.link_settings import LinkSettingsDialog
@@ -256,6 +257,7 @@ class ConnectionBar(QtWidgets.QFrame):
         dialog = LinkSettingsDialog(url, self.config, self.secrets, self.window(), ask_secret=ask_secret)
         dialog.accepted.connect(lambda: self.connect_clicked())
         self.dialog = dialog
+        fit_to_window(dialog, self)  # every word of it, also at a large text size (dialog_fit.py)
         dialog.open()
         return dialog
 

@@ -26,6 +26,7 @@ import attrs
 from qtpy import QtGui, QtWidgets
 
 from rcon_core.app.canvas_bar import CanvasBar
+from rcon_core.app.dialog_fit import fit_to_window
 from rcon_core.app.notice_bar import NoticeBar
 from rcon_core.app.operator_lock import Guard
 from rcon_core.bridge.envelope import MAX_ANGULAR, MAX_LINEAR, Envelope
@@ -197,6 +198,7 @@ class EnvelopeControl:
         dialog.accepted.connect(apply)
         dialog.finished.connect(lambda _r: dialog.deleteLater())
         self.dialog = dialog
+        fit_to_window(dialog, self.parent)  # the width its headings ask for, not the 600 px floor
         dialog.open()
         return dialog
 

@@ -136,6 +136,15 @@ class LiveCanvas:
             models.update(self._rt.models)
         self._post(Reset(models))
 
+    def _dispatch(self, fn: Callable[[], Any]) -> Any:
+        """A model's GUI-side action (a finger lifted, a tap) to the loop thread. Once the app has stopped
+        the thread (quitting), every model has stopped and sent its stop: a view hidden or unfocused after
+        it (a finger still on the pad) has nothing to send, and raising here would escape a Qt handler."""
+        if not self.thread.running:
+            log.debug("a widget's action after the bridge thread stopped: dropped")
+            return None
+        return self.thread.call(fn)
+
     def _running_ids(self) -> set[str]:
         return set(self._rt.models) if self._rt is not None else set()
 
@@ -144,7 +153,7 @@ class LiveCanvas:
         if self._rt is not None:
             self._rt.stop()
         self._rt = CanvasRuntime(
-            self.plugins, client, types=self.types, plugin_settings=shared, dispatch=self.thread.call,
+            self.plugins, client, types=self.types, plugin_settings=shared, dispatch=self._dispatch,
             on_activity=self.notify, view_only=view_only,
         )
         self._rt.start(canvas)

@@ -429,6 +429,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.side_policy.set_locked(locked)
         if locked:
             self.add_panel.cancel()
+        elif not self._shut:  # Edit mode: the canvas is no longer operated (a shield covers each view), so a
+            self.live.focus_lost()  # pad held through the switch stops at once, not when its finger lifts
 
     # -------------------------------------------------------------------------------------- adding
     def rank_widgets(self, type_name: str, role: Role) -> list[Candidate]:

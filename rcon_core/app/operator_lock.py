@@ -30,6 +30,7 @@ from typing import Any
 from qtpy import QtCore, QtWidgets
 
 from rcon_core.app.config import AppConfig
+from rcon_core.app.dialog_fit import fit_to_window
 from rcon_core.app.pin import PIN_MAX, PIN_MIN, check_pin, make_record, needs_upgrade, pin_problem
 
 MAX_TRIES = 5
@@ -248,6 +249,7 @@ class OperatorLock(QtCore.QObject):
         self.dialog = dialog
         dialog.accepted.connect(lambda: then())
         dialog.finished.connect(lambda _r, d=dialog: self._closed(d))
+        fit_to_window(dialog, self.window)  # the keypad whole on a 600 px tablet (dialog_fit.py)
         dialog.open()
         dialog.field.setFocus()
         return dialog

@@ -2,8 +2,8 @@
 
 A button ("● Rec"; also Canvas ▾ → Record every robot) and, while recording, an indicator:
 ``REC 01:23 · 45.6 MB`` (red), the time and the size on disk of every file, updated once a second from the
-frame clock. On a screen narrower than 1000 px the bar has no room for more: the button is left out (the
-menu starts and stops), and the indicator, ``REC 01:23`` (the size in its tooltip), takes the round-trip
+frame clock. On a screen narrower than 1100 px (a 1024x600 tablet) the bar has no room for more: the button is left
+out (the menu starts and stops), and the indicator, ``REC 01:23`` (the size in its tooltip), takes the round-trip
 time's place while recording. Each robot gets its own MCAP file
 in the recordings folder (``AppConfig.dir / "recordings"`` unless ``RecordControl.directory`` is
 set): the topics every canvas's widgets show, and on ``/rcon/operator/...`` every publish, call and
@@ -45,7 +45,7 @@ log = logging.getLogger(__name__)
 __all__ = ["RecordControl", "install_record_control", "COMPACT_BELOW"]
 
 #: a screen narrower than this gets the compact control (a 1024x600 tablet has room for the button)
-COMPACT_BELOW = 1000
+COMPACT_BELOW = 1100  # as the side panel's: at 1024 px the button left the URL field "ws:…971"
 
 
 def _clock(seconds: float) -> str:

@@ -349,11 +349,13 @@ class TeleopModel(WidgetModel):
         self._dispatch(lambda: self._on_release(reason, unlock=True))
 
     def on_focus_lost(self) -> None:
-        """The app says the operator's attention left (window inactive, canvas switched): stop now.
+        """The app says the operator's attention left (window inactive, the canvas put in Edit mode): stop
+        now, and a finger still on the pad drives nothing more until it lifts (its touch keeps reaching the
+        pad: its next move drove again).
 
         Called by the canvas runtime even when no view of this pad had keyboard focus.
         """
-        self.release("focus lost")
+        self._dispatch(lambda: self._force_release("focus lost"))
 
     # -- loop thread ----------------------------------------------------------------------------------
     def _group(self) -> _Group:

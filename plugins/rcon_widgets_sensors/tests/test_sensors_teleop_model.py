@@ -149,6 +149,31 @@ async def test_runtime_focus_lost_sends_one_zero_then_silence(sim, client):
         model.stop()
 
 
+async def test_runtime_focus_lost_holds_the_pad_until_the_finger_lifts(sim, client):
+    """Focus lost (or Edit mode) while a finger is still on the pad: the touch keeps going to the pad, and
+    its next move drove the robot again. Now the pad stays stopped until that finger lifts; the next touch
+    drives."""
+    rx, clock = Receiver(sim), ManualClock()
+    model = pad(client, clock=clock)
+    model.start()
+    try:
+        model.set_axes(0.0, 0.8)
+        await ticking_until(clock, lambda: rx.got, "driving")
+        t = time.monotonic()
+        model.on_focus_lost()
+        await until(lambda: rx.first_zero_since(t)[0], 2.0, "the zero on focus loss")
+        model.set_axes(0.0, 0.9)  # the same finger moves on
+        await tick(clock, 0.4)
+        await rx.barrier(client)
+        assert rx.first_zero_since(t)[1] == []
+        model.release()  # it lifts; the next touch drives
+        model.set_axes(0.0, 0.8)
+        await ticking_until(clock, lambda: len(rx.first_zero_since(t)[1]) > 0, "driving after the lift")
+        model.release()
+    finally:
+        model.stop()
+
+
 async def test_stop_sends_zero_and_locks_until_lift(sim, client):
     rx, clock = Receiver(sim), ManualClock()
     model = pad(client, clock=clock)
