@@ -143,6 +143,23 @@ async def test_fibonacci_goal_runs_to_success_with_feedback(client, types):
     model.stop()
 
 
+async def test_a_goal_sent_while_the_link_is_down_fails_at_once_and_is_not_kept(client, types):
+    """As a service call tapped while the link is down (tests/test_call_while_link_down.py): the goal is
+    not kept to reach the robot when the link comes back; sent again with the link up, it runs."""
+    model = ActionModel(ActionSettings(), Binding(FIB, FIB_TYPE, Role.ACTION), client.node("w5"), types=types)
+    model.start()
+    model.set_link(False)  # the runtime says the robot's link is down
+    model.send({"order": "3"})
+    await until(lambda: model.state.value is not None and model.state.value.final, what="the refusal")
+    assert model.state.value.phase == "failed" and "link is down" in model.state.value.text
+    assert model.state.value.result is None
+    model.set_link(True)
+    model.send({"order": "3"})
+    await until(lambda: model.state.value is not None and model.state.value.phase == "succeeded",
+                what="the goal sent with the link up")
+    model.stop()
+
+
 async def test_goal_to_a_missing_server_fails_not_succeeds(client, types):
     model = ActionModel(ActionSettings(), Binding("/nowhere", FIB_TYPE, Role.ACTION), client.node("w2"), types=types)
     model.start()

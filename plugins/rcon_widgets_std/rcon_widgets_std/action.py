@@ -372,6 +372,10 @@ class ActionModel(StdModel):
             self._goal.cancel()  # one goal at a time from one widget
         self._first_remaining = None
         b = self.binding
+        if self.state.link_down:  # a tap is the operator's intent now: never kept to reach the robot later
+            self._show(ActionStatus(GoalPhase.FAILED, "not sent: the robot's link is down (a goal is not kept "
+                                                      "to be sent when it comes back; send it again then)"))
+            return
         try:
             handle = self.port.send_action_goal(b.name, b.type, goal, feedback=self._on_feedback)
         except Exception as exc:
