@@ -415,8 +415,8 @@ class WidgetModel:
     async def _call_into(self, args: dict[str, Any] | None, fut: concurrent.futures.Future[Any]) -> None:
         try:
             if self._link_down:  # a tap is the operator's intent now: never kept to reach the robot later
-                raise NotConnectedError(f"not sent: the robot's link is down (a call is not kept to be sent "
-                                        f"when it comes back; tap again then)")
+                raise NotConnectedError("not sent: the robot's link is down (a call is not kept to be sent "
+                                        "when it comes back; tap again then)")
             response = await self.port.call_service(self.binding.name, args, timeout=self.call_timeout)
         except Exception as exc:
             self.set_error(f"call {self.binding.name} failed: {exc}")
