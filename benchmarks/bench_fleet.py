@@ -25,6 +25,7 @@ import json
 import os
 import re
 import resource
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -132,6 +133,67 @@ def proc_cpu_s(pid: int) -> float:
     with open(f"/proc/{pid}/stat") as f:
         fields = f.read().rsplit(")", 1)[1].split()
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+#: after the Record control is switched on or off, CPU is not counted for this long (s): the recorder's
+#: subscriptions change and its files open or close
+TOGGLE_SETTLE_S = 1.5
+
+
+def record_toggle(app: Any, window: Any, seconds: float, window_s: float) -> dict[str, Any]:
+    """The Record control off and on in turns (``window_s`` each, off first) for ``seconds``: the app's CPU
+    share (all threads, and by thread) in each state, counted from :data:`TOGGLE_SETTLE_S` after each switch
+    to the next. Both states see the same sims, load and drift, so the recorder's cost is the difference of
+    neighbours: ``pairs`` gives each (off, on) pair's increase, the figure is their median.
+
+    Returns ``{"pairs_increase_pct": [...], "increase_pct_median": x, "cpu_share": {"off": a, "on": b},
+    "by_thread": {"off": {...}, "on": {...}}, "record": {messages, dropped, ...}}``."""
+    control = window.record_control
+    spent: dict[str, list[tuple[float, float, dict[str, float]]]] = {"off": [], "on": []}
+    written = dropped = size = events = 0
+    files: list[str] = []
+    problems: list[str] = []
+    n = max(2, int(seconds // window_s) // 2 * 2)
+    for k in range(n):
+        state = "on" if k % 2 else "off"
+        if state == "on":
+            control.start()
+        ba.spin(app, TOGGLE_SETTLE_S)
+        w0, c0, t0 = time.perf_counter(), time.process_time(), thread_cpu_s()
+        ba.spin(app, max(0.5, window_s - TOGGLE_SETTLE_S))
+        w1, c1, t1 = time.perf_counter(), time.process_time(), thread_cpu_s()
+        spent[state].append((w1 - w0, c1 - c0, {name: t - t0.get(name, 0.0) for name, t in t1.items()}))
+        if state == "on" and control.recording is not None:
+            rec = control.recording
+            control.stop()
+            status = rec.status()
+            written += status.messages
+            dropped += status.dropped
+            size += status.size
+            events += status.events
+            files.extend(status.files)
+            if status.problem:
+                problems.append(status.problem)
+
+    def share(rows: list[tuple[float, float, dict[str, float]]]) -> float:
+        return sum(cpu for _w, cpu, _t in rows) / sum(w for w, _c, _t in rows)
+
+    def by_thread(rows: list[tuple[float, float, dict[str, float]]]) -> dict[str, float]:
+        wall = sum(w for w, _c, _t in rows)
+        names = {name for _w, _c, t in rows for name in t}
+        out = {name: round(sum(t.get(name, 0.0) for _w, _c, t in rows) / wall, 3) for name in names}
+        return dict(sorted(((k, v) for k, v in out.items() if v >= 0.002), key=lambda kv: -kv[1]))
+
+    pairs = [round((on[1] / on[0]) / (off[1] / off[0]) * 100 - 100, 1)
+             for off, on in zip(spent["off"], spent["on"], strict=True)]
+    off, on = share(spent["off"]), share(spent["on"])
+    return {"window_s": window_s, "pairs": len(pairs), "pairs_increase_pct": pairs,
+            "increase_pct_median": round(statistics.median(pairs), 1),
+            "cpu_share": {"off": round(off, 3), "on": round(on, 3)},
+            "increase_pct_pooled": round((on / off - 1) * 100, 1),
+            "by_thread": {"off": by_thread(spent["off"]), "on": by_thread(spent["on"])},
+            "record": {"messages_written": written, "dropped": dropped, "bytes_on_disk": size,
+                       "operator_events": events, "files": files, "problem": "; ".join(problems) or None}}
 
 
 def run(args: Any) -> dict:
@@ -265,9 +327,11 @@ def run(args: Any) -> dict:
 
         window.clock._consumers.insert(0, measure_tick)
         recording = os.environ.get("BENCH_RECORD_DIR")  # bench_record.py: the Record control on meanwhile
+        toggle = float(os.environ.get("BENCH_RECORD_TOGGLE", "0") or 0)  # bench_record.py: on and off in turns
         if recording:
             window.record_control.directory = Path(recording)
-            window.record_control.start()
+            if not toggle:
+                window.record_control.start()
         before = sim_stats()
         sim_cpu0 = [proc_cpu_s(pid) for _, _, pid in sims]
         threads0 = thread_cpu_s()
@@ -281,10 +345,29 @@ def run(args: Any) -> dict:
 
             profiler = cProfile.Profile()
             profiler.enable()
-        ba.spin(app, args.seconds)
+        loop_profiler = None
+        if os.environ.get("BENCH_PROFILE_BRIDGE"):  # diagnosis: cProfile of the bridge loop thread
+            import cProfile
+
+            loop_profiler = cProfile.Profile()
+            bt.loop.call_soon_threadsafe(loop_profiler.enable)
+        if recording and toggle:
+            figures["record_toggle"] = record_toggle(app, window, args.seconds, toggle)
+        else:
+            ba.spin(app, args.seconds)
         if profiler is not None:
             profiler.disable()
             profiler.dump_stats(os.environ["BENCH_PROFILE"])
+        if loop_profiler is not None:
+            done = __import__("threading").Event()
+
+            def stop_profile() -> None:
+                loop_profiler.disable()
+                done.set()
+
+            bt.loop.call_soon_threadsafe(stop_profile)
+            done.wait(5)
+            loop_profiler.dump_stats(os.environ["BENCH_PROFILE_BRIDGE"])
         check.stop()
         probes.stop()
         gc.callbacks.remove(gc_watch)
@@ -299,7 +382,7 @@ def run(args: Any) -> dict:
         QTest.mouseRelease(pad, QtCore.Qt.MouseButton.LeftButton, pos=c)
         window.removeEventFilter(probe)
         figures["load_average_after"] = [round(v, 2) for v in os.getloadavg()]
-        if recording and window.record_control.recording is not None:
+        if recording and not toggle and window.record_control.recording is not None:
             rec = window.record_control.recording
             status = rec.status()
             window.record_control.stop()

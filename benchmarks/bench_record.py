@@ -1,14 +1,17 @@
 """Benchmark of the flight recorder and of replay (issue 27's figures).
 
 Usage: ``python benchmarks/bench_record.py [--only fleet writer ingest pacing seek memory] [--seconds 20]
-[--pacing-seconds 600] [--out FILE.json]``. Each part prints its figures with the load average of the
+[--fleet-seconds 80] [--fleet-window 10] [--pacing-seconds 600] [--out FILE.json]``. Each part prints its figures with the load average of the
 machine before and after it (a 2-core machine shared with other work: timing figures taken under load
 are noisy, and the JSON says what the load was).
 
 - ``fleet``: the 3-vessel fleet benchmark (``bench_app.py --robots 3``: 6 cameras, 60 values at 20 Hz, one
-  window) run twice, without and with the app's Record control on; the app's CPU share of each run, the
-  messages the recorder wrote and dropped, and every file read back (its message count must equal what
-  was written). Target: app CPU +10 % at most, nothing dropped.
+  window) with the app's Record control off and on in turns (``--fleet-window`` seconds each, for
+  ``--fleet-seconds``; ``bench_fleet.record_toggle``): the app's CPU share in each state (all threads, and
+  by thread), the increase of each (off, on) pair and their median (neighbouring windows see the same
+  load and drift: two separate runs differed by more than the recorder costs), the messages the recorder
+  wrote and dropped, and every file read back (its message count must equal what was written). Target:
+  app CPU +10 % at most, nothing dropped.
 - ``writer``: the writer alone (``McapSink``, its thread) taking the fleet's camera frames as fast as it
   can, zstd and lz4: MB/s, and its headroom over the fleet's data rate (target >= 10x).
 - ``ingest``: ``rcon record`` (a process) recording a publisher of raw 640x480 rgb8 frames (a bare sim in
@@ -108,41 +111,40 @@ def schema(reg: Any, name: str) -> tuple[str, str, bytes, str]:
 
 def part_fleet(args: Any) -> dict[str, Any]:
     out: dict[str, Any] = {"load_before": load()}
-    runs = {}
     with tempfile.TemporaryDirectory() as tmp:
-        for label, env in (("plain", {}), ("recording", {"BENCH_RECORD_DIR": str(Path(tmp) / "rec")})):
-            path = Path(tmp) / f"{label}.json"
-            subprocess.run([sys.executable, str(HERE / "bench_app.py"), "--robots", "3", "--seconds",
-                            str(args.seconds), "--out", str(path)], env={**os.environ, **env,
-                                                                        "QT_QPA_PLATFORM": "offscreen"},
-                           check=True, stdout=subprocess.DEVNULL)
-            runs[label] = json.loads(path.read_text())
-        plain, rec = runs["plain"], runs["recording"]
-        r = rec.get("record", {})
+        path = Path(tmp) / "fleet.json"
+        env = {"BENCH_RECORD_DIR": str(Path(tmp) / "rec"), "BENCH_RECORD_TOGGLE": str(args.fleet_window),
+               "QT_QPA_PLATFORM": "offscreen"}
+        subprocess.run([sys.executable, str(HERE / "bench_app.py"), "--robots", "3", "--seconds",
+                        str(args.fleet_seconds), "--out", str(path)], env={**os.environ, **env},
+                       check=True, stdout=subprocess.DEVNULL)
+        run = json.loads(path.read_text())
+        tog = run["record_toggle"]
+        r = tog["record"]
         in_files, data_bytes, seconds = 0, 0, 0.0
         from mcap.reader import make_reader
 
         for f in r.get("files", []):
             with open(f, "rb") as fh:
                 reader = make_reader(fh)
-                summary = reader.get_summary()
-                in_files += summary.statistics.message_count
-                st = summary.statistics
-                seconds = max(seconds, (st.message_end_time - st.message_start_time) / 1e9)
+                st = reader.get_summary().statistics
+                in_files += st.message_count
+                seconds += (st.message_end_time - st.message_start_time) / 1e9 / 3  # one file per vessel
                 for _s, _c, m in reader.iter_messages():
                     data_bytes += len(m.data)
-    cpu_plain, cpu_rec = plain["app_cpu_share"], rec["app_cpu_share"]
     out.update({
-        "app_cpu_share_plain": cpu_plain, "app_cpu_share_recording": cpu_rec,
-        "app_cpu_increase_pct": round((cpu_rec - cpu_plain) / cpu_plain * 100, 1),
-        "app_cpu_by_thread_recording": rec.get("app_cpu_share_by_thread"),
+        "windows_s": tog["window_s"], "pairs": tog["pairs"],
+        "app_cpu_share_plain": tog["cpu_share"]["off"], "app_cpu_share_recording": tog["cpu_share"]["on"],
+        "app_cpu_increase_pct_by_pair": tog["pairs_increase_pct"],
+        "app_cpu_increase_pct": tog["increase_pct_median"],
+        "app_cpu_increase_pct_pooled": tog["increase_pct_pooled"],
+        "app_cpu_by_thread_plain": tog["by_thread"]["off"],
+        "app_cpu_by_thread_recording": tog["by_thread"]["on"],
         "messages_written": r.get("messages_written"), "messages_in_files": in_files,
         "dropped": r.get("dropped"), "problem": r.get("problem"), "bytes_on_disk": r.get("bytes_on_disk"),
         "fleet_data_rate_mb_s": round(data_bytes / max(seconds, 1e-9) / MB, 2),
-        "camera_frames_shown_per_s_plain": plain.get("camera_frames_shown_per_s"),
-        "camera_frames_shown_per_s_recording": rec.get("camera_frames_shown_per_s"),
-        "load_during_plain": [plain.get("load_average_before"), plain.get("load_average_after")],
-        "load_during_recording": [rec.get("load_average_before"), rec.get("load_average_after")],
+        "camera_frames_shown_per_s": run.get("camera_frames_shown_per_s"),
+        "load_during": [run.get("load_average_before"), run.get("load_average_after")],
         "target_cpu_increase_pct": 10.0,
     })
     out["ok_cpu"] = out["app_cpu_increase_pct"] <= 10.0
@@ -511,7 +513,11 @@ def part_memory(args: Any) -> dict[str, Any]:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", nargs="*", default=None)
-    parser.add_argument("--seconds", type=float, default=20.0, help="fleet and ingest runs (s)")
+    parser.add_argument("--seconds", type=float, default=20.0, help="ingest runs (s)")
+    parser.add_argument("--fleet-seconds", type=float, default=80.0,
+                        help="the fleet run: the Record control off and on in turns for this long (s)")
+    parser.add_argument("--fleet-window", type=float, default=10.0,
+                        help="each off or on window of the fleet run (s; the first 1.5 s not counted)")
     parser.add_argument("--pacing-seconds", type=float, default=600.0)
     parser.add_argument("--writer-mb", type=float, default=1500.0)
     parser.add_argument("--ingest-hz", type=float, default=120.0)

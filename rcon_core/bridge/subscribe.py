@@ -17,6 +17,11 @@ Decisions:
   compression wins.  (A size the client does send stays in force for the whole connection, service
   responses included, ``subscribe_options.jsonl:29-35``; the read loop joins whatever arrives in
   fragments, with the float ``total`` 2.x sends.)
+* A switch of encoding under traffic loses nothing: until the server has the old subscription's
+  unsubscribe, messages of both come (a message may come twice, never not at all); a payload of the old
+  encoding is delivered as what it is (a JSON or cbor message when the topic became ``cbor-raw``; a
+  ``cbor-raw`` payload decoded, for :data:`LEFTOVER_SECONDS`, when it left it), never reported as a bad
+  frame (``tests/test_record_beside_widgets.py``).
 * ``cbor-raw`` payloads are decoded by the one type system (``rawdecode.py``): CDR for types learned from a
   ROS 2 server (sniffed per payload when the flavour is unknown, ``cdrdecode.py``); else the
   application's registry (``BridgeClient(registry=...)``) when it knows the type -- it learns the server's
@@ -26,6 +31,7 @@ Decisions:
 from __future__ import annotations
 
 import logging
+import time
 from collections.abc import Awaitable, Callable
 from typing import TYPE_CHECKING, Any
 
@@ -39,6 +45,9 @@ if TYPE_CHECKING:
     from .topics import TopicEntry
 
 log = logging.getLogger(__name__)
+
+#: how long after a topic left ``cbor-raw`` a payload of the replaced subscription is still expected (s)
+LEFTOVER_SECONDS = 2.0
 
 
 class Subscriber:
@@ -114,9 +123,14 @@ class Subscriber:
             opts = {k: v for k, v in opts.items() if k != "fragment_size"}
         sid = self.session.next_id("sub", entry.topic)
         op = {"op": "subscribe", "id": sid, "topic": entry.topic, **opts}
+        was_raw = entry.raw_type
         entry.raw_type = opts["type"] if opts["compression"] == "cbor-raw" else None
         if entry.raw_type is not None:
             entry.decoder = self.raw_decoder(entry.raw_type)
+            entry.leftovers_until = 0.0
+        elif was_raw is not None:  # the old subscription's cbor-raw payloads may still come: decoded, a while
+            entry.leftovers_until = time.monotonic() + LEFTOVER_SECONDS
+            entry.leftovers_type = was_raw
         old, entry.sid = entry.sid, sid
         entry.rebuild()
         self.session.send(op)

@@ -8,7 +8,11 @@ Several nodes on one topic share ONE rosbridge subscription.  Its options are me
   the topic is also *latest-only* on the client side (``latest.py``);
 * ``fragment_size``: the smallest given;
 * ``compression``: the first of ``cbor``, ``cbor-raw``, ``png``, ``none`` that any consumer asked for
-  (every mode is decoded into the same dicts, so the cheapest binary form serves everybody);
+  (every mode is decoded into the same dicts, so the cheapest binary form serves everybody) -- among the
+  consumers that take messages; the ``raw=True`` ones (the flight recorder) choose only when they are alone.
+  A recorder that joins a topic a widget reads changes nothing on the wire (no re-subscription, no switch of
+  the widget's encoding, which made every value go through a slower decoder) and takes the messages as
+  they come (``record/ingest.py`` serializes them by the robot's definition);
 * ``type``: the first type given.
 
 When the set of consumers changes the options are recomputed and, if they changed, the client subscribes
@@ -20,6 +24,7 @@ the largest ``queue_size``); the last publisher to leave unadvertises.
 from __future__ import annotations
 
 import logging
+import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
@@ -50,7 +55,8 @@ class TopicEntry:
     """The client's one subscription to a topic, fanned out to every node's callback."""
 
     __slots__ = ("topic", "subs", "deliver", "fast", "sid", "sent_options", "raw_type", "decoder", "received",
-                 "report", "latest_only", "skipped", "raw_subs", "cooked_subs", "tally")
+                 "report", "latest_only", "skipped", "raw_subs", "cooked_subs", "tally", "leftovers_until",
+                 "leftovers_type")
 
     def __init__(self, topic: str, report: Callable[[str, str], None]) -> None:
         self.report = report  # ``report(kind, message)``: a payload that cannot be decoded (a bad frame)
@@ -59,6 +65,9 @@ class TopicEntry:
         self.sid: str | None = None  # id of the rosbridge subscription currently active on the server
         self.sent_options: dict[str, Any] | None = None
         self.raw_type: str | None = None  # set when the active subscription is cbor-raw
+        #: until then (monotonic s; 0: not) cbor-raw payloads of a replaced subscription may still arrive
+        self.leftovers_until = 0.0
+        self.leftovers_type = ""  # the type of those payloads
         self.decoder: Any = None
         self.received = 0
         #: every consumer asked for ``queue_length`` 1: stale frames are skipped when a newer one waits
@@ -90,7 +99,8 @@ class TopicEntry:
         frags = [s.fragment_size for s in subs if s.fragment_size]
         if frags:
             opts["fragment_size"] = min(frags)
-        opts["compression"] = min((s.compression for s in subs), key=_COMPRESSION_RANK.__getitem__)
+        choosers = [s for s in subs if not s.raw] or subs
+        opts["compression"] = min((s.compression for s in choosers), key=_COMPRESSION_RANK.__getitem__)
         return opts
 
     # --- delivery (the hot path) -----------------------------------------------------------------
@@ -103,6 +113,8 @@ class TopicEntry:
         self.cooked_subs = [s for s in subs if not s.raw]
         if self.raw_type is not None:
             self.deliver = self.fast = self._deliver_raw
+        elif subs and self.leftovers_until:
+            self.deliver = self.fast = self._deliver_after_raw
         elif not subs:
             self.deliver = self.fast = self._deliver_none
         elif len(subs) == 1:
@@ -137,14 +149,35 @@ class TopicEntry:
                 log.exception("callback for %s (node %s) raised; other subscribers are unaffected",
                               self.topic, s.node.id)
 
+    def _deliver_after_raw(self, msg: Any) -> None:
+        """Delivery for a while after the topic left ``cbor-raw``: a payload of the replaced subscription
+        still in flight is decoded (as it was before the switch) instead of reaching a consumer as a
+        ``{secs, nsecs, bytes}`` dict."""
+        if time.monotonic() > self.leftovers_until:
+            self.leftovers_until = 0.0
+            self.rebuild()
+            self.deliver(msg)
+            return
+        if type(msg) is dict and "bytes" in msg and "secs" in msg and self.decoder is not None:
+            self._deliver_payload(msg, self.leftovers_type)
+            return
+        self._deliver_many(msg)
+
     def _deliver_raw(self, msg: Any) -> None:
+        if type(msg) is dict and "bytes" not in msg and "secs" not in msg:
+            # a message of the subscription this one replaced (JSON or cbor), still in flight: as it is
+            self._deliver_many(msg)
+            return
+        self._deliver_payload(msg, self.raw_type or "")
+
+    def _deliver_payload(self, msg: Any, type_name: str) -> None:
         if self.raw_subs:
-            self._deliver_undecoded(msg)
+            self._deliver_undecoded(msg, type_name)
             if not self.cooked_subs:
                 return
         try:
             data = msg["bytes"]
-            decoded = self.decoder.decode(self.raw_type, data)
+            decoded = self.decoder.decode(type_name, data)
         except Exception as exc:
             self.report("cbor-raw", f"{self.topic}: cannot decode cbor-raw message ({exc})")
             return
@@ -155,10 +188,10 @@ class TopicEntry:
                 log.exception("callback for %s (node %s) raised; other subscribers are unaffected",
                               self.topic, s.node.id)
 
-    def _deliver_undecoded(self, msg: Any) -> None:
+    def _deliver_undecoded(self, msg: Any, type_name: str) -> None:
         try:
             data = msg["bytes"]
-            payload = RawPayload(self.raw_type or "", int(msg.get("secs", 0)), int(msg.get("nsecs", 0)),
+            payload = RawPayload(type_name, int(msg.get("secs", 0)), int(msg.get("nsecs", 0)),
                                  data if isinstance(data, bytes) else bytes(data))
         except Exception as exc:
             self.report("cbor-raw", f"{self.topic}: malformed cbor-raw message ({exc})")

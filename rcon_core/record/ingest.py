@@ -3,11 +3,15 @@
 Runs on the bridge loop thread (``start``/``stop``/callbacks); writing is the sink's thread
 (``writer.py``). Decisions:
 
-* **Nothing re-serialized when the robot offers raw bytes.** Topics are subscribed with
-  ``Node.subscribe(raw=True)``: ``cbor-raw`` payloads (ROS 1 bytes, or CDR on ROS 2) are written as they
-  came. When a topic arrives decoded (the server could not prepare ``cbor-raw``, or another consumer's
-  ``cbor`` won the shared subscription) it is serialized with RCON's own codecs; a value that cannot be
-  serialized is counted and said once per topic (``problems``).
+* **Nothing re-serialized when the robot offers raw bytes -- and the live view never disturbed.** Topics
+  are subscribed with ``Node.subscribe(raw=True)``: on a topic only the recorder reads (``rcon record``,
+  or a topic no widget shows) the ``cbor-raw`` payloads (ROS 1 bytes, or CDR on ROS 2) are written as they
+  came. A topic a widget reads keeps the widget's encoding (``bridge/topics.py``: raw consumers choose the
+  compression only when alone): pressing Record neither re-subscribes it nor sends its values through a
+  slower decoder; the recorder serializes the messages as the widgets get them, with the robot's own
+  definition (the same bytes for every ROS field type). The same when the server could not prepare
+  ``cbor-raw``. A value that
+  cannot be serialized is counted and said once per topic (``problems``).
 * **Times.** ``log_time`` is when the recorder got the message (wall clock, ns); ``publish_time`` is the
   message's own header stamp when it has one, else ``log_time``.
 * **Definitions** come from the robot first (``schema.py``); a topic whose type has none is recorded as
