@@ -7,8 +7,8 @@ raw camera cost more than twice the CPU of merely receiving it. Here:
 
 * **No copy of the payload.** A chunk is a list of pieces (each message's 31-byte record head, then the
   message's own bytes object); an uncompressed chunk goes to the OS with one ``writev`` of those pieces;
-  a compressed one is joined once and compressed in one call (zstd with the content size in its frame
-  header, or lz4 frame).
+  a compressed one is fed to zstd as a stream (its size pledged: the content size in the frame header),
+  or joined once for lz4.
 * **No CRC of the data.** The MCAP specification lets a writer leave a chunk's ``uncompressed_crc`` and
   the data end's ``data_section_crc`` at 0 ("not available": readers skip the check; ``mcap``'s reader and
   ``rosbags`` do). The summary's CRC is kept: it is small.
@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import struct
 import zlib
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any, Protocol
 
 from mcap.data_stream import RecordBuilder
@@ -107,21 +107,49 @@ def _record(record: McapRecord) -> bytes:
     return builder.end()
 
 
-def _compressor(compression: str) -> Callable[[list[Any], bool], bytes]:
-    """``compress(pieces, fast)`` for ``zstd`` (level 3, or :data:`FAST_LEVEL` when ``fast``; the content
-    size in the frame header) or ``lz4`` (frame; ``fast`` changes nothing). The pieces are joined first (one
-    copy of the chunk): zstd's one-shot call compresses a camera's chunk to 3.5 % where its streaming call,
-    fed piece by piece, gives 4.7 % for the same CPU."""
+#: pieces shorter than this are joined into runs before they are fed to the compressor (record heads,
+#: small messages); longer ones (camera frames) are fed as they are, never copied
+_SMALL_PIECE = 4096
+
+
+def _runs(pieces: list[Any]) -> Iterator[Any]:
+    """``pieces`` with each run of small ones joined: what a streaming compressor is fed."""
+    small: list[Any] = []
+    for piece in pieces:
+        if len(piece) < _SMALL_PIECE:
+            small.append(piece)
+            continue
+        if small:
+            yield b"".join(small)
+            small = []
+        yield piece
+    if small:
+        yield b"".join(small)
+
+
+def _compressor(compression: str) -> Callable[[list[Any], int, bool], bytes]:
+    """``compress(pieces, size, fast)`` for ``zstd`` (level 3, or :data:`FAST_LEVEL` when ``fast``; the
+    content size in the frame header) or ``lz4`` (frame; ``fast`` changes nothing). zstd is fed as a stream
+    with the chunk's ``size`` pledged, which gives it the parameters of its one-shot call (the same ratio)
+    without joining the chunk first: a chunk of the sim's camera frames 1.3 ms instead of 1.9 ms (the join
+    was a copy of every frame), a noisy camera's chunk the same ratio and time."""
     if compression == "zstd":
         import zstandard
 
         normal = zstandard.ZstdCompressor(level=3, write_content_size=True)
         quick = zstandard.ZstdCompressor(level=FAST_LEVEL, write_content_size=True)
-        return lambda pieces, fast: (quick if fast else normal).compress(b"".join(pieces))
+
+        def zstd(pieces: list[Any], size: int, fast: bool) -> bytes:
+            stream = (quick if fast else normal).compressobj(size=size)
+            out = [stream.compress(run) for run in _runs(pieces)]
+            out.append(stream.flush())
+            return b"".join(out)
+
+        return zstd
     if compression == "lz4":
         import lz4.frame
 
-        return lambda pieces, fast: lz4.frame.compress(b"".join(pieces), store_size=True)
+        return lambda pieces, size, fast: lz4.frame.compress(b"".join(pieces), store_size=True)
     raise ValueError(f"compression must be zstd, lz4 or none; got {compression!r}")
 
 
@@ -256,7 +284,7 @@ class McapFile:
             if fast:
                 self._fast -= 1
                 self.fast_chunks += 1
-            packed = self._compress(pieces, fast)
+            packed = self._compress(pieces, size, fast)
             if len(packed) > POOR_RATIO * size:
                 self._skip, self._fast = SKIP_AFTER_POOR, 0
             elif not fast and compression == "zstd" and len(packed) > FAST_RATIO * size:
