@@ -1,7 +1,7 @@
 """Benchmark of the flight recorder and of replay (issue 27's figures).
 
 Usage: ``python benchmarks/bench_record.py [--only fleet writer ingest pacing seek memory] [--seconds 20]
-[--fleet-seconds 80] [--fleet-window 10] [--pacing-seconds 600] [--out FILE.json]``. Each part prints its figures with the load average of the
+[--fleet-seconds 120] [--fleet-window 10] [--pacing-seconds 600] [--out FILE.json]``. Each part prints its figures with the load average of the
 machine before and after it (a 2-core machine shared with other work: timing figures taken under load
 are noisy, and the JSON says what the load was).
 
@@ -542,7 +542,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", nargs="*", default=None)
     parser.add_argument("--seconds", type=float, default=20.0, help="ingest runs (s)")
-    parser.add_argument("--fleet-seconds", type=float, default=80.0,
+    parser.add_argument("--fleet-seconds", type=float, default=120.0,
                         help="the fleet run: the Record control off and on in turns for this long (s)")
     parser.add_argument("--fleet-window", type=float, default=10.0,
                         help="each off or on window of the fleet run (s; the first 1.5 s not counted)")
