@@ -1,9 +1,9 @@
 """Benchmark of the flight recorder and of replay (issue 27's figures).
 
 Usage: ``python benchmarks/bench_record.py [--only fleet writer ingest pacing seek memory] [--seconds 20]
-[--fleet-seconds 120] [--fleet-window 10] [--pacing-seconds 600] [--out FILE.json]``. Each part prints its figures with the load average of the
-machine before and after it (a 2-core machine shared with other work: timing figures taken under load
-are noisy, and the JSON says what the load was).
+[--fleet-seconds 120] [--fleet-window 10] [--ingest-rounds 3] [--pacing-seconds 600] [--out FILE.json]``.
+Each part prints its figures with the load average of the machine before and after it (a 2-core machine
+shared with other work: timing figures taken under load are noisy, and the JSON says what the load was).
 
 - ``fleet``: the 3-vessel fleet benchmark (``bench_app.py --robots 3``: 6 cameras, 60 values at 20 Hz, one
   window) with the app's Record control off and on in turns (``--fleet-window`` seconds each, for
