@@ -135,10 +135,11 @@ class ConnectionShell:
     session: LinkSession
     call_timeout: float
 
-    def __init__(self, url: str, *, reconnect: bool, ca_file: str | None, client_cert: str | None,
-                 client_key: str | None, backoff_min: float, backoff_max: float, latency_interval: float,
-                 pong_timeout: float, open_timeout: float, stall_timeout: float | None, max_frame_size: int,
-                 transport: str | None, stats: BridgeStats) -> None:
+    def __init__(self, url: str, *, reconnect: bool = True, ca_file: str | None = None,
+                 client_cert: str | None = None, client_key: str | None = None, backoff_min: float = 0.25,
+                 backoff_max: float = 10.0, latency_interval: float = 2.0, pong_timeout: float = 10.0,
+                 open_timeout: float = 10.0, stall_timeout: float | None = 1.0, max_frame_size: int = 64 << 20,
+                 transport: str | None = None, stats: BridgeStats | None = None) -> None:
         if not isinstance(url, str) or not url.startswith(("ws://", "wss://")):
             raise ValueError(f"url must start with ws:// or wss://, got {url!r}")
         self.url = url
@@ -153,7 +154,7 @@ class ConnectionShell:
         #: the largest frame (and message) the transport accepts; a larger one closes the link (1009)
         self.max_frame_size = max_frame_size
         #: what the client counts (``rcon_core/bridge/stats.py``)
-        self.stats = stats
+        self.stats = BridgeStats() if stats is None else stats
         self.latency: float | None = None
         self.last_error: BaseException | None = None
         self.failure: Failure | None = None
