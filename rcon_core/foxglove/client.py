@@ -172,7 +172,7 @@ class FoxgloveClient(ConnectionShell):
             async with asyncio.timeout(budget):
                 await self.wait_connected()
                 await self._service_known(name)
-                cid = self.session.start_call(name, args, done)
+                cid = self.session.requests.start_call(name, args, done)
                 return await fut
         except TimeoutError:
             raise ServiceTimeoutError(f"no answer to the service call within {budget:g} s", name) from None
@@ -182,7 +182,7 @@ class FoxgloveClient(ConnectionShell):
             raise ServiceError(str(exc), name) from None
         finally:
             if cid is not None:
-                self.session.forget_call(cid)
+                self.session.requests.forget_call(cid)
 
     async def _service_known(self, name: str) -> None:
         while name not in self.session.service_by_name:
@@ -234,16 +234,11 @@ class FoxgloveClient(ConnectionShell):
         link.receiver.start()
 
     def _link_down(self, link: Link) -> None:
-        session = self.session
+        """Drop what the link still queued; the session forgets the server and fails the calls waiting."""
         dropped = link.drop_queue()
         if dropped:
             self.stats.dropped_on_disconnect += dropped
-        calls = list(session.calls.values())
-        session.calls.clear()
-        session.param_requests.clear()
-        session.detached()
-        for _srv, done, _dec in calls:
-            done(None, ConnectionLostError("connection lost before the answer arrived"))
+        self.session.detached()
 
 
 def _text_or_binary(link: Link) -> Callable[[str | bytes], None]:
