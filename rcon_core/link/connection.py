@@ -62,11 +62,12 @@ Close
 
 What a protocol supplies
     ``session`` (its protocol state: ``guard``, ``envelope``, ``nodes`` and ``stale_in_queue(pub)``, the
-    count of a queued command dropped at its deadline), :meth:`~ConnectionShell._receiver` (what a link's
-    messages go to), :meth:`~ConnectionShell._link_up` and :meth:`~ConnectionShell._link_down` (a link
-    comes and goes), and where it needs them :meth:`~ConnectionShell._open` (a check of the fresh link),
-    :meth:`~ConnectionShell._why`, :meth:`~ConnectionShell._check_end` (a lost link that must not be
-    reopened) and :meth:`~ConnectionShell._closed`.
+    count of a queued command dropped at its deadline), ``call_service`` (what a node's calls reach),
+    :meth:`~ConnectionShell._receiver` (what a link's messages go to), :meth:`~ConnectionShell._link_up`
+    and :meth:`~ConnectionShell._link_down` (a link comes and goes), and where it needs them
+    :meth:`~ConnectionShell._open` (a check of the fresh link), :meth:`~ConnectionShell._why`,
+    :meth:`~ConnectionShell._check_end` (a lost link that must not be reopened) and
+    :meth:`~ConnectionShell._closed`.  ``tests/test_link_connection.py`` builds a third protocol this way.
 """
 
 from __future__ import annotations
