@@ -40,7 +40,7 @@ def test_disconnect_keeps_the_last_values_marked_link_down_and_connect_brings_th
 
     tap(window.connection.connect_button)  # "Disconnect"
     qtbot.waitUntil(lambda: window.connection.state is ConnectionState.CLOSED, timeout=5_000)
-    qtbot.waitUntil(lambda: frame.badge.isVisible() and frame.badge.text() == "LINK DOWN", timeout=5_000)
+    qtbot.waitUntil(lambda: frame.badge.isVisible() and frame.badge.status == "LINK DOWN", timeout=5_000)
     qtbot.wait(300)  # time for a rebuild to show up, were there one
     QtWidgets.QApplication.processEvents()
     last = shown(window, wid)
@@ -53,7 +53,7 @@ def test_disconnect_keeps_the_last_values_marked_link_down_and_connect_brings_th
     window.switch_canvas(0)
     qtbot.waitUntil(lambda: window.host.hosted[wid].model is not kept and window.host.hosted[wid].view is not None,
                     timeout=10_000)
-    qtbot.waitUntil(lambda: frame.badge.isVisible() and frame.badge.text() == "LINK DOWN", timeout=5_000)
+    qtbot.waitUntil(lambda: frame.badge.isVisible() and frame.badge.status == "LINK DOWN", timeout=5_000)
 
     tap(window.connection.connect_button)  # Connect again: live values
     qtbot.waitUntil(lambda: window.connection.state is ConnectionState.CONNECTED, timeout=10_000)
