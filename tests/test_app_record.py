@@ -136,7 +136,7 @@ def test_recording_at_200_percent_text_on_a_1024_px_window_keeps_the_window_and_
         qtbot.waitUntil(lambda: "127.0.0.1" in line.shown_text(), timeout=5_000)
         control.action.trigger()  # Canvas ▾ → ● Record every robot
         qtbot.waitUntil(lambda: control.indicator.isVisible() and control.indicator.text() == "●", timeout=5_000)
-        settle(100)
+        settle()
         assert win.width() == 1024 and "127.0.0.1" in line.shown_text(), (win.width(), line.shown_text())
         assert control.indicator.accessibleName().startswith("recording: REC 00:0")
         assert "MB" in control.indicator.toolTip()
@@ -156,7 +156,7 @@ def test_the_compact_control_of_a_small_screen_keeps_the_bar_no_wider(qtbot, tmp
     control.directory = tmp_path / "rec"
     control.set_compact(False)
     qtbot.waitUntil(lambda: control.button.isVisible(), timeout=5_000)
-    settle(100)
+    settle()
     wide = win.connection.minimumSizeHint().width()
     control.set_compact(True)
     qtbot.waitUntil(lambda: win.connection.minimumSizeHint().width() < wide, timeout=5_000)
@@ -167,7 +167,7 @@ def test_the_compact_control_of_a_small_screen_keeps_the_bar_no_wider(qtbot, tmp
     qtbot.waitUntil(lambda: control.indicator.text().startswith("REC 00:0"), timeout=5_000)
     assert "MB" not in control.indicator.text() and "MB" in control.indicator.toolTip()
     assert not win.connection.latency_label.isVisible()
-    settle(100)
+    settle()
     assert win.connection.minimumSizeHint().width() <= narrow + 40
     control.action.trigger()
     assert not control.recording.active and win.connection.latency_label.isVisible()

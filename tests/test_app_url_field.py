@@ -89,7 +89,7 @@ def test_a_long_url_keeps_its_host_in_sight(qtbot, tmp_path, plugins):
     history(tmp_path, [url])
     window = open_window(qtbot, tmp_path, plugins, size=(1024, 600))
     try:
-        settle(60)
+        settle()
         field = window.connection.url
         line = field.lineEdit()
         assert line.fontMetrics().horizontalAdvance(url) > line.width()  # too long for the field

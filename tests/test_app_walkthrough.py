@@ -249,5 +249,6 @@ def test_quitting_with_a_finger_on_the_pad_raises_nothing(window, qtbot, sim_thr
     sim.wait_for_published_sync("/cmd_vel", lambda m: m["linear"]["x"] > 0.3, timeout=10)
     window.shutdown()
     window.hide()  # (pytest-qt fails the test on an exception raised in a Qt handler)
-    settle()
-    assert sim.published("/cmd_vel")[-1]["linear"]["x"] == 0.0
+    settle()  # the hide handlers run
+    # the last command the robot got is the zero (it arrives over the socket: waited for, not slept on)
+    qtbot.waitUntil(lambda: sim.published("/cmd_vel")[-1]["linear"]["x"] == 0.0, timeout=TIMEOUT_MS)
