@@ -8,6 +8,7 @@ import json
 
 import pytest
 from app_helpers import TIMEOUT_MS, open_window, settle, tap, tap_item
+from fit_check import problems
 from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
@@ -147,7 +148,10 @@ def test_on_a_1024_px_window_the_field_shows_which_robot_at_every_text_size(qtbo
             line.grab()
             assert line.painted == shown and field.currentText() == url and line.toolTip() == url
             assert window.width() == 1024, (text_size, window.width())
+            assert problems(window.connection) == []  # nothing on the bar cut (the latency: whole, or none)
             if url == robot.url:  # connected: the field shows the port too (the sim's, which tells sims apart)
                 assert shown.endswith(f":{robot.port}") or text_size == 200, shown
+                qtbot.waitUntil(lambda: window.connection.state_label.toolTip().startswith(
+                    "round trip to the robot: "), timeout=TIMEOUT_MS)  # where the latency has no room too
     finally:
         window.shutdown()

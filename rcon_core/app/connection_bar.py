@@ -331,7 +331,7 @@ class ConnectionBar(QtWidgets.QFrame):
 
     def _share_room(self) -> None:
         """The room the bar has beyond its parts' minimums goes, in this order, to: the URL field, as far as
-        it shows the robot's host and port whole (``…192.168.1.10:9090``); the latency (its widest reading,
+        it shows the robot's host and port whole (``url_field.host_text``: ``192.168.1.10:9090``); the latency (its widest reading,
         or nothing: never a cut figure); the bandwidth readout (up to its reading); the URL field again, as
         far as it shows the whole URL; the rest to the message. So at 200 % text on a 1024 px tablet the
         field shows which robot, the latency then being in the state's tooltip. Called on a resize, a text
@@ -439,8 +439,8 @@ class ConnectionBar(QtWidgets.QFrame):
             self._last_latency_text = text
             if self._latency_room:
                 self.latency_label.setText(text)
-            self.state_label.setToolTip(f"{STATE_TEXT[self.state].lower()}; round trip to the robot: {text}"
-                                        if latency is not None else "")
+            # also where the bar has no room for the latency (_share_room)
+            self.state_label.setToolTip(f"round trip to the robot: {text}" if latency is not None else "")
         self.bandwidth.poll()
 
     def _say(self, text: str, role: str = "problem") -> None:

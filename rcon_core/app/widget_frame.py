@@ -17,6 +17,7 @@ import math
 from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app.elided_label import OneLineLabel
+from rcon_core.app.frame_badge import Badge, ReasonLine, badge_form
 from rcon_core.app.geometry import GRID, fit_rect, scaled_about_center, snap_rect, snap_up
 from rcon_core.app.theme import colour as theme_colour
 from rcon_core.app.theme import current_text_size, current_touch_px, font_px, repolish
@@ -32,182 +33,6 @@ def frame_min_size() -> QtCore.QSize:
     """The smallest a widget frame may be: room for its corner handles and a little content."""
     t = current_touch_px()
     return QtCore.QSize(max(3 * t, 5 * GRID), max(2 * t + GRID, 5 * GRID))
-
-
-class Badge(QtWidgets.QLabel):
-    """A small status pill at the right end of the frame's title bar. Its tooltip is the reason (hover);
-    a tap shows the reason on the frame, on one line under the title (:class:`ReasonLine`), and a second
-    tap hides it.
-
-    On a narrow frame the pill is compact, so the title stays readable (an operator must tell Battery from
-    Dock exactly while their link is down): the frame picks the longest of its forms -- the whole word
-    (``LINK DOWN``), the short one (``DOWN``), a sign (``!``) -- that leaves the title its whole text, or
-    at least half the bar (:meth:`WidgetFrame.layout_overlays`). What the widget's status is stays in
-    :attr:`status` (the whole word, whatever the pill shows), in its accessible name, and, while the pill
-    is compact, at the head of its tooltip and of the tapped reason line."""
-
-    COLOURS = {"stale": "#a85400", "down": "#b00000", "problem": "#b00000", "ok": "#006b1b",
-               "view-only": "#3a3a3a"}
-    #: the short word of each status word, for a frame with no room for the whole one
-    SHORT = {"LINK DOWN": "DOWN", "PREVIEW ONLY": "PREVIEW", "VIEW ONLY": "VIEW", "NO DATA": "NONE"}
-    #: the sign, for a frame with no room even for the short word (kinds without one keep the short word)
-    SIGN = {"down": "!", "problem": "!", "stale": "!"}
-    #: px of padding each side of the whole word (half of it around a compact form)
-    PAD = 8
-
-    def __init__(self, parent: QtWidgets.QWidget) -> None:
-        super().__init__(parent)
-        self.setObjectName("frameBadge")
-        self.kind = ""
-        self.reason = ""
-        #: the status in words, whole ("LINK DOWN"), whatever form the pill shows; "" while hidden
-        self.status = ""
-        #: what the pill may show, longest first: the whole word, the short word, the sign
-        self.forms: tuple[str, ...] = ()
-        self.font_sheet = ""  #: the frame's text size for it (WidgetFrame.fit_text), "" for the app's
-        self._refitting = False
-        self.setCursor(QtCore.Qt.CursorShape.PointingHandCursor)
-        self.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
-        self.hide()
-
-    def show_status(self, kind: str, text: str, reason: str = "") -> None:
-        """Show ``text`` in ``kind``'s colour (``""``: hide); ``reason`` is the sentence behind it, shown on
-        hover (the tooltip) and on a tap (the frame's reason line)."""
-        if kind == self.kind and text == self.status and reason == self.reason:
-            return
-        self.kind, self.reason = kind, reason
-        self.status = text if kind else ""
-        forms = [text]
-        for form in (self.SHORT.get(text, ""), self.SIGN.get(kind, "")):
-            if form and form not in forms:
-                forms.append(form)
-        self.forms = tuple(forms)
-        self.setAccessibleName(f"status: {text}" if kind else "")
-        self.setAccessibleDescription(reason)
-        frame = self.parentWidget()
-        if not kind:
-            self.hide()
-        else:
-            self._show_form(text)
-            self.restyle()
-            self.show()
-            self.raise_()
-        if isinstance(frame, WidgetFrame):
-            frame.layout_overlays()  # hidden: the title gets its full width back; shown: its form fitted
-            frame.reason_line.follow(self)
-
-    @property
-    def compact(self) -> bool:
-        """Whether the pill shows less than the whole word (a short word or a sign)."""
-        return bool(self.status) and self.text() != self.status
-
-    def told(self) -> str:
-        """What a hover or a tap tells: the reason; while compact, the whole status word before it."""
-        if not self.compact:
-            return self.reason
-        return f"{self.status}: {self.reason}" if self.reason else self.status
-
-    def _pad(self, form: str) -> int:
-        """The pill's padding each side of ``form``: less for a compact one (more room for the title)."""
-        return self.PAD if form == self.status else self.PAD // 2
-
-    def form_width(self, form: str) -> int:
-        """The pill's width showing ``form`` (its text, padding and border as styled)."""
-        pad = self._pad(form)
-        width = self.fontMetrics().horizontalAdvance(form) + 2 * pad + 2 * self.frameWidth()
-        return max(width, self.sizeHint().height()) if len(form) == 1 else width
-
-    def _show_form(self, form: str) -> None:
-        self.setText(form)
-        self.setToolTip(self.told())
-        pad = self._pad(form)
-        self.setContentsMargins(pad, 0, pad, 0)
-        self._fit()
-
-    def _fit(self) -> None:
-        """Its size for what it shows; a sign is a square pill, never narrower than it is tall."""
-        self.setMinimumWidth(min(self.sizeHint().height(), self.maximumHeight()) if len(self.text()) == 1 else 0)
-        self.adjustSize()
-
-    def show_form(self, form: str) -> None:
-        """Show ``form`` (one of :attr:`forms`); the tooltip and the reason line follow."""
-        if form == self.text():
-            self._fit()  # the same form, in a bar that may have grown (another text size)
-            return
-        self._show_form(form)
-        frame = self.parentWidget()
-        if isinstance(frame, WidgetFrame):
-            frame.reason_line.follow(self)
-
-    def restyle(self) -> None:
-        """Its colour for its kind, at its frame's text size (a style sheet only when it changed)."""
-        colour = self.COLOURS.get(self.kind, "#000000")
-        sheet = (f"background:{colour}; color:#ffffff; font-weight:bold; border-radius:4px; padding:2px 0px;"
-                 f"{self.font_sheet}")  # the sides: contents margins (_show_form), known without a restyle
-        if sheet != self.styleSheet():
-            self.setStyleSheet(sheet)
-            self.adjustSize()
-
-    def changeEvent(self, event: QtCore.QEvent) -> None:  # noqa: N802 - Qt's name
-        super().changeEvent(event)
-        # another text size (the app's, or the frame's): the pill's size follows, and its form with it
-        if event.type() in (QtCore.QEvent.Type.FontChange, QtCore.QEvent.Type.StyleChange) and self.kind \
-                and not self._refitting:
-            self._refitting = True
-            try:
-                self._show_form(self.text())
-                frame = self.parentWidget()
-                if isinstance(frame, WidgetFrame):
-                    frame.layout_overlays()
-            finally:
-                self._refitting = False
-
-    def mouseReleaseEvent(self, event: QtGui.QMouseEvent) -> None:  # noqa: N802 - Qt's name
-        if event.button() == QtCore.Qt.MouseButton.LeftButton and self.rect().contains(event.position().toPoint()):
-            frame = self.parentWidget()
-            if isinstance(frame, WidgetFrame):
-                frame.reason_line.toggle(self)
-        super().mouseReleaseEvent(event)
-
-
-class ReasonLine(OneLineLabel):
-    """The badge's reason on one line across the top of the frame's body, cut with "…" when it is too
-    long (the whole sentence in its tooltip); shown by a tap on the badge, hidden by another tap on either."""
-
-    def __init__(self, parent: QtWidgets.QWidget) -> None:
-        super().__init__(parent)
-        self.setObjectName("frameReason")
-        self.full = ""  # its look: QLabel#frameReason in theme.qss
-        self.hide()
-
-    def toggle(self, badge: Badge) -> None:
-        if self.isVisible() or not badge.told():
-            self.hide()
-            return
-        self.full = ""
-        self.follow(badge)
-        self.show()
-        self.raise_()
-
-    def follow(self, badge: Badge) -> None:
-        """The badge changed: the line says its new reason, or goes away with it."""
-        told = badge.told()
-        if not badge.isVisible() or not told:
-            self.hide()
-            return
-        if told != self.full:
-            self.full = told
-            self.setToolTip(told)
-            self.setAccessibleName(told)
-            self._elide()
-
-    def _elide(self) -> None:
-        room = self.contentsRect().width()
-        self.setText(self.fontMetrics().elidedText(self.full, QtCore.Qt.TextElideMode.ElideRight, max(0, room)))
-
-    def mouseReleaseEvent(self, event: QtGui.QMouseEvent) -> None:  # noqa: N802 - Qt's name
-        self.hide()
-        super().mouseReleaseEvent(event)
 
 
 class FrameTitle(OneLineLabel):
@@ -714,22 +539,6 @@ class WidgetFrame(QtWidgets.QFrame):
                 self.layout_overlays()
 
     # overlays ---------------------------------------------------------------------------------------
-    def _badge_form(self) -> str:
-        """The longest of the badge's forms that leaves the title its whole text, or at least half the bar;
-        the shortest where none does (see :class:`Badge`)."""
-        forms = self.badge.forms
-        if not forms:
-            return self.badge.text()
-        title = self.title
-        margins = title.contentsMargins()
-        bar = title.contentsRect().width()
-        need = min(title.fontMetrics().horizontalAdvance(title.full_title), bar // 2)
-        for form in forms[:-1]:
-            reserve = max(0, self.badge.form_width(form) + 6 - margins.right())
-            if bar - reserve >= need:
-                return form
-        return forms[-1]
-
     def resizeEvent(self, event: QtGui.QResizeEvent) -> None:
         super().resizeEvent(event)
         self.fit_text()
@@ -753,7 +562,7 @@ class WidgetFrame(QtWidgets.QFrame):
         if self.badge.isVisible():  # in the title bar, so it never covers what the view shows
             title = self.title.geometry()
             self.badge.setMaximumHeight(title.height())
-            self.badge.show_form(self._badge_form())
+            self.badge.show_form(badge_form(self.badge, self.title))
             self.badge.move(title.right() - self.badge.width() - 2,
                             title.top() + max(0, (title.height() - self.badge.height()) // 2))
             self.title.set_reserve(max(0, self.badge.width() + 6 - self.title.contentsMargins().right()))
