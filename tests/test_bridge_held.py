@@ -79,6 +79,22 @@ def test_a_ros1_server_runs_calls_in_threads_and_never_holds():
     assert w.check() == Held("/dock", 0.0)
 
 
+def test_a_long_call_on_a_ros1_server_arranges_no_check_after_the_threshold():
+    """Found reading the watch: on a server that does not hold (ROS 1) a call unanswered past the threshold
+    re-arranged a check every 10 ms for as long as it ran (a 30 s call: 3,000 wake-ups of the bridge loop
+    that also times the teleop pad's commands)."""
+    w, clock, told = watch(may_hold=lambda: False)
+    w.started("call:1", "/navigate")
+    clock.advance(HOLD_AFTER + 0.05)  # the check the call arranged has run
+    assert told == [] and clock.pending == 0
+    w.check()  # any later check (an answer to another call...) arranges nothing either
+    assert clock.pending == 0
+    w.started("call:2", "/dock")  # a new call arranges its own threshold check, once
+    assert clock.pending == 1
+    clock.advance(30.0)
+    assert told == [] and clock.pending == 0
+
+
 def test_a_listener_that_fails_does_not_keep_the_others_from_hearing():
     w, clock, told = watch()
 
