@@ -13,6 +13,7 @@ from qtpy import QtWidgets
 from record_helpers import DEMO_BAG
 from rogue_widget import CMD, RoguePlugin
 
+from rcon_core.bridge import ConnectionState
 from rcon_core.canvas import Binding, Geometry
 from rcon_core.msgs import TypeRegistry
 from rcon_core.record.schema import OPERATOR_DEFINITION, OPERATOR_TYPE
@@ -171,3 +172,29 @@ def test_the_compact_control_of_a_small_screen_keeps_the_bar_no_wider(qtbot, tmp
     assert win.connection.minimumSizeHint().width() <= narrow + 40
     control.action.trigger()
     assert not control.recording.active and win.connection.latency_label.isVisible()
+
+
+def test_a_compact_recording_stopped_after_the_link_went_shows_no_round_trip(qtbot, tmp_path, plugins, sim_thread):
+    """Found by a person on a small screen: stopping a recording put the round-trip time back on the bar even
+    when the robot was no longer connected (the recorder and the bar each set the label's visibility; now
+    the bar alone decides, the recorder only asks for its place)."""
+    win = next(window_session(qtbot, tmp_path / "cfg", plugins, url=sim_thread.url, wait_connected=True,
+                              size=(1024, 600)))
+    control = win.record_control
+    control.directory = tmp_path / "rec"
+    control.set_compact(True)
+    latency = win.connection.latency_label
+    control.action.trigger()
+    assert control.recording.active and not latency.isVisible()
+    win.connection.connect_button.click()  # Disconnect
+    qtbot.waitUntil(lambda: win.connection.state is not ConnectionState.CONNECTED, timeout=5_000)
+    control.action.trigger()  # stop
+    assert not control.recording.active
+    settle()
+    assert not latency.isVisible()
+    win.connection.connect_button.click()  # Connect: the round trip comes back with the link
+    qtbot.waitUntil(lambda: win.connection.state is ConnectionState.CONNECTED, timeout=10_000)
+    qtbot.waitUntil(latency.isVisible, timeout=5_000)
+    control.action.trigger()  # recording again while connected: its indicator takes the place
+    qtbot.waitUntil(lambda: not latency.isVisible(), timeout=5_000)
+    control.action.trigger()

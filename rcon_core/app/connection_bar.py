@@ -145,6 +145,7 @@ class ConnectionBar(QtWidgets.QFrame):
         self.state_label.setObjectName("linkState")
         self.state_label.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
         self.state_label.setProperty("state", ConnectionState.CLOSED.value)
+        self._latency_yielded = False  # another part has the latency's place (yield_latency)
         self.latency_label = LatencyLabel("—")
         self.latency_label.setObjectName("latency")
         self.latency_label.setToolTip("round-trip time to the robot")
@@ -374,11 +375,19 @@ class ConnectionBar(QtWidgets.QFrame):
             self._share_room()
         return handled
 
+    def yield_latency(self, yielded: bool) -> None:
+        """Another part takes the latency's place (the compact recorder's indicator while recording) or
+        gives it back; the bar alone decides whether the latency shows (:meth:`_hold_latency_room`)."""
+        if yielded != self._latency_yielded:
+            self._latency_yielded = yielded
+            self._hold_latency_room()
+
     def _hold_latency_room(self) -> None:
-        """The latency shows only while connected; otherwise the message holds its spacing, so the bar's
-        minimum width is the same in every state."""
+        """The latency shows only while connected, and not while another part has its place
+        (:meth:`yield_latency`); otherwise the message holds its spacing, so the bar's minimum width is the
+        same in every state."""
         spacing = layout.spacing() if (layout := self.layout()) is not None else 0
-        if self.state is ConnectionState.CONNECTED:
+        if self.state is ConnectionState.CONNECTED and not self._latency_yielded:
             self.message.setMinimumWidth(0)
             self.latency_label.setVisible(True)
         else:

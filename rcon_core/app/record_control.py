@@ -103,16 +103,17 @@ class RecordControl(QtWidgets.QWidget):
     """The button and the indicator (see the module docstring)."""
 
     def __init__(self, thread: BridgeThread, directory: Path, doc: Document, fleet: Callable[[], Fleet],
-                 notice: NoticeBar, latency_label: QtWidgets.QWidget, parent: QtWidgets.QWidget | None = None, *,
-                 compact: bool = False) -> None:
+                 notice: NoticeBar, yield_latency: Callable[[bool], None],
+                 parent: QtWidgets.QWidget | None = None, *, compact: bool = False) -> None:
         super().__init__(parent)
         #: a small screen: no button on the bar (Canvas ▾ → Record every robot), and while recording a
         #: short indicator in the place of the round-trip time, so the bar is no wider than without it
         self.compact = compact
         self.action: QtGui.QAction | None = None
         self.bridge_thread, self.doc, self.fleet, self.notice = thread, doc, fleet, notice
-        #: the round-trip time on the connection bar: while recording, the compact indicator takes its place
-        self.latency_label = latency_label
+        #: ``yield_latency(True)``: the compact indicator takes the round-trip time's place on the connection
+        #: bar while recording (the bar alone shows or hides the round trip: ``ConnectionBar.yield_latency``)
+        self.yield_latency = yield_latency
         self.directory = directory
         self.budget: int | None = DEFAULT_BUDGET
         self.recording: AppRecording | None = None
@@ -150,7 +151,7 @@ class RecordControl(QtWidgets.QWidget):
         self.compact = compact
         self.button.setVisible(not compact)
         recording = self.recording is not None and self.recording.active
-        self.latency_label.setVisible(not (compact and recording))
+        self.yield_latency(compact and recording)
         self._fit_visibility()
         self._show()
 
@@ -188,7 +189,7 @@ class RecordControl(QtWidgets.QWidget):
         if self.action is not None:
             self.action.setText("■ Stop recording")
         if self.compact:
-            self.latency_label.hide()
+            self.yield_latency(True)
         self.indicator.show()
         self._fit_visibility()
         self._show(force=True)
@@ -205,8 +206,7 @@ class RecordControl(QtWidgets.QWidget):
             self.action.setText("● Record every robot")
         self.indicator.hide()
         self._fit_visibility()
-        if self.compact:
-            self.latency_label.show()
+        self.yield_latency(False)
         files = ", ".join(Path(f).name for f in status.files)
         self.notice.show_notice(f"ℹ Recorded {_clock(status.seconds)}, {status.size / 1e6:.1f} MB: {files} "
                                        f"in {self.directory}", kind="info")
@@ -252,7 +252,7 @@ def install_record_control(thread: BridgeThread, directory: Path, doc: Document,
                            replay_dialog: Callable[[], object], *, compact: bool) -> RecordControl:
     """Put the Record control on the connection bar, before the link state, and on the frame clock; and
     Canvas ▾ → Record every robot / Replay a recording… (``replay_dialog``). ``compact``: a small screen."""
-    control = RecordControl(thread, directory, doc, fleet, notice, connection.latency_label, compact=compact)
+    control = RecordControl(thread, directory, doc, fleet, notice, connection.yield_latency, compact=compact)
     row = connection.layout()
     if isinstance(row, QtWidgets.QBoxLayout):
         row.insertWidget(max(0, row.indexOf(connection.state_label)), control)
