@@ -17,7 +17,8 @@ shared with other work: timing figures taken under load are noisy, and the JSON 
 - ``ingest``: ``rcon record`` (a process) recording a publisher of raw 640x480 rgb8 frames (a bare sim in
   another process, ``--ingest-hz``), against a plain subscriber process that only counts them, in
   alternating rounds (``--ingest-rounds``): MB/s written (target >= 50) and CPU per message of each
-  (target: recording within 5 % of plain subscribe), each process's CPU counted over its steady window
+  (target: recording within 5 % of plain subscribe; also the recorder's receiving side alone, every
+  thread but the writer, and the writer's CPU a frame), each process's CPU counted over its steady window
   only (from 4 s after its start to 1.5 s before its end, with the messages it took in that window): the
   imports of ``rcon record`` (mcap, zstandard, the type registry: ~0.3 s more than the counter's) had
   been a sixth of the difference at 20 s, and one round each had spread from -8 % to +31 %.
@@ -248,15 +249,35 @@ INGEST_WARM_S = 4.0
 INGEST_TAIL_S = 1.5
 
 
-def _steady_cpu(proc: subprocess.Popen[str], seconds: float) -> tuple[int, int, float, float]:
-    """(window start ns, end ns, user s, system s) of ``proc`` between INGEST_WARM_S after its start and
-    INGEST_TAIL_S before its planned end; then waits for it."""
+def _writer_cpu(pid: int) -> float:
+    """CPU seconds of the process's recorder writer thread(s) so far (Linux: by thread name)."""
+    total = 0.0
+    tick = os.sysconf("SC_CLK_TCK")
+    try:
+        tids = os.listdir(f"/proc/{pid}/task")
+    except OSError:
+        return 0.0
+    for tid in tids:
+        try:
+            with open(f"/proc/{pid}/task/{tid}/stat") as f:
+                head, tail = f.read().rsplit(")", 1)
+        except OSError:
+            continue
+        if head.split("(", 1)[1] == "rcon-record-wr":  # its OS name (record/writer.py)
+            fields = tail.split()
+            total += (int(fields[11]) + int(fields[12])) / tick
+    return total
+
+
+def _steady_cpu(proc: subprocess.Popen[str], seconds: float) -> tuple[int, int, float, float, float]:
+    """(window start ns, end ns, user s, system s, of which the writer thread s) of ``proc`` between
+    INGEST_WARM_S after its start and INGEST_TAIL_S before its planned end; then waits for it."""
     time.sleep(INGEST_WARM_S)
-    a_ns, (u0, s0) = time.time_ns(), proc_cpu_split(proc.pid)
+    a_ns, (u0, s0), w0 = time.time_ns(), proc_cpu_split(proc.pid), _writer_cpu(proc.pid)
     time.sleep(max(1.0, seconds - INGEST_WARM_S - INGEST_TAIL_S))
-    b_ns, (u1, s1) = time.time_ns(), proc_cpu_split(proc.pid)
+    b_ns, (u1, s1), w1 = time.time_ns(), proc_cpu_split(proc.pid), _writer_cpu(proc.pid)
     proc.wait(seconds + 60)
-    return a_ns, b_ns, u1 - u0, s1 - s0
+    return a_ns, b_ns, u1 - u0, s1 - s0, w1 - w0
 
 
 def part_ingest(args: Any) -> dict[str, Any]:
@@ -281,7 +302,7 @@ def part_ingest(args: Any) -> dict[str, Any]:
                 counter = subprocess.Popen([sys.executable, "-c", COUNTER.format(root=str(HERE.parent), url=url,
                                                                                  seconds=seconds)],
                                            stdout=subprocess.PIPE, text=True)
-                a, b, user, system = _steady_cpu(counter, seconds)
+                a, b, user, system, _w = _steady_cpu(counter, seconds)
                 arrivals = [tuple(map(int, x.split(":"))) for x in counter.stdout.read().split()]  # type: ignore[union-attr]
                 got = [n for t, n in arrivals if a <= t <= b]
                 plain.append({"messages": len(got), "mb_s": sum(got) / ((b - a) / 1e9) / MB,
@@ -292,7 +313,7 @@ def part_ingest(args: Any) -> dict[str, Any]:
                                         "--url", url, "--duration", str(seconds), "--compression",
                                         args.ingest_compression],
                                        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-                a, b, user, system = _steady_cpu(rec, seconds)
+                a, b, user, system, writer = _steady_cpu(rec, seconds)
                 out["said"] = rec.stderr.read().strip()[-300:]  # type: ignore[union-attr]
                 with open(path, "rb") as f:
                     reader = make_reader(f)
@@ -300,6 +321,8 @@ def part_ingest(args: Any) -> dict[str, Any]:
                 recorded.append({"messages": n, "mb_s": n * frame / ((b - a) / 1e9) / MB,
                                  "ms_per_message": (user + system) * 1000 / max(1, n),
                                  "user_ms": user * 1000 / max(1, n), "sys_ms": system * 1000 / max(1, n),
+                                 "writer_ms": writer * 1000 / max(1, n),
+                                 "receive_ms": (user + system - writer) * 1000 / max(1, n),
                                  "file_mb": path.stat().st_size / MB})
                 path.unlink()
     finally:
@@ -310,12 +333,17 @@ def part_ingest(args: Any) -> dict[str, Any]:
         return round(statistics.median(r[key] for r in rows), 3)
 
     pairs = [round((r["ms_per_message"] / p["ms_per_message"] - 1) * 100, 1) for p, r in zip(plain, recorded, strict=True)]
+    receive = [round((r["receive_ms"] / p["ms_per_message"] - 1) * 100, 1) for p, r in zip(plain, recorded, strict=True)]
     out.update({
         "plain_subscribe": {k: med(plain, k) for k in ("messages", "mb_s", "ms_per_message", "user_ms", "sys_ms")},
-        "rcon_record": {**{k: med(recorded, k) for k in ("messages", "mb_s", "ms_per_message", "user_ms", "sys_ms")},
+        "rcon_record": {**{k: med(recorded, k) for k in ("messages", "mb_s", "ms_per_message", "user_ms", "sys_ms",
+                                                          "receive_ms", "writer_ms")},
                         "compression": args.ingest_compression},
         "record_cpu_over_plain_pct_by_round": pairs,
         "record_cpu_over_plain_pct": round(statistics.median(pairs), 1),
+        # the recorder's receiving side alone (every thread but the writer: reading, decoding, queueing)
+        "record_receive_cpu_over_plain_pct_by_round": receive,
+        "record_receive_cpu_over_plain_pct": round(statistics.median(receive), 1),
     })
     out["ok_50_mb_s"] = out["rcon_record"]["mb_s"] >= 50
     out["ok_cpu_5_pct"] = out["record_cpu_over_plain_pct"] <= 5
