@@ -9,6 +9,23 @@ Decision: the catalogue from advertisements and the graph, not from rosapi
     written once.  ``nodes`` are the graph's publisher, subscriber and provider ids.  Actions: none, the
     protocol has none (``action_servers`` returns an empty list; sending a goal says so in words).
 
+Decision: the first listing waits for the server's first advertisements, a bounded time
+    The link is CONNECTED with ``serverInfo`` (``client.py``); the server's ``advertise`` and
+    ``advertiseServices`` follow in frames of their own, which may come in a later read, so a listing made
+    at once (``rcon topics``, the app's first catalogue, a type lookup) read a part of the catalogue, or
+    nothing, with no sign that it was partial.  Each answer from the advertisements (``topics``,
+    ``services``, ``services_with_types``, ``topic_type``, ``service_type``, ``nodes``) first awaits
+    ``client.wait_catalog()``: it returns once this connection's first ``advertise`` came, and its first
+    ``advertiseServices`` where the server has the ``services`` capability (``session.told``) -- at once on
+    a link that has been up a while.  The protocol's text says at least one ``advertise`` always follows
+    ``serverInfo``, but foxglove-sdk (the core of ``foxglove_bridge``) sends none when it has no channels,
+    and no ``advertiseServices`` when it has no services, while declaring the capability; so the wait is
+    bounded: a listing never waits past ``client.advertise_grace`` (``ADVERTISE_GRACE``, 1 s) after
+    ``serverInfo``, and then lists what the server told (on such a server, nothing).  Connecting does not
+    wait (CONNECTED still means "``serverInfo`` came"): subscribing waits for its channel anyway, and a call
+    for its service (the same grace).  After a reconnect the new session's advertisements are awaited
+    afresh.  Tests: ``tests/test_foxglove_first_listing.py``.
+
 Decision: parameters
     :class:`FoxgloveParams` has ``client.params``' interface over ``getParameters``/``setParameters``:
     names are the server's own (foxglove_bridge: ``/node.param``), grouped by the part before the first
@@ -30,7 +47,8 @@ from rcon_core.msgs import names as type_names
 from .session import CANNOT
 
 #: what the catalogue and the parameters need of their client (``client.py``'s ``FoxgloveClient``, not imported:
-#: no cycle even for annotations): ``session``, ``call_timeout``, ``server_time``, ``await wait_connected()``
+#: no cycle even for annotations): ``session``, ``call_timeout``, ``server_time``, ``await wait_connected()``,
+#: ``await wait_catalog()``
 FoxgloveHost = Any
 
 
@@ -45,7 +63,7 @@ class FoxgloveCatalog:
         return self._client.session
 
     async def _ready(self) -> None:
-        await self._client.wait_connected()
+        await self._client.wait_catalog()  # the first advertisements, a bounded time (the module docstring)
 
     async def topics(self) -> dict[str, str]:
         await self._ready()

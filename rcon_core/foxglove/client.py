@@ -17,12 +17,15 @@ Reconnect
 
 State
     The link is CONNECTED once ``serverInfo`` arrived (``client.failure`` is then cleared), not when the
-    WebSocket opens.
+    WebSocket opens: subscribing, publishing and calls work from then on.  The server's advertisements
+    come in frames of their own after it, sometimes in a later read; a listing waits for them
+    (:meth:`FoxgloveClient.wait_catalog`, bounded by :data:`ADVERTISE_GRACE`; ``catalog.py``, "Decision: the
+    first listing"), connecting does not.
 
 Service calls
     Every call has a client-side budget (``timeout`` or ``call_timeout``).  A call made before the server
     advertised its services waits for them inside the budget; a service still not advertised
-    :data:`SERVICES_GRACE` seconds after the link came up raises ``ServiceError`` naming it.  A
+    :data:`ADVERTISE_GRACE` seconds after the link came up raises ``ServiceError`` naming it.  A
     ``serviceCallFailure`` raises ``ServiceError`` with the server's text; calls waiting when the link
     drops raise ``ConnectionLostError``.
 """
@@ -56,8 +59,9 @@ from .ws import FoxgloveReceiver, Link
 
 log = logging.getLogger(__name__)
 _monotonic = time.monotonic
-#: seconds after ``serverInfo`` within which the server's services are expected to be advertised
-SERVICES_GRACE = 1.0
+#: seconds after ``serverInfo`` within which the server's first ``advertise`` and ``advertiseServices`` are
+#: expected (``client.advertise_grace``): how long a listing or a call waits for advertisements that do not come
+ADVERTISE_GRACE = 1.0
 
 
 class NotFoxgloveError(BridgeError):
@@ -91,7 +95,9 @@ class FoxgloveClient(ConnectionShell):
         self.subprotocols = tuple(subprotocols)
         self.subprotocol: str | None = None
         self._up_at = 0.0
-        self._services_changed: asyncio.Event | None = None
+        #: see :data:`ADVERTISE_GRACE`
+        self.advertise_grace = ADVERTISE_GRACE
+        self._catalog_changed: asyncio.Event | None = None
         self.bad = BadFrames(url, self.stats)
         #: the protocol state (``session.py``)
         self.session = FoxgloveSession(url, self.stats, self.bad)
@@ -124,8 +130,36 @@ class FoxgloveClient(ConnectionShell):
         return RosInfo(version, source="foxglove channel schemas")
 
     async def detect_ros(self, refresh: bool = False) -> RosInfo:
-        """Which ROS the robot runs, from its channels' schema encodings (no rosapi on this protocol)."""
+        """Which ROS the robot runs, from its channels' schema encodings (no rosapi on this protocol): once
+        the channels are told (:meth:`wait_catalog`) where the link is up or coming."""
+        try:
+            await self.wait_catalog()
+        except NotConnectedError:
+            pass
         return self.ros_info
+
+    async def wait_catalog(self) -> None:
+        """Return once a link is up (as :meth:`wait_connected`, whose ``NotConnectedError`` it raises) and its
+        server's first advertisements came (``session.told``), or :attr:`advertise_grace` seconds after its
+        ``serverInfo`` when they did not: a server with no channels or no services may send none.  A link lost
+        meanwhile: waits for the next one."""
+        while True:
+            await self.wait_connected()
+            if self.session.told:
+                return
+            left = self._up_at + self.advertise_grace - _monotonic()
+            if left <= 0:
+                return
+            await self._catalog_news(left)
+
+    async def _catalog_news(self, within: float) -> None:
+        """Wait at most ``within`` s for the session to say its catalogue changed (or was forgotten)."""
+        event = self._catalog_changed = self._catalog_changed or asyncio.Event()
+        event.clear()
+        try:
+            await asyncio.wait_for(event.wait(), within)
+        except TimeoutError:
+            pass
 
     def describe(self) -> dict[str, Any]:
         """Which protocol and which server: ``rcon info`` and the connection bar show it."""
@@ -186,19 +220,14 @@ class FoxgloveClient(ConnectionShell):
 
     async def _service_known(self, name: str) -> None:
         while name not in self.session.service_by_name:
-            left = self._up_at + SERVICES_GRACE - _monotonic()
+            left = self._up_at + self.advertise_grace - _monotonic()
             if left <= 0:
                 raise ServiceError(f"the robot advertises no service {name}", name)
-            event = self._services_changed = self._services_changed or asyncio.Event()
-            event.clear()
-            try:
-                await asyncio.wait_for(event.wait(), left)
-            except TimeoutError:
-                pass
+            await self._catalog_news(left)
 
     def _session_event(self, kind: str) -> None:
-        if kind == "catalog" and self._services_changed is not None:
-            self._services_changed.set()
+        if kind == "catalog" and self._catalog_changed is not None:
+            self._catalog_changed.set()
         elif kind == "server" and self.link is not None and not self._connected.is_set():
             self._up_at = _monotonic()  # serverInfo arrived: the link is up
             self.failure = None

@@ -17,7 +17,8 @@ Decision: the catalogue
     channels is read from the first.  ``advertiseServices``/``unadvertiseServices`` keep ``services``.
     ``connectionGraphUpdate`` keeps ``graph`` (who publishes, subscribes, provides; removals applied).
     Everything is forgotten with the connection: a new connection (a restarted server) advertises afresh
-    with new ids.
+    with new ids.  :attr:`FoxgloveSession.told` says whether this connection's first advertisements have
+    come: what a listing waits for (``catalog.py``, "Decision: the first listing").
 
 Decision: after every (re)connect
     Subscriptions are sent for each wanted topic as soon as its channel is advertised (a subscription made
@@ -105,6 +106,8 @@ class FoxgloveSession:
         self.by_topic: dict[str, Channel] = {}
         self.service_list: dict[int, Service] = {}
         self.service_by_name: dict[str, Service] = {}
+        #: an ``advertise`` / ``advertiseServices`` came on this connection (see :attr:`told`)
+        self.channels_told = self.services_told = False
         self.graph: dict[str, dict[str, list[str]]] = {"published": {}, "subscribed": {}, "services": {}}
         self.time_ns: int | None = None
         self.statuses: dict[str, tuple[str, str]] = {}
@@ -140,6 +143,14 @@ class FoxgloveSession:
         enc = (self.server or {}).get("supportedEncodings")
         return [e for e in enc if isinstance(e, str)] if isinstance(enc, list) else []
 
+    @property
+    def told(self) -> bool:
+        """This connection's first advertisements came: ``serverInfo``, an ``advertise``, and an
+        ``advertiseServices`` where the server has the ``services`` capability.  (A server with no channels or
+        no services may send neither: the client bounds the wait, ``catalog.py``.)"""
+        return (self.server is not None and self.channels_told
+                and (self.services_told or "services" not in self.capabilities))
+
     def attached(self, write: Write, command: Command) -> None:
         self._write, self._command = write, command
 
@@ -151,6 +162,7 @@ class FoxgloveSession:
         self.by_topic.clear()
         self.service_list.clear()
         self.service_by_name.clear()
+        self.channels_told = self.services_told = False
         self.graph = {"published": {}, "subscribed": {}, "services": {}}
         self.statuses.clear()
         self.subs.clear()
@@ -273,6 +285,7 @@ class FoxgloveSession:
             entry = self.topics.get(ch.topic)
             if entry is not None and entry.sid is None:
                 self._subscribe(entry)
+        self.channels_told = True
         self._notify("catalog")
 
     def _on_unadvertise(self, m: dict[str, Any]) -> None:
@@ -310,6 +323,7 @@ class FoxgloveSession:
                 continue
             self.service_list[srv.id] = srv
             self.service_by_name[srv.name] = srv
+        self.services_told = True
         self._notify("catalog")
 
     def _on_unadvertise_services(self, m: dict[str, Any]) -> None:
