@@ -90,9 +90,13 @@ NODE_DIR = HERE / "node"
 FOX_SUBPROTOCOL = "foxglove.sdk.v1"
 
 
+#: messages per small-ingest flood (``--small``)
+SMALL = 100_000
+
+
 def sizes(quick: bool) -> dict[str, int]:
     """Messages per flood; round trips: warm-up, then ``rtt_blocks`` blocks of ``rtt_block`` per round."""
-    return {"small": 30000 if quick else 100000, "image_json": 30 if quick else 100, "image_cbor": 30 if quick else 200,
+    return {"small": 30000 if quick else SMALL, "image_json": 30 if quick else 100, "image_cbor": 30 if quick else 200,
             "rtt_warmup": 50 if quick else 300, "rtt_block": 50 if quick else 100, "rtt_blocks": 2 if quick else 5}
 
 
@@ -995,14 +999,14 @@ def node_ready() -> str | None:
 class ClientProcess:
     """One client in its own subprocess, driven by commands on its stdin."""
 
-    def __init__(self, kind: str, url: str, quick: bool) -> None:
+    def __init__(self, kind: str, url: str, n: dict[str, int]) -> None:
         self.kind = kind
         if kind in NODE:
             cmd = ["node", str(NODE_DIR / "bench_client.mjs"), "--lib", NODE[kind], "--url", url,
-                   "--sizes", json.dumps(sizes(quick))]
+                   "--sizes", json.dumps(n)]
         else:
-            cmd = [sys.executable, str(Path(__file__).resolve()), "--client", kind, "--url", url]
-            cmd += ["--quick"] if quick else []
+            cmd = [sys.executable, str(Path(__file__).resolve()), "--client", kind, "--url", url,
+                   "--sizes", json.dumps(n)]
         self.proc = subprocess.Popen(cmd, stdin=subprocess.PIPE,
                                      stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                      env=dict(os.environ, PYTHONWARNINGS="ignore"))
@@ -1033,9 +1037,11 @@ def _rotate(items: list[str], k: int) -> list[str]:
 
 
 def run_session(server: FloodServer, url: str, kinds: list[str], n: dict[str, int], n_rounds: int,
-                quick: bool) -> tuple[list[dict[str, dict[str, float]]], dict[str, dict[str, float]], dict[str, Any]]:
-    """Run every round; returns per-round figures, pooled round-trip figures and the raw results."""
-    clients = {k: ClientProcess(k, url, quick) for k in kinds}
+                phases: tuple[str, ...] = ALL_PHASES,
+                ) -> tuple[list[dict[str, dict[str, float]]], dict[str, dict[str, float]], dict[str, Any]]:
+    """Run every round (the ``phases`` asked for); returns per-round figures, pooled round-trip figures and
+    the raw results."""
+    clients = {k: ClientProcess(k, url, n) for k in kinds}
     rounds: list[dict[str, dict[str, float]]] = [{k: {} for k in kinds} for _ in range(n_rounds)]
     raw: dict[str, Any] = {k: {"floods": [], "rtt_samples": [], "rtt_cpu_s": 0.0} for k in kinds}
     try:
@@ -1043,7 +1049,9 @@ def run_session(server: FloodServer, url: str, kinds: list[str], n: dict[str, in
             c.read()  # ready: connected, round trip warmed up
         for r in range(n_rounds):
             rtt: dict[str, list[float]] = {k: [] for k in kinds}
-            for i, phase in enumerate(("small", "rtt", "image_json", "image_cbor")):
+            for i, phase in enumerate(ALL_PHASES):
+                if phase not in phases:
+                    continue
                 if phase == "rtt":
                     for b in range(n["rtt_blocks"]):
                         for k in _rotate(kinds, r + b):
@@ -1060,6 +1068,8 @@ def run_session(server: FloodServer, url: str, kinds: list[str], n: dict[str, in
                     raw[k]["floods"].append({"round": r, "phase": phase, "client": res, "server": floods})
                     rounds[r][k].update(ingest_figures(phase, res, floods))
             for k in kinds:
+                if not rtt[k]:
+                    continue
                 rounds[r][k].update(rtt_figures(rtt[k]))
                 raw[k]["rtt_samples"] += rtt[k]
             print(f"round {r + 1}/{n_rounds} done", file=sys.stderr, flush=True)
@@ -1075,6 +1085,8 @@ def run_session(server: FloodServer, url: str, kinds: list[str], n: dict[str, in
     pooled = {}
     for k in kinds:
         samples = raw[k]["rtt_samples"]
+        if not samples:
+            continue
         pooled[k] = rtt_figures(samples)
         pooled[k]["rtt_cpu_us"] = raw[k]["rtt_cpu_s"] / len(samples) * 1e6
         for rnd in rounds:
@@ -1089,11 +1101,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--clients", nargs="*", default=list(CLIENTS))
     parser.add_argument("--rounds", type=int, default=7, help="interleaved rounds (default 7)")
     parser.add_argument("--batch", type=int, default=64, help="small frames per server write (default 64)")
+    parser.add_argument("--small", type=int, help=f"messages per small-ingest flood (default {SMALL:,})")
+    parser.add_argument("--phases", nargs="*", choices=ALL_PHASES, default=list(ALL_PHASES),
+                        help="the phases to run (default: all)")
+    parser.add_argument("--sizes", help=argparse.SUPPRESS)  # internal: the sizes a client runs (JSON)
     parser.add_argument("--base", type=Path, help="source tree for the rcon_base column (RCON as it was)")
     parser.add_argument("--client", help=argparse.SUPPRESS)  # internal: run one client in this process
     parser.add_argument("--url", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
-    n = sizes(args.quick)
+    n = json.loads(args.sizes) if args.sizes else sizes(args.quick)
+    if args.small:
+        n["small"] = args.small
     if args.client:
         run_client(args.client, args.url, n)
         return 0
@@ -1116,7 +1134,8 @@ def main(argv: list[str] | None = None) -> int:
     load_before = os.getloadavg()
     server = FloodServer(n, batch=args.batch).start()
     try:
-        rounds, pooled, raw = run_session(server, f"ws://127.0.0.1:{server.port}", kinds, n, n_rounds, args.quick)
+        rounds, pooled, raw = run_session(server, f"ws://127.0.0.1:{server.port}", kinds, n, n_rounds,
+                                         tuple(args.phases))
     finally:
         server.stop()
     summary = summarize(rounds, pooled, kinds)
