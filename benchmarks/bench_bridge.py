@@ -2,7 +2,8 @@
 bare websockets+orjson and picows+orjson loops, against ONE loopback server; and RCON's Foxglove link (column
 ``foxglove``) against the same server speaking the Foxglove protocol.
 
-Usage: ``python benchmarks/bench_bridge.py [--out PATH] [--quick] [--rounds N] [--batch N] [--clients K ...]``.
+Usage: ``python benchmarks/bench_bridge.py [--out PATH] [--quick] [--rounds N] [--batch N] [--clients K ...]
+[--phases P ...] [--small N] [--small-chunks K] [--base TREE]``.
 
 Clients (columns): ``bare`` (websockets ``recv`` + orjson, the old floor), ``bare_picows`` (a picows listener +
 orjson: the floor of the picows transport), ``rcon`` (RCON's client on picows, the default transport, on the app's event loop),
@@ -20,7 +21,16 @@ its own subprocess for the whole run, connected and idle until the driver sends 
 within a round every phase runs for every client back to back, in an order that rotates -- so a burst of
 load from elsewhere on a shared machine lands on all clients alike.  Phases:
 
-* small-message ingest: std_msgs/Float64 ``publish`` frames sent back to back;
+* small-message ingest: std_msgs/Float64 ``publish`` frames sent back to back, in :data:`SMALL_CHUNKS` (5)
+  floods of :data:`SMALL` (100,000) per client and round, the clients taking turns flood by flood (the
+  round's figure is their sum).  Why: on this shared 2-core machine the other work comes and goes in bursts
+  of seconds, and one flood of 100,000 (0.1-0.2 s) per client and round met a burst or missed it: the
+  figures of one run spread +-20-40 % over its rounds and the judged ratio's median moved by 0.1-0.15 from
+  run to run.  Five floods a round, interleaved, spread each client's round over the same few seconds as
+  the others': measured three runs each at a load of 2-3 (``--rounds 7``, rcon against roslibjs), the
+  ratio's median moved 1.12-1.26 with one flood of 100,000, 1.09-1.22 with one of 500,000, and 1.18-1.24
+  with five interleaved floods of 100,000 (each client's spread over rounds +-2-9 %).  ``--small`` and
+  ``--small-chunks`` change them;
 * round trip: publish on /bench/ping, the server echoes it on /bench/pong; a warm-up at start and a few
   discarded trips at the start of every block (a process waking from idle is slower for a trip or two);
 * 640x480 rgb8 sensor_msgs/Image ingest as JSON (base64 data) and as CBOR (byte string); roslibpy has no
@@ -92,6 +102,8 @@ FOX_SUBPROTOCOL = "foxglove.sdk.v1"
 
 #: messages per small-ingest flood (``--small``)
 SMALL = 100_000
+#: small-ingest floods per client per round (``--small-chunks``), the clients taking turns (see the docstring)
+SMALL_CHUNKS = 5
 
 
 def sizes(quick: bool) -> dict[str, int]:
@@ -1036,11 +1048,21 @@ def _rotate(items: list[str], k: int) -> list[str]:
     return items[k:] + items[:k]
 
 
+def _summed(floods: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The server's flood records of one phase added up (one record per phase)."""
+    out: dict[str, dict[str, Any]] = {}
+    for fl in floods:
+        got = out.setdefault(fl["phase"], {"phase": fl["phase"], "count": 0, "wall_s": 0.0, "cpu_s": 0.0})
+        for key in ("count", "wall_s", "cpu_s"):
+            got[key] += fl[key]
+    return list(out.values())
+
+
 def run_session(server: FloodServer, url: str, kinds: list[str], n: dict[str, int], n_rounds: int,
-                phases: tuple[str, ...] = ALL_PHASES,
+                phases: tuple[str, ...] = ALL_PHASES, chunks: int = SMALL_CHUNKS,
                 ) -> tuple[list[dict[str, dict[str, float]]], dict[str, dict[str, float]], dict[str, Any]]:
-    """Run every round (the ``phases`` asked for); returns per-round figures, pooled round-trip figures and
-    the raw results."""
+    """Run every round (the ``phases`` asked for; the small phase as ``chunks`` floods per client, the
+    clients taking turns); returns per-round figures, pooled round-trip figures and the raw results."""
     clients = {k: ClientProcess(k, url, n) for k in kinds}
     rounds: list[dict[str, dict[str, float]]] = [{k: {} for k in kinds} for _ in range(n_rounds)]
     raw: dict[str, Any] = {k: {"floods": [], "rtt_samples": [], "rtt_cpu_s": 0.0} for k in kinds}
@@ -1059,14 +1081,21 @@ def run_session(server: FloodServer, url: str, kinds: list[str], n: dict[str, in
                             rtt[k] += res["samples"]
                             raw[k]["rtt_cpu_s"] += res["cpu_s"]
                     continue
-                for k in _rotate(kinds, r + i):
-                    if phase not in PHASES[k]:
-                        continue
-                    server.take_floods()
-                    res = clients[k].command(phase)
-                    floods = server.take_floods()
-                    raw[k]["floods"].append({"round": r, "phase": phase, "client": res, "server": floods})
-                    rounds[r][k].update(ingest_figures(phase, res, floods))
+                sums: dict[str, tuple[dict[str, float], list[dict[str, Any]]]] = {}
+                for chunk in range(chunks if phase == "small" else 1):  # the small phase: chunks, interleaved
+                    for k in _rotate(kinds, r + i + chunk):
+                        if phase not in PHASES[k]:
+                            continue
+                        server.take_floods()
+                        res = clients[k].command(phase)
+                        floods = server.take_floods()
+                        raw[k]["floods"].append({"round": r, "phase": phase, "client": res, "server": floods})
+                        got, all_floods = sums.setdefault(k, ({"n": 0, "wall_s": 0.0, "cpu_s": 0.0}, []))
+                        for key in got:
+                            got[key] += res[key]
+                        all_floods += floods
+                for k, (got, all_floods) in sums.items():
+                    rounds[r][k].update(ingest_figures(phase, got, _summed(all_floods)))
             for k in kinds:
                 if not rtt[k]:
                     continue
@@ -1102,6 +1131,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--rounds", type=int, default=7, help="interleaved rounds (default 7)")
     parser.add_argument("--batch", type=int, default=64, help="small frames per server write (default 64)")
     parser.add_argument("--small", type=int, help=f"messages per small-ingest flood (default {SMALL:,})")
+    parser.add_argument("--small-chunks", type=int, default=SMALL_CHUNKS,
+                        help=f"small-ingest floods per client per round, the clients taking turns (default "
+                             f"{SMALL_CHUNKS})")
     parser.add_argument("--phases", nargs="*", choices=ALL_PHASES, default=list(ALL_PHASES),
                         help="the phases to run (default: all)")
     parser.add_argument("--sizes", help=argparse.SUPPRESS)  # internal: the sizes a client runs (JSON)
@@ -1135,7 +1167,7 @@ def main(argv: list[str] | None = None) -> int:
     server = FloodServer(n, batch=args.batch).start()
     try:
         rounds, pooled, raw = run_session(server, f"ws://127.0.0.1:{server.port}", kinds, n, n_rounds,
-                                         tuple(args.phases))
+                                         tuple(args.phases), max(1, args.small_chunks))
     finally:
         server.stop()
     summary = summarize(rounds, pooled, kinds)
