@@ -30,8 +30,9 @@ load from elsewhere on a shared machine lands on all clients alike.  Phases:
   the others': measured three runs each at a load of 2-3 (``--rounds 7``, rcon against roslibjs), the
   ratio's median moved 1.12-1.26 with one flood of 100,000, 1.09-1.22 with one of 500,000, and 1.18-1.24
   with five interleaved floods of 100,000 (each client's spread over rounds +-2-9 %).  ``--small`` and
-  ``--small-chunks`` change them; roslibpy and the bare websockets loop (:data:`ONE_FLOOD`), 10-50 times
-  RCON's CPU per message and judged against thresholds far from their figures, run one flood a round;
+  ``--small-chunks`` change them; roslibpy and the bare websockets loop (:data:`ONE_FLOOD`), 4-15 times
+  RCON's CPU per message and judged against thresholds far from their figures, run one flood a round (the
+  whole benchmark, every client, ``--rounds 7``: 112 s at a load of 1.2-2.5);
 * round trip: publish on /bench/ping, the server echoes it on /bench/pong; a warm-up at start and a few
   discarded trips at the start of every block (a process waking from idle is slower for a trip or two);
 * 640x480 rgb8 sensor_msgs/Image ingest as JSON (base64 data) and as CBOR (byte string); roslibpy has no
@@ -105,8 +106,8 @@ FOX_SUBPROTOCOL = "foxglove.sdk.v1"
 SMALL = 100_000
 #: small-ingest floods per client per round (``--small-chunks``), the clients taking turns (see the docstring)
 SMALL_CHUNKS = 5
-#: clients that run one small-ingest flood a round: 10-50 times RCON's CPU per message (5 s a flood), judged
-#: against thresholds far from their figures
+#: clients that run one small-ingest flood a round: 4-15 times RCON's CPU per message (0.5-1.5 s a flood),
+#: judged against thresholds far from their figures
 ONE_FLOOD = ("roslibpy", "bare")
 
 
