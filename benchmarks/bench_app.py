@@ -227,6 +227,8 @@ def main(argv: list[str] | None = None) -> int:
                              "raised); bulk threads are still lowered")
     parser.add_argument("--robots", type=int, metavar="N",
                         help="the fleet benchmark: N vessels in their own processes (see bench_fleet.py)")
+    parser.add_argument("--no-malloc-policy", action="store_true",
+                        help="leave glibc's allocator at its defaults (rcon_core/mallocpolicy.py), app and sims")
     parser.add_argument("--background-load", type=int, default=0, metavar="N",
                         help="N busy processes (0-8) beside the benchmark for the whole run, ended with it")
     args = parser.parse_args(argv)
@@ -254,6 +256,10 @@ def latency_policy(off: bool) -> None:
 
 def run(args: argparse.Namespace) -> int:
     latency_policy(args.no_latency_policy)
+    if not args.no_malloc_policy:
+        from rcon_core.mallocpolicy import keep_big_blocks
+
+        keep_big_blocks()  # as the app's entry point does (rcon_core/mallocpolicy.py)
     if args.robots is not None:
         import bench_fleet
 

@@ -46,7 +46,7 @@ ROW_H = 400
 
 
 @contextlib.contextmanager
-def fleet_processes(n: int, hz: float, latency_policy: bool = True):
+def fleet_processes(n: int, hz: float, latency_policy: bool = True, malloc_policy: bool = True):
     """N ``fleet_sim.py`` processes (boat1..); yields [(name, url, pid)]."""
     here = Path(__file__).resolve().parent
     procs: list[subprocess.Popen] = []
@@ -55,7 +55,8 @@ def fleet_processes(n: int, hz: float, latency_policy: bool = True):
         for k in range(1, n + 1):
             name = f"boat{k}"
             proc = subprocess.Popen([sys.executable, str(here / "fleet_sim.py"), "--name", name, "--values",
-                                     str(VALUES), "--hz", str(hz), *([] if latency_policy else ["--no-latency-policy"])],
+                                     str(VALUES), "--hz", str(hz), *([] if latency_policy else ["--no-latency-policy"]),
+                                     *([] if malloc_policy else ["--no-malloc-policy"])],
                                     stdout=subprocess.PIPE,
                                     stderr=subprocess.STDOUT, text=True)
             procs.append(proc)
@@ -217,7 +218,8 @@ def run(args: Any) -> dict:
                                "load_average_before": [round(v, 2) for v in os.getloadavg()]}
     plugins = fleet_plugins()
     figures["latency_policy"] = not getattr(args, "no_latency_policy", False)
-    with tempfile.TemporaryDirectory() as tmp, fleet_processes(n, args.hz, figures["latency_policy"]) as sims:
+    with tempfile.TemporaryDirectory() as tmp, fleet_processes(n, args.hz, figures["latency_policy"],
+                                                                not getattr(args, "no_malloc_policy", False)) as sims:
         # the collector policy the app's entry point gives its window (rcon_core/app/main.py)
         collector = None if args.no_gc_policy else CollectorPolicy()
         window = MainWindow(AppConfig(Path(tmp) / "cfg"), plugins, collector=collector)

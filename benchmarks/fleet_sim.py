@@ -101,6 +101,7 @@ def main() -> int:
     parser.add_argument("--values", type=int, default=20)
     parser.add_argument("--hz", type=float, default=20.0)
     parser.add_argument("--no-latency-policy", action="store_true", help="as before favour_latency (priority.py)")
+    parser.add_argument("--no-malloc-policy", action="store_true", help="glibc's allocator as it is (mallocpolicy.py)")
     args = parser.parse_args()
     from rcon_core import priority
 
@@ -108,6 +109,10 @@ def main() -> int:
         priority.raise_this_thread = lambda: False
     else:
         priority.favour_latency()  # as `rcon sim` does: its loop thread raised, a short GIL switch interval
+    if not args.no_malloc_policy:
+        from rcon_core.mallocpolicy import keep_big_blocks
+
+        keep_big_blocks()  # as `rcon sim` does (rcon_core/mallocpolicy.py)
     die_with_parent()  # a benchmark killed outright leaves no vessel running
     asyncio.run(serve(args.name, args.values, args.hz))
     return 0

@@ -100,11 +100,28 @@ def window_maker(qtbot, config_root: Path, plugins: PluginManager, *, demo: bool
         win.shutdown()
 
 
-def settle(ms: int = 30) -> None:
-    """Let layouts and repaints catch up (events processed three times over ``ms``)."""
-    for _ in range(3):
-        QtWidgets.QApplication.processEvents()
-        QTest.qWait(ms // 3 or 1)
+def settle(passes: int = 3) -> None:
+    """Let Qt catch up with what the test just did: the posted events (layout requests, polish, queued
+    calls, zero-delay single shots) sent and the window system's events processed, ``passes`` times over
+    (what one pass posts, the next sends). It never waits for time to pass, and no timer fires in it:
+    what comes on a timer or from another thread (a frame of the frame clock, a value from the sim) is
+    waited for with ``qtbot.waitUntil`` on that condition."""
+    app = QtWidgets.QApplication.instance()
+    for _ in range(passes):
+        app.sendPostedEvents()
+        app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.X11ExcludeTimers)
+
+
+def canvas_shown(qtbot, window: MainWindow) -> None:
+    """Wait until every widget of the canvas shown has its view, built from the model the bridge thread
+    made for it (a canvas switch or a placed widget builds them a moment later), then :func:`settle`."""
+    def built() -> None:
+        missing = [w.title or w.kind for w in window.controller.canvas.widgets
+                   if (h := window.host.hosted.get(w.id)) is None or h.view is None or not h.view.isVisible()]
+        assert not missing, missing
+
+    qtbot.waitUntil(built, timeout=TIMEOUT_MS)
+    settle()
 
 
 def compound_in_operate(qtbot, window: MainWindow, widget_id: str, children: int) -> tuple[Any, Any]:

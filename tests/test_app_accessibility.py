@@ -29,7 +29,7 @@ def bundled():
 
 
 def walk(window, where: str, found: dict[str, str]) -> None:
-    settle(60)
+    settle()
     for line in nameless_controls(window):
         found.setdefault(line, where)
 

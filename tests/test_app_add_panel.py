@@ -345,7 +345,7 @@ def test_headings_keep_names_whole_and_the_preview_fits_the_panel(window, qtbot)
         panel, QtCore.QPoint(0, 0)).y()
     assert frame.height() <= panel.height() // 3 + 1
     badge = frame.badge.geometry()
-    assert "PREVIEW ONLY" in frame.badge.text()
+    assert "PREVIEW ONLY" in frame.badge.status
     assert frame.rect().contains(badge)
     assert frame.height() >= 0.8 * frame.width()  # square-ish like the 320 x 320 widget
     # the preview's model knows it is a preview (offline on purpose), so the pad says so, not "link down"

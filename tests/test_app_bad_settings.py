@@ -36,7 +36,7 @@ def test_a_wrong_type_in_settings_is_not_configured(window, qtbot, caplog):
     text = frame.problems.text()
     assert text.startswith("⚠ Not configured")
     assert "invalid settings: minimum must be a number (got 'low')" in text
-    assert frame.badge.text() != "ERROR"
+    assert frame.badge.status != "ERROR"
     placeholders = [w.text() for w in frame.findChildren(QtWidgets.QLabel, "placeholder")]
     assert not any("could not be shown" in t for t in placeholders)
     records = caplog.get_records("setup") + caplog.get_records("call")

@@ -54,8 +54,8 @@ def test_the_error_badge_shows_its_reason_on_hover_and_on_a_tap(qtbot, tmp_path,
         if edit:
             tap(win.edit_button)
         [frame] = win.controller.surface.frames.values()
-        qtbot.waitUntil(lambda frame=frame: frame.badge.text() == "ERROR", timeout=TIMEOUT_MS)
-        settle(60)
+        qtbot.waitUntil(lambda frame=frame: frame.badge.status == "ERROR", timeout=TIMEOUT_MS)
+        settle()
         assert (frame.width(), frame.height()) == default
         badge = frame.badge.geometry()
         centre = badge.center()

@@ -183,12 +183,12 @@ def test_ui_stays_responsive_while_the_link_drops_and_returns(qtbot, tmp_path):
         # the server is gone: the app notices, keeps painting, and shows the link down
         qtbot.waitUntil(lambda: window.connection.state in (ConnectionState.RECONNECTING, ConnectionState.CONNECTING), timeout=10_000)
         frame = next(iter(window.controller.surface.frames.values()))
-        qtbot.waitUntil(lambda: frame.badge.isVisible() and frame.badge.text() == "LINK DOWN", timeout=5_000)
+        qtbot.waitUntil(lambda: frame.badge.isVisible() and frame.badge.status == "LINK DOWN", timeout=5_000)
         qtbot.wait(500)
         with SimServer.in_thread(port=port) as second:
             qtbot.waitUntil(lambda: window.connection.state is ConnectionState.CONNECTED, timeout=15_000)
             qtbot.waitUntil(lambda: second.topic_subscriber_count("/battery") == 1, timeout=10_000)
-            qtbot.waitUntil(lambda: frame.badge.text() != "LINK DOWN" or not frame.badge.isVisible(), timeout=10_000)
+            qtbot.waitUntil(lambda: frame.badge.status != "LINK DOWN" or not frame.badge.isVisible(), timeout=10_000)
             timer.stop()
     finally:
         window.shutdown()

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import pytest
 from app_helpers import choose_kind, entry_point_plugins, tap, tap_topic, window_session
-from qtpy import QtWidgets
 
 from rcon_core.app.main_window import MainWindow
 from rcon_core.bridge import ConnectionState
@@ -37,14 +36,19 @@ def test_disconnect_keeps_the_last_values_marked_link_down_and_connect_brings_th
     qtbot.waitUntil(lambda: shown(window, wid) not in ("", "–"), timeout=10_000)
     frame = window.controller.surface.frames[wid]
     assert not frame.badge.isVisible()
+    live = window.host.hosted[wid]
+    model, view = live.model, live.view
 
     tap(window.connection.connect_button)  # "Disconnect"
     qtbot.waitUntil(lambda: window.connection.state is ConnectionState.CLOSED, timeout=5_000)
-    qtbot.waitUntil(lambda: frame.badge.isVisible() and frame.badge.text() == "LINK DOWN", timeout=5_000)
-    qtbot.wait(300)  # time for a rebuild to show up, were there one
-    QtWidgets.QApplication.processEvents()
-    last = shown(window, wid)
+    qtbot.waitUntil(lambda: frame.badge.isVisible() and frame.badge.status == "LINK DOWN", timeout=5_000)
+    # everything the Disconnect asked of the bridge thread has run (one queue, in order), and whatever it
+    # sent back is applied: a rebuild, were there one, is in place now
+    window.link.thread.call(lambda: None).result(5)
+    window._pump()
     kept = window.host.hosted[wid].model
+    assert kept is model and window.host.hosted[wid].view is view  # kept, not rebuilt
+    last = shown(window, wid)
     assert last not in ("", "–"), last  # still the last value, not "–" (no data yet)
     assert window.connection.connect_button.text() == "Connect"
 
@@ -53,7 +57,7 @@ def test_disconnect_keeps_the_last_values_marked_link_down_and_connect_brings_th
     window.switch_canvas(0)
     qtbot.waitUntil(lambda: window.host.hosted[wid].model is not kept and window.host.hosted[wid].view is not None,
                     timeout=10_000)
-    qtbot.waitUntil(lambda: frame.badge.isVisible() and frame.badge.text() == "LINK DOWN", timeout=5_000)
+    qtbot.waitUntil(lambda: frame.badge.isVisible() and frame.badge.status == "LINK DOWN", timeout=5_000)
 
     tap(window.connection.connect_button)  # Connect again: live values
     qtbot.waitUntil(lambda: window.connection.state is ConnectionState.CONNECTED, timeout=10_000)

@@ -6,7 +6,7 @@ label or button cut (in Operate and Edit mode, connected and not)."""
 from __future__ import annotations
 
 import pytest
-from app_helpers import TIMEOUT_MS, choose_kind, open_window, settle, snap, tap, tap_topic
+from app_helpers import TIMEOUT_MS, canvas_shown, choose_kind, open_window, settle, snap, tap, tap_topic
 from fit_check import problems
 from qtpy import QtCore, QtGui, QtWidgets
 from test_app_accessibility import every_widget
@@ -50,7 +50,7 @@ def display(window, qtbot, button: str) -> None:
     tap(dialog.findChild(QtWidgets.QPushButton, button))
     snap(dialog, f"display-{button}")
     dialog.close()
-    settle(90)
+    settle()
 
 
 def lightness(widget: QtWidgets.QWidget, at: QtCore.QPoint | None = None) -> float:
@@ -109,7 +109,7 @@ def test_every_bundled_widget_follows_the_theme(qtbot, tmp_path, bundled):
             looks = {}
             for name in ("sunlight", "night"):
                 display(window, qtbot, f"theme-{name}")
-                settle(300)
+                settle()
                 looks[name] = {h.widget.kind: lightness(h.view) for h in hosted}
                 snap(window, f"every-widget-{name}")
             for kind in looks["night"]:
@@ -133,39 +133,39 @@ def test_the_whole_window_follows_the_text_size_without_a_cut_at_1024x600(qtbot,
             assert window.connection.connect_button.font().pixelSize() == round(before * size / 100)
             for k in range(window.tabs.count()):  # Operate mode, every canvas
                 window.switch_canvas(k)
-                settle(300)
+                canvas_shown(qtbot, window)
                 assert window.size() == QtCore.QSize(1024, 600)
                 assert problems(window) == [], (k, problems(window))
             snap(window, f"text-{size}-operate")
             tap(window.edit_button)
-            settle(300)
+            settle()
             assert window.size() == QtCore.QSize(1024, 600) and problems(window) == []
             snap(window, f"text-{size}-edit")
             if not window.side.isVisible():  # no room beside the canvas: ▶ shows it in the canvas's place
                 assert window.side_toggle.isEnabled() and "in place of the canvas" in window.side_toggle.toolTip()
                 tap(window.side_toggle)
-                settle(300)
+                settle()
                 assert window.side.isVisible() and not window.center.isVisible()
                 assert window.size() == QtCore.QSize(1024, 600) and problems(window) == []
                 snap(window, f"text-{size}-side")
             tap_topic(window, "/battery")  # adding a widget: the add panel beside the canvas, nothing cut
             choose_kind(window, Role.SUBSCRIBE, "std.label")
             qtbot.waitUntil(lambda: window.add_panel.preview_frame is not None, timeout=TIMEOUT_MS)
-            settle(300)
+            settle()
             # beside the canvas, or in its place when the two do not fit side by side
             assert window.add_panel.isVisible() and window.center.isVisible() != window.side_policy.panel_alone
             assert window.size() == QtCore.QSize(1024, 600) and problems(window) == []
             snap(window, f"text-{size}-adding")
             tap(window.add_panel.place_button)
-            settle(300)
+            canvas_shown(qtbot, window)  # the placed widget's view too
             assert window.center.isVisible() and len(window.controller.canvas.widgets) > 0
             assert window.size() == QtCore.QSize(1024, 600) and problems(window) == []
             tap(window.connection.connect_button)  # disconnected: the longest state word
             qtbot.waitUntil(lambda: window.connection.state is ConnectionState.CLOSED, timeout=TIMEOUT_MS)
-            settle(200)
+            settle()
             assert window.size() == QtCore.QSize(1024, 600) and problems(window) == []
             window.canvas_actions["display"].trigger()  # the dialog itself
-            settle(200)
+            settle()
             assert problems(window.display.dialog) == []
             window.display.dialog.close()
         finally:

@@ -147,7 +147,7 @@ def test_one_robot_dropping_shows_link_down_only_on_its_widgets(qtbot, tmp_path,
         chip = win.fleet_ui.chips.chips["r-2"]
         qtbot.waitUntil(lambda: chip.state in (ConnectionState.RECONNECTING, ConnectionState.CLOSED), timeout=TIMEOUT_MS)
         b_badge = frame_of(win, b_id).badge
-        qtbot.waitUntil(lambda: b_badge.isVisible() and b_badge.text() == "LINK DOWN", timeout=TIMEOUT_MS)
+        qtbot.waitUntil(lambda: b_badge.isVisible() and b_badge.status == "LINK DOWN", timeout=TIMEOUT_MS)
         assert "RECONNECTING" in chip.text() or "DISCONNECTED" in chip.text()
         qtbot.waitUntil(lambda: "connection refused" in chip.toolTip(), timeout=TIMEOUT_MS)  # why, in words
         # Alpha's widget stays live: no badge, its value keeps coming

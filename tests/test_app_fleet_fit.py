@@ -43,7 +43,7 @@ def open_fleet(qtbot, tmp_path, plugins, n, size, urls=()):
     hosted = {(w.kind, w.binding.robot): window.host.hosted[w.id] for w in canvas.widgets}
     assert len(hosted) == 2 * n + 1
     qtbot.waitUntil(lambda: all(h.view is not None for h in hosted.values()), timeout=TIMEOUT_MS)
-    settle(90)
+    settle()
     return window, hosted
 
 
@@ -109,7 +109,7 @@ def test_three_vessels_show_whole_titles_and_each_pad_drives_its_own(qtbot, tmp_
                 for kind in ("sensors.image", "sensors.teleop"):
                     frame = hosted[(kind, f"r-{k}")].frame
                     qtbot.waitUntil(lambda frame=frame: not frame.badge.isVisible(), timeout=TIMEOUT_MS)
-            settle(60)
+            settle()
             for (kind, robot), h in hosted.items():
                 title = h.frame.title
                 assert title.text() == title.full_title, (kind, robot, title.text())  # whole, never "boat1 · Fr…"
@@ -118,7 +118,7 @@ def test_three_vessels_show_whole_titles_and_each_pad_drives_its_own(qtbot, tmp_
             # a finger on boat 3's pad (scrolled into sight if need be) drives boat 3 only
             pad = hosted[("sensors.teleop", "r-3")]
             window.controller.surface.reveal(pad.frame.geometry())
-            settle(60)
+            settle()
             centre, radius = pad.view.pad()
             c = centre.toPoint()
             QTest.mousePress(pad.view, QtCore.Qt.MouseButton.LeftButton, pos=c)
@@ -128,7 +128,7 @@ def test_three_vessels_show_whole_titles_and_each_pad_drives_its_own(qtbot, tmp_
             qtbot.waitUntil(lambda: sims[2].robot.cmd_surge == 0.0, timeout=TIMEOUT_MS)
             assert sims[0].robot.cmd_surge == 0.0 and sims[1].robot.cmd_surge == 0.0
             window.controller.surface.reveal(QtCore.QRect(0, 0, 10, 10))
-            settle(200)
+            settle()
             snap(window, f"fleet-live-3-{size[0]}x{size[1]}")
         finally:
             window.shutdown()
@@ -198,8 +198,9 @@ def test_the_fleet_map_shows_every_vessel_and_keeps_still_after_a_pan(qtbot, tmp
             assert not view.fit.fitting and view.pending is None  # a drag, not a tap: no goal offered
             kept = (view.viewport.lat, view.viewport.lon, view.viewport.zoom)
             sims[1].robot.y -= 6000.0  # boat2 goes far out of view
-            qtbot.waitUntil(lambda: at_sim("boat2", sims[1]), timeout=TIMEOUT_MS)
-            settle(300)
+            qtbot.waitUntil(lambda: at_sim("boat2", sims[1]), timeout=TIMEOUT_MS)  # the map was given it...
+            seen = view.state.seq
+            qtbot.waitUntil(lambda: view.state.seq > seen, timeout=TIMEOUT_MS)  # ...and a value after it
             assert (view.viewport.lat, view.viewport.lon, view.viewport.zoom) == kept
             assert in_view()["boat2"] is False
             # Fit brings every vessel back in view

@@ -38,7 +38,7 @@ def test_a_widget_whose_hooks_raise_leaves_the_others_refreshing(window, qtbot):
     qtbot.waitUntil(lambda: label.model.state.count > 0 and label.view.value.text() not in ("", "–"),
                     timeout=10_000)
     frame = host.hosted[fragile.id].frame
-    qtbot.waitUntil(lambda: frame.badge.text() == "ERROR", timeout=10_000)
+    qtbot.waitUntil(lambda: frame.badge.status == "ERROR", timeout=10_000)
     assert "problems() blew up" in frame.badge.toolTip()
     assert host.hook_errors >= 1
     # the fragile view is shown and refreshed too: only its problem list could not be had
@@ -49,4 +49,4 @@ def test_a_widget_whose_hooks_raise_leaves_the_others_refreshing(window, qtbot):
     # the link drops: the widgets after the fragile one hear it (its set_link raises)
     window.link.disconnect()
     qtbot.waitUntil(lambda: label.model.state.link_down, timeout=10_000)
-    qtbot.waitUntil(lambda: label.frame.badge.text() == "LINK DOWN", timeout=10_000)
+    qtbot.waitUntil(lambda: label.frame.badge.status == "LINK DOWN", timeout=10_000)

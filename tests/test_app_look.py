@@ -61,7 +61,7 @@ def painted_span(bar: QtWidgets.QScrollBar, behind: QtGui.QColor) -> tuple[int, 
 def test_scroll_bars_are_slim_and_light_but_take_a_finger(make_window, qtbot, size):
     window = make_window(size, demo=True)
     window.resize(size[0], size[1] * 2 // 3)  # the demo fits the screen: a shorter window makes the canvas scroll
-    settle(100)
+    settle()
     scroll = window.controller.surface.scroll_area
     bar = scroll.verticalScrollBar()
     qtbot.waitUntil(lambda: bar.isVisible() and bar.maximum() > 0, timeout=5_000)

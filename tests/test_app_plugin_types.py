@@ -67,5 +67,5 @@ def test_a_widget_on_a_type_the_robot_lacks_shows_error_with_the_sentence(qtbot,
     for win in window_session(qtbot, tmp_path / "config", pm, url=sim_thread.url, demo=layout,
                               wait_connected=True):
         [frame] = win.controller.surface.frames.values()
-        qtbot.waitUntil(lambda frame=frame: frame.badge.text() == "ERROR", timeout=10_000)
+        qtbot.waitUntil(lambda frame=frame: frame.badge.status == "ERROR", timeout=10_000)
         assert frame.badge.toolTip() == "the robot does not know lab_msgs/Winch (is its package installed there?)"

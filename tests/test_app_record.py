@@ -9,9 +9,11 @@ from pathlib import Path
 import pytest
 from app_helpers import entry_point_plugins, settle, window_session
 from mcap.reader import make_reader
+from qtpy import QtWidgets
 from record_helpers import DEMO_BAG
 from rogue_widget import CMD, RoguePlugin
 
+from rcon_core.bridge import ConnectionState
 from rcon_core.canvas import Binding, Geometry
 from rcon_core.msgs import TypeRegistry
 from rcon_core.record.schema import OPERATOR_DEFINITION, OPERATOR_TYPE
@@ -50,7 +52,8 @@ def test_record_control_records_the_canvas_topics_and_what_the_operator_sent(qtb
     control.directory = tmp_path / "rec"
     control.button.click()  # ● Rec
     assert control.recording is not None and control.recording.active
-    assert control.indicator.isVisible() and control.indicator.text().startswith("REC 00:0")
+    assert control.indicator.isVisible() and control.indicator.reading.startswith("REC 00:0")
+    qtbot.waitUntil(lambda: control.indicator.text() == control.indicator.reading, timeout=5_000)  # laid out
     qtbot.waitUntil(lambda: control.recording.status().messages >= 3, timeout=10_000)
     lab.view.model.publish(CMD)  # a lab's widget sends: recorded below it, at its port's node
     sim_thread.wait_for_published_sync("/cmd_vel", lambda m: m.get("linear", {}).get("x") == CMD["linear"]["x"])
@@ -115,6 +118,36 @@ def test_rcon_play_rejects_a_file_that_is_not_a_recording(tmp_path: Path, capsys
     assert "cannot play" in capsys.readouterr().err
 
 
+def test_recording_at_200_percent_text_on_a_1024_px_window_keeps_the_window_and_the_robots_host(
+        qtbot, tmp_path, plugins, sim_thread):
+    """At 200 % text the URL field takes the bar's room first (it shows which robot): recording then shows
+    a red ● where the bar has no room for "REC 00:01" (the reading in its accessible name, the details in
+    its tooltip), and the window stays 1024 px wide."""
+    from rcon_core.app import theme
+    from rcon_core.app.display_settings import set_display
+
+    win = next(window_session(qtbot, tmp_path / "cfg", plugins, url=sim_thread.url, wait_connected=True,
+                              size=(1024, 600)))
+    try:
+        set_display(win.config, None, text_size=200)
+        control = win.record_control
+        control.directory = tmp_path / "rec"
+        control.set_compact(True)
+        line = win.connection.url.lineEdit()
+        qtbot.waitUntil(lambda: "127.0.0.1" in line.shown_text(), timeout=5_000)
+        control.action.trigger()  # Canvas ▾ → ● Record every robot
+        qtbot.waitUntil(lambda: control.indicator.isVisible() and control.indicator.text() == "●", timeout=5_000)
+        settle()
+        assert win.width() == 1024 and "127.0.0.1" in line.shown_text(), (win.width(), line.shown_text())
+        assert control.indicator.accessibleName().startswith("recording: REC 00:0")
+        assert "MB" in control.indicator.toolTip()
+        control.action.trigger()
+        assert not control.recording.active and not control.indicator.isVisible()
+    finally:
+        win.shutdown()
+        theme.apply(QtWidgets.QApplication.instance(), theme.DEFAULT_THEME, 100)
+
+
 def test_the_compact_control_of_a_small_screen_keeps_the_bar_no_wider(qtbot, tmp_path, plugins, sim_thread):
     """On a screen below 1100 px the button is left out (Canvas ▾ → Record every robot starts and stops)
     and the short indicator takes the round-trip time's place while recording."""
@@ -124,7 +157,7 @@ def test_the_compact_control_of_a_small_screen_keeps_the_bar_no_wider(qtbot, tmp
     control.directory = tmp_path / "rec"
     control.set_compact(False)
     qtbot.waitUntil(lambda: control.button.isVisible(), timeout=5_000)
-    settle(100)
+    settle()
     wide = win.connection.minimumSizeHint().width()
     control.set_compact(True)
     qtbot.waitUntil(lambda: win.connection.minimumSizeHint().width() < wide, timeout=5_000)
@@ -135,7 +168,33 @@ def test_the_compact_control_of_a_small_screen_keeps_the_bar_no_wider(qtbot, tmp
     qtbot.waitUntil(lambda: control.indicator.text().startswith("REC 00:0"), timeout=5_000)
     assert "MB" not in control.indicator.text() and "MB" in control.indicator.toolTip()
     assert not win.connection.latency_label.isVisible()
-    settle(100)
+    settle()
     assert win.connection.minimumSizeHint().width() <= narrow + 40
     control.action.trigger()
     assert not control.recording.active and win.connection.latency_label.isVisible()
+
+
+def test_a_compact_recording_stopped_after_the_link_went_shows_no_round_trip(qtbot, tmp_path, plugins, sim_thread):
+    """Found by a person on a small screen: stopping a recording put the round-trip time back on the bar even
+    when the robot was no longer connected (the recorder and the bar each set the label's visibility; now
+    the bar alone decides, the recorder only asks for its place)."""
+    win = next(window_session(qtbot, tmp_path / "cfg", plugins, url=sim_thread.url, wait_connected=True,
+                              size=(1024, 600)))
+    control = win.record_control
+    control.directory = tmp_path / "rec"
+    control.set_compact(True)
+    latency = win.connection.latency_label
+    control.action.trigger()
+    assert control.recording.active and not latency.isVisible()
+    win.connection.connect_button.click()  # Disconnect
+    qtbot.waitUntil(lambda: win.connection.state is not ConnectionState.CONNECTED, timeout=5_000)
+    control.action.trigger()  # stop
+    assert not control.recording.active
+    settle()
+    assert not latency.isVisible()
+    win.connection.connect_button.click()  # Connect: the round trip comes back with the link
+    qtbot.waitUntil(lambda: win.connection.state is ConnectionState.CONNECTED, timeout=10_000)
+    qtbot.waitUntil(latency.isVisible, timeout=5_000)
+    control.action.trigger()  # recording again while connected: its indicator takes the place
+    qtbot.waitUntil(lambda: not latency.isVisible(), timeout=5_000)
+    control.action.trigger()

@@ -221,7 +221,7 @@ def test_undo_is_refused_in_operator_mode_and_the_lock_is_not_an_undo_step(qtbot
         # an offline widget still runs (placeholder-free) and says the link is down
         window.controller.redo()
         hosted = running(window, qtbot, inst.id)
-        qtbot.waitUntil(lambda: hosted.frame.badge.text() == "LINK DOWN", timeout=5_000)
+        qtbot.waitUntil(lambda: hosted.frame.badge.status == "LINK DOWN", timeout=5_000)
     finally:
         window.shutdown()
 
@@ -244,7 +244,7 @@ def test_previews_of_controls_never_reach_the_robot(qtbot, tmp_path, robot):  # 
         assert not panel.problems()
         preview_id = window.preview.widget.id
         hosted = running(window, qtbot, preview_id)
-        qtbot.waitUntil(lambda: hosted.frame.badge.text() == "PREVIEW ONLY", timeout=5_000)
+        qtbot.waitUntil(lambda: hosted.frame.badge.status == "PREVIEW ONLY", timeout=5_000)
         assert hosted.model.publish({"linear": {"x": 1.0}})  # what a touch on the pad would do
         # a marker through the window's (only) link to the robot arrives; the preview's command did not
         flushed_sync(window.link.thread, window.link.client, robot, qtbot=qtbot)

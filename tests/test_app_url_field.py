@@ -8,6 +8,7 @@ import json
 
 import pytest
 from app_helpers import TIMEOUT_MS, open_window, settle, tap, tap_item
+from fit_check import problems
 from qtpy import QtCore, QtWidgets
 from qtpy.QtTest import QTest
 
@@ -84,23 +85,73 @@ def test_the_history_is_a_list_to_pick_from(qtbot, tmp_path, robot, plugins):
         window.shutdown()
 
 
-def test_a_long_url_keeps_its_scheme_and_port_in_sight(qtbot, tmp_path, plugins):
+def test_a_long_url_keeps_its_host_in_sight(qtbot, tmp_path, plugins):
     url = "wss://operations-vessel-kingfisher-07.harbour.example.org:9090"
     history(tmp_path, [url])
     window = open_window(qtbot, tmp_path, plugins, size=(1024, 600))
     try:
-        settle(60)
+        settle()
         field = window.connection.url
         line = field.lineEdit()
         assert line.fontMetrics().horizontalAdvance(url) > line.width()  # too long for the field
         shown = line.shown_text()
-        assert shown.startswith("wss://") and shown.endswith(":9090") and "…" in shown, shown
-        assert line.fontMetrics().horizontalAdvance(shown) <= line.width()
-        assert field.currentText() == url  # the field's value is the whole URL
+        assert shown.startswith("…operations-vessel-kingfisher-07") and shown.endswith("…"), shown
+        assert line.fontMetrics().horizontalAdvance(shown) <= line.text_rect().width()
+        assert field.currentText() == url and line.toolTip() == url  # the field's value is the whole URL
         line.grab()  # painted: what the paint drew is what shown_text() says
         assert line.painted == shown
         # while editing, the whole text is there to edit
         tap(line)
         assert line.hasFocus() and line.text() == url
+    finally:
+        window.shutdown()
+
+
+@pytest.fixture
+def standard_look():
+    yield
+    from rcon_core.app import theme
+
+    theme.apply(QtWidgets.QApplication.instance(), theme.DEFAULT_THEME, 100)
+
+
+@pytest.mark.parametrize("text_size", [100, 150, 200])
+def test_on_a_1024_px_window_the_field_shows_which_robot_at_every_text_size(qtbot, tmp_path, robot, plugins,
+                                                                            text_size, standard_look):
+    """Found walking the app on a 1024x600 tablet: the field showed "ws://1…1:45991" (and at 200 % text
+    "w…5"): the scheme and the port, never the host, the part that tells which robot it is. The field now
+    shows the host whole -- connected, and for the robots of its list -- at 100, 150 and 200 % text (the
+    latency and the bandwidth readout give way first), the window still 1024 px wide."""
+    from rcon_core.app.display_settings import set_display
+
+    others = {"ws://192.168.1.10:9090": "192.168.1.10",
+              "wss://kingfisher-07.harbour.example.org:9090": "kingfisher-07"}
+    history(tmp_path, list(others))
+    window = open_window(qtbot, tmp_path, plugins, size=(1024, 600), url=robot.url, wait_connected=True)
+    try:
+        set_display(window.config, None, text_size=text_size)
+        field, line = window.connection.url, window.connection.url.lineEdit()
+
+        def shows(host: str) -> None:
+            settle()
+            assert host in line.shown_text(), (host, line.shown_text(), field.width())
+
+        for url, host in [(robot.url, "127.0.0.1"), *others.items()]:
+            if url != robot.url:
+                if window.link.client is not None:  # disconnected: the longest state word
+                    window.connection.toggle()
+                qtbot.waitUntil(lambda: window.connection.state is ConnectionState.CLOSED, timeout=TIMEOUT_MS)
+                field.setCurrentText(url)  # another robot's URL, as picked from the list
+            qtbot.waitUntil(lambda host=host: shows(host), timeout=TIMEOUT_MS)
+            shown = line.shown_text()
+            assert line.fontMetrics().horizontalAdvance(shown) <= line.text_rect().width(), shown
+            line.grab()
+            assert line.painted == shown and field.currentText() == url and line.toolTip() == url
+            assert window.width() == 1024, (text_size, window.width())
+            assert problems(window.connection) == []  # nothing on the bar cut (the latency: whole, or none)
+            if url == robot.url:  # connected: the field shows the port too (the sim's, which tells sims apart)
+                assert shown.endswith(f":{robot.port}") or text_size == 200, shown
+                qtbot.waitUntil(lambda: window.connection.state_label.toolTip().startswith(
+                    "round trip to the robot: "), timeout=TIMEOUT_MS)  # where the latency has no room too
     finally:
         window.shutdown()

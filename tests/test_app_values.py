@@ -93,7 +93,7 @@ def test_a_latched_map_that_delivered_once_is_not_called_stale(window, qtbot, si
     window.host.refresh()
     snap(window, f"latched-map-not-stale-{window.width()}")
     badge = hosted.frame.badge
-    assert badge.kind != "stale" and "STALE" not in badge.text()
+    assert badge.kind != "stale" and "STALE" not in badge.status
     assert hosted.view.stale_for() is None  # no "STALE · no new frame" over the map either
 
 

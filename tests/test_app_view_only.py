@@ -63,8 +63,8 @@ def test_a_view_only_canvas_disables_controls_and_a_rogue_widget_reaches_nothing
     assert sim.robot.lights == lights
     for control in (hosted, lights_button):
         assert not control.view.isEnabled() and "view-only" in control.view.toolTip()
-        assert control.frame.badge.text() == "VIEW ONLY" and control.frame.badge.isVisible()
-    assert label.view.isEnabled() and label.frame.badge.text() != "VIEW ONLY"
+        assert control.frame.badge.status == "VIEW ONLY" and control.frame.badge.isVisible()
+    assert label.view.isEnabled() and label.frame.badge.status != "VIEW ONLY"
     assert "view-only" in (hosted.model.state.error or "")
     snap(window, "view-only-canvas")
 
@@ -122,9 +122,9 @@ def test_a_view_only_widget_shows_its_badge_as_soon_as_it_is_shown(window, qtbot
     control."""
     rogue = place(window, "test.rogue", Binding("/cmd_vel", "geometry_msgs/Twist", "publish"), 24, "Rogue")
     hosted = model_of(window, qtbot, rogue.id, False)
-    assert hosted.frame.badge.text() != "VIEW ONLY"
+    assert hosted.frame.badge.status != "VIEW ONLY"
     monkeypatch.setattr(window.host, "refresh", lambda ids=None, now=None: None)  # no pass paints
     window.canvas_actions["view_only"].trigger()
     model_of(window, qtbot, rogue.id, True)  # attached: its view is there, disabled
     assert not hosted.view.isEnabled()
-    assert hosted.frame.badge.text() == "VIEW ONLY"
+    assert hosted.frame.badge.status == "VIEW ONLY"

@@ -94,7 +94,7 @@ def test_a_view_only_robot_refuses_a_parameter_write_on_its_link_even_in_a_locke
         qtbot.waitUntil(lambda: "call" in hosted.model.attempts, timeout=TIMEOUT_MS)
         all_sent(qtbot, win, sim)
         assert sim.ops_received[("publish", "/cmd_vel")] == calls.get(("publish", "/cmd_vel"), 0)
-        assert hosted.frame.badge.text() == "VIEW ONLY"
+        assert hosted.frame.badge.status == "VIEW ONLY"
         assert f"robot “Robot” at {sim.url} is view-only" in (hosted.model.state.error or "")
     finally:
         win.close_now()

@@ -68,7 +68,7 @@ def test_a_view_that_fails_to_show_a_value_does_not_stop_the_others(window, qtbo
             seq = good.model.state.seq
             qtbot.waitUntil(lambda seq=seq: good.painted_seq >= seq, timeout=3_000)
         qtbot.waitUntil(lambda: window.host.view_errors >= 1, timeout=3_000)
-        assert bad.frame.badge.kind == "problem" and bad.frame.badge.text() == "ERROR"
+        assert bad.frame.badge.kind == "problem" and bad.frame.badge.status == "ERROR"
         assert "cannot draw" in bad.frame.badge.toolTip()
         assert len(bad.frame.badge.toolTip()) < 400
         assert any("cannot draw" in r.getMessage() and len(r.getMessage()) < 600 for r in caplog.records)

@@ -79,6 +79,22 @@ def test_a_ros1_server_runs_calls_in_threads_and_never_holds():
     assert w.check() == Held("/dock", 0.0)
 
 
+def test_a_long_call_on_a_ros1_server_arranges_no_check_after_the_threshold():
+    """Found reading the watch: on a server that does not hold (ROS 1) a call unanswered past the threshold
+    re-arranged a check every 10 ms for as long as it ran (a 30 s call: 3,000 wake-ups of the bridge loop
+    that also times the teleop pad's commands)."""
+    w, clock, told = watch(may_hold=lambda: False)
+    w.started("call:1", "/navigate")
+    clock.advance(HOLD_AFTER + 0.05)  # the check the call arranged has run
+    assert told == [] and clock.pending == 0
+    w.check()  # any later check (an answer to another call...) arranges nothing either
+    assert clock.pending == 0
+    w.started("call:2", "/dock")  # a new call arranges its own threshold check, once
+    assert clock.pending == 1
+    clock.advance(30.0)
+    assert told == [] and clock.pending == 0
+
+
 def test_a_listener_that_fails_does_not_keep_the_others_from_hearing():
     w, clock, told = watch()
 
@@ -107,6 +123,45 @@ def test_the_number_of_calls_kept_is_bounded():
 
 
 # ------------------------------------------------------------------------------ on a link, against the sim
+def watched_calls(w: HeldWatch) -> dict[str, list]:
+    """From now on, the calls ``w`` is told were written (id, service) and answered (id)."""
+    calls: dict[str, list] = {"started": [], "answered": []}
+    started, answered = w.started, w.answered
+
+    def on_started(call_id, service):
+        calls["started"].append((call_id, service))
+        started(call_id, service)
+
+    def on_answered(call_id):
+        calls["answered"].append(call_id)
+        answered(call_id)
+
+    w.started, w.answered = on_started, on_answered  # type: ignore[method-assign]
+    return calls
+
+
+def checked_later(w: HeldWatch, seconds: float) -> Held | None:
+    """What ``w`` reports when it checks ``seconds`` from now: a call still unanswered then is held."""
+    clock = w.clock
+    w.clock = lambda: clock() + seconds
+    try:
+        return w.check()
+    finally:
+        w.clock = clock
+
+
+def unanswered(w: HeldWatch) -> str | None:
+    """The service of the oldest call ``w`` has seen written and not answered for more than the threshold,
+    whatever the server (``may_hold`` set aside for one synchronous look: no check runs meanwhile)."""
+    may_hold = w.may_hold
+    w.may_hold = lambda: True
+    try:
+        held = w.held()
+    finally:
+        w.may_hold = may_hold
+    return held.service if held is not None else None
+
+
 async def _serve_slow(url: str):
     """A client of its own serving /slow (std_srvs/Trigger), answering when the returned event is set."""
     gate = asyncio.Event()
@@ -136,8 +191,11 @@ async def test_a_link_reports_a_call_held_past_half_a_second_until_its_late_answ
             gate.set()  # the late answer: the server is free again
             await until(lambda: client.session.held.current is None, what="the hold ended by the late answer")
             assert told[-1] is None
-            assert (await client.call_service("/rosapi/get_time", {}))  # quick calls: never reported
-            await asyncio.sleep(HOLD_AFTER * 1.5)
+            calls = watched_calls(client.session.held)
+            assert (await client.call_service("/rosapi/get_time", {}))  # quick calls: never reported...
+            [(cid, service)] = calls["started"]
+            assert service == "/rosapi/get_time" and calls["answered"] == [cid]  # (watched, and answered)
+            assert checked_later(client.session.held, 60.0) is None  # ...however long after
             assert len(told) == 2
     finally:
         await cm.__aexit__(None, None, None)
@@ -149,10 +207,17 @@ async def test_a_ros1_link_never_reports_a_hold(sim):
         async with connected(sim.url, reconnect=False) as client:
             assert (await client.detect_ros()).version == 1  # rosbridge 0.11 runs each call in a thread
             await until(lambda: "/slow" in sim.services, what="/slow served")
+            watch = client.session.held
+            told: list = []
+            watch.add_listener(told.append)
             with pytest.raises(ServiceTimeoutError):
                 await client.call_service("/slow", {}, timeout=HOLD_AFTER * 2)
-            assert client.session.held.check() is None and client.session.held.current is None
-            gate.set()
-            await asyncio.sleep(0)
+            assert watch.check() is None and watch.current is None and told == []
+            # not for want of a call held: /slow is unanswered past the threshold, and a server that may
+            # hold frames (a ROS 2 one) would be reported; ROS 1 runs it in a thread of its own
+            assert unanswered(watch) == "/slow"
+            gate.set()  # the late answer reaches the client, and ends the call there too
+            await until(lambda: unanswered(watch) is None, what="the late answer to /slow")
+            assert watch.check() is None and told == []
     finally:
         await cm.__aexit__(None, None, None)

@@ -51,7 +51,7 @@ def test_every_recorded_server_frame_is_understood_without_a_bad_frame():
     assert got["/camera/compressed"][0]["data"].startswith(b"\xff\xd8")
     assert got["/gps"][0]["latitude"] == 57.7
     assert session.time_ns == 1_700_000_000_000_000_000
-    assert session.params["/boat.max_speed"] == 2.5
+    assert session.requests.params["/boat.max_speed"] == 2.5
     assert session.graph["published"]["/pose"] == ["/boat"]
     assert session.service_by_name["/reset"].request["schemaEncoding"] == "ros2msg"
 

@@ -136,10 +136,16 @@ def test_a_window_without_a_policy_leaves_the_collector_alone(qtbot, tmp_path: P
     frozen = gc.get_freeze_count()
     win = MainWindow(AppConfig(tmp_path / "cfg"), plugins)
     qtbot.addWidget(win)
+    ticks: list[float] = []
+    win.clock.add(ticks.append)  # after any poll the window registered: a policy's would run first
     win.show()
+    shown = time.monotonic()
     try:
-        win.new_canvas()
-        qtbot.wait(1300)  # longer than a policy's first settle (1 s after start) would take to come
+        win.new_canvas()  # another canvas: the moment a policy is asked for a full settle at once
+        switched = time.monotonic()
+        # the frame clock ran past the moments a policy's settles would come (1 s after start, at once
+        # after a canvas switch): a settle would have happened on those ticks
+        qtbot.waitUntil(lambda: len(ticks) >= 2 and ticks[-1] >= max(shown + 1.0, switched), timeout=10_000)
         assert win.collector is None and gc.get_freeze_count() == frozen
     finally:
         win.shutdown()

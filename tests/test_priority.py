@@ -215,3 +215,22 @@ def test_favour_latency_shortens_the_gil_switch_interval():
             assert done and own == LATENCY_SLICE_NS
     finally:
         sys.setswitchinterval(before)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="OS thread names: Linux")
+def test_a_thread_named_at_the_os_level_shows_its_name_to_top_and_the_benchmarks() -> None:
+    import threading
+
+    from rcon_core.priority import name_this_thread
+
+    seen: list[str] = []
+
+    def run() -> None:
+        assert name_this_thread("rcon-a-long-thread-name")
+        with open(f"/proc/self/task/{threading.get_native_id()}/comm") as f:
+            seen.append(f.read().strip())
+
+    t = threading.Thread(target=run)
+    t.start()
+    t.join()
+    assert seen == ["rcon-a-long-thr"]  # the kernel keeps 15 bytes

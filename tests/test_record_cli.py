@@ -35,8 +35,12 @@ async def test_a_killed_recorder_leaves_a_file_readable_up_to_its_last_chunk(sim
     out = tmp_path / "killed.mcap"
     proc = await start_recorder(sim_ros2.url, out, "--all", "--exclude", "^/camera/front")
     try:
-        # chunks close every second: wait until several are on disk
-        await until(lambda: out.exists() and out.stat().st_size > 200_000, timeout=60, what="chunks on disk")
+        # chunks close every second: wait until complete ones hold enough (a size alone was not enough: a
+        # chunk goes to the disk in several writes, and a kill between them left none complete)
+        def complete() -> int:
+            return len(list(read_complete(str(out), Recovered()))) if out.exists() else 0
+
+        await until(lambda: complete() > 50, timeout=60, what="complete chunks on disk")
     finally:
         proc.send_signal(signal.SIGKILL)
         await proc.wait()

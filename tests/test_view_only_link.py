@@ -335,14 +335,15 @@ async def test_a_view_only_ros2_link_reads_parameters_through_the_nodes_but_neve
 # classified, and a view-only Foxglove link gets nothing that changes the robot to the foxglove-sdk peer.
 
 def foxglove_ops() -> set[str]:
-    """Every op the Foxglove link writes: the JSON ops in its frame builders and the kinds its session
-    passes to the guard (binary frames by the names ``publish`` and ``call_service``)."""
+    """Every op the Foxglove link writes: the JSON ops in its frame builders and the kinds its session and
+    the session's parts (``requests.py``...) pass to the guard (binary frames by the names ``publish`` and
+    ``call_service``)."""
     import rcon_core.foxglove
 
     folder = Path(rcon_core.foxglove.__file__).parent
     wire_src = (folder / "wire.py").read_text(encoding="utf-8")
     builders = wire_src.split("# ====", 2)[-1]  # the client -> server half
-    session_src = (folder / "session.py").read_text(encoding="utf-8")
+    session_src = "\n".join(p.read_text(encoding="utf-8") for p in sorted(folder.glob("*.py")))
     return (set(re.findall(r'"op":\s*"(\w+)"', builders)) | set(re.findall(r'"(\w+)" if subscribe', builders))
             | set(re.findall(r'else "(\w+)"', builders)) | set(re.findall(r'_send\("(\w+)"', session_src))
             | set(re.findall(r'admit_op\("(\w+)"', session_src)))

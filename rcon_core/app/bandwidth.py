@@ -65,7 +65,20 @@ class BandwidthButton(QtWidgets.QToolButton):
         # nothing), its reading still in the tooltip and the details a tap away
         self.setSizePolicy(QtWidgets.QSizePolicy.Policy.Preferred, QtWidgets.QSizePolicy.Policy.Ignored)
         self._full_width = 0
+        #: the most its bar gives it (ConnectionBar._share_room: the URL field and the latency come first)
+        self._room = 16_777_215
         self.clicked.connect(self.show_details)
+
+    def full_width(self) -> int:
+        """Its width showing its widest reading (0 before it is measured, once shown)."""
+        return self._full_width
+
+    def set_room(self, px: int) -> None:
+        """The widest its bar lets it be (it shrinks to the arrow, or nothing, below its reading's width)."""
+        if px != self._room:
+            self._room = px
+            if self._full_width:
+                self.setMaximumWidth(min(self._full_width, px))
 
     def showEvent(self, event: QtGui.QShowEvent) -> None:  # noqa: N802 - Qt's name
         super().showEvent(event)
@@ -84,7 +97,7 @@ class BandwidthButton(QtWidgets.QToolButton):
             widths.append(super().sizeHint().width())
         self.setText(shown)
         self._full_width = max(widths)
-        self.setMaximumWidth(self._full_width)
+        self.setMaximumWidth(min(self._full_width, self._room))
         self.updateGeometry()
         self._show_reading()
 

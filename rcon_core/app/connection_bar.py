@@ -30,7 +30,7 @@ from rcon_core.app.operator_lock import Guard, no_guard
 from rcon_core.app.secret_store import SecretStore
 from rcon_core.app.theme import colour as theme_colour
 from rcon_core.app.theme import repolish, tinted_icon
-from rcon_core.app.url_field import UrlLineEdit
+from rcon_core.app.url_field import UrlCombo, host_text
 from rcon_core.bridge import ConnectionState
 
 
@@ -53,8 +53,22 @@ STATE_TEXT = {
     ConnectionState.RECONNECTING: "RECONNECTING",
     ConnectionState.CLOSED: "DISCONNECTED",
 }
+#: the URL field is never narrower than this many characters ("localhost", "10.0.0.12"); the bar gives it
+#: the room for the robot's host and port before anything else (ConnectionBar._share_room)
+HOST_CHARS = 8
 #: the states in which a round trip means something
 LIVE_STATES = (ConnectionState.CONNECTED, ConnectionState.DEGRADED)
+
+
+class LatencyLabel(QtWidgets.QLabel):
+    """The round-trip time: as wide as the bar lets it be (its maximum width, set by the bar), asking for no
+    minimum, so it never keeps a window from shrinking (the bar takes its room away at once)."""
+
+    def sizeHint(self) -> QtCore.QSize:  # noqa: N802 - Qt's name
+        return QtCore.QSize(self.maximumWidth(), super().sizeHint().height())
+
+    def minimumSizeHint(self) -> QtCore.QSize:  # noqa: N802 - Qt's name
+        return QtCore.QSize(0, super().minimumSizeHint().height())
 
 
 class ConnectionBar(QtWidgets.QFrame):
@@ -83,24 +97,22 @@ class ConnectionBar(QtWidgets.QFrame):
         #: why the robot's bridge holds this link's commands (shown as the message), None when it does not
         self.held: str | None = None
 
-        self.url = QtWidgets.QComboBox()
+        # a URL too long for the field shows the robot's host (url_field.py)
+        self.url = UrlCombo()
         self.url.setObjectName("urlField")
-        self.url.setEditable(True)
-        # a long URL shows its scheme and its port, "…" in the middle (url_field.py)
-        self.url.setLineEdit(UrlLineEdit())
         # Enter connects to exactly what is typed: the history is the list to pick from, never completed
         # inline (an inline completion turned ":91" into the history's ":9191", another robot)
         self.url.setCompleter(None)  # type: ignore[arg-type]  # Qt takes None: no completer
         self.url.setInsertPolicy(QtWidgets.QComboBox.InsertPolicy.NoInsert)
         self.url.setAccessibleName("Robot URL")
-        # an 800 px window keeps its side panel toggle, the lock and the state, also with large text (the
-        # field then shows the URL's two ends: "ws://…:9090")
-        self.url.setMinimumWidth(140)
-        # a long URL in the history never widens the bar (and so the window)
+        # the field is never narrower than HOST_CHARS characters at the text size in use, and the bar's room
+        # goes to it first, as far as it shows the robot's host (url_field.py, _share_room); a long URL in
+        # the history never widens the bar (and so the window)
         self.url.setSizeAdjustPolicy(QtWidgets.QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
-        self.url.setMinimumContentsLength(16)
+        self.url.setMinimumContentsLength(HOST_CHARS)
         self.url.addItems(config.url_history or [config.last_url])
         self.url.setCurrentText(config.last_url)
+        self.url.currentTextChanged.connect(lambda _text: self._share_room())  # another host: its width
         line = self.url.lineEdit()
         assert line is not None  # the combo is editable
         # the field names itself (no "Robot" label beside it: the bar keeps its room for the lock and state)
@@ -133,9 +145,18 @@ class ConnectionBar(QtWidgets.QFrame):
         self.state_label.setObjectName("linkState")
         self.state_label.setAlignment(QtCore.Qt.AlignmentFlag.AlignCenter)
         self.state_label.setProperty("state", ConnectionState.CLOSED.value)
-        self.latency_label = QtWidgets.QLabel("—")
+        self._latency_yielded = False  # another part has the latency's place (yield_latency)
+        self.latency_label = LatencyLabel("—")
         self.latency_label.setObjectName("latency")
         self.latency_label.setToolTip("round-trip time to the robot")
+        #: the latency label's width for its widest reading, and the width the bar gives it (that, or 0: no
+        #: room beside the URL field's, at a large text size on a small screen; the state's tooltip says it)
+        self._latency_full = 0
+        self._latency_room = 0
+        #: parts that show a short form where the bar has no room for their whole reading (``full_width()``,
+        #: ``set_room(px)``), served in this order after the URL field's host and before the latency (the
+        #: recorder's indicator: record_control.py)
+        self.givers: list[Any] = []
         #: bytes per second in, per robot and by topic (a tap shows the details)
         self.bandwidth = BandwidthButton(link)
         self.message = ElidedLabel()
@@ -145,15 +166,16 @@ class ConnectionBar(QtWidgets.QFrame):
         row = QtWidgets.QHBoxLayout(self)
         row.setContentsMargins(10, 8, 10, 8)
         row.setSpacing(10)
-        # the URL field takes two thirds of the free width, the message one third: at 1024 px beside the
-        # bandwidth readout the field was squeezed to "ws:…847" next to an empty message holding two thirds
-        row.addWidget(self.url, 2)
+        # the URL field before the readouts beside it: at 1024 px beside the bandwidth readout the field was
+        # squeezed to "ws:…847" next to an empty message (see _share_room)
+        row.addWidget(self.url)  # as wide as _share_room finds room for (its size hint); the message the rest
         row.addWidget(self.connect_button)
         row.addWidget(self.settings_button)
         row.addWidget(self.state_label)
         row.addWidget(self.latency_label)
         row.addWidget(self.bandwidth)
         row.addWidget(self.message, 1)
+        self.message.setMinimumWidth(0)
         self._show_state(ConnectionState.CLOSED)
 
     # ---------------------------------------------------------------------------------------- actions
@@ -302,21 +324,76 @@ class ConnectionBar(QtWidgets.QFrame):
         # and the latency the widest it reads ("888 ms"), so a new reading never cuts it or moves the bar
         latency = self.latency_label
         latency.setMinimumWidth(0)
-        latency.setMinimumWidth(max(latency.minimumSizeHint().width(), 4 + max(
-            latency.fontMetrics().horizontalAdvance(t) for t in ("888 ms", "<1 ms"))))
-        self._hold_latency_room()
+        latency.setMaximumWidth(16_777_215)
+        self._latency_full = max(QtWidgets.QLabel.minimumSizeHint(latency).width(), 4 + max(
+            latency.fontMetrics().horizontalAdvance(t) for t in ("888 ms", "<1 ms")))
+        self._latency_room = -1  # measured again: given again
+        self._share_room()
+
+    def _share_room(self) -> None:
+        """The room the bar has beyond its parts' minimums goes, in this order, to: the URL field, as far as
+        it shows the robot's host and port whole (``url_field.host_text``: ``192.168.1.10:9090``); the latency (its widest reading,
+        or nothing: never a cut figure); the bandwidth readout (up to its reading); the URL field again, as
+        far as it shows the whole URL; the rest to the message. So at 200 % text on a 1024 px tablet the
+        field shows which robot, the latency then being in the state's tooltip. Called on a resize, a text
+        size change, a state change and another URL; the bar's minimum width is the same in every state."""
+        layout = self.layout()
+        if layout is None or not self._latency_full:
+            return
+        latency, url = self.latency_label, self.url
+        spare = self.width() - layout.minimumSize().width()  # the latency and the readout have no minimum
+        least = url.minimumSizeHint().width()
+        text = normalize_url(url.currentText())
+        host = min(max(0, spare), max(0, url.width_for(host_text(text)) - least))
+        spare -= host
+        for part in self.givers:
+            low = part.minimumSizeHint().width()
+            give = min(max(0, spare), max(0, part.full_width() - low)) if part.isVisibleTo(self) else 0
+            part.set_room(low + give)
+            spare -= give
+        room = self._latency_full if spare >= self._latency_full else 0
+        if room != self._latency_room:
+            self._latency_room = room
+            latency.setMaximumWidth(room)  # its size hint: no minimum, so the window may still shrink
+            latency.setText(self._last_latency_text if room else "")
+        spare -= room if latency.isVisible() else 0
+        readout = max(0, min(spare, self.bandwidth.full_width()))
+        self.bandwidth.set_room(readout)
+        spare -= readout
+        whole = min(max(0, spare), max(0, url.width_for(text) - least - host))
+        url.set_extra(host + whole)
+
+    def resizeEvent(self, event: QtGui.QResizeEvent) -> None:  # noqa: N802 - Qt's name
+        super().resizeEvent(event)
+        self._share_room()
+
+    def event(self, event: QtCore.QEvent) -> bool:
+        handled = super().event(event)
+        if event.type() == QtCore.QEvent.Type.LayoutRequest:
+            # a part came or went (the recorder's indicator in the latency's place): shared again (a fixed
+            # point: nothing changes the second time)
+            self._share_room()
+        return handled
+
+    def yield_latency(self, yielded: bool) -> None:
+        """Another part takes the latency's place (the compact recorder's indicator while recording) or
+        gives it back; the bar alone decides whether the latency shows (:meth:`_hold_latency_room`)."""
+        if yielded != self._latency_yielded:
+            self._latency_yielded = yielded
+            self._hold_latency_room()
 
     def _hold_latency_room(self) -> None:
-        """The latency shows only while connected; otherwise the message holds its room as its minimum, so
-        the bar's minimum width is the same in every state (the smaller minimum first, so the bar never asks
-        for both at once, not even for one layout pass)."""
+        """The latency shows only while connected, and not while another part has its place
+        (:meth:`yield_latency`); otherwise the message holds its spacing, so the bar's minimum width is the
+        same in every state."""
         spacing = layout.spacing() if (layout := self.layout()) is not None else 0
-        if self.state is ConnectionState.CONNECTED:
+        if self.state is ConnectionState.CONNECTED and not self._latency_yielded:
             self.message.setMinimumWidth(0)
             self.latency_label.setVisible(True)
         else:
             self.latency_label.setVisible(False)
-            self.message.setMinimumWidth(self.latency_label.minimumWidth() + spacing)
+            self.message.setMinimumWidth(spacing)
+        self._share_room()
 
     def _tint_icon(self) -> None:
         """The padlock in the theme's text colour (black on light, light grey at night)."""
@@ -369,7 +446,10 @@ class ConnectionBar(QtWidgets.QFrame):
         text = "—" if latency is None else ("<1 ms" if latency < 0.0005 else f"{latency * 1000:.0f} ms")
         if text != self._last_latency_text:
             self._last_latency_text = text
-            self.latency_label.setText(text)
+            if self._latency_room:
+                self.latency_label.setText(text)
+            # also where the bar has no room for the latency (_share_room)
+            self.state_label.setToolTip(f"round trip to the robot: {text}" if latency is not None else "")
         self.bandwidth.poll()
 
     def _say(self, text: str, role: str = "problem") -> None:

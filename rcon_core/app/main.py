@@ -105,6 +105,7 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
     from rcon_core.app.link import BadUrl, check_url
     from rcon_core.app.main_window import MainWindow
     from rcon_core.gcpolicy import CollectorPolicy
+    from rcon_core.mallocpolicy import keep_big_blocks
     from rcon_core.priority import favour_latency
 
     url = getattr(args, "url", None)
@@ -217,6 +218,7 @@ def open_app(args: Any, stack: contextlib.ExitStack) -> Any:
             return demo_workspace(plugins)
 
     favour_latency()  # the GUI thread raised, the GIL's switch interval short (rcon_core/priority.py)
+    keep_big_blocks()  # camera frames' pages kept from one frame to the next (rcon_core/mallocpolicy.py)
     # the demo layout is built on its first start only (or when it cannot be read); edits persist
     # the collector's pauses kept short while robots stream (rcon_core/gcpolicy.py)
     # with --canvas: the embedded robot under the canvas given, never the demo's layout

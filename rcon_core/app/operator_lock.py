@@ -30,7 +30,7 @@ from typing import Any
 from qtpy import QtCore, QtWidgets
 
 from rcon_core.app.config import AppConfig
-from rcon_core.app.dialog_fit import fit_to_window
+from rcon_core.app.dialog_fit import fit_to_window, fitted_size, room_for
 from rcon_core.app.pin import PIN_MAX, PIN_MIN, check_pin, make_record, needs_upgrade, pin_problem
 
 MAX_TRIES = 5
@@ -48,7 +48,11 @@ def no_guard(_what: str, then: Callable[[], object]) -> object:
 
 class PinDialog(QtWidgets.QDialog):
     """Asks for a PIN (twice with ``repeat``), with a digit pad for a touch screen. ``check(pin)`` decides
-    on OK: None accepts, a sentence is shown and the dialog stays open (the field is cleared)."""
+    on OK: None accepts, a sentence is shown and the dialog stays open (the field is cleared).
+
+    One column (the prompt, the field(s), the keypad, OK) where it fits the room it has; where it does not
+    and the room is wider than tall (a 600 px landscape tablet at a large text size: 674 px asked), two:
+    the keypad beside the rest (:meth:`arrange_for`). Its keys never go below the touch size (gloves)."""
 
     def __init__(self, parent: QtWidgets.QWidget, title: str, prompt: str,
                  check: Callable[[str], str | None], *, repeat: bool = False) -> None:
@@ -57,44 +61,82 @@ class PinDialog(QtWidgets.QDialog):
         self.setWindowTitle(title)
         self.setWindowModality(QtCore.Qt.WindowModality.WindowModal)
         self._check = check
-        col = QtWidgets.QVBoxLayout(self)
-        heading = QtWidgets.QLabel(prompt)
-        heading.setObjectName("pinPrompt")
-        heading.setWordWrap(True)
-        heading.setProperty("role", "heading")
-        col.addWidget(heading)
+        self.grid = QtWidgets.QGridLayout(self)
+        self.heading = QtWidgets.QLabel(prompt)
+        self.heading.setObjectName("pinPrompt")
+        self.heading.setWordWrap(True)
+        self.heading.setProperty("role", "heading")
         self.field = self._pin_field("pinField", "PIN")
-        col.addWidget(self.field)
         self.repeat: QtWidgets.QLineEdit | None = None
         if repeat:
             self.repeat = self._pin_field("pinRepeat", "the same PIN again")
-            col.addWidget(self.repeat)
-        pad = QtWidgets.QGridLayout()
+        #: the keypad, one widget: it moves beside the rest in two columns
+        self.keypad = QtWidgets.QWidget()
+        self.keypad.setObjectName("pinKeypad")
+        pad = QtWidgets.QGridLayout(self.keypad)
+        pad.setContentsMargins(0, 0, 0, 0)
         self.keys: dict[str, QtWidgets.QPushButton] = {}
         for i, key in enumerate("123456789⌫0"):
             button = QtWidgets.QPushButton(key)
             button.setObjectName(f"pinKey{key if key.isdigit() else 'Back'}")
             button.setFocusPolicy(QtCore.Qt.FocusPolicy.NoFocus)
+            # as tall as the room gives in two columns, never lower than the touch size
+            button.setSizePolicy(QtWidgets.QSizePolicy.Policy.Preferred, QtWidgets.QSizePolicy.Policy.Expanding)
             button.clicked.connect(lambda _=False, k=key: self._key(k))
             self.keys[key] = button
             pad.addWidget(button, i // 3, i % 3)
-        col.addLayout(pad)
         self.message = QtWidgets.QLabel()
         self.message.setObjectName("pinMessage")
         self.message.setProperty("role", "problem")
         self.message.setWordWrap(True)
-        col.addWidget(self.message)
-        buttons = QtWidgets.QDialogButtonBox()
-        self.ok = buttons.addButton("OK", QtWidgets.QDialogButtonBox.ButtonRole.AcceptRole)
+        self.buttons = QtWidgets.QDialogButtonBox()
+        self.ok = self.buttons.addButton("OK", QtWidgets.QDialogButtonBox.ButtonRole.AcceptRole)
         self.ok.setObjectName("pinOk")
-        self.cancel = buttons.addButton(QtWidgets.QDialogButtonBox.StandardButton.Cancel)
+        self.cancel = self.buttons.addButton(QtWidgets.QDialogButtonBox.StandardButton.Cancel)
         self.cancel.setObjectName("pinCancel")
         self.ok.clicked.connect(self.submit)
         self.cancel.clicked.connect(self.reject)
-        col.addWidget(buttons)
         self.field.returnPressed.connect(self.submit)
         if self.repeat is not None:
             self.repeat.returnPressed.connect(self.submit)
+        #: 1 or 2 (:meth:`arrange`)
+        self.columns = 0
+        self.arrange(1)
+
+    def arrange(self, columns: int) -> None:
+        """Lay the parts out in one column, or in two (the keypad on the right, beside the rest)."""
+        if columns == self.columns:
+            return
+        self.columns = columns
+        grid = self.grid
+        parts: list[QtWidgets.QWidget] = [self.heading, self.field, *([self.repeat] if self.repeat else []),
+                                          self.keypad, self.message, self.buttons]
+        for part in parts:
+            grid.removeWidget(part)
+        for r in range(grid.rowCount()):
+            grid.setRowStretch(r, 0)
+        for c in range(grid.columnCount()):
+            grid.setColumnStretch(c, 0)
+        if columns == 1:
+            for row, part in enumerate(parts):
+                grid.addWidget(part, row, 0)
+            grid.setRowStretch(parts.index(self.keypad), 1)
+            return
+        side = [part for part in parts if part is not self.keypad]
+        for row, part in enumerate(side):
+            grid.addWidget(part, row, 0)
+        grid.setRowStretch(side.index(self.message), 1)  # OK and Cancel at the foot of the column
+        grid.addWidget(self.keypad, 0, 1, len(side), 1)
+        grid.setColumnStretch(0, 2)  # the prompt's lines the room they want; the keys' still glove-sized
+        grid.setColumnStretch(1, 1)
+        grid.setHorizontalSpacing(max(grid.horizontalSpacing(), 16))
+
+    def arrange_for(self, room: QtCore.QSize) -> None:
+        """One column when it fits ``room`` (the dialog's room over its window, ``dialog_fit.room_for``);
+        else two where the room is wider than tall (the keypad needs the height two columns leave it)."""
+        self.arrange(1)
+        if fitted_size(self, room).height() > room.height() and room.width() > room.height():
+            self.arrange(2)
 
     def _pin_field(self, name: str, placeholder: str) -> QtWidgets.QLineEdit:
         field = QtWidgets.QLineEdit()
@@ -249,6 +291,7 @@ class OperatorLock(QtCore.QObject):
         self.dialog = dialog
         dialog.accepted.connect(lambda: then())
         dialog.finished.connect(lambda _r, d=dialog: self._closed(d))
+        dialog.arrange_for(room_for(self.window))  # two columns where one does not fit (200 % text, 600 px)
         fit_to_window(dialog, self.window)  # the keypad whole on a 600 px tablet (dialog_fit.py)
         dialog.open()
         dialog.field.setFocus()

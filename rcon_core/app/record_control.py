@@ -4,7 +4,7 @@ A button ("● Rec"; also Canvas ▾ → Record every robot) and, while recordin
 ``REC 01:23 · 45.6 MB`` (red), the time and the size on disk of every file, updated once a second from the
 frame clock. On a screen narrower than 1100 px (a 1024x600 tablet) the bar has no room for more: the button is left
 out (the menu starts and stops), and the indicator, ``REC 01:23`` (the size in its tooltip), takes the round-trip
-time's place while recording. Each robot gets its own MCAP file
+time's place while recording; where even that has no room beside the URL field (200 % text), it is a red ●. Each robot gets its own MCAP file
 in the recordings folder (``AppConfig.dir / "recordings"`` unless ``RecordControl.directory`` is
 set): the topics every canvas's widgets show, and on ``/rcon/operator/...`` every publish, call and
 answer, action goal, feedback, result and cancel, and parameter set that left the app for it, with the
@@ -28,7 +28,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from qtpy import QtGui, QtWidgets
+from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app.canvas_bar import CanvasBar
 from rcon_core.app.connection_bar import ConnectionBar
@@ -48,6 +48,52 @@ __all__ = ["RecordControl", "install_record_control", "COMPACT_BELOW"]
 COMPACT_BELOW = 1100  # as the side panel's: at 1024 px the button left the URL field "ws:…971"
 
 
+class RecIndicator(QtWidgets.QLabel):
+    """The recording's reading (``REC 01:23``) where the bar gives it the room (its maximum width, set by the
+    bar: ``ConnectionBar.givers``), a red ● where not (at 200 % text on a 1024 px tablet the URL field comes
+    first); the reading is in its accessible name either way, the details in its tooltip."""
+
+    SHORT = "●"
+
+    def __init__(self) -> None:
+        super().__init__("")
+        self.reading = ""
+
+    def set_reading(self, text: str) -> None:
+        if text != self.reading:
+            self.reading = text
+            self.setAccessibleName(f"recording: {text}")
+            self.updateGeometry()
+            self._fit()
+
+    def _width(self, text: str) -> int:
+        shown = super().text()
+        chrome = super().sizeHint().width() - (self.fontMetrics().horizontalAdvance(shown) if shown else 0)
+        return chrome + self.fontMetrics().horizontalAdvance(text)
+
+    def full_width(self) -> int:
+        return self._width(self.reading) if self.reading else 0
+
+    def set_room(self, px: int) -> None:
+        if px != self.maximumWidth():
+            self.setMaximumWidth(px)
+
+    def sizeHint(self) -> QtCore.QSize:  # noqa: N802 - Qt's name
+        return QtCore.QSize(self.full_width(), super().sizeHint().height())
+
+    def minimumSizeHint(self) -> QtCore.QSize:  # noqa: N802 - Qt's name
+        return QtCore.QSize(self._width(self.SHORT), super().minimumSizeHint().height())
+
+    def resizeEvent(self, event: QtGui.QResizeEvent) -> None:  # noqa: N802 - Qt's name
+        super().resizeEvent(event)
+        self._fit()
+
+    def _fit(self) -> None:
+        text = self.reading if self.width() >= self.full_width() else self.SHORT if self.reading else ""
+        if text != super().text():
+            self.setText(text)
+
+
 def _clock(seconds: float) -> str:
     s = int(seconds)
     return f"{s // 3600}:{s % 3600 // 60:02d}:{s % 60:02d}" if s >= 3600 else f"{s // 60:02d}:{s % 60:02d}"
@@ -57,16 +103,17 @@ class RecordControl(QtWidgets.QWidget):
     """The button and the indicator (see the module docstring)."""
 
     def __init__(self, thread: BridgeThread, directory: Path, doc: Document, fleet: Callable[[], Fleet],
-                 notice: NoticeBar, latency_label: QtWidgets.QWidget, parent: QtWidgets.QWidget | None = None, *,
-                 compact: bool = False) -> None:
+                 notice: NoticeBar, yield_latency: Callable[[bool], None],
+                 parent: QtWidgets.QWidget | None = None, *, compact: bool = False) -> None:
         super().__init__(parent)
         #: a small screen: no button on the bar (Canvas ▾ → Record every robot), and while recording a
         #: short indicator in the place of the round-trip time, so the bar is no wider than without it
         self.compact = compact
         self.action: QtGui.QAction | None = None
         self.bridge_thread, self.doc, self.fleet, self.notice = thread, doc, fleet, notice
-        #: the round-trip time on the connection bar: while recording, the compact indicator takes its place
-        self.latency_label = latency_label
+        #: ``yield_latency(True)``: the compact indicator takes the round-trip time's place on the connection
+        #: bar while recording (the bar alone shows or hides the round trip: ``ConnectionBar.yield_latency``)
+        self.yield_latency = yield_latency
         self.directory = directory
         self.budget: int | None = DEFAULT_BUDGET
         self.recording: AppRecording | None = None
@@ -78,7 +125,7 @@ class RecordControl(QtWidgets.QWidget):
         self.button.setToolTip("Record every robot's topics and what the operator sends, to MCAP files "
                                "(Foxglove, Lichtblick, rosbags, rcon sim --play)")
         self.button.clicked.connect(self.toggle)
-        self.indicator = QtWidgets.QLabel("")
+        self.indicator = RecIndicator()
         self.indicator.setObjectName("recordIndicator")
         self.indicator.setProperty("role", "problem")
         self.indicator.hide()
@@ -88,6 +135,12 @@ class RecordControl(QtWidgets.QWidget):
         row.addWidget(self.button)
         row.addWidget(self.indicator)
         self.button.setVisible(not compact)
+        self._fit_visibility()
+
+    def _fit_visibility(self) -> None:
+        """Shown while it shows something: an empty control would still cost the bar a spacing (at 200 %
+        text on a 1024 px tablet the URL field needs every pixel)."""
+        self.setVisible(not self.button.isHidden() or not self.indicator.isHidden())
 
     def set_compact(self, compact: bool) -> None:
         """Leave the button out (or put it back). Decided once, from the screen, by the installer: a
@@ -98,7 +151,8 @@ class RecordControl(QtWidgets.QWidget):
         self.compact = compact
         self.button.setVisible(not compact)
         recording = self.recording is not None and self.recording.active
-        self.latency_label.setVisible(not (compact and recording))
+        self.yield_latency(compact and recording)
+        self._fit_visibility()
         self._show()
 
     # ------------------------------------------------------------------ start and stop
@@ -135,8 +189,9 @@ class RecordControl(QtWidgets.QWidget):
         if self.action is not None:
             self.action.setText("■ Stop recording")
         if self.compact:
-            self.latency_label.hide()
+            self.yield_latency(True)
         self.indicator.show()
+        self._fit_visibility()
         self._show(force=True)
 
     def stop(self) -> None:
@@ -150,8 +205,8 @@ class RecordControl(QtWidgets.QWidget):
         if self.action is not None:
             self.action.setText("● Record every robot")
         self.indicator.hide()
-        if self.compact:
-            self.latency_label.show()
+        self._fit_visibility()
+        self.yield_latency(False)
         files = ", ".join(Path(f).name for f in status.files)
         self.notice.show_notice(f"ℹ Recorded {_clock(status.seconds)}, {status.size / 1e6:.1f} MB: {files} "
                                        f"in {self.directory}", kind="info")
@@ -178,8 +233,8 @@ class RecordControl(QtWidgets.QWidget):
         if rec is None:
             return
         st = rec.status()
-        self.indicator.setText(f"REC {_clock(st.seconds)}" if self.compact else
-                               f"REC {_clock(st.seconds)} · {st.size / 1e6:.1f} MB")
+        self.indicator.set_reading(f"REC {_clock(st.seconds)}" if self.compact else
+                                   f"REC {_clock(st.seconds)} · {st.size / 1e6:.1f} MB")
         self.indicator.setToolTip(f"{st.size / 1e6:.1f} MB, {st.messages} messages, {st.events} operator events"
                                   + (f", {st.dropped} dropped" if st.dropped else "") + " · " + ", ".join(st.files))
         self.indicator.setProperty("role", "problem" if st.recording else "muted")
@@ -197,10 +252,11 @@ def install_record_control(thread: BridgeThread, directory: Path, doc: Document,
                            replay_dialog: Callable[[], object], *, compact: bool) -> RecordControl:
     """Put the Record control on the connection bar, before the link state, and on the frame clock; and
     Canvas ▾ → Record every robot / Replay a recording… (``replay_dialog``). ``compact``: a small screen."""
-    control = RecordControl(thread, directory, doc, fleet, notice, connection.latency_label, compact=compact)
+    control = RecordControl(thread, directory, doc, fleet, notice, connection.yield_latency, compact=compact)
     row = connection.layout()
     if isinstance(row, QtWidgets.QBoxLayout):
         row.insertWidget(max(0, row.indexOf(connection.state_label)), control)
+    connection.givers.insert(0, control.indicator)  # the bar's room, after the URL field's host, to it first
     clock.add(control.poll)
     menu = bar.menu
     record = QtGui.QAction("● Record every robot", menu)

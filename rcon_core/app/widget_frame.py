@@ -17,6 +17,7 @@ import math
 from qtpy import QtCore, QtGui, QtWidgets
 
 from rcon_core.app.elided_label import OneLineLabel
+from rcon_core.app.frame_badge import Badge, ReasonLine, badge_form
 from rcon_core.app.geometry import GRID, fit_rect, scaled_about_center, snap_rect, snap_up
 from rcon_core.app.theme import colour as theme_colour
 from rcon_core.app.theme import current_text_size, current_touch_px, font_px, repolish
@@ -32,101 +33,6 @@ def frame_min_size() -> QtCore.QSize:
     """The smallest a widget frame may be: room for its corner handles and a little content."""
     t = current_touch_px()
     return QtCore.QSize(max(3 * t, 5 * GRID), max(2 * t + GRID, 5 * GRID))
-
-
-class Badge(QtWidgets.QLabel):
-    """A small status pill at the right end of the frame's title bar. Its tooltip is the reason (hover);
-    a tap shows the reason on the frame, on one line under the title (:class:`ReasonLine`), and a second
-    tap hides it."""
-
-    COLOURS = {"stale": "#a85400", "down": "#b00000", "problem": "#b00000", "ok": "#006b1b",
-               "view-only": "#3a3a3a"}
-
-    def __init__(self, parent: QtWidgets.QWidget) -> None:
-        super().__init__(parent)
-        self.setObjectName("frameBadge")
-        self.kind = ""
-        self.reason = ""
-        self.font_sheet = ""  #: the frame's text size for it (WidgetFrame.fit_text), "" for the app's
-        self.setCursor(QtCore.Qt.CursorShape.PointingHandCursor)
-        self.hide()
-
-    def show_status(self, kind: str, text: str, reason: str = "") -> None:
-        """Show ``text`` in ``kind``'s colour (``""``: hide); ``reason`` is the sentence behind it, shown on
-        hover (the tooltip) and on a tap (the frame's reason line)."""
-        if kind == self.kind and text == self.text() and reason == self.reason:
-            return
-        self.kind, self.reason = kind, reason
-        self.setToolTip(reason)
-        self.setAccessibleName(f"status: {text}" if kind else "")
-        self.setAccessibleDescription(reason)
-        frame = self.parentWidget()
-        if not kind:
-            self.hide()
-        else:
-            self.setText(text)
-            self.restyle()
-            self.adjustSize()
-            self.show()
-            self.raise_()
-        if isinstance(frame, WidgetFrame):
-            frame.layout_overlays()  # hidden: the title gets its full width back
-            frame.reason_line.follow(self)
-
-    def restyle(self) -> None:
-        """Its colour for its kind, at its frame's text size (a style sheet only when it changed)."""
-        colour = self.COLOURS.get(self.kind, "#000000")
-        sheet = (f"background:{colour}; color:#ffffff; font-weight:bold; border-radius:4px; padding:2px 8px;"
-                 f"{self.font_sheet}")
-        if sheet != self.styleSheet():
-            self.setStyleSheet(sheet)
-            self.adjustSize()
-
-    def mouseReleaseEvent(self, event: QtGui.QMouseEvent) -> None:  # noqa: N802 - Qt's name
-        if event.button() == QtCore.Qt.MouseButton.LeftButton and self.rect().contains(event.position().toPoint()):
-            frame = self.parentWidget()
-            if isinstance(frame, WidgetFrame):
-                frame.reason_line.toggle(self)
-        super().mouseReleaseEvent(event)
-
-
-class ReasonLine(OneLineLabel):
-    """The badge's reason on one line across the top of the frame's body, cut with "…" when it is too
-    long (the whole sentence in its tooltip); shown by a tap on the badge, hidden by another tap on either."""
-
-    def __init__(self, parent: QtWidgets.QWidget) -> None:
-        super().__init__(parent)
-        self.setObjectName("frameReason")
-        self.full = ""  # its look: QLabel#frameReason in theme.qss
-        self.hide()
-
-    def toggle(self, badge: Badge) -> None:
-        if self.isVisible() or not badge.reason:
-            self.hide()
-            return
-        self.full = ""
-        self.follow(badge)
-        self.show()
-        self.raise_()
-
-    def follow(self, badge: Badge) -> None:
-        """The badge changed: the line says its new reason, or goes away with it."""
-        if not badge.isVisible() or not badge.reason:
-            self.hide()
-            return
-        if badge.reason != self.full:
-            self.full = badge.reason
-            self.setToolTip(badge.reason)
-            self.setAccessibleName(badge.reason)
-            self._elide()
-
-    def _elide(self) -> None:
-        room = self.contentsRect().width()
-        self.setText(self.fontMetrics().elidedText(self.full, QtCore.Qt.TextElideMode.ElideRight, max(0, room)))
-
-    def mouseReleaseEvent(self, event: QtGui.QMouseEvent) -> None:  # noqa: N802 - Qt's name
-        self.hide()
-        super().mouseReleaseEvent(event)
 
 
 class FrameTitle(OneLineLabel):
@@ -159,6 +65,12 @@ class FrameTitle(OneLineLabel):
         if px != self.reserve:
             self.reserve = px
             self._elide()
+
+    def resizeEvent(self, event: QtGui.QResizeEvent) -> None:  # noqa: N802 - Qt's name
+        super().resizeEvent(event)
+        frame = self.parentWidget()
+        if isinstance(frame, WidgetFrame) and event.oldSize().height() != event.size().height():
+            frame.layout_overlays()  # a taller or lower bar (another text size): the badge fits it again
 
     def _elide(self) -> None:
         room = self.contentsRect().width() - self.reserve
@@ -251,8 +163,8 @@ class Shield(QtWidgets.QWidget):
         if t == QtCore.QEvent.Type.ToolTip:  # over the badge: its reason, as in Operate mode
             badge = self.frame.badge
             pos = event.pos()  # type: ignore[attr-defined]
-            if badge.isVisible() and badge.reason and badge.geometry().contains(pos):
-                QtWidgets.QToolTip.showText(event.globalPos(), badge.reason, self)  # type: ignore[attr-defined]
+            if badge.isVisible() and badge.told() and badge.geometry().contains(pos):
+                QtWidgets.QToolTip.showText(event.globalPos(), badge.told(), self)  # type: ignore[attr-defined]
                 return True
         return super().event(event)
 
@@ -650,6 +562,7 @@ class WidgetFrame(QtWidgets.QFrame):
         if self.badge.isVisible():  # in the title bar, so it never covers what the view shows
             title = self.title.geometry()
             self.badge.setMaximumHeight(title.height())
+            self.badge.show_form(badge_form(self.badge, self.title))
             self.badge.move(title.right() - self.badge.width() - 2,
                             title.top() + max(0, (title.height() - self.badge.height()) // 2))
             self.title.set_reserve(max(0, self.badge.width() + 6 - self.title.contentsMargins().right()))

@@ -170,8 +170,7 @@ class WidgetHost:
             hosted.view.setEnabled(False)
             hosted.view.setToolTip(f"View only: {reason}. Nothing is sent to the robot.")
             # the badge with it, not at the next pass: a disabled control never shows without its reason
-            hosted.frame.badge.show_status("view-only", "VIEW ONLY")
-            hosted.frame.badge.setToolTip(f"{reason}: nothing is sent to the robot")
+            hosted.frame.badge.show_status("view-only", "VIEW ONLY", f"{reason}: nothing is sent to the robot")
 
     def set_link_up(self, up: bool, robot_id: str | None = None) -> None:
         """One robot's link (``robot_id``), or, without it, every robot's (a one-robot window)."""
@@ -278,8 +277,7 @@ class WidgetHost:
         hosted.hook_error = f"the widget failed in {hook}: {safe_text(exc)}"
         self._log_failure(hosted, hosted.hook_error)
         try:
-            hosted.frame.badge.show_status("problem", "ERROR")
-            hosted.frame.badge.setToolTip(hosted.hook_error)
+            hosted.frame.badge.show_status("problem", "ERROR", hosted.hook_error)
         except Exception:  # noqa: BLE001 - the frame itself is broken: the count and the log say it
             pass
 

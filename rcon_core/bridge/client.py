@@ -1,12 +1,16 @@
 """``BridgeClient``: one rosbridge v2 connection, shared by many nodes, on one asyncio loop.
 
-The client is the connection: connect, reconnect, auth, ping, stall watch and the writer task.  What the
+The client is the connection.  Connecting, reconnecting with backoff, state and failure reporting, the
+ping and stall watch, TLS and close are the shell it is built on, shared with the Foxglove link
+(:class:`~rcon_core.link.connection.ConnectionShell`, whose docstring states those decisions); what is
+rosbridge's is here: ``auth``, rosapi, and what happens on a fresh link and when it goes.  What the
 protocol is about is the sans-I/O :class:`~rcon_core.bridge.session.Session` (``client.session``); its async
 side, :class:`~rcon_core.bridge.shell.SessionShell` (``client.shell``: writing its outbox, futures, tasks), is
 attached to each fresh link; messages come in through ``receive.py`` to ``inbound.py``, frames go out through
 the link (``transport.py``, over ``pwlink.py`` or ``wslink.py``).  Where each behaviour is decided:
 
-* reconnect, state, latency and stall detection: here (and ``freshness.py``, ``reasons.py``, ``secure.py``);
+* reconnect, state, latency and stall detection: ``rcon_core/link/connection.py`` (and ``freshness.py``,
+  ``reasons.py``, ``secure.py``); ``auth`` and its refusal: here;
 * the transport, direct writes and command freshness on the wire: ``transport.py`` (adapters ``pwlink.py``,
   ``wslink.py``); messages in, in order, sharing the loop: ``receive.py``;
 * the hot path, big frames, fragments, png and bad input from the server: ``inbound.py``,
@@ -24,31 +28,12 @@ Test hooks (public, documented): ``client.session`` (``topics``, ``pending``, ``
 ``client.inbound`` (``inbound.fragments``), ``client.link`` (the current ``transport.Link`` or None: ``queued``,
 ``buffered()``, ``socket``, ``name``), ``client.transport`` (``picows`` or ``websockets``).
 
-Reconnect
-    One attempt at a time through the chosen transport (``transport.open_link``: picows or websockets, see
-    ``transport.py``), with our own ``_delays``: capped exponential backoff (``backoff_min`` doubling up to
-    ``backoff_max``) with full jitter.  After every
-    (re)connect the client sends, in order: ``auth`` (when configured), ``set_level`` (when set), every
-    advertisement, every advertised service and action, then every subscription -- rosbridge forgets all
-    of them with the connection (``reconnect.jsonl:8``; ``session.py``).  TLS certificate errors and a refused
-    ``auth`` are fatal rather than retried.  Each failed attempt is put in words by ``reasons.describe``; ``client.failure`` holds
-    the last one and failure listeners get it, with the time of the next attempt (``retry_at``).
-
-State
-    CONNECTING (first attempt) -> CONNECTED -> RECONNECTING (link lost, retrying) -> CONNECTED ...;
-    CLOSED after ``close()`` or a fatal error.  Listeners get ``fn(state)`` on the loop thread.
-    CONNECTED <-> DEGRADED while the socket is open but the link is stalled (``freshness.py``): DEGRADED is
-    a state of its own so every listener sees it and treats it as "not usable" (the app shows it, widgets
-    mark their values link-down, teleop stops), while ``client.connected`` -- "a socket is open" -- stays
-    True and nothing is restored when the link recovers.
-
-Latency and stall detection
-    With ``stall_timeout`` (1 s, the default) a WebSocket ping goes out every ``stall_timeout / 4`` while
-    none is in flight; a ping unanswered for ``stall_timeout`` (or a write buffer not draining as long) is
-    DEGRADED, and when commands written since the last answered ping are unconfirmed the link is cut with
-    a TCP reset so they are never delivered late (``freshness.py``).  ``stall_timeout=None``: a ping every
-    ``latency_interval`` (2 s) only.  ``client.latency`` is the ping/pong round trip.  It needs no rosapi and
-    works on any server; a pong missing for ``pong_timeout`` seconds drops the link (then it reconnects).
+After every (re)connect
+    The client sends, in order: ``auth`` (when configured), ``set_level`` (when set), every advertisement,
+    every advertised service and action, then every subscription -- rosbridge forgets all of them with the
+    connection (``reconnect.jsonl:8``; ``session.py``).  The link is CONNECTED once ``auth`` is written
+    (rosbridge never answers it).  A refused ``auth`` is fatal rather than retried: the robot closing the
+    link right after it is read as a refusal (``reasons.refused_auth``).
 
 Frames and messages above the hard ``max_frame_size`` (by default twice ``max_size``) make the transport
 close the link (1009), which then reconnects.
@@ -57,51 +42,33 @@ close the link (1009), which then reconnects.
 from __future__ import annotations
 
 import asyncio
-import enum
 import inspect
 import logging
-import random
-import ssl
-import time
-from collections.abc import Callable, Generator
+from collections.abc import Callable
 from typing import Any
+
+from rcon_core.link.connection import ConnectionShell, ConnectionState
 
 from . import rosapi_guard
 from .action_server import ProvidedActions
-from .envelope import Envelope
-from .errors import AuthRefusedError, LinkClosedError, NotConnectedError, RosapiRefusedError, ServiceError
-from .freshness import LinkEvent, LinkWatch, watch_link
-from .guard import LinkGuard
+from .errors import AuthRefusedError, RosapiRefusedError, ServiceError
 from .inbound import BadFrames, Inbound
 from .linkbase import Link
-from .nodes import Node
 from .params import Params
 from .protocol import encode
-from .reasons import Failure, describe, refused_auth
+from .reasons import refused_auth
 from .receive import Receiver
 from .rosinfo import RosInfo
 from .rosinfo import detect as detect_ros
-from .safety import without_traceback
-from .secure import ssl_context
 from .session import LOG_LEVELS, Session
 from .shell import SessionShell, later
 from .stats import BridgeStats
 from .traffic import Traffic
-from .transport import choose, open_link
 
 log = logging.getLogger(__name__)
 
-_monotonic = time.monotonic
 AUTH_FIELDS = ("mac", "client", "dest", "rand", "t", "level", "end")
 __all__ = ["BridgeClient", "ConnectionState", "LOG_LEVELS"]
-
-
-class ConnectionState(enum.Enum):
-    CONNECTING = "connecting"
-    CONNECTED = "connected"
-    DEGRADED = "degraded"
-    RECONNECTING = "reconnecting"
-    CLOSED = "closed"
 
 
 def _check_auth(auth: dict[str, Any]) -> dict[str, Any]:
@@ -125,11 +92,13 @@ class _Unguarded:
         return await self._shell.call_service(name, args, timeout)
 
 
-class BridgeClient:
+class BridgeClient(ConnectionShell):
     """A rosbridge v2 client.  Create, ``await connect()``, then hand out ``node(label)`` to consumers.
-    One of the two implementations of ``rcon_core.link.RobotLink``."""
+    One of the two implementations of ``rcon_core.link.RobotLink``; connecting, reconnecting, state and
+    close are the shell's (``rcon_core/link/connection.py``)."""
 
     protocol = "rosbridge"
+    session: Session
 
     def __init__(self, url: str, *, reconnect: bool = True, ca_file: str | None = None,
                  auth: dict[str, Any] | Callable[[], Any] | None = None, call_timeout: float = 10.0,
@@ -140,47 +109,25 @@ class BridgeClient:
                  stall_timeout: float | None = 1.0, client_cert: str | None = None,
                  client_key: str | None = None, max_decoded: int | None = None,
                  transport: str | None = None) -> None:
-        if not isinstance(url, str) or not url.startswith(("ws://", "wss://")):
-            raise ValueError(f"url must start with ws:// or wss://, got {url!r}")
+        size = max_size if max_message_size is None else max_message_size
+        super().__init__(url, reconnect=reconnect, ca_file=ca_file, client_cert=client_cert, client_key=client_key,
+                         backoff_min=backoff_min, backoff_max=backoff_max, latency_interval=latency_interval,
+                         pong_timeout=pong_timeout, open_timeout=open_timeout, stall_timeout=stall_timeout,
+                         max_frame_size=max_frame_size or max(2 * size, size + (1 << 20)), transport=transport,
+                         stats=BridgeStats())
         if typed_arrays not in ("list", "numpy"):
             raise ValueError("typed_arrays must be 'list' or 'numpy'")
         if isinstance(auth, dict):
             _check_auth(auth)
-        self.url = url
-        #: the WebSocket library carrying the link: ``picows`` or ``websockets`` (``transport.choose``)
-        self.transport = choose(transport)
-        self.reconnect = reconnect
-        self.ca_file = ca_file
-        self.client_cert, self.client_key = client_cert, client_key
         self.auth = auth
         self.call_timeout = call_timeout
         self.registry = registry
         self.typed_arrays = typed_arrays
-        self.backoff_min = backoff_min
-        self.backoff_max = backoff_max
-        self.latency_interval = latency_interval
-        self.pong_timeout = pong_timeout
-        self.open_timeout = open_timeout
-        #: the largest frame the client accepts (``max_message_size`` is the older name of the same limit)
-        self.max_size = self.max_message_size = max_size if max_message_size is None else max_message_size
-        self.max_frame_size = max_frame_size or max(2 * self.max_message_size, self.max_message_size + (1 << 20))
+        #: the largest message the client accepts (``max_message_size`` is the older name of the same limit)
+        self.max_size = self.max_message_size = size
         self.big_frame = min(big_frame, self.max_message_size)
         #: the bytes of Python objects one (big) frame may decode to; a frame over it is refused (offload.py)
         self.max_decoded = 4 * self.max_message_size if max_decoded is None else max_decoded
-        self.stall_timeout = stall_timeout
-        self.latency: float | None = None
-        self.last_error: BaseException | None = None
-        self.failure: Failure | None = None
-        self._failure_listeners: list[Callable[[Failure], None]] = []
-        #: what the client counts (``stats.py``)
-        self.stats = BridgeStats()
-        self._state = ConnectionState.CLOSED
-        self._state_listeners: list[Callable[[ConnectionState], None]] = []
-        #: the current connection (None while down); see ``linkbase.py``
-        self.link: Link | None = None
-        self._task: asyncio.Task[None] | None = None
-        self._connected = asyncio.Event()
-        self._closing = False
         from .rosapi import Rosapi
 
         self.rosapi = Rosapi(self)
@@ -199,19 +146,6 @@ class BridgeClient:
                                fragment_timeout=fragment_timeout, max_decoded=self.max_decoded)
 
     # ================================================================== state
-
-    @property
-    def state(self) -> ConnectionState:
-        return self._state
-
-    @property
-    def connected(self) -> bool:
-        return self.link is not None
-
-    @property
-    def guard(self) -> LinkGuard:
-        """Whether this link is view-only (``guard.set_view_only(reason)``, any thread; see ``guard.py``)."""
-        return self.session.guard
 
     @property
     def traffic(self) -> Traffic:
@@ -233,19 +167,6 @@ class BridgeClient:
     def provided_actions(self) -> ProvidedActions:
         """Actions this client serves (``node.advertise_action``; see ``action_server.py``)."""
         return self.session.provided_actions
-
-    @property
-    def envelope(self) -> Envelope | None:
-        """The robot's safety envelope: every motion command published through this client is held to it
-        (clamped, or refused when not a number; see ``envelope.py``). None: no speed limit. Any thread may
-        set it (one attribute; the loop reads it at each publish)."""
-        return self.session.envelope
-
-    @envelope.setter
-    def envelope(self, value: Envelope | None) -> None:
-        if value is not None and not isinstance(value, Envelope):
-            raise TypeError(f"envelope must be an Envelope or None, not {type(value).__name__}")
-        self.session.envelope = value
 
     @property
     def ros_version(self) -> int | None:
@@ -294,56 +215,9 @@ class BridgeClient:
         future.set_result(info)
         return info
 
-    def add_state_listener(self, fn: Callable[[ConnectionState], None]) -> Callable[[], None]:
-        """Call ``fn(state)`` on every change; returns a function that removes the listener."""
-        self._state_listeners.append(fn)
-        return lambda: self._state_listeners.remove(fn) if fn in self._state_listeners else None
-
     def add_status_listener(self, fn: Callable[[dict[str, Any]], None]) -> Callable[[], None]:
         """Call ``fn(frame)`` for each ``status`` op the server sends (``level``, ``msg``, ``id``)."""
         return self.session.add_status_listener(fn)
-
-    def add_failure_listener(self, fn: Callable[[Failure], None]) -> Callable[[], None]:
-        """Call ``fn(failure)`` (on the loop thread) for each failed attempt: why in words, whether it is
-        fatal, and ``retry_at`` (``time.monotonic()``) of the next attempt; returns a remover."""
-        self._failure_listeners.append(fn)
-        return lambda: self._failure_listeners.remove(fn) if fn in self._failure_listeners else None
-
-    def _report(self, failure: Failure) -> None:
-        self.failure = failure
-        for fn in list(self._failure_listeners):
-            try:
-                fn(failure)
-            except Exception:
-                log.exception("failure listener raised")
-
-    def _why(self, exc: BaseException) -> Failure:
-        without_cert = self.url.startswith("wss:") and not self.client_cert
-        return describe(exc, ca_file=self.ca_file, wss_without_cert=without_cert)
-
-    def _set_state(self, state: ConnectionState) -> None:
-        if state is self._state:
-            return
-        self._state = state
-        if self.link is not None:
-            self.link.degraded = state is ConnectionState.DEGRADED
-        for fn in list(self._state_listeners):
-            try:
-                fn(state)
-            except Exception:
-                log.exception("state listener raised")
-
-    def node(self, label: str) -> Node:
-        """A new node; its id is ``label``, made unique with a ``#n`` suffix when already taken."""
-        if not isinstance(label, str) or not label:
-            raise ValueError("node label must be a non-empty string")
-        nodes = self.session.nodes
-        node_id, n = label, 1
-        while node_id in nodes:
-            n += 1
-            node_id = f"{label}#{n}"
-        node = nodes[node_id] = Node(self, node_id)
-        return node
 
     # ================================================================== the protocol, by the session
 
@@ -389,165 +263,32 @@ class BridgeClient:
         reconnects."""
         self.session.set_level(level)
 
-    async def wait_connected(self) -> None:
-        """Return once a link is open and restored (after ``auth``); raises NotConnectedError when the client
-        is not trying to connect."""
-        if self._connected.is_set():
-            return
-        if self._task is None or self._task.done():
-            raise NotConnectedError(f"not connected to {self.url}")
-        await self._connected.wait()
+    # ================================================================== a link comes and goes (the shell's hooks)
 
-    # ================================================================== connecting
+    def _receiver(self) -> Receiver:
+        return Receiver(self.inbound)
 
-    def _ssl_context(self) -> ssl.SSLContext | None:
-        if not self.url.startswith("wss://"):
-            return None
-        return ssl_context(self.ca_file, self.client_cert, self.client_key)
+    async def _link_up(self, link: Link) -> None:
+        """``auth`` first (when configured), then the session's shell restores the rest: CONNECTED."""
+        self.inbound.waiting = link.receiver.waiting
+        await self._send_auth(link)
+        self.shell.attached(link)
+        self._up()
 
-    def _delays(self) -> Generator[float]:
-        delay = self.backoff_min
-        while True:
-            wait = random.uniform(self.backoff_min / 2, delay)  # jitter
-            if self.last_error is not None:  # drawn right after a failed attempt: say why, and when next
-                self._report(self._why(self.last_error).retrying(wait))
-            yield wait
-            delay = min(delay * 2, self.backoff_max)
+    def _link_down(self, link: Link) -> None:
+        self.inbound.disconnected()
+        self.inbound.waiting = None
+        self.shell.detached(link)
 
-    async def _open(self) -> Link:
-        """One connection attempt with the chosen transport (``transport.open_link``)."""
-        receiver = Receiver(self.inbound)
-        link = await open_link(self.transport, self.url, receiver, self.session.stale_in_queue,
-                               ssl=self._ssl_context(), open_timeout=self.open_timeout, max_size=self.max_frame_size)
-        link.receiver = receiver
-        return link
+    def _check_end(self, link: Link, seconds_open: float) -> None:
+        """rosbridge never answers ``auth``: a close right after it is a refusal, fatal (``reasons.py``)."""
+        if refused_auth(link.close_code, link.close_reason, auth_sent=self.auth is not None,
+                        seconds_open=seconds_open):
+            raise AuthRefusedError(f"{self.url} closed the link after the auth op")
 
-    async def connect(self, timeout: float | None = None) -> None:
-        """Connect; returns once connected.  With ``reconnect=False`` the first failure is raised; with
-        reconnect it keeps trying (until ``timeout``, then ``TimeoutError``) unless the error is fatal."""
-        if self.link is not None:
-            return
-        self._closing = False
-        if self._task is None or self._task.done():
-            self._set_state(ConnectionState.CONNECTING)
-            if not self.reconnect:
-                try:
-                    link = await self._open()
-                except BaseException as exc:
-                    self.last_error = exc
-                    if isinstance(exc, Exception):
-                        self._report(self._why(exc))
-                    self._set_state(ConnectionState.CLOSED)
-                    raise
-                self._task = asyncio.create_task(self._serve_once(link))
-            else:
-                self._task = asyncio.create_task(self._run())
-        waiter = asyncio.ensure_future(self._connected.wait())
-        try:
-            await asyncio.wait({waiter, self._task}, timeout=timeout, return_when=asyncio.FIRST_COMPLETED)
-        finally:
-            waiter.cancel()
-        if self.link is not None:
-            return
-        if self._task.done():
-            error = self._task.exception() if not self._task.cancelled() else None
-            raise error or NotConnectedError(f"could not connect to {self.url}")
-        raise TimeoutError(f"not connected to {self.url} within {timeout} s (last error: {self.last_error})")
-
-    async def close(self) -> None:
-        """Close the connection and stop reconnecting.  Nodes stay usable for a later ``connect()``."""
-        self._closing = True
-        task, self._task = self._task, None
-        link = self.link
-        if link is not None:
-            await link.close()
-        if task is not None and not task.done():
-            task.cancel()
-        if task is not None:
-            try:
-                await task
-            except (asyncio.CancelledError, Exception):
-                pass
+    def _closed(self) -> None:
         self.shell.cancel_tasks()
         self.inbound.close()
-        self._set_state(ConnectionState.CLOSED)
-
-    async def __aenter__(self) -> BridgeClient:
-        await self.connect()
-        return self
-
-    async def __aexit__(self, *exc: object) -> None:
-        await self.close()
-
-    async def _run(self) -> None:
-        """Connect, serve, reconnect: a failed attempt is retried after ``_delays()`` unless it is fatal
-        (``reasons.describe``); a lost link is reconnected after a short random pause."""
-        delays: Generator[float] | None = None
-        try:
-            while True:
-                try:
-                    link = await self._open()
-                except Exception as exc:
-                    self.last_error = exc
-                    if describe(exc).fatal:
-                        raise  # retrying cannot fix a certificate problem, a bad URL...
-                    if self._state is not ConnectionState.CLOSED:
-                        log.info("connecting to %s failed: %s", self.url, exc)
-                    delays = delays or self._delays()
-                    await asyncio.sleep(next(delays))
-                    continue
-                delays = None
-                opened = time.monotonic()
-                await self._serve_once(link, final=False)
-                if self._closing:
-                    break
-                if refused_auth(link.close_code, link.close_reason, auth_sent=self.auth is not None,
-                                seconds_open=time.monotonic() - opened):
-                    raise AuthRefusedError(f"{self.url} closed the link after the auth op")
-                self._set_state(ConnectionState.RECONNECTING)
-                await asyncio.sleep(random.uniform(0, self.backoff_min))  # never a tight reconnect loop
-        except asyncio.CancelledError:
-            raise
-        except Exception as exc:
-            self.last_error = exc
-            self._report(self._why(exc))
-            log.error("giving up on %s: %s", self.url, exc)
-            raise
-        finally:
-            self._set_state(ConnectionState.CLOSED)
-
-    async def _serve_once(self, link: Link, final: bool = True) -> None:
-        self.link = link
-        receiver: Receiver = link.receiver
-        self.inbound.waiting = receiver.waiting
-        self.stats.connects += 1
-        writer = asyncio.create_task(link.run_writer())
-        pinger = asyncio.create_task(self._pinger(link))
-        try:
-            await self._send_auth(link)
-            self.shell.attached(link)
-            self._connected.set()
-            self._set_state(ConnectionState.CONNECTED)
-            await link.wait_closed()
-            closed = link.closed_error()
-            # kept without its traceback: the frames it holds keep the dead connection's buffers alive
-            self.last_error = without_traceback(closed) if closed is not None else None
-            if receiver.task is not None:  # messages that arrived before the close are still delivered
-                await asyncio.shield(receiver.task)
-        finally:
-            receiver.cancel()
-            self.link = None
-            self._connected.clear()
-            writer.cancel()
-            pinger.cancel()
-            self.inbound.disconnected()
-            self.inbound.waiting = None
-            self.shell.detached(link)
-            link.release()  # its buffers go now, not at the collector's next full pass (wslink.py)
-            if final:
-                self._set_state(ConnectionState.CLOSED)
-        if not self._closing:
-            log.warning("connection to %s lost (%s)", self.url, link.close_reason or link.close_code or "no close frame")
 
     async def _send_auth(self, link: Link) -> None:
         """The ``auth`` op first on a fresh connection (when configured); the session restores the rest."""
@@ -556,48 +297,3 @@ class BridgeClient:
             if inspect.isawaitable(auth):
                 auth = await auth
             link.write(encode(_check_auth(auth)))
-
-    # ================================================================== ping and stall watch
-
-    async def _pinger(self, link: Link) -> None:
-        """Without stall detection (``stall_timeout=None``): a ping every ``latency_interval``; a pong
-        missing for ``pong_timeout`` drops the link.  With it, ``freshness.watch_link``."""
-        if self.stall_timeout is not None:
-            probe_interval = min(self.latency_interval, self.stall_timeout / 4)
-            link.watch = LinkWatch(self.stall_timeout, probe_interval, _monotonic())
-            await watch_link(link, link.watch, self.pong_timeout, self._link_event)
-            return
-        try:
-            while True:
-                waiter = await link.ping()
-                try:
-                    self.latency = await asyncio.wait_for(waiter, self.pong_timeout)
-                except TimeoutError:
-                    log.warning("no pong from %s within %.0f s; dropping the link", self.url, self.pong_timeout)
-                    link.abort()
-                    return
-                await asyncio.sleep(self.latency_interval)
-        except LinkClosedError:
-            pass
-
-    def _link_event(self, event: LinkEvent, detail: Any) -> bool:
-        """What the watchdog (``freshness.watch_link``) reports; True when a stall counts (CONNECTED)."""
-        if event is LinkEvent.LATENCY:
-            self.latency = detail
-        elif event is LinkEvent.STALLED:
-            if self._state is not ConnectionState.CONNECTED:
-                return False
-            self.stats.degraded += 1
-            log.warning("link to %s is degraded: %s", self.url, detail)
-            self._set_state(ConnectionState.DEGRADED)
-        elif event is LinkEvent.RECOVERED:
-            log.info("link to %s has recovered", self.url)
-            if self._state is ConnectionState.DEGRADED:
-                self._set_state(ConnectionState.CONNECTED)
-        elif event is LinkEvent.CUT:
-            self.stats.stall_cuts += 1
-            log.warning("link to %s stalled (%s) with commands in flight; cut it so they are never delivered "
-                        "late; reconnecting", self.url, detail)
-        else:
-            log.warning("%s from %s; dropping the link", detail, self.url)
-        return True

@@ -117,7 +117,9 @@ class HeldWatch:
         now = self.held()
         if now is None and self._calls:
             _service, since = next(iter(self._calls.values()))
-            self._later(max(0.0, since + self.threshold - self.clock()))
+            left = since + self.threshold - self.clock()
+            if left > 0:  # not yet past the threshold; past it and not held (ROS 1): nothing to wait for
+                self._later(left)
         if now != self.current:
             self.current = now
             for fn in list(self._listeners):

@@ -71,6 +71,9 @@ def run(name: str, args: argparse.Namespace) -> int:
     if not url.startswith(("ws://", "wss://")):
         print(f"rcon record: --url must be a ws:// or wss:// URL, got {url!r}", file=sys.stderr)
         return 2
+    from rcon_core.mallocpolicy import keep_big_blocks
+
+    keep_big_blocks()  # a camera frame's pages kept for the next one (mallocpolicy.py)
     try:
         return asyncio.run(_record(url, args))
     except KeyboardInterrupt:

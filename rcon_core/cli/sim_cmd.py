@@ -244,9 +244,11 @@ async def _serve(args: argparse.Namespace, tls: ssl.SSLContext | None = None, se
         with contextlib.suppress(NotImplementedError, RuntimeError):
             loop.add_signal_handler(sig, stop.set)
     from rcon_core.gcpolicy import keep_settled
+    from rcon_core.mallocpolicy import keep_big_blocks
     from rcon_core.priority import favour_latency
 
     favour_latency()  # the loop that receives commands raised, the GIL's switch interval short (priority.py)
+    keep_big_blocks()  # camera frames' pages kept from one frame to the next (mallocpolicy.py)
     settler = asyncio.create_task(keep_settled())  # the collector's pauses kept short (gcpolicy.py)
     try:
         await stop.wait()

@@ -187,12 +187,12 @@ class FoxgloveParams:
                 try:
                     return await fut
                 finally:
-                    client.session.param_requests.pop(rid, None)
+                    client.session.requests.param_requests.pop(rid, None)
         except TimeoutError:
             raise ServiceTimeoutError(f"no parameter answer within {budget:g} s", "getParameters") from None
 
     async def names(self) -> list[str]:
-        got = await self._ask(lambda done: self._client.session.request_params([], done))
+        got = await self._ask(lambda done: self._client.session.requests.request_params([], done))
         return sorted(p["name"] for p in got)
 
     async def by_owner(self) -> dict[str, list[str]]:
@@ -206,7 +206,7 @@ class FoxgloveParams:
         return (await self.get(name, default=MISSING if False else None)) is not None
 
     async def get(self, name: str, default: Any = MISSING) -> Any:
-        got = await self._ask(lambda done: self._client.session.request_params([name], done))
+        got = await self._ask(lambda done: self._client.session.requests.request_params([name], done))
         for p in got:
             if p["name"] == name and p.get("value") is not None:
                 return p["value"]
@@ -229,7 +229,7 @@ class FoxgloveParams:
 
     async def _set(self, name: str, value: Any, verify: bool) -> None:
         item = {"name": name, **_wire_value(value)}
-        got = await self._ask(lambda done: self._client.session.set_params([item], done))
+        got = await self._ask(lambda done: self._client.session.requests.set_params([item], done))
         if not verify:
             return
         now = next((p.get("value") for p in got if p["name"] == name), None)
@@ -244,4 +244,4 @@ class FoxgloveParams:
 
     def watch(self, names: list[str], fn: Callable[[str, Any], None]) -> Callable[[], None]:
         """``fn(name, value)`` on every update of these parameters (loop thread); returns a remover."""
-        return self._client.session.watch_params(list(names), fn)
+        return self._client.session.requests.watch_params(list(names), fn)

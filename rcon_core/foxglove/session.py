@@ -5,7 +5,8 @@ for each text or binary frame from the server, :meth:`attached` / :meth:`detache
 and goes), frames out through the ``write(frame)`` and ``command(frame, pub, max_age)`` functions the shell
 hands over at :meth:`attached` (a ``str`` is a text frame, ``bytes`` a binary one; nothing is written while
 there is no connection), and events to the shell through callbacks (a service answer, a parameter answer,
-the catalogue changed).  No asyncio here: ``client.py`` is the async shell (connect, reconnect, stall
+the catalogue changed).  Service calls, parameter requests and parameter watches are its part
+``requests.py`` (``session.requests``).  No asyncio here: ``client.py`` is the async shell (connect, reconnect, stall
 watch, futures and timeouts).  The nodes (``rcon_core.bridge.nodes``: the same ``Node`` the rosbridge link
 hands out) call :meth:`add_subscription`, :meth:`add_publisher`, :meth:`publish`... exactly as they call the
 rosbridge session, so a widget cannot tell the protocols apart; a ``raw=True`` consumer (the flight
@@ -64,6 +65,7 @@ from .codecs import CodecError, Codecs, Decode
 from .delivery import frame_decoder
 from .entries import CANNOT, STATUS_LEVELS, Channel, ClientChannel, Service, _NoActions, _NoServices
 from .guard import FoxgloveGuard
+from .requests import Requests
 
 if TYPE_CHECKING:
     from rcon_core.bridge.nodes import Node, Publisher, Subscription
@@ -109,26 +111,21 @@ class FoxgloveSession:
         # what this client wants (kept across reconnects)
         self.topics: dict[str, TopicEntry] = {}
         self.adverts: dict[str, ClientChannel] = {}
-        self.param_watch: dict[str, list[Callable[[str, Any], None]]] = {}
         self.graph_wanted = False
-        self.params: dict[str, Any] = {}
         # ids
         self._sub_ids = itertools.count(1)
         self._chan_ids = itertools.count(1)
-        self._call_ids = itertools.count(1)
-        self._req_ids = itertools.count(1)
         self.subs: dict[int, tuple[TopicEntry, Decode]] = {}  # subscription id -> (topic, decoder)
-        #: call id -> ``done(values, error)``; request id -> ``done(parameters)``
-        self.calls: dict[int, tuple[Service, Callable[[Any, BaseException | None], None], Decode | None]] = {}
-        self.param_requests: dict[str, Callable[[list[dict[str, Any]]], None]] = {}
         self.listeners: list[Callable[[str], None]] = []  # fn(kind): "catalog", "graph", "status", "params"
         self.status_listeners: list[Callable[[dict[str, Any]], None]] = []
+        #: service calls, parameter requests and watches (``requests.py``)
+        self.requests = Requests(self, self._send, self._notify)
         self._ops: dict[str, Callable[[dict[str, Any]], None]] = {
             "serverInfo": self._on_server_info, "status": self._on_status, "removeStatus": self._on_remove_status,
             "advertise": self._on_advertise, "unadvertise": self._on_unadvertise,
             "advertiseServices": self._on_advertise_services, "unadvertiseServices": self._on_unadvertise_services,
-            "parameterValues": self._on_parameter_values, "connectionGraphUpdate": self._on_graph,
-            "serviceCallFailure": self._on_call_failure, "playbackState": lambda m: None,
+            "parameterValues": self.requests.on_parameter_values, "connectionGraphUpdate": self._on_graph,
+            "serviceCallFailure": self.requests.on_call_failure, "playbackState": lambda m: None,
         }
 
     # ================================================================== the connection comes and goes
@@ -146,8 +143,8 @@ class FoxgloveSession:
     def attached(self, write: Write, command: Command) -> None:
         self._write, self._command = write, command
 
-    def detached(self) -> list[tuple[Callable[..., None], BaseException]]:
-        """The connection is gone: forget the server's catalogue; returns the waiting calls to fail."""
+    def detached(self) -> None:
+        """The connection is gone: forget the server's catalogue; the calls waiting fail (``requests.py``)."""
         self._write = self._command = None
         self.server = None
         self.channels.clear()
@@ -163,7 +160,7 @@ class FoxgloveSession:
             adv.active = False
         self.guard.offered.clear()
         self._notify("catalog")
-        return []
+        self.requests.detached()
 
     def _send(self, kind: str, target: str, frame: str | bytes) -> bool:
         write = self._write
@@ -234,8 +231,7 @@ class FoxgloveSession:
         # restore what this client offered and watches (subscriptions wait for their channels)
         for adv in self.adverts.values():
             self._advertise(adv)
-        if self.param_watch and "parametersSubscribe" in self.capabilities:
-            self._send("subscribeParameterUpdates", "", wire.subscribe_parameters_frame(sorted(self.param_watch)))
+        self.requests.restore()
         if self.graph_wanted and "connectionGraph" in self.capabilities:
             self._send("subscribeConnectionGraph", "", wire.graph_frame())
         self._notify("server")
@@ -323,21 +319,6 @@ class FoxgloveSession:
                 del self.service_by_name[srv.name]
         self._notify("catalog")
 
-    def _on_parameter_values(self, m: dict[str, Any]) -> None:
-        params = [p for p in wire.items(m, "parameters") if isinstance(p, dict) and isinstance(p.get("name"), str)]
-        for p in params:
-            self.params[p["name"]] = p.get("value")
-            for fn in list(self.param_watch.get(p["name"], [])):
-                try:
-                    fn(p["name"], p.get("value"))
-                except Exception:
-                    log.exception("parameter watcher raised")
-        rid = m.get("id")
-        done = self.param_requests.pop(rid, None) if isinstance(rid, str) else None
-        if done is not None:
-            done(params)
-        self._notify("params")
-
     def _on_graph(self, m: dict[str, Any]) -> None:
         g = self.graph
         for key, field, ids in (("published", "publishedTopics", "publisherIds"),
@@ -354,34 +335,13 @@ class FoxgloveSession:
             g["services"].pop(name, None) if isinstance(name, str) else None
         self._notify("graph")
 
-    def _on_call_failure(self, m: dict[str, Any]) -> None:
-        cid = m.get("callId")
-        pending = self.calls.pop(cid, None) if isinstance(cid, int) else None
-        if pending is None:
-            return
-        from rcon_core.bridge.errors import ServiceError
-
-        text = m.get("message")
-        pending[1](None, ServiceError(text if isinstance(text, str) else bounded_repr(text, 200), pending[0].name))
-
     def _on_binary(self, frame: tuple[Any, ...]) -> None:
         kind = frame[0]
         if kind == "time":  # ("message", ...) is not reached: receive_binary takes MessageData the short way
             self.time_ns = frame[1]
         elif kind == "service_response":
-            _, sid, cid, encoding, payload = frame
-            pending = self.calls.pop(cid, None)
-            if pending is None:
-                return  # a late answer to a call that timed out
-            srv, done, answer = pending
-            try:
-                values = answer(payload) if answer is not None else {"raw": payload, "encoding": encoding}
-            except Exception as exc:
-                from rcon_core.bridge.errors import ServiceError
-
-                done(None, ServiceError(f"cannot read the answer ({safe_text(exc)})", srv.name))
-                return
-            done(values, None)
+            _, _sid, cid, encoding, payload = frame
+            self.requests.on_response(cid, encoding, payload)
 
     # ================================================================== subscriptions (for the nodes)
 
@@ -538,69 +498,7 @@ class FoxgloveSession:
             if not adv.active and self.server is not None:
                 self._advertise(adv)
 
-    # ================================================================== services and parameters
-
-    def start_call(self, name: str, args: Any, done: Callable[[Any, BaseException | None], None]) -> int:
-        """Write one service call request; ``done(values, error)`` is called with the answer.  Raises
-        ``BridgeError`` for a service the server does not advertise or whose encoding RCON cannot write."""
-        srv = self.service_by_name.get(name)
-        if srv is None:
-            raise BridgeError(f"the robot advertises no service {name} (Foxglove link)")
-        self.guard.check(f"the call to {name}")
-        encoding, encode, _ = self.codecs.request_codec(srv.request, self.encodings[0] if self.encodings else "",
-                                                        "Request")
-        _, _, decode = self.codecs.request_codec(srv.response, encoding, "Response")
-        if encode is None:
-            raise BridgeError(f"{name}: RCON cannot write {encoding!r} service requests")
-        cid = next(self._call_ids)
-        payload = encode(args if isinstance(args, dict) else {})
-        self.calls[cid] = (srv, done, decode)
-        if not self._send("call_service", name, wire.call_frame(srv.id, cid, encoding, payload)):
-            del self.calls[cid]
-            raise BridgeError(f"the call to {name} was not sent (no connection)")
-        return cid
-
-    def forget_call(self, cid: int) -> None:
-        self.calls.pop(cid, None)
-
-    def request_params(self, names: list[str], done: Callable[[list[dict[str, Any]]], None]) -> str:
-        rid = f"get:{next(self._req_ids)}"
-        self.param_requests[rid] = done
-        if not self._send("getParameters", "", wire.get_parameters_frame(names, rid)):
-            del self.param_requests[rid]
-            raise BridgeError("parameters were not asked for (no connection)")
-        return rid
-
-    def set_params(self, params: list[dict[str, Any]], done: Callable[[list[dict[str, Any]]], None]) -> str:
-        name = ", ".join(p["name"] for p in params)
-        self.guard.check(f"setting parameter {name}")
-        rid = f"set:{next(self._req_ids)}"
-        self.param_requests[rid] = done
-        if not self._send("setParameters", name, wire.set_parameters_frame(params, rid)):
-            del self.param_requests[rid]
-            raise BridgeError(f"setting parameter {name} was not sent (no connection)")
-        return rid
-
-    def watch_params(self, names: list[str], fn: Callable[[str, Any], None]) -> Callable[[], None]:
-        """``fn(name, value)`` on each update of these parameters (kept across reconnects)."""
-        new = [n for n in names if n not in self.param_watch]
-        for n in names:
-            self.param_watch.setdefault(n, []).append(fn)
-        if new and self.server is not None and "parametersSubscribe" in self.capabilities:
-            self._send("subscribeParameterUpdates", "", wire.subscribe_parameters_frame(new))
-
-        def stop() -> None:
-            gone = []
-            for n in names:
-                fns = self.param_watch.get(n, [])
-                if fn in fns:
-                    fns.remove(fn)
-                if not fns and n in self.param_watch:
-                    del self.param_watch[n]
-                    gone.append(n)
-            if gone:
-                self._send("unsubscribeParameterUpdates", "", wire.subscribe_parameters_frame(gone, False))
-        return stop
+    # ================================================================== the connection graph
 
     def watch_graph(self) -> None:
         if not self.graph_wanted:

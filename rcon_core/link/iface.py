@@ -32,10 +32,11 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, Protocol, runtime_checkable
 
-from rcon_core.bridge.client import ConnectionState
 from rcon_core.bridge.guard import LinkGuard
 from rcon_core.bridge.nodes import Node
 from rcon_core.bridge.reasons import Failure
+
+from .connection import ConnectionState
 
 #: the protocols RCON speaks; ``--protocol`` takes one of them (none: detected from the server)
 PROTOCOLS = ("rosbridge", "foxglove")

@@ -419,6 +419,19 @@ def _field_writer(reg: CdrCodec, f: FieldDef) -> Writer:
     return array
 
 
+def serializer(reg: CdrCodec, name: str) -> Callable[[dict[str, Any]], bytes]:
+    """``serialize(msg) -> bytes`` of the message ``name`` (canonical), its writer compiled once (as
+    :func:`serialize`, without the per-call lookup)."""
+    write = _writer(reg, name)
+
+    def ser(msg: dict[str, Any]) -> bytes:
+        out = bytearray(HEADER_LE)
+        write(msg, out)
+        return bytes(out)
+
+    return ser
+
+
 def serialize(reg: CdrCodec, name: str, msg: dict[str, Any]) -> bytes:
     """A wire-shape dict of the message ``name`` (canonical) -> CDR bytes with the little-endian header."""
     out = bytearray(HEADER_LE)

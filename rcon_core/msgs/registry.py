@@ -8,12 +8,14 @@ rosapi answers (:meth:`TypeRegistry.add_typedefs`). What one registry learns nev
 from __future__ import annotations
 
 import base64
+from collections.abc import Callable
 from typing import Any
 
 from . import names
 from . import text as msg_text
 from .actions import actionlib_wrappers
 from .cdr import CdrCodec
+from .cdr import serializer as cdr_serializer
 from .deftext import definition_text
 from .fielddefs import TIME_TYPES, Constant, FieldDef, MsgDef, is_binary, primitive
 from .parse import parse_interface
@@ -312,6 +314,15 @@ class TypeRegistry:
     def serialize_ros1(self, name: str, msg: dict[str, Any]) -> bytes:
         """ROS 1 binary serialization (no 4-byte length prefix)."""
         return self._ros1().serialize(self.resolve(name), msg)
+
+    def serializer(self, name: str, ros2: bool) -> Callable[[dict[str, Any]], bytes]:
+        """``serialize(msg) -> bytes`` of the message ``name`` compiled once: CDR (``ros2``) or ROS 1, for a
+        caller that writes many messages of one type (the flight recorder). Made with the definitions known
+        now; it keeps them when the registry learns others."""
+        resolved = self.resolve(name)
+        if ros2:
+            return cdr_serializer(self._cdr(), resolved)
+        return self._ros1().serializer(resolved)
 
     def deserialize_ros1(self, name: str, data: bytes | bytearray | memoryview) -> dict[str, Any]:
         """ROS 1 binary -> wire-shape dict (``uint8[]`` as bytes, NaN stays NaN)."""

@@ -252,8 +252,7 @@ class RobotRecorder:
                       "recorded as JSON")
             t.encode = self._json
         else:
-            ser = reg.serialize_cdr if self.ros2 else reg.serialize_ros1
-            t.encode = lambda msg, _s=ser, _t=type_name: _s(_t, msg)
+            t.encode = reg.serializer(type_name, self.ros2)
             t.stamp = stamp_reader(type_name, reg, self.ros2)
         self.sink.add_channel(name, t.schema.name, t.schema.encoding, t.schema.data, t.schema.message_encoding,
                               {"rcon.robot": self.robot} if self.robot else {})

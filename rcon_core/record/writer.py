@@ -43,6 +43,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from rcon_core.priority import name_this_thread
+
 from .mcapfile import McapFile
 
 log = logging.getLogger(__name__)
@@ -273,6 +275,7 @@ class McapSink:
         self._last_chunk = time.monotonic()
 
     def _run(self) -> None:
+        name_this_thread("rcon-record-wr")  # as top -H and the benchmarks see it
         items = self._queue
         try:
             while True:
