@@ -2,7 +2,8 @@
 bare websockets+orjson and picows+orjson loops, against ONE loopback server; and RCON's Foxglove link (column
 ``foxglove``) against the same server speaking the Foxglove protocol.
 
-Usage: ``python benchmarks/bench_bridge.py [--out PATH] [--quick] [--rounds N] [--batch N] [--clients K ...]``.
+Usage: ``python benchmarks/bench_bridge.py [--out PATH] [--quick] [--rounds N] [--batch N] [--clients K ...]
+[--phases P ...] [--small N] [--small-chunks K] [--base TREE]``.
 
 Clients (columns): ``bare`` (websockets ``recv`` + orjson, the old floor), ``bare_picows`` (a picows listener +
 orjson: the floor of the picows transport), ``rcon`` (RCON's client on picows, the default transport, on the app's event loop),
@@ -20,7 +21,18 @@ its own subprocess for the whole run, connected and idle until the driver sends 
 within a round every phase runs for every client back to back, in an order that rotates -- so a burst of
 load from elsewhere on a shared machine lands on all clients alike.  Phases:
 
-* small-message ingest: std_msgs/Float64 ``publish`` frames sent back to back;
+* small-message ingest: std_msgs/Float64 ``publish`` frames sent back to back, in :data:`SMALL_CHUNKS` (5)
+  floods of :data:`SMALL` (100,000) per client and round, the clients taking turns flood by flood (the
+  round's figure is their sum).  Why: on this shared 2-core machine the other work comes and goes in bursts
+  of seconds, and one flood of 100,000 (0.1-0.2 s) per client and round met a burst or missed it: the
+  figures of one run spread +-20-40 % over its rounds and the judged ratio's median moved by 0.1-0.15 from
+  run to run.  Five floods a round, interleaved, spread each client's round over the same few seconds as
+  the others': measured three runs each at a load of 2-3 (``--rounds 7``, rcon against roslibjs), the
+  ratio's median moved 1.12-1.26 with one flood of 100,000, 1.09-1.22 with one of 500,000, and 1.18-1.24
+  with five interleaved floods of 100,000 (each client's spread over rounds +-2-9 %).  ``--small`` and
+  ``--small-chunks`` change them; roslibpy and the bare websockets loop (:data:`ONE_FLOOD`), 4-15 times
+  RCON's CPU per message and judged against thresholds far from their figures, run one flood a round (the
+  whole benchmark, every client, ``--rounds 7``: 112 s at a load of 1.2-2.5);
 * round trip: publish on /bench/ping, the server echoes it on /bench/pong; a warm-up at start and a few
   discarded trips at the start of every block (a process waking from idle is slower for a trip or two);
 * 640x480 rgb8 sensor_msgs/Image ingest as JSON (base64 data) and as CBOR (byte string); roslibpy has no
@@ -90,9 +102,18 @@ NODE_DIR = HERE / "node"
 FOX_SUBPROTOCOL = "foxglove.sdk.v1"
 
 
+#: messages per small-ingest flood (``--small``)
+SMALL = 100_000
+#: small-ingest floods per client per round (``--small-chunks``), the clients taking turns (see the docstring)
+SMALL_CHUNKS = 5
+#: clients that run one small-ingest flood a round: 4-15 times RCON's CPU per message (0.5-1.5 s a flood),
+#: judged against thresholds far from their figures
+ONE_FLOOD = ("roslibpy", "bare")
+
+
 def sizes(quick: bool) -> dict[str, int]:
     """Messages per flood; round trips: warm-up, then ``rtt_blocks`` blocks of ``rtt_block`` per round."""
-    return {"small": 30000 if quick else 100000, "image_json": 30 if quick else 100, "image_cbor": 30 if quick else 200,
+    return {"small": 30000 if quick else SMALL, "image_json": 30 if quick else 100, "image_cbor": 30 if quick else 200,
             "rtt_warmup": 50 if quick else 300, "rtt_block": 50 if quick else 100, "rtt_blocks": 2 if quick else 5}
 
 
@@ -995,14 +1016,14 @@ def node_ready() -> str | None:
 class ClientProcess:
     """One client in its own subprocess, driven by commands on its stdin."""
 
-    def __init__(self, kind: str, url: str, quick: bool) -> None:
+    def __init__(self, kind: str, url: str, n: dict[str, int]) -> None:
         self.kind = kind
         if kind in NODE:
             cmd = ["node", str(NODE_DIR / "bench_client.mjs"), "--lib", NODE[kind], "--url", url,
-                   "--sizes", json.dumps(sizes(quick))]
+                   "--sizes", json.dumps(n)]
         else:
-            cmd = [sys.executable, str(Path(__file__).resolve()), "--client", kind, "--url", url]
-            cmd += ["--quick"] if quick else []
+            cmd = [sys.executable, str(Path(__file__).resolve()), "--client", kind, "--url", url,
+                   "--sizes", json.dumps(n)]
         self.proc = subprocess.Popen(cmd, stdin=subprocess.PIPE,
                                      stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                      env=dict(os.environ, PYTHONWARNINGS="ignore"))
@@ -1032,10 +1053,22 @@ def _rotate(items: list[str], k: int) -> list[str]:
     return items[k:] + items[:k]
 
 
+def _summed(floods: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The server's flood records of one phase added up (one record per phase)."""
+    out: dict[str, dict[str, Any]] = {}
+    for fl in floods:
+        got = out.setdefault(fl["phase"], {"phase": fl["phase"], "count": 0, "wall_s": 0.0, "cpu_s": 0.0})
+        for key in ("count", "wall_s", "cpu_s"):
+            got[key] += fl[key]
+    return list(out.values())
+
+
 def run_session(server: FloodServer, url: str, kinds: list[str], n: dict[str, int], n_rounds: int,
-                quick: bool) -> tuple[list[dict[str, dict[str, float]]], dict[str, dict[str, float]], dict[str, Any]]:
-    """Run every round; returns per-round figures, pooled round-trip figures and the raw results."""
-    clients = {k: ClientProcess(k, url, quick) for k in kinds}
+                phases: tuple[str, ...] = ALL_PHASES, chunks: int = SMALL_CHUNKS,
+                ) -> tuple[list[dict[str, dict[str, float]]], dict[str, dict[str, float]], dict[str, Any]]:
+    """Run every round (the ``phases`` asked for; the small phase as ``chunks`` floods per client, the
+    clients taking turns); returns per-round figures, pooled round-trip figures and the raw results."""
+    clients = {k: ClientProcess(k, url, n) for k in kinds}
     rounds: list[dict[str, dict[str, float]]] = [{k: {} for k in kinds} for _ in range(n_rounds)]
     raw: dict[str, Any] = {k: {"floods": [], "rtt_samples": [], "rtt_cpu_s": 0.0} for k in kinds}
     try:
@@ -1043,7 +1076,9 @@ def run_session(server: FloodServer, url: str, kinds: list[str], n: dict[str, in
             c.read()  # ready: connected, round trip warmed up
         for r in range(n_rounds):
             rtt: dict[str, list[float]] = {k: [] for k in kinds}
-            for i, phase in enumerate(("small", "rtt", "image_json", "image_cbor")):
+            for i, phase in enumerate(ALL_PHASES):
+                if phase not in phases:
+                    continue
                 if phase == "rtt":
                     for b in range(n["rtt_blocks"]):
                         for k in _rotate(kinds, r + b):
@@ -1051,15 +1086,24 @@ def run_session(server: FloodServer, url: str, kinds: list[str], n: dict[str, in
                             rtt[k] += res["samples"]
                             raw[k]["rtt_cpu_s"] += res["cpu_s"]
                     continue
-                for k in _rotate(kinds, r + i):
-                    if phase not in PHASES[k]:
-                        continue
-                    server.take_floods()
-                    res = clients[k].command(phase)
-                    floods = server.take_floods()
-                    raw[k]["floods"].append({"round": r, "phase": phase, "client": res, "server": floods})
-                    rounds[r][k].update(ingest_figures(phase, res, floods))
+                sums: dict[str, tuple[dict[str, float], list[dict[str, Any]]]] = {}
+                for chunk in range(chunks if phase == "small" else 1):  # the small phase: chunks, interleaved
+                    for k in _rotate(kinds, r + i + chunk):
+                        if phase not in PHASES[k] or (chunk and k in ONE_FLOOD):
+                            continue
+                        server.take_floods()
+                        res = clients[k].command(phase)
+                        floods = server.take_floods()
+                        raw[k]["floods"].append({"round": r, "phase": phase, "client": res, "server": floods})
+                        got, all_floods = sums.setdefault(k, ({"n": 0, "wall_s": 0.0, "cpu_s": 0.0}, []))
+                        for key in got:
+                            got[key] += res[key]
+                        all_floods += floods
+                for k, (got, all_floods) in sums.items():
+                    rounds[r][k].update(ingest_figures(phase, got, _summed(all_floods)))
             for k in kinds:
+                if not rtt[k]:
+                    continue
                 rounds[r][k].update(rtt_figures(rtt[k]))
                 raw[k]["rtt_samples"] += rtt[k]
             print(f"round {r + 1}/{n_rounds} done", file=sys.stderr, flush=True)
@@ -1075,6 +1119,8 @@ def run_session(server: FloodServer, url: str, kinds: list[str], n: dict[str, in
     pooled = {}
     for k in kinds:
         samples = raw[k]["rtt_samples"]
+        if not samples:
+            continue
         pooled[k] = rtt_figures(samples)
         pooled[k]["rtt_cpu_us"] = raw[k]["rtt_cpu_s"] / len(samples) * 1e6
         for rnd in rounds:
@@ -1089,11 +1135,20 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--clients", nargs="*", default=list(CLIENTS))
     parser.add_argument("--rounds", type=int, default=7, help="interleaved rounds (default 7)")
     parser.add_argument("--batch", type=int, default=64, help="small frames per server write (default 64)")
+    parser.add_argument("--small", type=int, help=f"messages per small-ingest flood (default {SMALL:,})")
+    parser.add_argument("--small-chunks", type=int, default=SMALL_CHUNKS,
+                        help=f"small-ingest floods per client per round, the clients taking turns (default "
+                             f"{SMALL_CHUNKS})")
+    parser.add_argument("--phases", nargs="*", choices=ALL_PHASES, default=list(ALL_PHASES),
+                        help="the phases to run (default: all)")
+    parser.add_argument("--sizes", help=argparse.SUPPRESS)  # internal: the sizes a client runs (JSON)
     parser.add_argument("--base", type=Path, help="source tree for the rcon_base column (RCON as it was)")
     parser.add_argument("--client", help=argparse.SUPPRESS)  # internal: run one client in this process
     parser.add_argument("--url", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
-    n = sizes(args.quick)
+    n = json.loads(args.sizes) if args.sizes else sizes(args.quick)
+    if args.small:
+        n["small"] = args.small
     if args.client:
         run_client(args.client, args.url, n)
         return 0
@@ -1116,7 +1171,8 @@ def main(argv: list[str] | None = None) -> int:
     load_before = os.getloadavg()
     server = FloodServer(n, batch=args.batch).start()
     try:
-        rounds, pooled, raw = run_session(server, f"ws://127.0.0.1:{server.port}", kinds, n, n_rounds, args.quick)
+        rounds, pooled, raw = run_session(server, f"ws://127.0.0.1:{server.port}", kinds, n, n_rounds,
+                                         tuple(args.phases), max(1, args.small_chunks))
     finally:
         server.stop()
     summary = summarize(rounds, pooled, kinds)

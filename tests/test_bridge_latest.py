@@ -84,25 +84,27 @@ async def test_stale_frames_of_a_latest_only_topic_are_skipped_and_counted(sim_t
 
 
 async def test_the_read_loop_gives_the_event_loop_a_turn_within_a_backlog(sim_thread):
-    """A backlog of small frames already received is not read in one go: past the first ``YIELD_EVERY`` frames
-    of a turn, once they have taken its budget (``receive.TURN_BUDGET``, 1 ms; the clock is read every
-    ``YIELD_EVERY`` frames), timers and other links on the loop get a turn (a teleop pad's tick is not held
-    by a backlog).  Each callback here spends 0.2 ms of CPU, so 64 of them are over the budget however fast
-    or loaded the machine is: a turn holds at most twice ``YIELD_EVERY`` frames and one more."""
+    """A backlog of small frames already received is not read in one go: past the first ``YIELD_BYTES`` (4 kB)
+    of frames of a turn, once they have taken its budget (``receive.TURN_BUDGET``, 1 ms; the clock is read
+    every ``YIELD_BYTES`` of frames), timers and other links on the loop get a turn (a teleop pad's tick is
+    not held by a backlog).  Each frame here is about 560 bytes and each callback spends 0.2 ms of CPU, so
+    the frames of 4 kB are over the budget however fast or loaded the machine is: a turn holds at most the
+    frames of twice ``YIELD_BYTES`` and two more, far fewer than the backlog."""
     import asyncio
 
-    from rcon_core.bridge.inbound import YIELD_EVERY
+    from rcon_core.bridge.receive import YIELD_BYTES
 
     node = "/backlog_pub"
     count = 150
-    sim_thread.run_sync(lambda: sim_thread.advertise_internal("/backlog/v", "std_msgs/Int32", node))
+    pad = "x" * 500
+    sim_thread.run_sync(lambda: sim_thread.advertise_internal("/backlog/v", "std_msgs/String", node))
     sim_thread.run_sync(lambda: sim_thread.advertise_internal("/backlog/start", "std_msgs/Int32", node))
     got: list[int] = []
     turns: list[int] = []  # len(got) each time the probe ran
 
     def burst():
         for i in range(count):
-            sim_thread.publish("/backlog/v", {"data": i}, node)
+            sim_thread.publish("/backlog/v", {"data": f"{i:04d}{pad}"}, node)
 
     def on_start(_msg):  # hold the client's loop while the sim writes the whole burst
         sim_thread.run_sync(burst)
@@ -123,12 +125,12 @@ async def test_the_read_loop_gives_the_event_loop_a_turn_within_a_backlog(sim_th
     try:
         n = c.node("backlog")
         def busy(m):
-            got.append(m["data"])
+            got.append(int(m["data"][:4]))
             start = time.thread_time()
             while time.thread_time() - start < 0.0002:
                 pass
 
-        n.subscribe("/backlog/v", busy, type="std_msgs/Int32")
+        n.subscribe("/backlog/v", busy, type="std_msgs/String")
         n.subscribe("/backlog/start", on_start, type="std_msgs/Int32")
         await until(lambda: sim_thread.has_subscribers("/backlog/v") and sim_thread.has_subscribers("/backlog/start"))
         probe()
@@ -136,7 +138,10 @@ async def test_the_read_loop_gives_the_event_loop_a_turn_within_a_backlog(sim_th
         await asyncio.wait_for(done.wait(), 10)
         assert got == list(range(count))  # every frame, in order
         steps = [b - a for a, b in zip(turns, turns[1:], strict=False)]
-        assert max(steps) <= 2 * YIELD_EVERY + 1, f"the client delivered {max(steps)} frames without a turn"
+        nbytes, frames = c.traffic.snapshot()[1]["/backlog/v"]
+        most = 2 * (YIELD_BYTES // (nbytes // frames) + 1) + 1  # the frames are all of one size
+        assert most < count // 2
+        assert max(steps) <= most, f"the client delivered {max(steps)} frames without a turn (at most {most})"
     finally:
         await c.close()
 

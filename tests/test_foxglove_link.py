@@ -63,6 +63,18 @@ async def test_the_link_runs_on_the_chosen_transport(fox, fox_client, transport)
         FoxgloveClient(fox.url, transport="carrier-pigeon")
 
 
+async def test_on_picows_binary_frames_go_to_the_session_straight_from_the_parser(fox, fox_client, transport):
+    """The Foxglove link's hot path on picows: its Receiver's own frame callback is the listener's
+    ``on_ws_frame`` (``FoxgloveReceiver.frame_callback``), not the listener's generic step; the messages this
+    file's other tests receive go that way."""
+    if transport == "picows":
+        listener = fox_client.link.listener
+        assert listener.on_ws_frame is listener.hot
+        assert getattr(listener.hot, "__qualname__", "").startswith("FoxgloveReceiver.frame_callback")
+    else:
+        assert not hasattr(fox_client.link, "listener")  # websockets: frames come through Receiver.message
+
+
 def _raw_server(picked: bytes, then: bytes = b""):
     """A bare WebSocket server that answers the handshake picking ``picked`` and writes ``then`` (server
     frames) in the same write as the answer, then waits for the client to go."""

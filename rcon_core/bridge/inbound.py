@@ -2,8 +2,10 @@
 
 Decision: the hot path
     Per message: one ``orjson.loads`` of the message's bytes (CBOR for binary frames), a few dict lookups,
-    two additions to the topic's traffic row and a direct call of the topic's ``fast`` function -- for a topic with one consumer, its
-    callback -- all inside the transport's callback (:meth:`Inbound.take`, fed by ``receive.py``).
+    two additions to the topic's traffic row and a direct call of the topic's ``fast`` function -- for a
+    topic with one consumer, its callback -- all inside the transport's callback (``receive.py``'s
+    ``Receiver`` does these steps itself for a small text message, on picows straight from picows' parser;
+    :meth:`Inbound.take` for the rest).
     Everything unusual (other ops, unknown topics, malformed frames) takes the slow path
     (:meth:`Inbound.other`), which unwraps ``fragment`` and ``png`` frames and hands every op to the
     session (``session.handle``).  Frames above ``big_frame`` (1 MB), and every ``png`` frame whatever its
@@ -55,8 +57,6 @@ from .traffic import Traffic
 log = logging.getLogger(__name__)
 
 _loads = orjson.loads
-#: the event loop gets a turn after this many messages in a row (and before each big one; ``receive.py``)
-YIELD_EVERY = 64
 
 
 class BadFrames:

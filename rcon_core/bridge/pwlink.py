@@ -21,12 +21,16 @@ Decision: reads of a flood are capped
     while reads fill it: a flood of small messages grows it to megabytes, and one read then holds tens of
     thousands of messages, far more than one turn of the loop may take (``receive.py``): the Receiver
     would copy all but the first millisecond of them to hold them for later turns, doubling their cost.
-    So while the last read brought 64 messages or more (``Receiver.flood``), one read takes at most
-    :data:`READ_CAP` (32 kB, about 0.5 ms of small messages), and otherwise :data:`BIG_READ_CAP` (256 kB:
-    five reads for a 640x480 camera frame); the transport's protocol is wrapped (``transport.set_protocol``,
-    asyncio's public API) to hand picows a shorter view of its buffer.  The cap also bounds the buffer:
-    a camera stream that fell behind grew it to tens of megabytes (reads as large as the kernel's backlog),
-    kept for the connection's life; it now stays near twice the largest message.
+    So while the last read brought more than a turn's first 4 kB of messages (``Receiver.flood``), one
+    read takes at most :data:`READ_CAP` (32 kB, about 0.5 ms of small messages), and otherwise
+    :data:`BIG_READ_CAP` (256 kB: five reads for a 640x480 camera frame); the transport's protocol is
+    wrapped (``transport.set_protocol``, asyncio's public API) to hand picows a shorter view of its buffer.
+    The cap also bounds the buffer: a camera stream that fell behind grew it to tens of megabytes (reads
+    as large as the kernel's backlog), kept for the connection's life; it now stays near twice the largest
+    message.  A capped read that fills its buffer is followed at once by another, in the same cycle of the
+    loop: aiofastnet reads on while reads fill the buffer, up to :data:`CYCLE` (256 kB) a cycle.  The
+    wrapper says so to the Receiver after each read (``Receiver.read_done(more)``), which carries the turn
+    on into that read or stops reading until the loop has had its turn (``receive.py``).
 
 Decision: which socket layer
     picows' default, ``aiofastnet`` (its own socket transport), for ``ws://``; the event loop's own TLS
@@ -54,14 +58,16 @@ WRITE_LIMIT = 32 << 10
 READ_CAP = 32 << 10
 #: the most one read takes otherwise (picows' buffer then grows to about twice the largest message only)
 BIG_READ_CAP = 256 << 10
+#: the bytes picows' socket layer (aiofastnet) reads in one cycle of the loop while each read fills its buffer
+CYCLE = 256 << 10
 CLOSE_TIMEOUT = 2.0
 
 
 class _Listener(WSListener):  # type: ignore[misc]
     """picows' callbacks for one :class:`PicowsLink`.  The hot path is ``on_ws_frame``, an attribute (picows
     calls what the listener's ``on_ws_frame`` attribute holds): the Receiver's own frame callback
-    (``Receiver.frame_callback``: one Python call a message less), which hands every frame it does not
-    finish to :meth:`frame`; :meth:`frame` itself while a fragmented message is being joined, or when the
+    (``Receiver.frame_callback``: the rosbridge link's whole text frames, the Foxglove link's whole binary
+    ones; one Python call a message less), which hands every frame it does not finish to :meth:`frame`; :meth:`frame` itself while a fragmented message is being joined, or when the
     Receiver has no callback of its own.  Slots, not a ``__dict__``: a picows listener subclass's attributes
     are otherwise looked up the slow way.  :meth:`frame` calls ``message`` (``Receiver.message``, or while a
     fragmented message is being joined :meth:`PicowsLink.interrupted_message`, so it needs no ``joining``
@@ -75,7 +81,7 @@ class _Listener(WSListener):  # type: ignore[misc]
         self.message: Any = link.receiver.message
         self.joining = False
         frame = self.frame
-        self.hot: Any = link.receiver.frame_callback(_TEXT, frame) or frame
+        self.hot: Any = link.receiver.frame_callback(_TEXT, _BINARY, frame) or frame
         self.on_ws_frame: Any = self.hot
 
     def on_ws_connected(self, transport: Any) -> None:
@@ -103,22 +109,34 @@ class _Listener(WSListener):  # type: ignore[misc]
 
 
 class _CappedReads(asyncio.BufferedProtocol):
-    """picows' protocol as the asyncio transport sees it, with one change: one read takes at most
+    """picows' protocol as the asyncio transport sees it, with two changes: one read takes at most
     :data:`BIG_READ_CAP` bytes, and :data:`READ_CAP` while messages arrive as a flood of small ones
-    (``Receiver.flood``; see the module docstring).  Everything else is passed through as it is."""
+    (``Receiver.flood``), and the Receiver is told after each read whether the transport reads again before
+    the loop runs (see the module docstring).  Everything else is passed through as it is."""
 
     def __init__(self, inner: Any, receiver: Any) -> None:
         self.inner = inner
         self.receiver = receiver
+        self.size = 0  # the buffer handed for the read under way
+        self.cycle = 0  # bytes of this loop cycle's full reads so far
 
     def get_buffer(self, sizehint: int) -> Any:
         buf = self.inner.get_buffer(sizehint)
         cap = READ_CAP if self.receiver.flood else BIG_READ_CAP
-        return buf[:cap] if len(buf) > cap else buf
+        if len(buf) > cap:
+            buf = buf[:cap]
+        self.size = len(buf)
+        return buf
 
     def buffer_updated(self, nbytes: int) -> None:
         self.inner.buffer_updated(nbytes)  # picows parses the read and hands over its messages
-        self.receiver.read_done()
+        more = False
+        if nbytes == self.size:  # a full read: the transport reads again, up to CYCLE bytes a cycle
+            self.cycle += nbytes
+            more = self.cycle < CYCLE
+        if not more:
+            self.cycle = 0
+        self.receiver.read_done(more)
 
     def eof_received(self) -> bool | None:
         return self.inner.eof_received()  # type: ignore[no-any-return]

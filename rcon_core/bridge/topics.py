@@ -32,6 +32,7 @@ import orjson
 
 if TYPE_CHECKING:
     from .nodes import Publisher, Subscription
+    from .traffic import Tally
 
 log = logging.getLogger(__name__)
 
@@ -82,9 +83,9 @@ class TopicEntry:
         #: consumer (no wrapper frame per message), else the same as ``deliver``.
         self.deliver: Callable[[Any], None] = self._deliver_none
         self.fast: Callable[[Any], None] = self._deliver_none
-        #: the topic's row of the connection's traffic counts (``Traffic.row``: ``[bytes, frames]``), which
-        #: the read loop adds to; set by the read loop at the topic's first message
-        self.tally: list[int] | None = None
+        #: the topic's row of the connection's traffic counts (``Traffic.row``: a ``Tally`` of bytes and
+        #: frames), which the read loop adds to; set by the read loop at the topic's first message
+        self.tally: Tally | None = None
 
     # --- options ---------------------------------------------------------------------------------
 

@@ -2,8 +2,8 @@
 
 Decision: counted where messages come in, read by anyone
     :class:`Traffic` is written only on the bridge's loop as messages come in (``receive.py``,
-    ``inbound.py``; on the hot path the count is inlined: two additions to the topic's row, which its
-    ``TopicEntry`` keeps as ``tally``, no dict lookup), by the frame's
+    ``inbound.py``; on the hot path the count is inlined: two additions to slots of the topic's
+    :class:`Tally`, which its ``TopicEntry`` keeps as ``tally``, no dict lookup), by the frame's
     size as it came off the socket (JSON text or CBOR, before decoding; a frame skipped as stale is counted too: it crossed the link). Publishes count under their
     topic, everything else under its op in brackets (``(fragment)``, ``(service_response)``...). At most
     :data:`MAX_KEYS` names are kept; the rest add up under ``(other topics)``, so a server inventing topic
@@ -18,11 +18,22 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-__all__ = ["Traffic", "TrafficRates", "MAX_KEYS", "rate_text"]
+__all__ = ["Tally", "Traffic", "TrafficRates", "MAX_KEYS", "rate_text"]
 
 #: names counted one by one; more add up under OTHER
 MAX_KEYS = 500
 OTHER = "(other topics)"
+
+
+class Tally:
+    """One name's counts: bytes and frames received.  The hot path adds to a subscribed topic's in place (its
+    ``TopicEntry`` keeps it as ``tally``): two additions to slots, no lookup."""
+
+    __slots__ = ("nbytes", "frames")
+
+    def __init__(self) -> None:
+        self.nbytes = 0
+        self.frames = 0
 
 
 class Traffic:
@@ -31,17 +42,17 @@ class Traffic:
     __slots__ = ("counts",)
 
     def __init__(self) -> None:
-        #: name -> [bytes, frames]; every frame counts under exactly one name, so the totals are its sums
+        #: name -> its :class:`Tally`; every frame counts under exactly one name, so the totals are its sums
         #: (summed when read: two additions fewer per message on the hot path)
-        self.counts: dict[str, list[int]] = {}
+        self.counts: dict[str, Tally] = {}
 
     @property
     def total_bytes(self) -> int:
-        return sum(v[0] for v in list(self.counts.values()))
+        return sum(v.nbytes for v in list(self.counts.values()))
 
     @property
     def total_frames(self) -> int:
-        return sum(v[1] for v in list(self.counts.values()))
+        return sum(v.frames for v in list(self.counts.values()))
 
     def count(self, m: Any, size: int) -> None:
         """A decoded frame ``m`` of ``size`` bytes (the read loop; never raises)."""
@@ -54,23 +65,24 @@ class Traffic:
 
     def count_name(self, key: str | None, size: int) -> None:
         entry = self.row(key or "(other)")
-        entry[0] += size
-        entry[1] += 1
+        entry.nbytes += size
+        entry.frames += 1
 
-    def row(self, key: str) -> list[int]:
-        """The ``[bytes, frames]`` that ``key``'s frames are added to (:data:`OTHER`'s once :data:`MAX_KEYS`
-        names are kept).  The hot path keeps a topic's row on its ``TopicEntry`` (``tally``) and adds to it
-        in place: no dict lookup per message."""
+    def row(self, key: str) -> Tally:
+        """The :class:`Tally` that ``key``'s frames are added to (:data:`OTHER`'s once :data:`MAX_KEYS` names
+        are kept).  The hot path keeps a topic's on its ``TopicEntry`` (``tally``) and adds to it in place: no
+        dict lookup per message."""
         entry = self.counts.get(key)
         if entry is None:
             if len(self.counts) >= MAX_KEYS:
                 key = OTHER
-            entry = self.counts.setdefault(key, [0, 0])
+            entry = self.counts.setdefault(key, Tally())
         return entry
 
     def snapshot(self) -> tuple[int, dict[str, tuple[int, int]]]:
         """``(total bytes, {name: (bytes, frames)})`` now (any thread)."""
-        counts = {k: (v[0], v[1]) for k, v in dict(self.counts).items()}  # one C-level copy: atomic under the GIL
+        # one C-level copy of the dict (atomic under the GIL), then each tally's two counts
+        counts = {k: (v.nbytes, v.frames) for k, v in dict(self.counts).items()}
         return sum(v[0] for v in counts.values()), counts
 
 

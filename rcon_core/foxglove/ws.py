@@ -16,13 +16,16 @@ Decision: the same two transports as the rosbridge link, through the same adapte
 
 Decision: messages are pushed, parsed from the transport's buffer
     Like the rosbridge link, messages arrive through a :class:`~rcon_core.bridge.receive.Receiver`:
-    :class:`FoxgloveReceiver` keeps its rules for sharing the loop (after 64 messages of one turn the
-    clock is read every 64 and more than 1 ms of them hands the rest to the next turn; a message of
+    :class:`FoxgloveReceiver` keeps its rules for sharing the loop (past 4 kB of messages of one turn the
+    clock is read every 4 kB and more than 1 ms of them hands the rest to the next turn; a message of
     32 kB or more that is not the first of its turn waits for the next turn; while more than 16 are held
-    the transport stops reading) and its 1007 rule (a text message that is not UTF-8 closes the link),
-    with its own hot path: a binary message goes to ``FoxgloveSession.receive_binary`` as it is -- on
-    picows a ``memoryview`` of picows' read buffer, so a ``MessageData`` frame is decoded straight from
-    that buffer in the callback that brought it (every decoder copies what it keeps: CDR, ROS 1, JSON,
+    the transport stops reading; a flood read by picows several reads a cycle waits for the loop's turn
+    between reads) and its 1007 rule (a text message that is not UTF-8 closes the link), with its own hot
+    path: a binary message goes to ``FoxgloveSession.receive_binary`` as it is -- on picows a ``memoryview``
+    of picows' read buffer, handed over straight from picows' parser (:meth:`FoxgloveReceiver.frame_callback`
+    is the listener's ``on_ws_frame``: no listener step, no :meth:`FoxgloveReceiver.message` call), so a
+    ``MessageData`` frame is decoded straight from that buffer in the callback that brought it (every
+    decoder copies what it keeps: CDR, ROS 1, JSON,
     protobuf, flatbuffer; a raw consumer's payload is copied out, ``delivery.payload_of``).  Held
     messages are copies (the Receiver copies what it holds).  A text message is decoded to ``str`` (its
     UTF-8 checked) and handed to ``FoxgloveSession.receive_text``.  Until the client attached the session
@@ -101,20 +104,53 @@ class FoxgloveReceiver(Receiver):
         else:
             self.busy = False
 
-    def frame_callback(self, text_type: Any, other: Callable[[Any, Any], None]) -> None:
-        """None: picows' listener calls :meth:`message` for every frame (the rosbridge hot path is not this
-        link's)."""
-        return None
+    def frame_callback(self, text_type: Any, binary_type: Any,
+                       other: Callable[[Any, Any], None]) -> Callable[[Any, Any], None] | None:
+        """picows' per-frame callback (see ``Receiver.frame_callback``): a whole binary frame that fits in the
+        turn's room goes to the session's ``receive_binary`` as a view of picows' read buffer, straight from
+        picows' parser (the listener's step and :meth:`message` folded in: two Python calls a message less);
+        every other frame, and every frame while messages are held, goes to ``other`` (the listener's own
+        step, which calls :meth:`message`).  The steps are :meth:`message`'s, in the same order."""
+        binary = self.binary
+        failed = self.failed
+        heavy = self.heavy
+        spent = self._spent
+        r = self
+
+        def on_frame(transport: Any, frame: Any) -> None:
+            if frame.msg_type is binary_type and frame.fin and not r.busy:
+                view = frame.get_payload_as_memoryview()
+                size = len(view)
+                room = r.room - size
+                if room > 0:
+                    r.room = room
+                elif size >= heavy or spent():
+                    r._over(view, False, size)
+                    return
+                try:
+                    binary(view)
+                except Exception as exc:  # the frame boundary: one frame never ends the link
+                    failed(exc)
+            else:
+                other(transport, frame)
+
+        return on_frame
 
     def message(self, raw: Any, text: bool, last: bool) -> None:
         """One whole message (see ``Receiver.message``); the hot path hands it to the session at once."""
         if self.busy:
             Receiver.message(self, raw, text, last)  # held, in order, as the rosbridge link holds them
             return
-        n = self.n = self.n + 1
-        if n > 1 and (len(raw) >= self.heavy or (n > self.check and self._spent())):
-            self._yield(raw, text)
-        elif text:
+        size = len(raw)
+        room = self.room - size
+        if room > 0:
+            self.room = room
+        elif size >= self.heavy or self._spent():  # a heavy message, or the turn's budget is spent
+            self._over(raw, text, size)
+            if last:
+                self.read_done()
+            return
+        if text:
             self._take(raw, text)  # never returns a job: nothing here waits
         else:  # the hot path: MessageData, decoded from the buffer in place
             try:
