@@ -319,41 +319,37 @@ class McapSink:
         if self.split_size is not None:
             room = min(room, self.split_size - f.position)
         room -= writer.open_bytes + (64 << 10)  # the open chunk may reach the disk whole, with its indexes
-        items, ids, add = self._queue, self._ids, writer.add_message
-        per_topic = self.stats.per_topic
-        done = count = 0
-        stop = False
+        tally = [0, 0, False]  # bytes written, messages written, the stop mark taken
         try:
-            while items and done < room:
-                item = items.popleft()
-                if item is _STOP:
-                    stop = True
-                    break
-                if len(item) != 4:  # ("channel", topic)
-                    self._handle(item)
-                    continue
-                topic, log_time, publish_time, data = item
-                n = len(data)
-                done += n
-                count += 1
-                add(ids[topic], log_time, publish_time, data)
-                per_topic[topic] = per_topic.get(topic, 0) + 1
-                room -= 31  # the message's record head
-        except OSError as exc:
-            self._fail(_os_words(exc))
-            self._abandon()
-        except Exception as exc:  # noqa: BLE001 - one bad message never ends the recording
-            log.exception("recording %s: a record could not be written", self.path)
-            if self.problem is None:
-                self.problem = f"a record could not be written ({exc})"
+            self._guarded(self._write_items, writer, room, tally)
         finally:
-            self._unqueue(done)
+            self._unqueue(tally[0])
             st = self.stats
-            st.messages += count
-            st.bytes_in += done
+            st.messages += tally[1]
+            st.bytes_in += tally[0]
+        stop = bool(tally[2])
         if self._writer is not None and time.monotonic() - self._last_chunk >= self.chunk_seconds:
             self._guarded(self._close_chunk)
         return stop
+
+    def _write_items(self, writer: McapFile, room: int, tally: list[Any]) -> None:
+        """``_write_run``'s loop: queued messages while ``room`` lasts, counted in ``tally`` as they go."""
+        items, ids, add = self._queue, self._ids, writer.add_message
+        per_topic = self.stats.per_topic
+        while items and tally[0] < room:
+            item = items.popleft()
+            if item is _STOP:
+                tally[2] = True
+                return
+            if len(item) != 4:  # ("channel", topic)
+                self._handle(item)
+                continue
+            topic, log_time, publish_time, data = item
+            add(ids[topic], log_time, publish_time, data)
+            tally[0] += len(data)
+            tally[1] += 1
+            per_topic[topic] = per_topic.get(topic, 0) + 1
+            room -= 31  # the message's record head
 
     def _take(self, item: Any) -> None:
         if self._writer is None:
