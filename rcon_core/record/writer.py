@@ -21,6 +21,11 @@ Decisions:
   run (``_write_run``): the budget, split and chunk-age checks are made once for the run, not per
   message, as long as no message of it can reach an edge (then one at a time): about 1.9 us of the
   writer's CPU a small message instead of 2.7.
+* **The writer runs in the background** (``priority.lower_this_thread``: SCHED_BATCH, nice 5). Compressing
+  a camera's frames costs more CPU than receiving them; at normal priority on a 2-core machine beside the
+  robot's process the writer preempted the thread that receives about 40 times a second (``rcon record``
+  of a 120 Hz camera; about once after), and in the app it would compete with the bridge loop that times
+  the teleop pad. It only needs to keep up on average: the queue below absorbs the rest.
 * **Nothing blocks the sender.** The queue is bounded in bytes (``max_queue``, 256 MB); a message that
   would pass it is dropped and counted (``stats.dropped``) -- the bench checks none is at the fleet's rate.
 * **Disk budget.** ``budget`` bytes (None: none): ``warning`` is set once 90 % is used, and at 100 %
@@ -43,7 +48,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from rcon_core.priority import name_this_thread
+from rcon_core.priority import lower_this_thread, name_this_thread
 
 from .mcapfile import McapFile
 
@@ -276,6 +281,7 @@ class McapSink:
 
     def _run(self) -> None:
         name_this_thread("rcon-record-wr")  # as top -H and the benchmarks see it
+        lower_this_thread()  # bulk work: behind the loops that receive (rcon_core/priority.py)
         items = self._queue
         try:
             while True:
