@@ -1,7 +1,7 @@
 """Benchmark of the flight recorder and of replay (issue 27's figures).
 
 Usage: ``python benchmarks/bench_record.py [--only fleet writer ingest pacing seek memory] [--seconds 20]
-[--fleet-seconds 120] [--fleet-window 10] [--ingest-rounds 6] [--pacing-seconds 600] [--out FILE.json]``.
+[--fleet-seconds 120] [--fleet-window 10] [--ingest-rounds 5] [--pacing-seconds 600] [--out FILE.json]``.
 Each part prints its figures with the load average of the machine before and after it (a 2-core machine
 shared with other work: timing figures taken under load are noisy, and the JSON says what the load was).
 
@@ -15,20 +15,22 @@ shared with other work: timing figures taken under load are noisy, and the JSON 
 - ``writer``: the writer alone (``McapSink``, its thread) taking the fleet's camera frames as fast as it
   can, zstd and lz4: MB/s, and its headroom over the fleet's data rate (target >= 10x).
 - ``ingest``: ``rcon record`` (a process) recording a publisher of raw 640x480 rgb8 frames (a bare sim in
-  another process, ``--ingest-hz``), against a plain subscriber process that only counts them, in
-  alternating rounds (``--ingest-rounds``): MB/s written (target >= 50) and CPU per message of each,
-  each process's CPU counted over its steady window only (from 4 s after its start to 1.5 s before its
-  end, with the messages it took in that window): the imports of ``rcon record`` (mcap, zstandard, the
-  type registry: ~0.3 s more than the counter's) had been a sixth of the difference at 20 s, and one
-  round each had spread from -8 % to +31 %. The recorder's CPU is split into its messages' side (every
-  thread but the writer: receiving, taking the bytes, queueing) and its writer (compressing and storing),
-  and each round also measures the **bytes' floor** (``bytes_floor``: the same frames compressed the same
-  way and written to the same disk by a bare loop, no recorder around it). Target, "<= 5 % of messages'
-  CPU over plain subscribe": the messages' side within 5 % of the plain subscriber (median of the rounds'
-  pairs). Printed beside it: the writer over the floor, the whole recorder over plain subscribe, and what
-  it costs beyond plain subscribe plus the floor. The whole cannot be within 5 % for any recorder that
-  stores the frames: writing a 640x480 rgb8 frame to this disk alone costs about 0.2 ms of system time,
-  some 40 % of what receiving it costs (0.43-0.51 ms), before any compression.
+  another process, ``--ingest-hz``), in alternating rounds (``--ingest-rounds``) with two subscriber
+  processes that only count the frames: a plain one, and one that hands each frame to a second thread
+  which reads it (``zlib.crc32``) and drops it -- what any recorder with a writer thread does before it
+  compresses or writes anything. Each process's CPU is counted over its steady window only (from 4 s after
+  its start to 1.5 s before its end, with the messages it took in that window): the imports of ``rcon
+  record`` had been a sixth of the difference at 20 s, and one round each had spread from -8 % to +31 %.
+  The recorder's CPU is split into its messages' side (every thread but the writer: receiving, taking the
+  bytes, queueing) and its writer (compressing and storing), and each round also measures the **bytes'
+  floor** (``bytes_floor``: the same frames, arriving from another thread at the camera's pace, compressed
+  the same way and written to the same disk by a bare loop). Printed: MB/s written (target >= 50); the
+  whole recorder over plain subscribe (the issue's target, <= 5 %); the hand-off over plain; the
+  recorder's messages' side over the hand-off and its writer over the floor (what RCON answers for: each
+  within 5 %); and the recorder beyond plain subscribe plus the floor. Why the issue's target cannot be met
+  by any recorder that stores the frames: writing a 640x480 rgb8 frame to this disk alone costs about
+  0.2 ms of system time, some 45 % of receiving it (0.42-0.46 ms); compressing it with zstd more; and on
+  a 2-core machine merely handing it to a second thread costs the receiving thread about a quarter more.
 - ``pacing``: a 10-minute recording (odometry 50 Hz, fix 5 Hz, a 320x240 camera 5 Hz) played at 1x with a
   subscriber: each message's release time minus its due time, p50/p99/max (target p99 < 5 ms).
   ``--pacing-seconds`` plays only the first N seconds of it (the default plays all 600).
@@ -234,12 +236,24 @@ sys.path.insert(0, {root!r})
 from rcon_core.bridge import BridgeClient
 from rcon_core.mallocpolicy import keep_big_blocks
 keep_big_blocks()  # as rcon record (and every RCON entry point) does: the same allocator for both
+HAND = {hand}  # each frame handed to a second thread that reads it (zlib.crc32) and drops it
+if HAND:
+    import queue, threading, zlib
+    handed = queue.SimpleQueue()
+    def reader():
+        from rcon_core.priority import name_this_thread
+        name_this_thread("bench-handoff")  # its CPU is not the receiving side's (_thread_cpu)
+        while True:
+            zlib.crc32(handed.get())
+    threading.Thread(target=reader, daemon=True).start()
 async def main():
     c = BridgeClient({url!r}, max_size=64 << 20)
     await c.connect()
     arrivals = []
     def got(p):
         arrivals.append((time.time_ns(), len(p.data)))
+        if HAND:
+            handed.put(p.data)
     c.node("count").subscribe("/cam", got, raw=True)
     t0 = time.time()
     while time.time() - t0 < {seconds}:
@@ -256,8 +270,9 @@ INGEST_WARM_S = 4.0
 INGEST_TAIL_S = 1.5
 
 
-def _writer_cpu(pid: int) -> float:
-    """CPU seconds of the process's recorder writer thread(s) so far (Linux: by thread name)."""
+def _thread_cpu(pid: int, name: str = "rcon-record-wr") -> float:
+    """CPU seconds so far of the process's threads of OS name ``name`` (Linux): the recorder's writer (its
+    name in record/writer.py), or the hand-off counter's reader."""
     total = 0.0
     tick = os.sysconf("SC_CLK_TCK")
     try:
@@ -270,19 +285,20 @@ def _writer_cpu(pid: int) -> float:
                 head, tail = f.read().rsplit(")", 1)
         except OSError:
             continue
-        if head.split("(", 1)[1] == "rcon-record-wr":  # its OS name (record/writer.py)
+        if head.split("(", 1)[1] == name:
             fields = tail.split()
             total += (int(fields[11]) + int(fields[12])) / tick
     return total
 
 
-def _steady_cpu(proc: subprocess.Popen[str], seconds: float) -> tuple[int, int, float, float, float]:
-    """(window start ns, end ns, user s, system s, of which the writer thread s) of ``proc`` between
-    INGEST_WARM_S after its start and INGEST_TAIL_S before its planned end; then waits for it."""
+def _steady_cpu(proc: subprocess.Popen[str], seconds: float,
+                thread: str = "rcon-record-wr") -> tuple[int, int, float, float, float]:
+    """(window start ns, end ns, user s, system s, of which the threads named ``thread`` s) of ``proc``
+    between INGEST_WARM_S after its start and INGEST_TAIL_S before its planned end; then waits for it."""
     time.sleep(INGEST_WARM_S)
-    a_ns, (u0, s0), w0 = time.time_ns(), proc_cpu_split(proc.pid), _writer_cpu(proc.pid)
+    a_ns, (u0, s0), w0 = time.time_ns(), proc_cpu_split(proc.pid), _thread_cpu(proc.pid, thread)
     time.sleep(max(1.0, seconds - INGEST_WARM_S - INGEST_TAIL_S))
-    b_ns, (u1, s1), w1 = time.time_ns(), proc_cpu_split(proc.pid), _writer_cpu(proc.pid)
+    b_ns, (u1, s1), w1 = time.time_ns(), proc_cpu_split(proc.pid), _thread_cpu(proc.pid, thread)
     proc.wait(seconds + 60)
     return a_ns, b_ns, u1 - u0, s1 - s0, w1 - w0
 
@@ -366,6 +382,7 @@ def part_ingest(args: Any) -> dict[str, Any]:
                            stdout=subprocess.PIPE, text=True)
     frame = 640 * 480 * 3
     plain: list[dict[str, float]] = []
+    handoff: list[dict[str, float]] = []  # plain subscribe, each frame handed to a thread that reads it
     recorded: list[dict[str, float]] = []
     floors: list[dict[str, float]] = []
     try:
@@ -373,15 +390,16 @@ def part_ingest(args: Any) -> dict[str, Any]:
         seconds = args.seconds
         with tempfile.TemporaryDirectory() as tmp:
             for k in range(args.ingest_rounds):
-                counter = subprocess.Popen([sys.executable, "-c", COUNTER.format(root=str(HERE.parent), url=url,
-                                                                                 seconds=seconds)],
-                                           stdout=subprocess.PIPE, text=True)
-                a, b, user, system, _w = _steady_cpu(counter, seconds)
-                arrivals = [tuple(map(int, x.split(":"))) for x in counter.stdout.read().split()]  # type: ignore[union-attr]
-                got = [n for t, n in arrivals if a <= t <= b]
-                plain.append({"messages": len(got), "mb_s": sum(got) / ((b - a) / 1e9) / MB,
-                              "ms_per_message": (user + system) * 1000 / max(1, len(got)),
-                              "user_ms": user * 1000 / max(1, len(got)), "sys_ms": system * 1000 / max(1, len(got))})
+                for hand, rows in ((False, plain), (True, handoff)):
+                    counter = subprocess.Popen([sys.executable, "-c", COUNTER.format(
+                        root=str(HERE.parent), url=url, seconds=seconds, hand=hand)], stdout=subprocess.PIPE, text=True)
+                    a, b, user, system, reader = _steady_cpu(counter, seconds, "bench-handoff")
+                    arrivals = [tuple(map(int, x.split(":"))) for x in counter.stdout.read().split()]  # type: ignore[union-attr]
+                    got = [n for t, n in arrivals if a <= t <= b]
+                    rows.append({"messages": len(got), "mb_s": sum(got) / ((b - a) / 1e9) / MB,
+                                 # the receiving side: every thread but the hand-off's reader
+                                 "ms_per_message": (user + system - reader) * 1000 / max(1, len(got)),
+                                 "user_ms": user * 1000 / max(1, len(got)), "sys_ms": system * 1000 / max(1, len(got))})
                 path = Path(tmp) / f"ingest{k}.mcap"
                 rec = subprocess.Popen([sys.executable, "-m", "rcon_core", "record", "-q", "-o", str(path), "/cam",
                                         "--url", url, "--duration", str(seconds), "--compression",
@@ -420,6 +438,18 @@ def part_ingest(args: Any) -> dict[str, Any]:
         "record_receive_cpu_over_plain_pct_by_round": receive,
         "record_receive_cpu_over_plain_pct": round(statistics.median(receive), 1),
     })
+    over_handoff = [round((r["receive_ms"] / h["ms_per_message"] - 1) * 100, 1) for h, r in zip(handoff, recorded, strict=True)]
+    handoff_over_plain = [round((h["ms_per_message"] / p["ms_per_message"] - 1) * 100, 1) for p, h in zip(plain, handoff, strict=True)]
+    out.update({
+        # the reference that any recorder with a writer thread meets: plain subscribe handing each frame to a
+        # second thread that only reads it (on this 2-core machine the receiving thread pays for the frames'
+        # memory moving between the cores' caches)
+        "plain_with_handoff": {k: med(handoff, k) for k in ("messages", "ms_per_message")},
+        "handoff_over_plain_pct_by_round": handoff_over_plain,
+        "handoff_over_plain_pct": round(statistics.median(handoff_over_plain), 1),
+        "record_receive_over_handoff_pct_by_round": over_handoff,
+        "record_receive_over_handoff_pct": round(statistics.median(over_handoff), 1),
+    })
     floor = {k: med(floors, k) for k in ("ms_per_message", "user_ms", "sys_ms")}
     writer_over = [round((r["writer_ms"] / f["ms_per_message"] - 1) * 100, 1) for r, f in zip(recorded, floors, strict=True)]
     beyond = [round((r["ms_per_message"] - p["ms_per_message"] - f["ms_per_message"]) / p["ms_per_message"] * 100, 1)
@@ -434,11 +464,13 @@ def part_ingest(args: Any) -> dict[str, Any]:
         "record_beyond_plain_and_floor_pct": round(statistics.median(beyond), 1),
     })
     out["ok_50_mb_s"] = out["rcon_record"]["mb_s"] >= 50
-    # the target "<= 5 % of messages' CPU over plain subscribe", judged on the messages' side: what the
-    # recorder spends on a message (receiving, taking its bytes, queueing them) against a plain subscriber;
-    # compressing and storing the bytes is the floor's work, shown beside it (no recorder that stores the
-    # frames can be within 5 % of plain subscribe as a whole: the floor alone is more than that)
-    out["ok_cpu_5_pct"] = out["record_receive_cpu_over_plain_pct"] <= 5
+    # the target "<= 5 % of messages' CPU over plain subscribe", as the issue states it: the whole recorder
+    # against plain subscribe (no recorder that stores the frames meets it: the bytes' floor alone is more)
+    out["ok_cpu_5_pct"] = out["record_cpu_over_plain_pct"] <= 5
+    # what is RCON's to answer for: its messages' side against plain subscribe with a hand-off, its writer
+    # against the floor
+    out["ok_receive_5_pct_over_handoff"] = out["record_receive_over_handoff_pct"] <= 5
+    out["ok_writer_5_pct_over_floor"] = out["writer_over_floor_pct"] <= 5
     out["load_after"] = load()
     return out
 
@@ -669,7 +701,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--pacing-seconds", type=float, default=600.0)
     parser.add_argument("--writer-mb", type=float, default=1500.0)
     parser.add_argument("--ingest-hz", type=float, default=120.0)
-    parser.add_argument("--ingest-rounds", type=int, default=6,
+    parser.add_argument("--ingest-rounds", type=int, default=5,
                         help="plain subscribe and rcon record in turns, this many times each")
     parser.add_argument("--ingest-compression", default="zstd", choices=("zstd", "lz4", "none"))
     parser.add_argument("--seek-frames", type=int, default=1150, help="640x480 frames in the seek file (~1 GB)")
