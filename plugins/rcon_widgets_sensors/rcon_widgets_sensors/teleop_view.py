@@ -62,9 +62,29 @@ class TeleopView(QtWidgets.QWidget):
     def pad(self) -> tuple[QtCore.QPointF, float]:
         """Centre and radius of the pad (leaving room for the labels)."""
         line = QtGui.QFontMetrics(self._small_font()).height()
-        top, bottom = line + 2, line + 6  # room for the axis labels and the status line (the text size's)
+        # room for the axis labels (one row, or two: see label_rows) and the status line (the text size's)
+        top, bottom = self.label_rows() * line + 2, line + 6
         r = max(10.0, min(self.width() - 8, self.height() - top - bottom) / 2 - 4)
         return QtCore.QPointF(self.width() / 2, top + (self.height() - top - bottom) / 2), r
+
+    def _axis_words(self) -> tuple[str, str]:
+        """The two axis labels whole: ("↑ forward", "turn right →"), "" for an axis not driven."""
+        h_axis, v_axis = self.model.axes() if hasattr(self.model, "axes") else ("", "")
+        v_word = "↑ " + (axis_words(v_axis) or v_axis) if v_axis else ""
+        h_word = (axis_words(h_axis) or h_axis) + " →" if h_axis else ""
+        return v_word, h_word
+
+    def label_rows(self) -> int:
+        """1, or 2 when the two axis labels do not fit whole side by side, each in its half of the row (a
+        large text size, a narrow pad): then the vertical axis's on the first row (left), the horizontal
+        axis's under it (right), each whole if the pad is wide enough for it alone. Fixed by the axes, the width and the text size, never by what
+        the pad is doing: the pad does not move under a driving finger."""
+        v_word, h_word = self._axis_words()
+        if not (v_word and h_word):
+            return 1
+        fm = QtGui.QFontMetricsF(self._small_font())
+        half = (self.width() - 8) / 2 - 4  # one row: each word in its half (_paint_labels)
+        return 1 if max(fm.horizontalAdvance(v_word), fm.horizontalAdvance(h_word)) <= half else 2
 
     def to_axes(self, pos: QtCore.QPointF) -> tuple[float, float]:
         c, r = self.pad()
@@ -272,56 +292,73 @@ class TeleopView(QtWidgets.QWidget):
     def _paint_labels(self, pal: QtGui.QPalette, h_axis: str, v_axis: str) -> QtGui.QPixmap:
         """What moving the finger does, in words ("↑ forward", "turn right →"), each with the field it
         drives in small print beside it ("linear.x"); the small print goes first when the pad is too narrow
-        for both; an axis without words shows its field."""
+        for both; an axis without words shows its field. On one row, or on two when the words do not fit
+        whole side by side (``label_rows``); each row as tall as the text."""
         pm = self._new_layer()
         pm.fill(QtCore.Qt.GlobalColor.transparent)
         p = QtGui.QPainter(pm)
         p.setRenderHint(QtGui.QPainter.RenderHint.Antialiasing, True)
         big, small = self._small_font(), self._fine_font()
         fm_big, fm_small = QtGui.QFontMetricsF(big), QtGui.QFontMetricsF(small)
-        # each label in its half of the row (a large text size or a narrow pad): "…" rather than overlap
-        half = (self.width() - 8) / 2 - 4 if v_axis and h_axis else self.width() - 8
+        line = QtGui.QFontMetrics(big).height()
+        rows = self.label_rows()
+        width = self.width() - 8
+        # each label in its half of the row when they share it: "…" rather than overlap
+        room = width / 2 - 4 if v_axis and h_axis and rows == 1 else width
         elide = QtCore.Qt.TextElideMode.ElideRight
-        v_word = fm_elide(big, "↑ " + (axis_words(v_axis) or v_axis), elide, half) if v_axis else ""
-        h_word = fm_elide(big, (axis_words(h_axis) or h_axis) + " →", elide, half) if h_axis else ""
+        v_full, h_full = self._axis_words()
+        v_word = fm_elide(big, v_full, elide, room) if v_axis else ""
+        h_word = fm_elide(big, h_full, elide, room) if h_axis else ""
         v_fine = v_axis if v_axis and axis_words(v_axis) else ""
         h_fine = h_axis if h_axis and axis_words(h_axis) else ""
-        width = self.width() - 8
         gap = 6.0
-        need = (fm_big.horizontalAdvance(v_word) + fm_big.horizontalAdvance(h_word) + 2 * gap
-                + fm_small.horizontalAdvance(v_fine) + fm_small.horizontalAdvance(h_fine) + 12)
-        fine = need <= width  # room for the fields in small print too
-        self.axis_labels = (v_word, v_fine if fine else "", h_word, h_fine if fine else "")
+
+        def fits(word: str, fine_text: str) -> bool:
+            return fm_big.horizontalAdvance(word) + gap + fm_small.horizontalAdvance(fine_text) + 6 <= width
+
+        if rows == 1:  # room for the fields in small print too
+            need = (fm_big.horizontalAdvance(v_word) + fm_big.horizontalAdvance(h_word) + 2 * gap
+                    + fm_small.horizontalAdvance(v_fine) + fm_small.horizontalAdvance(h_fine) + 12)
+            v_fine_shown = v_fine if need <= width else ""
+            h_fine_shown = h_fine if need <= width else ""
+        else:
+            v_fine_shown = v_fine if fits(v_word, v_fine) else ""
+            h_fine_shown = h_fine if fits(h_word, h_fine) else ""
+        self.axis_labels = (v_word, v_fine_shown, h_word, h_fine_shown)
         text_colour = pal.color(QtGui.QPalette.ColorRole.WindowText)
         muted = QtGui.QColor(text_colour)
         muted.setAlpha(150)
         mid = QtCore.Qt.AlignmentFlag.AlignVCenter
         left, right = QtCore.Qt.AlignmentFlag.AlignLeft | mid, QtCore.Qt.AlignmentFlag.AlignRight | mid
         x0, x1 = 4.0, self.width() - 4.0
+        v_top, h_top = 1.0, 1.0 + (line if rows == 2 else 0)
         if v_word:
             p.setFont(big)
             p.setPen(text_colour)
-            p.drawText(QtCore.QRectF(x0, 1, width, 16), left, v_word)
-            if fine and v_fine:
+            p.drawText(QtCore.QRectF(x0, v_top, width, line), left, v_word)
+            if v_fine_shown:
                 p.setFont(small)
                 p.setPen(muted)
-                p.drawText(QtCore.QRectF(x0 + fm_big.horizontalAdvance(v_word) + gap, 2, width, 16), left, v_fine)
+                p.drawText(QtCore.QRectF(x0 + fm_big.horizontalAdvance(v_word) + gap, v_top, width, line), left,
+                           v_fine_shown)
         if h_word:
             p.setFont(big)
             p.setPen(text_colour)
-            p.drawText(QtCore.QRectF(x0, 1, width, 16), right, h_word)
-            if fine and h_fine:
+            p.drawText(QtCore.QRectF(x0, h_top, width, line), right, h_word)
+            if h_fine_shown:
                 p.setFont(small)
                 p.setPen(muted)
                 end = x1 - fm_big.horizontalAdvance(h_word) - gap
-                p.drawText(QtCore.QRectF(x0, 2, end - x0, 16), right, h_fine)
+                p.drawText(QtCore.QRectF(x0, h_top, end - x0, line), right, h_fine_shown)
         p.end()
         return pm
 
     def _fine_font(self) -> QtGui.QFont:
-        """The small print beside the axis words: the labels' font, 0.8 times again (at least 6 pt)."""
+        """The small print beside the axis words: the labels' font, 0.65 times (at least 8 px). In
+        pixels, as ``_small_font`` gives it: its point size reads -1, which had left the small print at the
+        6 pt floor at every text size."""
         font = QtGui.QFont(self._small_font())
-        font.setPointSizeF(max(6.0, font.pointSizeF() * 0.8))
+        font.setPixelSize(max(8, round(font.pixelSize() * 0.65)))
         return font
 
     @property

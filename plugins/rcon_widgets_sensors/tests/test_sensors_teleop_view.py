@@ -199,3 +199,55 @@ def test_a_narrow_pad_shows_the_start_of_its_status_line_whole_never_both_ends_c
     view.grab()
     assert view.status_shown == full
     model.stop()
+
+
+def test_at_a_large_text_size_the_axis_words_go_on_two_rows_whole_and_above_the_pad(qtbot):
+    """200 % text on a tablet's pad (about 260 px wide): the words had been cut to "↑ forw…" and "turn ri…"
+    in a row 16 px tall that clipped their tops. Now they go on two rows, each whole and as tall as the
+    text, and the pad's disc starts below them; at the normal size they share one row as before."""
+    model, view = offline_pad(dry_run=True)
+    qtbot.addWidget(view)
+    view.resize(260, 360)
+    view.show()
+    view.grab()
+    assert view.label_rows() == 1 and view.axis_labels[0] == "↑ forward" and view.axis_labels[2] == "turn right →"
+    font = QtGui.QFont(view.font())
+    font.setPixelSize(28)  # the theme's font at 200 % text
+    view.setFont(font)
+    fm = QtGui.QFontMetricsF(view._small_font())
+    words = fm.horizontalAdvance("↑ forward"), fm.horizontalAdvance("turn right →")
+    # as in the app's 200 % screenshot: too narrow for both words side by side (each in its half of the
+    # row), wide enough for each alone
+    view.resize(int(2 * max(words)) + 8, 360)
+    assert max(words) + 8 < view.width()
+    view.grab()
+    line = QtGui.QFontMetrics(view._small_font()).height()
+    assert line > 16  # taller than the old fixed row
+    assert view.label_rows() == 2
+    v_word, _v_fine, h_word, _h_fine = view.axis_labels
+    assert (v_word, h_word) == ("↑ forward", "turn right →")  # whole, no "…"
+    assert fm.horizontalAdvance(v_word) <= view.width() - 8 and fm.horizontalAdvance(h_word) <= view.width() - 8
+    c, r = view.pad()
+    assert c.y() - r >= 2 * line  # the disc starts under the second row
+    painted = view.grab().toImage()
+    # the second row is painted: dark text pixels in the right half between line and 2 * line
+    dpr = painted.devicePixelRatio()
+    dark = sum(1 for x in range(view.width() // 2, view.width() - 4) for y in range(line + 2, 2 * line - 2)
+               if QtGui.QColor(painted.pixel(int(x * dpr), int(y * dpr))).lightness() < 100)
+    assert dark > 20
+    model.stop()
+
+
+def test_the_small_print_beside_the_axis_words_follows_the_text_size(qtbot):
+    """The field names ("linear.x") are 0.65 times the axis words at every text size; they had stayed at a
+    6 pt floor (the theme's font is in pixels, its point size -1), a speck at 200 % text."""
+    model, view = offline_pad(dry_run=True)
+    qtbot.addWidget(view)
+    for px in (14, 28):
+        font = QtGui.QFont(view.font())
+        font.setPixelSize(px)
+        view.setFont(font)
+        words, fine = view._small_font().pixelSize(), view._fine_font().pixelSize()
+        assert fine == max(8, round(words * 0.65)), (px, words, fine)
+    assert view._fine_font().pixelSize() >= 14  # at 28 px: 22 px words, 14 px small print (6 pt is 8 px)
+    model.stop()
