@@ -19,6 +19,7 @@ CPU per repaint instead of 0.85 ms).
 from __future__ import annotations
 
 import math
+import re
 import time
 from typing import Any
 
@@ -232,8 +233,7 @@ class TeleopView(QtWidgets.QWidget):
         line = p.fontMetrics().height()
         room = QtCore.QRectF(4, self.height() - line - 2, self.width() - 8, line)
         # a narrow pad (a fleet tile) shows the line's beginning and "…", never both ends cut off
-        self.status_shown = p.fontMetrics().elidedText(self.status_text(), QtCore.Qt.TextElideMode.ElideRight,
-                                                       int(room.width()))
+        self.status_shown = fit_status(self.status_text(), p.fontMetrics(), int(room.width()))
         p.drawText(room, QtCore.Qt.AlignmentFlag.AlignCenter, self.status_shown)
         p.end()
 
@@ -395,6 +395,26 @@ class TeleopView(QtWidgets.QWidget):
             return f"touch to drive {v.held}"
         rate = getattr(self.model.settings, "rate_hz", 0)
         return f"idle · touch to drive ({rate:g} Hz)"
+
+
+_TRAILING_REMARK = re.compile(r"\s*\([^()]*\)$")
+
+
+def fit_status(text: str, fm: QtGui.QFontMetrics, width: int) -> str:
+    """The status line as it fits ``width``: whole; else without its closing remark in brackets ("touch to
+    drive ≤ 1.5 m/s (safety envelope)" -> "... ≤ 1.5 m/s", "idle · touch to drive (10 Hz)" -> "idle · touch
+    to drive"), which cuts no word of what the pad does; else, for a line that gives a limit, the limit
+    alone ("≤ 1.5 m/s": on a narrow pad it matters more than the invitation to touch); else its beginning
+    and "…"."""
+    if fm.horizontalAdvance(text) <= width:
+        return text
+    short = _TRAILING_REMARK.sub("", text) or text
+    if fm.horizontalAdvance(short) <= width:
+        return short
+    limit = short[short.find("≤"):] if "≤" in short else ""
+    if limit and fm.horizontalAdvance(limit) <= width:
+        return limit
+    return fm.elidedText(short, QtCore.Qt.TextElideMode.ElideRight, width)
 
 
 def fm_elide(font: QtGui.QFont, text: str, mode: QtCore.Qt.TextElideMode, width: float) -> str:

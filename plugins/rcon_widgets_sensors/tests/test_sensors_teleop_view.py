@@ -251,3 +251,29 @@ def test_the_small_print_beside_the_axis_words_follows_the_text_size(qtbot):
         assert fine == max(8, round(words * 0.65)), (px, words, fine)
     assert view._fine_font().pixelSize() >= 14  # at 28 px: 22 px words, 14 px small print (6 pt is 8 px)
     model.stop()
+
+
+def test_a_status_line_too_long_for_the_pad_drops_its_closing_remark_before_cutting_words(qtbot):
+    """A fleet tile's pad showed "touch to drive ≤ 1.5 m/s (s…"; now the remark in brackets goes first
+    ("touch to drive ≤ 1.5 m/s"), then (a pad at 200 % text) all but the limit ("≤ 1.5 m/s"), and only a
+    line still too long is cut with "…"."""
+    from rcon_widgets_sensors.teleop_view import fit_status
+
+    view = QtWidgets.QWidget()
+    qtbot.addWidget(view)
+    fm = QtGui.QFontMetrics(view.font())
+    full = "touch to drive ≤ 1.5 m/s (safety envelope)"
+    short = "touch to drive ≤ 1.5 m/s"
+    assert fit_status(full, fm, fm.horizontalAdvance(full) + 2) == full  # fits: whole
+    assert fit_status(full, fm, fm.horizontalAdvance(short) + 2) == short  # the remark dropped, no "…"
+    limit = "≤ 1.5 m/s"
+    assert fit_status(full, fm, fm.horizontalAdvance(limit) + 2) == limit
+    idle = "idle · touch to drive (10 Hz)"  # no limit: its beginning and "…"
+    cut = fit_status(idle, fm, fm.horizontalAdvance("idle · touch") + 2)
+    assert cut.endswith("…") and idle.startswith(cut[:-1]) and "(" not in cut
+    assert fm.horizontalAdvance(cut) <= fm.horizontalAdvance("idle · touch") + 2
+    tiny = fit_status(full, fm, fm.horizontalAdvance(limit) // 2)  # not even the limit fits
+    assert tiny.endswith("…") and short.startswith(tiny[:-1])
+    # a remark in the middle stays (the reason a pad stopped): only its end is cut
+    stopped = "stopped (lost focus): lift your finger"
+    assert fit_status(stopped, fm, fm.horizontalAdvance(stopped) - 10).startswith("stopped (lost")
