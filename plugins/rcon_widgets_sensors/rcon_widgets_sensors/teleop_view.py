@@ -78,8 +78,9 @@ class TeleopView(QtWidgets.QWidget):
     def label_rows(self) -> int:
         """1, or 2 when the two axis labels do not fit whole side by side, each in its half of the row (a
         large text size, a narrow pad): then the vertical axis's on the first row (left), the horizontal
-        axis's under it (right), each whole if the pad is wide enough for it alone. Fixed by the axes, the width and the text size, never by what
-        the pad is doing: the pad does not move under a driving finger."""
+        axis's under it (right), each whole if the pad is wide enough for it alone. Fixed by the axes, the
+        width and the text size, never by what the pad is doing: the pad does not move under a driving
+        finger."""
         v_word, h_word = self._axis_words()
         if not (v_word and h_word):
             return 1
